@@ -1,0 +1,1 @@
+//! Barycentric coordinates: mean value (Φ), max-entropy (Ψ projection), MaxVol row selection.

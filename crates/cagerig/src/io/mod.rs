@@ -1,0 +1,1 @@
+//! File formats: OBJ and the paper tool's formats.

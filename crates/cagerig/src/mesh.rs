@@ -1,0 +1,139 @@
+//! Triangle meshes: the skin M and the cage C share this representation.
+
+use glam::DVec3;
+
+use crate::error::RigError;
+
+/// A triangle mesh with f64 positions and u32 triangle indices (counter-clockwise = outward).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TriMesh {
+    /// Vertex positions, `#V`.
+    pub positions: Vec<DVec3>,
+    /// Triangles as vertex indices, `#F`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriMesh {
+    /// Builds a mesh, checking that positions are finite and every index is in range.
+    pub fn new(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Result<Self, RigError> {
+        if let Some(index) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(RigError::NonFinite {
+                what: "vertex",
+                index,
+            });
+        }
+        let len = positions.len();
+        for tri in &triangles {
+            for &i in tri {
+                if i as usize >= len {
+                    return Err(RigError::IndexOutOfRange {
+                        what: "triangle vertex",
+                        index: i as usize,
+                        len,
+                    });
+                }
+            }
+        }
+        Ok(Self {
+            positions,
+            triangles,
+        })
+    }
+
+    pub fn num_vertices(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn num_triangles(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The three corner positions of triangle `t`.
+    pub fn corners(&self, t: usize) -> [DVec3; 3] {
+        let [a, b, c] = self.triangles[t];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+
+    /// Axis-aligned bounding box `(min, max)`; `(0, 0)` for an empty mesh.
+    pub fn bounding_box(&self) -> (DVec3, DVec3) {
+        bounding_box(&self.positions)
+    }
+
+    /// Signed enclosed volume (positive when triangles face outwards).
+    pub fn signed_volume(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|t| {
+                let [a, b, c] = self.corners(t);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    /// Unit area-weighted vertex normals written into `out` (`#V`); isolated vertices get zero.
+    pub fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]], out: &mut [DVec3]) {
+        out.iter_mut().for_each(|n| *n = DVec3::ZERO);
+        for &[a, b, c] in triangles {
+            let (pa, pb, pc) = (
+                positions[a as usize],
+                positions[b as usize],
+                positions[c as usize],
+            );
+            let n = (pb - pa).cross(pc - pa);
+            out[a as usize] += n;
+            out[b as usize] += n;
+            out[c as usize] += n;
+        }
+        out.iter_mut().for_each(|n| *n = n.normalize_or_zero());
+    }
+}
+
+/// Axis-aligned bounding box of a point set `(min, max)`; `(0, 0)` when empty.
+pub fn bounding_box(points: &[DVec3]) -> (DVec3, DVec3) {
+    if points.is_empty() {
+        return (DVec3::ZERO, DVec3::ZERO);
+    }
+    points.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
+}
+
+/// Largest distance between corresponding points of two equally long slices.
+pub fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_out_of_range_and_nan() {
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+        assert!(matches!(
+            TriMesh::new(p.clone(), vec![[0, 1, 3]]),
+            Err(RigError::IndexOutOfRange { index: 3, .. })
+        ));
+        let mut q = p.clone();
+        q[1].y = f64::NAN;
+        assert!(matches!(
+            TriMesh::new(q, vec![[0, 1, 2]]),
+            Err(RigError::NonFinite { index: 1, .. })
+        ));
+        assert!(TriMesh::new(p, vec![[0, 1, 2]]).is_ok());
+    }
+
+    #[test]
+    fn tetra_volume() {
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        let m = TriMesh::new(p, vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]).unwrap();
+        assert!((m.signed_volume() - 1.0 / 6.0).abs() < 1e-15);
+    }
+}
