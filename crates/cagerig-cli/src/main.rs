@@ -1,1 +1,166 @@
-fn main() {}
+//! `cagerig`: command-line front end of the cagerig library.
+
+mod bench;
+mod commands;
+mod rig_source;
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+use rig_source::RigArgs;
+
+#[derive(Parser)]
+#[command(name = "cagerig", version, about = "Real-time deformation with coupled cages and skeletons")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Counts, discovered files and validation warnings of a rig.
+    Info {
+        #[command(flatten)]
+        rig: RigArgs,
+        /// Machine-readable output.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Compute mean value coordinates Φ of the mesh w.r.t. the cage, in the cage-weights format.
+    Coords {
+        #[command(flatten)]
+        rig: RigArgs,
+        /// Output file (`<cageVertex> <meshVertex> <weight>` lines).
+        #[arg(long)]
+        out: PathBuf,
+        /// Write 6 fixed decimals like the paper tool instead of round-trip floats.
+        #[arg(long)]
+        fixed6: bool,
+    },
+    /// Select the MaxVol rows of Φ and print log|det|.
+    Maxvol {
+        #[command(flatten)]
+        rig: RigArgs,
+        /// Output `.maxvol` file.
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Replay an edit script (JSON) and write every structure after each step.
+    Edit {
+        #[command(flatten)]
+        rig: RigArgs,
+        /// The script: {"skinning":..., "steps":[{"op":...}, ...]}.
+        #[arg(long)]
+        script: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Skinning method (overrides the script's).
+        #[arg(long, value_enum)]
+        skinning: Option<commands::SkinningArg>,
+        #[command(flatten)]
+        session: commands::SessionArgs,
+    },
+    /// Sample skeleton and cage animations at given times and write the structures.
+    Animate {
+        #[command(flatten)]
+        rig: RigArgs,
+        /// Skeleton animation (V1/V2/V3 text format).
+        #[arg(long)]
+        skeleton_anim: Option<PathBuf>,
+        /// Cage animation (rest-cage offsets).
+        #[arg(long)]
+        cage_anim: Option<PathBuf>,
+        /// Comma-separated sample times in seconds.
+        #[arg(long, value_delimiter = ',', required = true)]
+        times: Vec<f64>,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long, value_enum)]
+        skinning: Option<commands::SkinningArg>,
+        #[command(flatten)]
+        session: commands::SessionArgs,
+    },
+    /// A hybrid edit on a built-in rig: bend with the skeleton, inflate with the cage, grab the
+    /// current cage; writes the results and prints each sync's time.
+    Demo {
+        /// Built-in rig to use.
+        #[arg(long, default_value = "bar")]
+        builtin: String,
+        /// Mesh resolution parameter of the built-in rig.
+        #[arg(long)]
+        resolution: Option<usize>,
+        /// Output directory.
+        #[arg(long, default_value = "cagerig-demo")]
+        out: PathBuf,
+    },
+    /// Midpoint-subdivide a rig N times and write its files (mesh, .skt, .skw, cage, Φ, MaxVol).
+    Subdivide {
+        #[command(flatten)]
+        rig: RigArgs,
+        #[arg(long, default_value_t = 1)]
+        levels: usize,
+        #[arg(long)]
+        out: PathBuf,
+        /// Base name of the written files.
+        #[arg(long, default_value = "rig")]
+        name: String,
+    },
+    /// Per-operator timings in the layout of the paper's Table 1.
+    Bench(bench::BenchArgs),
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Info { rig, json } => commands::info(&rig, json),
+        Command::Coords { rig, out, fixed6 } => commands::coords(&rig, &out, fixed6),
+        Command::Maxvol { rig, out, json } => commands::maxvol(&rig, &out, json),
+        Command::Edit {
+            rig,
+            script,
+            out,
+            skinning,
+            session,
+        } => commands::edit(&rig, &script, &out, skinning, &session),
+        Command::Animate {
+            rig,
+            skeleton_anim,
+            cage_anim,
+            times,
+            out,
+            skinning,
+            session,
+        } => commands::animate(
+            &rig,
+            skeleton_anim.as_deref(),
+            cage_anim.as_deref(),
+            &times,
+            &out,
+            skinning,
+            &session,
+        ),
+        Command::Demo {
+            builtin,
+            resolution,
+            out,
+        } => commands::demo(&builtin, resolution, &out),
+        Command::Subdivide {
+            rig,
+            levels,
+            out,
+            name,
+        } => commands::subdivide(&rig, levels, &out, &name),
+        Command::Bench(args) => bench::run(&args),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,1 @@
+pub struct BenchArgs; pub fn run(_: &BenchArgs) -> anyhow::Result<()> { Ok(()) }

@@ -1,0 +1,506 @@
+//! The subcommands (thin wrappers over the library).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use cagerig::Warning;
+use cagerig::coords::maxvol;
+use cagerig::io::obj::write_obj_to;
+use cagerig::script::EditScript;
+use cagerig::session::{CageFitSource, FitRows, RigSession, SessionOptions};
+use cagerig::skinning::SkinningMethod;
+use cagerig::sync::skeleton_updater::JointLocalisation;
+use clap::{Args, ValueEnum};
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::rig_source::{LoadedRig, RigArgs, load_rig};
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum SkinningArg {
+    Lbs,
+    Dqs,
+    Cor,
+}
+
+impl From<SkinningArg> for SkinningMethod {
+    fn from(s: SkinningArg) -> Self {
+        match s {
+            SkinningArg::Lbs => SkinningMethod::Lbs,
+            SkinningArg::Dqs => SkinningMethod::Dqs,
+            SkinningArg::Cor => SkinningMethod::Cor,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, Default)]
+pub enum FitRowsArg {
+    /// MaxVol rows (shipped `.maxvol` if found, else computed): exact square system.
+    #[default]
+    Maxvol,
+    /// All mesh rows, least squares.
+    All,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, Default)]
+pub enum LocalisationArg {
+    /// cagerig's articulation-localised prior (default).
+    #[default]
+    Articulation,
+    /// The paper tool's localisation (s = 0.05, ε = 0.01, signed masses).
+    ReferenceTool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, Default)]
+pub enum FitSourceArg {
+    /// LBS ghost of the fitted rows drives CageUp (exact loop for DQS/CoR).
+    #[default]
+    Ghost,
+    /// CageUp fits the displayed DQS/CoR mesh (approximate reverse deformer).
+    Displayed,
+}
+
+/// Session options shared by `edit` and `animate`.
+#[derive(Debug, Clone, Args)]
+pub struct SessionArgs {
+    /// Mesh rows used by CageUp/CageRev.
+    #[arg(long, value_enum, default_value_t)]
+    pub fit_rows: FitRowsArg,
+    /// Joint localisation of the skeleton updater.
+    #[arg(long, value_enum, default_value_t)]
+    pub localisation: LocalisationArg,
+    /// What CageUp fits with DQS/CoR.
+    #[arg(long, value_enum, default_value_t)]
+    pub fit_source: FitSourceArg,
+}
+
+impl SessionArgs {
+    pub fn options(&self) -> SessionOptions {
+        SessionOptions {
+            localisation: match self.localisation {
+                LocalisationArg::Articulation => JointLocalisation::default(),
+                LocalisationArg::ReferenceTool => JointLocalisation::reference_tool(),
+            },
+            fit_rows: match self.fit_rows {
+                FitRowsArg::Maxvol => FitRows::MaxVol,
+                FitRowsArg::All => FitRows::AllRows,
+            },
+            fit_source: match self.fit_source {
+                FitSourceArg::Ghost => CageFitSource::GhostLbs,
+                FitSourceArg::Displayed => CageFitSource::DisplayedMesh,
+            },
+            ..SessionOptions::default()
+        }
+    }
+}
+
+fn start_session(
+    loaded: LoadedRig,
+    options: SessionOptions,
+) -> anyhow::Result<(RigSession, Vec<Warning>)> {
+    let (session, mut warnings) =
+        RigSession::new(loaded.parts, options).context("assembling the rig")?;
+    let mut all = loaded.warnings;
+    all.append(&mut warnings);
+    Ok((session, all))
+}
+
+// ----- info ----------------------------------------------------------------------------------
+
+#[derive(Serialize)]
+struct InfoReport {
+    rig: String,
+    vertices: usize,
+    triangles: usize,
+    joints: usize,
+    cage_vertices: usize,
+    cage_triangles: usize,
+    max_influences: usize,
+    files: Vec<FileUse>,
+    warnings: Vec<String>,
+}
+
+#[derive(Serialize)]
+pub struct FileUse {
+    pub role: String,
+    pub path: PathBuf,
+}
+
+pub fn info(rig: &RigArgs, json: bool) -> anyhow::Result<()> {
+    let loaded = load_rig(rig, !json, false)?;
+    let p = &loaded.parts;
+    let mut warnings: Vec<String> = loaded.warnings.iter().map(|w| w.to_string()).collect();
+    let cage_check = cagerig::cage::validate_cage(p.cage.clone());
+    match &cage_check {
+        Ok((_, w)) => warnings.extend(w.iter().map(|w| w.to_string())),
+        Err(e) => warnings.push(format!("the cage is unusable: {e}")),
+    }
+    let report = InfoReport {
+        rig: loaded.name.clone(),
+        vertices: p.mesh.num_vertices(),
+        triangles: p.mesh.num_triangles(),
+        joints: p.skeleton.len(),
+        cage_vertices: p.cage.num_vertices(),
+        cage_triangles: p.cage.num_triangles(),
+        max_influences: p.skin_weights.max_influences(),
+        files: loaded.files.clone(),
+        warnings,
+    };
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!("rig            {}", report.rig);
+        println!(
+            "mesh           {} vertices, {} triangles",
+            report.vertices, report.triangles
+        );
+        println!(
+            "skeleton       {} joints (at most {} influences per vertex)",
+            report.joints, report.max_influences
+        );
+        println!(
+            "cage           {} vertices, {} triangles",
+            report.cage_vertices, report.cage_triangles
+        );
+        for f in &report.files {
+            println!("file           {:<14} {}", f.role, f.path.display());
+        }
+        if report.warnings.is_empty() {
+            println!("warnings       none");
+        }
+        for w in &report.warnings {
+            println!("warning        {w}");
+        }
+    }
+    Ok(())
+}
+
+// ----- coords / maxvol -----------------------------------------------------------------------
+
+pub fn coords(rig: &RigArgs, out: &Path, fixed6: bool) -> anyhow::Result<()> {
+    let mut loaded = load_rig(rig, true, false)?;
+    let t = Instant::now();
+    let phi = crate::rig_source::compute_coords_with_progress(&loaded.parts, true)?;
+    let elapsed = t.elapsed();
+    let format = if fixed6 {
+        cagerig::io::text::FloatFormat::TOOL
+    } else {
+        cagerig::io::text::FloatFormat::RoundTrip
+    };
+    cagerig::io::cage_weights::write_cage_weights(out, &phi, format)?;
+    loaded.parts.cage_coords = Some(phi);
+    println!(
+        "mean value coordinates: {} vertices × {} cage vertices in {:.1} ms, written to {}",
+        loaded.parts.mesh.num_vertices(),
+        loaded.parts.cage.num_vertices(),
+        elapsed.as_secs_f64() * 1e3,
+        out.display()
+    );
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct MaxvolReport {
+    rows: Vec<usize>,
+    log_abs_det: f64,
+    milliseconds: f64,
+    shipped: Option<ShippedMaxvol>,
+}
+
+#[derive(Serialize)]
+struct ShippedMaxvol {
+    path: PathBuf,
+    log_abs_det: f64,
+}
+
+pub fn maxvol(rig: &RigArgs, out: &Path, json: bool) -> anyhow::Result<()> {
+    let loaded = load_rig(rig, !json, true)?;
+    let phi = match &loaded.parts.cage_coords {
+        Some(phi) => phi.clone(),
+        None => crate::rig_source::compute_coords_with_progress(&loaded.parts, !json)?,
+    };
+    let t = Instant::now();
+    let selection = maxvol::select_maxvol_rows(&phi)?;
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    cagerig::io::maxvol::write_maxvol(out, &selection.rows)?;
+    let shipped = match (&loaded.parts.maxvol_rows, &loaded.maxvol_path) {
+        (Some(rows), Some(path)) => Some(ShippedMaxvol {
+            path: path.clone(),
+            log_abs_det: maxvol::log_abs_det_of_rows(&phi, rows)?,
+        }),
+        _ => None,
+    };
+    let report = MaxvolReport {
+        rows: selection.rows,
+        log_abs_det: selection.log_abs_det,
+        milliseconds: ms,
+        shipped,
+    };
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "MaxVol: {} rows, log|det| = {:.6} ({ms:.1} ms), written to {}",
+            report.rows.len(),
+            report.log_abs_det,
+            out.display()
+        );
+        if let Some(s) = &report.shipped {
+            println!(
+                "shipped selection {}: log|det| = {:.6}",
+                s.path.display(),
+                s.log_abs_det
+            );
+        }
+    }
+    Ok(())
+}
+
+// ----- edit / animate ------------------------------------------------------------------------
+
+/// Files produced for one state, kept in memory until the whole run succeeded.
+pub struct StateFiles {
+    files: Vec<(PathBuf, Vec<u8>)>,
+}
+
+#[derive(Serialize)]
+struct JointState {
+    name: String,
+    parent: Option<usize>,
+    rest: [f64; 3],
+    posed: [f64; 3],
+}
+
+impl StateFiles {
+    pub fn new() -> Self {
+        Self { files: Vec::new() }
+    }
+
+    /// Adds `{prefix}_mesh_rest.obj`, `_mesh_posed.obj`, `_cage_rest.obj`, `_cage_posed.obj`
+    /// and `_joints.json` for the session's current state.
+    pub fn add_state(&mut self, prefix: &str, s: &RigSession) -> anyhow::Result<()> {
+        let objs: [(&str, &[DVec3], &[[u32; 3]]); 4] = [
+            ("mesh_rest", s.rest_mesh(), s.mesh_triangles()),
+            ("mesh_posed", s.posed_mesh(), s.mesh_triangles()),
+            ("cage_rest", s.rest_cage(), s.cage_triangles()),
+            ("cage_posed", s.posed_cage(), s.cage_triangles()),
+        ];
+        for (what, positions, triangles) in objs {
+            let mut bytes = Vec::new();
+            write_obj_to(&mut bytes, positions, triangles)?;
+            self.files
+                .push((PathBuf::from(format!("{prefix}_{what}.obj")), bytes));
+        }
+        let joints: Vec<JointState> = s
+            .skeleton()
+            .joints()
+            .iter()
+            .zip(s.rest_joints().zip(s.posed_joints()))
+            .map(|(j, (rest, posed))| JointState {
+                name: j.name.clone(),
+                parent: j.parent,
+                rest: rest.to_array(),
+                posed: posed.to_array(),
+            })
+            .collect();
+        self.files.push((
+            PathBuf::from(format!("{prefix}_joints.json")),
+            serde_json::to_vec_pretty(&joints)?,
+        ));
+        Ok(())
+    }
+
+    /// Writes every file into `dir` (created if needed), each through a temporary file.
+    pub fn write_all(&self, dir: &Path) -> anyhow::Result<usize> {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating output directory {}", dir.display()))?;
+        for (name, bytes) in &self.files {
+            let path = dir.join(name);
+            cagerig::io::atomic::write_atomically(&path, |w| w.write_all(bytes))
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+        Ok(self.files.len())
+    }
+}
+
+pub fn edit(
+    rig: &RigArgs,
+    script_path: &Path,
+    out: &Path,
+    skinning: Option<SkinningArg>,
+    session_args: &SessionArgs,
+) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(script_path)
+        .with_context(|| format!("reading {}", script_path.display()))?;
+    let script =
+        EditScript::parse(&text).with_context(|| format!("in {}", script_path.display()))?;
+    let loaded = load_rig(rig, true, true)?;
+    let mut options = session_args.options();
+    options.skinning = skinning
+        .map(SkinningMethod::from)
+        .or(script.skinning)
+        .unwrap_or_default();
+    let (mut session, warnings) = start_session(loaded, options)?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    script
+        .validate(&session)
+        .with_context(|| format!("in {}", script_path.display()))?;
+    let mut files = StateFiles::new();
+    files.add_state("step0", &session)?;
+    for k in 0..script.steps.len() {
+        let t = Instant::now();
+        script
+            .run_step(k, &mut session)
+            .with_context(|| format!("in {}", script_path.display()))?;
+        eprintln!(
+            "step {}: {:?} ({:.3} ms)",
+            k + 1,
+            script.steps[k],
+            t.elapsed().as_secs_f64() * 1e3
+        );
+        files.add_state(&format!("step{}", k + 1), &session)?;
+    }
+    let n = files.write_all(out)?;
+    println!("{n} files written to {}", out.display());
+    Ok(())
+}
+
+pub fn animate(
+    rig: &RigArgs,
+    skeleton_anim: Option<&Path>,
+    cage_anim: Option<&Path>,
+    times: &[f64],
+    out: &Path,
+    skinning: Option<SkinningArg>,
+    session_args: &SessionArgs,
+) -> anyhow::Result<()> {
+    if skeleton_anim.is_none() && cage_anim.is_none() {
+        bail!("give --skeleton-anim and/or --cage-anim");
+    }
+    if let Some(t) = times.iter().find(|t| !t.is_finite()) {
+        bail!("sample time {t} is not finite");
+    }
+    let loaded = load_rig(rig, true, true)?;
+    let skeleton = loaded.parts.skeleton.clone();
+    let num_cage = loaded.parts.cage.num_vertices();
+    let skeleton_track = match skeleton_anim {
+        Some(p) => Some(cagerig::io::keyframes::read_skeleton_animation(p, &skeleton)?),
+        None => None,
+    };
+    let cage_track = match cage_anim {
+        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(p, num_cage)?),
+        None => None,
+    };
+    let mut options = session_args.options();
+    options.skinning = skinning.map(SkinningMethod::from).unwrap_or_default();
+    let (session, warnings) = start_session(loaded, options)?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut player = cagerig::animation::AnimationPlayer::new(&session, skeleton_track, cage_track)?;
+    let mut session = session;
+    let mut files = StateFiles::new();
+    for &t in times {
+        let start = Instant::now();
+        player.apply(t, &mut session)?;
+        eprintln!(
+            "t = {t}: frame in {:.3} ms",
+            start.elapsed().as_secs_f64() * 1e3
+        );
+        files.add_state(&format!("t{t}"), &session)?;
+    }
+    let n = files.write_all(out)?;
+    println!("{n} files written to {}", out.display());
+    Ok(())
+}
+
+// ----- demo ----------------------------------------------------------------------------------
+
+pub fn demo(builtin: &str, resolution: Option<usize>, out: &Path) -> anyhow::Result<()> {
+    let args = RigArgs {
+        mesh: None,
+        cage: None,
+        builtin: Some(builtin.to_string()),
+        resolution,
+    };
+    let t = Instant::now();
+    let loaded = load_rig(&args, true, true)?;
+    let (mut s, warnings) = start_session(loaded, SessionOptions::default())?;
+    println!(
+        "loaded built-in rig {builtin:?}: {} vertices, {} joints, {} cage vertices ({:.1} ms incl. Φ, MaxVol, Ψ)",
+        s.rest_mesh().len(),
+        s.skeleton().len(),
+        s.rest_cage().len(),
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    for w in &warnings {
+        println!("warning: {w}");
+    }
+    let mut files = StateFiles::new();
+    files.add_state("0_loaded", &s)?;
+    let (lo, hi) = cagerig::mesh::bounding_box(s.rest_cage());
+    let centre = (lo + hi) * 0.5;
+    let size = (hi - lo).length();
+
+    // 1. Bend with the skeleton: rotate the middle joint.
+    let joint = s.skeleton().len() / 2;
+    let t = Instant::now();
+    s.rotate_joint(joint, DVec3::Z, 60f64.to_radians())?;
+    println!(
+        "1. skeleton edit: joint {joint} ({}) +60° about Z → M', C' synced in {:.3} ms",
+        s.skeleton().joint(joint).name,
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    files.add_state("1_bend", &s)?;
+
+    // 2. Inflate with the rest cage: push the cage vertices on the far half outwards.
+    let (verts, offsets): (Vec<usize>, Vec<DVec3>) = s
+        .rest_cage()
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.x > centre.x)
+        .map(|(k, c)| {
+            let mut radial = *c - centre;
+            radial.x = 0.0;
+            (k, radial.normalize_or_zero() * 0.08 * size)
+        })
+        .unzip();
+    let t = Instant::now();
+    s.move_rest_cage(&verts, &offsets)?;
+    println!(
+        "2. rest-cage edit: inflated {} cage vertices → M, S, S', M', C' synced in {:.3} ms",
+        verts.len(),
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    files.add_state("2_inflate", &s)?;
+
+    // 3. Grab the current cage: pull the vertex farthest along +X.
+    let far = s
+        .posed_cage()
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.x.total_cmp(&b.1.x))
+        .map(|(k, _)| k)
+        .unwrap_or(0);
+    let target = s.posed_cage()[far] + DVec3::new(0.0, 0.1 * size, 0.0);
+    let t = Instant::now();
+    s.move_posed_cage(&[far], &[DVec3::new(0.0, 0.1 * size, 0.0)])?;
+    println!(
+        "3. current-cage grab: vertex {far} → C (CageRev refactor + solve), full loop synced in {:.3} ms; landed {:.2e} from target",
+        t.elapsed().as_secs_f64() * 1e3,
+        s.posed_cage()[far].distance(target)
+    );
+    files.add_state("3_grab", &s)?;
+    let n = files.write_all(out)?;
+    println!("{n} files written to {}", out.display());
+    Ok(())
+}
+
+// ----- subdivide -----------------------------------------------------------------------------
+
+pub fn subdivide(rig: &RigArgs, levels: usize, out: &Path, name: &str) -> anyhow::Result<()> {
+    crate::rig_source::subdivide_and_write(rig, levels, out, name)
+}

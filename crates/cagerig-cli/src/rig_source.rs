@@ -1,0 +1,163 @@
+//! Where a rig comes from: files on disk (with companions discovered beside the mesh, as the
+//! paper tool does) or a built-in demo rig.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use cagerig::session::RigParts;
+use cagerig::{CageCoords, Warning};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::commands::FileUse;
+
+/// Rig selection shared by the subcommands.
+#[derive(Debug, Clone, Args)]
+pub struct RigArgs {
+    /// Character mesh (OBJ). Companions are discovered beside it: `<stem>.skt`, `<stem>.skw`,
+    /// `<stem>_corWeights.txt`, `<stem>_cage.obj`; beside the cage `<cage>_cageWeights.txt`,
+    /// `<cage>.maxvol` (or `<stem>_maxvol.txt`).
+    #[arg(required_unless_present = "builtin")]
+    pub mesh: Option<PathBuf>,
+    /// Cage (OBJ); default `<stem>_cage.obj` beside the mesh.
+    #[arg(long)]
+    pub cage: Option<PathBuf>,
+    /// Use a built-in demo rig instead of files (bar, bar_irregular, snake).
+    #[arg(long, conflicts_with = "mesh")]
+    pub builtin: Option<String>,
+    /// Mesh resolution parameter of the built-in rig.
+    #[arg(long, requires = "builtin")]
+    pub resolution: Option<usize>,
+}
+
+/// A loaded rig and what was used to build it.
+pub struct LoadedRig {
+    pub name: String,
+    pub parts: RigParts,
+    pub files: Vec<FileUse>,
+    pub warnings: Vec<Warning>,
+    /// Path of the shipped MaxVol selection, when one was found.
+    pub maxvol_path: Option<PathBuf>,
+}
+
+/// Loads the rig. With `compute_coords`, Φ is computed (with a progress bar when `progress` and
+/// stderr is a terminal) if no cage-weights file was found.
+pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow::Result<LoadedRig> {
+    let mut loaded = match (&args.builtin, &args.mesh) {
+        (Some(name), _) => {
+            let rig = cagerig::demo::builtin(name, args.resolution)
+                .with_context(|| format!("building the built-in rig {name:?}"))?;
+            LoadedRig {
+                name: format!("builtin:{name}"),
+                parts: RigParts {
+                    mesh: rig.mesh,
+                    skeleton: rig.skeleton,
+                    skin_weights: rig.skin_weights,
+                    cage: rig.cage,
+                    cage_coords: None,
+                    maxvol_rows: None,
+                    cor_rows: None,
+                    joint_coords: None,
+                },
+                files: Vec::new(),
+                warnings: rig.warnings,
+                maxvol_path: None,
+            }
+        }
+        (None, Some(mesh)) => load_files(mesh, args.cage.as_deref())?,
+        (None, None) => bail!("give a mesh file or --builtin NAME"),
+    };
+    if compute_coords && loaded.parts.cage_coords.is_none() {
+        loaded.parts.cage_coords = Some(compute_coords_with_progress(&loaded.parts, progress)?);
+    }
+    Ok(loaded)
+}
+
+fn load_files(mesh: &Path, cage: Option<&Path>) -> anyhow::Result<LoadedRig> {
+    let rig = cagerig::io::rig_files::load_rig_files(mesh, cage)?;
+    Ok(LoadedRig {
+        name: mesh.display().to_string(),
+        files: rig
+            .files
+            .into_iter()
+            .map(|(role, path)| FileUse {
+                role: role.to_string(),
+                path,
+            })
+            .collect(),
+        parts: rig.parts,
+        warnings: rig.warnings,
+        maxvol_path: rig.maxvol_path,
+    })
+}
+
+/// Mean value coordinates of the rest mesh w.r.t. the rest cage, with a progress bar on a
+/// terminal.
+pub fn compute_coords_with_progress(parts: &RigParts, progress: bool) -> anyhow::Result<CageCoords> {
+    let n = parts.mesh.num_vertices();
+    let bar = (progress && std::io::stderr().is_terminal() && n > 20_000).then(|| {
+        let bar = ProgressBar::new(n as u64);
+        bar.set_style(
+            ProgressStyle::with_template("mean value coordinates {bar:40} {pos}/{len} {eta}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let report = |done: usize| {
+        if let Some(b) = &bar {
+            b.set_position(done as u64);
+        }
+    };
+    let phi = cagerig::coords::mvc::compute_cage_coords(
+        &parts.cage,
+        &parts.mesh.positions,
+        Some(&report),
+    )
+    .context("computing mean value coordinates")?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    Ok(phi)
+}
+
+/// `cagerig subdivide`: N levels of midpoint subdivision, written as a rig file set.
+pub fn subdivide_and_write(
+    args: &RigArgs,
+    levels: usize,
+    out: &Path,
+    name: &str,
+) -> anyhow::Result<()> {
+    let loaded = load_rig(args, true, false)?;
+    let p = &loaded.parts;
+    let t = std::time::Instant::now();
+    let sub = cagerig::subdivide::subdivide_rig(
+        &p.mesh,
+        &p.skin_weights,
+        p.cor_rows.as_ref(),
+        levels,
+    )?;
+    println!(
+        "subdivided {} → {} vertices, {} triangles in {:.1} ms",
+        p.mesh.num_vertices(),
+        sub.mesh.num_vertices(),
+        sub.mesh.num_triangles(),
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    let sub_parts = RigParts {
+        mesh: sub.mesh,
+        skeleton: p.skeleton.clone(),
+        skin_weights: sub.skin_weights,
+        cage: p.cage.clone(),
+        cage_coords: None,
+        maxvol_rows: None,
+        cor_rows: sub.cor_rows,
+        joint_coords: None,
+    };
+    let phi = compute_coords_with_progress(&sub_parts, true)?;
+    let rows = cagerig::coords::maxvol::select_maxvol_rows(&phi)?.rows;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    cagerig::io::rig_files::write_rig_files(out, name, &sub_parts, &phi, &rows)?;
+    println!("rig files written to {} as {name}.*", out.display());
+    Ok(())
+}

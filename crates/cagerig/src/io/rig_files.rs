@@ -1,0 +1,135 @@
+//! A whole rig on disk: the mesh and its companions, discovered beside it the way the paper
+//! tool does (see [`super::discovery`]), read and validated into [`RigParts`]; and the reverse,
+//! writing a rig as such a file set.
+
+use std::path::{Path, PathBuf};
+
+use super::discovery::discover;
+use super::error::ParseError;
+use super::text::FloatFormat;
+use crate::cage_coords::CageCoords;
+use crate::error::Warning;
+use crate::session::RigParts;
+
+/// A rig read from files.
+#[derive(Debug, Clone)]
+pub struct RigFiles {
+    pub parts: RigParts,
+    /// `(role, path)` of every file that was read.
+    pub files: Vec<(&'static str, PathBuf)>,
+    /// Validation warnings (weights renormalised, …).
+    pub warnings: Vec<Warning>,
+    /// The shipped MaxVol selection file, if one was found.
+    pub maxvol_path: Option<PathBuf>,
+}
+
+/// Reads `mesh` (OBJ) and its companions. The skeleton (`.skt`), the skinning weights (`.skw`)
+/// and the cage are required; Φ, MaxVol rows and CoR weights are optional (computed later).
+pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, ParseError> {
+    let found = discover(mesh, cage);
+    let missing = |what: &str, expected: String| ParseError::Io {
+        path: mesh.to_path_buf(),
+        kind: std::io::ErrorKind::NotFound,
+        message: format!("no {what} found beside the mesh (looked for {expected})"),
+    };
+    let stem = mesh
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut files = Vec::new();
+    let mesh_data = super::obj::read_obj(mesh)?;
+    files.push(("mesh", mesh.to_path_buf()));
+    let skeleton_path = found
+        .skeleton
+        .clone()
+        .ok_or_else(|| missing("skeleton", format!("{stem}.skt")))?;
+    let skeleton = super::skt::read_skt(&skeleton_path)?;
+    files.push(("skeleton", skeleton_path));
+    let weights_path = found
+        .skin_weights
+        .clone()
+        .ok_or_else(|| missing("skinning weights", format!("{stem}.skw")))?;
+    let (skin_weights, mut warnings) =
+        super::skw::read_skw(&weights_path, mesh_data.num_vertices(), skeleton.len())?;
+    files.push(("skin_weights", weights_path));
+    let cage_path = found
+        .cage
+        .clone()
+        .ok_or_else(|| missing("cage", format!("{stem}_cage.obj or --cage")))?;
+    let cage_data = super::obj::read_obj(&cage_path)?;
+    files.push(("cage", cage_path));
+    let nv = mesh_data.num_vertices();
+    let nc = cage_data.num_vertices();
+    let cage_coords = match &found.cage_coords {
+        Some(p) => {
+            let phi = super::cage_weights::read_cage_weights(p, nv, nc)?;
+            files.push(("cage_coords", p.clone()));
+            Some(phi)
+        }
+        None => None,
+    };
+    let maxvol_rows = match &found.maxvol {
+        Some(p) => {
+            let rows = super::maxvol::read_maxvol(p, nv)?;
+            files.push(("maxvol", p.clone()));
+            if rows.len() != nc {
+                warnings.push(Warning::Note {
+                    message: format!(
+                        "{} selects {} rows for a {nc}-vertex cage: least-squares fit",
+                        p.display(),
+                        rows.len()
+                    ),
+                });
+            }
+            Some(rows)
+        }
+        None => None,
+    };
+    let cor_rows = match &found.cor_weights {
+        Some(p) => {
+            let rows = super::cor_weights::read_cor_weights(p, nv)?;
+            files.push(("cor_weights", p.clone()));
+            Some(rows)
+        }
+        None => None,
+    };
+    Ok(RigFiles {
+        parts: RigParts {
+            mesh: mesh_data,
+            skeleton,
+            skin_weights,
+            cage: cage_data,
+            cage_coords,
+            maxvol_rows,
+            cor_rows,
+            joint_coords: None,
+        },
+        files,
+        warnings,
+        maxvol_path: found.maxvol,
+    })
+}
+
+/// Writes a rig as `<name>.obj`, `.skt`, `.skw`, `<name>_cage.obj`,
+/// `<name>_cage_cageWeights.txt`, `<name>_cage.maxvol` and, when present,
+/// `<name>_corWeights.txt` into `dir` (each file replaced atomically). Round-trip floats.
+pub fn write_rig_files(
+    dir: &Path,
+    name: &str,
+    parts: &RigParts,
+    cage_coords: &CageCoords,
+    maxvol_rows: &[usize],
+) -> Result<(), ParseError> {
+    let fmt = FloatFormat::RoundTrip;
+    let p = |suffix: &str| dir.join(format!("{name}{suffix}"));
+    super::obj::write_obj(&p(".obj"), &parts.mesh.positions, &parts.mesh.triangles)?;
+    super::skt::write_skt(&p(".skt"), &parts.skeleton)?;
+    super::skw::write_skw(&p(".skw"), &parts.skin_weights, fmt)?;
+    super::obj::write_obj(&p("_cage.obj"), &parts.cage.positions, &parts.cage.triangles)?;
+    super::cage_weights::write_cage_weights(&p("_cage_cageWeights.txt"), cage_coords, fmt)?;
+    super::maxvol::write_maxvol(&p("_cage.maxvol"), maxvol_rows)?;
+    if let Some(rows) = &parts.cor_rows {
+        super::cor_weights::write_cor_weights(&p("_corWeights.txt"), rows, fmt)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,111 @@
+//! Asynchronous playback of a skeleton track and a cage track on a [`RigSession`] (Section 5,
+//! Figures 9–11): each track has its own keyframe times; a sample at time t sets the rest cage
+//! C = C₀ + offsets(t) and the joint rotations of the skeleton track, then SkelUp moves the
+//! bones with the cage before skinning and CageUp.
+//!
+//! Skeleton keys are local transforms `parent_from_joint`: only their rotations are used, plus
+//! the translation of each root relative to the rest skeleton as loaded (root motion). Bone
+//! offsets come from the current rest skeleton, which follows the cage.
+
+use glam::{DAffine3, DQuat, DVec3};
+
+use crate::animation::{CageTrack, SkeletonTrack};
+use crate::error::RigError;
+use crate::session::RigSession;
+
+/// Plays tracks on a session; holds the per-frame buffers (no allocation per sample).
+#[derive(Debug, Clone)]
+pub struct AnimationPlayer {
+    skeleton_track: Option<SkeletonTrack>,
+    cage_track: Option<CageTrack>,
+    /// Root translations of the rest skeleton as loaded, `#J` (zero for non-roots).
+    original_root_translation: Vec<DVec3>,
+    locals: Vec<DAffine3>,
+    rotations: Vec<DQuat>,
+    root_motion: Vec<DVec3>,
+    offsets: Vec<DVec3>,
+}
+
+impl AnimationPlayer {
+    /// Checks the tracks against the session's rig (joint and cage vertex counts).
+    pub fn new(
+        session: &RigSession,
+        skeleton_track: Option<SkeletonTrack>,
+        cage_track: Option<CageTrack>,
+    ) -> Result<Self, RigError> {
+        let nj = session.skeleton().len();
+        let nc = session.rest_cage().len();
+        if let Some(t) = &skeleton_track
+            && t.num_joints() != nj
+        {
+            return Err(RigError::SizeMismatch {
+                what: "joints in the skeleton animation",
+                expected: nj,
+                actual: t.num_joints(),
+            });
+        }
+        if let Some(t) = &cage_track
+            && t.num_cage_vertices() != nc
+        {
+            return Err(RigError::SizeMismatch {
+                what: "vertices in the cage animation",
+                expected: nc,
+                actual: t.num_cage_vertices(),
+            });
+        }
+        let original_root_translation = session
+            .skeleton()
+            .joints()
+            .iter()
+            .map(|j| match j.parent {
+                None => j.rest_world_from_joint.translation,
+                Some(_) => DVec3::ZERO,
+            })
+            .collect();
+        let mut locals = vec![DAffine3::IDENTITY; nj];
+        session
+            .skeleton()
+            .locals_from_worlds(&session.skeleton().rest_world_from_joint(), &mut locals);
+        Ok(Self {
+            skeleton_track,
+            cage_track,
+            original_root_translation,
+            rotations: locals.iter().map(|l| DQuat::from_mat3(&l.matrix3)).collect(),
+            locals,
+            root_motion: vec![DVec3::ZERO; nj],
+            offsets: vec![DVec3::ZERO; nc],
+        })
+    }
+
+    /// Last keyframe time over both tracks.
+    pub fn duration(&self) -> f64 {
+        let last = |times: &[f64]| times.last().copied().unwrap_or(0.0);
+        let s = self.skeleton_track.as_ref().map_or(0.0, |t| last(t.times()));
+        let c = self.cage_track.as_ref().map_or(0.0, |t| last(t.times()));
+        s.max(c)
+    }
+
+    /// Samples both tracks at `t` seconds (clamped to each track's range) and runs the full
+    /// sync on the session.
+    pub fn apply(&mut self, t: f64, session: &mut RigSession) -> Result<(), RigError> {
+        if let Some(track) = &self.skeleton_track {
+            track.sample(t, &mut self.locals);
+            for (j, local) in self.locals.iter().enumerate() {
+                self.rotations[j] = DQuat::from_mat3(&local.matrix3).normalize();
+                self.root_motion[j] = if session.skeleton().parent(j).is_none() {
+                    local.translation - self.original_root_translation[j]
+                } else {
+                    DVec3::ZERO
+                };
+            }
+        }
+        let offsets = match &self.cage_track {
+            Some(track) => {
+                track.sample(t, &mut self.offsets);
+                Some(self.offsets.as_slice())
+            }
+            None => None,
+        };
+        session.set_animation_sample(offsets, &self.rotations, &self.root_motion)
+    }
+}

@@ -1,0 +1,241 @@
+//! Edit scripts: a JSON list of user events replayed on a [`RigSession`] (one step = one event).
+//!
+//! ```json
+//! {"skinning":"lbs","steps":[
+//!   {"op":"rotate_joint","joint":"lowerarm01.R","axis":[1,0,0],"degrees":60},
+//!   {"op":"move_rest_cage","vertices":[0,2,4,5,6],"offset":[2,-1,1.5]},
+//!   {"op":"move_posed_cage","vertices":[20,23,25],"offset":[-1.5,2,0.5]},
+//!   {"op":"set_skinning","method":"dqs"}]}
+//! ```
+//! `joint` is a name or an index. The whole script is parsed and checked against the rig before
+//! any step runs, so a bad step is reported (with its number) before anything happens.
+
+use glam::DVec3;
+use serde::Deserialize;
+use thiserror::Error;
+
+use crate::error::RigError;
+use crate::session::RigSession;
+use crate::skinning::SkinningMethod;
+
+/// A joint given by name or by index.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum JointRef {
+    Index(usize),
+    Name(String),
+}
+
+/// One user event.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
+pub enum EditStep {
+    /// Rotate a joint about a world axis through its current position (S' edit).
+    RotateJoint {
+        joint: JointRef,
+        axis: [f64; 3],
+        degrees: f64,
+    },
+    /// Translate rest-cage vertices (C edit).
+    MoveRestCage { vertices: Vec<usize>, offset: [f64; 3] },
+    /// Translate current-cage vertices (C' edit).
+    MovePosedCage { vertices: Vec<usize>, offset: [f64; 3] },
+    /// Switch the skinning method.
+    SetSkinning { method: SkinningMethod },
+    /// Back to the rest pose.
+    ResetPose {},
+}
+
+/// A parsed script.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EditScript {
+    /// Skinning method to start with (the rig's default when absent).
+    pub skinning: Option<SkinningMethod>,
+    pub steps: Vec<EditStep>,
+}
+
+/// Problems with a script; step numbers are 1-based like the output files.
+#[derive(Debug, Error)]
+pub enum ScriptError {
+    #[error("the script is not valid JSON: {0}")]
+    Json(String),
+    #[error("the script must be an object with a \"steps\" array{0}")]
+    Shape(String),
+    #[error("step {step}: {message}")]
+    Step { step: usize, message: String },
+    #[error("step {step}: {source}")]
+    Rig {
+        step: usize,
+        #[source]
+        source: RigError,
+    },
+}
+
+impl EditScript {
+    /// Parses a script, naming the first bad step.
+    pub fn parse(text: &str) -> Result<Self, ScriptError> {
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| ScriptError::Json(e.to_string()))?;
+        let obj = value
+            .as_object()
+            .ok_or_else(|| ScriptError::Shape(String::new()))?;
+        if let Some(key) = obj.keys().find(|k| *k != "skinning" && *k != "steps") {
+            return Err(ScriptError::Shape(format!(" (unknown key {key:?})")));
+        }
+        let skinning = match obj.get("skinning") {
+            None => None,
+            Some(v) => Some(
+                SkinningMethod::deserialize(v)
+                    .map_err(|e| ScriptError::Shape(format!(" (\"skinning\": {e})")))?,
+            ),
+        };
+        let steps = obj
+            .get("steps")
+            .and_then(|s| s.as_array())
+            .ok_or_else(|| ScriptError::Shape(String::new()))?
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                EditStep::deserialize(v).map_err(|e| ScriptError::Step {
+                    step: i + 1,
+                    message: e.to_string(),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self { skinning, steps })
+    }
+
+    /// Checks every step against the rig (joint names/indices, cage indices, finite numbers).
+    pub fn validate(&self, session: &RigSession) -> Result<(), ScriptError> {
+        for (i, step) in self.steps.iter().enumerate() {
+            let step_no = i + 1;
+            let fail = |message: String| ScriptError::Step {
+                step: step_no,
+                message,
+            };
+            match step {
+                EditStep::RotateJoint {
+                    joint,
+                    axis,
+                    degrees,
+                } => {
+                    resolve_joint(session, joint).map_err(fail)?;
+                    let axis = DVec3::from_array(*axis);
+                    if !axis.is_finite() || axis.length_squared() == 0.0 {
+                        return Err(fail(format!("axis {axis} must be finite and non-zero")));
+                    }
+                    if !degrees.is_finite() {
+                        return Err(fail(format!("angle {degrees} is not finite")));
+                    }
+                }
+                EditStep::MoveRestCage { vertices, offset }
+                | EditStep::MovePosedCage { vertices, offset } => {
+                    let n = session.rest_cage().len();
+                    if vertices.is_empty() {
+                        return Err(fail("no cage vertices given".into()));
+                    }
+                    if let Some(v) = vertices.iter().find(|&&v| v >= n) {
+                        return Err(fail(format!(
+                            "cage vertex {v} is out of range (the cage has {n} vertices)"
+                        )));
+                    }
+                    if !DVec3::from_array(*offset).is_finite() {
+                        return Err(fail("offset is not finite".into()));
+                    }
+                }
+                EditStep::SetSkinning { .. } | EditStep::ResetPose {} => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs step `index` (0-based) on the session.
+    pub fn run_step(&self, index: usize, session: &mut RigSession) -> Result<(), ScriptError> {
+        let step_no = index + 1;
+        let rig = |source| ScriptError::Rig {
+            step: step_no,
+            source,
+        };
+        match &self.steps[index] {
+            EditStep::RotateJoint {
+                joint,
+                axis,
+                degrees,
+            } => {
+                let j = resolve_joint(session, joint).map_err(|message| ScriptError::Step {
+                    step: step_no,
+                    message,
+                })?;
+                session
+                    .rotate_joint(j, DVec3::from_array(*axis), degrees.to_radians())
+                    .map_err(rig)
+            }
+            EditStep::MoveRestCage { vertices, offset } => session
+                .move_rest_cage(vertices, &[DVec3::from_array(*offset)])
+                .map_err(rig),
+            EditStep::MovePosedCage { vertices, offset } => session
+                .move_posed_cage(vertices, &[DVec3::from_array(*offset)])
+                .map_err(rig),
+            EditStep::SetSkinning { method } => session.set_skinning(*method).map_err(rig),
+            EditStep::ResetPose {} => {
+                session.reset_pose();
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Index of a joint given by name or index.
+pub fn resolve_joint(session: &RigSession, joint: &JointRef) -> Result<usize, String> {
+    let n = session.skeleton().len();
+    match joint {
+        JointRef::Index(j) if *j < n => Ok(*j),
+        JointRef::Index(j) => Err(format!("joint {j} is out of range (the rig has {n} joints)")),
+        JointRef::Name(name) => session
+            .skeleton()
+            .find(name)
+            .ok_or_else(|| format!("unknown joint {name:?}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_the_documented_example_and_names_bad_steps() {
+        let s = EditScript::parse(
+            r#"{"skinning":"lbs","steps":[
+            {"op":"rotate_joint","joint":"lowerarm01.R","axis":[1,0,0],"degrees":60},
+            {"op":"move_rest_cage","vertices":[0,2,4,5,6],"offset":[2,-1,1.5]},
+            {"op":"move_posed_cage","vertices":[20,23,25],"offset":[-1.5,2,0.5]},
+            {"op":"set_skinning","method":"dqs"},
+            {"op":"rotate_joint","joint":3,"axis":[0,0,1],"degrees":-10}]}"#,
+        )
+        .unwrap();
+        assert_eq!(s.steps.len(), 5);
+        assert_eq!(s.skinning, Some(SkinningMethod::Lbs));
+        assert_eq!(
+            s.steps[4],
+            EditStep::RotateJoint {
+                joint: JointRef::Index(3),
+                axis: [0.0, 0.0, 1.0],
+                degrees: -10.0
+            }
+        );
+        let err = EditScript::parse(
+            r#"{"steps":[{"op":"reset_pose"},{"op":"explode","vertices":[1]}]}"#,
+        )
+        .unwrap_err();
+        assert!(matches!(err, ScriptError::Step { step: 2, .. }), "{err}");
+        assert!(err.to_string().contains("explode"));
+        assert!(matches!(
+            EditScript::parse("[1,2]"),
+            Err(ScriptError::Shape(_))
+        ));
+        assert!(matches!(
+            EditScript::parse(r#"{"steps":[{"op":"move_rest_cage","vertices":[1]}]}"#),
+            Err(ScriptError::Step { step: 1, .. })
+        ));
+    }
+}

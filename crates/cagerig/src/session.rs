@@ -1,0 +1,727 @@
+//! The coupled rig session: the six structures M, S, C (rest) and M', S', C' (current) kept in
+//! consensus under any interleaving of the three user interactions (Section 4, Figures 3–4):
+//! editing the current skeleton S', the rest cage C, or the current cage C'.
+//!
+//! Pose parametrisation: the current skeleton is given by local joint rotations plus a motion of
+//! each root; bone offsets always come from the rest skeleton. When SkelUp moves the rest joints,
+//! the rotations T_j^r are thus kept and the translations T_j^t re-derived root-first (Sec. 4.2).
+//! Every event ends with C' = CageUp(M') so that the loop C' → C → S → S' → C' is closed.
+
+use glam::{DAffine3, DMat3, DQuat, DVec3};
+
+use crate::cage::validate_cage;
+use crate::cage_coords::CageCoords;
+use crate::coords::{maxvol, mvc};
+use crate::error::{RigError, Warning};
+use crate::mesh::TriMesh;
+use crate::skeleton::Skeleton;
+use crate::skin_weights::SkinWeights;
+use crate::skinning::SkinningMethod;
+use crate::skinning::cor::CenterOfRotationSkinning;
+use crate::skinning::cor_centres::{CorCentresOptions, compute_cor_centres};
+use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
+use crate::skinning::lbs::LinearBlendSkinning;
+use crate::sparse_rows::SparseRows;
+use crate::sync::cage_reverser::CageReverser;
+use crate::sync::cage_updater::{CageFitMode, CageUpdater};
+use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
+
+/// Which mesh CageUp fits when the skinning method is not LBS (Section 4.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CageFitSource {
+    /// An LBS "ghost" of the fitted rows drives CageUp whatever the skinning method, so the
+    /// loop C' → C → S → S' → C' stays exact for DQS and CoR too (the default).
+    #[default]
+    GhostLbs,
+    /// CageUp fits the displayed mesh; with DQS/CoR the reverse deformer is then approximate.
+    DisplayedMesh,
+}
+
+/// Which mesh rows CageUp and CageRev use.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum FitRows {
+    /// Given rows (e.g. a shipped `.maxvol` file) if any, else computed MaxVol rows.
+    #[default]
+    MaxVol,
+    /// All mesh rows, least squares (the reference tool's GUI behaviour; slow on big meshes).
+    AllRows,
+    /// Explicit rows; interpolation when there are `#C` of them, least squares otherwise.
+    Rows(Vec<usize>),
+}
+
+/// Options for assembling a session.
+#[derive(Debug, Clone, Default)]
+pub struct SessionOptions {
+    pub localisation: JointLocalisation,
+    pub fit_rows: FitRows,
+    pub fit_source: CageFitSource,
+    pub skinning: SkinningMethod,
+    pub cor_centres: CorCentresOptions,
+}
+
+/// Rig inputs: the rest structures and optional precomputed data (computed when absent).
+#[derive(Debug, Clone)]
+pub struct RigParts {
+    /// Rest skin M.
+    pub mesh: TriMesh,
+    /// Rest skeleton S.
+    pub skeleton: Skeleton,
+    /// Ω, `#V × #J`.
+    pub skin_weights: SkinWeights,
+    /// Rest cage C (validated here).
+    pub cage: TriMesh,
+    /// Φ, `#V × #C` (mean value coordinates computed when absent).
+    pub cage_coords: Option<CageCoords>,
+    /// MaxVol rows (computed when absent and needed).
+    pub maxvol_rows: Option<Vec<usize>>,
+    /// CoR centres as combinations of rest vertices, `#V × #V` sparse (computed on first use
+    /// of CoR skinning when absent).
+    pub cor_rows: Option<SparseRows>,
+    /// Ψ, `#J` rows of `#C` (computed when absent).
+    pub joint_coords: Option<Vec<Vec<f64>>>,
+}
+
+/// CoR data: Λ = S·Φ (`#V × #C`, Eq. 14) and the current centres Λ·C.
+#[derive(Debug, Clone)]
+struct CorState {
+    centre_coords: CageCoords,
+    centres: Vec<DVec3>,
+    skinning: CenterOfRotationSkinning,
+}
+
+/// A live coupled rig.
+#[derive(Debug, Clone)]
+pub struct RigSession {
+    // Static data.
+    mesh_triangles: Vec<[u32; 3]>,
+    cage_triangles: Vec<[u32; 3]>,
+    skeleton: Skeleton,
+    skin_weights: SkinWeights,
+    cage_coords: CageCoords,
+    skeleton_updater: SkeletonUpdater,
+    cage_updater: CageUpdater,
+    reverser: CageReverser,
+    lbs: LinearBlendSkinning,
+    dqs: DualQuaternionSkinning,
+    ghost_lbs: LinearBlendSkinning,
+    cor_rows: Option<SparseRows>,
+    cor: Option<CorState>,
+    cor_options: CorCentresOptions,
+    options_fit_source: CageFitSource,
+    method: SkinningMethod,
+    /// Original rest cage C₀ (cage-animation offsets are relative to it).
+    original_rest_cage: Vec<DVec3>,
+
+    // Rest state.
+    rest_cage: Vec<DVec3>,
+    rest_mesh: Vec<DVec3>,
+    rest_world_from_joint: Vec<DAffine3>,
+
+    // Current state.
+    /// Local rotations of the current pose (parent_from_joint linear part), `#J`.
+    posed_local_rotation: Vec<DQuat>,
+    /// For roots: current translation minus rest translation (zero for other joints).
+    root_motion: Vec<DVec3>,
+    posed_world_from_joint: Vec<DAffine3>,
+    posed_from_rest: Vec<DAffine3>,
+    posed_mesh: Vec<DVec3>,
+    posed_cage: Vec<DVec3>,
+
+    // Scratch.
+    scratch_locals: Vec<DAffine3>,
+    scratch_joints: Vec<DVec3>,
+    scratch_rotations: Vec<DMat3>,
+    scratch_cage_a: Vec<DVec3>,
+    scratch_cage_b: Vec<DVec3>,
+    scratch_touched: Vec<usize>,
+    scratch_rows_rest: Vec<DVec3>,
+    scratch_rows_posed: Vec<DVec3>,
+    dqs_scratch: DqsScratch,
+}
+
+impl RigSession {
+    /// Validates the parts, computes what is missing (Φ, MaxVol rows, Ψ), builds the operators
+    /// and places the rig at rest. Returns the warnings gathered on the way.
+    pub fn new(parts: RigParts, options: SessionOptions) -> Result<(Self, Vec<Warning>), RigError> {
+        let RigParts {
+            mesh,
+            skeleton,
+            skin_weights,
+            cage,
+            cage_coords,
+            maxvol_rows,
+            cor_rows,
+            joint_coords,
+        } = parts;
+        let nv = mesh.num_vertices();
+        if skin_weights.num_vertices() != nv {
+            return Err(RigError::SizeMismatch {
+                what: "skinning weight rows (mesh vertices)",
+                expected: nv,
+                actual: skin_weights.num_vertices(),
+            });
+        }
+        if skin_weights.num_joints() != skeleton.len() {
+            return Err(RigError::SizeMismatch {
+                what: "skinning weight columns (joints)",
+                expected: skeleton.len(),
+                actual: skin_weights.num_joints(),
+            });
+        }
+        let (cage, mut warnings) = validate_cage(cage)?;
+        let nc = cage.num_vertices();
+        let cage_coords = match cage_coords {
+            Some(phi) => {
+                if phi.num_vertices() != nv || phi.num_cage_vertices() != nc {
+                    return Err(RigError::SizeMismatch {
+                        what: "cage coordinates shape (#V × #C)",
+                        expected: nv * nc,
+                        actual: phi.num_vertices() * phi.num_cage_vertices(),
+                    });
+                }
+                phi
+            }
+            None => mvc::compute_cage_coords(&cage, &mesh.positions, None)?,
+        };
+        let (rows, mode) = match options.fit_rows {
+            FitRows::MaxVol => match maxvol_rows {
+                Some(rows) => (rows, CageFitMode::Interpolate),
+                None => (
+                    maxvol::select_maxvol_rows(&cage_coords)?.rows,
+                    CageFitMode::Interpolate,
+                ),
+            },
+            FitRows::AllRows => ((0..nv).collect(), CageFitMode::LeastSquares),
+            FitRows::Rows(rows) => {
+                let mode = if rows.len() == nc {
+                    CageFitMode::Interpolate
+                } else {
+                    CageFitMode::LeastSquares
+                };
+                (rows, mode)
+            }
+        };
+        let cage_updater = CageUpdater::new(&cage_coords, rows, mode)?;
+        let rest_cage = cage.positions.clone();
+        let skeleton_updater = match joint_coords {
+            Some(rows) => SkeletonUpdater::from_joint_coords(&rows, nc)?,
+            None => {
+                let (up, w) = SkeletonUpdater::new(
+                    &mesh,
+                    &skeleton,
+                    &skin_weights,
+                    &cage_coords,
+                    &rest_cage,
+                    options.localisation,
+                )?;
+                warnings.extend(w);
+                up
+            }
+        };
+        let reverser = CageReverser::new(
+            &cage_coords,
+            cage_updater.rows(),
+            cage_updater.cage_from_rows(),
+            &skin_weights,
+            |j| skeleton_updater.joint_row(j).to_vec(),
+            &skeleton,
+        )?;
+        let nj = skeleton.len();
+        let nr = cage_updater.rows().len();
+        let ghost_lbs = LinearBlendSkinning::new(&skin_weights.select_rows(cage_updater.rows()));
+        let rest_world_from_joint = skeleton.rest_world_from_joint();
+        let mut locals = vec![DAffine3::IDENTITY; nj];
+        skeleton.locals_from_worlds(&rest_world_from_joint, &mut locals);
+        let posed_local_rotation = locals
+            .iter()
+            .map(|l| DQuat::from_mat3(&l.matrix3))
+            .collect();
+        let mut session = Self {
+            mesh_triangles: mesh.triangles.clone(),
+            cage_triangles: cage.triangles.clone(),
+            lbs: LinearBlendSkinning::new(&skin_weights),
+            dqs: DualQuaternionSkinning::new(&skin_weights),
+            dqs_scratch: DqsScratch::new(nj),
+            ghost_lbs,
+            skeleton,
+            skin_weights,
+            cage_coords,
+            skeleton_updater,
+            cage_updater,
+            reverser,
+            cor_rows,
+            cor: None,
+            cor_options: options.cor_centres,
+            options_fit_source: options.fit_source,
+            method: SkinningMethod::Lbs,
+            original_rest_cage: rest_cage.clone(),
+            rest_cage,
+            rest_mesh: mesh.positions,
+            rest_world_from_joint,
+            posed_local_rotation,
+            root_motion: vec![DVec3::ZERO; nj],
+            posed_world_from_joint: vec![DAffine3::IDENTITY; nj],
+            posed_from_rest: vec![DAffine3::IDENTITY; nj],
+            posed_mesh: vec![DVec3::ZERO; nv],
+            posed_cage: vec![DVec3::ZERO; nc],
+            scratch_locals: locals,
+            scratch_joints: vec![DVec3::ZERO; nj],
+            scratch_rotations: vec![DMat3::IDENTITY; nj],
+            scratch_cage_a: vec![DVec3::ZERO; nc],
+            scratch_cage_b: vec![DVec3::ZERO; nc],
+            scratch_touched: Vec::with_capacity(nc),
+            scratch_rows_rest: vec![DVec3::ZERO; nr],
+            scratch_rows_posed: vec![DVec3::ZERO; nr],
+        };
+        session.set_skinning(options.skinning)?;
+        session.pose_and_fit();
+        Ok((session, warnings))
+    }
+
+    // ----- accessors -------------------------------------------------------------------------
+
+    /// Rest skin M (`#V`).
+    pub fn rest_mesh(&self) -> &[DVec3] {
+        &self.rest_mesh
+    }
+    /// Current skin M' (`#V`).
+    pub fn posed_mesh(&self) -> &[DVec3] {
+        &self.posed_mesh
+    }
+    /// Rest cage C (`#C`).
+    pub fn rest_cage(&self) -> &[DVec3] {
+        &self.rest_cage
+    }
+    /// Current cage C' (`#C`).
+    pub fn posed_cage(&self) -> &[DVec3] {
+        &self.posed_cage
+    }
+    /// The original rest cage C₀ as loaded.
+    pub fn original_rest_cage(&self) -> &[DVec3] {
+        &self.original_rest_cage
+    }
+    pub fn mesh_triangles(&self) -> &[[u32; 3]] {
+        &self.mesh_triangles
+    }
+    pub fn cage_triangles(&self) -> &[[u32; 3]] {
+        &self.cage_triangles
+    }
+    /// The skeleton topology and its rest frames as loaded.
+    pub fn skeleton(&self) -> &Skeleton {
+        &self.skeleton
+    }
+    pub fn skin_weights(&self) -> &SkinWeights {
+        &self.skin_weights
+    }
+    /// Φ.
+    pub fn cage_coords(&self) -> &CageCoords {
+        &self.cage_coords
+    }
+    pub fn skeleton_updater(&self) -> &SkeletonUpdater {
+        &self.skeleton_updater
+    }
+    pub fn cage_updater(&self) -> &CageUpdater {
+        &self.cage_updater
+    }
+    /// Current rest frames of the joints (S).
+    pub fn rest_world_from_joint(&self) -> &[DAffine3] {
+        &self.rest_world_from_joint
+    }
+    /// Current posed frames of the joints (S').
+    pub fn posed_world_from_joint(&self) -> &[DAffine3] {
+        &self.posed_world_from_joint
+    }
+    /// Skinning transforms T_j = posed_from_rest (Eq. 1–3).
+    pub fn posed_from_rest(&self) -> &[DAffine3] {
+        &self.posed_from_rest
+    }
+    /// Rest joint positions (`#J`).
+    pub fn rest_joints(&self) -> impl Iterator<Item = DVec3> + '_ {
+        self.rest_world_from_joint.iter().map(|t| t.translation)
+    }
+    /// Current joint positions (`#J`).
+    pub fn posed_joints(&self) -> impl Iterator<Item = DVec3> + '_ {
+        self.posed_world_from_joint.iter().map(|t| t.translation)
+    }
+    pub fn skinning(&self) -> SkinningMethod {
+        self.method
+    }
+    pub fn fit_source(&self) -> CageFitSource {
+        self.options_fit_source
+    }
+    /// Current CoR centres (`#V`), if CoR data exists.
+    pub fn cor_centres(&self) -> Option<&[DVec3]> {
+        self.cor.as_ref().map(|c| c.centres.as_slice())
+    }
+    /// Whether the reverse cage deformer currently holds a factorisation.
+    pub fn reverser_is_factorised(&self) -> bool {
+        self.reverser.is_factorised()
+    }
+
+    // ----- user interactions -----------------------------------------------------------------
+
+    /// Switches the skinning method; computes CoR centres on the first switch to CoR.
+    pub fn set_skinning(&mut self, method: SkinningMethod) -> Result<(), RigError> {
+        if method == SkinningMethod::Cor && self.cor.is_none() {
+            self.build_cor()?;
+        }
+        self.method = method;
+        self.pose_and_fit();
+        Ok(())
+    }
+
+    /// Selects what CageUp fits for DQS / CoR (see [`CageFitSource`]).
+    pub fn set_fit_source(&mut self, source: CageFitSource) {
+        self.options_fit_source = source;
+        self.pose_and_fit();
+    }
+
+    /// S' edit: rotates joint `joint` by `angle` radians about the world-space `axis`, pivoting
+    /// on the joint's current position; descendants follow. Then M' and C' follow.
+    pub fn rotate_joint(&mut self, joint: usize, axis: DVec3, angle: f64) -> Result<(), RigError> {
+        self.check_joint(joint)?;
+        let axis = axis.try_normalize().ok_or(RigError::Invalid(format!(
+            "rotation axis {axis} has no direction"
+        )))?;
+        if !angle.is_finite() {
+            return Err(RigError::Invalid(format!("rotation angle {angle} is not finite")));
+        }
+        let world_rotation = DQuat::from_axis_angle(axis, angle);
+        let joint_world = DQuat::from_mat3(&self.posed_world_from_joint[joint].matrix3);
+        let parent_world = match self.skeleton.parent(joint) {
+            Some(p) => DQuat::from_mat3(&self.posed_world_from_joint[p].matrix3),
+            None => DQuat::IDENTITY,
+        };
+        self.posed_local_rotation[joint] =
+            (parent_world.inverse() * world_rotation * joint_world).normalize();
+        self.reverser.invalidate();
+        self.pose_and_fit();
+        Ok(())
+    }
+
+    /// S' edit: sets all local rotations (parent_from_joint linear parts, `#J`) and root motions
+    /// (current minus rest translation of each root; ignored for other joints).
+    pub fn set_pose(
+        &mut self,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
+        self.store_pose(local_rotations, root_motion)?;
+        self.pose_and_fit();
+        Ok(())
+    }
+
+    /// Validates and stores a pose without running the sync chain.
+    fn store_pose(&mut self, local_rotations: &[DQuat], root_motion: &[DVec3]) -> Result<(), RigError> {
+        let nj = self.skeleton.len();
+        if local_rotations.len() != nj || root_motion.len() != nj {
+            return Err(RigError::SizeMismatch {
+                what: "pose joints",
+                expected: nj,
+                actual: local_rotations.len().min(root_motion.len()),
+            });
+        }
+        if let Some(j) = (0..nj).find(|&j| {
+            let q = local_rotations[j];
+            !q.is_finite() || q.length_squared() == 0.0 || !root_motion[j].is_finite()
+        }) {
+            return Err(RigError::NonFinite {
+                what: "pose joint",
+                index: j,
+            });
+        }
+        for (j, (q, m)) in local_rotations.iter().zip(root_motion).enumerate() {
+            self.posed_local_rotation[j] = q.normalize();
+            self.root_motion[j] = if self.skeleton.parent(j).is_none() {
+                *m
+            } else {
+                DVec3::ZERO
+            };
+        }
+        self.reverser.invalidate();
+        Ok(())
+    }
+
+    /// Back to the rest pose (rest cage edits are kept).
+    pub fn reset_pose(&mut self) {
+        let mut locals = std::mem::take(&mut self.scratch_locals);
+        self.skeleton
+            .locals_from_worlds(&self.rest_world_from_joint, &mut locals);
+        for (q, l) in self.posed_local_rotation.iter_mut().zip(&locals) {
+            *q = DQuat::from_mat3(&l.matrix3);
+        }
+        self.scratch_locals = locals;
+        self.root_motion.iter_mut().for_each(|m| *m = DVec3::ZERO);
+        self.reverser.invalidate();
+        self.pose_and_fit();
+    }
+
+    /// C edit: moves rest-cage vertices `vertices` by `offsets` (one per vertex, or one for all).
+    /// M follows incrementally (M += Φ[:, k]·ΔC_k), then SkelUp, skinning and CageUp.
+    pub fn move_rest_cage(&mut self, vertices: &[usize], offsets: &[DVec3]) -> Result<(), RigError> {
+        self.check_cage_edit(vertices, offsets)?;
+        let mut dense = std::mem::take(&mut self.scratch_cage_a);
+        dense.iter_mut().for_each(|d| *d = DVec3::ZERO);
+        for (i, &v) in vertices.iter().enumerate() {
+            dense[v] += offsets[if offsets.len() == 1 { 0 } else { i }];
+        }
+        let mut touched = std::mem::take(&mut self.scratch_touched);
+        let mut compact = std::mem::take(&mut self.scratch_cage_b);
+        touched.clear();
+        for (k, d) in dense.iter().enumerate() {
+            if *d != DVec3::ZERO {
+                compact[touched.len()] = *d;
+                touched.push(k);
+            }
+        }
+        self.apply_rest_cage_delta_sparse(&touched, &compact[..touched.len()]);
+        self.scratch_cage_a = dense;
+        self.scratch_cage_b = compact;
+        self.scratch_touched = touched;
+        self.sync_from_rest_cage();
+        Ok(())
+    }
+
+    /// C' edit: moves current-cage vertices by `offsets`. CageRev (Eq. 19) turns the edit into a
+    /// rest-cage edit (refactorising first if the skeleton moved since the last grab); the full
+    /// chain then re-fits C', which lands on the requested positions (exactly under LBS, or with
+    /// the ghost fit for DQS/CoR).
+    pub fn move_posed_cage(
+        &mut self,
+        vertices: &[usize],
+        offsets: &[DVec3],
+    ) -> Result<(), RigError> {
+        self.check_cage_edit(vertices, offsets)?;
+        if !self.reverser.is_factorised() {
+            for (r, t) in self.scratch_rotations.iter_mut().zip(&self.posed_from_rest) {
+                *r = t.matrix3;
+            }
+            self.reverser.refactor(&self.scratch_rotations)?;
+        }
+        let mut posed_delta = std::mem::take(&mut self.scratch_cage_a);
+        posed_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
+        for (i, &v) in vertices.iter().enumerate() {
+            posed_delta[v] += offsets[if offsets.len() == 1 { 0 } else { i }];
+        }
+        let mut rest_delta = std::mem::take(&mut self.scratch_cage_b);
+        let solved = self.reverser.solve(&posed_delta, &mut rest_delta);
+        if solved.is_ok() {
+            for (c, d) in self.rest_cage.iter_mut().zip(&rest_delta) {
+                *c += *d;
+            }
+            self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+            if let Some(cor) = &mut self.cor {
+                cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+            }
+        }
+        self.scratch_cage_a = posed_delta;
+        self.scratch_cage_b = rest_delta;
+        solved?;
+        self.sync_from_rest_cage();
+        Ok(())
+    }
+
+    /// Animation sample: rest-cage offsets from C₀ (`#C`), local rotations and root motions
+    /// (`#J`); runs SkelUp so that bones follow the cage, then skinning and CageUp.
+    pub fn set_animation_sample(
+        &mut self,
+        rest_cage_offsets: Option<&[DVec3]>,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
+        if let Some(offsets) = rest_cage_offsets {
+            if offsets.len() != self.rest_cage.len() {
+                return Err(RigError::SizeMismatch {
+                    what: "cage animation offsets",
+                    expected: self.rest_cage.len(),
+                    actual: offsets.len(),
+                });
+            }
+            if let Some(i) = offsets.iter().position(|o| !o.is_finite()) {
+                return Err(RigError::NonFinite {
+                    what: "cage animation offset",
+                    index: i,
+                });
+            }
+        }
+        self.store_pose(local_rotations, root_motion)?;
+        if let Some(offsets) = rest_cage_offsets {
+            for ((c, o), c0) in self
+                .rest_cage
+                .iter_mut()
+                .zip(offsets)
+                .zip(&self.original_rest_cage)
+            {
+                *c = *c0 + *o;
+            }
+            self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+            if let Some(cor) = &mut self.cor {
+                cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+            }
+        }
+        self.sync_from_rest_cage();
+        Ok(())
+    }
+
+    // ----- internals ---------------------------------------------------------------------------
+
+    fn check_joint(&self, joint: usize) -> Result<(), RigError> {
+        if joint >= self.skeleton.len() {
+            return Err(RigError::IndexOutOfRange {
+                what: "joint",
+                index: joint,
+                len: self.skeleton.len(),
+            });
+        }
+        Ok(())
+    }
+
+    fn check_cage_edit(&self, vertices: &[usize], offsets: &[DVec3]) -> Result<(), RigError> {
+        if offsets.len() != 1 && offsets.len() != vertices.len() {
+            return Err(RigError::SizeMismatch {
+                what: "cage edit offsets (one, or one per vertex)",
+                expected: vertices.len(),
+                actual: offsets.len(),
+            });
+        }
+        if let Some(&bad) = vertices.iter().find(|&&v| v >= self.rest_cage.len()) {
+            return Err(RigError::IndexOutOfRange {
+                what: "cage vertex",
+                index: bad,
+                len: self.rest_cage.len(),
+            });
+        }
+        if let Some(i) = offsets.iter().position(|o| !o.is_finite()) {
+            return Err(RigError::NonFinite {
+                what: "cage offset",
+                index: i,
+            });
+        }
+        Ok(())
+    }
+
+    fn build_cor(&mut self) -> Result<(), RigError> {
+        let rows = match self.cor_rows.take() {
+            Some(rows) => rows,
+            None => compute_cor_centres(
+                &self.rest_mesh,
+                &self.mesh_triangles,
+                &self.skin_weights,
+                &self.cor_options,
+                None,
+            )?,
+        };
+        let centre_coords = rows.compose_dense(&self.cage_coords)?;
+        let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
+        centre_coords.apply(&self.rest_cage, &mut centres);
+        self.cor = Some(CorState {
+            centre_coords,
+            centres,
+            skinning: CenterOfRotationSkinning::new(&self.skin_weights),
+        });
+        self.cor_rows = Some(rows);
+        Ok(())
+    }
+
+    /// Applies ΔC on a few rest-cage vertices to C, M and the CoR centres.
+    fn apply_rest_cage_delta_sparse(&mut self, vertices: &[usize], deltas: &[DVec3]) {
+        for (&k, d) in vertices.iter().zip(deltas) {
+            self.rest_cage[k] += *d;
+        }
+        self.cage_coords
+            .apply_delta(vertices, deltas, &mut self.rest_mesh);
+        if let Some(cor) = &mut self.cor {
+            cor.centre_coords
+                .apply_delta(vertices, deltas, &mut cor.centres);
+        }
+    }
+
+    /// After C changed: SkelUp (A = ΨC, rest frames re-placed), FK, skinning, CageUp.
+    fn sync_from_rest_cage(&mut self) {
+        self.skeleton_updater
+            .apply(&self.rest_cage, &mut self.scratch_joints);
+        for (frame, a) in self.rest_world_from_joint.iter_mut().zip(&self.scratch_joints) {
+            frame.translation = *a;
+        }
+        self.pose_and_fit();
+    }
+
+    /// FK of the current pose on the current rest skeleton, skinning, CageUp.
+    fn pose_and_fit(&mut self) {
+        // Locals: current rotation, rest bone offset (+ root motion).
+        for j in 0..self.skeleton.len() {
+            let translation = match self.skeleton.parent(j) {
+                Some(p) => self.rest_world_from_joint[p]
+                    .inverse()
+                    .transform_point3(self.rest_world_from_joint[j].translation),
+                None => self.rest_world_from_joint[j].translation + self.root_motion[j],
+            };
+            self.scratch_locals[j] = DAffine3::from_rotation_translation(
+                self.posed_local_rotation[j],
+                translation,
+            );
+        }
+        self.skeleton
+            .forward_kinematics(&self.scratch_locals, &mut self.posed_world_from_joint);
+        Skeleton::skinning_transforms(
+            &self.rest_world_from_joint,
+            &self.posed_world_from_joint,
+            &mut self.posed_from_rest,
+        );
+        self.skin();
+        self.fit_cage();
+    }
+
+    fn skin(&mut self) {
+        match self.method {
+            SkinningMethod::Lbs => {
+                self.lbs
+                    .apply(&self.posed_from_rest, &self.rest_mesh, &mut self.posed_mesh)
+            }
+            SkinningMethod::Dqs => self.dqs.apply(
+                &self.posed_from_rest,
+                &self.rest_mesh,
+                &mut self.dqs_scratch,
+                &mut self.posed_mesh,
+            ),
+            SkinningMethod::Cor => match &self.cor {
+                Some(cor) => cor.skinning.apply(
+                    &self.posed_from_rest,
+                    &self.rest_mesh,
+                    &cor.centres,
+                    &mut self.posed_mesh,
+                ),
+                None => {
+                    self.lbs
+                        .apply(&self.posed_from_rest, &self.rest_mesh, &mut self.posed_mesh)
+                }
+            },
+        }
+    }
+
+    fn fit_cage(&mut self) {
+        let ghost = self.method != SkinningMethod::Lbs
+            && self.options_fit_source == CageFitSource::GhostLbs;
+        if ghost {
+            for (r, &row) in self
+                .scratch_rows_rest
+                .iter_mut()
+                .zip(self.cage_updater.rows())
+            {
+                *r = self.rest_mesh[row];
+            }
+            self.ghost_lbs.apply(
+                &self.posed_from_rest,
+                &self.scratch_rows_rest,
+                &mut self.scratch_rows_posed,
+            );
+            self.cage_updater
+                .apply_rows(&self.scratch_rows_posed, &mut self.posed_cage);
+        } else {
+            self.cage_updater
+                .apply(&self.posed_mesh, &mut self.posed_cage);
+        }
+    }
+}
+

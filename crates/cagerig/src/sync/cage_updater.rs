@@ -1,0 +1,225 @@
+//! CageUp, S'→C' (Section 4.1, Eq. 8): fit the current cage C' to the current skin M'.
+//!
+//! C' is obtained from a few selected rows of M' (the MaxVol rows, `#C` of them) by a linear map
+//! `P` computed once: `P = Φ̃⁻¹` for the square MaxVol system (exact interpolation of the selected
+//! vertices), or `P = Φ̃⁺` (least squares, `(Φ̃ᵀΦ̃)⁻¹Φ̃ᵀ` via QR) when more rows are used.
+//! Per frame, C' = P · M̃' is a small dense product (`#C × #R` by `#R × 3`), with no allocation.
+
+use faer::Mat;
+use faer::linalg::solvers::DenseSolveCore;
+use glam::DVec3;
+
+use crate::cage_coords::CageCoords;
+use crate::error::RigError;
+
+/// Reciprocal condition estimate below which a cage-fitting system is rejected as singular.
+pub const MIN_RECIPROCAL_CONDITION: f64 = 1e-13;
+
+/// How C' is fitted to the selected mesh rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CageFitMode {
+    /// Square system Φ̃ C' = M̃' on exactly `#C` rows (the paper's MaxVol relaxation, Eq. 8).
+    #[default]
+    Interpolate,
+    /// Least squares on `#R ≥ #C` rows: C' = argmin ‖Φ̃ C' − M̃'‖².
+    LeastSquares,
+}
+
+/// The CageUp operator: maps the posed positions of `rows` to the posed cage C'.
+#[derive(Debug, Clone)]
+pub struct CageUpdater {
+    rows: Vec<usize>,
+    mode: CageFitMode,
+    /// P, `#C × #R`, column-major: C' = P · M̃'.
+    cage_from_rows: Mat<f64>,
+}
+
+impl CageUpdater {
+    /// Factorises the fitting system for the given mesh rows of Φ (`#V × #C`).
+    pub fn new(
+        cage_coords: &CageCoords,
+        rows: Vec<usize>,
+        mode: CageFitMode,
+    ) -> Result<Self, RigError> {
+        let num_cage = cage_coords.num_cage_vertices();
+        let num_vertices = cage_coords.num_vertices();
+        if let Some(&bad) = rows.iter().find(|&&r| r >= num_vertices) {
+            return Err(RigError::IndexOutOfRange {
+                what: "cage-fitting row",
+                index: bad,
+                len: num_vertices,
+            });
+        }
+        let selected = cage_coords.select_rows(&rows);
+        let cage_from_rows = match mode {
+            CageFitMode::Interpolate => {
+                if rows.len() != num_cage {
+                    return Err(RigError::SizeMismatch {
+                        what: "number of interpolated rows (must equal the cage vertex count)",
+                        expected: num_cage,
+                        actual: rows.len(),
+                    });
+                }
+                let lu = selected.partial_piv_lu();
+                check_triangular_condition(lu.U().diagonal().column_vector().iter().copied())?;
+                lu.inverse()
+            }
+            CageFitMode::LeastSquares => {
+                if rows.len() < num_cage {
+                    return Err(RigError::SizeMismatch {
+                        what: "number of least-squares rows (at least the cage vertex count)",
+                        expected: num_cage,
+                        actual: rows.len(),
+                    });
+                }
+                let qr = selected.qr();
+                let r = qr.thin_R();
+                check_triangular_condition(r.diagonal().column_vector().iter().copied())?;
+                let q = qr.compute_thin_Q();
+                // P = R⁻¹ Qᵀ: solve R · P = Qᵀ by back substitution.
+                let mut p = q.transpose().to_owned();
+                faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+                    r,
+                    p.as_mut(),
+                    faer::Par::Seq,
+                );
+                p
+            }
+        };
+        Ok(Self {
+            rows,
+            mode,
+            cage_from_rows,
+        })
+    }
+
+    /// The mesh rows the fit uses (`#R`).
+    pub fn rows(&self) -> &[usize] {
+        &self.rows
+    }
+
+    pub fn mode(&self) -> CageFitMode {
+        self.mode
+    }
+
+    /// P = Φ̃⁻¹ or Φ̃⁺, `#C × #R`.
+    pub fn cage_from_rows(&self) -> &Mat<f64> {
+        &self.cage_from_rows
+    }
+
+    /// C' = P · M̃' from the full posed mesh M' (`#V`): reads only the selected rows.
+    pub fn apply(&self, posed_mesh: &[DVec3], posed_cage: &mut [DVec3]) {
+        posed_cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
+        for (r, &row) in self.rows.iter().enumerate() {
+            self.accumulate_column(r, posed_mesh[row], posed_cage);
+        }
+    }
+
+    /// C' = P · M̃' from the posed positions of the selected rows only (`#R`, e.g. a ghost mesh).
+    pub fn apply_rows(&self, posed_rows: &[DVec3], posed_cage: &mut [DVec3]) {
+        posed_cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
+        for (r, p) in posed_rows.iter().enumerate() {
+            self.accumulate_column(r, *p, posed_cage);
+        }
+    }
+
+    #[inline]
+    fn accumulate_column(&self, r: usize, p: DVec3, posed_cage: &mut [DVec3]) {
+        let col = self.cage_from_rows.col(r);
+        for (k, c) in posed_cage.iter_mut().enumerate() {
+            *c += col[k] * p;
+        }
+    }
+}
+
+/// Rejects a triangular factor whose diagonal spans more than 1/MIN_RECIPROCAL_CONDITION.
+pub(crate) fn check_triangular_condition(
+    diagonal: impl Iterator<Item = f64>,
+) -> Result<(), RigError> {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for d in diagonal {
+        lo = lo.min(d.abs());
+        hi = hi.max(d.abs());
+    }
+    if !(lo > MIN_RECIPROCAL_CONDITION * hi) || !lo.is_finite() {
+        return Err(RigError::Singular {
+            what: "the cage-fitting system",
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Φ of a 1D-like toy: 4 "cage vertices" (tetrahedron corners) and points given by
+    /// barycentric rows; fitting recovers the cage exactly from any 4 independent rows.
+    fn toy() -> (CageCoords, Vec<DVec3>) {
+        let rows = vec![
+            vec![0.7, 0.1, 0.1, 0.1],
+            vec![0.1, 0.7, 0.1, 0.1],
+            vec![0.1, 0.1, 0.7, 0.1],
+            vec![0.1, 0.1, 0.1, 0.7],
+            vec![0.25, 0.25, 0.25, 0.25],
+            vec![0.4, 0.4, 0.1, 0.1],
+        ];
+        let cage = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::new(0.0, 2.0, 1.0),
+            DVec3::new(1.0, 1.0, 4.0),
+        ];
+        (CageCoords::from_rows(&rows, 4).unwrap(), cage)
+    }
+
+    #[test]
+    fn interpolation_and_least_squares_recover_an_exact_cage() {
+        let (phi, cage) = toy();
+        let mut mesh = vec![DVec3::ZERO; phi.num_vertices()];
+        phi.apply(&cage, &mut mesh);
+        for (rows, mode) in [
+            (vec![0, 1, 2, 3], CageFitMode::Interpolate),
+            (vec![5, 1, 2, 3], CageFitMode::Interpolate),
+            ((0..6).collect(), CageFitMode::LeastSquares),
+        ] {
+            let up = CageUpdater::new(&phi, rows, mode).unwrap();
+            let mut fitted = vec![DVec3::ZERO; 4];
+            up.apply(&mesh, &mut fitted);
+            assert!(crate::mesh::max_distance(&fitted, &cage) < 1e-12, "{mode:?}");
+        }
+    }
+
+    #[test]
+    fn rejects_singular_and_wrong_sizes() {
+        let (phi, _) = toy();
+        assert!(matches!(
+            CageUpdater::new(&phi, vec![0, 1, 2, 4], CageFitMode::Interpolate),
+            Ok(_)
+        ));
+        // Rows 0..3 plus their mean (row 4) minus one: rows 4 = mean of 0..3 -> dependent set.
+        let dependent = CageCoords::from_rows(
+            &[
+                vec![0.5, 0.5, 0.0, 0.0],
+                vec![0.0, 0.0, 0.5, 0.5],
+                vec![0.25, 0.25, 0.25, 0.25],
+                vec![0.0, 1.0, 0.0, 0.0],
+            ],
+            4,
+        )
+        .unwrap();
+        assert!(matches!(
+            CageUpdater::new(&dependent, vec![0, 1, 2, 3], CageFitMode::Interpolate),
+            Err(RigError::Singular { .. })
+        ));
+        assert!(matches!(
+            CageUpdater::new(&phi, vec![0, 1, 2], CageFitMode::Interpolate),
+            Err(RigError::SizeMismatch { .. })
+        ));
+        assert!(matches!(
+            CageUpdater::new(&phi, vec![0, 1, 2, 9], CageFitMode::Interpolate),
+            Err(RigError::IndexOutOfRange { index: 9, .. })
+        ));
+    }
+}

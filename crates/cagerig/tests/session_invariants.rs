@@ -1,0 +1,156 @@
+//! Invariants of the coupled rig on built-in rigs under interleaved events:
+//! identity pose gives the rest mesh, the loop C' → C → S → S' → C' is exact under LBS (and with
+//! the ghost fit for DQS/CoR), M = ΦC and A = ΨC hold after any number of events (no drift).
+
+use cagerig::demo;
+use cagerig::mesh::max_distance;
+use cagerig::session::{CageFitSource, RigParts, RigSession, SessionOptions};
+use cagerig::skinning::SkinningMethod;
+use glam::DVec3;
+
+fn session(name: &str) -> RigSession {
+    let rig = demo::builtin(name, None).unwrap();
+    let parts = RigParts {
+        mesh: rig.mesh,
+        skeleton: rig.skeleton,
+        skin_weights: rig.skin_weights,
+        cage: rig.cage,
+        cage_coords: None,
+        maxvol_rows: None,
+        cor_rows: None,
+        joint_coords: None,
+    };
+    RigSession::new(parts, SessionOptions::default()).unwrap().0
+}
+
+/// Scale of the rig, for relative tolerances.
+fn scale(s: &RigSession) -> f64 {
+    let (lo, hi) = cagerig::mesh::bounding_box(s.rest_cage());
+    (hi - lo).length()
+}
+
+fn check_consensus(s: &RigSession, tol: f64) {
+    let mut m = vec![DVec3::ZERO; s.rest_mesh().len()];
+    s.cage_coords().apply(s.rest_cage(), &mut m);
+    assert!(max_distance(&m, s.rest_mesh()) < tol, "M != ΦC");
+    let mut a = vec![DVec3::ZERO; s.skeleton().len()];
+    s.skeleton_updater().apply(s.rest_cage(), &mut a);
+    let rest: Vec<DVec3> = s.rest_joints().collect();
+    assert!(max_distance(&a, &rest) < tol, "A != ΨC");
+}
+
+/// Deterministic pseudo-random numbers (no extra dependency).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64)
+    }
+    fn index(&mut self, n: usize) -> usize {
+        ((self.next() * n as f64) as usize).min(n - 1)
+    }
+    fn vec(&mut self, r: f64) -> DVec3 {
+        DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * 2.0 * r
+    }
+}
+
+#[test]
+fn identity_pose_gives_rest_structures() {
+    for name in ["bar", "bar_irregular", "snake"] {
+        let s = session(name);
+        let tol = 1e-12 * scale(&s);
+        assert!(max_distance(s.posed_mesh(), s.rest_mesh()) < tol, "{name}");
+        assert!(max_distance(s.posed_cage(), s.rest_cage()) < 1e3 * tol, "{name}");
+        let rest: Vec<DVec3> = s.skeleton().rest_positions();
+        let psi: Vec<DVec3> = s.rest_joints().collect();
+        assert!(max_distance(&rest, &psi) < 1e-9 * scale(&s), "{name}: ΨC != rest joints");
+    }
+}
+
+fn grab_lands_exactly(s: &mut RigSession, vertices: &[usize], offset: DVec3, tol: f64) {
+    let before = s.posed_cage().to_vec();
+    s.move_posed_cage(vertices, &[offset]).unwrap();
+    for (k, (after, b)) in s.posed_cage().iter().zip(&before).enumerate() {
+        let expect = if vertices.contains(&k) { *b + offset } else { *b };
+        assert!(
+            after.distance(expect) < tol,
+            "cage vertex {k}: {after} vs {expect} ({})",
+            after.distance(expect)
+        );
+    }
+}
+
+#[test]
+fn loop_is_exact_under_lbs_and_ghost_fit() {
+    for method in [SkinningMethod::Lbs, SkinningMethod::Dqs, SkinningMethod::Cor] {
+        let mut s = session("bar");
+        s.set_skinning(method).unwrap();
+        assert_eq!(s.fit_source(), CageFitSource::GhostLbs);
+        let tol = 1e-9 * scale(&s).max(1.0);
+        s.rotate_joint(1, DVec3::Z, 0.8).unwrap();
+        grab_lands_exactly(&mut s, &[3, 5], DVec3::new(0.3, -0.2, 0.4), tol);
+        s.move_rest_cage(&[0, 1], &[DVec3::new(0.0, 0.5, 0.0)]).unwrap();
+        s.rotate_joint(2, DVec3::Y, -0.5).unwrap();
+        grab_lands_exactly(&mut s, &[7], DVec3::new(-0.5, 0.1, 0.2), tol);
+        grab_lands_exactly(&mut s, &[2, 7, 9], DVec3::new(0.1, 0.1, -0.3), tol);
+        check_consensus(&s, tol);
+    }
+}
+
+#[test]
+fn thousand_interleaved_events_keep_consensus_and_do_not_drift() {
+    let mut s = session("bar_irregular");
+    let mut rng = Lcg(7);
+    let nc = s.rest_cage().len();
+    let nj = s.skeleton().len();
+    let sc = scale(&s);
+    let tol = 1e-9 * sc;
+    for event in 0..1000 {
+        match rng.index(5) {
+            0 | 1 => {
+                let axis = rng.vec(1.0) + DVec3::splat(1e-3);
+                s.rotate_joint(rng.index(nj), axis, (rng.next() - 0.5) * 0.4)
+                    .unwrap();
+            }
+            2 => {
+                let v = [rng.index(nc), rng.index(nc)];
+                s.move_rest_cage(&v, &[rng.vec(0.02 * sc)]).unwrap();
+            }
+            3 => {
+                let v = [rng.index(nc)];
+                grab_lands_exactly(&mut s, &v, rng.vec(0.02 * sc), tol);
+            }
+            _ => {
+                let m = [SkinningMethod::Lbs, SkinningMethod::Dqs, SkinningMethod::Cor]
+                    [rng.index(3)];
+                s.set_skinning(m).unwrap();
+            }
+        }
+        if event % 50 == 0 {
+            check_consensus(&s, tol);
+        }
+    }
+    check_consensus(&s, tol);
+    // Back at rest pose, C' fits M = ΦC again: C' = C up to round-off.
+    s.reset_pose();
+    assert!(max_distance(s.posed_cage(), s.rest_cage()) < tol);
+}
+
+#[test]
+fn bad_edits_are_errors_not_panics() {
+    let mut s = session("bar");
+    assert!(s.rotate_joint(99, DVec3::X, 1.0).is_err());
+    assert!(s.rotate_joint(0, DVec3::ZERO, 1.0).is_err());
+    assert!(s.rotate_joint(0, DVec3::X, f64::NAN).is_err());
+    assert!(s.move_rest_cage(&[999], &[DVec3::X]).is_err());
+    assert!(s.move_posed_cage(&[0, 1], &[DVec3::X, DVec3::Y, DVec3::Z]).is_err());
+    assert!(
+        s.move_posed_cage(&[0], &[DVec3::new(f64::INFINITY, 0.0, 0.0)])
+            .is_err()
+    );
+    // State unchanged by rejected edits.
+    assert!(max_distance(s.posed_mesh(), s.rest_mesh()) < 1e-12);
+}
