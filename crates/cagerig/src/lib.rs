@@ -8,12 +8,14 @@
 pub mod cage;
 pub mod cage_coords;
 pub mod coords;
+pub mod demo;
 pub mod error;
 pub mod io;
 pub mod mesh;
 pub mod skeleton;
 pub mod skin_weights;
 pub mod skinning;
+pub mod subdivide;
 
 pub use cage_coords::CageCoords;
 pub use error::{RigError, Warning};

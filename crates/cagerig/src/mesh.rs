@@ -102,6 +102,24 @@ pub fn bounding_box(points: &[DVec3]) -> (DVec3, DVec3) {
     )
 }
 
+/// Generalised winding number of `point` with respect to a closed triangle mesh: the sum of the
+/// signed solid angles its triangles subtend at `point`, divided by 4π (Van Oosterom–Strackee
+/// formula). For a closed, outward-oriented mesh it is 1 inside, 0 outside and ½ on the surface
+/// (up to rounding); for an open mesh it varies smoothly. Cost O(#F).
+pub fn winding_number(positions: &[DVec3], triangles: &[[u32; 3]], point: DVec3) -> f64 {
+    let mut total = 0.0;
+    for &[a, b, c] in triangles {
+        let va = positions[a as usize] - point;
+        let vb = positions[b as usize] - point;
+        let vc = positions[c as usize] - point;
+        let (la, lb, lc) = (va.length(), vb.length(), vc.length());
+        let numerator = va.dot(vb.cross(vc));
+        let denominator = la * lb * lc + va.dot(vb) * lc + va.dot(vc) * lb + vb.dot(vc) * la;
+        total += 2.0 * numerator.atan2(denominator);
+    }
+    total / (4.0 * std::f64::consts::PI)
+}
+
 /// Largest distance between corresponding points of two equally long slices.
 pub fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
     a.iter()
@@ -128,6 +146,19 @@ mod tests {
             Err(RigError::NonFinite { index: 1, .. })
         ));
         assert!(TriMesh::new(p, vec![[0, 1, 2]]).is_ok());
+    }
+
+    #[test]
+    fn winding_number_of_tetra_is_one_inside_zero_outside() {
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        let t = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let inside = winding_number(&p, &t, DVec3::splat(0.2));
+        assert!((inside - 1.0).abs() < 1e-12, "{inside}");
+        let outside = winding_number(&p, &t, DVec3::new(1.0, 1.0, 1.0));
+        assert!(outside.abs() < 1e-12, "{outside}");
+        // Inverted orientation gives −1 inside.
+        let flipped: Vec<[u32; 3]> = t.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        assert!((winding_number(&p, &flipped, DVec3::splat(0.2)) + 1.0).abs() < 1e-12);
     }
 
     #[test]

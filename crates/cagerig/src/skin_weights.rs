@@ -203,6 +203,25 @@ impl SkinWeights {
         (&self.row_start, &self.joints, &self.weights)
     }
 
+    /// Ω from raw CSR arrays that already satisfy the invariants (ascending unique joints below
+    /// `num_joints`, positive weights, rows summing to 1); for kernels that derive Ω from a valid Ω.
+    pub(crate) fn from_csr_unchecked(
+        num_joints: usize,
+        row_start: Vec<u32>,
+        joints: Vec<u32>,
+        weights: Vec<f64>,
+    ) -> Self {
+        debug_assert_eq!(row_start.last().map(|&r| r as usize), Some(joints.len()));
+        debug_assert_eq!(joints.len(), weights.len());
+        debug_assert!(joints.iter().all(|&j| (j as usize) < num_joints));
+        Self {
+            num_joints,
+            row_start,
+            joints,
+            weights,
+        }
+    }
+
     /// Ω restricted to the given vertices (rows in the given order).
     pub fn select_rows(&self, rows: &[usize]) -> Self {
         let mut row_start = Vec::with_capacity(rows.len() + 1);
