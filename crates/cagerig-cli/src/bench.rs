@@ -1,1 +1,454 @@
-pub struct BenchArgs; pub fn run(_: &BenchArgs) -> anyhow::Result<()> { Ok(()) }
+//! `cagerig bench`: per-operator timings in the layout of the paper's Table 1 (and more).
+//!
+//! Every figure is the median of repeated runs (with min and max) after a warm-up. Per-frame
+//! figures also print the bytes the kernel must move at least (an estimate from the data sizes)
+//! and the bandwidth that implies. All kernels measured here run in f64.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use cagerig::coords::{maxvol, mvc};
+use cagerig::playback::AnimationPlayer;
+use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::skinning::{
+    CorCentresMethod, CorCentresOptions, CorScratch, CorSkinning, DqsScratch,
+    DualQuaternionSkinning, LinearBlendSkinning, compute_cor_centres,
+};
+use cagerig::sync::cage_updater::{CageFitMode, CageUpdater};
+use cagerig::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
+use clap::Args;
+use glam::{DAffine3, DQuat, DVec3};
+use serde::Serialize;
+
+#[derive(Debug, Clone, Args)]
+pub struct BenchArgs {
+    /// Character mesh (OBJ) with its companions; default: the built-in rig.
+    pub mesh: Option<PathBuf>,
+    #[arg(long)]
+    pub cage: Option<PathBuf>,
+    /// Built-in rig when no mesh is given.
+    #[arg(long, default_value = "snake")]
+    pub builtin: String,
+    /// Resolution of the built-in rig.
+    #[arg(long)]
+    pub resolution: Option<usize>,
+    /// Levels of midpoint subdivision; a comma-separated list benches several models.
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub subdivide: Vec<usize>,
+    /// Machine-readable output: an array with one object per model.
+    #[arg(long)]
+    pub json: bool,
+    /// Multiplies the number of repetitions.
+    #[arg(long, default_value_t = 1.0)]
+    pub repeat_scale: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize)]
+struct Stat {
+    median_ms: f64,
+    min_ms: f64,
+    max_ms: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bytes_moved: Option<u64>,
+}
+
+impl Stat {
+    fn with_bytes(mut self, bytes: u64) -> Self {
+        self.bytes_moved = Some(bytes);
+        self
+    }
+}
+
+#[derive(Debug, Serialize)]
+struct ModelRow {
+    model: String,
+    vertices: usize,
+    joints: usize,
+    cage_vertices: usize,
+    peak_memory_mb: f64,
+    precision: &'static str,
+    mvc: Stat,
+    maxvol: Stat,
+    skelup_preprocess: Stat,
+    cageup_preprocess: Stat,
+    cor_centres: Stat,
+    cor_centres_method: String,
+    cagerev_refactor: Stat,
+    lbs: Stat,
+    dqs: Stat,
+    cor: Stat,
+    animation_frame: Stat,
+    rest_cage_drag: Stat,
+    grab_after_skeleton_edit: Stat,
+}
+
+/// Runs `f` `warmup` times untimed, then `reps` times; returns median/min/max in ms.
+fn time(reps: usize, warmup: usize, mut f: impl FnMut()) -> Stat {
+    for _ in 0..warmup {
+        f();
+    }
+    let mut samples: Vec<f64> = (0..reps.max(1))
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    Stat {
+        median_ms: samples[samples.len() / 2],
+        min_ms: samples[0],
+        max_ms: samples[samples.len() - 1],
+        bytes_moved: None,
+    }
+}
+
+/// Peak resident memory of this process (VmHWM), in MB; 0 where unknown.
+fn peak_memory_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<f64>().ok())
+        })
+        .map_or(0.0, |kb| kb / 1024.0)
+}
+
+fn load_parts(args: &BenchArgs) -> anyhow::Result<(String, RigParts)> {
+    let rig_args = crate::rig_source::RigArgs {
+        mesh: args.mesh.clone(),
+        cage: args.cage.clone(),
+        builtin: args.mesh.is_none().then(|| args.builtin.clone()),
+        resolution: if args.mesh.is_none() {
+            args.resolution
+        } else {
+            None
+        },
+    };
+    let loaded = crate::rig_source::load_rig(&rig_args, false, false)?;
+    Ok((loaded.name, loaded.parts))
+}
+
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let (name, base) = load_parts(args)?;
+    let mut rows = Vec::new();
+    for &levels in &args.subdivide {
+        let parts = if levels == 0 {
+            base.clone()
+        } else {
+            let sub = cagerig::subdivide::subdivide_rig(
+                &base.mesh,
+                &base.skin_weights,
+                base.cor_rows.as_ref(),
+                levels,
+            )?;
+            RigParts {
+                mesh: sub.mesh,
+                skeleton: base.skeleton.clone(),
+                skin_weights: sub.skin_weights,
+                cage: base.cage.clone(),
+                cage_coords: None,
+                maxvol_rows: None,
+                cor_rows: sub.cor_rows,
+                joint_coords: None,
+            }
+        };
+        let model = if levels == 0 {
+            name.clone()
+        } else {
+            format!("{name} N={levels}")
+        };
+        if !args.json {
+            eprintln!("benchmarking {model} ({} vertices)…", parts.mesh.num_vertices());
+        }
+        rows.push(bench_model(model, parts, args.repeat_scale)?);
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    } else {
+        print_table(&rows);
+    }
+    Ok(())
+}
+
+fn reps(base: usize, scale: f64, vertices: usize) -> usize {
+    // Fewer repetitions of the heavy steps on big meshes.
+    let factor = if vertices > 50_000 {
+        0.3
+    } else if vertices > 10_000 {
+        0.6
+    } else {
+        1.0
+    };
+    ((base as f64 * scale * factor).round() as usize).max(3)
+}
+
+fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<ModelRow> {
+    let nv = parts.mesh.num_vertices();
+    let nj = parts.skeleton.len();
+    let nc = parts.cage.num_vertices();
+    let (cage, _) = cagerig::cage::validate_cage(parts.cage.clone())?;
+
+    let mut phi = None;
+    let mvc_stat = time(reps(5, scale, nv), 1, || {
+        phi = mvc::compute_cage_coords(&cage, &parts.mesh.positions, None).ok();
+    });
+    let phi = phi.context("computing mean value coordinates")?;
+
+    let mut selection = None;
+    let maxvol_stat = time(reps(5, scale, nv), 1, || {
+        selection = maxvol::select_maxvol_rows(&phi).ok();
+    });
+    let rows = selection.context("MaxVol selection")?.rows;
+
+    let mut skelup = None;
+    let skelup_stat = time(reps(5, scale, nv), 1, || {
+        skelup = SkeletonUpdater::new(
+            &parts.mesh,
+            &parts.skeleton,
+            &parts.skin_weights,
+            &phi,
+            &cage.positions,
+            JointLocalisation::default(),
+        )
+        .ok();
+    });
+    let (skelup, _) = skelup.context("skeleton updater")?;
+
+    let cageup_stat = time(reps(21, scale, nv), 2, || {
+        let _ = CageUpdater::new(&phi, rows.clone(), CageFitMode::Interpolate);
+    });
+
+    let cor_options = CorCentresOptions {
+        method: if nv > 20_000 {
+            CorCentresMethod::Clustered {
+                relative_step: 0.02,
+            }
+        } else {
+            CorCentresMethod::Exact
+        },
+        ..CorCentresOptions::default()
+    };
+    let mut cor_rows = None;
+    let cor_centres_stat = time(reps(3, scale, nv).min(5), 0, || {
+        cor_rows = compute_cor_centres(
+            &parts.mesh.positions,
+            &parts.mesh.triangles,
+            &parts.skin_weights,
+            &cor_options,
+            &|_, _| {},
+        )
+        .ok();
+    });
+    let cor_rows = cor_rows.context("CoR centres")?;
+
+    // The session, from the precomputed parts.
+    let joint_coords: Vec<Vec<f64>> = (0..nj).map(|j| skelup.joint_row(j).to_vec()).collect();
+    let session_parts = RigParts {
+        cage_coords: Some(phi.clone()),
+        maxvol_rows: Some(rows.clone()),
+        cor_rows: Some(cor_rows),
+        joint_coords: Some(joint_coords),
+        ..parts.clone()
+    };
+    let (mut session, _) = RigSession::new(session_parts, SessionOptions::default())?;
+    // The pose of the paper tool's per-frame timings: one joint bent by 60° about +X.
+    let bend_joint = session
+        .skeleton()
+        .find("lowerarm01.R")
+        .unwrap_or(nj / 2);
+    session.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
+
+    let refactor_stat = time(reps(51, scale, nv), 3, || {
+        let _ = session.refactor_reverser();
+    });
+
+    let transforms: Vec<DAffine3> = session.posed_from_rest().to_vec();
+    let rest = session.rest_mesh().to_vec();
+    let mut out = vec![DVec3::ZERO; nv];
+    let frame_reps = reps(200, scale, nv);
+    let nnz = parts.skin_weights.num_entries() as u64;
+    let skin_bytes = nv as u64 * (24 + 24 + 4) + nnz * 12;
+
+    let lbs = LinearBlendSkinning::new(&parts.skin_weights);
+    let lbs_stat = time(frame_reps, 5, || lbs.apply(&transforms, &rest, &mut out))
+        .with_bytes(skin_bytes);
+    let dqs = DualQuaternionSkinning::new(&parts.skin_weights);
+    let mut dqs_scratch = DqsScratch::new(nj);
+    let dqs_stat = time(frame_reps, 5, || {
+        dqs.apply(&transforms, &rest, &mut dqs_scratch, &mut out)
+    })
+    .with_bytes(skin_bytes + nv as u64 * 4);
+    session.set_skinning(cagerig::skinning::SkinningMethod::Cor)?;
+    let centres = session.cor_centres().map(<[DVec3]>::to_vec).unwrap_or_default();
+    session.set_skinning(cagerig::skinning::SkinningMethod::Lbs)?;
+    let cor = CorSkinning::new(&parts.skin_weights);
+    let mut cor_scratch = CorScratch::new(nj);
+    let cor_stat = time(frame_reps, 5, || {
+        cor.apply(&transforms, &rest, &centres, &mut cor_scratch, &mut out)
+    })
+    .with_bytes(skin_bytes + nv as u64 * (24 + 4));
+
+    // Animation frame: skeleton keys (rotations) and cage keys (rest-cage offsets), async.
+    let (skeleton_track, cage_track) = synthetic_tracks(&session)?;
+    let mut player = AnimationPlayer::new(&session, Some(skeleton_track), Some(cage_track))?;
+    let duration = player.duration();
+    let mut frame = 0usize;
+    let anim_stat = time(frame_reps, 5, || {
+        frame += 1;
+        let t = (frame as f64 * 0.037) % duration;
+        let _ = player.apply(t, &mut session);
+    })
+    .with_bytes(skin_bytes + (nv * nc * 8) as u64 + nv as u64 * 48);
+    session.reset_pose();
+    session.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
+
+    // Rest-cage drag of the 5 cage vertices nearest the bent joint.
+    let joint_pos = session.rest_world_from_joint()[bend_joint].translation;
+    let mut by_distance: Vec<usize> = (0..nc).collect();
+    by_distance.sort_by(|&a, &b| {
+        session.rest_cage()[a]
+            .distance(joint_pos)
+            .total_cmp(&session.rest_cage()[b].distance(joint_pos))
+    });
+    let drag: Vec<usize> = by_distance[..5.min(nc)].to_vec();
+    let step = 1e-3 * {
+        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
+        (hi - lo).length()
+    };
+    let mut sign = 1.0;
+    let drag_stat = time(frame_reps, 5, || {
+        sign = -sign;
+        let _ = session.move_rest_cage(&drag, &[DVec3::new(sign * step, 0.0, 0.0)]);
+    })
+    .with_bytes(skin_bytes + (nv * drag.len() * 8) as u64 + nv as u64 * 48);
+
+    // Current-cage grab right after a skeleton edit (refactor + solve + full chain).
+    let grab_reps = reps(51, scale, nv);
+    let mut samples = Vec::with_capacity(grab_reps);
+    for i in 0..grab_reps + 3 {
+        let angle = if i % 2 == 0 { 0.01 } else { -0.01 };
+        session.rotate_joint(bend_joint, DVec3::Y, angle)?;
+        let t = Instant::now();
+        session.move_posed_cage(&drag[..1], &[DVec3::new(0.0, sign * step, 0.0)])?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        sign = -sign;
+        if i >= 3 {
+            samples.push(ms);
+        }
+    }
+    samples.sort_by(f64::total_cmp);
+    let grab_stat = Stat {
+        median_ms: samples[samples.len() / 2],
+        min_ms: samples[0],
+        max_ms: samples[samples.len() - 1],
+        bytes_moved: Some(skin_bytes + (nv * nc * 8) as u64 + nv as u64 * 48),
+    };
+
+    Ok(ModelRow {
+        model,
+        vertices: nv,
+        joints: nj,
+        cage_vertices: nc,
+        peak_memory_mb: peak_memory_mb(),
+        precision: "f64",
+        mvc: mvc_stat,
+        maxvol: maxvol_stat,
+        skelup_preprocess: skelup_stat,
+        cageup_preprocess: cageup_stat,
+        cor_centres: cor_centres_stat,
+        cor_centres_method: format!("{:?}", cor_options.method),
+        cagerev_refactor: refactor_stat,
+        lbs: lbs_stat,
+        dqs: dqs_stat,
+        cor: cor_stat,
+        animation_frame: anim_stat,
+        rest_cage_drag: drag_stat,
+        grab_after_skeleton_edit: grab_stat,
+    })
+}
+
+/// A 5-key skeleton track bending every joint a little about alternating axes, and a 3-key
+/// cage track breathing the rest cage, with unrelated key times (asynchronous tracks).
+fn synthetic_tracks(
+    session: &RigSession,
+) -> anyhow::Result<(cagerig::animation::SkeletonTrack, cagerig::animation::CageTrack)> {
+    let skeleton = session.skeleton();
+    let rest = skeleton.rest_world_from_joint();
+    let mut rest_locals = vec![DAffine3::IDENTITY; skeleton.len()];
+    skeleton.locals_from_worlds(&rest, &mut rest_locals);
+    let times = vec![0.0, 3.0, 6.5, 9.0, 10.0];
+    let keys = times
+        .iter()
+        .enumerate()
+        .map(|(k, _)| {
+            rest_locals
+                .iter()
+                .enumerate()
+                .map(|(j, l)| {
+                    let axis = [DVec3::X, DVec3::Y, DVec3::Z][(j + k) % 3];
+                    *l * DAffine3::from_quat(DQuat::from_axis_angle(axis, 0.2 * k as f64))
+                })
+                .collect()
+        })
+        .collect();
+    let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
+    let centre = (lo + hi) * 0.5;
+    let cage_times = vec![0.0, 1.5, 3.0];
+    let offsets = cage_times
+        .iter()
+        .enumerate()
+        .map(|(k, _)| {
+            session
+                .rest_cage()
+                .iter()
+                .map(|c| (*c - centre) * 0.05 * k as f64)
+                .collect()
+        })
+        .collect();
+    Ok((
+        cagerig::animation::SkeletonTrack::new(times, keys)?,
+        cagerig::animation::CageTrack::new(cage_times, offsets)?,
+    ))
+}
+
+fn print_table(rows: &[ModelRow]) {
+    for r in rows {
+        println!(
+            "\n{}: {} vertices, {} joints, {} cage vertices, peak memory {:.0} MB, kernels in {}",
+            r.model, r.vertices, r.joints, r.cage_vertices, r.peak_memory_mb, r.precision
+        );
+        println!(
+            "  {:<28} {:>11} {:>11} {:>11} {:>12} {:>10}",
+            "operation", "median ms", "min ms", "max ms", "bytes moved", "GB/s"
+        );
+        let line = |name: &str, s: &Stat| {
+            let (bytes, bw) = match s.bytes_moved {
+                Some(b) => (
+                    format!("{:.1} MB", b as f64 / 1e6),
+                    format!("{:.1}", b as f64 / 1e6 / s.median_ms),
+                ),
+                None => (String::new(), String::new()),
+            };
+            println!(
+                "  {:<28} {:>11.3} {:>11.3} {:>11.3} {:>12} {:>10}",
+                name, s.median_ms, s.min_ms, s.max_ms, bytes, bw
+            );
+        };
+        line("MVC Φ (all vertices)", &r.mvc);
+        line("MaxVol selection", &r.maxvol);
+        line("SkelUp preprocess (Ψ)", &r.skelup_preprocess);
+        line("CageUp preprocess", &r.cageup_preprocess);
+        line(&format!("CoR centres ({})", r.cor_centres_method), &r.cor_centres);
+        line("CageRev refactor", &r.cagerev_refactor);
+        line("LBS skinning", &r.lbs);
+        line("DQS skinning", &r.dqs);
+        line("CoR skinning", &r.cor);
+        line("animation frame (LBS)", &r.animation_frame);
+        line("rest-cage drag, 5 v, sync", &r.rest_cage_drag);
+        line("grab after skeleton edit", &r.grab_after_skeleton_edit);
+    }
+}

@@ -61,7 +61,7 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
                     joint_coords: None,
                 },
                 files: Vec::new(),
-                warnings: rig.warnings,
+                warnings: Vec::new(),
                 maxvol_path: None,
             }
         }

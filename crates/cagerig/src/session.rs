@@ -494,10 +494,7 @@ impl RigSession {
     ) -> Result<(), RigError> {
         self.check_cage_edit(vertices, offsets)?;
         if !self.reverser.is_factorised() {
-            for (r, t) in self.scratch_rotations.iter_mut().zip(&self.posed_from_rest) {
-                *r = t.matrix3;
-            }
-            self.reverser.refactor(&self.scratch_rotations)?;
+            self.refactor_reverser()?;
         }
         let mut posed_delta = std::mem::take(&mut self.scratch_cage_a);
         posed_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
@@ -520,6 +517,15 @@ impl RigSession {
         solved?;
         self.sync_from_rest_cage();
         Ok(())
+    }
+
+    /// Factorises the reverse cage deformer (Eq. 19) for the current pose now. An editor calls
+    /// this when a cage grab starts; [`RigSession::move_posed_cage`] does it lazily otherwise.
+    pub fn refactor_reverser(&mut self) -> Result<(), RigError> {
+        for (r, t) in self.scratch_rotations.iter_mut().zip(&self.posed_from_rest) {
+            *r = t.matrix3;
+        }
+        self.reverser.refactor(&self.scratch_rotations)
     }
 
     /// Animation sample: rest-cage offsets from C₀ (`#C`), local rotations and root motions
