@@ -14,6 +14,7 @@ pub mod mesh;
 pub mod skeleton;
 pub mod skin_weights;
 pub mod skinning;
+pub mod sparse_rows;
 
 pub use cage_coords::CageCoords;
 pub use error::{RigError, Warning};
