@@ -23,7 +23,8 @@
 //! S sparse (the exp kernel makes most far-away contributions negligible).
 //!
 //! **Clustering** ([`CorCentresMethod::Clustered`]): p_i depends on ω_i only, so vertices whose
-//! weight rows quantise to the same key (weights rounded to multiples of `weight_step`) share
+//! weight rows quantise to the same key (same joints, `ln ω` rounded to multiples of
+//! `relative_step`) share
 //! one row of S, computed for the mean weight row of the cluster. Error is measured against the
 //! exact form in the tests (Arm: see `tests/cor_arm.rs`).
 
@@ -44,8 +45,11 @@ pub enum CorCentresMethod {
     Exact,
     /// One evaluation per cluster of vertices with equal quantised weight rows.
     Clustered {
-        /// Quantisation step of the weights (e.g. 1/128).
-        weight_step: f64,
+        /// Relative quantisation step of the weights: weights are binned by
+        /// `round(ln(ω) / relative_step)`, so members of a cluster differ by about this
+        /// relative amount per weight (e.g. 0.02). Relative (not absolute) bins matter: a small
+        /// weight on a third joint steers the centre between joint-pair regions.
+        relative_step: f64,
     },
 }
 
@@ -337,10 +341,10 @@ pub fn compute_cor_centres(
                 }
             }
         }
-        CorCentresMethod::Clustered { weight_step } => {
-            if !(weight_step.is_finite() && weight_step > 0.0) {
+        CorCentresMethod::Clustered { relative_step } => {
+            if !(relative_step.is_finite() && relative_step > 0.0) {
                 return Err(RigError::Invalid(format!(
-                    "CoR clustering weight step must be positive, got {weight_step}"
+                    "CoR clustering relative step must be positive, got {relative_step}"
                 )));
             }
             let mut clusters: HashMap<Vec<(u32, i64)>, u32> = HashMap::new();
@@ -354,8 +358,7 @@ pub fn compute_cor_centres(
                 let key: Vec<(u32, i64)> = js
                     .iter()
                     .zip(ws)
-                    .map(|(&j, &w)| (j, (w / weight_step).round() as i64))
-                    .filter(|e| e.1 != 0)
+                    .map(|(&j, &w)| (j, (w.ln() / relative_step).round() as i64))
                     .collect();
                 let id = *clusters.entry(key).or_insert_with(|| {
                     sums.push(HashMap::new());
@@ -497,7 +500,9 @@ mod tests {
         }
         // Clustering with a fine step reproduces the exact rows (all weight rows are distinct).
         let options = CorCentresOptions {
-            method: CorCentresMethod::Clustered { weight_step: 1e-6 },
+            method: CorCentresMethod::Clustered {
+                relative_step: 1e-9,
+            },
             ..unpruned
         };
         let clustered = compute_cor_centres(&p, &tris, &w, &options, &|_, _| {}).unwrap();
