@@ -3,8 +3,12 @@
 //! Six structures: rest skin M, rest skeleton S, rest cage C and their current counterparts
 //! M', S', C'. Skinning weights Ω (`#V × #J`, [`SkinWeights`]) drive S→S'→M' ([`skinning`]); cage
 //! coordinates Φ (`#V × #C`, [`CageCoords`]) give M = ΦC ([`coords`]); the sync operators of
-//! Section 4 ([`sync`]) keep all six in consensus.
+//! Section 4 ([`sync`]) keep all six in consensus inside a [`session::RigSession`].
+//!
+//! The numerical modules depend on no file format; [`io`] reads and writes OBJ and the paper
+//! tool's formats, [`script`] replays JSON edit scripts.
 
+pub mod animation;
 pub mod cage;
 pub mod cage_coords;
 pub mod coords;
@@ -12,10 +16,15 @@ pub mod demo;
 pub mod error;
 pub mod io;
 pub mod mesh;
+pub mod playback;
+pub mod script;
+pub mod session;
 pub mod skeleton;
 pub mod skin_weights;
 pub mod skinning;
+pub mod sparse_rows;
 pub mod subdivide;
+pub mod sync;
 
 pub use cage_coords::CageCoords;
 pub use error::{RigError, Warning};

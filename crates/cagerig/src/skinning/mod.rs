@@ -1,1 +1,20 @@
 //! Skinning S→S'→M': LBS, DQS and CoR (Eq. 1–6).
+//!
+//! Every kernel takes the skinning transforms `T_j = posed_from_rest[j]` (`#J`, see
+//! [`crate::Skeleton::skinning_transforms`]), the rest mesh M (`#V`, it changes when the rest cage
+//! is edited) and writes M' into a caller-owned `#V` buffer without allocating.
+//! Vertices with an empty weight row stay at their rest position under every method.
+
+pub mod cor;
+pub mod cor_centres;
+pub mod dqs;
+pub mod lbs;
+pub mod rigid_rotation;
+
+pub use cor::{CorScratch, CorSkinning};
+pub use cor_centres::{CorCentresMethod, CorCentresOptions, compute_cor_centres};
+pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
+pub use lbs::LinearBlendSkinning;
+
+/// Vertices per rayon task in the per-frame kernels.
+pub(crate) const VERTEX_GRAIN: usize = 4096;

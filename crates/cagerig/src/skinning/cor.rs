@@ -1,0 +1,223 @@
+//! Optimized centres-of-rotation skinning (Le & Hodgins 2016; Eq. 6):
+//!
+//! `R(i)` = normalised quaternion blend of the joint rotations (sign-aligned with the heaviest
+//! influence, as in DQS), `p̃_i = Σ_j ω_ij (T_j^r p_i + T_j^t)` (the LBS image of the CoR p_i),
+//! `t(i) = p̃_i − R(i) p_i`, and `v'_i = R(i) v_i + t(i) = R(i) (v_i − p_i) + p̃_i`.
+//!
+//! The centres p_i (`#V`) are passed to [`CorSkinning::apply`]: they follow the rest cage
+//! (CoRs = Λ·C, Eq. 14) and are computed by [`super::cor_centres`].
+//!
+//! **No CoR ⇒ LBS.** With `p_i = v_i` the formula reduces exactly to LBS for that vertex. This is
+//! how [`super::cor_centres::compute_cor_centres`] encodes vertices without a centre (single
+//! influence, zero total similarity), and a non-finite `p_i` is treated the same way here.
+//! For a single-influence vertex the result is the rigid `T_j v_i` whatever p_i is.
+//!
+//! Rotations of non-rigid `T_j^r` are their polar factors ([`super::rigid_rotation`]); `p̃_i`
+//! uses the full affine `T_j`.
+
+use glam::{DAffine3, DMat3, DQuat, DVec3};
+use rayon::prelude::*;
+
+use super::VERTEX_GRAIN;
+use super::lbs::blend_affine;
+use super::rigid_rotation::rotation_quaternion;
+use crate::SkinWeights;
+
+/// Caller-owned per-frame buffer: the `#J` joint rotation quaternions.
+#[derive(Debug, Clone)]
+pub struct CorScratch {
+    joint_rotations: Vec<DQuat>,
+}
+
+impl CorScratch {
+    pub fn new(num_joints: usize) -> Self {
+        Self {
+            joint_rotations: vec![DQuat::IDENTITY; num_joints],
+        }
+    }
+
+    /// The joint rotations of the last `apply`.
+    pub fn joint_rotations(&self) -> &[DQuat] {
+        &self.joint_rotations
+    }
+}
+
+/// Precomputed CoR skinning: flat Ω (CSR) and the per-vertex pivot (heaviest) joint.
+#[derive(Debug, Clone)]
+pub struct CorSkinning {
+    num_joints: usize,
+    row_start: Vec<u32>,
+    joints: Vec<u32>,
+    weights: Vec<f64>,
+    pivot: Vec<u32>,
+}
+
+/// Normalised sign-aligned quaternion blend `Σ_j ω_j s_j r_j / |…|` (DQBlendRot).
+#[inline(always)]
+pub(crate) fn blend_rotations(
+    joints: &[u32],
+    weights: &[f64],
+    pivot: usize,
+    joint_rotations: &[DQuat],
+) -> DQuat {
+    let pivot_rotation = joint_rotations[pivot];
+    let mut sum = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+    for (&j, &w) in joints.iter().zip(weights) {
+        let q = joint_rotations[j as usize];
+        let signed = if pivot_rotation.dot(q) < 0.0 { -w } else { w };
+        sum = sum + q * signed;
+    }
+    sum * (1.0 / sum.length())
+}
+
+impl CorSkinning {
+    pub fn new(weights: &SkinWeights) -> Self {
+        let (row_start, joints, w) = weights.csr();
+        let pivot = (0..weights.num_vertices())
+            .map(|v| weights.heaviest(v).unwrap_or(0) as u32)
+            .collect();
+        Self {
+            num_joints: weights.num_joints(),
+            row_start: row_start.to_vec(),
+            joints: joints.to_vec(),
+            weights: w.to_vec(),
+            pivot,
+        }
+    }
+
+    pub fn num_vertices(&self) -> usize {
+        self.row_start.len() - 1
+    }
+
+    pub fn num_joints(&self) -> usize {
+        self.num_joints
+    }
+
+    /// Fills `scratch` with the joint rotation quaternions of `transforms` (`#J`, serial).
+    pub fn prepare(&self, transforms: &[DAffine3], scratch: &mut CorScratch) {
+        assert_eq!(transforms.len(), self.num_joints, "CoR: transforms");
+        assert_eq!(
+            scratch.joint_rotations.len(),
+            self.num_joints,
+            "CoR: scratch"
+        );
+        for (q, t) in scratch.joint_rotations.iter_mut().zip(transforms) {
+            *q = rotation_quaternion(t.matrix3);
+        }
+    }
+
+    /// The blended rotation `R(i)` of vertex `v` (needs a prepared `scratch`); identity for an
+    /// unweighted vertex.
+    pub fn blended_rotation(&self, v: usize, scratch: &CorScratch) -> DMat3 {
+        let range = self.row_start[v] as usize..self.row_start[v + 1] as usize;
+        if range.is_empty() {
+            return DMat3::IDENTITY;
+        }
+        DMat3::from_quat(blend_rotations(
+            &self.joints[range.clone()],
+            &self.weights[range],
+            self.pivot[v] as usize,
+            &scratch.joint_rotations,
+        ))
+    }
+
+    /// M' = CoR(T, Ω, M, P) (Eq. 6). `transforms`: `#J`; `scratch`: `CorScratch::new(#J)`;
+    /// `rest_positions`, `centres` (p_i, rest space), `out`: `#V`.
+    ///
+    /// # Panics
+    /// If a slice length does not match `#J` / `#V`.
+    pub fn apply(
+        &self,
+        transforms: &[DAffine3],
+        rest_positions: &[DVec3],
+        centres: &[DVec3],
+        scratch: &mut CorScratch,
+        out: &mut [DVec3],
+    ) {
+        self.prepare(transforms, scratch);
+        assert_eq!(rest_positions.len(), self.num_vertices(), "CoR: rest");
+        assert_eq!(centres.len(), self.num_vertices(), "CoR: centres");
+        assert_eq!(out.len(), self.num_vertices(), "CoR: out");
+        let joint_rotations = &scratch.joint_rotations[..];
+        out.par_chunks_mut(VERTEX_GRAIN)
+            .zip(rest_positions.par_chunks(VERTEX_GRAIN))
+            .zip(centres.par_chunks(VERTEX_GRAIN))
+            .enumerate()
+            .for_each(|(chunk, ((out_chunk, rest_chunk), centre_chunk))| {
+                let first = chunk * VERTEX_GRAIN;
+                for (k, ((o, &p), &c)) in out_chunk
+                    .iter_mut()
+                    .zip(rest_chunk)
+                    .zip(centre_chunk)
+                    .enumerate()
+                {
+                    let v = first + k;
+                    let range = self.row_start[v] as usize..self.row_start[v + 1] as usize;
+                    if range.is_empty() {
+                        *o = p;
+                        continue;
+                    }
+                    let joints = &self.joints[range.clone()];
+                    let weights = &self.weights[range];
+                    let blended = blend_affine(joints, weights, transforms);
+                    if !c.is_finite() {
+                        *o = blended.transform_point3(p);
+                        continue;
+                    }
+                    let rotation =
+                        blend_rotations(joints, weights, self.pivot[v] as usize, joint_rotations);
+                    *o = rotation.mul_vec3(p - c) + blended.transform_point3(c);
+                }
+            });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    fn skin(
+        weights: &[Vec<f64>],
+        transforms: &[DAffine3],
+        rest: &[DVec3],
+        centres: &[DVec3],
+    ) -> Vec<DVec3> {
+        let (w, _) = SkinWeights::from_dense(weights).unwrap();
+        let cor = CorSkinning::new(&w);
+        let mut scratch = CorScratch::new(transforms.len());
+        let mut out = vec![DVec3::ZERO; rest.len()];
+        cor.apply(transforms, rest, centres, &mut scratch, &mut out);
+        out
+    }
+
+    #[test]
+    fn elbow_bend_with_centre_on_the_joint_is_rigid_about_it() {
+        // Bone 0 fixed, bone 1 rotates 90° about z around the elbow e. A vertex with 50/50
+        // weights and its CoR at e is rotated by 45° about e (LBS would pull it inwards).
+        let e = DVec3::new(1.0, 0.0, 0.0);
+        let bend = DAffine3::from_translation(e)
+            * DAffine3::from_rotation_z(FRAC_PI_2)
+            * DAffine3::from_translation(-e);
+        let v = DVec3::new(1.0, 0.5, 0.0);
+        let out = skin(&[vec![0.5, 0.5]], &[DAffine3::IDENTITY, bend], &[v], &[e]);
+        let expected = e + DQuat::from_rotation_z(FRAC_PI_2 / 2.0).mul_vec3(v - e);
+        assert!(out[0].abs_diff_eq(expected, 1e-14), "{out:?} vs {expected}");
+        assert!((out[0].distance(e) - 0.5).abs() < 1e-14);
+    }
+
+    #[test]
+    fn centre_at_vertex_or_non_finite_gives_lbs() {
+        let t = [
+            DAffine3::from_rotation_x(0.4),
+            DAffine3::from_translation(DVec3::Y) * DAffine3::from_rotation_y(-1.1),
+        ];
+        let v = DVec3::new(0.3, 0.7, -1.2);
+        let lbs = (t[0].matrix3 * 0.25 + t[1].matrix3 * 0.75) * v
+            + (t[0].translation * 0.25 + t[1].translation * 0.75);
+        for c in [v, DVec3::NAN] {
+            let out = skin(&[vec![0.25, 0.75]], &t, &[v], &[c]);
+            assert!(out[0].abs_diff_eq(lbs, 1e-14), "{out:?} vs {lbs}");
+        }
+    }
+}

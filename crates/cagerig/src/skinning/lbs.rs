@@ -1,0 +1,178 @@
+//! Linear blend skinning (Eq. 2–3): `v'_i = (Σ_j ω_ij T_j^r)·v_i + Σ_j ω_ij T_j^t`.
+
+use glam::{DAffine3, DMat3, DVec3};
+use rayon::prelude::*;
+
+use super::VERTEX_GRAIN;
+use crate::SkinWeights;
+
+/// Precomputed LBS: a flat copy of Ω (`#V × #J`, CSR) streamed by [`LinearBlendSkinning::apply`].
+#[derive(Debug, Clone)]
+pub struct LinearBlendSkinning {
+    num_joints: usize,
+    row_start: Vec<u32>,
+    joints: Vec<u32>,
+    weights: Vec<f64>,
+}
+
+/// `Σ_j ω_ij T_j` for the influences of one vertex (an affine map, not rigid in general).
+#[inline(always)]
+pub(crate) fn blend_affine(joints: &[u32], weights: &[f64], transforms: &[DAffine3]) -> DAffine3 {
+    let mut x = DVec3::ZERO;
+    let mut y = DVec3::ZERO;
+    let mut z = DVec3::ZERO;
+    let mut t = DVec3::ZERO;
+    for (&j, &w) in joints.iter().zip(weights) {
+        let a = &transforms[j as usize];
+        x += w * a.matrix3.x_axis;
+        y += w * a.matrix3.y_axis;
+        z += w * a.matrix3.z_axis;
+        t += w * a.translation;
+    }
+    DAffine3 {
+        matrix3: DMat3::from_cols(x, y, z),
+        translation: t,
+    }
+}
+
+impl LinearBlendSkinning {
+    pub fn new(weights: &SkinWeights) -> Self {
+        let (row_start, joints, w) = weights.csr();
+        Self {
+            num_joints: weights.num_joints(),
+            row_start: row_start.to_vec(),
+            joints: joints.to_vec(),
+            weights: w.to_vec(),
+        }
+    }
+
+    pub fn num_vertices(&self) -> usize {
+        self.row_start.len() - 1
+    }
+
+    pub fn num_joints(&self) -> usize {
+        self.num_joints
+    }
+
+    #[inline(always)]
+    fn row(&self, v: usize) -> (&[u32], &[f64]) {
+        let range = self.row_start[v] as usize..self.row_start[v + 1] as usize;
+        (&self.joints[range.clone()], &self.weights[range])
+    }
+
+    /// Skins vertex `v` at rest position `rest` (unweighted vertices stay at rest).
+    #[inline(always)]
+    fn skin_vertex(&self, v: usize, transforms: &[DAffine3], rest: DVec3) -> DVec3 {
+        let (joints, weights) = self.row(v);
+        if joints.is_empty() {
+            return rest;
+        }
+        blend_affine(joints, weights, transforms).transform_point3(rest)
+    }
+
+    /// M' = LBS(T, Ω, M) (Eq. 2–3). `transforms`: `#J`; `rest_positions`, `out`: `#V`.
+    ///
+    /// # Panics
+    /// If a slice length does not match `#J` / `#V`.
+    pub fn apply(&self, transforms: &[DAffine3], rest_positions: &[DVec3], out: &mut [DVec3]) {
+        assert_eq!(transforms.len(), self.num_joints, "LBS: transforms");
+        assert_eq!(rest_positions.len(), self.num_vertices(), "LBS: rest");
+        assert_eq!(out.len(), self.num_vertices(), "LBS: out");
+        out.par_chunks_mut(VERTEX_GRAIN)
+            .zip(rest_positions.par_chunks(VERTEX_GRAIN))
+            .enumerate()
+            .for_each(|(chunk, (out_chunk, rest_chunk))| {
+                let first = chunk * VERTEX_GRAIN;
+                for (k, (o, &p)) in out_chunk.iter_mut().zip(rest_chunk).enumerate() {
+                    *o = self.skin_vertex(first + k, transforms, p);
+                }
+            });
+    }
+
+    /// LBS of a subset of vertices (e.g. the MaxVol rows of the ghost mesh used by CageUp):
+    /// `out[k] = LBS(rows[k])` with rest position `rest_positions_of_rows[k]`. Serial (the subset
+    /// is small).
+    ///
+    /// # Panics
+    /// If the slice lengths differ or a row is out of range.
+    pub fn apply_rows(
+        &self,
+        rows: &[usize],
+        transforms: &[DAffine3],
+        rest_positions_of_rows: &[DVec3],
+        out: &mut [DVec3],
+    ) {
+        assert_eq!(transforms.len(), self.num_joints, "LBS: transforms");
+        assert_eq!(rows.len(), rest_positions_of_rows.len(), "LBS: rest rows");
+        assert_eq!(rows.len(), out.len(), "LBS: out rows");
+        for ((o, &v), &p) in out.iter_mut().zip(rows).zip(rest_positions_of_rows) {
+            *o = self.skin_vertex(v, transforms, p);
+        }
+    }
+
+    /// Blended linear part `R(i) = Σ_j ω_ij T_j^r` of vertex `v` (the diagonal blocks of ℛ in
+    /// Eq. 15, used by CageRev). Zero for an unweighted vertex.
+    pub fn blended_linear_part(&self, v: usize, transforms: &[DAffine3]) -> DMat3 {
+        let (joints, weights) = self.row(v);
+        blend_affine(joints, weights, transforms).matrix3
+    }
+
+    /// Blended translation `Σ_j ω_ij T_j^t` of vertex `v` (Eq. 3).
+    pub fn blended_translation(&self, v: usize, transforms: &[DAffine3]) -> DVec3 {
+        let (joints, weights) = self.row(v);
+        blend_affine(joints, weights, transforms).translation
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    fn about(point: DVec3, rotation: DAffine3) -> DAffine3 {
+        DAffine3::from_translation(point) * rotation * DAffine3::from_translation(-point)
+    }
+
+    #[test]
+    fn single_bone_rotation_about_a_point() {
+        let (w, _) = SkinWeights::from_dense(&[vec![1.0], vec![1.0]]).unwrap();
+        let lbs = LinearBlendSkinning::new(&w);
+        let pivot = DVec3::new(1.0, 0.0, 0.0);
+        let t = [about(pivot, DAffine3::from_rotation_z(FRAC_PI_2))];
+        let rest = [DVec3::new(2.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 3.0)];
+        let mut out = [DVec3::ZERO; 2];
+        lbs.apply(&t, &rest, &mut out);
+        assert!(out[0].abs_diff_eq(DVec3::new(1.0, 1.0, 0.0), 1e-15));
+        assert!(out[1].abs_diff_eq(DVec3::new(1.0, 0.0, 3.0), 1e-15));
+    }
+
+    #[test]
+    fn half_half_plus_minus_90_degrees_collapses() {
+        // Twisting ±90° about x: the blended linear part is diag(1, 0, 0) (candy wrapper).
+        let (w, _) = SkinWeights::from_dense(&[vec![0.5, 0.5]]).unwrap();
+        let lbs = LinearBlendSkinning::new(&w);
+        let t = [
+            DAffine3::from_rotation_x(FRAC_PI_2),
+            DAffine3::from_rotation_x(-FRAC_PI_2),
+        ];
+        let mut out = [DVec3::ZERO];
+        lbs.apply(&t, &[DVec3::new(3.0, 1.0, 2.0)], &mut out);
+        assert!(out[0].abs_diff_eq(DVec3::new(3.0, 0.0, 0.0), 1e-15));
+        let r = lbs.blended_linear_part(0, &t);
+        assert!(r.abs_diff_eq(DMat3::from_diagonal(DVec3::new(1.0, 0.0, 0.0)), 1e-15));
+        // apply_rows agrees with apply.
+        let mut sub = [DVec3::ZERO];
+        lbs.apply_rows(&[0], &t, &[DVec3::new(3.0, 1.0, 2.0)], &mut sub);
+        assert_eq!(sub, out);
+    }
+
+    #[test]
+    fn unweighted_vertex_stays_at_rest() {
+        let (w, _) = SkinWeights::from_triplets(2, 1, [(0, 0, 1.0)]).unwrap();
+        let lbs = LinearBlendSkinning::new(&w);
+        let t = [DAffine3::from_translation(DVec3::X)];
+        let mut out = [DVec3::ZERO; 2];
+        lbs.apply(&t, &[DVec3::Y, DVec3::Z], &mut out);
+        assert_eq!(out, [DVec3::new(1.0, 1.0, 0.0), DVec3::Z]);
+    }
+}

@@ -1,0 +1,218 @@
+//! Skinning kernels and CoR centres on the Arm rig against the reference tool's outputs.
+
+use std::time::Instant;
+
+use cagerig::SkinWeights;
+use cagerig::mesh::{bounding_box, max_distance};
+use cagerig::skinning::{
+    CorCentresMethod, CorCentresOptions, CorScratch, CorSkinning, DqsScratch,
+    DualQuaternionSkinning, LinearBlendSkinning, compute_cor_centres,
+};
+use cagerig::sparse_rows::SparseRows;
+use glam::{DAffine3, DMat3, DVec3};
+
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+
+fn read(name: &str) -> String {
+    std::fs::read_to_string(format!("{ARM}/{name}")).unwrap()
+}
+
+fn numbers(line: &str) -> Vec<f64> {
+    line.split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect()
+}
+
+fn obj(name: &str) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut p = Vec::new();
+    let mut t = Vec::new();
+    for line in read(name).lines() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let v: Vec<f64> = it.map(|x| x.parse().unwrap()).collect();
+                p.push(DVec3::new(v[0], v[1], v[2]));
+            }
+            Some("f") => {
+                let f: Vec<u32> = it
+                    .map(|x| x.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
+                    .collect();
+                t.push([f[0], f[1], f[2]]);
+            }
+            _ => {}
+        }
+    }
+    (p, t)
+}
+
+fn weights(num_vertices: usize) -> SkinWeights {
+    let text = read("arm.skw");
+    let triplets: Vec<_> = text
+        .lines()
+        .map(|l| {
+            let n = numbers(l);
+            (n[1] as usize, n[0] as usize, n[2])
+        })
+        .collect();
+    SkinWeights::from_triplets(num_vertices, 25, triplets)
+        .unwrap()
+        .0
+}
+
+/// Skinning transforms T_j of reference step ii (the third 3×4 row-major matrix per joint).
+fn step2_transforms() -> Vec<DAffine3> {
+    read("reference/s2_transforms.txt")
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| {
+            let n = &numbers(l)[25..37];
+            DAffine3 {
+                matrix3: DMat3::from_cols(
+                    DVec3::new(n[0], n[4], n[8]),
+                    DVec3::new(n[1], n[5], n[9]),
+                    DVec3::new(n[2], n[6], n[10]),
+                ),
+                translation: DVec3::new(n[3], n[7], n[11]),
+            }
+        })
+        .collect()
+}
+
+fn reference_cor_matrix(num_vertices: usize) -> SparseRows {
+    let triplets: Vec<_> = read("arm_corWeights.txt")
+        .lines()
+        .map(|l| {
+            let n = numbers(l);
+            (n[0] as usize, n[1] as usize, n[2])
+        })
+        .collect();
+    SparseRows::from_triplets(num_vertices, num_vertices, triplets).unwrap()
+}
+
+fn diagonal(p: &[DVec3]) -> f64 {
+    let (lo, hi) = bounding_box(p);
+    lo.distance(hi)
+}
+
+#[test]
+fn lbs_dqs_cor_match_reference_step2() {
+    let (rest, _) = obj("arm.obj");
+    let w = weights(rest.len());
+    let t = step2_transforms();
+    let n = rest.len();
+    let mut out = vec![DVec3::ZERO; n];
+
+    LinearBlendSkinning::new(&w).apply(&t, &rest, &mut out);
+    let lbs_err = max_distance(&out, &obj("reference/s2_Mdef.obj").0);
+    println!("LBS vs reference s2_Mdef: {lbs_err:e}");
+    assert!(lbs_err < 1e-9);
+
+    let mut scratch = DqsScratch::new(t.len());
+    DualQuaternionSkinning::new(&w).apply(&t, &rest, &mut scratch, &mut out);
+    let dqs_err = max_distance(&out, &obj("reference/extras/x_step2_DQS_Mdef.obj").0);
+    println!("DQS vs reference x_step2_DQS_Mdef: {dqs_err:e}");
+    assert!(dqs_err < 1e-9);
+
+    // CoR with the reference's own centres (its S applied to M).
+    let s_ref = reference_cor_matrix(n);
+    let mut centres = vec![DVec3::ZERO; n];
+    s_ref.apply(&rest, &mut centres);
+    let mut scratch = CorScratch::new(t.len());
+    CorSkinning::new(&w).apply(&t, &rest, &centres, &mut scratch, &mut out);
+    let cor_err = max_distance(&out, &obj("reference/extras/x_step2_CoR_Mdef.obj").0);
+    println!("CoR vs reference x_step2_CoR_Mdef: {cor_err:e}");
+    // The reference forms its centres as (S·Φ)·C with Φ stored to 6 decimals.
+    assert!(cor_err < 1e-3, "{cor_err}");
+}
+
+#[test]
+fn cor_centres_exact_clustered_and_reference() {
+    let (rest, tris) = obj("arm.obj");
+    let w = weights(rest.len());
+    let n = rest.len();
+    let diag = diagonal(&rest);
+    let centres_of = |s: &SparseRows| {
+        let mut c = vec![DVec3::ZERO; n];
+        s.apply(&rest, &mut c);
+        c
+    };
+
+    let unpruned = CorCentresOptions {
+        mass_tolerance: 0.0,
+        ..Default::default()
+    };
+    let start = Instant::now();
+    let s_full = compute_cor_centres(&rest, &tris, &w, &unpruned, &|_, _| {}).unwrap();
+    let t_full = start.elapsed();
+    let start = Instant::now();
+    let s_exact =
+        compute_cor_centres(&rest, &tris, &w, &CorCentresOptions::default(), &|_, _| {}).unwrap();
+    let t_exact = start.elapsed();
+    let full = centres_of(&s_full);
+    let exact = centres_of(&s_exact);
+    let prune_err = max_distance(&full, &exact) / diag;
+    println!(
+        "Arm {} v: bbox diag {diag:.3}; unpruned {:?} nnz {}; pruned(1e-5) {:?} nnz {} (max row {}), error/diag {prune_err:e}",
+        n,
+        t_full,
+        s_full.nnz(),
+        t_exact,
+        s_exact.nnz(),
+        (0..n).map(|i| s_exact.row(i).0.len()).max().unwrap()
+    );
+    assert!(prune_err <= 1e-5);
+
+    for step in [0.05, 0.02, 0.01, 0.005] {
+        let options = CorCentresOptions {
+            method: CorCentresMethod::Clustered {
+                relative_step: step,
+            },
+            ..Default::default()
+        };
+        let start = Instant::now();
+        let s = compute_cor_centres(&rest, &tris, &w, &options, &|_, _| {}).unwrap();
+        let elapsed = start.elapsed();
+        let clustered = centres_of(&s);
+        let err = max_distance(&exact, &clustered) / diag;
+        println!("clustered relative step {step}: {elapsed:?}, max error/diag {err:e}");
+        if step <= 0.01 {
+            assert!(err <= 1e-3, "step {step}: {err}");
+        }
+    }
+
+    // Against the tool's offline CoR weights.
+    let reference = centres_of(&reference_cor_matrix(n));
+    let mut d: Vec<f64> = (0..n)
+        .map(|i| reference[i].distance(exact[i]) / diag)
+        .collect();
+    let multi: Vec<f64> = (0..n)
+        .filter(|&i| w.row(i).0.len() >= 2)
+        .map(|i| reference[i].distance(exact[i]) / diag)
+        .collect();
+    d.sort_by(f64::total_cmp);
+    let mut m = multi.clone();
+    m.sort_by(f64::total_cmp);
+    println!(
+        "vs arm_corWeights (distance/diag): all median {:.3e} p90 {:.3e} max {:.3e}; multi-influence ({}) median {:.3e} p90 {:.3e} max {:.3e}",
+        d[n / 2],
+        d[n * 9 / 10],
+        d[n - 1],
+        m.len(),
+        m[m.len() / 2],
+        m[m.len() * 9 / 10],
+        m[m.len() - 1]
+    );
+    assert!(m[m.len() / 2] < 0.02, "median {}", m[m.len() / 2]);
+
+    // Effect on the step-ii CoR deformation: ours vs the tool's centres.
+    let t = step2_transforms();
+    let cor = CorSkinning::new(&w);
+    let mut scratch = CorScratch::new(t.len());
+    let mut ours = vec![DVec3::ZERO; n];
+    let mut theirs = vec![DVec3::ZERO; n];
+    cor.apply(&t, &rest, &exact, &mut scratch, &mut ours);
+    cor.apply(&t, &rest, &reference, &mut scratch, &mut theirs);
+    let deform_diff = max_distance(&ours, &theirs) / diag;
+    println!("step ii CoR deformation, our centres vs arm_corWeights: max {deform_diff:e} of diag");
+    assert!(deform_diff < 0.02);
+}

@@ -1,0 +1,149 @@
+//! Property tests shared by the three skinning kernels (LBS, DQS, CoR).
+
+use cagerig::SkinWeights;
+use cagerig::skinning::{
+    CorScratch, CorSkinning, DqsScratch, DualQuaternionSkinning, LinearBlendSkinning,
+};
+use glam::{DAffine3, DQuat, DVec3};
+use proptest::prelude::*;
+
+const NUM_JOINTS: usize = 6;
+
+fn point() -> impl Strategy<Value = DVec3> {
+    (-10.0..10.0f64, -10.0..10.0f64, -10.0..10.0f64).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+}
+
+fn rigid() -> impl Strategy<Value = DAffine3> {
+    (
+        (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
+        point(),
+    )
+        .prop_filter_map("degenerate quaternion", |((x, y, z, w), t)| {
+            let q = DQuat::from_xyzw(x, y, z, w);
+            (q.length() > 0.1).then(|| DAffine3::from_rotation_translation(q.normalize(), t))
+        })
+}
+
+/// Rows of 1..=NUM_JOINTS influences (as triplets) for `n` vertices.
+fn weight_rows(n: usize) -> impl Strategy<Value = Vec<Vec<(usize, f64)>>> {
+    proptest::collection::vec(
+        proptest::collection::btree_map(0..NUM_JOINTS, 0.01..1.0f64, 1..=NUM_JOINTS)
+            .prop_map(|m| m.into_iter().collect::<Vec<_>>()),
+        n,
+    )
+}
+
+fn skin_weights(rows: &[Vec<(usize, f64)>]) -> SkinWeights {
+    let triplets = rows
+        .iter()
+        .enumerate()
+        .flat_map(|(v, r)| r.iter().map(move |&(j, w)| (v, j, w)));
+    SkinWeights::from_triplets(rows.len(), NUM_JOINTS, triplets.collect::<Vec<_>>())
+        .unwrap()
+        .0
+}
+
+/// LBS, DQS and CoR of the same input.
+fn skin_all(w: &SkinWeights, t: &[DAffine3], rest: &[DVec3], centres: &[DVec3]) -> [Vec<DVec3>; 3] {
+    let n = rest.len();
+    let mut lbs = vec![DVec3::ZERO; n];
+    LinearBlendSkinning::new(w).apply(t, rest, &mut lbs);
+    let mut dqs = vec![DVec3::ZERO; n];
+    DualQuaternionSkinning::new(w).apply(t, rest, &mut DqsScratch::new(t.len()), &mut dqs);
+    let mut cor = vec![DVec3::ZERO; n];
+    CorSkinning::new(w).apply(t, rest, centres, &mut CorScratch::new(t.len()), &mut cor);
+    [lbs, dqs, cor]
+}
+
+proptest! {
+    #[test]
+    fn identity_transforms_give_the_rest_mesh(
+        (rows, rest, centres) in (1..40usize).prop_flat_map(|n| (
+            weight_rows(n),
+            proptest::collection::vec(point(), n),
+            proptest::collection::vec(point(), n),
+        ))
+    ) {
+        let w = skin_weights(&rows);
+        let t = vec![DAffine3::IDENTITY; NUM_JOINTS];
+        for (method, out) in skin_all(&w, &t, &rest, &centres).iter().enumerate() {
+            for (a, b) in out.iter().zip(&rest) {
+                prop_assert!(a.abs_diff_eq(*b, 1e-14 * (1.0 + b.length())), "method {}: {} vs {}", method, a, b);
+            }
+        }
+    }
+
+    #[test]
+    fn single_bone_methods_agree(
+        joint in 0..NUM_JOINTS,
+        transforms in proptest::collection::vec(rigid(), NUM_JOINTS),
+        rest in proptest::collection::vec(point(), 1..30),
+        centre in point(),
+    ) {
+        let rows: Vec<Vec<(usize, f64)>> = rest.iter().map(|_| vec![(joint, 1.0)]).collect();
+        let w = skin_weights(&rows);
+        let centres = vec![centre; rest.len()];
+        let [lbs, dqs, cor] = skin_all(&w, &transforms, &rest, &centres);
+        for i in 0..rest.len() {
+            let expected = transforms[joint].transform_point3(rest[i]);
+            prop_assert!(lbs[i].abs_diff_eq(expected, 1e-10));
+            prop_assert!(dqs[i].abs_diff_eq(expected, 1e-10), "{} vs {}", dqs[i], expected);
+            prop_assert!(cor[i].abs_diff_eq(expected, 1e-10), "{} vs {}", cor[i], expected);
+        }
+    }
+
+    #[test]
+    fn common_rigid_transform_moves_the_mesh_rigidly(
+        (rows, rest, centres) in (1..40usize).prop_flat_map(|n| (
+            weight_rows(n),
+            proptest::collection::vec(point(), n),
+            proptest::collection::vec(point(), n),
+        )),
+        transform in rigid(),
+    ) {
+        let w = skin_weights(&rows);
+        let t = vec![transform; NUM_JOINTS];
+        for (method, out) in skin_all(&w, &t, &rest, &centres).iter().enumerate() {
+            for (a, b) in out.iter().zip(&rest) {
+                let expected = transform.transform_point3(*b);
+                prop_assert!(a.abs_diff_eq(expected, 1e-10), "method {}: {} vs {}", method, a, expected);
+            }
+        }
+    }
+
+    /// Rotations by ±θ (θ near 180°) about the same axis have nearly antipodal quaternions; the
+    /// blend must go the short way, through 180°, not collapse towards the identity.
+    #[test]
+    fn dqs_and_cor_blend_near_antipodal_rotations_the_short_way(
+        axis in point().prop_filter("zero axis", |a| a.length() > 0.1),
+        theta_deg in 150.0..179.9f64,
+        first_weight in 0.05..0.95f64,
+        p in point(),
+    ) {
+        let axis = axis.normalize();
+        let theta = theta_deg.to_radians();
+        let t = [
+            DAffine3::from_axis_angle(axis, theta),
+            DAffine3::from_axis_angle(axis, -theta),
+        ];
+        let rows = vec![vec![(0usize, first_weight), (1usize, 1.0 - first_weight)]];
+        let w = SkinWeights::from_triplets(1, 2, rows[0].iter().map(|&(j, x)| (0, j, x))).unwrap().0;
+        let mut dqs = [DVec3::ZERO];
+        DualQuaternionSkinning::new(&w).apply(&t, &[p], &mut DqsScratch::new(2), &mut dqs);
+        let mut cor = [DVec3::ZERO];
+        CorSkinning::new(&w).apply(&t, &[p], &[DVec3::ZERO], &mut CorScratch::new(2), &mut cor);
+        let along = axis * p.dot(axis);
+        let radial = p - along;
+        for out in [dqs[0], cor[0]] {
+            // A rotation about `axis`: axial component and radius kept.
+            prop_assert!((out.dot(axis) - p.dot(axis)).abs() < 1e-10);
+            let out_radial = out - axis * out.dot(axis);
+            prop_assert!((out_radial.length() - radial.length()).abs() < 1e-10);
+            // Angle between θ and 360° − θ (through 180°): cos ≤ cos θ.
+            if radial.length() > 1e-3 {
+                let cos = out_radial.dot(radial) / radial.length_squared();
+                prop_assert!(cos <= theta.cos() + 1e-9, "cos {} vs {}", cos, theta.cos());
+            }
+        }
+    }
+}
