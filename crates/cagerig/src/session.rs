@@ -17,14 +17,18 @@ use crate::mesh::TriMesh;
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::SkinningMethod;
-use crate::skinning::cor::CenterOfRotationSkinning;
-use crate::skinning::cor_centres::{CorCentresOptions, compute_cor_centres};
+use crate::skinning::cor::{CorScratch, CorSkinning};
+use crate::skinning::cor_centres::{CorCentresMethod, CorCentresOptions, compute_cor_centres};
 use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
 use crate::sparse_rows::SparseRows;
 use crate::sync::cage_reverser::CageReverser;
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
+
+/// Above this many vertices, CoR centres computed on demand use weight clustering
+/// ([`CorCentresMethod::Clustered`]) instead of the exact O(#V·#F) form.
+pub const CLUSTERED_COR_CENTRES_ABOVE: usize = 20_000;
 
 /// Which mesh CageUp fits when the skinning method is not LBS (Section 4.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -87,7 +91,8 @@ pub struct RigParts {
 struct CorState {
     centre_coords: CageCoords,
     centres: Vec<DVec3>,
-    skinning: CenterOfRotationSkinning,
+    skinning: CorSkinning,
+    scratch: CorScratch,
 }
 
 /// A live coupled rig.
@@ -610,13 +615,24 @@ impl RigSession {
     fn build_cor(&mut self) -> Result<(), RigError> {
         let rows = match self.cor_rows.take() {
             Some(rows) => rows,
-            None => compute_cor_centres(
-                &self.rest_mesh,
-                &self.mesh_triangles,
-                &self.skin_weights,
-                &self.cor_options,
-                None,
-            )?,
+            None => {
+                // Exact centres cost O(#V·#F): large meshes use weight clustering instead.
+                let mut options = self.cor_options;
+                if options.method == CorCentresMethod::Exact
+                    && self.rest_mesh.len() > CLUSTERED_COR_CENTRES_ABOVE
+                {
+                    options.method = CorCentresMethod::Clustered {
+                        relative_step: 0.02,
+                    };
+                }
+                compute_cor_centres(
+                    &self.rest_mesh,
+                    &self.mesh_triangles,
+                    &self.skin_weights,
+                    &options,
+                    &|_, _| {},
+                )?
+            }
         };
         let centre_coords = rows.compose_dense(&self.cage_coords)?;
         let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
@@ -624,7 +640,8 @@ impl RigSession {
         self.cor = Some(CorState {
             centre_coords,
             centres,
-            skinning: CenterOfRotationSkinning::new(&self.skin_weights),
+            skinning: CorSkinning::new(&self.skin_weights),
+            scratch: CorScratch::new(self.skeleton.len()),
         });
         self.cor_rows = Some(rows);
         Ok(())
@@ -691,11 +708,12 @@ impl RigSession {
                 &mut self.dqs_scratch,
                 &mut self.posed_mesh,
             ),
-            SkinningMethod::Cor => match &self.cor {
+            SkinningMethod::Cor => match &mut self.cor {
                 Some(cor) => cor.skinning.apply(
                     &self.posed_from_rest,
                     &self.rest_mesh,
                     &cor.centres,
+                    &mut cor.scratch,
                     &mut self.posed_mesh,
                 ),
                 None => {

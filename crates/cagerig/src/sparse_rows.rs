@@ -83,6 +83,38 @@ impl SparseRows {
         })
     }
 
+    /// The dense product `self · Φ` (`#rows × #C`) for a matrix whose columns address the rows
+    /// of Φ: e.g. Λ = S·Φ of Eq. 14, so that CoRs = Λ·C. Parallel over the columns of Φ.
+    pub fn compose_dense(
+        &self,
+        cage_coords: &crate::cage_coords::CageCoords,
+    ) -> Result<crate::cage_coords::CageCoords, RigError> {
+        if self.ncols != cage_coords.num_vertices() {
+            return Err(RigError::SizeMismatch {
+                what: "sparse matrix columns vs. rows of Φ",
+                expected: cage_coords.num_vertices(),
+                actual: self.ncols,
+            });
+        }
+        let nrows = self.nrows();
+        let num_cage = cage_coords.num_cage_vertices();
+        let columns: Vec<Vec<f64>> = (0..num_cage)
+            .into_par_iter()
+            .map(|k| {
+                let phi = cage_coords.column(k);
+                (0..nrows)
+                    .map(|i| {
+                        let (cols, vals) = self.row(i);
+                        cols.iter().zip(vals).map(|(&c, &v)| v * phi[c as usize]).sum()
+                    })
+                    .collect()
+            })
+            .collect();
+        crate::cage_coords::CageCoords::from_matrix(faer::Mat::from_fn(nrows, num_cage, |i, k| {
+            columns[k][i]
+        }))
+    }
+
     pub fn nrows(&self) -> usize {
         self.row_start.len().saturating_sub(1)
     }

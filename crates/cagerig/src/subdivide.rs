@@ -308,3 +308,46 @@ mod tests {
         ));
     }
 }
+
+/// A subdivided rig: skin, Ω and (when given) the CoR rows, carried along by [`midpoint_rows`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SubdividedRig {
+    pub mesh: TriMesh,
+    pub skin_weights: SkinWeights,
+    /// CoR rows S (`#V' × #V`: new rows averaged, columns still address the original vertices).
+    pub cor_rows: Option<crate::sparse_rows::SparseRows>,
+}
+
+/// [`subdivide_midpoint`] plus the CoR rows (`#V × #V`) when the rig has them.
+pub fn subdivide_rig(
+    mesh: &TriMesh,
+    skin_weights: &SkinWeights,
+    cor_rows: Option<&crate::sparse_rows::SparseRows>,
+    levels: usize,
+) -> Result<SubdividedRig, RigError> {
+    if let Some(rows) = cor_rows
+        && rows.nrows() != mesh.num_vertices()
+    {
+        return Err(RigError::SizeMismatch {
+            what: "CoR rows vs. mesh vertices",
+            expected: mesh.num_vertices(),
+            actual: rows.nrows(),
+        });
+    }
+    let sub = subdivide_midpoint(mesh, skin_weights, levels)?;
+    let cor_rows = cor_rows.map(|rows| {
+        let (row_start, cols, values) =
+            midpoint_rows(&rows.row_start, &rows.cols, &rows.values, &sub.edge_parents);
+        crate::sparse_rows::SparseRows {
+            row_start,
+            cols,
+            values,
+            ncols: rows.ncols,
+        }
+    });
+    Ok(SubdividedRig {
+        mesh: sub.mesh,
+        skin_weights: sub.skin_weights,
+        cor_rows,
+    })
+}

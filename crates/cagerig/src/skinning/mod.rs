@@ -16,5 +16,20 @@ pub use cor_centres::{CorCentresMethod, CorCentresOptions, compute_cor_centres};
 pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
 pub use lbs::LinearBlendSkinning;
 
+/// The skinning method S→S'→M' of a session.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum SkinningMethod {
+    /// Linear blend skinning (Eq. 2–3).
+    #[default]
+    Lbs,
+    /// Dual quaternion skinning (Eq. 4).
+    Dqs,
+    /// Optimised centres of rotation (Eq. 5–6).
+    Cor,
+}
+
 /// Vertices per rayon task in the per-frame kernels.
 pub(crate) const VERTEX_GRAIN: usize = 4096;
