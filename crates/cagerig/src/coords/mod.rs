@@ -1,1 +1,5 @@
 //! Barycentric coordinates: mean value (Φ), max-entropy (Ψ projection), MaxVol row selection.
+
+pub mod maxvol;
+pub mod mec;
+pub mod mvc;

@@ -1,0 +1,1 @@
+//! MaxVol row selection (placeholder, see next commit).
