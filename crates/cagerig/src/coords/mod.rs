@@ -2,4 +2,5 @@
 
 pub mod maxvol;
 pub mod mec;
+pub mod mec_signed;
 pub mod mvc;

@@ -14,7 +14,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::cage_coords::CageCoords;
-use crate::coords::{mec, mvc};
+use crate::coords::{mec, mec_signed, mvc};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
 use crate::skeleton::Skeleton;
@@ -274,7 +274,7 @@ fn joint_coordinates(
     let outcome = if floor_masses {
         mec::max_entropy_coordinates(rest_cage, &masses, target, &mut psi)
     } else {
-        mec::max_entropy_coordinates_signed(rest_cage, &masses, target, &mut psi)
+        mec_signed::max_entropy_coordinates_signed(rest_cage, &masses, target, &mut psi)
     };
     let reached = psi
         .iter()
@@ -283,7 +283,13 @@ fn joint_coordinates(
     let report = JointCoordsReport {
         joint: j,
         unlocalised,
-        method: outcome.method_name().to_string(),
+        method: match outcome.method {
+            mec::MecMethod::MaxEntropy => "max_entropy".to_string(),
+            mec::MecMethod::LeastSquaresFallback => format!(
+                "least_squares_fallback ({})",
+                outcome.fallback_reason.as_deref().unwrap_or("no reason given")
+            ),
+        },
         residual: reached.distance(target),
     };
     (psi, report)
