@@ -5,6 +5,7 @@
 //! coordinates Φ (`#V × #C`, [`CageCoords`]) give M = ΦC ([`coords`]); the sync operators of
 //! Section 4 ([`sync`]) keep all six in consensus.
 
+pub mod animation;
 pub mod cage;
 pub mod cage_coords;
 pub mod coords;
@@ -14,9 +15,11 @@ pub mod mesh;
 pub mod skeleton;
 pub mod skin_weights;
 pub mod skinning;
+pub mod sparse_rows;
 
 pub use cage_coords::CageCoords;
 pub use error::{RigError, Warning};
 pub use mesh::TriMesh;
 pub use skeleton::{Joint, Skeleton};
 pub use skin_weights::SkinWeights;
+pub use sparse_rows::SparseRows;
