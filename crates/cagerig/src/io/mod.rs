@@ -29,7 +29,8 @@ pub use error::ParseError;
 pub use maxvol::{parse_maxvol, read_maxvol, write_maxvol};
 pub use obj::{parse_obj, read_obj, write_obj};
 pub use skeleton_animation::{
-    SkeletonAnimationVersion, parse_skeleton_animation, read_skeleton_animation,
+    LocalComposition, SkeletonAnimationVersion, parse_skeleton_animation,
+    parse_skeleton_animation_with, read_skeleton_animation, read_skeleton_animation_with,
     write_skeleton_animation,
 };
 pub use skt::{parse_skt, read_skt, write_skt};

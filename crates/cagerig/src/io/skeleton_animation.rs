@@ -12,9 +12,12 @@
 //! Keyframes are returned as local transforms in a [`SkeletonTrack`].
 //!
 //! Note: the tool's `cg3::Transform::cumulateWith(t)` is `this · t`, so its code actually
-//! computes `G_j · G_parent⁻¹` (V3) and `K_j · L_rest_j` (V2); these agree with the formulas
-//! above only when the rotations involved commute. We implement the formulas above (which make
-//! forward kinematics reproduce the V3 global frames exactly).
+//! computes `G_j · G_parent⁻¹` (V3) and `K_j · L_rest_j` (V2, with rest locals
+//! `G_rest_j · G_rest_parent⁻¹`); these agree with the formulas above only when the rotations
+//! involved commute. On the Arm V3 file they do not (local rotation entries differ by up to
+//! 0.76). [`LocalComposition::Correct`] (the default, [`parse_skeleton_animation`]) makes forward
+//! kinematics reproduce the V3 global frames exactly; [`LocalComposition::PaperTool`]
+//! reproduces the tool's locals, for conformance comparisons against its outputs.
 
 use std::io::Write;
 use std::path::Path;
@@ -43,6 +46,17 @@ pub enum SkeletonAnimationVersion {
     V3GlobalFrames,
 }
 
+/// How keyframe values are turned into local transforms (see the module notes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LocalComposition {
+    /// V3: `L_j = G_parent⁻¹ · G_j`; V2: `L_j = L_rest_j · K_j`.
+    #[default]
+    Correct,
+    /// What the tool's code computes: V3 `G_j · G_parent⁻¹`; V2 `K_j · L_rest_j` with
+    /// `L_rest_j = G_rest_j · G_rest_parent⁻¹`.
+    PaperTool,
+}
+
 /// Detects the version from one header line (`None` if the line is not a version marker).
 pub fn version_marker(line: &str) -> Option<SkeletonAnimationVersion> {
     match line.trim() {
@@ -60,12 +74,32 @@ pub fn read_skeleton_animation(
     parse_skeleton_animation(&read_file(path)?, path, skeleton)
 }
 
-/// Parses skeleton-animation text.
+/// Reads a skeleton animation with the given local-transform convention.
+pub fn read_skeleton_animation_with(
+    path: &Path,
+    skeleton: &Skeleton,
+    composition: LocalComposition,
+) -> Result<(SkeletonTrack, SkeletonAnimationVersion), ParseError> {
+    parse_skeleton_animation_with(&read_file(path)?, path, skeleton, composition)
+}
+
+/// Parses skeleton-animation text ([`LocalComposition::Correct`]).
 pub fn parse_skeleton_animation(
     data: &[u8],
     source: &Path,
     skeleton: &Skeleton,
 ) -> Result<(SkeletonTrack, SkeletonAnimationVersion), ParseError> {
+    parse_skeleton_animation_with(data, source, skeleton, LocalComposition::Correct)
+}
+
+/// Parses skeleton-animation text with the given local-transform convention.
+pub fn parse_skeleton_animation_with(
+    data: &[u8],
+    source: &Path,
+    skeleton: &Skeleton,
+    composition: LocalComposition,
+) -> Result<(SkeletonTrack, SkeletonAnimationVersion), ParseError> {
+    let tool = composition == LocalComposition::PaperTool;
     let mut version = SkeletonAnimationVersion::V1LocalMatrices;
     // Peek the header first: the number of values per record depends on it.
     let mut probe_version = None;
@@ -91,6 +125,13 @@ pub fn parse_skeleton_animation(
     let rest_world = skeleton.rest_world_from_joint();
     let mut rest_local = vec![DAffine3::IDENTITY; num_joints];
     skeleton.locals_from_worlds(&rest_world, &mut rest_local);
+    if tool {
+        for (j, l) in rest_local.iter_mut().enumerate() {
+            if let Some(p) = skeleton.parent(j) {
+                *l = rest_world[j] * rest_world[p].inverse();
+            }
+        }
+    }
 
     let mut keys = Vec::with_capacity(parsed.records.len());
     for (k, key) in parsed.records.iter().enumerate() {
@@ -127,7 +168,11 @@ pub fn parse_skeleton_animation(
                     if skeleton.parent(j).is_none() {
                         delta.translation -= rest_local[j].translation;
                     }
-                    locals[j] = rest_local[j] * delta;
+                    locals[j] = if tool {
+                        delta * rest_local[j]
+                    } else {
+                        rest_local[j] * delta
+                    };
                 }
             }
             SkeletonAnimationVersion::V3GlobalFrames => {
@@ -141,6 +186,13 @@ pub fn parse_skeleton_animation(
                     })
                     .collect();
                 skeleton.locals_from_worlds(&globals, &mut locals);
+                if tool {
+                    for (j, l) in locals.iter_mut().enumerate() {
+                        if let Some(p) = skeleton.parent(j) {
+                            *l = globals[j] * globals[p].inverse();
+                        }
+                    }
+                }
             }
         }
         keys.push(locals);
@@ -326,6 +378,28 @@ mod tests {
         {
             assert!(a.abs_diff_eq(*b, 1e-12));
         }
+    }
+
+    #[test]
+    fn paper_tool_composition_reverses_the_products() {
+        // Root rotated 90° about z, child rotated 90° about x (globals): the orders differ.
+        let text = "# V3\nk 0\ns 0 0 0 90 1 0 0\ns 0 90 0 0 1 2 0\n";
+        let s = skeleton();
+        let (ours, _) = parse(text).unwrap();
+        let (tool, _) = parse_skeleton_animation_with(
+            text.as_bytes(),
+            Path::new("a.txt"),
+            &s,
+            LocalComposition::PaperTool,
+        )
+        .unwrap();
+        let g_root = frame_from_euler_degrees(DVec3::new(0.0, 0.0, 90.0), DVec3::X);
+        let g_child =
+            frame_from_euler_degrees(DVec3::new(90.0, 0.0, 0.0), DVec3::new(1.0, 2.0, 0.0));
+        assert!(ours.keys()[0][1].abs_diff_eq(g_root.inverse() * g_child, 1e-12));
+        assert!(tool.keys()[0][1].abs_diff_eq(g_child * g_root.inverse(), 1e-12));
+        assert!(!ours.keys()[0][1].abs_diff_eq(tool.keys()[0][1], 1e-3));
+        assert_eq!(ours.keys()[0][0], tool.keys()[0][0]);
     }
 
     #[test]
