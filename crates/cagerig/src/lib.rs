@@ -31,3 +31,4 @@ pub use error::{RigError, Warning};
 pub use mesh::TriMesh;
 pub use skeleton::{Joint, Skeleton};
 pub use skin_weights::SkinWeights;
+pub use sparse_rows::SparseRows;

@@ -1,29 +1,29 @@
-//! Generic sparse row-major matrices (CSR) acting on point sets, e.g. the CoR matrix S of Eq. 14
-//! (`#V × #V`, CoRs = S·M) or loaded mesh-to-mesh weight files.
+//! A generic sparse matrix in compressed-row storage, applied to point sets.
+//!
+//! Used for the CoR weights S (`#V × #V`, mesh-to-mesh: CoR_i = Σ_k S[i,k] · M_rest[k]) and any
+//! other "each output point is a sparse combination of input points" operator.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::error::RigError;
 
-/// Rows per rayon task in [`SparseRows::apply`].
-const APPLY_GRAIN: usize = 2048;
+/// Rows per parallel task in [`SparseRows::apply`].
+const ROW_BLOCK: usize = 1024;
 
-/// A sparse `nrows × ncols` matrix in compressed-row storage.
-///
-/// Row `i` holds `cols[row_start[i]..row_start[i+1]]` (ascending, no duplicates) and the matching
-/// `values`. `row_start.len() == nrows + 1`.
-#[derive(Debug, Clone, PartialEq, Default)]
+/// Sparse `nrows × ncols` matrix, CSR: row `i` holds `cols[row_start[i]..row_start[i+1]]`
+/// (ascending, no duplicates) and the matching `values`.
+#[derive(Debug, Clone, PartialEq)]
 pub struct SparseRows {
-    pub row_start: Vec<u32>,
-    pub cols: Vec<u32>,
-    pub values: Vec<f64>,
-    pub ncols: usize,
+    row_start: Vec<u32>,
+    cols: Vec<u32>,
+    values: Vec<f64>,
+    ncols: usize,
 }
 
 impl SparseRows {
-    /// Builds the matrix from `(row, col, value)` entries in any order; duplicates are summed,
-    /// explicit zeros kept out. Indices out of range and non-finite values are rejected.
+    /// Builds the matrix from `(row, col, value)` entries in any order. Duplicates are summed;
+    /// explicit zeros are kept. Indices out of range or non-finite values are rejected.
     pub fn from_triplets(
         nrows: usize,
         ncols: usize,
@@ -51,36 +51,56 @@ impl SparseRows {
                     index: row,
                 });
             }
-            if value != 0.0 {
-                entries.push((row as u32, col as u32, value));
-            }
+            entries.push((row as u32, col as u32, value));
+        }
+        if nrows > u32::MAX as usize
+            || ncols > u32::MAX as usize
+            || entries.len() > u32::MAX as usize
+        {
+            return Err(RigError::Invalid(
+                "sparse matrix too large for 32-bit indices".into(),
+            ));
         }
         entries.sort_by_key(|&(r, c, _)| (r, c));
-        let mut row_start = vec![0u32; nrows + 1];
-        let mut cols = Vec::with_capacity(entries.len());
-        let mut values: Vec<f64> = Vec::with_capacity(entries.len());
-        let mut last: Option<(u32, u32)> = None;
-        for (r, c, v) in entries {
-            if last == Some((r, c)) {
-                if let Some(x) = values.last_mut() {
-                    *x += v;
-                }
-                continue;
+        let mut merged: Vec<(u32, u32, f64)> = Vec::with_capacity(entries.len());
+        for e in entries {
+            match merged.last_mut() {
+                Some(last) if last.0 == e.0 && last.1 == e.1 => last.2 += e.2,
+                _ => merged.push(e),
             }
-            last = Some((r, c));
+        }
+        let mut row_start = vec![0u32; nrows + 1];
+        for &(r, _, _) in &merged {
             row_start[r as usize + 1] += 1;
-            cols.push(c);
-            values.push(v);
         }
         for i in 0..nrows {
             row_start[i + 1] += row_start[i];
         }
         Ok(Self {
             row_start,
+            cols: merged.iter().map(|e| e.1).collect(),
+            values: merged.iter().map(|e| e.2).collect(),
+            ncols,
+        })
+    }
+
+    /// Wraps CSR arrays produced by the crate's own algorithms (rows ascending and in range by
+    /// construction; checked in debug builds).
+    pub(crate) fn from_csr_unchecked(
+        row_start: Vec<u32>,
+        cols: Vec<u32>,
+        values: Vec<f64>,
+        ncols: usize,
+    ) -> Self {
+        debug_assert_eq!(row_start.last().copied().unwrap_or(0) as usize, cols.len());
+        debug_assert_eq!(cols.len(), values.len());
+        debug_assert!(cols.iter().all(|&c| (c as usize) < ncols));
+        Self {
+            row_start,
             cols,
             values,
             ncols,
-        })
+        }
     }
 
     /// The dense product `self · Φ` (`#rows × #C`) for a matrix whose columns address the rows
@@ -116,38 +136,69 @@ impl SparseRows {
     }
 
     pub fn nrows(&self) -> usize {
-        self.row_start.len().saturating_sub(1)
+        self.row_start.len() - 1
     }
 
-    /// Number of stored non-zeros.
+    pub fn ncols(&self) -> usize {
+        self.ncols
+    }
+
+    /// Number of stored entries.
     pub fn nnz(&self) -> usize {
         self.values.len()
     }
 
-    /// Columns and values of row `i`.
+    /// Columns and values of row `i` (ascending column).
     #[inline]
     pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
         let range = self.row_start[i] as usize..self.row_start[i + 1] as usize;
         (&self.cols[range.clone()], &self.values[range])
     }
 
-    /// `out = self · points` (`out`: `nrows`, `points`: `ncols`), rayon-parallel, no allocation.
-    ///
-    /// # Panics
-    /// If the slice lengths do not match the matrix shape.
-    pub fn apply(&self, points: &[DVec3], out: &mut [DVec3]) {
-        assert_eq!(points.len(), self.ncols, "SparseRows::apply: points");
-        assert_eq!(out.len(), self.nrows(), "SparseRows::apply: out");
-        out.par_chunks_mut(APPLY_GRAIN)
+    /// Entry `(i, k)`, zero when not stored.
+    pub fn get(&self, i: usize, k: usize) -> f64 {
+        let (cols, values) = self.row(i);
+        cols.binary_search(&(k as u32)).map_or(0.0, |p| values[p])
+    }
+
+    /// Raw CSR arrays `(row_start, cols, values)`.
+    pub fn csr(&self) -> (&[u32], &[u32], &[f64]) {
+        (&self.row_start, &self.cols, &self.values)
+    }
+
+    /// All entries `(row, col, value)` in row-major order.
+    pub fn triplets(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        (0..self.nrows()).flat_map(move |i| {
+            let (cols, values) = self.row(i);
+            cols.iter()
+                .zip(values)
+                .map(move |(&k, &w)| (i, k as usize, w))
+        })
+    }
+
+    /// Sum of each row's values, `nrows`.
+    pub fn row_sums(&self) -> Vec<f64> {
+        (0..self.nrows())
+            .map(|i| self.row(i).1.iter().sum())
+            .collect()
+    }
+
+    /// `out_i = Σ_k w_ik · x_k` for every row: `x` is `ncols`, `out` is `nrows`.
+    /// Parallel over row blocks, no allocation.
+    pub fn apply(&self, x: &[DVec3], out: &mut [DVec3]) {
+        assert_eq!(x.len(), self.ncols, "SparseRows::apply: input length");
+        assert_eq!(out.len(), self.nrows(), "SparseRows::apply: output length");
+        out.par_chunks_mut(ROW_BLOCK)
             .enumerate()
-            .for_each(|(chunk, out_chunk)| {
-                let first = chunk * APPLY_GRAIN;
-                for (offset, o) in out_chunk.iter_mut().enumerate() {
+            .for_each(|(block, chunk)| {
+                let first = block * ROW_BLOCK;
+                for (offset, o) in chunk.iter_mut().enumerate() {
                     let (cols, values) = self.row(first + offset);
-                    *o = cols
-                        .iter()
-                        .zip(values)
-                        .fold(DVec3::ZERO, |acc, (&c, &w)| acc + w * points[c as usize]);
+                    let mut sum = DVec3::ZERO;
+                    for (&k, &w) in cols.iter().zip(values) {
+                        sum += w * x[k as usize];
+                    }
+                    *o = sum;
                 }
             });
     }
@@ -158,26 +209,67 @@ mod tests {
     use super::*;
 
     #[test]
-    fn triplets_sum_duplicates_and_apply() {
-        let m = SparseRows::from_triplets(
+    fn builds_sorted_merged_rows_and_applies() {
+        let s = SparseRows::from_triplets(
             3,
-            2,
+            4,
             [
-                (2, 1, 1.0),
+                (0, 3, 0.5),
                 (0, 1, 0.25),
-                (0, 0, 0.5),
+                (2, 0, 1.0),
                 (0, 1, 0.25),
-                (1, 0, 0.0),
+                (1, 2, 0.0),
             ],
         )
         .unwrap();
-        assert_eq!(m.row(0), (&[0u32, 1][..], &[0.5, 0.5][..]));
-        assert!(m.row(1).0.is_empty());
-        assert_eq!(m.nnz(), 3);
-        let mut out = vec![DVec3::ZERO; 3];
-        m.apply(&[DVec3::X, DVec3::Y], &mut out);
-        assert_eq!(out, vec![DVec3::new(0.5, 0.5, 0.0), DVec3::ZERO, DVec3::Y]);
-        assert!(SparseRows::from_triplets(1, 1, [(0, 1, 1.0)]).is_err());
-        assert!(SparseRows::from_triplets(1, 1, [(0, 0, f64::NAN)]).is_err());
+        assert_eq!(s.row(0), (&[1u32, 3][..], &[0.5, 0.5][..]));
+        assert_eq!(s.row(1).0, &[2]);
+        assert_eq!(s.nnz(), 4);
+        assert_eq!(s.get(2, 0), 1.0);
+        assert_eq!(s.get(2, 1), 0.0);
+        let x = [DVec3::X, DVec3::Y, DVec3::Z, DVec3::new(1.0, 1.0, 1.0)];
+        let mut out = [DVec3::splat(9.0); 3];
+        s.apply(&x, &mut out);
+        assert_eq!(out[0], DVec3::new(0.5, 1.0, 0.5));
+        assert_eq!(out[1], DVec3::ZERO);
+        assert_eq!(out[2], DVec3::X);
+        assert_eq!(s.row_sums(), vec![1.0, 0.0, 1.0]);
+        let t: Vec<_> = s.triplets().collect();
+        assert_eq!(SparseRows::from_triplets(3, 4, t).unwrap(), s);
+    }
+
+    #[test]
+    fn apply_many_rows_in_parallel_matches_serial() {
+        let n = 5000;
+        let s = SparseRows::from_triplets(
+            n,
+            n,
+            (0..n).flat_map(|i| [(i, i, 0.5), (i, (i * 7 + 3) % n, 0.5)]),
+        )
+        .unwrap();
+        let x: Vec<DVec3> = (0..n)
+            .map(|i| DVec3::new(i as f64, 1.0, -(i as f64)))
+            .collect();
+        let mut out = vec![DVec3::ZERO; n];
+        s.apply(&x, &mut out);
+        for i in [0, 1023, 1024, 4999] {
+            assert_eq!(out[i], 0.5 * x[i] + 0.5 * x[(i * 7 + 3) % n]);
+        }
+    }
+
+    #[test]
+    fn rejects_bad_entries() {
+        assert!(matches!(
+            SparseRows::from_triplets(2, 2, [(2, 0, 1.0)]),
+            Err(RigError::IndexOutOfRange { index: 2, .. })
+        ));
+        assert!(matches!(
+            SparseRows::from_triplets(2, 2, [(0, 5, 1.0)]),
+            Err(RigError::IndexOutOfRange { index: 5, .. })
+        ));
+        assert!(matches!(
+            SparseRows::from_triplets(2, 2, [(1, 0, f64::INFINITY)]),
+            Err(RigError::NonFinite { index: 1, .. })
+        ));
     }
 }

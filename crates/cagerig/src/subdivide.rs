@@ -336,14 +336,10 @@ pub fn subdivide_rig(
     }
     let sub = subdivide_midpoint(mesh, skin_weights, levels)?;
     let cor_rows = cor_rows.map(|rows| {
+        let (row_start, cols, values) = rows.csr();
         let (row_start, cols, values) =
-            midpoint_rows(&rows.row_start, &rows.cols, &rows.values, &sub.edge_parents);
-        crate::sparse_rows::SparseRows {
-            row_start,
-            cols,
-            values,
-            ncols: rows.ncols,
-        }
+            midpoint_rows(row_start, cols, values, &sub.edge_parents);
+        crate::sparse_rows::SparseRows::from_csr_unchecked(row_start, cols, values, rows.ncols())
     });
     Ok(SubdividedRig {
         mesh: sub.mesh,

@@ -415,12 +415,12 @@ pub fn compute_cor_centres(
         }
         row_start.push(cols.len() as u32);
     }
-    Ok(SparseRows {
+    Ok(SparseRows::from_csr_unchecked(
         row_start,
         cols,
         values,
-        ncols: num_vertices,
-    })
+        num_vertices,
+    ))
 }
 
 #[cfg(test)]

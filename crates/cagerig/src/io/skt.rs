@@ -1,0 +1,229 @@
+//! Skeleton `.skt`: lines `j <idx> <name> <father> x y z` or
+//! `j <idx> <name> <father> rx ry rz x y z` give each joint's GLOBAL rest frame
+//! (`Translate · Rz · Ry · Rx`, degrees). `<idx>` is ignored: joints are numbered by order of
+//! appearance; father `-1` = root. Lines whose first token is not `j` are ignored.
+
+use std::io::Write;
+use std::path::Path;
+
+use glam::{DMat3, DVec3};
+
+use super::atomic::{read_file, write_atomically};
+use super::error::ParseError;
+use super::euler::{euler_degrees_from_rotation, frame_from_euler_degrees};
+use super::text::{FloatFormat, lines};
+use crate::skeleton::{Joint, Skeleton};
+
+/// Reads a `.skt` skeleton (joints in file order).
+pub fn read_skt(path: &Path) -> Result<Skeleton, ParseError> {
+    parse_skt(&read_file(path)?, path)
+}
+
+/// Parses `.skt` text; `source` names it in errors.
+pub fn parse_skt(data: &[u8], source: &Path) -> Result<Skeleton, ParseError> {
+    // (joint, father as written, line number)
+    let mut parsed: Vec<(Joint, i64, usize)> = Vec::new();
+    for line in lines(data, source) {
+        let line = line?;
+        let mut t = line.tokens();
+        if t.next_raw() != Some("j") {
+            continue;
+        }
+        let count = line.text.split_whitespace().count();
+        if count != 7 && count != 10 {
+            return Err(line.malformed(
+                "7 tokens (j idx name father x y z) or 10 (j idx name father rx ry rz x y z)",
+                format!("{count} tokens"),
+            ));
+        }
+        let _idx = t.i64("joint index")?;
+        let name = t.text("joint name")?.to_string();
+        let father = t.i64("father index")?;
+        if father < -1 {
+            return Err(line.malformed("father index -1 or a joint index", father.to_string()));
+        }
+        let degrees = if count == 10 {
+            t.vec3("rotation angle (degrees)")?
+        } else {
+            DVec3::ZERO
+        };
+        let translation = t.vec3("joint position")?;
+        t.end()?;
+        parsed.push((
+            Joint {
+                name,
+                parent: None,
+                rest_world_from_joint: frame_from_euler_degrees(degrees, translation),
+            },
+            father,
+            line.number,
+        ));
+    }
+    let len = parsed.len();
+    let mut joints = Vec::with_capacity(len);
+    for (j, (mut joint, father, number)) in parsed.into_iter().enumerate() {
+        if father >= 0 {
+            if father as usize >= len || father as usize == j {
+                return Err(ParseError::IndexOutOfRange {
+                    path: source.to_path_buf(),
+                    line: number,
+                    what: "father joint",
+                    index: father,
+                    len,
+                });
+            }
+            joint.parent = Some(father as usize);
+        }
+        joints.push(joint);
+    }
+    Skeleton::new(joints).map_err(|e| ParseError::Rig {
+        path: source.to_path_buf(),
+        source: e,
+    })
+}
+
+/// Writes a `.skt` (7-token lines; 10-token lines for joints whose rest rotation is not the
+/// identity), replacing `path` atomically. Fails if a rest frame is not a rigid transform.
+pub fn write_skt(path: &Path, skeleton: &Skeleton) -> Result<(), ParseError> {
+    let text = skt_text(skeleton, FloatFormat::RoundTrip).map_err(|message| {
+        ParseError::Unrepresentable {
+            path: path.to_path_buf(),
+            message,
+        }
+    })?;
+    write_atomically(path, |w| w.write_all(text.as_bytes()))
+}
+
+/// The `.skt` text of a skeleton, or a message naming the first non-rigid joint frame.
+pub fn skt_text(skeleton: &Skeleton, format: FloatFormat) -> Result<String, String> {
+    let mut out = String::from("# j <jointIndex> <jointName> <fatherIndex> [rx ry rz] x y z\n");
+    for (j, joint) in skeleton.joints().iter().enumerate() {
+        let father = joint.parent.map_or(-1, |p| p as i64);
+        let frame = joint.rest_world_from_joint;
+        let t = frame.translation;
+        let f = |x: f64| format.format(x);
+        if frame.matrix3 == DMat3::IDENTITY {
+            out += &format!(
+                "j {j} {} {father} {} {} {}\n",
+                joint.name,
+                f(t.x),
+                f(t.y),
+                f(t.z)
+            );
+        } else {
+            let d = euler_degrees_from_rotation(frame.matrix3).ok_or_else(|| {
+                format!(
+                    "joint {j} ({}) has a rest frame that is not a rotation",
+                    joint.name
+                )
+            })?;
+            out += &format!(
+                "j {j} {} {father} {} {} {} {} {} {}\n",
+                joint.name,
+                f(d.x),
+                f(d.y),
+                f(d.z),
+                f(t.x),
+                f(t.y),
+                f(t.z)
+            );
+        }
+    }
+    Ok(out)
+}
+
+/// Writes `.skt` text to any writer.
+pub fn write_skt_to(
+    w: &mut dyn Write,
+    skeleton: &Skeleton,
+    format: FloatFormat,
+) -> std::io::Result<()> {
+    let text = skt_text(skeleton, format).map_err(std::io::Error::other)?;
+    w.write_all(text.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::RigError;
+
+    fn parse(s: &str) -> Result<Skeleton, ParseError> {
+        parse_skt(s.as_bytes(), Path::new("test.skt"))
+    }
+
+    #[test]
+    fn reads_both_forms_and_ignores_other_lines() {
+        let s = parse("# header\n\nj 0 root -1 1 2 3\nx ignored line\nj 7 child 0 0 0 90 4 5 6\n")
+            .unwrap();
+        assert_eq!(s.len(), 2);
+        assert_eq!(s.parent(1), Some(0));
+        assert_eq!(
+            s.joint(0).rest_world_from_joint.translation,
+            DVec3::new(1.0, 2.0, 3.0)
+        );
+        let f = s.joint(1).rest_world_from_joint;
+        assert_eq!(f.translation, DVec3::new(4.0, 5.0, 6.0));
+        assert!(f.transform_vector3(DVec3::X).abs_diff_eq(DVec3::Y, 1e-15));
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = parse("j 0 a -1 0 0 0\nj 1 b 5 0 0 0\n").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                ParseError::IndexOutOfRange {
+                    line: 2,
+                    index: 5,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let e = parse("j 0 a -1 0 0\n").unwrap_err();
+        assert!(matches!(e, ParseError::Malformed { line: 1, .. }));
+        let e = parse("\nj 0 a -1 0 y 0\n").unwrap_err();
+        assert!(matches!(&e, ParseError::Malformed { line: 2, found, .. } if found == "y"));
+        let e = parse("j 0 a -2 0 0 0\n").unwrap_err();
+        assert_eq!(e.line(), Some(1));
+        let e = parse("j 0 a -1 0 0 0\nj 1 a 0 0 0 0\n").unwrap_err();
+        assert!(matches!(
+            e,
+            ParseError::Rig {
+                source: RigError::DuplicateJointName { .. },
+                ..
+            }
+        ));
+        let e = parse("j 0 a 1 0 0 0\nj 1 b 0 0 0 0\n").unwrap_err();
+        assert!(matches!(
+            e,
+            ParseError::Rig {
+                source: RigError::Cycle { .. },
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn write_read_round_trip() {
+        let s = parse("j 0 root -1 1 2 3\nj 1 child 0 10 -20 30 4 5 6\nj 2 tip 1 0.1 0.2 0.3\n")
+            .unwrap();
+        let text = skt_text(&s, FloatFormat::RoundTrip).unwrap();
+        assert_eq!(
+            text.lines()
+                .filter(|l| l.split_whitespace().count() == 10)
+                .count(),
+            1
+        );
+        let back = parse(&text).unwrap();
+        for (a, b) in back.joints().iter().zip(s.joints()) {
+            assert_eq!(a.name, b.name);
+            assert_eq!(a.parent, b.parent);
+            assert!(
+                a.rest_world_from_joint
+                    .abs_diff_eq(b.rest_world_from_joint, 1e-12)
+            );
+        }
+        assert_eq!(back.joint(2), s.joint(2));
+    }
+}
