@@ -7,6 +7,7 @@ use anyhow::{Context, bail};
 use cagerig::Warning;
 use cagerig::coords::maxvol;
 use cagerig::io::obj::write_obj_to;
+use cagerig::io::text::FloatFormat;
 use cagerig::script::EditScript;
 use cagerig::session::{CageFitSource, FitRows, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
@@ -121,7 +122,7 @@ struct InfoReport {
     warnings: Vec<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Clone, Serialize)]
 pub struct FileUse {
     pub role: String,
     pub path: PathBuf,
@@ -288,7 +289,7 @@ impl StateFiles {
         ];
         for (what, positions, triangles) in objs {
             let mut bytes = Vec::new();
-            write_obj_to(&mut bytes, positions, triangles)?;
+            write_obj_to(&mut bytes, positions, triangles, FloatFormat::RoundTrip)?;
             self.files
                 .push((PathBuf::from(format!("{prefix}_{what}.obj")), bytes));
         }
@@ -387,7 +388,7 @@ pub fn animate(
     let skeleton = loaded.parts.skeleton.clone();
     let num_cage = loaded.parts.cage.num_vertices();
     let skeleton_track = match skeleton_anim {
-        Some(p) => Some(cagerig::io::keyframes::read_skeleton_animation(p, &skeleton)?),
+        Some(p) => Some(cagerig::io::skeleton_animation::read_skeleton_animation(p, &skeleton)?.0),
         None => None,
     };
     let cage_track = match cage_anim {
@@ -400,7 +401,7 @@ pub fn animate(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let mut player = cagerig::animation::AnimationPlayer::new(&session, skeleton_track, cage_track)?;
+    let mut player = cagerig::playback::AnimationPlayer::new(&session, skeleton_track, cage_track)?;
     let mut session = session;
     let mut files = StateFiles::new();
     for &t in times {
