@@ -9,6 +9,10 @@
 //!    |det Φ̃| grows by the factor |B[i, j]|, and B is updated in place by the rank-1 formula
 //!    `B ← B − B[:, j] (B[i, :] − e_jᵀ) / B[i, j]` (one parallel pass fused with the next argmax).
 //!
+//! 3. Multi-start ([`MaxVolOptions`]): the swap refinement has many local maxima, so further
+//!    starts (LU with shuffled column orders) run on a reduced candidate row set and the best
+//!    result is refined once more on all rows.
+//!
 //! At convergence every row of Φ is a combination of the selected rows with coefficients of
 //! magnitude ≤ [`SWAP_THRESHOLD`] (a "dominant" submatrix).
 
