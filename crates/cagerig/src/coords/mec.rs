@@ -372,7 +372,7 @@ fn least_squares_fallback(
 /// relative ridge); `None` if h is not positive definite even with the ridge.
 fn solve_spd3(h: [DVec3; 3], rhs: DVec3) -> Option<DVec3> {
     let trace = h[0].x + h[1].y + h[2].z;
-    if !(trace > 0.0) || !trace.is_finite() {
+    if trace.is_nan() || trace <= 0.0 || !trace.is_finite() {
         return None;
     }
     let ridge = 1e-15 * trace;
@@ -385,11 +385,9 @@ fn solve_spd3(h: [DVec3; 3], rhs: DVec3) -> Option<DVec3> {
     for i in 0..3 {
         for j in 0..=i {
             let mut sum = 0.5 * (a[i][j] + a[j][i]);
-            for p in 0..j {
-                sum -= l[i][p] * l[j][p];
-            }
+            sum -= (0..j).map(|p| l[i][p] * l[j][p]).sum::<f64>();
             if i == j {
-                if !(sum > 0.0) {
+                if sum.is_nan() || sum <= 0.0 {
                     return None;
                 }
                 l[i][i] = sum.sqrt();
