@@ -162,7 +162,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             format!("{name} N={levels}")
         };
         if !args.json {
-            eprintln!("benchmarking {model} ({} vertices)…", parts.mesh.num_vertices());
+            eprintln!(
+                "benchmarking {model} ({} vertices)…",
+                parts.mesh.num_vertices()
+            );
         }
         rows.push(bench_model(model, parts, args.repeat_scale)?);
     }
@@ -256,10 +259,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     };
     let (mut session, _) = RigSession::new(session_parts, SessionOptions::default())?;
     // The pose of the paper tool's per-frame timings: one joint bent by 60° about +X.
-    let bend_joint = session
-        .skeleton()
-        .find("lowerarm01.R")
-        .unwrap_or(nj / 2);
+    let bend_joint = session.skeleton().find("lowerarm01.R").unwrap_or(nj / 2);
     session.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
 
     let refactor_stat = time(reps(51, scale, nv), 3, || {
@@ -274,8 +274,8 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     let skin_bytes = nv as u64 * (24 + 24 + 4) + nnz * 12;
 
     let lbs = LinearBlendSkinning::new(&parts.skin_weights);
-    let lbs_stat = time(frame_reps, 5, || lbs.apply(&transforms, &rest, &mut out))
-        .with_bytes(skin_bytes);
+    let lbs_stat =
+        time(frame_reps, 5, || lbs.apply(&transforms, &rest, &mut out)).with_bytes(skin_bytes);
     let dqs = DualQuaternionSkinning::new(&parts.skin_weights);
     let mut dqs_scratch = DqsScratch::new(nj);
     let dqs_stat = time(frame_reps, 5, || {
@@ -283,7 +283,10 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     })
     .with_bytes(skin_bytes + nv as u64 * 4);
     session.set_skinning(cagerig::skinning::SkinningMethod::Cor)?;
-    let centres = session.cor_centres().map(<[DVec3]>::to_vec).unwrap_or_default();
+    let centres = session
+        .cor_centres()
+        .map(<[DVec3]>::to_vec)
+        .unwrap_or_default();
     session.set_skinning(cagerig::skinning::SkinningMethod::Lbs)?;
     let cor = CorSkinning::new(&parts.skin_weights);
     let mut cor_scratch = CorScratch::new(nj);
@@ -375,7 +378,10 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
 /// cage track breathing the rest cage, with unrelated key times (asynchronous tracks).
 fn synthetic_tracks(
     session: &RigSession,
-) -> anyhow::Result<(cagerig::animation::SkeletonTrack, cagerig::animation::CageTrack)> {
+) -> anyhow::Result<(
+    cagerig::animation::SkeletonTrack,
+    cagerig::animation::CageTrack,
+)> {
     let skeleton = session.skeleton();
     let rest = skeleton.rest_world_from_joint();
     let mut rest_locals = vec![DAffine3::IDENTITY; skeleton.len()];
@@ -442,7 +448,10 @@ fn print_table(rows: &[ModelRow]) {
         line("MaxVol selection", &r.maxvol);
         line("SkelUp preprocess (Ψ)", &r.skelup_preprocess);
         line("CageUp preprocess", &r.cageup_preprocess);
-        line(&format!("CoR centres ({})", r.cor_centres_method), &r.cor_centres);
+        line(
+            &format!("CoR centres ({})", r.cor_centres_method),
+            &r.cor_centres,
+        );
         line("CageRev refactor", &r.cagerev_refactor);
         line("LBS skinning", &r.lbs);
         line("DQS skinning", &r.dqs);

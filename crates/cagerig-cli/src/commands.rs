@@ -392,7 +392,9 @@ pub fn animate(
         None => None,
     };
     let cage_track = match cage_anim {
-        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(p, num_cage)?),
+        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
+            p, num_cage,
+        )?),
         None => None,
     };
     let mut options = session_args.options();

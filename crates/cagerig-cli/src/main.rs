@@ -11,7 +11,11 @@ use clap::{Parser, Subcommand};
 use rig_source::RigArgs;
 
 #[derive(Parser)]
-#[command(name = "cagerig", version, about = "Real-time deformation with coupled cages and skeletons")]
+#[command(
+    name = "cagerig",
+    version,
+    about = "Real-time deformation with coupled cages and skeletons"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -94,7 +94,10 @@ fn load_files(mesh: &Path, cage: Option<&Path>) -> anyhow::Result<LoadedRig> {
 
 /// Mean value coordinates of the rest mesh w.r.t. the rest cage, with a progress bar on a
 /// terminal.
-pub fn compute_coords_with_progress(parts: &RigParts, progress: bool) -> anyhow::Result<CageCoords> {
+pub fn compute_coords_with_progress(
+    parts: &RigParts,
+    progress: bool,
+) -> anyhow::Result<CageCoords> {
     let n = parts.mesh.num_vertices();
     let bar = (progress && std::io::stderr().is_terminal() && n > 20_000).then(|| {
         let bar = ProgressBar::new(n as u64);
@@ -131,12 +134,8 @@ pub fn subdivide_and_write(
     let loaded = load_rig(args, true, false)?;
     let p = &loaded.parts;
     let t = std::time::Instant::now();
-    let sub = cagerig::subdivide::subdivide_rig(
-        &p.mesh,
-        &p.skin_weights,
-        p.cor_rows.as_ref(),
-        levels,
-    )?;
+    let sub =
+        cagerig::subdivide::subdivide_rig(&p.mesh, &p.skin_weights, p.cor_rows.as_ref(), levels)?;
     println!(
         "subdivided {} → {} vertices, {} triangles in {:.1} ms",
         p.mesh.num_vertices(),

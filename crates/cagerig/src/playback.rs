@@ -70,7 +70,10 @@ impl AnimationPlayer {
             skeleton_track,
             cage_track,
             original_root_translation,
-            rotations: locals.iter().map(|l| DQuat::from_mat3(&l.matrix3)).collect(),
+            rotations: locals
+                .iter()
+                .map(|l| DQuat::from_mat3(&l.matrix3))
+                .collect(),
             locals,
             root_motion: vec![DVec3::ZERO; nj],
             offsets: vec![DVec3::ZERO; nc],
@@ -80,7 +83,10 @@ impl AnimationPlayer {
     /// Last keyframe time over both tracks.
     pub fn duration(&self) -> f64 {
         let last = |times: &[f64]| times.last().copied().unwrap_or(0.0);
-        let s = self.skeleton_track.as_ref().map_or(0.0, |t| last(t.times()));
+        let s = self
+            .skeleton_track
+            .as_ref()
+            .map_or(0.0, |t| last(t.times()));
         let c = self.cage_track.as_ref().map_or(0.0, |t| last(t.times()));
         s.max(c)
     }

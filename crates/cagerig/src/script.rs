@@ -37,9 +37,15 @@ pub enum EditStep {
         degrees: f64,
     },
     /// Translate rest-cage vertices (C edit).
-    MoveRestCage { vertices: Vec<usize>, offset: [f64; 3] },
+    MoveRestCage {
+        vertices: Vec<usize>,
+        offset: [f64; 3],
+    },
     /// Translate current-cage vertices (C' edit).
-    MovePosedCage { vertices: Vec<usize>, offset: [f64; 3] },
+    MovePosedCage {
+        vertices: Vec<usize>,
+        offset: [f64; 3],
+    },
     /// Switch the skinning method.
     SetSkinning { method: SkinningMethod },
     /// Back to the rest pose.
@@ -190,7 +196,9 @@ pub fn resolve_joint(session: &RigSession, joint: &JointRef) -> Result<usize, St
     let n = session.skeleton().len();
     match joint {
         JointRef::Index(j) if *j < n => Ok(*j),
-        JointRef::Index(j) => Err(format!("joint {j} is out of range (the rig has {n} joints)")),
+        JointRef::Index(j) => Err(format!(
+            "joint {j} is out of range (the rig has {n} joints)"
+        )),
         JointRef::Name(name) => session
             .skeleton()
             .find(name)
@@ -223,10 +231,9 @@ mod tests {
                 degrees: -10.0
             }
         );
-        let err = EditScript::parse(
-            r#"{"steps":[{"op":"reset_pose"},{"op":"explode","vertices":[1]}]}"#,
-        )
-        .unwrap_err();
+        let err =
+            EditScript::parse(r#"{"steps":[{"op":"reset_pose"},{"op":"explode","vertices":[1]}]}"#)
+                .unwrap_err();
         assert!(matches!(err, ScriptError::Step { step: 2, .. }), "{err}");
         assert!(err.to_string().contains("explode"));
         assert!(matches!(

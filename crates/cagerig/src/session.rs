@@ -30,6 +30,9 @@ use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 /// ([`CorCentresMethod::Clustered`]) instead of the exact O(#V·#F) form.
 pub const CLUSTERED_COR_CENTRES_ABOVE: usize = 20_000;
 
+/// Φ reproduces the given rest mesh when max |ΦC − M| ≤ this × the cage's bbox diagonal.
+pub const PHI_C_TOLERANCE: f64 = 1e-9;
+
 /// Which mesh CageUp fits when the skinning method is not LBS (Section 4.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -119,6 +122,9 @@ pub struct RigSession {
     original_rest_cage: Vec<DVec3>,
 
     // Rest state.
+    /// False while M is still the mesh as loaded and differs from ΦC (e.g. Φ read from a file
+    /// with 6 decimals); the first cage edit then sets M = ΦC in full.
+    rest_mesh_is_phi_c: bool,
     rest_cage: Vec<DVec3>,
     rest_mesh: Vec<DVec3>,
     rest_world_from_joint: Vec<DAffine3>,
@@ -209,6 +215,19 @@ impl RigSession {
         };
         let cage_updater = CageUpdater::new(&cage_coords, rows, mode)?;
         let rest_cage = cage.positions.clone();
+        let mut phi_c = vec![DVec3::ZERO; nv];
+        cage_coords.apply(&rest_cage, &mut phi_c);
+        let residual = crate::mesh::max_distance(&phi_c, &mesh.positions);
+        let (lo, hi) = cage.bounding_box();
+        let rest_mesh_is_phi_c = residual <= PHI_C_TOLERANCE * (hi - lo).length();
+        if !rest_mesh_is_phi_c {
+            warnings.push(Warning::Note {
+                message: format!(
+                    "the cage coordinates reproduce the rest mesh only to {residual:.3e} (M ≠ ΦC); \
+                     the rest mesh becomes ΦC at the first cage edit"
+                ),
+            });
+        }
         let skeleton_updater = match joint_coords {
             Some(rows) => SkeletonUpdater::from_joint_coords(&rows, nc)?,
             None => {
@@ -261,6 +280,7 @@ impl RigSession {
             options_fit_source: options.fit_source,
             method: SkinningMethod::Lbs,
             original_rest_cage: rest_cage.clone(),
+            rest_mesh_is_phi_c,
             rest_cage,
             rest_mesh: mesh.positions,
             rest_world_from_joint,
@@ -390,7 +410,9 @@ impl RigSession {
             "rotation axis {axis} has no direction"
         )))?;
         if !angle.is_finite() {
-            return Err(RigError::Invalid(format!("rotation angle {angle} is not finite")));
+            return Err(RigError::Invalid(format!(
+                "rotation angle {angle} is not finite"
+            )));
         }
         let world_rotation = DQuat::from_axis_angle(axis, angle);
         let joint_world = DQuat::from_mat3(&self.posed_world_from_joint[joint].matrix3);
@@ -418,7 +440,11 @@ impl RigSession {
     }
 
     /// Validates and stores a pose without running the sync chain.
-    fn store_pose(&mut self, local_rotations: &[DQuat], root_motion: &[DVec3]) -> Result<(), RigError> {
+    fn store_pose(
+        &mut self,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
         let nj = self.skeleton.len();
         if local_rotations.len() != nj || root_motion.len() != nj {
             return Err(RigError::SizeMismatch {
@@ -464,7 +490,11 @@ impl RigSession {
 
     /// C edit: moves rest-cage vertices `vertices` by `offsets` (one per vertex, or one for all).
     /// M follows incrementally (M += Φ[:, k]·ΔC_k), then SkelUp, skinning and CageUp.
-    pub fn move_rest_cage(&mut self, vertices: &[usize], offsets: &[DVec3]) -> Result<(), RigError> {
+    pub fn move_rest_cage(
+        &mut self,
+        vertices: &[usize],
+        offsets: &[DVec3],
+    ) -> Result<(), RigError> {
         self.check_cage_edit(vertices, offsets)?;
         let mut dense = std::mem::take(&mut self.scratch_cage_a);
         dense.iter_mut().for_each(|d| *d = DVec3::ZERO);
@@ -513,6 +543,7 @@ impl RigSession {
                 *c += *d;
             }
             self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+            self.rest_mesh_is_phi_c = true;
             if let Some(cor) = &mut self.cor {
                 cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
             }
@@ -567,6 +598,7 @@ impl RigSession {
                 *c = *c0 + *o;
             }
             self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+            self.rest_mesh_is_phi_c = true;
             if let Some(cor) = &mut self.cor {
                 cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
             }
@@ -652,8 +684,13 @@ impl RigSession {
         for (&k, d) in vertices.iter().zip(deltas) {
             self.rest_cage[k] += *d;
         }
-        self.cage_coords
-            .apply_delta(vertices, deltas, &mut self.rest_mesh);
+        if !self.rest_mesh_is_phi_c {
+            self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+            self.rest_mesh_is_phi_c = true;
+        } else {
+            self.cage_coords
+                .apply_delta(vertices, deltas, &mut self.rest_mesh);
+        }
         if let Some(cor) = &mut self.cor {
             cor.centre_coords
                 .apply_delta(vertices, deltas, &mut cor.centres);
@@ -664,7 +701,11 @@ impl RigSession {
     fn sync_from_rest_cage(&mut self) {
         self.skeleton_updater
             .apply(&self.rest_cage, &mut self.scratch_joints);
-        for (frame, a) in self.rest_world_from_joint.iter_mut().zip(&self.scratch_joints) {
+        for (frame, a) in self
+            .rest_world_from_joint
+            .iter_mut()
+            .zip(&self.scratch_joints)
+        {
             frame.translation = *a;
         }
         self.pose_and_fit();
@@ -680,10 +721,8 @@ impl RigSession {
                     .transform_point3(self.rest_world_from_joint[j].translation),
                 None => self.rest_world_from_joint[j].translation + self.root_motion[j],
             };
-            self.scratch_locals[j] = DAffine3::from_rotation_translation(
-                self.posed_local_rotation[j],
-                translation,
-            );
+            self.scratch_locals[j] =
+                DAffine3::from_rotation_translation(self.posed_local_rotation[j], translation);
         }
         self.skeleton
             .forward_kinematics(&self.scratch_locals, &mut self.posed_world_from_joint);
@@ -748,4 +787,3 @@ impl RigSession {
         }
     }
 }
-

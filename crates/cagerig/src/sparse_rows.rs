@@ -125,7 +125,10 @@ impl SparseRows {
                 (0..nrows)
                     .map(|i| {
                         let (cols, vals) = self.row(i);
-                        cols.iter().zip(vals).map(|(&c, &v)| v * phi[c as usize]).sum()
+                        cols.iter()
+                            .zip(vals)
+                            .map(|(&c, &v)| v * phi[c as usize])
+                            .sum()
                     })
                     .collect()
             })

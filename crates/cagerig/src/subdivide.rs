@@ -337,8 +337,7 @@ pub fn subdivide_rig(
     let sub = subdivide_midpoint(mesh, skin_weights, levels)?;
     let cor_rows = cor_rows.map(|rows| {
         let (row_start, cols, values) = rows.csr();
-        let (row_start, cols, values) =
-            midpoint_rows(row_start, cols, values, &sub.edge_parents);
+        let (row_start, cols, values) = midpoint_rows(row_start, cols, values, &sub.edge_parents);
         crate::sparse_rows::SparseRows::from_csr_unchecked(row_start, cols, values, rows.ncols())
     });
     Ok(SubdividedRig {

@@ -63,10 +63,16 @@ fn identity_pose_gives_rest_structures() {
         let s = session(name);
         let tol = 1e-12 * scale(&s);
         assert!(max_distance(s.posed_mesh(), s.rest_mesh()) < tol, "{name}");
-        assert!(max_distance(s.posed_cage(), s.rest_cage()) < 1e3 * tol, "{name}");
+        assert!(
+            max_distance(s.posed_cage(), s.rest_cage()) < 1e3 * tol,
+            "{name}"
+        );
         let rest: Vec<DVec3> = s.skeleton().rest_positions();
         let psi: Vec<DVec3> = s.rest_joints().collect();
-        assert!(max_distance(&rest, &psi) < 1e-9 * scale(&s), "{name}: ΨC != rest joints");
+        assert!(
+            max_distance(&rest, &psi) < 1e-9 * scale(&s),
+            "{name}: ΨC != rest joints"
+        );
     }
 }
 
@@ -74,7 +80,11 @@ fn grab_lands_exactly(s: &mut RigSession, vertices: &[usize], offset: DVec3, tol
     let before = s.posed_cage().to_vec();
     s.move_posed_cage(vertices, &[offset]).unwrap();
     for (k, (after, b)) in s.posed_cage().iter().zip(&before).enumerate() {
-        let expect = if vertices.contains(&k) { *b + offset } else { *b };
+        let expect = if vertices.contains(&k) {
+            *b + offset
+        } else {
+            *b
+        };
         assert!(
             after.distance(expect) < tol,
             "cage vertex {k}: {after} vs {expect} ({})",
@@ -85,14 +95,19 @@ fn grab_lands_exactly(s: &mut RigSession, vertices: &[usize], offset: DVec3, tol
 
 #[test]
 fn loop_is_exact_under_lbs_and_ghost_fit() {
-    for method in [SkinningMethod::Lbs, SkinningMethod::Dqs, SkinningMethod::Cor] {
+    for method in [
+        SkinningMethod::Lbs,
+        SkinningMethod::Dqs,
+        SkinningMethod::Cor,
+    ] {
         let mut s = session("bar");
         s.set_skinning(method).unwrap();
         assert_eq!(s.fit_source(), CageFitSource::GhostLbs);
         let tol = 1e-9 * scale(&s).max(1.0);
         s.rotate_joint(1, DVec3::Z, 0.8).unwrap();
         grab_lands_exactly(&mut s, &[3, 5], DVec3::new(0.3, -0.2, 0.4), tol);
-        s.move_rest_cage(&[0, 1], &[DVec3::new(0.0, 0.5, 0.0)]).unwrap();
+        s.move_rest_cage(&[0, 1], &[DVec3::new(0.0, 0.5, 0.0)])
+            .unwrap();
         s.rotate_joint(2, DVec3::Y, -0.5).unwrap();
         grab_lands_exactly(&mut s, &[7], DVec3::new(-0.5, 0.1, 0.2), tol);
         grab_lands_exactly(&mut s, &[2, 7, 9], DVec3::new(0.1, 0.1, -0.3), tol);
@@ -124,8 +139,11 @@ fn thousand_interleaved_events_keep_consensus_and_do_not_drift() {
                 grab_lands_exactly(&mut s, &v, rng.vec(0.02 * sc), tol);
             }
             _ => {
-                let m = [SkinningMethod::Lbs, SkinningMethod::Dqs, SkinningMethod::Cor]
-                    [rng.index(3)];
+                let m = [
+                    SkinningMethod::Lbs,
+                    SkinningMethod::Dqs,
+                    SkinningMethod::Cor,
+                ][rng.index(3)];
                 s.set_skinning(m).unwrap();
             }
         }
@@ -146,7 +164,10 @@ fn bad_edits_are_errors_not_panics() {
     assert!(s.rotate_joint(0, DVec3::ZERO, 1.0).is_err());
     assert!(s.rotate_joint(0, DVec3::X, f64::NAN).is_err());
     assert!(s.move_rest_cage(&[999], &[DVec3::X]).is_err());
-    assert!(s.move_posed_cage(&[0, 1], &[DVec3::X, DVec3::Y, DVec3::Z]).is_err());
+    assert!(
+        s.move_posed_cage(&[0, 1], &[DVec3::X, DVec3::Y, DVec3::Z])
+            .is_err()
+    );
     assert!(
         s.move_posed_cage(&[0], &[DVec3::new(f64::INFINITY, 0.0, 0.0)])
             .is_err()

@@ -125,7 +125,11 @@ pub fn write_rig_files(
     super::obj::write_obj(&p(".obj"), &parts.mesh.positions, &parts.mesh.triangles)?;
     super::skt::write_skt(&p(".skt"), &parts.skeleton)?;
     super::skw::write_skw(&p(".skw"), &parts.skin_weights, fmt)?;
-    super::obj::write_obj(&p("_cage.obj"), &parts.cage.positions, &parts.cage.triangles)?;
+    super::obj::write_obj(
+        &p("_cage.obj"),
+        &parts.cage.positions,
+        &parts.cage.triangles,
+    )?;
     super::cage_weights::write_cage_weights(&p("_cage_cageWeights.txt"), cage_coords, fmt)?;
     super::maxvol::write_maxvol(&p("_cage.maxvol"), maxvol_rows)?;
     if let Some(rows) = &parts.cor_rows {

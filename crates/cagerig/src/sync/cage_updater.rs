@@ -187,7 +187,10 @@ mod tests {
             let up = CageUpdater::new(&phi, rows, mode).unwrap();
             let mut fitted = vec![DVec3::ZERO; 4];
             up.apply(&mesh, &mut fitted);
-            assert!(crate::mesh::max_distance(&fitted, &cage) < 1e-12, "{mode:?}");
+            assert!(
+                crate::mesh::max_distance(&fitted, &cage) < 1e-12,
+                "{mode:?}"
+            );
         }
     }
 

@@ -144,7 +144,10 @@ impl SkeletonUpdater {
     }
 
     /// Wraps given joint coordinates Ψ (`#J` rows of `#C`), e.g. loaded from a file.
-    pub fn from_joint_coords(rows: &[Vec<f64>], num_cage_vertices: usize) -> Result<Self, RigError> {
+    pub fn from_joint_coords(
+        rows: &[Vec<f64>],
+        num_cage_vertices: usize,
+    ) -> Result<Self, RigError> {
         let mut joint_coords = Vec::with_capacity(rows.len() * num_cage_vertices);
         for (j, r) in rows.iter().enumerate() {
             if r.len() != num_cage_vertices {
@@ -287,7 +290,10 @@ fn joint_coordinates(
             mec::MecMethod::MaxEntropy => "max_entropy".to_string(),
             mec::MecMethod::LeastSquaresFallback => format!(
                 "least_squares_fallback ({})",
-                outcome.fallback_reason.as_deref().unwrap_or("no reason given")
+                outcome
+                    .fallback_reason
+                    .as_deref()
+                    .unwrap_or("no reason given")
             ),
         },
         residual: reached.distance(target),
