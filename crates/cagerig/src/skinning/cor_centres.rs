@@ -390,7 +390,7 @@ pub fn compute_cor_centres(
             |scratch, r| {
                 let row = centre_row(&rep_joints[r], &rep_weights[r], &table, options, scratch);
                 let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
-                if finished % 256 == 0 || finished == total {
+                if finished.is_multiple_of(256) || finished == total {
                     progress(finished, total);
                 }
                 row
