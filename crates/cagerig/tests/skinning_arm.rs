@@ -244,12 +244,14 @@ fn cor_centres_exact_clustered_and_reference() {
     assert!(deform_diff < 0.02);
 }
 
+type WeightRows = Vec<Vec<(usize, f64)>>;
+
 /// Midpoint subdivision (1 → 4 triangles) with weights averaged on new edge vertices.
 fn subdivide(
     rest: &[DVec3],
     tris: &[[u32; 3]],
     rows: &[Vec<(usize, f64)>],
-) -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<Vec<(usize, f64)>>) {
+) -> (Vec<DVec3>, Vec<[u32; 3]>, WeightRows) {
     let mut p = rest.to_vec();
     let mut r = rows.to_vec();
     let mut edge_vertex = std::collections::HashMap::new();
