@@ -228,7 +228,9 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     let cor_options = CorCentresOptions {
         method: if nv > 20_000 {
             CorCentresMethod::Clustered {
-                relative_step: 0.02,
+                vertex_step: 0.01,
+                patch_step: 0.05,
+                weight_floor: 0.0,
             }
         } else {
             CorCentresMethod::Exact

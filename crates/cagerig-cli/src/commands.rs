@@ -260,6 +260,9 @@ pub fn maxvol(rig: &RigArgs, out: &Path, json: bool) -> anyhow::Result<()> {
 
 // ----- edit / animate ------------------------------------------------------------------------
 
+/// A triangle as vertex indices.
+type Triangle = [u32; 3];
+
 /// Files produced for one state, kept in memory until the whole run succeeded.
 pub struct StateFiles {
     files: Vec<(PathBuf, Vec<u8>)>,
@@ -281,7 +284,7 @@ impl StateFiles {
     /// Adds `{prefix}_mesh_rest.obj`, `_mesh_posed.obj`, `_cage_rest.obj`, `_cage_posed.obj`
     /// and `_joints.json` for the session's current state.
     pub fn add_state(&mut self, prefix: &str, s: &RigSession) -> anyhow::Result<()> {
-        let objs: [(&str, &[DVec3], &[[u32; 3]]); 4] = [
+        let objs: [(&str, &[DVec3], &[Triangle]); 4] = [
             ("mesh_rest", s.rest_mesh(), s.mesh_triangles()),
             ("mesh_posed", s.posed_mesh(), s.mesh_triangles()),
             ("cage_rest", s.rest_cage(), s.cage_triangles()),

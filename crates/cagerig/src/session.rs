@@ -654,7 +654,9 @@ impl RigSession {
                     && self.rest_mesh.len() > CLUSTERED_COR_CENTRES_ABOVE
                 {
                     options.method = CorCentresMethod::Clustered {
-                        relative_step: 0.02,
+                        vertex_step: 0.01,
+                        patch_step: 0.05,
+                        weight_floor: 0.0,
                     };
                 }
                 compute_cor_centres(

@@ -5,8 +5,8 @@ use std::time::Instant;
 use cagerig::SkinWeights;
 use cagerig::mesh::{bounding_box, max_distance};
 use cagerig::skinning::{
-    CorCentresMethod, CorCentresOptions, CorScratch, CorSkinning, DqsScratch,
-    DualQuaternionSkinning, LinearBlendSkinning, compute_cor_centres,
+    CorCentresFactored, CorCentresMethod, CorCentresOptions, CorScratch, CorSkinning, DqsScratch,
+    DualQuaternionSkinning, LinearBlendSkinning, compute_cor_centres, compute_cor_centres_factored,
 };
 use cagerig::sparse_rows::SparseRows;
 use glam::{DAffine3, DMat3, DVec3};
@@ -162,19 +162,46 @@ fn cor_centres_exact_clustered_and_reference() {
     );
     assert!(prune_err <= 1e-5);
 
+    let start = Instant::now();
+    let factored =
+        compute_cor_centres_factored(&rest, &tris, &w, &CorCentresOptions::default(), &|_, _| {})
+            .unwrap();
+    println!(
+        "exact factored: {:?}, {} clusters, {} patches, nnz A {} + B {}",
+        start.elapsed(),
+        factored.num_clusters(),
+        factored.num_patches(),
+        factored.cluster_patch_weights.nnz(),
+        factored.patch_points.nnz()
+    );
+    let factored_centres = |f: &CorCentresFactored| {
+        let mut patch_scratch = vec![DVec3::ZERO; f.num_patches()];
+        let mut cluster_scratch = vec![DVec3::ZERO; f.num_clusters()];
+        let mut c = vec![DVec3::ZERO; n];
+        f.apply(&rest, &mut patch_scratch, &mut cluster_scratch, &mut c);
+        c
+    };
+    assert!(max_distance(&exact, &factored_centres(&factored)) < 1e-12 * diag);
+
     for step in [0.05, 0.02, 0.01, 0.005] {
         let options = CorCentresOptions {
             method: CorCentresMethod::Clustered {
-                relative_step: step,
+                vertex_step: step,
+                patch_step: 0.05,
+                weight_floor: 0.0,
             },
             ..Default::default()
         };
         let start = Instant::now();
-        let s = compute_cor_centres(&rest, &tris, &w, &options, &|_, _| {}).unwrap();
+        let f = compute_cor_centres_factored(&rest, &tris, &w, &options, &|_, _| {}).unwrap();
         let elapsed = start.elapsed();
-        let clustered = centres_of(&s);
-        let err = max_distance(&exact, &clustered) / diag;
-        println!("clustered relative step {step}: {elapsed:?}, max error/diag {err:e}");
+        let err = max_distance(&exact, &factored_centres(&f)) / diag;
+        println!(
+            "clustered vertex step {step}, patch step 0.05: {elapsed:?}, {} clusters, {} patches, nnz A {}, max error/diag {err:e}",
+            f.num_clusters(),
+            f.num_patches(),
+            f.cluster_patch_weights.nnz()
+        );
         if step <= 0.01 {
             assert!(err <= 1e-3, "step {step}: {err}");
         }
@@ -215,4 +242,135 @@ fn cor_centres_exact_clustered_and_reference() {
     let deform_diff = max_distance(&ours, &theirs) / diag;
     println!("step ii CoR deformation, our centres vs arm_corWeights: max {deform_diff:e} of diag");
     assert!(deform_diff < 0.02);
+}
+
+type WeightRows = Vec<Vec<(usize, f64)>>;
+
+/// Midpoint subdivision (1 → 4 triangles) with weights averaged on new edge vertices.
+fn subdivide(
+    rest: &[DVec3],
+    tris: &[[u32; 3]],
+    rows: &[Vec<(usize, f64)>],
+) -> (Vec<DVec3>, Vec<[u32; 3]>, WeightRows) {
+    let mut p = rest.to_vec();
+    let mut r = rows.to_vec();
+    let mut edge_vertex = std::collections::HashMap::new();
+    let mut midpoint = |a: u32, b: u32, p: &mut Vec<DVec3>, r: &mut Vec<Vec<(usize, f64)>>| {
+        *edge_vertex.entry((a.min(b), a.max(b))).or_insert_with(|| {
+            p.push((p[a as usize] + p[b as usize]) * 0.5);
+            let mut m = std::collections::BTreeMap::new();
+            for &(j, x) in r[a as usize].iter().chain(&r[b as usize]) {
+                *m.entry(j).or_insert(0.0) += 0.5 * x;
+            }
+            r.push(m.into_iter().collect());
+            (p.len() - 1) as u32
+        })
+    };
+    let mut t = Vec::with_capacity(tris.len() * 4);
+    for &[a, b, c] in tris {
+        let ab = midpoint(a, b, &mut p, &mut r);
+        let bc = midpoint(b, c, &mut p, &mut r);
+        let ca = midpoint(c, a, &mut p, &mut r);
+        t.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+    }
+    (p, t, r)
+}
+
+/// Scaling of the CoR centre computation on subdivided Arms (prints; run with --ignored).
+#[test]
+#[ignore]
+fn cor_centres_on_subdivided_arm() {
+    let (mut rest, mut tris) = obj("arm.obj");
+    let w = weights(rest.len());
+    let mut rows: Vec<Vec<(usize, f64)>> = (0..rest.len())
+        .map(|v| {
+            let (j, x) = w.row(v);
+            j.iter()
+                .map(|&j| j as usize)
+                .zip(x.iter().copied())
+                .collect()
+        })
+        .collect();
+    for level in 1..=2 {
+        (rest, tris, rows) = subdivide(&rest, &tris, &rows);
+        let n = rest.len();
+        let triplets: Vec<_> = rows
+            .iter()
+            .enumerate()
+            .flat_map(|(v, r)| r.iter().map(move |&(j, x)| (v, j, x)))
+            .collect();
+        let w = SkinWeights::from_triplets(n, 25, triplets).unwrap().0;
+        let diag = diagonal(&rest);
+        let centres = |f: &CorCentresFactored| {
+            let mut a = vec![DVec3::ZERO; f.num_patches()];
+            let mut b = vec![DVec3::ZERO; f.num_clusters()];
+            let mut c = vec![DVec3::ZERO; n];
+            f.apply(&rest, &mut a, &mut b, &mut c);
+            c
+        };
+        let env = |name: &str, default: f64| {
+            std::env::var(name)
+                .ok()
+                .and_then(|x| x.parse().ok())
+                .unwrap_or(default)
+        };
+        let options = CorCentresOptions {
+            method: CorCentresMethod::Clustered {
+                vertex_step: env("VSTEP", 0.01),
+                patch_step: env("PSTEP", 0.05),
+                weight_floor: env("FLOOR", 0.0),
+            },
+            mass_tolerance: env("MASSTOL", 1e-5),
+            ..Default::default()
+        };
+        if level > env("LEVELS", 2.0) as usize {
+            break;
+        }
+        let start = Instant::now();
+        let clustered =
+            compute_cor_centres_factored(&rest, &tris, &w, &options, &|_, _| {}).unwrap();
+        let t_clustered = start.elapsed();
+        let mut patch_scratch = vec![DVec3::ZERO; clustered.num_patches()];
+        let mut cluster_scratch = vec![DVec3::ZERO; clustered.num_clusters()];
+        let mut out = vec![DVec3::ZERO; n];
+        let start = Instant::now();
+        clustered.apply(&rest, &mut patch_scratch, &mut cluster_scratch, &mut out);
+        let t_apply = start.elapsed();
+        println!(
+            "level {level}: {n} v, {} tris; clustered {:?} {t_clustered:?}: {} clusters, {} patches, nnz A {}, B {}; CoR update (A·(B·M)) {t_apply:?}",
+            tris.len(),
+            options.method,
+            clustered.num_clusters(),
+            clustered.num_patches(),
+            clustered.cluster_patch_weights.nnz(),
+            clustered.patch_points.nnz()
+        );
+        if level == 1 {
+            let start = Instant::now();
+            let exact = compute_cor_centres_factored(
+                &rest,
+                &tris,
+                &w,
+                &CorCentresOptions::default(),
+                &|_, _| {},
+            )
+            .unwrap();
+            println!(
+                "level 1 exact: {:?}, nnz A {}; clustered max error/diag {:e}",
+                start.elapsed(),
+                exact.cluster_patch_weights.nnz(),
+                max_distance(&centres(&exact), &centres(&clustered)) / diag
+            );
+            if options.method
+                == (CorCentresMethod::Clustered {
+                    vertex_step: 0.01,
+                    patch_step: 0.05,
+                    weight_floor: 0.0,
+                })
+            {
+                let err = max_distance(&centres(&exact), &centres(&clustered)) / diag;
+                assert!(err < 1e-3, "{err}");
+            }
+        }
+    }
 }

@@ -126,8 +126,9 @@ proptest! {
             DAffine3::from_axis_angle(axis, theta),
             DAffine3::from_axis_angle(axis, -theta),
         ];
-        let rows = vec![vec![(0usize, first_weight), (1usize, 1.0 - first_weight)]];
-        let w = SkinWeights::from_triplets(1, 2, rows[0].iter().map(|&(j, x)| (0, j, x))).unwrap().0;
+        let w = SkinWeights::from_triplets(1, 2, [(0, 0, first_weight), (0, 1, 1.0 - first_weight)])
+            .unwrap()
+            .0;
         let mut dqs = [DVec3::ZERO];
         DualQuaternionSkinning::new(&w).apply(&t, &[p], &mut DqsScratch::new(2), &mut dqs);
         let mut cor = [DVec3::ZERO];

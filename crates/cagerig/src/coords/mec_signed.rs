@@ -27,7 +27,12 @@ pub fn max_entropy_coordinates_signed(
         .iter()
         .map(|c| c.distance(target))
         .fold(0.0, f64::max);
-    if n == 0 || !(scale > 0.0) || !scale.is_finite() || prior.iter().any(|m| !m.is_finite()) {
+    if n == 0
+        || scale.is_nan()
+        || scale <= 0.0
+        || !scale.is_finite()
+        || prior.iter().any(|m| !m.is_finite())
+    {
         return max_entropy_coordinates(points, prior, target, out);
     }
     let x = |k: usize| (points[k] - target) / scale;
@@ -38,7 +43,7 @@ pub fn max_entropy_coordinates_signed(
             *b = prior[k] * (-lambda.dot(x(k))).exp();
             total += *b;
         }
-        if !(total.abs() > 1e-300) || !total.is_finite() {
+        if total.is_nan() || total.abs() <= 1e-300 || !total.is_finite() {
             return None;
         }
         let mut g = DVec3::ZERO;

@@ -64,8 +64,8 @@ pub(crate) fn blend_rotations(
     let mut sum = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
     for (&j, &w) in joints.iter().zip(weights) {
         let q = joint_rotations[j as usize];
-        let signed = if pivot_rotation.dot(q) < 0.0 { -w } else { w };
-        sum = sum + q * signed;
+        let signed = w.copysign(pivot_rotation.dot(q));
+        sum += q * signed;
     }
     sum * (1.0 / sum.length())
 }

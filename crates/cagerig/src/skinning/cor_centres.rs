@@ -23,8 +23,8 @@
 //! S sparse (the exp kernel makes most far-away contributions negligible).
 //!
 //! **Clustering** ([`CorCentresMethod::Clustered`]): p_i depends on ω_i only, so vertices whose
-//! weight rows quantise to the same key (same joints, `ln ω` rounded to multiples of
-//! `relative_step`) share
+//! weight rows quantise to the same key (same joints, `ln(ω + floor)` rounded to multiples of
+//! `vertex_step`) share
 //! one row of S, computed for the mean weight row of the cluster. Error is measured against the
 //! exact form in the tests (Arm: see `tests/cor_arm.rs`).
 
@@ -45,11 +45,19 @@ pub enum CorCentresMethod {
     Exact,
     /// One evaluation per cluster of vertices with equal quantised weight rows.
     Clustered {
-        /// Relative quantisation step of the weights: weights are binned by
-        /// `round(ln(ω) / relative_step)`, so members of a cluster differ by about this
-        /// relative amount per weight (e.g. 0.02). Relative (not absolute) bins matter: a small
-        /// weight on a third joint steers the centre between joint-pair regions.
-        relative_step: f64,
+        /// Measured (Arm and its midpoint subdivision): `vertex_step` 0.01, `patch_step` 0.05,
+        /// `weight_floor` 0 give max centre error ≈ 7e-4 × bbox diagonal.
+        ///
+        /// Quantisation step of vertex weight rows: weights are binned by
+        /// `round(ln(ω + weight_floor) / vertex_step)`, i.e. relative bins of about this size for
+        /// weights above `weight_floor` (a small weight on a third joint steers the centre
+        /// between joint-pair regions, so absolute bins are too coarse there) and absolute
+        /// bins of about `vertex_step × weight_floor` below it.
+        vertex_step: f64,
+        /// The same for triangle patches (ω_t).
+        patch_step: f64,
+        /// See `vertex_step`.
+        weight_floor: f64,
     },
 }
 
@@ -115,39 +123,205 @@ pub fn weight_similarity(
     2.0 * sum
 }
 
-/// Triangle data shared by all rows: areas, averaged weights (CSR) and the joint-pair index.
-struct TriangleTable<'a> {
-    triangles: &'a [[u32; 3]],
-    areas: Vec<f64>,
-    row_start: Vec<u32>,
-    joints: Vec<u32>,
-    weights: Vec<f64>,
-    /// Triangles (positive area) whose averaged weights contain both joints of the pair.
-    by_pair: HashMap<(u32, u32), Vec<u32>>,
+/// The CoR matrix in factored form `S = A·B` (see the module doc).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CorCentresFactored {
+    /// Per vertex (`#V`): its row of `cluster_patch_weights`, or [`Self::NO_CENTRE`] (p_i = v_i).
+    pub vertex_cluster: Vec<u32>,
+    /// A: `#clusters × #P`, each row a convex combination of patches.
+    pub cluster_patch_weights: SparseRows,
+    /// B: `#P × #V`, each row a convex combination of rest vertices (a patch point).
+    pub patch_points: SparseRows,
 }
 
-impl<'a> TriangleTable<'a> {
-    fn new(rest: &[DVec3], triangles: &'a [[u32; 3]], weights: &SkinWeights) -> Self {
-        let mut areas = Vec::with_capacity(triangles.len());
-        let mut row_start = Vec::with_capacity(triangles.len() + 1);
+impl CorCentresFactored {
+    /// Marks a vertex without a centre of rotation: p_i = v_i (CoR skinning = LBS there).
+    pub const NO_CENTRE: u32 = u32::MAX;
+
+    pub fn num_vertices(&self) -> usize {
+        self.vertex_cluster.len()
+    }
+
+    pub fn num_patches(&self) -> usize {
+        self.patch_points.nrows()
+    }
+
+    pub fn num_clusters(&self) -> usize {
+        self.cluster_patch_weights.nrows()
+    }
+
+    /// CoRs = S·M = A·(B·M) (`rest_positions`, `out`: `#V`; `patch_scratch`: `#P`;
+    /// `cluster_scratch`: `#clusters`). No allocation, parallel.
+    ///
+    /// # Panics
+    /// If a slice length does not match.
+    pub fn apply(
+        &self,
+        rest_positions: &[DVec3],
+        patch_scratch: &mut [DVec3],
+        cluster_scratch: &mut [DVec3],
+        out: &mut [DVec3],
+    ) {
+        assert_eq!(out.len(), self.num_vertices(), "CoR centres: out");
+        self.patch_points.apply(rest_positions, patch_scratch);
+        self.cluster_patch_weights
+            .apply(patch_scratch, cluster_scratch);
+        out.par_iter_mut()
+            .with_min_len(4096)
+            .enumerate()
+            .for_each(|(v, o)| {
+                let c = self.vertex_cluster[v];
+                *o = if c == Self::NO_CENTRE {
+                    rest_positions[v]
+                } else {
+                    cluster_scratch[c as usize]
+                };
+            });
+    }
+
+    /// The product S = A·B (`#V × #V`). Rows of a cluster are duplicated; O(#V²) non-zeros on
+    /// fine meshes, intended for small meshes and for forming Λ = S·Φ (Eq. 14).
+    pub fn to_sparse_rows(&self) -> SparseRows {
+        let num_vertices = self.num_vertices();
+        let cluster_rows: Vec<Vec<(u32, f64)>> = (0..self.num_clusters())
+            .into_par_iter()
+            .map_init(
+                || (vec![0.0f64; num_vertices], Vec::<u32>::new()),
+                |(accumulator, touched), c| {
+                    let (patches, coefficients) = self.cluster_patch_weights.row(c);
+                    for (&p, &a) in patches.iter().zip(coefficients) {
+                        let (vertices, b) = self.patch_points.row(p as usize);
+                        for (&k, &bk) in vertices.iter().zip(b) {
+                            let acc = &mut accumulator[k as usize];
+                            if *acc == 0.0 {
+                                touched.push(k);
+                            }
+                            *acc += a * bk;
+                        }
+                    }
+                    touched.sort_unstable();
+                    let row = touched
+                        .iter()
+                        .map(|&k| (k, std::mem::take(&mut accumulator[k as usize])))
+                        .collect();
+                    touched.clear();
+                    row
+                },
+            )
+            .collect();
+        let mut row_start = Vec::with_capacity(num_vertices + 1);
         row_start.push(0u32);
-        let mut joints = Vec::new();
-        let mut tri_weights = Vec::new();
-        let mut by_pair: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+        let mut cols = Vec::new();
+        let mut values = Vec::new();
+        for (v, &c) in self.vertex_cluster.iter().enumerate() {
+            if c == Self::NO_CENTRE {
+                cols.push(v as u32);
+                values.push(1.0);
+            } else {
+                let row = &cluster_rows[c as usize];
+                cols.extend(row.iter().map(|e| e.0));
+                values.extend(row.iter().map(|e| e.1));
+            }
+            row_start.push(cols.len() as u32);
+        }
+        SparseRows::from_csr_unchecked(row_start, cols, values, num_vertices)
+    }
+}
+
+/// Quantisation of weight rows: `(step, floor)`, see [`CorCentresMethod::Clustered`].
+#[derive(Clone, Copy)]
+struct Quantiser {
+    step: f64,
+    floor: f64,
+}
+
+impl Quantiser {
+    /// Sparse weight rows keyed for clustering: same joints, `round(ln(ω + floor) / step)`.
+    fn key(&self, joints: &[u32], weights: &[f64]) -> Vec<(u32, i64)> {
+        joints
+            .iter()
+            .zip(weights)
+            .map(|(&j, &w)| (j, ((w + self.floor).ln() / self.step).round() as i64))
+            .collect()
+    }
+}
+
+/// Accumulates weighted sparse rows per group and returns the weighted-mean rows (CSR parts).
+#[derive(Default)]
+struct GroupMeans {
+    sums: Vec<HashMap<u32, f64>>,
+    mass: Vec<f64>,
+}
+
+impl GroupMeans {
+    fn add(&mut self, group: usize, joints: &[u32], weights: &[f64], mass: f64) {
+        if group == self.sums.len() {
+            self.sums.push(HashMap::new());
+            self.mass.push(0.0);
+        }
+        for (&j, &w) in joints.iter().zip(weights) {
+            *self.sums[group].entry(j).or_insert(0.0) += mass * w;
+        }
+        self.mass[group] += mass;
+    }
+
+    fn into_rows(self) -> Vec<(Vec<u32>, Vec<f64>)> {
+        self.sums
+            .into_iter()
+            .zip(self.mass)
+            .map(|(sum, mass)| {
+                let mut row: Vec<(u32, f64)> = sum.into_iter().collect();
+                row.sort_by_key(|e| e.0);
+                (
+                    row.iter().map(|e| e.0).collect(),
+                    row.iter().map(|e| e.1 / mass).collect(),
+                )
+            })
+            .collect()
+    }
+}
+
+/// Patches (groups of positive-area triangles): area, mean weights, joint-pair index.
+struct PatchTable {
+    areas: Vec<f64>,
+    weights: Vec<(Vec<u32>, Vec<f64>)>,
+    /// Patches whose weights contain both joints of the pair.
+    by_pair: HashMap<(u32, u32), Vec<u32>>,
+    /// B: `#P × #V`.
+    points: SparseRows,
+}
+
+impl PatchTable {
+    fn new(
+        rest: &[DVec3],
+        triangles: &[[u32; 3]],
+        weights: &SkinWeights,
+        quantiser: Option<Quantiser>,
+    ) -> Result<Self, RigError> {
+        let mut keys: HashMap<Vec<(u32, i64)>, u32> = HashMap::new();
+        let mut means = GroupMeans::default();
+        let mut areas: Vec<f64> = Vec::new();
+        let mut point_triplets: Vec<(usize, usize, f64)> = Vec::new();
         let mut merged: Vec<(u32, f64)> = Vec::new();
-        for (t, &[a, b, c]) in triangles.iter().enumerate() {
+        let mut joints: Vec<u32> = Vec::new();
+        let mut tri_weights: Vec<f64> = Vec::new();
+        for &[a, b, c] in triangles {
             let (pa, pb, pc) = (rest[a as usize], rest[b as usize], rest[c as usize]);
             let area = 0.5 * (pb - pa).cross(pc - pa).length();
-            areas.push(area);
+            if area.is_nan() || area <= 0.0 {
+                continue;
+            }
+            // ω_t = (ω_a + ω_b + ω_c) / 3, sparse, ascending joints.
             merged.clear();
             for corner in [a, b, c] {
                 let (js, ws) = weights.row(corner as usize);
                 merged.extend(js.iter().zip(ws).map(|(&j, &w)| (j, w / 3.0)));
             }
             merged.sort_by_key(|e| e.0);
-            let start = joints.len();
+            joints.clear();
+            tri_weights.clear();
             for &(j, w) in &merged {
-                if joints.len() > start && joints.last() == Some(&j) {
+                if joints.last() == Some(&j) {
                     if let Some(x) = tri_weights.last_mut() {
                         *x += w;
                     }
@@ -156,60 +330,58 @@ impl<'a> TriangleTable<'a> {
                     tri_weights.push(w);
                 }
             }
-            row_start.push(joints.len() as u32);
-            if area > 0.0 {
-                let js = &joints[start..];
-                for (x, &j) in js.iter().enumerate() {
-                    for &k in &js[x + 1..] {
-                        by_pair.entry((j, k)).or_default().push(t as u32);
-                    }
+            let patch = match quantiser {
+                None => areas.len(),
+                Some(q) => {
+                    let next = areas.len() as u32;
+                    *keys.entry(q.key(&joints, &tri_weights)).or_insert(next) as usize
+                }
+            };
+            if patch == areas.len() {
+                areas.push(0.0);
+            }
+            areas[patch] += area;
+            means.add(patch, &joints, &tri_weights, area);
+            for corner in [a, b, c] {
+                point_triplets.push((patch, corner as usize, area / 3.0));
+            }
+        }
+        for t in point_triplets.iter_mut() {
+            t.2 /= areas[t.0];
+        }
+        let points = SparseRows::from_triplets(areas.len(), rest.len(), point_triplets)?;
+        let weights = means.into_rows();
+        let mut by_pair: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+        for (p, (js, _)) in weights.iter().enumerate() {
+            for (x, &j) in js.iter().enumerate() {
+                for &k in &js[x + 1..] {
+                    by_pair.entry((j, k)).or_default().push(p as u32);
                 }
             }
         }
-        Self {
-            triangles,
+        Ok(Self {
             areas,
-            row_start,
-            joints,
-            weights: tri_weights,
+            weights,
             by_pair,
-        }
-    }
-
-    fn row(&self, t: usize) -> (&[u32], &[f64]) {
-        let range = self.row_start[t] as usize..self.row_start[t + 1] as usize;
-        (&self.joints[range.clone()], &self.weights[range])
+            points,
+        })
     }
 }
 
 /// Per-thread buffers for one row evaluation.
 struct RowScratch {
-    /// `stamp[t] == generation` ⇔ triangle t already collected for this row.
+    /// `stamp[p] == generation` ⇔ patch p already collected for this row.
     stamp: Vec<u32>,
     generation: u32,
-    /// Dense accumulator over mesh vertices and the list of touched columns.
-    accumulator: Vec<f64>,
-    touched: Vec<u32>,
     contributions: Vec<(f64, u32)>,
 }
 
-impl RowScratch {
-    fn new(num_vertices: usize, num_triangles: usize) -> Self {
-        Self {
-            stamp: vec![0; num_triangles],
-            generation: 0,
-            accumulator: vec![0.0; num_vertices],
-            touched: Vec::new(),
-            contributions: Vec::new(),
-        }
-    }
-}
-
-/// Row of S for weights `(joints, weights)`; `None` when the total similarity is zero.
+/// Row of A (patch, coefficient) for weights `(joints, weights)`; `None` when the total
+/// similarity is zero. Coefficients are ascending in patch index and sum to 1.
 fn centre_row(
     joints: &[u32],
     weights: &[f64],
-    table: &TriangleTable,
+    patches: &PatchTable,
     options: &CorCentresOptions,
     scratch: &mut RowScratch,
 ) -> Option<Vec<(u32, f64)>> {
@@ -226,20 +398,20 @@ fn centre_row(
     let mut total = 0.0;
     for (x, &j) in joints.iter().enumerate() {
         for &k in &joints[x + 1..] {
-            let Some(list) = table.by_pair.get(&(j, k)) else {
+            let Some(list) = patches.by_pair.get(&(j, k)) else {
                 continue;
             };
-            for &t in list {
-                if scratch.stamp[t as usize] == scratch.generation {
+            for &p in list {
+                if scratch.stamp[p as usize] == scratch.generation {
                     continue;
                 }
-                scratch.stamp[t as usize] = scratch.generation;
-                let (tj, tw) = table.row(t as usize);
-                let s = weight_similarity(joints, weights, tj, tw, inv_sigma_sq);
-                let mass = s * table.areas[t as usize];
+                scratch.stamp[p as usize] = scratch.generation;
+                let (pj, pw) = &patches.weights[p as usize];
+                let s = weight_similarity(joints, weights, pj, pw, inv_sigma_sq);
+                let mass = s * patches.areas[p as usize];
                 if mass > 0.0 {
                     total += mass;
-                    scratch.contributions.push((mass, t));
+                    scratch.contributions.push((mass, p));
                 }
             }
         }
@@ -261,38 +433,26 @@ fn centre_row(
         dropped += mass;
         first_kept += 1;
     }
-    let kept_total = total - dropped;
-    let scale = 1.0 / (3.0 * kept_total);
-    for &(mass, t) in &scratch.contributions[first_kept..] {
-        for k in table.triangles[t as usize] {
-            let acc = &mut scratch.accumulator[k as usize];
-            if *acc == 0.0 {
-                scratch.touched.push(k);
-            }
-            *acc += mass * scale;
-        }
-    }
-    scratch.touched.sort_unstable();
-    let row = scratch
-        .touched
+    let scale = 1.0 / (total - dropped);
+    let mut row: Vec<(u32, f64)> = scratch.contributions[first_kept..]
         .iter()
-        .map(|&k| (k, std::mem::take(&mut scratch.accumulator[k as usize])))
+        .map(|&(mass, p)| (p, mass * scale))
         .collect();
-    scratch.touched.clear();
+    row.sort_unstable_by_key(|e| e.0);
     Some(row)
 }
 
-/// Computes the CoR matrix S (`#V × #V`, CoRs = S·M) of Eq. 5 for the rest mesh
+/// Computes the CoR matrix of Eq. 5 in factored form `S = A·B` for the rest mesh
 /// (`rest_positions` M: `#V`, `triangles`: `#F`) and skinning weights Ω (`#V × #J`).
 ///
-/// `progress(done, total)` is called from worker threads as rows (or clusters) complete.
-pub fn compute_cor_centres(
+/// `progress(done, total)` is called from worker threads as rows of A complete.
+pub fn compute_cor_centres_factored(
     rest_positions: &[DVec3],
     triangles: &[[u32; 3]],
     weights: &SkinWeights,
     options: &CorCentresOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<SparseRows, RigError> {
+) -> Result<CorCentresFactored, RigError> {
     let num_vertices = rest_positions.len();
     if weights.num_vertices() != num_vertices {
         return Err(RigError::SizeMismatch {
@@ -324,73 +484,69 @@ pub fn compute_cor_centres(
             options.sigma
         )));
     }
-    let table = TriangleTable::new(rest_positions, triangles, weights);
-
-    // Representatives: (joints, weights) evaluated once; every vertex maps to one or to None.
-    let mut rep_joints: Vec<Vec<u32>> = Vec::new();
-    let mut rep_weights: Vec<Vec<f64>> = Vec::new();
-    let mut vertex_rep: Vec<Option<u32>> = vec![None; num_vertices];
-    match options.method {
-        CorCentresMethod::Exact => {
-            for (v, rep) in vertex_rep.iter_mut().enumerate() {
-                let (js, ws) = weights.row(v);
-                if js.len() >= 2 {
-                    *rep = Some(rep_joints.len() as u32);
-                    rep_joints.push(js.to_vec());
-                    rep_weights.push(ws.to_vec());
-                }
-            }
-        }
-        CorCentresMethod::Clustered { relative_step } => {
-            if !(relative_step.is_finite() && relative_step > 0.0) {
+    let (vertex_quantiser, patch_quantiser) = match options.method {
+        CorCentresMethod::Exact => (None, None),
+        CorCentresMethod::Clustered {
+            vertex_step,
+            patch_step,
+            weight_floor,
+        } => {
+            let positive = |x: f64| x.is_finite() && x > 0.0;
+            if !(positive(vertex_step) && positive(patch_step) && weight_floor >= 0.0) {
                 return Err(RigError::Invalid(format!(
-                    "CoR clustering relative step must be positive, got {relative_step}"
+                    "CoR clustering steps must be positive and the floor non-negative, got \
+                     {vertex_step}, {patch_step}, {weight_floor}"
                 )));
             }
-            let mut clusters: HashMap<Vec<(u32, i64)>, u32> = HashMap::new();
-            let mut sums: Vec<HashMap<u32, f64>> = Vec::new();
-            let mut counts: Vec<usize> = Vec::new();
-            for (v, rep) in vertex_rep.iter_mut().enumerate() {
-                let (js, ws) = weights.row(v);
-                if js.len() < 2 {
-                    continue;
-                }
-                let key: Vec<(u32, i64)> = js
-                    .iter()
-                    .zip(ws)
-                    .map(|(&j, &w)| (j, (w.ln() / relative_step).round() as i64))
-                    .collect();
-                let id = *clusters.entry(key).or_insert_with(|| {
-                    sums.push(HashMap::new());
-                    counts.push(0);
-                    (sums.len() - 1) as u32
-                });
-                for (&j, &w) in js.iter().zip(ws) {
-                    *sums[id as usize].entry(j).or_insert(0.0) += w;
-                }
-                counts[id as usize] += 1;
-                *rep = Some(id);
-            }
-            for (sum, count) in sums.into_iter().zip(counts) {
-                let mut row: Vec<(u32, f64)> = sum.into_iter().collect();
-                row.sort_by_key(|e| e.0);
-                rep_joints.push(row.iter().map(|e| e.0).collect());
-                rep_weights.push(row.iter().map(|e| e.1 / count as f64).collect());
-            }
+            (
+                Some(Quantiser {
+                    step: vertex_step,
+                    floor: weight_floor,
+                }),
+                Some(Quantiser {
+                    step: patch_step,
+                    floor: weight_floor,
+                }),
+            )
         }
-    }
+    };
+    let patches = PatchTable::new(rest_positions, triangles, weights, patch_quantiser)?;
 
-    let total = rep_joints.len();
+    // Vertex clusters (one per multi-influence vertex in exact mode).
+    let mut keys: HashMap<Vec<(u32, i64)>, u32> = HashMap::new();
+    let mut means = GroupMeans::default();
+    let mut vertex_cluster = vec![CorCentresFactored::NO_CENTRE; num_vertices];
+    for (v, cluster) in vertex_cluster.iter_mut().enumerate() {
+        let (js, ws) = weights.row(v);
+        if js.len() < 2 {
+            continue;
+        }
+        let next = means.mass.len() as u32;
+        let id = match vertex_quantiser {
+            None => next,
+            Some(q) => *keys.entry(q.key(js, ws)).or_insert(next),
+        };
+        means.add(id as usize, js, ws, 1.0);
+        *cluster = id;
+    }
+    let clusters = means.into_rows();
+
+    let total = clusters.len();
     let done = AtomicUsize::new(0);
-    let rows: Vec<Option<Vec<(u32, f64)>>> = (0..total)
-        .into_par_iter()
+    let num_patches = patches.areas.len();
+    let rows: Vec<Option<Vec<(u32, f64)>>> = clusters
+        .par_iter()
         .with_min_len(16)
         .map_init(
-            || RowScratch::new(num_vertices, triangles.len()),
-            |scratch, r| {
-                let row = centre_row(&rep_joints[r], &rep_weights[r], &table, options, scratch);
+            || RowScratch {
+                stamp: vec![0; num_patches],
+                generation: 0,
+                contributions: Vec::new(),
+            },
+            |scratch, (js, ws)| {
+                let row = centre_row(js, ws, &patches, options, scratch);
                 let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
-                if finished % 256 == 0 || finished == total {
+                if finished.is_multiple_of(256) || finished == total {
                     progress(finished, total);
                 }
                 row
@@ -398,29 +554,46 @@ pub fn compute_cor_centres(
         )
         .collect();
 
-    let mut row_start = Vec::with_capacity(num_vertices + 1);
-    row_start.push(0u32);
+    // Clusters without a centre: their vertices use p_i = v_i; renumber the others.
+    let mut renumber = vec![CorCentresFactored::NO_CENTRE; rows.len()];
+    let mut row_start = vec![0u32];
     let mut cols = Vec::new();
     let mut values = Vec::new();
-    for (v, rep) in vertex_rep.iter().enumerate() {
-        match rep.and_then(|r| rows[r as usize].as_ref()) {
-            Some(row) => {
-                cols.extend(row.iter().map(|e| e.0));
-                values.extend(row.iter().map(|e| e.1));
-            }
-            None => {
-                cols.push(v as u32);
-                values.push(1.0);
-            }
+    for (c, row) in rows.iter().enumerate() {
+        if let Some(row) = row {
+            renumber[c] = (row_start.len() - 1) as u32;
+            cols.extend(row.iter().map(|e| e.0));
+            values.extend(row.iter().map(|e| e.1));
+            row_start.push(cols.len() as u32);
         }
-        row_start.push(cols.len() as u32);
     }
-    Ok(SparseRows::from_csr_unchecked(
-        row_start,
-        cols,
-        values,
-        num_vertices,
-    ))
+    for c in vertex_cluster.iter_mut() {
+        if *c != CorCentresFactored::NO_CENTRE {
+            *c = renumber[*c as usize];
+        }
+    }
+    Ok(CorCentresFactored {
+        vertex_cluster,
+        cluster_patch_weights: SparseRows::from_csr_unchecked(row_start, cols, values, num_patches),
+        patch_points: patches.points,
+    })
+}
+
+/// Computes the CoR matrix S (`#V × #V`, CoRs = S·M) of Eq. 5 for the rest mesh
+/// (`rest_positions` M: `#V`, `triangles`: `#F`) and skinning weights Ω (`#V × #J`).
+/// `S = A·B` multiplied out: fine for small meshes; use [`compute_cor_centres_factored`] for large
+/// ones (see the module doc).
+///
+/// `progress(done, total)` is called from worker threads as rows complete.
+pub fn compute_cor_centres(
+    rest_positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    weights: &SkinWeights,
+    options: &CorCentresOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<SparseRows, RigError> {
+    compute_cor_centres_factored(rest_positions, triangles, weights, options, progress)
+        .map(|factored| factored.to_sparse_rows())
 }
 
 #[cfg(test)]
@@ -501,7 +674,9 @@ mod tests {
         // Clustering with a fine step reproduces the exact rows (all weight rows are distinct).
         let options = CorCentresOptions {
             method: CorCentresMethod::Clustered {
-                relative_step: 1e-9,
+                vertex_step: 1e-9,
+                patch_step: 1e-9,
+                weight_floor: 0.0,
             },
             ..unpruned
         };
@@ -509,6 +684,13 @@ mod tests {
         let mut c2 = vec![DVec3::ZERO; p.len()];
         clustered.apply(&p, &mut c2);
         assert!(crate::mesh::max_distance(&centres, &c2) < 1e-14);
+        // The factored form gives the same centres.
+        let factored = compute_cor_centres_factored(&p, &tris, &w, &unpruned, &|_, _| {}).unwrap();
+        let mut patch_scratch = vec![DVec3::ZERO; factored.num_patches()];
+        let mut cluster_scratch = vec![DVec3::ZERO; factored.num_clusters()];
+        factored.apply(&p, &mut patch_scratch, &mut cluster_scratch, &mut c2);
+        assert!(crate::mesh::max_distance(&centres, &c2) < 1e-14);
+        assert_eq!(factored.vertex_cluster[0], CorCentresFactored::NO_CENTRE);
     }
 
     #[test]

@@ -100,9 +100,9 @@ pub(crate) fn blend_dual_quats(
     let mut dual = real;
     for (&j, &w) in joints.iter().zip(weights) {
         let q = &joint_dual_quats[j as usize];
-        let signed = if pivot_real.dot(q.real) < 0.0 { -w } else { w };
-        real = real + q.real * signed;
-        dual = dual + q.dual * signed;
+        let signed = w.copysign(pivot_real.dot(q.real));
+        real += q.real * signed;
+        dual += q.dual * signed;
     }
     let inv_norm = 1.0 / real.length();
     DualQuat {

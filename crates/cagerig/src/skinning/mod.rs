@@ -12,7 +12,10 @@ pub mod lbs;
 pub mod rigid_rotation;
 
 pub use cor::{CorScratch, CorSkinning};
-pub use cor_centres::{CorCentresMethod, CorCentresOptions, compute_cor_centres};
+pub use cor_centres::{
+    CorCentresFactored, CorCentresMethod, CorCentresOptions, compute_cor_centres,
+    compute_cor_centres_factored,
+};
 pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
 pub use lbs::LinearBlendSkinning;
 

@@ -24,7 +24,7 @@ pub fn rotation_quaternion(linear: DMat3) -> DQuat {
         .sum::<f64>()
         .sqrt();
     let mut q = linear;
-    if !(orthonormal_error <= ORTHONORMAL_TOLERANCE) {
+    if orthonormal_error.is_nan() || orthonormal_error > ORTHONORMAL_TOLERANCE {
         let det = linear.determinant();
         if !det.is_finite() || det.abs() < f64::MIN_POSITIVE.sqrt() {
             return DQuat::IDENTITY;
