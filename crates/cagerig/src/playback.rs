@@ -9,21 +9,25 @@
 
 use glam::{DAffine3, DQuat, DVec3};
 
-use crate::animation::{CageTrack, SkeletonTrack};
+use crate::animation::{CageTrack, SkeletonTrack, bracket};
 use crate::error::RigError;
-use crate::session::RigSession;
+use crate::session::{RestKeyframe, RigSession};
 
 /// Plays tracks on a session; holds the per-frame buffers (no allocation per sample).
 #[derive(Debug, Clone)]
 pub struct AnimationPlayer {
     skeleton_track: Option<SkeletonTrack>,
     cage_track: Option<CageTrack>,
+    /// C, M = ΦC and CoR centres of every cage keyframe (per-keyframe cache: a sample between
+    /// two keys lerps two meshes instead of recomputing ΦC).
+    cage_keys: Vec<RestKeyframe>,
+    /// Whether `cage_keys` hold CoR centres (rebuilt when the session gains CoR data).
+    keys_have_centres: bool,
     /// Root translations of the rest skeleton as loaded, `#J` (zero for non-roots).
     original_root_translation: Vec<DVec3>,
     locals: Vec<DAffine3>,
     rotations: Vec<DQuat>,
     root_motion: Vec<DVec3>,
-    offsets: Vec<DVec3>,
 }
 
 impl AnimationPlayer {
@@ -62,11 +66,21 @@ impl AnimationPlayer {
                 Some(_) => DVec3::ZERO,
             })
             .collect();
+        let cage_keys = match &cage_track {
+            Some(track) => track
+                .offsets()
+                .iter()
+                .map(|o| session.rest_keyframe(o))
+                .collect::<Result<Vec<_>, _>>()?,
+            None => Vec::new(),
+        };
         let mut locals = vec![DAffine3::IDENTITY; nj];
         session
             .skeleton()
             .locals_from_worlds(&session.skeleton().rest_world_from_joint(), &mut locals);
         Ok(Self {
+            keys_have_centres: session.cor_centres().is_some(),
+            cage_keys,
             skeleton_track,
             cage_track,
             original_root_translation,
@@ -76,7 +90,6 @@ impl AnimationPlayer {
                 .collect(),
             locals,
             root_motion: vec![DVec3::ZERO; nj],
-            offsets: vec![DVec3::ZERO; nc],
         })
     }
 
@@ -105,13 +118,26 @@ impl AnimationPlayer {
                 };
             }
         }
-        let offsets = match &self.cage_track {
+        match &self.cage_track {
             Some(track) => {
-                track.sample(t, &mut self.offsets);
-                Some(self.offsets.as_slice())
+                if self.keys_have_centres != session.cor_centres().is_some() {
+                    self.cage_keys = track
+                        .offsets()
+                        .iter()
+                        .map(|o| session.rest_keyframe(o))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    self.keys_have_centres = session.cor_centres().is_some();
+                }
+                let b = bracket(track.times(), t);
+                session.set_animation_sample_between(
+                    &self.cage_keys[b.lo],
+                    &self.cage_keys[b.hi],
+                    b.a,
+                    &self.rotations,
+                    &self.root_motion,
+                )
             }
-            None => None,
-        };
-        session.set_animation_sample(offsets, &self.rotations, &self.root_motion)
+            None => session.set_animation_sample(None, &self.rotations, &self.root_motion),
+        }
     }
 }

@@ -98,6 +98,16 @@ struct CorState {
     scratch: CorScratch,
 }
 
+/// The rest state induced by one cage-animation keyframe: C = C₀ + offsets, M = ΦC and the CoR
+/// centres Λ·C, precomputed so that playback between two keys is a lerp of two meshes instead of
+/// a full ΦC product (exact up to round-off: everything is linear in C).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RestKeyframe {
+    cage: Vec<DVec3>,
+    mesh: Vec<DVec3>,
+    centres: Option<Vec<DVec3>>,
+}
+
 /// A live coupled rig.
 #[derive(Debug, Clone)]
 pub struct RigSession {
@@ -573,19 +583,7 @@ impl RigSession {
         root_motion: &[DVec3],
     ) -> Result<(), RigError> {
         if let Some(offsets) = rest_cage_offsets {
-            if offsets.len() != self.rest_cage.len() {
-                return Err(RigError::SizeMismatch {
-                    what: "cage animation offsets",
-                    expected: self.rest_cage.len(),
-                    actual: offsets.len(),
-                });
-            }
-            if let Some(i) = offsets.iter().position(|o| !o.is_finite()) {
-                return Err(RigError::NonFinite {
-                    what: "cage animation offset",
-                    index: i,
-                });
-            }
+            self.check_cage_offsets(offsets)?;
         }
         self.store_pose(local_rotations, root_motion)?;
         if let Some(offsets) = rest_cage_offsets {
@@ -604,6 +602,84 @@ impl RigSession {
             }
         }
         self.sync_from_rest_cage();
+        Ok(())
+    }
+
+    /// Precomputes the rest state of a cage keyframe (offsets from C₀, `#C`).
+    pub fn rest_keyframe(&self, offsets: &[DVec3]) -> Result<RestKeyframe, RigError> {
+        self.check_cage_offsets(offsets)?;
+        let cage: Vec<DVec3> = self
+            .original_rest_cage
+            .iter()
+            .zip(offsets)
+            .map(|(c, o)| *c + *o)
+            .collect();
+        let mut mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
+        self.cage_coords.apply(&cage, &mut mesh);
+        let centres = self.cor.as_ref().map(|cor| {
+            let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
+            cor.centre_coords.apply(&cage, &mut centres);
+            centres
+        });
+        Ok(RestKeyframe {
+            cage,
+            mesh,
+            centres,
+        })
+    }
+
+    /// Animation sample between two precomputed cage keyframes (weight `a` on `hi`): C, M and
+    /// the CoR centres are lerped, then pose, SkelUp, skinning and CageUp as in
+    /// [`RigSession::set_animation_sample`]. No allocation.
+    pub fn set_animation_sample_between(
+        &mut self,
+        lo: &RestKeyframe,
+        hi: &RestKeyframe,
+        a: f64,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
+        let nv = self.rest_mesh.len();
+        let nc = self.rest_cage.len();
+        if lo.mesh.len() != nv || hi.mesh.len() != nv || lo.cage.len() != nc || hi.cage.len() != nc
+        {
+            return Err(RigError::SizeMismatch {
+                what: "rest keyframe vertices",
+                expected: nv,
+                actual: lo.mesh.len().min(hi.mesh.len()),
+            });
+        }
+        if !a.is_finite() {
+            return Err(RigError::Invalid(format!("blend weight {a} is not finite")));
+        }
+        self.store_pose(local_rotations, root_motion)?;
+        lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
+        lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
+        self.rest_mesh_is_phi_c = true;
+        if let Some(cor) = &mut self.cor {
+            match (&lo.centres, &hi.centres) {
+                (Some(l), Some(h)) => lerp_into(l, h, a, &mut cor.centres),
+                _ => cor.centre_coords.apply(&self.rest_cage, &mut cor.centres),
+            }
+        }
+        self.sync_from_rest_cage();
+        Ok(())
+    }
+
+    fn check_cage_offsets(&self, offsets: &[DVec3]) -> Result<(), RigError> {
+        if offsets.len() != self.rest_cage.len() {
+            return Err(RigError::SizeMismatch {
+                what: "cage animation offsets",
+                expected: self.rest_cage.len(),
+                actual: offsets.len(),
+            });
+        }
+        if let Some(i) = offsets.iter().position(|o| !o.is_finite()) {
+            return Err(RigError::NonFinite {
+                what: "cage animation offset",
+                index: i,
+            });
+        }
         Ok(())
     }
 
@@ -788,4 +864,16 @@ impl RigSession {
                 .apply(&self.posed_mesh, &mut self.posed_cage);
         }
     }
+}
+
+/// out = (1 − a)·lo + a·hi, in parallel for big point sets.
+fn lerp_into(lo: &[DVec3], hi: &[DVec3], a: f64, out: &mut [DVec3]) {
+    use rayon::prelude::*;
+    out.par_chunks_mut(8192)
+        .zip(lo.par_chunks(8192).zip(hi.par_chunks(8192)))
+        .for_each(|(o, (l, h))| {
+            for ((o, l), h) in o.iter_mut().zip(l).zip(h) {
+                *o = l.lerp(*h, a);
+            }
+        });
 }
