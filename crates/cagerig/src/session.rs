@@ -22,7 +22,7 @@ use crate::skinning::cor_centres::{CorCentresMethod, CorCentresOptions, compute_
 use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
 use crate::sparse_rows::SparseRows;
-use crate::sync::cage_reverser::CageReverser;
+use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
@@ -389,6 +389,16 @@ impl RigSession {
     pub fn cor_centres(&self) -> Option<&[DVec3]> {
         self.cor.as_ref().map(|c| c.centres.as_slice())
     }
+    /// Chooses how CageRev factorises Eq. 19 (low-rank by default, see [`ReverserMethod`]).
+    pub fn set_reverser_method(&mut self, method: ReverserMethod) {
+        self.reverser.set_method(method);
+    }
+
+    /// Whether the held CageRev factorisation is the low-rank (Woodbury) one.
+    pub fn reverser_is_low_rank(&self) -> bool {
+        self.reverser.is_low_rank()
+    }
+
     /// Whether the reverse cage deformer currently holds a factorisation.
     pub fn reverser_is_factorised(&self) -> bool {
         self.reverser.is_factorised()

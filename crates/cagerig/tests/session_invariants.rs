@@ -6,6 +6,7 @@ use cagerig::demo;
 use cagerig::mesh::max_distance;
 use cagerig::session::{CageFitSource, RigParts, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
+use cagerig::sync::cage_reverser::ReverserMethod;
 use glam::DVec3;
 
 fn session(name: &str) -> RigSession {
@@ -174,4 +175,101 @@ fn bad_edits_are_errors_not_panics() {
     );
     // State unchanged by rejected edits.
     assert!(max_distance(s.posed_mesh(), s.rest_mesh()) < 1e-12);
+}
+
+#[test]
+fn low_rank_and_dense_reverse_deformers_agree() {
+    for name in ["bar", "snake"] {
+        let mut fast = session(name);
+        let mut dense = session(name);
+        dense.set_reverser_method(ReverserMethod::Dense);
+        let nj = fast.skeleton().len();
+        for s in [&mut fast, &mut dense] {
+            // One rotated joint (rank-3 update), then several (rank 3·#active).
+            s.rotate_joint(nj / 2, DVec3::Z, 0.7).unwrap();
+            s.move_posed_cage(&[3], &[DVec3::new(0.2, 0.3, -0.1)])
+                .unwrap();
+            s.rotate_joint(1, DVec3::new(1.0, 1.0, 0.0), -0.4).unwrap();
+            s.rotate_joint(nj - 1, DVec3::Y, 0.3).unwrap();
+            s.move_posed_cage(&[1, 6], &[DVec3::new(-0.1, 0.05, 0.2)])
+                .unwrap();
+        }
+        assert!(fast.reverser_is_low_rank(), "{name}");
+        assert!(!dense.reverser_is_low_rank(), "{name}");
+        let tol = 1e-10 * scale(&fast);
+        assert!(
+            max_distance(fast.rest_cage(), dense.rest_cage()) < tol,
+            "{name}"
+        );
+        assert!(
+            max_distance(fast.posed_cage(), dense.posed_cage()) < tol,
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn cached_keyframe_playback_equals_full_recompute() {
+    use cagerig::animation::{CageTrack, SkeletonTrack};
+    use cagerig::playback::AnimationPlayer;
+    use glam::{DAffine3, DQuat};
+    let base = session("snake");
+    let nc = base.rest_cage().len();
+    let skeleton = base.skeleton().clone();
+    let mut locals = vec![DAffine3::IDENTITY; skeleton.len()];
+    skeleton.locals_from_worlds(&skeleton.rest_world_from_joint(), &mut locals);
+    let keys: Vec<Vec<DAffine3>> = (0..3)
+        .map(|k| {
+            locals
+                .iter()
+                .map(|l| *l * DAffine3::from_quat(DQuat::from_rotation_z(0.1 * k as f64)))
+                .collect()
+        })
+        .collect();
+    let offsets: Vec<Vec<DVec3>> = (0..2)
+        .map(|k| {
+            (0..nc)
+                .map(|c| DVec3::new(0.0, 0.02 * (c % 3) as f64, 0.01) * k as f64)
+                .collect()
+        })
+        .collect();
+    let skel = SkeletonTrack::new(vec![0.0, 1.0, 2.0], keys).unwrap();
+    let cage = CageTrack::new(vec![0.0, 1.5], offsets).unwrap();
+    let mut player = AnimationPlayer::new(&base, Some(skel.clone()), Some(cage.clone())).unwrap();
+    let mut cached = base.clone();
+    let mut full = base;
+    let mut sampled_offsets = vec![DVec3::ZERO; nc];
+    let mut sampled_locals = locals.clone();
+    for t in [0.3, 0.75, 1.2, 1.9, 2.5] {
+        player.apply(t, &mut cached).unwrap();
+        cage.sample(t, &mut sampled_offsets);
+        skel.sample(t, &mut sampled_locals);
+        let rotations: Vec<DQuat> = sampled_locals
+            .iter()
+            .map(|l| DQuat::from_mat3(&l.matrix3))
+            .collect();
+        let motion: Vec<DVec3> = sampled_locals
+            .iter()
+            .zip(skeleton.joints())
+            .map(|(l, j)| match j.parent {
+                None => l.translation - j.rest_world_from_joint.translation,
+                Some(_) => DVec3::ZERO,
+            })
+            .collect();
+        full.set_animation_sample(Some(&sampled_offsets), &rotations, &motion)
+            .unwrap();
+        let tol = 1e-10 * scale(&full);
+        assert!(
+            max_distance(cached.rest_mesh(), full.rest_mesh()) < tol,
+            "t = {t}"
+        );
+        assert!(
+            max_distance(cached.posed_mesh(), full.posed_mesh()) < tol,
+            "t = {t}"
+        );
+        assert!(
+            max_distance(cached.posed_cage(), full.posed_cage()) < tol,
+            "t = {t}"
+        );
+    }
 }

@@ -10,9 +10,20 @@
 //!
 //! `P (R̃ Φ̃ + Ω̃ B_topo⁻¹ A_R Ψ) ∂C = ∂C'`
 //!
-//! is factorised (LU with partial pivoting) lazily on the first grab after the skeleton pose
-//! changed, and reused for every grab until the next skeleton edit. Exact under LBS: after the
-//! full update the grabbed C' vertices land on their targets and the others do not move.
+//! is factorised lazily on the first grab after the skeleton pose changed, and reused for every
+//! grab until the next skeleton edit. Exact under LBS: after the full update the grabbed C'
+//! vertices land on their targets and the others do not move.
+//!
+//! **Low-rank factorisation (default, MaxVol rows).** Write the system matrix of Eq. 19 as
+//! `G = A₀ + U V` with `A₀ = R̃ (Φ̃ ⊗ I₃)` and the skeleton term `Ω̃ B_topo⁻¹ A_R Ψ = U V`.
+//! Only *active* joints contribute to the latter: a joint whose rotation equals its parent's (a
+//! root: equals the identity) has a zero block in A_R. With `D_k = R_f − R_k` (root: `I − R_k`)
+//! and `W_ik = Σ_{j ∈ subtree(k)} ω_ij`, `U` has blocks `W_ik D_k` (3#R × 3#active) and
+//! `V = Ψ_active ⊗ I₃`. Since `A₀⁻¹ = (P ⊗ I₃) R̃⁻¹` is known (P = Φ̃⁻¹ from CageUp, R̃ block
+//! diagonal), the Woodbury identity reduces the refactorisation to an LU of the
+//! `3#active × 3#active` capacitance matrix `I + V A₀⁻¹ U`: O(#C²·#active) work instead of
+//! O((3#C)³). The dense `3#C × 3#C` LU is used when the rows are not square (least-squares
+//! CageUp), when a blended rotation R_i is singular, or on request ([`ReverserMethod::Dense`]).
 
 use faer::Mat;
 use glam::{DMat3, DVec3};
@@ -21,6 +32,21 @@ use crate::error::RigError;
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::sync::cage_updater::check_triangular_condition;
+
+/// How [`CageReverser::refactor`] factorises Eq. 19.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ReverserMethod {
+    /// Low-rank (Woodbury) factorisation when applicable, dense LU otherwise.
+    #[default]
+    Auto,
+    /// Always the dense `3#C × 3#C` LU.
+    Dense,
+}
+
+/// Blocks `D_k` with no entry above this are treated as zero (joint rotated like its parent).
+const INACTIVE_JOINT_TOLERANCE: f64 = 1e-13;
+/// A blended rotation with |det| below this sends the factorisation to the dense path.
+const MIN_BLENDED_DETERMINANT: f64 = 1e-8;
 
 /// Everything the reverse map needs that does not change with the pose.
 #[derive(Debug, Clone)]
@@ -37,16 +63,85 @@ pub struct CageReverser {
     parents: Vec<Option<usize>>,
     order: Vec<usize>,
     factor: Option<Factor>,
+    method: ReverserMethod,
     /// Scratch for the per-grab solve (3#C).
     rhs: Vec<f64>,
+    /// Scratch for the low-rank solve: `#R` points, `#C` points, `3#J` numbers.
+    scratch_rows: Vec<DVec3>,
+    scratch_cage: Vec<DVec3>,
+    scratch_small: Vec<f64>,
 }
 
+/// A factorisation of Eq. 19 for one pose.
 #[derive(Debug, Clone)]
-struct Factor {
+enum Factor {
+    Dense(DenseLu),
+    LowRank(LowRank),
+}
+
+/// Woodbury form (see the module docs).
+#[derive(Debug, Clone)]
+struct LowRank {
+    /// R_i⁻¹ of every fitted row, `#R`.
+    inverse_row_rotations: Vec<DMat3>,
+    /// Active joints.
+    active: Vec<usize>,
+    /// Y = A₀⁻¹ U, `#C × #active` blocks (row-major by cage vertex).
+    y: Vec<DMat3>,
+    /// LU of the capacitance matrix `I + V Y` (absent when no joint is active).
+    capacitance: Option<DenseLu>,
+}
+
+/// A dense LU with partial pivoting, packed.
+#[derive(Debug, Clone)]
+struct DenseLu {
     /// Packed LU factors (unit lower L below the diagonal, U on and above), `n × n` column-major.
     lu: Mat<f64>,
     /// Row permutation: row `i` of P·S is row `perm[i]` of S.
     perm: Vec<usize>,
+}
+
+impl DenseLu {
+    fn new(system: &Mat<f64>) -> Result<Self, RigError> {
+        let n = system.nrows();
+        let lu = system.partial_piv_lu();
+        check_triangular_condition(lu.U().diagonal().column_vector().iter().copied())?;
+        let l = lu.L();
+        let u = lu.U();
+        let packed = Mat::<f64>::from_fn(n, n, |r, c| if r > c { l[(r, c)] } else { u[(r, c)] });
+        let (fwd, _) = lu.P().arrays();
+        Ok(Self {
+            lu: packed,
+            perm: fwd.to_vec(),
+        })
+    }
+
+    /// Solves in place: `x` holds b on entry (length n), the solution on exit; `tmp` is n long.
+    fn solve(&self, x: &mut [f64], tmp: &mut [f64]) {
+        let n = self.perm.len();
+        for (i, t) in tmp[..n].iter_mut().enumerate() {
+            *t = x[self.perm[i]];
+        }
+        let lu = &self.lu;
+        for c in 0..n {
+            let v = tmp[c];
+            if v != 0.0 {
+                let col = lu.col(c);
+                for r in c + 1..n {
+                    tmp[r] -= col[r] * v;
+                }
+            }
+        }
+        for c in (0..n).rev() {
+            let col = lu.col(c);
+            let v = tmp[c] / col[c];
+            tmp[c] = v;
+            for r in 0..c {
+                tmp[r] -= col[r] * v;
+            }
+        }
+        x[..n].copy_from_slice(&tmp[..n]);
+    }
 }
 
 impl CageReverser {
@@ -93,7 +188,11 @@ impl CageReverser {
             parents: (0..skeleton.len()).map(|j| skeleton.parent(j)).collect(),
             order: skeleton.topological_order().to_vec(),
             factor: None,
+            method: ReverserMethod::Auto,
             rhs: vec![0.0; 3 * num_cage],
+            scratch_rows: vec![DVec3::ZERO; rows.len()],
+            scratch_cage: vec![DVec3::ZERO; num_cage],
+            scratch_small: vec![0.0; 6 * skeleton.len().max(num_cage)],
         })
     }
 
@@ -107,9 +206,129 @@ impl CageReverser {
         self.factor.is_some()
     }
 
+    /// Selects the factorisation method (drops the current factorisation).
+    pub fn set_method(&mut self, method: ReverserMethod) {
+        self.method = method;
+        self.factor = None;
+    }
+
+    /// Whether the held factorisation is the low-rank one.
+    pub fn is_low_rank(&self) -> bool {
+        matches!(self.factor, Some(Factor::LowRank(_)))
+    }
+
     /// Builds and factorises the Eq. 19 system for the rotations `T_j^r` of the current pose
     /// (`joint_rotations`, `#J`, the linear parts of posed_from_rest).
     pub fn refactor(&mut self, joint_rotations: &[DMat3]) -> Result<(), RigError> {
+        let square = self.row_weights.num_vertices() == self.num_cage;
+        if self.method == ReverserMethod::Auto && square {
+            if let Some(low_rank) = self.low_rank(joint_rotations)? {
+                self.factor = Some(Factor::LowRank(low_rank));
+                return Ok(());
+            }
+        }
+        self.factor = Some(Factor::Dense(self.dense(joint_rotations)?));
+        Ok(())
+    }
+
+    /// The Woodbury factorisation, or None if a blended rotation is singular.
+    fn low_rank(&self, joint_rotations: &[DMat3]) -> Result<Option<LowRank>, RigError> {
+        let nc = self.num_cage;
+        let nr = self.row_weights.num_vertices();
+        let nj = self.parents.len();
+        // D_k and the active joints.
+        let mut slot = vec![usize::MAX; nj];
+        let mut active = Vec::new();
+        let mut d = Vec::new();
+        for k in 0..nj {
+            let dk = match self.parents[k] {
+                None => DMat3::IDENTITY - joint_rotations[k],
+                Some(f) => joint_rotations[f] - joint_rotations[k],
+            };
+            let max = dk
+                .to_cols_array()
+                .iter()
+                .fold(0.0f64, |m, x| m.max(x.abs()));
+            if max > INACTIVE_JOINT_TOLERANCE {
+                slot[k] = active.len();
+                active.push(k);
+                d.push(dk);
+            }
+        }
+        let na = active.len();
+        // R_i⁻¹ and Z = R̃⁻¹ U (blocks R_i⁻¹ W_ik D_k), row-major #R × #active.
+        let mut inverse_row_rotations = Vec::with_capacity(nr);
+        let mut z = vec![DMat3::ZERO; nr * na];
+        let mut w = vec![0.0f64; na];
+        for i in 0..nr {
+            let (joints, weights) = self.row_weights.row(i);
+            let mut rot_i = DMat3::ZERO;
+            w.iter_mut().for_each(|x| *x = 0.0);
+            for (&j, &wt) in joints.iter().zip(weights) {
+                rot_i += joint_rotations[j as usize] * wt;
+                // W_ik accumulates ω_ij over every active ancestor k of j (j included).
+                let mut k = Some(j as usize);
+                while let Some(kk) = k {
+                    if slot[kk] != usize::MAX {
+                        w[slot[kk]] += wt;
+                    }
+                    k = self.parents[kk];
+                }
+            }
+            let det = rot_i.determinant();
+            if det.is_nan() || det.abs() < MIN_BLENDED_DETERMINANT {
+                return Ok(None);
+            }
+            let inv = rot_i.inverse();
+            for a in 0..na {
+                z[i * na + a] = inv * d[a] * w[a];
+            }
+            inverse_row_rotations.push(inv);
+        }
+        // Y = (P ⊗ I) Z: block (c, a) = Σ_i P[c, i] Z(i, a).
+        let mut y = vec![DMat3::ZERO; nc * na];
+        for i in 0..nr {
+            let p_col = self.cage_from_rows.col(i);
+            for c in 0..nc {
+                let pc = p_col[c];
+                if pc != 0.0 {
+                    for a in 0..na {
+                        y[c * na + a] += z[i * na + a] * pc;
+                    }
+                }
+            }
+        }
+        // Capacitance I + V Y: block (a, b) = δ_ab I + Σ_c Ψ_{k_a c} Y(c, b).
+        let capacitance = if na == 0 {
+            None
+        } else {
+            let mut blocks = vec![DMat3::ZERO; na * na];
+            for (a, &k) in active.iter().enumerate() {
+                let psi = &self.joint_coords[k * nc..(k + 1) * nc];
+                for (c, &pk) in psi.iter().enumerate() {
+                    if pk != 0.0 {
+                        for b in 0..na {
+                            blocks[a * na + b] += y[c * na + b] * pk;
+                        }
+                    }
+                }
+                blocks[a * na + a] += DMat3::IDENTITY;
+            }
+            let n = 3 * na;
+            let m =
+                Mat::<f64>::from_fn(n, n, |r, c| blocks[(r / 3) * na + c / 3].col(c % 3)[r % 3]);
+            Some(DenseLu::new(&m)?)
+        };
+        Ok(Some(LowRank {
+            inverse_row_rotations,
+            active,
+            y,
+            capacitance,
+        }))
+    }
+
+    /// The dense `3#C × 3#C` system and its LU.
+    fn dense(&self, joint_rotations: &[DMat3]) -> Result<DenseLu, RigError> {
         let nc = self.num_cage;
         let nj = self.parents.len();
         let nr = self.row_weights.num_vertices();
@@ -153,17 +372,7 @@ impl CageReverser {
             let (k, b) = (c / 3, c % 3);
             pg[(kp, 9 * k + 3 * a + b)]
         });
-        let lu = system.partial_piv_lu();
-        check_triangular_condition(lu.U().diagonal().column_vector().iter().copied())?;
-        let l = lu.L();
-        let u = lu.U();
-        let packed = Mat::<f64>::from_fn(n, n, |r, c| if r > c { l[(r, c)] } else { u[(r, c)] });
-        let (fwd, _) = lu.P().arrays();
-        self.factor = Some(Factor {
-            lu: packed,
-            perm: fwd.to_vec(),
-        });
-        Ok(())
+        DenseLu::new(&system)
     }
 
     /// Solves Eq. 19 for the rest-cage offsets ∂C (`#C`, written to `rest_cage_delta`) that
@@ -174,38 +383,71 @@ impl CageReverser {
         posed_cage_delta: &[DVec3],
         rest_cage_delta: &mut [DVec3],
     ) -> Result<(), RigError> {
-        let factor = self.factor.as_ref().ok_or(RigError::Invalid(
-            "the reverse cage deformer was not factorised for the current pose".into(),
-        ))?;
-        let n = 3 * self.num_cage;
-        // b = P_perm · ∂C'
-        for (i, r) in self.rhs.iter_mut().enumerate() {
-            let src = factor.perm[i];
-            *r = posed_cage_delta[src / 3][src % 3];
-        }
-        let lu = &factor.lu;
-        // Forward substitution with unit lower L.
-        for c in 0..n {
-            let x = self.rhs[c];
-            if x != 0.0 {
-                let col = lu.col(c);
-                for r in c + 1..n {
-                    self.rhs[r] -= col[r] * x;
+        let nc = self.num_cage;
+        match &self.factor {
+            None => Err(RigError::Invalid(
+                "the reverse cage deformer was not factorised for the current pose".into(),
+            )),
+            Some(Factor::Dense(lu)) => {
+                let n = 3 * nc;
+                for (k, d) in posed_cage_delta.iter().enumerate() {
+                    self.rhs[3 * k..3 * k + 3].copy_from_slice(&d.to_array());
                 }
+                let (x, tmp) = (&mut self.rhs, &mut self.scratch_small);
+                if tmp.len() < n {
+                    tmp.resize(n, 0.0);
+                }
+                lu.solve(x, tmp);
+                for (k, d) in rest_cage_delta.iter_mut().enumerate() {
+                    *d = DVec3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
+                }
+                Ok(())
+            }
+            Some(Factor::LowRank(lr)) => {
+                // m = R̃⁻¹ (Φ̃ ⊗ I) ∂C'
+                for (i, m) in self.scratch_rows.iter_mut().enumerate() {
+                    let phi = &self.row_coords[i * nc..(i + 1) * nc];
+                    let sum = phi
+                        .iter()
+                        .zip(posed_cage_delta)
+                        .fold(DVec3::ZERO, |acc, (&p, d)| acc + p * *d);
+                    *m = lr.inverse_row_rotations[i] * sum;
+                }
+                // z = (P ⊗ I) m
+                let z = &mut self.scratch_cage;
+                z.iter_mut().for_each(|v| *v = DVec3::ZERO);
+                for (i, m) in self.scratch_rows.iter().enumerate() {
+                    let p_col = self.cage_from_rows.col(i);
+                    for (c, zc) in z.iter_mut().enumerate() {
+                        *zc += p_col[c] * *m;
+                    }
+                }
+                let na = lr.active.len();
+                if let Some(cap) = &lr.capacitance {
+                    // s = (I + VY)⁻¹ V z, then x = z − Y s.
+                    let (w, tmp) = self.scratch_small.split_at_mut(3 * na);
+                    for (a, &k) in lr.active.iter().enumerate() {
+                        let psi = &self.joint_coords[k * nc..(k + 1) * nc];
+                        let v = psi
+                            .iter()
+                            .zip(z.iter())
+                            .fold(DVec3::ZERO, |acc, (&p, zc)| acc + p * *zc);
+                        w[3 * a..3 * a + 3].copy_from_slice(&v.to_array());
+                    }
+                    cap.solve(w, tmp);
+                    for (c, out) in rest_cage_delta.iter_mut().enumerate() {
+                        let mut x = z[c];
+                        for a in 0..na {
+                            x -=
+                                lr.y[c * na + a] * DVec3::new(w[3 * a], w[3 * a + 1], w[3 * a + 2]);
+                        }
+                        *out = x;
+                    }
+                } else {
+                    rest_cage_delta.copy_from_slice(z);
+                }
+                Ok(())
             }
         }
-        // Back substitution with U.
-        for c in (0..n).rev() {
-            let col = lu.col(c);
-            let x = self.rhs[c] / col[c];
-            self.rhs[c] = x;
-            for r in 0..c {
-                self.rhs[r] -= col[r] * x;
-            }
-        }
-        for (k, d) in rest_cage_delta.iter_mut().enumerate() {
-            *d = DVec3::new(self.rhs[3 * k], self.rhs[3 * k + 1], self.rhs[3 * k + 2]);
-        }
-        Ok(())
     }
 }
