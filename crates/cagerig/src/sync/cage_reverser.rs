@@ -221,11 +221,12 @@ impl CageReverser {
     /// (`joint_rotations`, `#J`, the linear parts of posed_from_rest).
     pub fn refactor(&mut self, joint_rotations: &[DMat3]) -> Result<(), RigError> {
         let square = self.row_weights.num_vertices() == self.num_cage;
-        if self.method == ReverserMethod::Auto && square {
-            if let Some(low_rank) = self.low_rank(joint_rotations)? {
-                self.factor = Some(Factor::LowRank(low_rank));
-                return Ok(());
-            }
+        if self.method == ReverserMethod::Auto
+            && square
+            && let Some(low_rank) = self.low_rank(joint_rotations)?
+        {
+            self.factor = Some(Factor::LowRank(low_rank));
+            return Ok(());
         }
         self.factor = Some(Factor::Dense(self.dense(joint_rotations)?));
         Ok(())
