@@ -426,9 +426,9 @@ impl RigSession {
     /// on the joint's current position; descendants follow. Then M' and C' follow.
     pub fn rotate_joint(&mut self, joint: usize, axis: DVec3, angle: f64) -> Result<(), RigError> {
         self.check_joint(joint)?;
-        let axis = axis.try_normalize().ok_or(RigError::Invalid(format!(
-            "rotation axis {axis} has no direction"
-        )))?;
+        let axis = axis
+            .try_normalize()
+            .ok_or_else(|| RigError::Invalid(format!("rotation axis {axis} has no direction")))?;
         if !angle.is_finite() {
             return Err(RigError::Invalid(format!(
                 "rotation angle {angle} is not finite"

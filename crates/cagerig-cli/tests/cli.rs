@@ -1,0 +1,176 @@
+//! End-to-end tests of the `cagerig` binary: outputs reload bit-exactly, bad scripts fail with a
+//! clear error naming the step and write nothing.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn cagerig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_cagerig"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cagerig-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn arm() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm/arm.obj")
+}
+
+const SCRIPT: &str = r#"{"skinning":"lbs","steps":[
+  {"op":"rotate_joint","joint":"lowerarm01.R","axis":[1,0,0],"degrees":60},
+  {"op":"move_rest_cage","vertices":[0,2,4,5,6],"offset":[2,-1,1.5]},
+  {"op":"move_posed_cage","vertices":[20,23,25],"offset":[-1.5,2,0.5]},
+  {"op":"set_skinning","method":"dqs"}]}"#;
+
+#[test]
+fn edit_writes_every_step_and_outputs_reload_bit_exactly() {
+    let dir = temp_dir("edit");
+    let script = dir.join("edits.json");
+    std::fs::write(&script, SCRIPT).unwrap();
+    let out = dir.join("out");
+    let status = cagerig()
+        .arg("edit")
+        .arg(arm())
+        .arg("--script")
+        .arg(&script)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    for k in 0..=4 {
+        for f in [
+            "mesh_rest.obj",
+            "mesh_posed.obj",
+            "cage_rest.obj",
+            "cage_posed.obj",
+            "joints.json",
+        ] {
+            assert!(out.join(format!("step{k}_{f}")).is_file(), "step{k}_{f}");
+        }
+    }
+    // Bit-exact reload: writing what was read gives the same bytes.
+    let path = out.join("step3_mesh_posed.obj");
+    let mesh = cagerig::io::read_obj(&path).unwrap();
+    let again = dir.join("again.obj");
+    cagerig::io::write_obj(&again, &mesh.positions, &mesh.triangles).unwrap();
+    assert_eq!(
+        std::fs::read(&path).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
+    // The grab landed: step-3 posed cage = step-2 posed cage + offset on vertices 20, 23, 25.
+    let c2 = cagerig::io::read_obj(&out.join("step2_cage_posed.obj"))
+        .unwrap()
+        .positions;
+    let c3 = cagerig::io::read_obj(&out.join("step3_cage_posed.obj"))
+        .unwrap()
+        .positions;
+    let offset = glam::DVec3::new(-1.5, 2.0, 0.5);
+    for (k, (a, b)) in c2.iter().zip(&c3).enumerate() {
+        let expect = if [20, 23, 25].contains(&k) {
+            *a + offset
+        } else {
+            *a
+        };
+        assert!(b.distance(expect) < 1e-9, "cage vertex {k}");
+    }
+    let joints: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("step1_joints.json")).unwrap()).unwrap();
+    assert_eq!(joints.as_array().unwrap().len(), 25);
+    assert_eq!(joints[3]["name"], "lowerarm01.R");
+    assert_eq!(joints[3]["parent"], 2);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_scripts_name_the_step_and_write_nothing() {
+    let dir = temp_dir("bad");
+    for (script, needle) in [
+        (
+            r#"{"steps":[{"op":"reset_pose"},{"op":"twist","joint":1}]}"#,
+            "step 2",
+        ),
+        (
+            r#"{"steps":[{"op":"rotate_joint","joint":"elbow.L","axis":[1,0,0],"degrees":5}]}"#,
+            "unknown joint",
+        ),
+        (
+            r#"{"steps":[{"op":"reset_pose"},{"op":"move_rest_cage","vertices":[999],"offset":[1,0,0]}]}"#,
+            "step 2",
+        ),
+        ("{not json", "JSON"),
+    ] {
+        let path = dir.join("s.json");
+        std::fs::write(&path, script).unwrap();
+        let out = dir.join("out");
+        let result = cagerig()
+            .args(["edit", "--builtin", "bar", "--script"])
+            .arg(&path)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{script}");
+        assert!(stderr.contains(needle), "{script}: {stderr}");
+        assert!(!out.exists(), "{script}: something was written");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn info_reports_counts_files_and_warnings_as_json() {
+    let out = cagerig()
+        .arg("info")
+        .arg(arm())
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["vertices"], 2089);
+    assert_eq!(v["triangles"], 4156);
+    assert_eq!(v["joints"], 25);
+    assert_eq!(v["cage_vertices"], 58);
+    assert_eq!(v["cage_triangles"], 112);
+    let files = v["files"].as_array().unwrap();
+    assert!(files.iter().any(|f| f["role"] == "maxvol"));
+    let warnings = v["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("renormalised"))
+    );
+    let bad = cagerig()
+        .args(["info", "/nonexistent/x.obj"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("/nonexistent/x.obj"));
+}
+
+#[test]
+fn demo_runs_and_lands_the_grab() {
+    let dir = temp_dir("demo");
+    let out = cagerig()
+        .args(["demo", "--out"])
+        .arg(dir.join("d"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("current-cage grab"), "{stdout}");
+    assert!(dir.join("d/3_grab_cage_posed.obj").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,91 @@
+//! Per-event work must not allocate: a counting global allocator checks the session's
+//! skeleton edits, rest-cage drags, current-cage grabs (with a held factorisation), skinning
+//! switches between already-built methods and cage grabs.
+//!
+//! The events run inside the rayon pool (as an interactive front end would): called from a
+//! foreign thread, rayon's own injector queue allocates a block every few dozen jobs, which is
+//! rayon's amortised bookkeeping, not per-event work of ours.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use cagerig::demo;
+use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::skinning::SkinningMethod;
+use glam::DVec3;
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations_during(mut f: impl FnMut()) -> usize {
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    f();
+    ALLOCATIONS.load(Ordering::SeqCst) - before
+}
+
+#[test]
+fn per_event_work_does_not_allocate() {
+    let pool = rayon::ThreadPoolBuilder::new().build().unwrap();
+    pool.install(run_events);
+}
+
+fn run_events() {
+    // One test in this binary, so no other test thread allocates meanwhile.
+    let rig = demo::builtin("snake", Some(20_000)).unwrap();
+    let parts = RigParts {
+        mesh: rig.mesh,
+        skeleton: rig.skeleton,
+        skin_weights: rig.skin_weights,
+        cage: rig.cage,
+        cage_coords: None,
+        maxvol_rows: None,
+        cor_rows: None,
+        joint_coords: None,
+    };
+    let (mut s, _) = RigSession::new(parts, SessionOptions::default()).unwrap();
+    s.set_skinning(SkinningMethod::Cor).unwrap();
+    s.set_skinning(SkinningMethod::Lbs).unwrap();
+    let offset = DVec3::new(0.01, 0.02, -0.01);
+    // Warm up (thread pool, work-stealing queues).
+    for _ in 0..3 {
+        s.rotate_joint(3, DVec3::Z, 0.01).unwrap();
+        s.move_rest_cage(&[1, 2], &[offset]).unwrap();
+        s.move_posed_cage(&[4], &[offset]).unwrap();
+        s.move_posed_cage(&[4], &[-offset]).unwrap();
+    }
+    let n = allocations_during(|| {
+        s.rotate_joint(5, DVec3::Y, 0.02).unwrap();
+    });
+    assert_eq!(n, 0, "rotate_joint allocated {n} times");
+    for method in [
+        SkinningMethod::Lbs,
+        SkinningMethod::Dqs,
+        SkinningMethod::Cor,
+    ] {
+        let n = allocations_during(|| s.set_skinning(method).unwrap());
+        assert_eq!(n, 0, "set_skinning({method:?}) allocated {n} times");
+        let n = allocations_during(|| s.move_rest_cage(&[0, 3, 7], &[offset]).unwrap());
+        assert_eq!(n, 0, "move_rest_cage ({method:?}) allocated {n} times");
+    }
+    s.refactor_reverser().unwrap();
+    let n = allocations_during(|| s.move_posed_cage(&[9, 10], &[offset]).unwrap());
+    assert_eq!(n, 0, "move_posed_cage allocated {n} times");
+}
