@@ -18,7 +18,8 @@ use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::SkinningMethod;
 use crate::skinning::cor::{CorScratch, CorSkinning};
-use crate::skinning::cor_centres::{CorCentresMethod, CorCentresOptions, compute_cor_centres};
+use crate::skinning::cor_cage_coords::compute_cor_cage_coords;
+use crate::skinning::cor_centres::{CorCentresMethod, CorCentresOptions};
 use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
 use crate::sparse_rows::SparseRows;
@@ -731,10 +732,13 @@ impl RigSession {
     }
 
     fn build_cor(&mut self) -> Result<(), RigError> {
-        let rows = match self.cor_rows.take() {
-            Some(rows) => rows,
+        let centre_coords = match &self.cor_rows {
+            // Loaded rows: Λ = S·Φ (O(nnz(S)·#C); fine for the rows the tool writes, which
+            // address the original vertices, also after subdivision).
+            Some(rows) => rows.compose_dense(&self.cage_coords)?,
             None => {
-                // Exact centres cost O(#V·#F): large meshes use weight clustering instead.
+                // Λ directly (S is never formed). Exact centres cost O(#V·#F): large meshes use
+                // weight clustering instead.
                 let mut options = self.cor_options;
                 if options.method == CorCentresMethod::Exact
                     && self.rest_mesh.len() > CLUSTERED_COR_CENTRES_ABOVE
@@ -745,16 +749,16 @@ impl RigSession {
                         weight_floor: 0.0,
                     };
                 }
-                compute_cor_centres(
+                compute_cor_cage_coords(
                     &self.rest_mesh,
                     &self.mesh_triangles,
                     &self.skin_weights,
+                    &self.cage_coords,
                     &options,
                     &|_, _| {},
                 )?
             }
         };
-        let centre_coords = rows.compose_dense(&self.cage_coords)?;
         let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
         centre_coords.apply(&self.rest_cage, &mut centres);
         self.cor = Some(CorState {
@@ -763,7 +767,6 @@ impl RigSession {
             skinning: CorSkinning::new(&self.skin_weights),
             scratch: CorScratch::new(self.skeleton.len()),
         });
-        self.cor_rows = Some(rows);
         Ok(())
     }
 

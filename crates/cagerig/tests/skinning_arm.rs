@@ -374,3 +374,47 @@ fn cor_centres_on_subdivided_arm() {
         }
     }
 }
+
+/// Λ = S·Φ computed directly (clustered, as the session does on big meshes): Λ·C against the
+/// exact Eq. 5 centres, and partition of unity of Λ's rows.
+#[test]
+fn cor_cage_coords_on_arm() {
+    let (rest, tris) = obj("arm.obj");
+    let (cage, cage_tris) = obj("arm_cage.obj");
+    let w = weights(rest.len());
+    let n = rest.len();
+    let diag = diagonal(&rest);
+    let cage_mesh = cagerig::TriMesh::new(cage.clone(), cage_tris).unwrap();
+    let phi = cagerig::coords::mvc::compute_cage_coords(&cage_mesh, &rest, None).unwrap();
+    let unpruned = CorCentresOptions {
+        mass_tolerance: 0.0,
+        ..Default::default()
+    };
+    let s = compute_cor_centres(&rest, &tris, &w, &unpruned, &|_, _| {}).unwrap();
+    let mut exact = vec![DVec3::ZERO; n];
+    s.apply(&rest, &mut exact);
+    let options = CorCentresOptions {
+        method: CorCentresMethod::Clustered {
+            vertex_step: 0.01,
+            patch_step: 0.05,
+            weight_floor: 0.0,
+        },
+        ..Default::default()
+    };
+    let start = Instant::now();
+    let lambda =
+        cagerig::skinning::compute_cor_cage_coords(&rest, &tris, &w, &phi, &options, &|_, _| {})
+            .unwrap();
+    let elapsed = start.elapsed();
+    let mut centres = vec![DVec3::ZERO; n];
+    lambda.apply(&cage, &mut centres);
+    let err = max_distance(&exact, &centres) / diag;
+    println!("Arm Λ (clustered): {elapsed:?}, max centre error {err:e} of bbox diagonal");
+    assert!(err <= 1e-3, "{err}");
+    for i in 0..n {
+        let sum: f64 = (0..lambda.num_cage_vertices())
+            .map(|k| lambda.get(i, k))
+            .sum();
+        assert!((sum - 1.0).abs() < 1e-9, "{i}: {sum}");
+    }
+}

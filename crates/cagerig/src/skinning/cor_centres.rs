@@ -282,13 +282,13 @@ impl GroupMeans {
 }
 
 /// Patches (groups of positive-area triangles): area, mean weights, joint-pair index.
-struct PatchTable {
+pub(crate) struct PatchTable {
     areas: Vec<f64>,
     weights: Vec<(Vec<u32>, Vec<f64>)>,
     /// Patches whose weights contain both joints of the pair.
     by_pair: HashMap<(u32, u32), Vec<u32>>,
     /// B: `#P × #V`.
-    points: SparseRows,
+    pub(crate) points: SparseRows,
 }
 
 impl PatchTable {
@@ -369,16 +369,26 @@ impl PatchTable {
 }
 
 /// Per-thread buffers for one row evaluation.
-struct RowScratch {
+pub(crate) struct RowScratch {
     /// `stamp[p] == generation` ⇔ patch p already collected for this row.
     stamp: Vec<u32>,
     generation: u32,
     contributions: Vec<(f64, u32)>,
 }
 
+impl RowScratch {
+    pub(crate) fn new(num_patches: usize) -> Self {
+        Self {
+            stamp: vec![0; num_patches],
+            generation: 0,
+            contributions: Vec::new(),
+        }
+    }
+}
+
 /// Row of A (patch, coefficient) for weights `(joints, weights)`; `None` when the total
 /// similarity is zero. Coefficients are ascending in patch index and sum to 1.
-fn centre_row(
+pub(crate) fn centre_row(
     joints: &[u32],
     weights: &[f64],
     patches: &PatchTable,
@@ -442,6 +452,111 @@ fn centre_row(
     Some(row)
 }
 
+/// The inputs of the row evaluations: patches, vertex clusters and their mean weight rows.
+pub(crate) struct CorProblem {
+    pub(crate) patches: PatchTable,
+    /// Per vertex: its cluster, or [`CorCentresFactored::NO_CENTRE`] (single influence).
+    pub(crate) vertex_cluster: Vec<u32>,
+    /// Mean weight row `(joints, weights)` per cluster.
+    pub(crate) clusters: Vec<(Vec<u32>, Vec<f64>)>,
+}
+
+impl CorProblem {
+    /// Validates the inputs, builds the patches (B) and the vertex clusters.
+    pub(crate) fn new(
+        rest_positions: &[DVec3],
+        triangles: &[[u32; 3]],
+        weights: &SkinWeights,
+        options: &CorCentresOptions,
+    ) -> Result<Self, RigError> {
+        let num_vertices = rest_positions.len();
+        if weights.num_vertices() != num_vertices {
+            return Err(RigError::SizeMismatch {
+                what: "skinning weight rows vs rest vertices",
+                expected: num_vertices,
+                actual: weights.num_vertices(),
+            });
+        }
+        if let Some(index) = rest_positions.iter().position(|p| !p.is_finite()) {
+            return Err(RigError::NonFinite {
+                what: "vertex",
+                index,
+            });
+        }
+        for tri in triangles {
+            for &i in tri {
+                if i as usize >= num_vertices {
+                    return Err(RigError::IndexOutOfRange {
+                        what: "triangle vertex",
+                        index: i as usize,
+                        len: num_vertices,
+                    });
+                }
+            }
+        }
+        if !(options.sigma.is_finite() && options.sigma > 0.0) {
+            return Err(RigError::Invalid(format!(
+                "CoR similarity width sigma must be positive, got {}",
+                options.sigma
+            )));
+        }
+        let (vertex_quantiser, patch_quantiser) = match options.method {
+            CorCentresMethod::Exact => (None, None),
+            CorCentresMethod::Clustered {
+                vertex_step,
+                patch_step,
+                weight_floor,
+            } => {
+                let positive = |x: f64| x.is_finite() && x > 0.0;
+                if !(positive(vertex_step) && positive(patch_step) && weight_floor >= 0.0) {
+                    return Err(RigError::Invalid(format!(
+                        "CoR clustering steps must be positive and the floor non-negative, got \
+                         {vertex_step}, {patch_step}, {weight_floor}"
+                    )));
+                }
+                (
+                    Some(Quantiser {
+                        step: vertex_step,
+                        floor: weight_floor,
+                    }),
+                    Some(Quantiser {
+                        step: patch_step,
+                        floor: weight_floor,
+                    }),
+                )
+            }
+        };
+        let patches = PatchTable::new(rest_positions, triangles, weights, patch_quantiser)?;
+
+        // Vertex clusters (one per multi-influence vertex in exact mode).
+        let mut keys: HashMap<Vec<(u32, i64)>, u32> = HashMap::new();
+        let mut means = GroupMeans::default();
+        let mut vertex_cluster = vec![CorCentresFactored::NO_CENTRE; num_vertices];
+        for (v, cluster) in vertex_cluster.iter_mut().enumerate() {
+            let (js, ws) = weights.row(v);
+            if js.len() < 2 {
+                continue;
+            }
+            let next = means.mass.len() as u32;
+            let id = match vertex_quantiser {
+                None => next,
+                Some(q) => *keys.entry(q.key(js, ws)).or_insert(next),
+            };
+            means.add(id as usize, js, ws, 1.0);
+            *cluster = id;
+        }
+        Ok(Self {
+            patches,
+            vertex_cluster,
+            clusters: means.into_rows(),
+        })
+    }
+
+    pub(crate) fn num_patches(&self) -> usize {
+        self.patches.areas.len()
+    }
+}
+
 /// Computes the CoR matrix of Eq. 5 in factored form `S = A·B` for the rest mesh
 /// (`rest_positions` M: `#V`, `triangles`: `#F`) and skinning weights Ω (`#V × #J`).
 ///
@@ -453,96 +568,20 @@ pub fn compute_cor_centres_factored(
     options: &CorCentresOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<CorCentresFactored, RigError> {
-    let num_vertices = rest_positions.len();
-    if weights.num_vertices() != num_vertices {
-        return Err(RigError::SizeMismatch {
-            what: "skinning weight rows vs rest vertices",
-            expected: num_vertices,
-            actual: weights.num_vertices(),
-        });
-    }
-    if let Some(index) = rest_positions.iter().position(|p| !p.is_finite()) {
-        return Err(RigError::NonFinite {
-            what: "vertex",
-            index,
-        });
-    }
-    for tri in triangles {
-        for &i in tri {
-            if i as usize >= num_vertices {
-                return Err(RigError::IndexOutOfRange {
-                    what: "triangle vertex",
-                    index: i as usize,
-                    len: num_vertices,
-                });
-            }
-        }
-    }
-    if !(options.sigma.is_finite() && options.sigma > 0.0) {
-        return Err(RigError::Invalid(format!(
-            "CoR similarity width sigma must be positive, got {}",
-            options.sigma
-        )));
-    }
-    let (vertex_quantiser, patch_quantiser) = match options.method {
-        CorCentresMethod::Exact => (None, None),
-        CorCentresMethod::Clustered {
-            vertex_step,
-            patch_step,
-            weight_floor,
-        } => {
-            let positive = |x: f64| x.is_finite() && x > 0.0;
-            if !(positive(vertex_step) && positive(patch_step) && weight_floor >= 0.0) {
-                return Err(RigError::Invalid(format!(
-                    "CoR clustering steps must be positive and the floor non-negative, got \
-                     {vertex_step}, {patch_step}, {weight_floor}"
-                )));
-            }
-            (
-                Some(Quantiser {
-                    step: vertex_step,
-                    floor: weight_floor,
-                }),
-                Some(Quantiser {
-                    step: patch_step,
-                    floor: weight_floor,
-                }),
-            )
-        }
-    };
-    let patches = PatchTable::new(rest_positions, triangles, weights, patch_quantiser)?;
-
-    // Vertex clusters (one per multi-influence vertex in exact mode).
-    let mut keys: HashMap<Vec<(u32, i64)>, u32> = HashMap::new();
-    let mut means = GroupMeans::default();
-    let mut vertex_cluster = vec![CorCentresFactored::NO_CENTRE; num_vertices];
-    for (v, cluster) in vertex_cluster.iter_mut().enumerate() {
-        let (js, ws) = weights.row(v);
-        if js.len() < 2 {
-            continue;
-        }
-        let next = means.mass.len() as u32;
-        let id = match vertex_quantiser {
-            None => next,
-            Some(q) => *keys.entry(q.key(js, ws)).or_insert(next),
-        };
-        means.add(id as usize, js, ws, 1.0);
-        *cluster = id;
-    }
-    let clusters = means.into_rows();
-
+    let problem = CorProblem::new(rest_positions, triangles, weights, options)?;
+    let num_patches = problem.num_patches();
+    let CorProblem {
+        patches,
+        mut vertex_cluster,
+        clusters,
+    } = problem;
     let total = clusters.len();
     let done = AtomicUsize::new(0);
-    let num_patches = patches.areas.len();
     let rows: Vec<Option<Vec<(u32, f64)>>> = clusters
         .par_iter()
         .with_min_len(16)
         .map_init(
-            || RowScratch {
-                stamp: vec![0; num_patches],
-                generation: 0,
-                contributions: Vec::new(),
-            },
+            || RowScratch::new(num_patches),
             |scratch, (js, ws)| {
                 let row = centre_row(js, ws, &patches, options, scratch);
                 let finished = done.fetch_add(1, Ordering::Relaxed) + 1;

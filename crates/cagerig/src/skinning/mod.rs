@@ -6,12 +6,14 @@
 //! Vertices with an empty weight row stay at their rest position under every method.
 
 pub mod cor;
+pub mod cor_cage_coords;
 pub mod cor_centres;
 pub mod dqs;
 pub mod lbs;
 pub mod rigid_rotation;
 
 pub use cor::{CorScratch, CorSkinning};
+pub use cor_cage_coords::compute_cor_cage_coords;
 pub use cor_centres::{
     CorCentresFactored, CorCentresMethod, CorCentresOptions, compute_cor_centres,
     compute_cor_centres_factored,
