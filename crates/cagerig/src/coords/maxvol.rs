@@ -460,6 +460,35 @@ fn rank_one_update_and_argmax(
         .reduce(|| (0, 0, -1.0), max_entry)
 }
 
+fn pivot_row_zero(rank: usize) -> Vec<f64> {
+    vec![0.0; rank]
+}
+
+/// Sequential [`rank_one_update_and_argmax`] (a zero `pivot_row` just finds the argmax).
+fn rank_one_update_and_argmax_seq(
+    b: &mut Mat<f64>,
+    pivot_column: &[f64],
+    pivot_row: &[f64],
+) -> (usize, usize, f64) {
+    let mut best = (0, 0, -1.0);
+    for (k, &factor) in pivot_row.iter().enumerate() {
+        let Some(col) = b.as_mut().col_mut(k).try_as_col_major_mut() else {
+            continue;
+        };
+        let mut local = (0, -1.0f64);
+        for (r, (v, s)) in col.as_slice_mut().iter_mut().zip(pivot_column).enumerate() {
+            *v -= s * factor;
+            if v.abs() > local.1 {
+                local = (r, v.abs());
+            }
+        }
+        if local.1 > best.2 {
+            best = (local.0, k, local.1);
+        }
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -563,33 +592,4 @@ mod tests {
         assert!(log_abs_det_of_rows(&phi, &[0, 9]).is_err());
         assert!((log_abs_det_of_rows(&phi, &[0, 1]).unwrap() - 0.75f64.ln()).abs() < 1e-14);
     }
-}
-
-fn pivot_row_zero(rank: usize) -> Vec<f64> {
-    vec![0.0; rank]
-}
-
-/// Sequential [`rank_one_update_and_argmax`] (a zero `pivot_row` just finds the argmax).
-fn rank_one_update_and_argmax_seq(
-    b: &mut Mat<f64>,
-    pivot_column: &[f64],
-    pivot_row: &[f64],
-) -> (usize, usize, f64) {
-    let mut best = (0, 0, -1.0);
-    for (k, &factor) in pivot_row.iter().enumerate() {
-        let Some(col) = b.as_mut().col_mut(k).try_as_col_major_mut() else {
-            continue;
-        };
-        let mut local = (0, -1.0f64);
-        for (r, (v, s)) in col.as_slice_mut().iter_mut().zip(pivot_column).enumerate() {
-            *v -= s * factor;
-            if v.abs() > local.1 {
-                local = (r, v.abs());
-            }
-        }
-        if local.1 > best.2 {
-            best = (local.0, k, local.1);
-        }
-    }
-    best
 }
