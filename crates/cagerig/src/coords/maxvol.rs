@@ -27,6 +27,8 @@ use crate::error::RigError;
 pub const SWAP_THRESHOLD: f64 = 1.0 + 1e-3;
 /// Safety cap on swaps per cage vertex.
 const MAX_SWAPS_PER_COLUMN: usize = 100;
+/// B matrices with fewer entries are refined sequentially.
+const PARALLEL_ENTRIES: usize = 1 << 20;
 /// Rows per parallel task of the rank-1 update.
 const ROW_BLOCK: usize = 8192;
 
@@ -62,10 +64,13 @@ impl Default for MaxVolOptions {
     }
 }
 
-/// The extra starts use, per column k, the rows with the [`CANDIDATES_PER_COLUMN`] largest
-/// |B[i, k]| after the first start (B = Φ Φ̃⁻¹): rows that are well represented by the first
-/// selection cannot matter much. This keeps the extra starts independent of #V.
+/// Candidate rows: per column k, the rows with the [`CANDIDATES_PER_COLUMN`] largest |Φ[i, k]|
+/// (a row interpolating cage vertex k is one where Φ[:, k] dominates). All starts run on the
+/// candidates only, which keeps them independent of #V.
 pub const CANDIDATES_PER_COLUMN: usize = 32;
+
+/// Rows per parallel task of the dominance check (Φ Φ̃⁻¹ computed block by block).
+const CHECK_BLOCK: usize = 2048;
 
 /// [`select_maxvol_rows_with`] with the default options.
 pub fn select_maxvol_rows(phi: &CageCoords) -> Result<MaxVolSelection, RigError> {
@@ -73,8 +78,12 @@ pub fn select_maxvol_rows(phi: &CageCoords) -> Result<MaxVolSelection, RigError>
 }
 
 /// Selects #C rows of Φ (`#V × #C`) with locally maximal |det| (see module docs), the best of
-/// `options.starts` greedy starts, finally refined on all rows (so the result is dominant on Φ).
-/// Errors if #V < #C or Φ is (numerically) rank deficient.
+/// `options.starts` greedy starts, made dominant on all rows of Φ.
+///
+/// The starts run on candidate rows (see [`CANDIDATES_PER_COLUMN`]); then one pass over Φ
+/// computes B = Φ Φ̃⁻¹ block by block. Rows with some |B[i, j]| > [`SWAP_THRESHOLD`] (usually
+/// none) join the candidates and the refinement continues from the current best, until no row
+/// of Φ violates the bound. Errors if #V < #C or Φ is (numerically) rank deficient.
 pub fn select_maxvol_rows_with(
     phi: &CageCoords,
     options: &MaxVolOptions,
@@ -94,68 +103,173 @@ pub fn select_maxvol_rows_with(
     let scale = (0..rank)
         .map(|k| phi.column(k).iter().fold(0.0f64, |m, v| m.max(v.abs())))
         .fold(0.0, f64::max);
-    let first_rows = lu_pivot_rows(matrix, None, scale)?;
-    let (mut best, b) = refine(phi, &first_rows)?;
-    if options.starts <= 1 {
-        return Ok(best);
-    }
-    // Extra starts on the candidate rows: per column, the rows with the largest |B[:, k]|.
-    let candidates = candidate_rows(&b);
-    drop(b);
+    let mut candidates = top_rows_per_column(phi, CANDIDATES_PER_COLUMN);
     let reduced = CageCoords::from_matrix(phi.select_rows(&candidates))?;
-    let mut state = options.seed;
-    let mut improved = false;
-    for _ in 1..options.starts {
-        let mut order: Vec<usize> = (0..rank).collect();
-        for i in (1..rank).rev() {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            order.swap(i, (state >> 33) as usize % (i + 1));
+    // Start 0: LU pivots of the candidates (of all rows if the candidates are rank deficient).
+    let first_rows = match lu_pivot_rows(reduced.matrix(), None, scale) {
+        Ok(local) => local.iter().map(|&r| candidates[r]).collect(),
+        Err(_) => {
+            let rows = lu_pivot_rows(matrix, None, scale)?;
+            candidates = merged(&candidates, &rows);
+            rows
         }
-        let Ok(local_rows) = lu_pivot_rows(reduced.matrix(), Some(&order), scale) else {
-            continue;
-        };
-        let Ok((local, _)) = refine(&reduced, &local_rows) else {
-            continue;
-        };
-        if local.log_abs_det > best.log_abs_det {
-            best = MaxVolSelection {
+    };
+    // Round 1: all starts on the candidates; keep the best.
+    let mut best: Option<MaxVolSelection> = None;
+    let reduced = CageCoords::from_matrix(phi.select_rows(&candidates))?;
+    let local_rows = |candidates: &[usize], rows: &[usize]| -> Vec<usize> {
+        rows.iter()
+            .filter_map(|r| candidates.binary_search(r).ok())
+            .collect()
+    };
+    let mut state = options.seed;
+    let initial_rows: Vec<Vec<usize>> = (0..options.starts.max(1))
+        .filter_map(|start| {
+            if start == 0 {
+                return Some(local_rows(&candidates, &first_rows));
+            }
+            let mut order: Vec<usize> = (0..rank).collect();
+            for i in (1..rank).rev() {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                order.swap(i, (state >> 33) as usize % (i + 1));
+            }
+            lu_pivot_rows(reduced.matrix(), Some(&order), scale).ok()
+        })
+        .collect();
+    // The starts are independent: run them in parallel, keep the first best (deterministic).
+    let outcomes: Vec<Option<MaxVolSelection>> = initial_rows
+        .par_iter()
+        .map(|initial| refine(&reduced, initial).ok().map(|(local, _)| local))
+        .collect();
+    for local in outcomes.into_iter().flatten() {
+        if best
+            .as_ref()
+            .is_none_or(|b| local.log_abs_det > b.log_abs_det)
+        {
+            best = Some(MaxVolSelection {
                 rows: local.rows.iter().map(|&r| candidates[r]).collect(),
                 log_abs_det: local.log_abs_det,
                 swaps: local.swaps,
-            };
-            improved = true;
+            });
         }
     }
-    if improved {
-        // Make the winner dominant on all rows (usually zero swaps).
-        let swaps = best.swaps;
-        let (mut full, _) = refine(phi, &best.rows)?;
-        full.swaps += swaps;
-        best = full;
+    let mut best = best.ok_or(RigError::Singular {
+        what: "cage coordinates Φ (rank deficient: MaxVol needs rank #C)",
+    })?;
+    // Later rounds: add the rows of Φ that violate dominance, refine from the current best.
+    loop {
+        let violators = dominance_violations(phi, &best.rows)?;
+        let before = candidates.len();
+        candidates = merged(&candidates, &violators);
+        if candidates.len() == before {
+            // No violators (or, through rounding at the threshold, only rows the refinement
+            // on the candidates already accepted).
+            break;
+        }
+        let reduced = CageCoords::from_matrix(phi.select_rows(&candidates))?;
+        let (local, _) = refine(&reduced, &local_rows(&candidates, &best.rows))?;
+        best = MaxVolSelection {
+            rows: local.rows.iter().map(|&r| candidates[r]).collect(),
+            log_abs_det: local.log_abs_det,
+            swaps: best.swaps + local.swaps,
+        };
     }
     Ok(best)
 }
 
-/// Union over columns k of the rows with the largest |B[i, k]|, sorted.
-fn candidate_rows(b: &Mat<f64>) -> Vec<usize> {
-    let mut rows: Vec<usize> = (0..b.ncols())
+/// Sorted union of two row lists (the first sorted and deduplicated).
+fn merged(sorted: &[usize], extra: &[usize]) -> Vec<usize> {
+    let mut rows: Vec<usize> = sorted.iter().chain(extra).copied().collect();
+    rows.sort_unstable();
+    rows.dedup();
+    rows
+}
+
+/// Union over columns k of the `per_column` rows with the largest |Φ[i, k]|, sorted.
+fn top_rows_per_column(phi: &CageCoords, per_column: usize) -> Vec<usize> {
+    let rank = phi.num_cage_vertices();
+    let mut rows: Vec<usize> = (0..rank)
         .into_par_iter()
         .flat_map_iter(|k| {
-            let col = column(b, k);
-            let mut order: Vec<usize> = (0..col.len()).collect();
-            let m = CANDIDATES_PER_COLUMN.min(col.len());
-            if m < col.len() {
-                order.select_nth_unstable_by(m, |&x, &y| col[y].abs().total_cmp(&col[x].abs()));
-                order.truncate(m);
+            let col = phi.column(k);
+            let m = per_column.min(col.len());
+            // Streaming top-m: `kept` holds (|value|, row); replace its minimum when beaten.
+            let mut kept: Vec<(f64, usize)> = (0..m).map(|i| (col[i].abs(), i)).collect();
+            let minimum = |kept: &[(f64, usize)]| {
+                kept.iter()
+                    .enumerate()
+                    .fold(
+                        (0, f64::INFINITY),
+                        |a, (j, e)| if e.0 < a.1 { (j, e.0) } else { a },
+                    )
+            };
+            let (mut slot, mut floor) = minimum(&kept);
+            for (i, v) in col.iter().enumerate().skip(m) {
+                if v.abs() > floor {
+                    kept[slot] = (v.abs(), i);
+                    (slot, floor) = minimum(&kept);
+                }
             }
-            order
+            kept.into_iter().map(|(_, i)| i)
         })
         .collect();
     rows.sort_unstable();
     rows.dedup();
     rows
+}
+
+/// Rows i of Φ with max_j |B[i, j]| > [`SWAP_THRESHOLD`], B = Φ Φ̃⁻¹ (`#V × #C`) computed in
+/// parallel blocks without storing it; at most [`CANDIDATES_PER_COLUMN`]·#C of them (largest
+/// first). Errors if the selected submatrix is singular.
+fn dominance_violations(phi: &CageCoords, rows: &[usize]) -> Result<Vec<usize>, RigError> {
+    let selected = phi.select_rows(rows);
+    let lu = selected.partial_piv_lu();
+    let inverse = lu.inverse();
+    if !inverse.col_iter().all(|c| c.iter().all(|v| v.is_finite())) {
+        return Err(RigError::Singular {
+            what: "MaxVol submatrix",
+        });
+    }
+    let matrix = phi.matrix();
+    let (num_rows, rank) = (matrix.nrows(), matrix.ncols());
+    let mut violators: Vec<(f64, usize)> = (0..num_rows.div_ceil(CHECK_BLOCK))
+        .into_par_iter()
+        .map_init(
+            || Mat::<f64>::zeros(CHECK_BLOCK, rank),
+            |buffer, block| {
+                let start = block * CHECK_BLOCK;
+                let height = CHECK_BLOCK.min(num_rows - start);
+                let mut b = buffer.as_mut().subrows_mut(0, height);
+                faer::linalg::matmul::matmul(
+                    b.as_mut(),
+                    faer::Accum::Replace,
+                    matrix.as_ref().subrows(start, height),
+                    inverse.as_ref(),
+                    1.0,
+                    faer::Par::Seq,
+                );
+                let mut row_max = vec![0.0f64; height];
+                for k in 0..rank {
+                    let col = b.as_ref().col(k);
+                    for (m, v) in row_max.iter_mut().zip(col.iter()) {
+                        *m = m.max(v.abs());
+                    }
+                }
+                row_max
+                    .into_iter()
+                    .enumerate()
+                    .filter(|(_, m)| *m > SWAP_THRESHOLD)
+                    .map(|(i, m)| (m, start + i))
+                    .collect::<Vec<_>>()
+            },
+        )
+        .flatten()
+        .collect();
+    violators.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+    violators.truncate(CANDIDATES_PER_COLUMN * rank);
+    Ok(violators.into_iter().map(|(_, i)| i).collect())
 }
 
 /// The first #C pivot rows of a row-pivoted LU of Φ (columns taken in `order` if given).
@@ -209,11 +323,29 @@ fn refine(
     // B = Φ Φ̃⁻¹.
     let selected = phi.select_rows(&rows);
     let inverse = selected.partial_piv_lu().inverse();
-    let mut b: Mat<f64> = matrix * &inverse;
+    // Small problems (the candidate rows) run sequentially: several starts run in parallel.
+    let parallel = num_rows * rank >= PARALLEL_ENTRIES;
+    let mut b = Mat::<f64>::zeros(num_rows, rank);
+    faer::linalg::matmul::matmul(
+        b.as_mut(),
+        faer::Accum::Replace,
+        matrix.as_ref(),
+        inverse.as_ref(),
+        1.0,
+        if parallel {
+            faer::get_global_parallelism()
+        } else {
+            faer::Par::Seq
+        },
+    );
     let mut pivot_column = vec![0.0; num_rows];
     let mut pivot_row = vec![0.0; rank];
     let mut swaps = 0;
-    let mut best = argmax_abs(&b);
+    let mut best = if parallel {
+        argmax_abs(&b)
+    } else {
+        rank_one_update_and_argmax_seq(&mut b, &vec![0.0; num_rows], &pivot_row_zero(rank))
+    };
     while best.2 > SWAP_THRESHOLD && swaps < MAX_SWAPS_PER_COLUMN * rank {
         let (i, j, _) = best;
         let pivot = b[(i, j)];
@@ -223,7 +355,11 @@ fn refine(
         }
         rows[j] = i;
         swaps += 1;
-        best = rank_one_update_and_argmax(&mut b, &pivot_column, &pivot_row);
+        best = if parallel {
+            rank_one_update_and_argmax(&mut b, &pivot_column, &pivot_row)
+        } else {
+            rank_one_update_and_argmax_seq(&mut b, &pivot_column, &pivot_row)
+        };
     }
     let log_abs_det = log_abs_det_of_rows(phi, &rows)?;
     Ok((
@@ -322,6 +458,35 @@ fn rank_one_update_and_argmax(
             best
         })
         .reduce(|| (0, 0, -1.0), max_entry)
+}
+
+fn pivot_row_zero(rank: usize) -> Vec<f64> {
+    vec![0.0; rank]
+}
+
+/// Sequential [`rank_one_update_and_argmax`] (a zero `pivot_row` just finds the argmax).
+fn rank_one_update_and_argmax_seq(
+    b: &mut Mat<f64>,
+    pivot_column: &[f64],
+    pivot_row: &[f64],
+) -> (usize, usize, f64) {
+    let mut best = (0, 0, -1.0);
+    for (k, &factor) in pivot_row.iter().enumerate() {
+        let Some(col) = b.as_mut().col_mut(k).try_as_col_major_mut() else {
+            continue;
+        };
+        let mut local = (0, -1.0f64);
+        for (r, (v, s)) in col.as_slice_mut().iter_mut().zip(pivot_column).enumerate() {
+            *v -= s * factor;
+            if v.abs() > local.1 {
+                local = (r, v.abs());
+            }
+        }
+        if local.1 > best.2 {
+            best = (local.0, k, local.1);
+        }
+    }
+    best
 }
 
 #[cfg(test)]

@@ -4,3 +4,4 @@ pub mod maxvol;
 pub mod mec;
 pub mod mec_signed;
 pub mod mvc;
+mod mvc_batch;

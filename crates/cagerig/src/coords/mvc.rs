@@ -26,12 +26,13 @@ use faer::Mat;
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::mvc_batch::{BatchScratch, evaluate_rows};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::mesh::TriMesh;
 
 /// Dimensionless tolerance for the degenerate cases (same value as Ju et al.'s reference code).
-const EPS: f64 = 1e-8;
+pub(crate) const EPS: f64 = 1e-8;
 
 /// Points handled per parallel task by [`compute_cage_coords`].
 const POINT_BLOCK: usize = 256;
@@ -102,13 +103,13 @@ pub fn mean_value_coordinates(
 /// ([`MvcEvaluator::evaluate`] shares the `atan2` of each edge between its triangles).
 #[derive(Debug, Clone)]
 pub struct MvcEvaluator<'a> {
-    positions: &'a [DVec3],
-    triangles: &'a [[u32; 3]],
+    pub(crate) positions: &'a [DVec3],
+    pub(crate) triangles: &'a [[u32; 3]],
     /// Unique undirected edges `(a, b)`, `a < b`, `#E`.
-    edges: Vec<[u32; 2]>,
+    pub(crate) edges: Vec<[u32; 2]>,
     /// Per triangle, per corner j: the edge opposite j (`(j+1, j+2)`) and whether it is stored
     /// reversed (`a > b` in triangle order), `#F`.
-    triangle_edges: Vec<[(u32, bool); 3]>,
+    pub(crate) triangle_edges: Vec<[(u32, bool); 3]>,
 }
 
 /// Per-thread scratch for [`MvcEvaluator::evaluate`]: per-vertex unit vectors and distances and
@@ -240,7 +241,8 @@ impl<'a> MvcEvaluator<'a> {
 }
 
 /// Cage coordinates Φ (`#points × #C`, Eq. 7) of `points` w.r.t. the rest cage: MVC of every
-/// point, computed in parallel blocks of rows. `progress` (if any) is called from worker threads
+/// point, computed in parallel blocks of rows, several points at a time (SIMD across points; the
+/// points near the cage surface go through [`MvcEvaluator::evaluate`]). `progress` (if any) is called from worker threads
 /// with the number of points finished so far (every [`POINT_BLOCK`] points).
 pub fn compute_cage_coords(
     cage: &TriMesh,
@@ -264,16 +266,12 @@ pub fn compute_cage_coords(
         .par_row_chunks_mut(POINT_BLOCK)
         .enumerate()
         .for_each_init(
-            || (evaluator.scratch(), vec![0.0; num_cage]),
-            |(scratch, row), (block, mut rows)| {
+            || BatchScratch::new(&evaluator),
+            |scratch, (block, rows)| {
                 let start = block * POINT_BLOCK;
-                for r in 0..rows.nrows() {
-                    evaluator.evaluate(points[start + r], scratch, row);
-                    for (k, &w) in row.iter().enumerate() {
-                        rows[(r, k)] = w;
-                    }
-                }
-                let finished = done.fetch_add(rows.nrows(), Ordering::Relaxed) + rows.nrows();
+                let count = rows.nrows();
+                evaluate_rows(&evaluator, &points[start..start + count], scratch, rows);
+                let finished = done.fetch_add(count, Ordering::Relaxed) + count;
                 if let Some(report) = progress {
                     report(finished);
                 }
@@ -661,6 +659,53 @@ pub(crate) mod tests {
             }
         }
         assert!(phi.max_partition_error() < 1e-12);
+    }
+
+    #[test]
+    fn cage_coords_batches_handle_special_points() {
+        // Batched evaluation with vertex / edge / face / near-surface / outside points mixed in
+        // with regular ones must agree with the robust per-point function.
+        let radii: Vec<f64> = (0..42)
+            .map(|i| 1.0 + 0.3 * ((i * 7 % 11) as f64 / 11.0))
+            .collect();
+        let (pos, tris) = icosphere(&radii);
+        let cage = TriMesh::new(pos.clone(), tris.clone()).unwrap();
+        let face = tris[17].map(|i| pos[i as usize]);
+        let normal = (face[1] - face[0]).cross(face[2] - face[0]).normalize();
+        let mut points = Vec::new();
+        for i in 0..37 {
+            let f = i as f64;
+            points.push(DVec3::new((f * 0.37).sin(), (f * 0.73).cos(), (f * 0.11).sin()) * 0.6);
+            match i % 6 {
+                0 => points.push(pos[i % pos.len()]),
+                1 => points.push(0.4 * face[0] + 0.6 * face[1]),
+                2 => points.push(0.2 * face[0] + 0.5 * face[1] + 0.3 * face[2]),
+                3 => points.push(face[2] + 1e-10 * normal),
+                4 => points.push(DVec3::new(5.0, -3.0, 2.0) * (1.0 + f)),
+                _ => points.push(0.3 * face[0] + 0.7 * face[2] - 1e-9 * normal),
+            }
+        }
+        let phi = compute_cage_coords(&cage, &points, None).unwrap();
+        let mut w = vec![0.0; pos.len()];
+        let mut row = vec![0.0; pos.len()];
+        for (i, &x) in points.iter().enumerate() {
+            mean_value_coordinates(&pos, &tris, x, &mut w);
+            phi.row_into(i, &mut row);
+            let reproduction = reproduction_error(&pos, &row, x);
+            assert!(
+                reproduction < 1e-9 * (1.0 + x.length()),
+                "point {i}: {reproduction}"
+            );
+            // Far outside, the weights cancel (|w| ≫ 1): compare relative to their size.
+            let size = w.iter().map(|v| v.abs()).sum::<f64>();
+            for (k, &wk) in w.iter().enumerate() {
+                assert!(
+                    (row[k] - wk).abs() < 1e-10 * size.powi(2),
+                    "point {i} ({x}), column {k}: {} vs {wk}",
+                    row[k]
+                );
+            }
+        }
     }
 
     proptest! {
