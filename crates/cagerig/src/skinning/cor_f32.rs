@@ -69,7 +69,7 @@ fn skin_point(
         z += a.matrix3.z_axis * w;
         t += a.translation * w;
         let q = rotations[j];
-        rotation = rotation + q * w.copysign(pivot_rotation.dot(q));
+        rotation += q * w.copysign(pivot_rotation.dot(q));
     }
     let rotation = rotation * (1.0 / rotation.length());
     rotation.mul_vec3a(offset) + x * centre_local.x + y * centre_local.y + z * centre_local.z + t

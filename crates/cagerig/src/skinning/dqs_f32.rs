@@ -67,8 +67,8 @@ fn skin_point(
     for (&j, &w) in joints.iter().zip(weights) {
         let q = &joint_dual_quats[usize::from(j)];
         let signed = w.copysign(pivot_real.dot(q.real));
-        real = real + q.real * signed;
-        dual = dual + q.dual * signed;
+        real += q.real * signed;
+        dual += q.dual * signed;
     }
     let inv_norm = 1.0 / real.length();
     let real = real * inv_norm;

@@ -157,9 +157,10 @@ mod tests {
     fn single_bone_rotation_about_a_point_and_unweighted_vertex() {
         let (w, _) = SkinWeights::from_triplets(3, 1, [(0, 0, 1.0), (1, 0, 1.0)]).unwrap();
         let pivot = DVec3::new(101.0, 0.0, 0.0);
-        let t = [DAffine3::from_translation(pivot)
+        let about_pivot = DAffine3::from_translation(pivot)
             * DAffine3::from_rotation_z(FRAC_PI_2)
-            * DAffine3::from_translation(-pivot)];
+            * DAffine3::from_translation(-pivot);
+        let t = [about_pivot];
         let rest = [
             DVec3::new(102.0, 0.0, 0.0),
             DVec3::new(101.0, 0.0, 3.0),
