@@ -3,8 +3,8 @@
 //!
 //! The rest mesh M is **stored** in the kernel (as f32 offsets from a local origin, see
 //! [`super::compact_weights`]): call [`LbsF32::set_rest_positions`] whenever the rest cage is
-//! edited. Accuracy: on the 3× subdivided Arm at step ii the result is within 1e-6 of the bounding
-//! box diagonal of [`super::LinearBlendSkinning`] (see the tests); use the f64 kernel where exact
+//! edited. Accuracy: on the 3× subdivided Arm at step ii max |f32 − f64| is 3.1e-7
+//! of the bounding-box diagonal vs [`super::LinearBlendSkinning`] (tests assert ≤ 2e-6); use the f64 kernel where exact
 //! results are needed (conformance, CageRev/CageUp solves).
 
 use glam::{Affine3A, DAffine3, DVec3, Vec3, Vec3A};
