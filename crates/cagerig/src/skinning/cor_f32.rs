@@ -10,10 +10,9 @@
 //! diagonal on the 3× subdivided Arm at step ii (tests assert ≤ 2e-6).
 
 use glam::{Affine3A, DAffine3, DVec3, Quat, Vec3, Vec3A};
-use rayon::prelude::*;
 
-use super::VERTEX_GRAIN_F32;
-use super::compact_weights::{CompactWeights, affine_from_local, local_origin};
+use super::compact_weights::{CountSortedWeights, VertexKernel, affine_from_local, local_origin};
+use super::dqs_f32::rotate_unnormalised;
 use super::rigid_rotation::rotation_quaternion;
 use crate::{RigError, SkinWeights};
 
@@ -36,12 +35,39 @@ impl CorF32Scratch {
 /// Precomputed f32 CoR skinning: compact Ω, pivots, centres `p_i − o` and offsets `v_i − p_i`.
 #[derive(Debug, Clone)]
 pub struct CorF32 {
-    weights: CompactWeights,
+    weights: CountSortedWeights,
     origin: DVec3,
-    /// `p_i − o` (`v_i − o` for a vertex without CoR), `#V`.
-    centres_local: Vec<Vec3A>,
-    /// `v_i − p_i` (zero for a vertex without CoR), `#V`.
-    offsets: Vec<Vec3A>,
+    /// `[p_i − o, v_i − p_i]` (`[v_i − o, 0]` for a vertex without CoR), `#V`, sorted order.
+    centres_and_offsets: Vec<[Vec3A; 2]>,
+}
+
+/// Per-frame CoR rule: input = `[p − o, v − p]`.
+struct CorKernel<'a> {
+    transforms: &'a [Affine3A],
+    rotations: &'a [Quat],
+    origin: Vec3A,
+}
+
+impl VertexKernel for CorKernel<'_> {
+    type Input = [Vec3A; 2];
+
+    #[inline(always)]
+    fn skin(&self, joints: &[u16], weights: &[f32], pivot: u16, [c, d]: [Vec3A; 2]) -> Vec3A {
+        skin_point(
+            joints,
+            weights,
+            usize::from(pivot),
+            self.transforms,
+            self.rotations,
+            c,
+            d,
+        )
+    }
+
+    #[inline(always)]
+    fn unweighted(&self, [c, d]: [Vec3A; 2]) -> Vec3A {
+        c + d + self.origin
+    }
 }
 
 /// CoR image of one vertex: `R (v − p) + (Σ ω A) (p − o)`.
@@ -71,8 +97,9 @@ fn skin_point(
         let q = rotations[j];
         rotation += q * w.copysign(pivot_rotation.dot(q));
     }
-    let rotation = rotation * (1.0 / rotation.length());
-    rotation.mul_vec3a(offset) + x * centre_local.x + y * centre_local.y + z * centre_local.z + t
+    let (v, w) = (Vec3A::new(rotation.x, rotation.y, rotation.z), rotation.w);
+    let rotated = rotate_unnormalised(v, w, offset) * (1.0 / (v.length_squared() + w * w));
+    rotated + x * centre_local.x + y * centre_local.y + z * centre_local.z + t
 }
 
 impl CorF32 {
@@ -83,11 +110,11 @@ impl CorF32 {
         rest_positions: &[DVec3],
         centres: &[DVec3],
     ) -> Result<Self, RigError> {
+        let weights = CountSortedWeights::new(skin_weights)?;
         let mut cor = Self {
-            weights: CompactWeights::new(skin_weights)?,
+            centres_and_offsets: vec![[Vec3A::ZERO; 2]; weights.num_vertices()],
+            weights,
             origin: DVec3::ZERO,
-            centres_local: Vec::new(),
-            offsets: Vec::new(),
         };
         cor.set_rest_positions(rest_positions, centres)?;
         Ok(cor)
@@ -102,7 +129,7 @@ impl CorF32 {
     }
 
     /// Replaces the stored rest mesh M and centres p_i (both `#V`; after a rest-cage edit).
-    /// Parallel, reuses storage.
+    /// Parallel, no allocation.
     pub fn set_rest_positions(
         &mut self,
         rest_positions: &[DVec3],
@@ -125,18 +152,18 @@ impl CorF32 {
         }
         self.origin = local_origin(rest_positions);
         let origin = self.origin;
-        self.centres_local.resize(rest_positions.len(), Vec3A::ZERO);
-        self.offsets.resize(rest_positions.len(), Vec3A::ZERO);
-        self.centres_local
-            .par_iter_mut()
-            .zip(self.offsets.par_iter_mut())
-            .zip(rest_positions.par_iter().zip(centres.par_iter()))
-            .with_min_len(VERTEX_GRAIN_F32)
-            .for_each(|((centre_local, offset), (&v, &c))| {
-                let c = if c.is_finite() { c } else { v };
-                *centre_local = Vec3A::from((c - origin).as_vec3());
-                *offset = Vec3A::from((v - c).as_vec3());
-            });
+        self.weights.gather(&mut self.centres_and_offsets, |i| {
+            let v = rest_positions[i];
+            let c = if centres[i].is_finite() {
+                centres[i]
+            } else {
+                v
+            };
+            [
+                Vec3A::from((c - origin).as_vec3()),
+                Vec3A::from((v - c).as_vec3()),
+            ]
+        });
         Ok(())
     }
 
@@ -171,42 +198,12 @@ impl CorF32 {
     /// If a slice length does not match `#J` / `#V`.
     pub fn apply(&self, transforms: &[DAffine3], scratch: &mut CorF32Scratch, out: &mut [Vec3]) {
         self.prepare(transforms, scratch);
-        assert_eq!(out.len(), self.num_vertices(), "CoR f32: out");
-        let (affines, rotations) = (&scratch.transforms[..], &scratch.rotations[..]);
-        let w = &self.weights;
-        let origin = Vec3A::from(self.origin.as_vec3());
-        out.par_chunks_mut(VERTEX_GRAIN_F32)
-            .zip(self.centres_local.par_chunks(VERTEX_GRAIN_F32))
-            .zip(self.offsets.par_chunks(VERTEX_GRAIN_F32))
-            .enumerate()
-            .for_each(|(chunk, ((out_chunk, centre_chunk), offset_chunk))| {
-                let first = chunk * VERTEX_GRAIN_F32;
-                let row_start = &w.row_start[first..=first + out_chunk.len()];
-                let pivots = &w.pivot[first..first + out_chunk.len()];
-                for ((((o, &c), &d), bounds), &pivot) in out_chunk
-                    .iter_mut()
-                    .zip(centre_chunk)
-                    .zip(offset_chunk)
-                    .zip(row_start.windows(2))
-                    .zip(pivots)
-                {
-                    let range = bounds[0] as usize..bounds[1] as usize;
-                    *o = if range.is_empty() {
-                        (c + d + origin).into()
-                    } else {
-                        skin_point(
-                            &w.joints[range.clone()],
-                            &w.weights[range],
-                            usize::from(pivot),
-                            affines,
-                            rotations,
-                            c,
-                            d,
-                        )
-                        .into()
-                    };
-                }
-            });
+        let kernel = CorKernel {
+            transforms: &scratch.transforms,
+            rotations: &scratch.rotations,
+            origin: Vec3A::from(self.origin.as_vec3()),
+        };
+        self.weights.skin(&kernel, &self.centres_and_offsets, out);
     }
 }
 

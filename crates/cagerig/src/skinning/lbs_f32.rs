@@ -8,10 +8,8 @@
 //! results are needed (conformance, CageRev/CageUp solves).
 
 use glam::{Affine3A, DAffine3, DVec3, Vec3, Vec3A};
-use rayon::prelude::*;
 
-use super::VERTEX_GRAIN_F32;
-use super::compact_weights::{CompactWeights, affine_from_local, local_origin};
+use super::compact_weights::{CountSortedWeights, VertexKernel, affine_from_local, local_origin};
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: the `#J` transforms `T_j ∘ translate(o)` in f32.
@@ -28,15 +26,16 @@ impl LbsF32Scratch {
     }
 }
 
-/// Precomputed f32 LBS: compact Ω and the rest mesh M (`#V`, f32, relative to a local origin).
+/// Precomputed f32 LBS: count-sorted compact Ω and the rest mesh M (`#V`, f32, relative to a
+/// local origin, in sorted order; see [`super::compact_weights`]).
 #[derive(Debug, Clone)]
 pub struct LbsF32 {
-    weights: CompactWeights,
+    weights: CountSortedWeights,
     origin: DVec3,
     rest_local: Vec<Vec3A>,
 }
 
-/// `(Σ_j ω_j A_j) p` for the influences of one vertex (`A_j` local-to-world, f32).
+/// `Σ_j ω_j A_j` for the influences of one vertex (`A_j` local-to-world, f32).
 #[inline(always)]
 pub(crate) fn blend_affine_f32(
     joints: &[u16],
@@ -60,13 +59,34 @@ pub(crate) fn blend_affine_f32(
     }
 }
 
+/// Per-frame LBS rule: input = local rest position `v − o`.
+struct LbsKernel<'a> {
+    transforms: &'a [Affine3A],
+    origin: Vec3A,
+}
+
+impl VertexKernel for LbsKernel<'_> {
+    type Input = Vec3A;
+
+    #[inline(always)]
+    fn skin(&self, joints: &[u16], weights: &[f32], _pivot: u16, rest: Vec3A) -> Vec3A {
+        blend_affine_f32(joints, weights, self.transforms).transform_point3a(rest)
+    }
+
+    #[inline(always)]
+    fn unweighted(&self, rest: Vec3A) -> Vec3A {
+        rest + self.origin
+    }
+}
+
 impl LbsF32 {
     /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ or `#J` > 65 536.
     pub fn new(skin_weights: &SkinWeights, rest_positions: &[DVec3]) -> Result<Self, RigError> {
+        let weights = CountSortedWeights::new(skin_weights)?;
         let mut lbs = Self {
-            weights: CompactWeights::new(skin_weights)?,
+            rest_local: vec![Vec3A::ZERO; weights.num_vertices()],
+            weights,
             origin: DVec3::ZERO,
-            rest_local: Vec::new(),
         };
         lbs.set_rest_positions(rest_positions)?;
         Ok(lbs)
@@ -80,7 +100,7 @@ impl LbsF32 {
         self.weights.num_joints
     }
 
-    /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, reuses storage.
+    /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
     pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
         if rest_positions.len() != self.num_vertices() {
             return Err(RigError::SizeMismatch {
@@ -91,12 +111,9 @@ impl LbsF32 {
         }
         self.origin = local_origin(rest_positions);
         let origin = self.origin;
-        self.rest_local.resize(rest_positions.len(), Vec3A::ZERO);
-        self.rest_local
-            .par_iter_mut()
-            .zip(rest_positions.par_iter())
-            .with_min_len(VERTEX_GRAIN_F32)
-            .for_each(|(o, p)| *o = Vec3A::from((*p - origin).as_vec3()));
+        self.weights.gather(&mut self.rest_local, |v| {
+            Vec3A::from((rest_positions[v] - origin).as_vec3())
+        });
         Ok(())
     }
 
@@ -120,31 +137,11 @@ impl LbsF32 {
     /// If a slice length does not match `#J` / `#V`.
     pub fn apply(&self, transforms: &[DAffine3], scratch: &mut LbsF32Scratch, out: &mut [Vec3]) {
         self.prepare(transforms, scratch);
-        assert_eq!(out.len(), self.num_vertices(), "LBS f32: out");
-        let transforms = &scratch.transforms[..];
-        let w = &self.weights;
-        let origin = Vec3A::from(self.origin.as_vec3());
-        out.par_chunks_mut(VERTEX_GRAIN_F32)
-            .zip(self.rest_local.par_chunks(VERTEX_GRAIN_F32))
-            .enumerate()
-            .for_each(|(chunk, (out_chunk, rest_chunk))| {
-                let first = chunk * VERTEX_GRAIN_F32;
-                let row_start = &w.row_start[first..=first + out_chunk.len()];
-                for ((o, &p), bounds) in out_chunk
-                    .iter_mut()
-                    .zip(rest_chunk)
-                    .zip(row_start.windows(2))
-                {
-                    let range = bounds[0] as usize..bounds[1] as usize;
-                    *o = if range.is_empty() {
-                        (p + origin).into()
-                    } else {
-                        blend_affine_f32(&w.joints[range.clone()], &w.weights[range], transforms)
-                            .transform_point3a(p)
-                            .into()
-                    };
-                }
-            });
+        let kernel = LbsKernel {
+            transforms: &scratch.transforms,
+            origin: Vec3A::from(self.origin.as_vec3()),
+        };
+        self.weights.skin(&kernel, &self.rest_local, out);
     }
 }
 
