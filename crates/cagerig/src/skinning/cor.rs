@@ -19,7 +19,7 @@ use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rayon::prelude::*;
 
 use super::VERTEX_GRAIN;
-use super::lbs::blend_affine;
+use super::lbs::{blend_affine_cols, transform_point_cols};
 use super::rigid_rotation::rotation_quaternion;
 use crate::SkinWeights;
 
@@ -61,12 +61,15 @@ pub(crate) fn blend_rotations(
     joint_rotations: &[DQuat],
 ) -> DQuat {
     let pivot_rotation = joint_rotations[pivot];
-    let mut sum = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+    let mut sum = [0.0f64; 4];
     for (&j, &w) in joints.iter().zip(weights) {
         let q = joint_rotations[j as usize];
         let signed = w.copysign(pivot_rotation.dot(q));
-        sum += q * signed;
+        for (s, x) in sum.iter_mut().zip(q.to_array()) {
+            *s += x * signed;
+        }
     }
+    let sum = DQuat::from_array(sum);
     sum * (1.0 / sum.length())
 }
 
@@ -145,28 +148,30 @@ impl CorSkinning {
             .enumerate()
             .for_each(|(chunk, ((out_chunk, rest_chunk), centre_chunk))| {
                 let first = chunk * VERTEX_GRAIN;
-                for (k, ((o, &p), &c)) in out_chunk
+                let row_start = &self.row_start[first..=first + out_chunk.len()];
+                let pivots = &self.pivot[first..first + out_chunk.len()];
+                for ((((o, &p), &c), bounds), &pivot) in out_chunk
                     .iter_mut()
                     .zip(rest_chunk)
                     .zip(centre_chunk)
-                    .enumerate()
+                    .zip(row_start.windows(2))
+                    .zip(pivots)
                 {
-                    let v = first + k;
-                    let range = self.row_start[v] as usize..self.row_start[v + 1] as usize;
+                    let range = bounds[0] as usize..bounds[1] as usize;
                     if range.is_empty() {
                         *o = p;
                         continue;
                     }
                     let joints = &self.joints[range.clone()];
                     let weights = &self.weights[range];
-                    let blended = blend_affine(joints, weights, transforms);
+                    let blended = blend_affine_cols(joints, weights, transforms);
                     if !c.is_finite() {
-                        *o = blended.transform_point3(p);
+                        *o = transform_point_cols(&blended, p);
                         continue;
                     }
                     let rotation =
-                        blend_rotations(joints, weights, self.pivot[v] as usize, joint_rotations);
-                    *o = rotation.mul_vec3(p - c) + blended.transform_point3(c);
+                        blend_rotations(joints, weights, pivot as usize, joint_rotations);
+                    *o = rotation.mul_vec3(p - c) + transform_point_cols(&blended, c);
                 }
             });
     }

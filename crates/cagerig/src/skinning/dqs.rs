@@ -96,18 +96,23 @@ pub(crate) fn blend_dual_quats(
     joint_dual_quats: &[DualQuat],
 ) -> DualQuat {
     let pivot_real = joint_dual_quats[pivot].real;
-    let mut real = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
-    let mut dual = real;
+    let mut real = [0.0f64; 4];
+    let mut dual = [0.0f64; 4];
     for (&j, &w) in joints.iter().zip(weights) {
         let q = &joint_dual_quats[j as usize];
         let signed = w.copysign(pivot_real.dot(q.real));
-        real += q.real * signed;
-        dual += q.dual * signed;
+        for (sum, x) in real.iter_mut().zip(q.real.to_array()) {
+            *sum += x * signed;
+        }
+        for (sum, x) in dual.iter_mut().zip(q.dual.to_array()) {
+            *sum += x * signed;
+        }
     }
+    let real = DQuat::from_array(real);
     let inv_norm = 1.0 / real.length();
     DualQuat {
         real: real * inv_norm,
-        dual: dual * inv_norm,
+        dual: DQuat::from_array(dual) * inv_norm,
     }
 }
 
@@ -173,16 +178,22 @@ impl DualQuaternionSkinning {
             .enumerate()
             .for_each(|(chunk, (out_chunk, rest_chunk))| {
                 let first = chunk * VERTEX_GRAIN;
-                for (k, (o, &p)) in out_chunk.iter_mut().zip(rest_chunk).enumerate() {
-                    let v = first + k;
-                    let range = self.row_start[v] as usize..self.row_start[v + 1] as usize;
+                let row_start = &self.row_start[first..=first + out_chunk.len()];
+                let pivots = &self.pivot[first..first + out_chunk.len()];
+                for (((o, &p), bounds), &pivot) in out_chunk
+                    .iter_mut()
+                    .zip(rest_chunk)
+                    .zip(row_start.windows(2))
+                    .zip(pivots)
+                {
+                    let range = bounds[0] as usize..bounds[1] as usize;
                     *o = if range.is_empty() {
                         p
                     } else {
                         blend_dual_quats(
                             &self.joints[range.clone()],
                             &self.weights[range],
-                            self.pivot[v] as usize,
+                            pivot as usize,
                             joint_dual_quats,
                         )
                         .transform_point3(p)

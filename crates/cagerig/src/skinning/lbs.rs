@@ -15,24 +15,41 @@ pub struct LinearBlendSkinning {
     weights: Vec<f64>,
 }
 
+/// `Σ_j ω_ij T_j` for the influences of one vertex as 12 column-major numbers
+/// (`[x_axis, y_axis, z_axis, translation]`, the layout of [`DAffine3::to_cols_array`]); an affine
+/// map, not rigid in general. A fixed-length accumulation LLVM vectorises; the per-element order
+/// of operations is that of the glam vector code it replaces (bit-identical results).
+#[inline(always)]
+pub(crate) fn blend_affine_cols(
+    joints: &[u32],
+    weights: &[f64],
+    transforms: &[DAffine3],
+) -> [f64; 12] {
+    let mut blended = [0.0f64; 12];
+    for (&j, &w) in joints.iter().zip(weights) {
+        let a = transforms[j as usize].to_cols_array();
+        for (b, x) in blended.iter_mut().zip(a) {
+            *b += w * x;
+        }
+    }
+    blended
+}
+
+/// Applies column-major affine numbers (see [`blend_affine_cols`]) to a point:
+/// `((x p.x + y p.y) + z p.z) + t`, the evaluation order of [`DAffine3::transform_point3`].
+#[inline(always)]
+pub(crate) fn transform_point_cols(a: &[f64; 12], p: DVec3) -> DVec3 {
+    DVec3::new(
+        a[0] * p.x + a[3] * p.y + a[6] * p.z + a[9],
+        a[1] * p.x + a[4] * p.y + a[7] * p.z + a[10],
+        a[2] * p.x + a[5] * p.y + a[8] * p.z + a[11],
+    )
+}
+
 /// `Σ_j ω_ij T_j` for the influences of one vertex (an affine map, not rigid in general).
 #[inline(always)]
 pub(crate) fn blend_affine(joints: &[u32], weights: &[f64], transforms: &[DAffine3]) -> DAffine3 {
-    let mut x = DVec3::ZERO;
-    let mut y = DVec3::ZERO;
-    let mut z = DVec3::ZERO;
-    let mut t = DVec3::ZERO;
-    for (&j, &w) in joints.iter().zip(weights) {
-        let a = &transforms[j as usize];
-        x += w * a.matrix3.x_axis;
-        y += w * a.matrix3.y_axis;
-        z += w * a.matrix3.z_axis;
-        t += w * a.translation;
-    }
-    DAffine3 {
-        matrix3: DMat3::from_cols(x, y, z),
-        translation: t,
-    }
+    DAffine3::from_cols_array(&blend_affine_cols(joints, weights, transforms))
 }
 
 impl LinearBlendSkinning {
@@ -67,7 +84,7 @@ impl LinearBlendSkinning {
         if joints.is_empty() {
             return rest;
         }
-        blend_affine(joints, weights, transforms).transform_point3(rest)
+        transform_point_cols(&blend_affine_cols(joints, weights, transforms), rest)
     }
 
     /// M' = LBS(T, Ω, M) (Eq. 2–3). `transforms`: `#J`; `rest_positions`, `out`: `#V`.
@@ -83,8 +100,23 @@ impl LinearBlendSkinning {
             .enumerate()
             .for_each(|(chunk, (out_chunk, rest_chunk))| {
                 let first = chunk * VERTEX_GRAIN;
-                for (k, (o, &p)) in out_chunk.iter_mut().zip(rest_chunk).enumerate() {
-                    *o = self.skin_vertex(first + k, transforms, p);
+                let row_start = &self.row_start[first..=first + out_chunk.len()];
+                for ((o, &p), bounds) in out_chunk
+                    .iter_mut()
+                    .zip(rest_chunk)
+                    .zip(row_start.windows(2))
+                {
+                    let range = bounds[0] as usize..bounds[1] as usize;
+                    *o = if range.is_empty() {
+                        p
+                    } else {
+                        let blended = blend_affine_cols(
+                            &self.joints[range.clone()],
+                            &self.weights[range],
+                            transforms,
+                        );
+                        transform_point_cols(&blended, p)
+                    };
                 }
             });
     }

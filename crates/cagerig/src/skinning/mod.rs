@@ -5,11 +5,15 @@
 //! is edited) and writes M' into a caller-owned `#V` buffer without allocating.
 //! Vertices with an empty weight row stay at their rest position under every method.
 
+pub(crate) mod compact_weights;
 pub mod cor;
 pub mod cor_cage_coords;
 pub mod cor_centres;
+pub mod cor_f32;
 pub mod dqs;
+pub mod dqs_f32;
 pub mod lbs;
+pub mod lbs_f32;
 pub mod rigid_rotation;
 
 pub use cor::{CorScratch, CorSkinning};
@@ -18,8 +22,11 @@ pub use cor_centres::{
     CorCentresFactored, CorCentresMethod, CorCentresOptions, compute_cor_centres,
     compute_cor_centres_factored,
 };
+pub use cor_f32::{CorF32, CorF32Scratch};
 pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
+pub use dqs_f32::{DqsF32, DqsF32Scratch};
 pub use lbs::LinearBlendSkinning;
+pub use lbs_f32::{LbsF32, LbsF32Scratch};
 
 /// The skinning method S→S'→M' of a session.
 #[derive(
@@ -37,4 +44,7 @@ pub enum SkinningMethod {
 }
 
 /// Vertices per rayon task in the per-frame kernels.
-pub(crate) const VERTEX_GRAIN: usize = 4096;
+pub(crate) const VERTEX_GRAIN: usize = 8192;
+
+/// Vertices per rayon task in the f32 per-frame kernels.
+pub(crate) const VERTEX_GRAIN_F32: usize = 8192;
