@@ -12,8 +12,8 @@ use cagerig::coords::{maxvol, mvc};
 use cagerig::playback::AnimationPlayer;
 use cagerig::session::{RigParts, RigSession, SessionOptions};
 use cagerig::skinning::{
-    CorCentresMethod, CorCentresOptions, CorScratch, CorSkinning, DqsScratch,
-    DualQuaternionSkinning, LinearBlendSkinning, compute_cor_centres,
+    CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
+    DualQuaternionSkinning, LbsF32, LbsF32Scratch, LinearBlendSkinning,
 };
 use cagerig::sync::cage_updater::{CageFitMode, CageUpdater};
 use cagerig::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
@@ -67,6 +67,7 @@ struct ModelRow {
     joints: usize,
     cage_vertices: usize,
     peak_memory_mb: f64,
+    /// Precision of the session-level figures (the `_f32` kernels are the f32 variants).
     precision: &'static str,
     mvc: Stat,
     maxvol: Stat,
@@ -81,6 +82,9 @@ struct ModelRow {
     animation_frame: Stat,
     rest_cage_drag: Stat,
     grab_after_skeleton_edit: Stat,
+    lbs_f32: Stat,
+    dqs_f32: Stat,
+    cor_f32: Stat,
 }
 
 /// Runs `f` `warmup` times untimed, then `reps` times; returns median/min/max in ms.
@@ -154,6 +158,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 maxvol_rows: None,
                 cor_rows: sub.cor_rows,
                 joint_coords: None,
+                cor_centre_coords: None,
             }
         };
         let model = if levels == 0 {
@@ -225,41 +230,33 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         let _ = CageUpdater::new(&phi, rows.clone(), CageFitMode::Interpolate);
     });
 
-    let cor_options = CorCentresOptions {
-        method: if nv > 20_000 {
-            CorCentresMethod::Clustered {
-                vertex_step: 0.01,
-                patch_step: 0.05,
-                weight_floor: 0.0,
-            }
-        } else {
-            CorCentresMethod::Exact
-        },
-        ..CorCentresOptions::default()
-    };
-    let mut cor_rows = None;
-    let cor_centres_stat = time(reps(3, scale, nv).min(5), 0, || {
-        cor_rows = compute_cor_centres(
+    // CoR centres as the session computes them when none are loaded: Λ (Eq. 14) directly.
+    let mut lambda = None;
+    let cor_centres_stat = time(if nv > 20_000 { 1 } else { 3 }, 0, || {
+        lambda = cagerig::session::compute_centre_coords(
             &parts.mesh.positions,
             &parts.mesh.triangles,
             &parts.skin_weights,
-            &cor_options,
-            &|_, _| {},
+            &phi,
+            &cagerig::skinning::CorCentresOptions::default(),
         )
         .ok();
     });
-    let cor_rows = cor_rows.context("CoR centres")?;
+    let lambda = lambda.context("CoR centres")?;
+    let cor_centres_method = cagerig::session::centre_coords_method(nv).to_string();
 
-    // The session, from the precomputed parts.
+    // The session, from the precomputed parts (Φ moved in, not copied).
     let joint_coords: Vec<Vec<f64>> = (0..nj).map(|j| skelup.joint_row(j).to_vec()).collect();
     let session_parts = RigParts {
-        cage_coords: Some(phi.clone()),
+        cage_coords: Some(phi),
         maxvol_rows: Some(rows.clone()),
-        cor_rows: Some(cor_rows),
+        cor_rows: None,
         joint_coords: Some(joint_coords),
-        ..parts.clone()
+        cor_centre_coords: Some(lambda),
+        ..parts
     };
     let (mut session, _) = RigSession::new(session_parts, SessionOptions::default())?;
+    let parts_weights = session.skin_weights().clone();
     // The pose of the paper tool's per-frame timings: one joint bent by 60° about +X.
     let bend_joint = session.skeleton().find("lowerarm01.R").unwrap_or(nj / 2);
     session.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
@@ -272,13 +269,13 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     let rest = session.rest_mesh().to_vec();
     let mut out = vec![DVec3::ZERO; nv];
     let frame_reps = reps(200, scale, nv);
-    let nnz = parts.skin_weights.num_entries() as u64;
+    let nnz = parts_weights.num_entries() as u64;
     let skin_bytes = nv as u64 * (24 + 24 + 4) + nnz * 12;
 
-    let lbs = LinearBlendSkinning::new(&parts.skin_weights);
+    let lbs = LinearBlendSkinning::new(&parts_weights);
     let lbs_stat =
         time(frame_reps, 5, || lbs.apply(&transforms, &rest, &mut out)).with_bytes(skin_bytes);
-    let dqs = DualQuaternionSkinning::new(&parts.skin_weights);
+    let dqs = DualQuaternionSkinning::new(&parts_weights);
     let mut dqs_scratch = DqsScratch::new(nj);
     let dqs_stat = time(frame_reps, 5, || {
         dqs.apply(&transforms, &rest, &mut dqs_scratch, &mut out)
@@ -290,12 +287,34 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         .map(<[DVec3]>::to_vec)
         .unwrap_or_default();
     session.set_skinning(cagerig::skinning::SkinningMethod::Lbs)?;
-    let cor = CorSkinning::new(&parts.skin_weights);
+    let cor = CorSkinning::new(&parts_weights);
     let mut cor_scratch = CorScratch::new(nj);
     let cor_stat = time(frame_reps, 5, || {
         cor.apply(&transforms, &rest, &centres, &mut cor_scratch, &mut out)
     })
     .with_bytes(skin_bytes + nv as u64 * (24 + 4));
+
+    // The f32 per-frame kernels (error vs f64 stated in their tests: ≤ 2e-6 of the bbox diagonal).
+    let mut out32 = vec![glam::Vec3::ZERO; nv];
+    let lbs32 = LbsF32::new(&parts_weights, &rest)?;
+    let mut lbs32_scratch = LbsF32Scratch::new(nj);
+    let f32_bytes = nv as u64 * (12 + 12 + 4) + nnz * 6;
+    let lbs32_stat = time(frame_reps, 5, || {
+        lbs32.apply(&transforms, &mut lbs32_scratch, &mut out32)
+    })
+    .with_bytes(f32_bytes);
+    let dqs32 = DqsF32::new(&parts_weights, &rest)?;
+    let mut dqs32_scratch = DqsF32Scratch::new(nj);
+    let dqs32_stat = time(frame_reps, 5, || {
+        dqs32.apply(&transforms, &mut dqs32_scratch, &mut out32)
+    })
+    .with_bytes(f32_bytes);
+    let cor32 = CorF32::new(&parts_weights, &rest, &centres)?;
+    let mut cor32_scratch = CorF32Scratch::new(nj);
+    let cor32_stat = time(frame_reps, 5, || {
+        cor32.apply(&transforms, &mut cor32_scratch, &mut out32)
+    })
+    .with_bytes(f32_bytes + nv as u64 * 12);
 
     // Animation frame: skeleton keys (rotations) and cage keys (rest-cage offsets), async.
     let (skeleton_track, cage_track) = synthetic_tracks(&session)?;
@@ -365,7 +384,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         skelup_preprocess: skelup_stat,
         cageup_preprocess: cageup_stat,
         cor_centres: cor_centres_stat,
-        cor_centres_method: format!("{:?}", cor_options.method),
+        cor_centres_method,
         cagerev_refactor: refactor_stat,
         lbs: lbs_stat,
         dqs: dqs_stat,
@@ -373,6 +392,9 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         animation_frame: anim_stat,
         rest_cage_drag: drag_stat,
         grab_after_skeleton_edit: grab_stat,
+        lbs_f32: lbs32_stat,
+        dqs_f32: dqs32_stat,
+        cor_f32: cor32_stat,
     })
 }
 
@@ -458,6 +480,9 @@ fn print_table(rows: &[ModelRow]) {
         line("LBS skinning", &r.lbs);
         line("DQS skinning", &r.dqs);
         line("CoR skinning", &r.cor);
+        line("LBS skinning (f32)", &r.lbs_f32);
+        line("DQS skinning (f32)", &r.dqs_f32);
+        line("CoR skinning (f32)", &r.cor_f32);
         line("animation frame (LBS)", &r.animation_frame);
         line("rest-cage drag, 5 v, sync", &r.rest_cage_drag);
         line("grab after skeleton edit", &r.grab_after_skeleton_edit);

@@ -59,6 +59,7 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
                     maxvol_rows: None,
                     cor_rows: None,
                     joint_coords: None,
+                    cor_centre_coords: None,
                 },
                 files: Vec::new(),
                 warnings: Vec::new(),
@@ -152,6 +153,7 @@ pub fn subdivide_and_write(
         maxvol_rows: None,
         cor_rows: sub.cor_rows,
         joint_coords: None,
+        cor_centre_coords: None,
     };
     let phi = compute_coords_with_progress(&sub_parts, true)?;
     let rows = cagerig::coords::maxvol::select_maxvol_rows(&phi)?.rows;

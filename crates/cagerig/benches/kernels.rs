@@ -97,6 +97,7 @@ fn cage_ops(c: &mut Criterion) {
             maxvol_rows: None,
             cor_rows: None,
             joint_coords: None,
+            cor_centre_coords: None,
         };
         let (mut s, _) = RigSession::new(parts, SessionOptions::default()).unwrap();
         s.rotate_joint(1, DVec3::Z, 0.5).unwrap();

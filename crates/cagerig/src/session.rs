@@ -34,6 +34,45 @@ pub const CLUSTERED_COR_CENTRES_ABOVE: usize = 20_000;
 /// Φ reproduces the given rest mesh when max |ΦC − M| ≤ this × the cage's bbox diagonal.
 pub const PHI_C_TOLERANCE: f64 = 1e-9;
 
+/// How [`compute_centre_coords`] computes Λ for a mesh of `num_vertices` vertices.
+pub fn centre_coords_method(num_vertices: usize) -> &'static str {
+    if num_vertices > CLUSTERED_COR_CENTRES_ABOVE {
+        "clustered"
+    } else {
+        "exact"
+    }
+}
+
+/// CoR cage coordinates Λ (`#V × #C`, Eq. 14: centres = Λ·C) from the rest mesh, Ω and Φ, as
+/// a session computes them when none were loaded: with `options`, except that the exact form
+/// is replaced by the accelerated one on big meshes (see [`centre_coords_method`]).
+pub fn compute_centre_coords(
+    rest_positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    skin_weights: &SkinWeights,
+    cage_coords: &CageCoords,
+    options: &CorCentresOptions,
+) -> Result<CageCoords, RigError> {
+    let mut options = *options;
+    if options.method == CorCentresMethod::Exact
+        && rest_positions.len() > CLUSTERED_COR_CENTRES_ABOVE
+    {
+        options.method = CorCentresMethod::Clustered {
+            vertex_step: 0.01,
+            patch_step: 0.05,
+            weight_floor: 0.0,
+        };
+    }
+    compute_cor_cage_coords(
+        rest_positions,
+        triangles,
+        skin_weights,
+        cage_coords,
+        &options,
+        &|_, _| {},
+    )
+}
+
 /// Which mesh CageUp fits when the skinning method is not LBS (Section 4.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -88,6 +127,8 @@ pub struct RigParts {
     pub cor_rows: Option<SparseRows>,
     /// Ψ, `#J` rows of `#C` (computed when absent).
     pub joint_coords: Option<Vec<Vec<f64>>>,
+    /// Λ = S·Φ (`#V × #C`, Eq. 14), when already computed; takes precedence over `cor_rows`.
+    pub cor_centre_coords: Option<CageCoords>,
 }
 
 /// CoR data: Λ = S·Φ (`#V × #C`, Eq. 14) and the current centres Λ·C.
@@ -125,6 +166,8 @@ pub struct RigSession {
     dqs: DualQuaternionSkinning,
     ghost_lbs: LinearBlendSkinning,
     cor_rows: Option<SparseRows>,
+    /// Λ given with the parts, used on the first switch to CoR.
+    given_centre_coords: Option<CageCoords>,
     cor: Option<CorState>,
     cor_options: CorCentresOptions,
     options_fit_source: CageFitSource,
@@ -175,6 +218,7 @@ impl RigSession {
             maxvol_rows,
             cor_rows,
             joint_coords,
+            cor_centre_coords,
         } = parts;
         let nv = mesh.num_vertices();
         if skin_weights.num_vertices() != nv {
@@ -286,6 +330,7 @@ impl RigSession {
             cage_updater,
             reverser,
             cor_rows,
+            given_centre_coords: cor_centre_coords,
             cor: None,
             cor_options: options.cor_centres,
             options_fit_source: options.fit_source,
@@ -732,32 +777,30 @@ impl RigSession {
     }
 
     fn build_cor(&mut self) -> Result<(), RigError> {
-        let centre_coords = match &self.cor_rows {
+        let given = self.given_centre_coords.take();
+        let centre_coords = match (&self.cor_rows, given) {
+            (_, Some(lambda)) => {
+                if lambda.num_vertices() != self.rest_mesh.len()
+                    || lambda.num_cage_vertices() != self.rest_cage.len()
+                {
+                    return Err(RigError::SizeMismatch {
+                        what: "CoR cage coordinates Λ (#V × #C)",
+                        expected: self.rest_mesh.len() * self.rest_cage.len(),
+                        actual: lambda.num_vertices() * lambda.num_cage_vertices(),
+                    });
+                }
+                lambda
+            }
             // Loaded rows: Λ = S·Φ (O(nnz(S)·#C); fine for the rows the tool writes, which
             // address the original vertices, also after subdivision).
-            Some(rows) => rows.compose_dense(&self.cage_coords)?,
-            None => {
-                // Λ directly (S is never formed). Exact centres cost O(#V·#F): large meshes use
-                // weight clustering instead.
-                let mut options = self.cor_options;
-                if options.method == CorCentresMethod::Exact
-                    && self.rest_mesh.len() > CLUSTERED_COR_CENTRES_ABOVE
-                {
-                    options.method = CorCentresMethod::Clustered {
-                        vertex_step: 0.01,
-                        patch_step: 0.05,
-                        weight_floor: 0.0,
-                    };
-                }
-                compute_cor_cage_coords(
-                    &self.rest_mesh,
-                    &self.mesh_triangles,
-                    &self.skin_weights,
-                    &self.cage_coords,
-                    &options,
-                    &|_, _| {},
-                )?
-            }
+            (Some(rows), None) => rows.compose_dense(&self.cage_coords)?,
+            (None, None) => compute_centre_coords(
+                &self.rest_mesh,
+                &self.mesh_triangles,
+                &self.skin_weights,
+                &self.cage_coords,
+                &self.cor_options,
+            )?,
         };
         let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
         centre_coords.apply(&self.rest_cage, &mut centres);

@@ -59,6 +59,7 @@ fn run_events() {
         maxvol_rows: None,
         cor_rows: None,
         joint_coords: None,
+        cor_centre_coords: None,
     };
     let (mut s, _) = RigSession::new(parts, SessionOptions::default()).unwrap();
     s.set_skinning(SkinningMethod::Cor).unwrap();

@@ -20,6 +20,7 @@ fn session(name: &str) -> RigSession {
         maxvol_rows: None,
         cor_rows: None,
         joint_coords: None,
+        cor_centre_coords: None,
     };
     RigSession::new(parts, SessionOptions::default()).unwrap().0
 }

@@ -103,6 +103,7 @@ pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, Pars
             maxvol_rows,
             cor_rows,
             joint_coords: None,
+            cor_centre_coords: None,
         },
         files,
         warnings,
