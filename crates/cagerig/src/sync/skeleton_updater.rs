@@ -239,28 +239,30 @@ fn joint_coordinates(
         target,
         &mut mesh_mvc,
     );
-    let mut prior: Vec<f64> = (0..num_vertices)
-        .map(|i| {
+    let floor_masses = matches!(localisation, JointLocalisation::Articulation { .. });
+    // The prior π_i = mvc_i · L_i as a sparse list: in the articulation localisation L vanishes
+    // wherever the joint's or its parent's weight is zero, i.e. on most of the mesh.
+    let mut prior: Vec<(usize, f64)> = (0..num_vertices)
+        .filter_map(|i| {
             let own = skin_weights.get(i, j);
             let par = parent.map(|p| skin_weights.get(i, p));
-            mesh_mvc[i] * localisation_value(localisation, own, par)
+            if floor_masses && (own == 0.0 || par == Some(0.0)) {
+                return None;
+            }
+            let l = localisation_value(localisation, own, par);
+            (l != 0.0).then(|| (i, mesh_mvc[i] * l))
         })
         .collect();
     let mut unlocalised = false;
-    let floor_masses = matches!(localisation, JointLocalisation::Articulation { .. });
-    if floor_masses && prior.iter().all(|&p| p <= 0.0) {
-        prior.copy_from_slice(&mesh_mvc);
+    if floor_masses && prior.iter().all(|&(_, p)| p <= 0.0) {
+        prior = mesh_mvc.iter().copied().enumerate().collect();
         unlocalised = true;
     }
     // μ_k = Σ_i prior_i Φ_ik (Eq. 10).
     let mut masses: Vec<f64> = (0..num_cage)
         .map(|k| {
-            cage_coords
-                .column(k)
-                .iter()
-                .zip(&prior)
-                .map(|(&phi, &p)| phi * p)
-                .sum()
+            let column = cage_coords.column(k);
+            prior.iter().map(|&(i, p)| column[i] * p).sum()
         })
         .collect();
     if floor_masses {
