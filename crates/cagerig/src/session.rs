@@ -20,6 +20,7 @@ use crate::skinning::SkinningMethod;
 use crate::skinning::cor::{CorScratch, CorSkinning};
 use crate::skinning::cor_cage_coords::compute_cor_cage_coords;
 use crate::skinning::cor_centres::{CorCentresMethod, CorCentresOptions};
+use crate::skinning::cor_grid::{CorGridOptions, compute_cor_cage_coords_grid};
 use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
 use crate::sparse_rows::SparseRows;
@@ -27,9 +28,10 @@ use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
-/// Above this many vertices, CoR centres computed on demand use weight clustering
-/// ([`CorCentresMethod::Clustered`]) instead of the exact O(#V·#F) form.
-pub const CLUSTERED_COR_CENTRES_ABOVE: usize = 20_000;
+/// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
+/// the similarity tables of [`crate::skinning::cor_grid`] (seconds, centre error ≈ 1e-4 × bbox
+/// diagonal) instead of the exact O(#V·#F) form.
+pub const GRID_COR_CENTRES_ABOVE: usize = 20_000;
 
 /// Φ reproduces the given rest mesh when max |ΦC − M| ≤ this × the cage's bbox diagonal.
 pub const PHI_C_TOLERANCE: f64 = 1e-9;
@@ -738,25 +740,32 @@ impl RigSession {
             Some(rows) => rows.compose_dense(&self.cage_coords)?,
             None => {
                 // Λ directly (S is never formed). Exact centres cost O(#V·#F): large meshes use
-                // weight clustering instead.
-                let mut options = self.cor_options;
+                // per-joint-pair similarity tables instead.
+                let options = self.cor_options;
                 if options.method == CorCentresMethod::Exact
-                    && self.rest_mesh.len() > CLUSTERED_COR_CENTRES_ABOVE
+                    && self.rest_mesh.len() > GRID_COR_CENTRES_ABOVE
                 {
-                    options.method = CorCentresMethod::Clustered {
-                        vertex_step: 0.01,
-                        patch_step: 0.05,
-                        weight_floor: 0.0,
-                    };
+                    compute_cor_cage_coords_grid(
+                        &self.rest_mesh,
+                        &self.mesh_triangles,
+                        &self.skin_weights,
+                        &self.cage_coords,
+                        &CorGridOptions {
+                            sigma: options.sigma,
+                            ..Default::default()
+                        },
+                        &|_, _| {},
+                    )?
+                } else {
+                    compute_cor_cage_coords(
+                        &self.rest_mesh,
+                        &self.mesh_triangles,
+                        &self.skin_weights,
+                        &self.cage_coords,
+                        &options,
+                        &|_, _| {},
+                    )?
                 }
-                compute_cor_cage_coords(
-                    &self.rest_mesh,
-                    &self.mesh_triangles,
-                    &self.skin_weights,
-                    &self.cage_coords,
-                    &options,
-                    &|_, _| {},
-                )?
             }
         };
         let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];

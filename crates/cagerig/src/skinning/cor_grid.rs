@@ -59,12 +59,16 @@ pub struct CorGridOptions {
 }
 
 impl Default for CorGridOptions {
-    /// Measured on the Arm (N = 0..3 midpoint subdivisions): max centre error ≈ TODO × bbox diagonal.
+    /// σ = 0.1, h = 1/64, bins of 1/128, bicubic. Measured on the Arm (release, 2 shared cores):
+    /// N = 0: max centre error 3.9e-4 (mean 2.7e-5) × bbox diagonal over all vertices; N = 3
+    /// (133k vertices): 1.0e-4 (mean 1.0e-5) on 300 sampled vertices, about 3 s. Bins of 1/256:
+    /// 1.1e-4 at N = 0 but about 3× slower at N = 3; bins of 1/64: about 2× faster at 8.3e-4.
+    /// Binning dominates the error; the grid step barely matters.
     fn default() -> Self {
         Self {
             sigma: 0.1,
             grid_step: 1.0 / 64.0,
-            bin_resolution: 256.0,
+            bin_resolution: 128.0,
             interpolation: GridInterpolation::Bicubic,
         }
     }
