@@ -3,7 +3,9 @@
 //! for small N, a sample of vertices otherwise).
 //!
 //! `cargo run --release -p cagerig --example cor_bench [-- LEVELS [SAMPLES]]`
-//! Environment: VSTEP, PSTEP, FLOOR, MASSTOL override the clustering options.
+//! Environment: MODE = grid (default; [`compute_cor_cage_coords_grid`]) or clustered
+//! ([`compute_cor_cage_coords`]); STEP (grid step, default 1/64), BINS (bin resolution, 128),
+//! INTERP (cubic | linear) for the grid; VSTEP, PSTEP, FLOOR, MASSTOL for the clustering.
 
 use std::path::Path;
 use std::time::Instant;
@@ -13,7 +15,10 @@ use cagerig::coords::mvc::compute_cage_coords;
 use cagerig::io::{read_obj, read_skt, read_skw};
 use cagerig::mesh::bounding_box;
 use cagerig::skinning::cor_centres::weight_similarity;
-use cagerig::skinning::{CorCentresMethod, CorCentresOptions, compute_cor_cage_coords};
+use cagerig::skinning::{
+    CorCentresMethod, CorCentresOptions, CorGridOptions, GridInterpolation,
+    compute_cor_cage_coords, compute_cor_cage_coords_grid,
+};
 use cagerig::subdivide::subdivide_midpoint;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -89,21 +94,38 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let before = peak_rss_mb();
 
-    let options = CorCentresOptions {
-        method: CorCentresMethod::Clustered {
-            vertex_step: env("VSTEP", 0.01),
-            patch_step: env("PSTEP", 0.05),
-            weight_floor: env("FLOOR", 0.0),
-        },
-        mass_tolerance: env("MASSTOL", 1e-5),
-        ..Default::default()
-    };
+    let mode = std::env::var("MODE").unwrap_or_else(|_| "grid".into());
     let start = Instant::now();
-    let lambda = compute_cor_cage_coords(&rest, &tris, &weights, &phi, &options, &|_, _| {})?;
+    let (lambda, label) = if mode == "clustered" {
+        let options = CorCentresOptions {
+            method: CorCentresMethod::Clustered {
+                vertex_step: env("VSTEP", 0.01),
+                patch_step: env("PSTEP", 0.05),
+                weight_floor: env("FLOOR", 0.0),
+            },
+            mass_tolerance: env("MASSTOL", 1e-5),
+            ..Default::default()
+        };
+        let lambda = compute_cor_cage_coords(&rest, &tris, &weights, &phi, &options, &|_, _| {})?;
+        (lambda, format!("{:?}", options.method))
+    } else {
+        let options = CorGridOptions {
+            grid_step: env("STEP", 1.0 / 64.0),
+            bin_resolution: env("BINS", 128.0),
+            interpolation: if std::env::var("INTERP").as_deref() == Ok("linear") {
+                GridInterpolation::Bilinear
+            } else {
+                GridInterpolation::Bicubic
+            },
+            ..Default::default()
+        };
+        let lambda =
+            compute_cor_cage_coords_grid(&rest, &tris, &weights, &phi, &options, &|_, _| {})?;
+        (lambda, format!("{options:?}"))
+    };
     let elapsed = start.elapsed();
     println!(
-        "Λ = S·Φ ({:?}): {elapsed:.2?}, peak RSS {:.0} MB (before {before:.0} MB, Λ itself {:.0} MB)",
-        options.method,
+        "Λ = S·Φ ({label}): {elapsed:.2?}, peak RSS {:.0} MB (before {before:.0} MB, Λ itself {:.0} MB)",
         peak_rss_mb(),
         (n * phi.num_cage_vertices() * 8) as f64 / 1e6
     );

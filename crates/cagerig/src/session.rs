@@ -20,6 +20,7 @@ use crate::skinning::SkinningMethod;
 use crate::skinning::cor::{CorScratch, CorSkinning};
 use crate::skinning::cor_cage_coords::compute_cor_cage_coords;
 use crate::skinning::cor_centres::{CorCentresMethod, CorCentresOptions};
+use crate::skinning::cor_grid::{CorGridOptions, compute_cor_cage_coords_grid};
 use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
 use crate::sparse_rows::SparseRows;
@@ -27,17 +28,19 @@ use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
-/// Above this many vertices, CoR centres computed on demand use weight clustering
-/// ([`CorCentresMethod::Clustered`]) instead of the exact O(#V·#F) form.
-pub const CLUSTERED_COR_CENTRES_ABOVE: usize = 20_000;
+/// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
+/// the similarity tables of [`crate::skinning::cor_grid`] (seconds, centre error ≈ 1e-4 × bbox
+/// diagonal) instead of the exact O(#V·#F) form.
+pub const GRID_COR_CENTRES_ABOVE: usize = 20_000;
 
 /// Φ reproduces the given rest mesh when max |ΦC − M| ≤ this × the cage's bbox diagonal.
 pub const PHI_C_TOLERANCE: f64 = 1e-9;
 
-/// How [`compute_centre_coords`] computes Λ for a mesh of `num_vertices` vertices.
+/// How [`compute_centre_coords`] computes Λ for a mesh of `num_vertices` vertices with the
+/// default (exact) options.
 pub fn centre_coords_method(num_vertices: usize) -> &'static str {
-    if num_vertices > CLUSTERED_COR_CENTRES_ABOVE {
-        "clustered"
+    if num_vertices > GRID_COR_CENTRES_ABOVE {
+        "similarity tables"
     } else {
         "exact"
     }
@@ -45,7 +48,8 @@ pub fn centre_coords_method(num_vertices: usize) -> &'static str {
 
 /// CoR cage coordinates Λ (`#V × #C`, Eq. 14: centres = Λ·C) from the rest mesh, Ω and Φ, as
 /// a session computes them when none were loaded: with `options`, except that the exact form
-/// is replaced by the accelerated one on big meshes (see [`centre_coords_method`]).
+/// is replaced by the similarity tables of [`crate::skinning::cor_grid`] on big meshes (see
+/// [`centre_coords_method`]).
 pub fn compute_centre_coords(
     rest_positions: &[DVec3],
     triangles: &[[u32; 3]],
@@ -53,22 +57,25 @@ pub fn compute_centre_coords(
     cage_coords: &CageCoords,
     options: &CorCentresOptions,
 ) -> Result<CageCoords, RigError> {
-    let mut options = *options;
-    if options.method == CorCentresMethod::Exact
-        && rest_positions.len() > CLUSTERED_COR_CENTRES_ABOVE
-    {
-        options.method = CorCentresMethod::Clustered {
-            vertex_step: 0.01,
-            patch_step: 0.05,
-            weight_floor: 0.0,
-        };
+    if options.method == CorCentresMethod::Exact && rest_positions.len() > GRID_COR_CENTRES_ABOVE {
+        return compute_cor_cage_coords_grid(
+            rest_positions,
+            triangles,
+            skin_weights,
+            cage_coords,
+            &CorGridOptions {
+                sigma: options.sigma,
+                ..Default::default()
+            },
+            &|_, _| {},
+        );
     }
     compute_cor_cage_coords(
         rest_positions,
         triangles,
         skin_weights,
         cage_coords,
-        &options,
+        options,
         &|_, _| {},
     )
 }

@@ -10,6 +10,7 @@ pub mod cor;
 pub mod cor_cage_coords;
 pub mod cor_centres;
 pub mod cor_f32;
+pub mod cor_grid;
 pub mod dqs;
 pub mod dqs_f32;
 pub mod lbs;
@@ -23,6 +24,7 @@ pub use cor_centres::{
     compute_cor_centres_factored,
 };
 pub use cor_f32::{CorF32, CorF32Scratch};
+pub use cor_grid::{CorGridOptions, GridInterpolation, compute_cor_cage_coords_grid};
 pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
 pub use dqs_f32::{DqsF32, DqsF32Scratch};
 pub use lbs::LinearBlendSkinning;

@@ -1,0 +1,815 @@
+//! Cage coordinates of the centres of rotation, Λ (`#V × #C`, Eq. 5 and 14), from per-joint-pair
+//! similarity tables on a grid over the weight simplex: O(#F + #pairs·nodes·bins·#C + #V·#C),
+//! i.e. seconds where the clustered form of [`super::cor_cage_coords`] takes minutes.
+//!
+//! Eq. 5 over rest triangles t (area α_t, weights ω_t = mean of the corner rows, coordinate row
+//! Φ_t = mean of the corner rows of Φ, so that the centroid is v_t = Φ_t·C):
+//!
+//! `Λ_i = Σ_t s(ω_i, ω_t) α_t Φ_t / Σ_t s(ω_i, ω_t) α_t`,
+//! `s(w_p, w_v) = Σ_{j≠k} w_pj w_pk w_vj w_vk exp(−(w_pj w_vk − w_pk w_vj)²/σ²)`.
+//!
+//! s is a sum over joint pairs (j, k), and the term of a pair depends on vertex i only through
+//! (x, y) = (ω_ij, ω_ik):
+//!
+//! `Σ_t α_t s(ω_i, ω_t) Φ_t = 2 Σ_{j<k} x y G_jk(x, y)`,
+//! `G_jk(x, y) = Σ_t α_t a_t b_t exp(−(x b_t − y a_t)²/σ²) Φ_t`, (a_t, b_t) = (ω_tj, ω_tk),
+//!
+//! where only triangles with a_t, b_t > 0 contribute. G_jk is smooth at the scale σ, so it is
+//! tabulated on a regular grid (step `grid_step`, only the nodes that some vertex's interpolation
+//! stencil touches) and interpolated (bicubic Catmull–Rom or bilinear). To build the tables, the
+//! triangles of a pair are first aggregated into bins of (a_t, b_t) (`1/bin_resolution`), each
+//! bin keeping Σ α a b, Σ α a b Φ_t and the α a b-weighted mean (ā, b̄), at which the kernel is
+//! evaluated (so the binning error is second order in the bin size). A table is then a dense
+//! product (nodes × bins)·(bins × #C).
+//!
+//! The denominator is the sum of the numerator's #C entries (rows of Φ sum to 1), so the rows of Λ
+//! sum to 1 up to rounding whatever the interpolation error. Vertices without a centre (fewer
+//! than two positive weights, no joint pair shared with any triangle, or a non-positive
+//! interpolated total) keep Λ_i = Φ_i (S_ii = 1, as in [`super::cor_centres`]).
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use faer::{Accum, Mat, Par};
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::SkinWeights;
+use crate::cage_coords::CageCoords;
+use crate::error::RigError;
+
+/// How the similarity tables are interpolated at a vertex's (x, y).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GridInterpolation {
+    /// 2 × 2 nodes, error O(h²).
+    Bilinear,
+    /// 4 × 4 nodes (Catmull–Rom), error O(h³).
+    Bicubic,
+}
+
+/// Options of [`compute_cor_cage_coords_grid`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CorGridOptions {
+    /// Width σ of the similarity kernel (Le & Hodgins: 0.1).
+    pub sigma: f64,
+    /// Grid step h of the tables in weight space (in (0, 0.5]).
+    pub grid_step: f64,
+    /// Triangle weight pairs (a_t, b_t) are binned at `1 / bin_resolution` (≥ 1).
+    pub bin_resolution: f64,
+    pub interpolation: GridInterpolation,
+}
+
+impl Default for CorGridOptions {
+    /// σ = 0.1, h = 1/64, bins of 1/128, bicubic. Measured on the Arm (release, 2 shared cores):
+    /// N = 0: max centre error 3.9e-4 (mean 2.7e-5) × bbox diagonal over all vertices; N = 3
+    /// (133k vertices): 1.0e-4 (mean 1.0e-5) on 300 sampled vertices, about 3 s. Bins of 1/256:
+    /// 1.1e-4 at N = 0 but about 3× slower at N = 3; bins of 1/64: about 2× faster at 8.3e-4.
+    /// Binning dominates the error; the grid step barely matters.
+    fn default() -> Self {
+        Self {
+            sigma: 0.1,
+            grid_step: 1.0 / 64.0,
+            bin_resolution: 128.0,
+            interpolation: GridInterpolation::Bicubic,
+        }
+    }
+}
+
+/// Table nodes evaluated per dense product (rows of the kernel matrix).
+const NODE_CHUNK: usize = 256;
+/// Cap on kernel matrix entries per product (8 MB).
+const KERNEL_ENTRIES: usize = 1 << 20;
+/// Vertices per rayon task in the evaluation.
+const VERTEX_BLOCK: usize = 2048;
+const NONE: u32 = u32::MAX;
+
+/// One triangle's contribution to one joint pair's bin.
+struct Entry {
+    /// `pair_key << 32 | bin_a << 16 | bin_b`, with pair_key = j·#J + k.
+    key: u64,
+    /// α_t a_t b_t.
+    mass: f64,
+    a: f64,
+    b: f64,
+    triangle: u32,
+}
+
+/// The tabulation grid: node (p, q) sits at ((p − 1)h, (q − 1)h), p, q ∈ 0..side.
+#[derive(Clone, Copy)]
+struct Grid {
+    step: f64,
+    /// Cells per unit (1/h, rounded up).
+    cells: usize,
+    side: usize,
+    interpolation: GridInterpolation,
+}
+
+impl Grid {
+    /// Stencil of (x, y): up to 16 (node index, weight) pairs, as `count`.
+    #[inline]
+    fn stencil(&self, x: f64, y: f64, out: &mut [(usize, f64); 16]) -> usize {
+        let axis = |v: f64| {
+            let s = v / self.step;
+            let cell = (s.floor().max(0.0) as usize).min(self.cells - 1);
+            (cell, s - cell as f64)
+        };
+        let (cx, tx) = axis(x);
+        let (cy, ty) = axis(y);
+        match self.interpolation {
+            GridInterpolation::Bilinear => {
+                let wx = [1.0 - tx, tx];
+                let wy = [1.0 - ty, ty];
+                let mut n = 0;
+                for (dx, &u) in wx.iter().enumerate() {
+                    for (dy, &v) in wy.iter().enumerate() {
+                        out[n] = ((cx + 1 + dx) * self.side + cy + 1 + dy, u * v);
+                        n += 1;
+                    }
+                }
+                n
+            }
+            GridInterpolation::Bicubic => {
+                let wx = catmull_rom(tx);
+                let wy = catmull_rom(ty);
+                let mut n = 0;
+                for (dx, &u) in wx.iter().enumerate() {
+                    for (dy, &v) in wy.iter().enumerate() {
+                        out[n] = ((cx + dx) * self.side + cy + dy, u * v);
+                        n += 1;
+                    }
+                }
+                n
+            }
+        }
+    }
+
+    fn node_position(&self, node: usize) -> (f64, f64) {
+        let (p, q) = (node / self.side, node % self.side);
+        ((p as f64 - 1.0) * self.step, (q as f64 - 1.0) * self.step)
+    }
+}
+
+/// Kernel matrix `K_nb = exp(−(x_n b̄_b − y_n ā_b)²/σ²)` (nodes × bins, column-major) into
+/// `out`, for the bins `(mass, ā, b̄)`, vectorised for the CPU at hand.
+fn fill_kernel(
+    out: &mut [f64],
+    xs: &[f64],
+    ys: &[f64],
+    bins: &[(f64, f64, f64)],
+    inv_sigma_sq: f64,
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports the enabled feature (checked just above).
+            return unsafe { fill_kernel_avx512(out, xs, ys, bins, inv_sigma_sq) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: as above.
+            return unsafe { fill_kernel_avx2(out, xs, ys, bins, inv_sigma_sq) };
+        }
+    }
+    fill_kernel_generic(out, xs, ys, bins, inv_sigma_sq)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn fill_kernel_avx512(
+    out: &mut [f64],
+    xs: &[f64],
+    ys: &[f64],
+    bins: &[(f64, f64, f64)],
+    inv_sigma_sq: f64,
+) {
+    fill_kernel_generic(out, xs, ys, bins, inv_sigma_sq)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn fill_kernel_avx2(
+    out: &mut [f64],
+    xs: &[f64],
+    ys: &[f64],
+    bins: &[(f64, f64, f64)],
+    inv_sigma_sq: f64,
+) {
+    fill_kernel_generic(out, xs, ys, bins, inv_sigma_sq)
+}
+
+#[inline(always)]
+fn fill_kernel_generic(
+    out: &mut [f64],
+    xs: &[f64],
+    ys: &[f64],
+    bins: &[(f64, f64, f64)],
+    inv_sigma_sq: f64,
+) {
+    let n = xs.len();
+    for (column, &(_, a, b)) in out.chunks_exact_mut(n).zip(bins) {
+        for ((k, &x), &y) in column.iter_mut().zip(xs).zip(ys) {
+            let cross = x * b - y * a;
+            *k = exp_non_positive(-cross * cross * inv_sigma_sq);
+        }
+    }
+}
+
+/// e^x for x ≤ 0 (relative error ≲ 1e-15; 0 below −700), branch- and call-free so that loops
+/// vectorise.
+#[inline(always)]
+fn exp_non_positive(x: f64) -> f64 {
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    // Adding 1.5·2^52 rounds to an integer held in the low mantissa bits.
+    const SHIFTER: f64 = 6_755_399_441_055_744.0;
+    let x = x.max(-700.0);
+    let shifted = x * std::f64::consts::LOG2_E + SHIFTER;
+    let n = shifted - SHIFTER;
+    let r = (x - n * LN2_HI) - n * LN2_LO;
+    // Taylor series of e^r on |r| ≤ ln2/2 to degree 12 (remainder < 2e-17).
+    let mut p = 1.0 / 479_001_600.0;
+    for d in [
+        39_916_800.0,
+        3_628_800.0,
+        362_880.0,
+        40_320.0,
+        5_040.0,
+        720.0,
+        120.0,
+        24.0,
+        6.0,
+        2.0,
+        1.0,
+        1.0,
+    ] {
+        p = p * r + 1.0 / d;
+    }
+    // 2^n via the exponent bits (n ≥ −1010, a normal number): n = bits(shifted) − bits(SHIFTER).
+    let exponent = shifted
+        .to_bits()
+        .wrapping_sub(SHIFTER.to_bits())
+        .wrapping_add(1023);
+    p * f64::from_bits(exponent << 52)
+}
+
+/// Catmull–Rom weights of nodes −1, 0, 1, 2 at t ∈ [0, 1] (they sum to 1).
+#[inline]
+fn catmull_rom(t: f64) -> [f64; 4] {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    [
+        0.5 * (-t3 + 2.0 * t2 - t),
+        0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+        0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+        0.5 * (t3 - t2),
+    ]
+}
+
+/// Calls `f(a, b)` for each pair of positions a < b in a weight row whose weights are positive.
+#[inline]
+fn for_each_pair(weights: &[f64], mut f: impl FnMut(usize, usize)) {
+    for a in 0..weights.len() {
+        if weights[a] > 0.0 {
+            for b in a + 1..weights.len() {
+                if weights[b] > 0.0 {
+                    f(a, b);
+                }
+            }
+        }
+    }
+}
+
+/// Λ (`#V × #C`, Eq. 14) for the rest mesh (`rest_positions` M: `#V`, `triangles`: `#F`),
+/// skinning weights Ω (`#V × #J`) and cage coordinates Φ (`#V × #C`) of the same vertices: the
+/// CoR centres (Eq. 5) are Λ·C for the rest cage C. See the module documentation for the method
+/// and `options` for its accuracy.
+///
+/// `progress(done, total)` is called from worker threads as vertex blocks complete.
+pub fn compute_cor_cage_coords_grid(
+    rest_positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    weights: &SkinWeights,
+    cage_coords: &CageCoords,
+    options: &CorGridOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<CageCoords, RigError> {
+    let num_vertices = rest_positions.len();
+    validate(rest_positions, triangles, weights, cage_coords, options)?;
+    let num_cage = cage_coords.num_cage_vertices();
+    let num_joints = weights.num_joints();
+    let inv_sigma_sq = 1.0 / (options.sigma * options.sigma);
+    let cells = (1.0 / options.grid_step).ceil() as usize;
+    let grid = Grid {
+        step: options.grid_step,
+        cells,
+        side: cells + 3,
+        interpolation: options.interpolation,
+    };
+    let nodes_per_pair = grid.side * grid.side;
+    let trace = std::env::var_os("CAGERIG_COR_TRACE").is_some();
+    let clock = std::time::Instant::now();
+
+    // 1. Triangle contributions per (joint pair, bin), sorted by key.
+    let entries = triangle_entries(rest_positions, triangles, weights, options.bin_resolution);
+
+    // 2. Bins: ranges of equal keys; pairs: ranges of bins with equal pair keys.
+    let mut bin_starts = Vec::new();
+    let mut pair_keys: Vec<u32> = Vec::new();
+    let mut pair_bin_starts = Vec::new();
+    for (e, entry) in entries.iter().enumerate() {
+        if e == 0 || entry.key != entries[e - 1].key {
+            let pair_key = (entry.key >> 32) as u32;
+            if pair_keys.last() != Some(&pair_key) {
+                pair_keys.push(pair_key);
+                pair_bin_starts.push(bin_starts.len());
+            }
+            bin_starts.push(e);
+        }
+    }
+    let num_bins = bin_starts.len();
+    bin_starts.push(entries.len());
+    pair_bin_starts.push(num_bins);
+    let num_pairs = pair_keys.len();
+    let mut pair_of_key = vec![NONE; num_joints * num_joints];
+    for (p, &key) in pair_keys.iter().enumerate() {
+        pair_of_key[key as usize] = p as u32;
+    }
+
+    // Per bin: (Σ α a b, ā, b̄).
+    let bins: Vec<(f64, f64, f64)> = bin_starts
+        .par_windows(2)
+        .map(|w| {
+            let (mut m, mut ma, mut mb) = (0.0, 0.0, 0.0);
+            for e in &entries[w[0]..w[1]] {
+                m += e.mass;
+                ma += e.mass * e.a;
+                mb += e.mass * e.b;
+            }
+            (m, ma / m, mb / m)
+        })
+        .collect();
+
+    // 3. Σ α a b Φ_t per bin (#bins × #C, column-major), columns in parallel.
+    let mut bin_coords = Mat::<f64>::zeros(num_bins, num_cage);
+    bin_coords
+        .as_mut()
+        .par_col_chunks_mut(1)
+        .enumerate()
+        .for_each(|(c, mut column)| {
+            let phi = cage_coords.column(c);
+            for b in 0..num_bins {
+                let mut sum = 0.0;
+                for e in &entries[bin_starts[b]..bin_starts[b + 1]] {
+                    let [i, j, k] = triangles[e.triangle as usize];
+                    sum += e.mass * (phi[i as usize] + phi[j as usize] + phi[k as usize]);
+                }
+                column[(b, 0)] = sum / 3.0;
+            }
+        });
+    drop(entries);
+
+    // 4. Nodes that some vertex's stencil touches, per pair → table slots.
+    let mut slot_of_node = vec![NONE; num_pairs * nodes_per_pair];
+    let mut stencil = [(0usize, 0.0f64); 16];
+    for v in 0..num_vertices {
+        let (js, ws) = weights.row(v);
+        for_each_pair(ws, |a, b| {
+            let pair = pair_of_key[js[a] as usize * num_joints + js[b] as usize];
+            if pair != NONE {
+                let n = grid.stencil(ws[a], ws[b], &mut stencil);
+                for &(node, _) in &stencil[..n] {
+                    slot_of_node[pair as usize * nodes_per_pair + node] = 0;
+                }
+            }
+        });
+    }
+    let mut pair_nodes: Vec<Vec<u32>> = Vec::with_capacity(num_pairs);
+    let mut num_slots = 0usize;
+    for pair in 0..num_pairs {
+        let slots = &mut slot_of_node[pair * nodes_per_pair..][..nodes_per_pair];
+        let mut nodes = Vec::new();
+        for (node, slot) in slots.iter_mut().enumerate() {
+            if *slot != NONE {
+                *slot = num_slots as u32;
+                num_slots += 1;
+                nodes.push(node as u32);
+            }
+        }
+        pair_nodes.push(nodes);
+    }
+
+    if trace {
+        eprintln!(
+            "cor_grid: {} bins, {num_pairs} pairs, {num_slots} slots, {} kernel entries, {:.2?}",
+            num_bins,
+            (0..num_pairs)
+                .map(|p| pair_nodes[p].len() * (pair_bin_starts[p + 1] - pair_bin_starts[p]))
+                .sum::<usize>(),
+            clock.elapsed()
+        );
+    }
+    // 5. Tables G (#slots × #C, row-major): G_chunk = E·P with E_nb = exp(−(x b̄ − y ā)²/σ²).
+    let mut tables = vec![0.0f64; num_slots * num_cage];
+    if num_cage > 0 {
+        let mut tasks = Vec::new();
+        let mut rest_tables: &mut [f64] = &mut tables;
+        for (pair, nodes) in pair_nodes.iter().enumerate() {
+            let (pair_tables, tail) = rest_tables.split_at_mut(nodes.len() * num_cage);
+            rest_tables = tail;
+            let pair_bins = pair_bin_starts[pair]..pair_bin_starts[pair + 1];
+            let chunk = (KERNEL_ENTRIES / pair_bins.len().max(1)).clamp(16, NODE_CHUNK);
+            for (c, out) in pair_tables.chunks_mut(chunk * num_cage).enumerate() {
+                tasks.push((
+                    pair_bins.clone(),
+                    &nodes[c * chunk..][..out.len() / num_cage],
+                    out,
+                ));
+            }
+        }
+        tasks.into_par_iter().for_each(|(pair_bins, nodes, out)| {
+            let bins = &bins[pair_bins.clone()];
+            // Kernel (nodes × bins, column-major).
+            let (xs, ys): (Vec<f64>, Vec<f64>) = nodes
+                .iter()
+                .map(|&n| grid.node_position(n as usize))
+                .unzip();
+            let mut kernel_values = vec![0.0f64; nodes.len() * bins.len()];
+            fill_kernel(&mut kernel_values, &xs, &ys, bins, inv_sigma_sq);
+            let kernel =
+                faer::MatRef::from_column_major_slice(&kernel_values, nodes.len(), bins.len());
+            let mut product = Mat::<f64>::zeros(nodes.len(), num_cage);
+            faer::linalg::matmul::matmul(
+                product.as_mut(),
+                Accum::Replace,
+                kernel.as_ref(),
+                bin_coords
+                    .as_ref()
+                    .subrows(pair_bins.start, pair_bins.len()),
+                1.0,
+                Par::Seq,
+            );
+            for (r, row) in out.chunks_mut(num_cage).enumerate() {
+                for (c, o) in row.iter_mut().enumerate() {
+                    *o = product[(r, c)];
+                }
+            }
+        });
+    }
+    drop(bin_coords);
+    if trace {
+        eprintln!("cor_grid: tables {:.2?}", clock.elapsed());
+    }
+
+    // 6. Λ_i = Σ_pairs x y interp(G)(x, y) / its sum, vertex blocks in parallel.
+    let mut matrix = Mat::<f64>::zeros(num_vertices, num_cage);
+    let num_blocks = num_vertices.div_ceil(VERTEX_BLOCK);
+    let done = AtomicUsize::new(0);
+    if num_cage > 0 {
+        matrix
+            .as_mut()
+            .par_row_chunks_mut(VERTEX_BLOCK)
+            .enumerate()
+            .for_each(|(block, mut out)| {
+                let mut numerator = vec![0.0f64; num_cage];
+                let mut stencil = [(0usize, 0.0f64); 16];
+                for r in 0..out.nrows() {
+                    let v = block * VERTEX_BLOCK + r;
+                    let (js, ws) = weights.row(v);
+                    numerator.fill(0.0);
+                    let mut any = false;
+                    for_each_pair(ws, |a, b| {
+                        let pair = pair_of_key[js[a] as usize * num_joints + js[b] as usize];
+                        if pair == NONE {
+                            return;
+                        }
+                        any = true;
+                        let (x, y) = (ws[a], ws[b]);
+                        let n = grid.stencil(x, y, &mut stencil);
+                        let slots = &slot_of_node[pair as usize * nodes_per_pair..];
+                        for &(node, w) in &stencil[..n] {
+                            let slot = slots[node] as usize;
+                            let g = &tables[slot * num_cage..][..num_cage];
+                            let w = w * x * y;
+                            for (o, &t) in numerator.iter_mut().zip(g) {
+                                *o += w * t;
+                            }
+                        }
+                    });
+                    let total: f64 = numerator.iter().sum();
+                    if any && total > 0.0 && total.is_finite() {
+                        let inv = 1.0 / total;
+                        for (c, &x) in numerator.iter().enumerate() {
+                            out[(r, c)] = x * inv;
+                        }
+                    } else {
+                        for c in 0..num_cage {
+                            out[(r, c)] = cage_coords.get(v, c);
+                        }
+                    }
+                }
+                let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(finished, num_blocks);
+            });
+    }
+    CageCoords::from_matrix(matrix)
+}
+
+fn validate(
+    rest_positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    weights: &SkinWeights,
+    cage_coords: &CageCoords,
+    options: &CorGridOptions,
+) -> Result<(), RigError> {
+    let num_vertices = rest_positions.len();
+    if weights.num_vertices() != num_vertices {
+        return Err(RigError::SizeMismatch {
+            what: "skinning weight rows vs rest vertices",
+            expected: num_vertices,
+            actual: weights.num_vertices(),
+        });
+    }
+    if cage_coords.num_vertices() != num_vertices {
+        return Err(RigError::SizeMismatch {
+            what: "cage coordinate rows vs rest vertices",
+            expected: num_vertices,
+            actual: cage_coords.num_vertices(),
+        });
+    }
+    if let Some(index) = rest_positions.iter().position(|p| !p.is_finite()) {
+        return Err(RigError::NonFinite {
+            what: "vertex",
+            index,
+        });
+    }
+    for tri in triangles {
+        for &i in tri {
+            if i as usize >= num_vertices {
+                return Err(RigError::IndexOutOfRange {
+                    what: "triangle vertex",
+                    index: i as usize,
+                    len: num_vertices,
+                });
+            }
+        }
+    }
+    if !(options.sigma.is_finite() && options.sigma > 0.0) {
+        return Err(RigError::Invalid(format!(
+            "CoR similarity width sigma must be positive, got {}",
+            options.sigma
+        )));
+    }
+    if !(options.grid_step.is_finite() && options.grid_step > 0.0 && options.grid_step <= 0.5) {
+        return Err(RigError::Invalid(format!(
+            "CoR grid step must be in (0, 0.5], got {}",
+            options.grid_step
+        )));
+    }
+    if !(options.bin_resolution.is_finite() && (1.0..=65535.0).contains(&options.bin_resolution)) {
+        return Err(RigError::Invalid(format!(
+            "CoR bin resolution must be in [1, 65535], got {}",
+            options.bin_resolution
+        )));
+    }
+    Ok(())
+}
+
+/// Per triangle of positive area and joint pair j < k with a_t, b_t > 0: its [`Entry`], sorted by
+/// key (pair, then bin).
+fn triangle_entries(
+    rest_positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    weights: &SkinWeights,
+    bin_resolution: f64,
+) -> Vec<Entry> {
+    let num_joints = weights.num_joints() as u64;
+    let mut entries: Vec<Entry> = triangles
+        .par_chunks(4096)
+        .enumerate()
+        .flat_map_iter(|(chunk, tris)| {
+            let mut out = Vec::new();
+            let mut joints: Vec<u32> = Vec::new();
+            let mut row: Vec<f64> = Vec::new();
+            for (t, &[i, j, k]) in tris.iter().enumerate() {
+                let (pi, pj, pk) = (
+                    rest_positions[i as usize],
+                    rest_positions[j as usize],
+                    rest_positions[k as usize],
+                );
+                let area = 0.5 * (pj - pi).cross(pk - pi).length();
+                if !(area > 0.0) {
+                    continue;
+                }
+                // ω_t: merged corner rows / 3 (ascending joints).
+                joints.clear();
+                row.clear();
+                for v in [i, j, k] {
+                    let (js, ws) = weights.row(v as usize);
+                    for (&jj, &w) in js.iter().zip(ws) {
+                        match joints.binary_search(&jj) {
+                            Ok(p) => row[p] += w / 3.0,
+                            Err(p) => {
+                                joints.insert(p, jj);
+                                row.insert(p, w / 3.0);
+                            }
+                        }
+                    }
+                }
+                let triangle = (chunk * 4096 + t) as u32;
+                for_each_pair(&row, |x, y| {
+                    let (a, b) = (row[x], row[y]);
+                    let pair_key = joints[x] as u64 * num_joints + joints[y] as u64;
+                    let bin = |v: f64| ((v * bin_resolution).round() as u64).min(0xFFFF);
+                    let (bin_a, bin_b) = (bin(a), bin(b));
+                    out.push(Entry {
+                        key: pair_key << 32 | bin_a << 16 | bin_b,
+                        mass: area * a * b,
+                        a,
+                        b,
+                        triangle,
+                    });
+                });
+            }
+            out
+        })
+        .collect();
+    entries.par_sort_unstable_by_key(|e| e.key);
+    entries
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::skinning::cor_centres::weight_similarity;
+
+    /// A strip of quads along x in the plane z = 0, weights blending joint 0 → 1 → 2 along x, with
+    /// a bump of joint 2 near the middle so that three-joint rows occur.
+    fn strip(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>, SkinWeights) {
+        let mut p = Vec::new();
+        let mut rows = Vec::new();
+        for i in 0..=n {
+            let x = i as f64 / n as f64;
+            for y in [0.0, 1.0] {
+                p.push(DVec3::new(x, y, 0.1 * (3.0 * x).sin() * y));
+                let t = 2.0 * x;
+                let mut row = if t <= 1.0 {
+                    vec![1.0 - t, t, 0.0]
+                } else {
+                    vec![0.0, 2.0 - t, t - 1.0]
+                };
+                if y > 0.0 && (0.3..0.5).contains(&x) {
+                    row[2] += 0.2;
+                    let s: f64 = row.iter().sum();
+                    row.iter_mut().for_each(|w| *w /= s);
+                }
+                rows.push(row);
+            }
+        }
+        let mut tris = Vec::new();
+        for i in 0..n as u32 {
+            let (a, b, c, d) = (2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1);
+            tris.push([a, b, c]);
+            tris.push([a, c, d]);
+        }
+        (p, tris, SkinWeights::from_dense(&rows).unwrap().0)
+    }
+
+    /// Coordinates w.r.t. a unit-cube "cage" (trilinear): rows non-negative, sum to 1, ΦC = p.
+    fn trilinear(points: &[DVec3]) -> (CageCoords, Vec<DVec3>) {
+        let mut cage = Vec::new();
+        for c in 0..8 {
+            cage.push(DVec3::new(
+                (c & 1) as f64,
+                (c >> 1 & 1) as f64,
+                (c >> 2 & 1) as f64,
+            ));
+        }
+        let rows: Vec<Vec<f64>> = points
+            .iter()
+            .map(|p| {
+                cage.iter()
+                    .map(|q| {
+                        let f = |u: f64, v: f64| if v > 0.5 { u } else { 1.0 - u };
+                        f(p.x, q.x) * f(p.y, q.y) * f((p.z + 0.5) / 1.0, q.z)
+                    })
+                    .collect()
+            })
+            .collect();
+        let cage = cage
+            .into_iter()
+            .map(|q| DVec3::new(q.x, q.y, q.z - 0.5))
+            .collect();
+        (CageCoords::from_rows(&rows, 8).unwrap(), cage)
+    }
+
+    /// Exact Eq. 5 centre of vertex i.
+    fn exact_centre(i: usize, p: &[DVec3], tris: &[[u32; 3]], w: &SkinWeights) -> DVec3 {
+        let (js, ws) = w.row(i);
+        let (mut num, mut den) = (DVec3::ZERO, 0.0);
+        for &[a, b, c] in tris {
+            let (pa, pb, pc) = (p[a as usize], p[b as usize], p[c as usize]);
+            let area = 0.5 * (pb - pa).cross(pc - pa).length();
+            let mut row = std::collections::BTreeMap::new();
+            for v in [a, b, c] {
+                let (tj, tw) = w.row(v as usize);
+                for (&j, &x) in tj.iter().zip(tw) {
+                    *row.entry(j).or_insert(0.0) += x / 3.0;
+                }
+            }
+            let tj: Vec<u32> = row.keys().copied().collect();
+            let tw: Vec<f64> = row.values().copied().collect();
+            let s = weight_similarity(js, ws, &tj, &tw, 100.0) * area;
+            num += s * (pa + pb + pc) / 3.0;
+            den += s;
+        }
+        if den > 0.0 { num / den } else { p[i] }
+    }
+
+    #[test]
+    fn matches_exact_centres_and_partition_of_unity() {
+        let (p, tris, w) = strip(40);
+        let (phi, cage) = trilinear(&p);
+        for (interpolation, step, tolerance) in [
+            (GridInterpolation::Bicubic, 1.0 / 64.0, 1e-3),
+            (GridInterpolation::Bilinear, 1.0 / 128.0, 2e-3),
+            // Fine grid and bins: close to exact.
+            (GridInterpolation::Bicubic, 1.0 / 256.0, 1e-5),
+        ] {
+            let options = CorGridOptions {
+                grid_step: step,
+                bin_resolution: if step < 0.005 { 65535.0 } else { 256.0 },
+                interpolation,
+                ..Default::default()
+            };
+            let lambda =
+                compute_cor_cage_coords_grid(&p, &tris, &w, &phi, &options, &|_, _| {}).unwrap();
+            let mut centres = vec![DVec3::ZERO; p.len()];
+            lambda.apply(&cage, &mut centres);
+            let mut worst = 0.0f64;
+            for i in 0..p.len() {
+                worst = worst.max(centres[i].distance(exact_centre(i, &p, &tris, &w)));
+                let sum: f64 = (0..8).map(|k| lambda.get(i, k)).sum();
+                assert!((sum - 1.0).abs() < 1e-12, "{i}: {sum}");
+            }
+            assert!(worst < tolerance, "{interpolation:?} {step}: {worst}");
+            // Single-influence ends keep Λ_i = Φ_i.
+            for i in [0, 1, 80, 81] {
+                for k in 0..8 {
+                    assert_eq!(lambda.get(i, k), phi.get(i, k), "{i}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn exp_matches_std() {
+        for i in 0..=7000 {
+            let x = -0.1 * i as f64;
+            let (got, want) = (exp_non_positive(x), x.exp());
+            assert!((got - want).abs() <= 4e-16 * want, "{x}: {got} vs {want}");
+        }
+        assert_eq!(exp_non_positive(0.0), 1.0);
+        assert!(exp_non_positive(-1e9) < 1e-300);
+    }
+
+    #[test]
+    fn catmull_rom_reproduces_quadratics() {
+        for t in [0.0, 0.25, 0.6, 1.0] {
+            let w = catmull_rom(t);
+            assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+            let f = |x: f64| 3.0 * x * x - x + 2.0;
+            let v: f64 = (0..4).map(|n| w[n] * f(n as f64 - 1.0)).sum();
+            assert!((v - f(t)).abs() < 1e-12, "{t}");
+        }
+    }
+
+    #[test]
+    fn rejects_bad_inputs() {
+        let (p, tris, w) = strip(4);
+        let (phi, _) = trilinear(&p);
+        let (short_phi, _) = trilinear(&p[1..]);
+        let run = |phi: &CageCoords, options: CorGridOptions| {
+            compute_cor_cage_coords_grid(&p, &tris, &w, phi, &options, &|_, _| {})
+        };
+        assert!(matches!(
+            run(&short_phi, Default::default()),
+            Err(RigError::SizeMismatch { .. })
+        ));
+        for options in [
+            CorGridOptions {
+                sigma: 0.0,
+                ..Default::default()
+            },
+            CorGridOptions {
+                grid_step: 0.0,
+                ..Default::default()
+            },
+            CorGridOptions {
+                bin_resolution: 0.5,
+                ..Default::default()
+            },
+        ] {
+            assert!(matches!(run(&phi, options), Err(RigError::Invalid(_))));
+        }
+        assert!(run(&phi, Default::default()).is_ok());
+    }
+}
