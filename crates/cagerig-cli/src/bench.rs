@@ -195,6 +195,8 @@ fn reps(base: usize, scale: f64, vertices: usize) -> usize {
 }
 
 fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<ModelRow> {
+    // Reset the peak-RSS counter (VmHWM) so the figure is this model's, not the process's.
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
     let nv = parts.mesh.num_vertices();
     let nj = parts.skeleton.len();
     let nc = parts.cage.num_vertices();

@@ -143,6 +143,9 @@ pub struct RigParts {
 struct CorState {
     centre_coords: CageCoords,
     centres: Vec<DVec3>,
+    /// The centres lag behind C while another skinning method is active (they are refreshed
+    /// in full when CoR skinning runs next), so cage edits under LBS/DQS do not pay for Λ·C.
+    stale: bool,
     skinning: CorSkinning,
     scratch: CorScratch,
 }
@@ -438,7 +441,8 @@ impl RigSession {
     pub fn fit_source(&self) -> CageFitSource {
         self.options_fit_source
     }
-    /// Current CoR centres (`#V`), if CoR data exists.
+    /// CoR centres (`#V`), if CoR data exists. They follow the cage while CoR skinning is active
+    /// and are refreshed when it next runs otherwise.
     pub fn cor_centres(&self) -> Option<&[DVec3]> {
         self.cor.as_ref().map(|c| c.centres.as_slice())
     }
@@ -618,7 +622,11 @@ impl RigSession {
             self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
             self.rest_mesh_is_phi_c = true;
             if let Some(cor) = &mut self.cor {
-                cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+                if self.method == SkinningMethod::Cor {
+                    cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+                } else {
+                    cor.stale = true;
+                }
             }
         }
         self.scratch_cage_a = posed_delta;
@@ -661,7 +669,11 @@ impl RigSession {
             self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
             self.rest_mesh_is_phi_c = true;
             if let Some(cor) = &mut self.cor {
-                cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+                if self.method == SkinningMethod::Cor {
+                    cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+                } else {
+                    cor.stale = true;
+                }
             }
         }
         self.sync_from_rest_cage();
@@ -720,9 +732,13 @@ impl RigSession {
         lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
         self.rest_mesh_is_phi_c = true;
         if let Some(cor) = &mut self.cor {
-            match (&lo.centres, &hi.centres) {
-                (Some(l), Some(h)) => lerp_into(l, h, a, &mut cor.centres),
-                _ => cor.centre_coords.apply(&self.rest_cage, &mut cor.centres),
+            match (&lo.centres, &hi.centres, self.method) {
+                (_, _, m) if m != SkinningMethod::Cor => cor.stale = true,
+                (Some(l), Some(h), _) => {
+                    lerp_into(l, h, a, &mut cor.centres);
+                    cor.stale = false;
+                }
+                _ => cor.stale = true,
             }
         }
         self.sync_from_rest_cage();
@@ -814,6 +830,7 @@ impl RigSession {
         self.cor = Some(CorState {
             centre_coords,
             centres,
+            stale: false,
             skinning: CorSkinning::new(&self.skin_weights),
             scratch: CorScratch::new(self.skeleton.len()),
         });
@@ -833,8 +850,12 @@ impl RigSession {
                 .apply_delta(vertices, deltas, &mut self.rest_mesh);
         }
         if let Some(cor) = &mut self.cor {
-            cor.centre_coords
-                .apply_delta(vertices, deltas, &mut cor.centres);
+            if self.method == SkinningMethod::Cor && !cor.stale {
+                cor.centre_coords
+                    .apply_delta(vertices, deltas, &mut cor.centres);
+            } else {
+                cor.stale = true;
+            }
         }
     }
 
@@ -889,13 +910,19 @@ impl RigSession {
                 &mut self.posed_mesh,
             ),
             SkinningMethod::Cor => match &mut self.cor {
-                Some(cor) => cor.skinning.apply(
-                    &self.posed_from_rest,
-                    &self.rest_mesh,
-                    &cor.centres,
-                    &mut cor.scratch,
-                    &mut self.posed_mesh,
-                ),
+                Some(cor) => {
+                    if cor.stale {
+                        cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+                        cor.stale = false;
+                    }
+                    cor.skinning.apply(
+                        &self.posed_from_rest,
+                        &self.rest_mesh,
+                        &cor.centres,
+                        &mut cor.scratch,
+                        &mut self.posed_mesh,
+                    )
+                }
                 None => {
                     self.lbs
                         .apply(&self.posed_from_rest, &self.rest_mesh, &mut self.posed_mesh)

@@ -274,3 +274,27 @@ fn cached_keyframe_playback_equals_full_recompute() {
         );
     }
 }
+
+#[test]
+fn cor_centres_catch_up_after_cage_edits_under_other_methods() {
+    let mut always_cor = session("bar");
+    always_cor.set_skinning(SkinningMethod::Cor).unwrap();
+    let mut switched = session("bar");
+    switched.set_skinning(SkinningMethod::Cor).unwrap();
+    switched.set_skinning(SkinningMethod::Lbs).unwrap();
+    for s in [&mut always_cor, &mut switched] {
+        s.rotate_joint(1, DVec3::Z, 0.6).unwrap();
+        s.move_rest_cage(&[0, 4], &[DVec3::new(0.2, -0.3, 0.1)])
+            .unwrap();
+        s.move_posed_cage(&[7], &[DVec3::new(0.0, 0.2, 0.3)])
+            .unwrap();
+    }
+    switched.set_skinning(SkinningMethod::Cor).unwrap();
+    let tol = 1e-10 * scale(&switched);
+    let (a, b) = (
+        always_cor.cor_centres().unwrap(),
+        switched.cor_centres().unwrap(),
+    );
+    assert!(max_distance(a, b) < tol);
+    assert!(max_distance(always_cor.posed_mesh(), switched.posed_mesh()) < tol);
+}
