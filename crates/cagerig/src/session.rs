@@ -574,10 +574,7 @@ impl RigSession {
     ) -> Result<(), RigError> {
         self.check_cage_edit(vertices, offsets)?;
         let mut dense = std::mem::take(&mut self.scratch_cage_a);
-        dense.iter_mut().for_each(|d| *d = DVec3::ZERO);
-        for (i, &v) in vertices.iter().enumerate() {
-            dense[v] += offsets[if offsets.len() == 1 { 0 } else { i }];
-        }
+        scatter_edit(vertices, offsets, &mut dense);
         let mut touched = std::mem::take(&mut self.scratch_touched);
         let mut compact = std::mem::take(&mut self.scratch_cage_b);
         touched.clear();
@@ -609,25 +606,14 @@ impl RigSession {
             self.refactor_reverser()?;
         }
         let mut posed_delta = std::mem::take(&mut self.scratch_cage_a);
-        posed_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
-        for (i, &v) in vertices.iter().enumerate() {
-            posed_delta[v] += offsets[if offsets.len() == 1 { 0 } else { i }];
-        }
+        scatter_edit(vertices, offsets, &mut posed_delta);
         let mut rest_delta = std::mem::take(&mut self.scratch_cage_b);
         let solved = self.reverser.solve(&posed_delta, &mut rest_delta);
         if solved.is_ok() {
             for (c, d) in self.rest_cage.iter_mut().zip(&rest_delta) {
                 *c += *d;
             }
-            self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
-            self.rest_mesh_is_phi_c = true;
-            if let Some(cor) = &mut self.cor {
-                if self.method == SkinningMethod::Cor {
-                    cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
-                } else {
-                    cor.stale = true;
-                }
-            }
+            self.rest_from_cage_in_full();
         }
         self.scratch_cage_a = posed_delta;
         self.scratch_cage_b = rest_delta;
@@ -666,15 +652,7 @@ impl RigSession {
             {
                 *c = *c0 + *o;
             }
-            self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
-            self.rest_mesh_is_phi_c = true;
-            if let Some(cor) = &mut self.cor {
-                if self.method == SkinningMethod::Cor {
-                    cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
-                } else {
-                    cor.stale = true;
-                }
-            }
+            self.rest_from_cage_in_full();
         }
         self.sync_from_rest_cage();
         Ok(())
@@ -837,6 +815,20 @@ impl RigSession {
         Ok(())
     }
 
+    /// After C changed everywhere: M = ΦC, and the CoR centres Λ·C (or marked stale when CoR
+    /// skinning is not active).
+    fn rest_from_cage_in_full(&mut self) {
+        self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+        self.rest_mesh_is_phi_c = true;
+        if let Some(cor) = &mut self.cor {
+            if self.method == SkinningMethod::Cor {
+                cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+            } else {
+                cor.stale = true;
+            }
+        }
+    }
+
     /// Applies ΔC on a few rest-cage vertices to C, M and the CoR centres.
     fn apply_rest_cage_delta_sparse(&mut self, vertices: &[usize], deltas: &[DVec3]) {
         for (&k, d) in vertices.iter().zip(deltas) {
@@ -953,6 +945,15 @@ impl RigSession {
             self.cage_updater
                 .apply(&self.posed_mesh, &mut self.posed_cage);
         }
+    }
+}
+
+/// Per-cage-vertex offsets of an edit (`#C`): one offset per listed vertex, or one for all;
+/// a vertex listed twice moves by the sum. `vertices` and `offsets` are checked beforehand.
+fn scatter_edit(vertices: &[usize], offsets: &[DVec3], dense: &mut [DVec3]) {
+    dense.iter_mut().for_each(|d| *d = DVec3::ZERO);
+    for (i, &v) in vertices.iter().enumerate() {
+        dense[v] += offsets[if offsets.len() == 1 { 0 } else { i }];
     }
 }
 
