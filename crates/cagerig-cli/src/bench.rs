@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
+use cagerig::cage_coords::CoordsPrecision;
 use cagerig::coords::{maxvol, mvc};
 use cagerig::playback::AnimationPlayer;
 use cagerig::session::{RigParts, RigSession, SessionOptions};
@@ -82,6 +83,9 @@ struct ModelRow {
     animation_frame: Stat,
     rest_cage_drag: Stat,
     grab_after_skeleton_edit: Stat,
+    /// The drag and the grab with Φ stored in f32 (`--coords-precision f32`).
+    rest_cage_drag_f32_coords: Stat,
+    grab_after_skeleton_edit_f32_coords: Stat,
     lbs_f32: Stat,
     dqs_f32: Stat,
     cor_f32: Stat,
@@ -249,11 +253,22 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
 
     // The session, from the precomputed parts (Φ moved in, not copied).
     let joint_coords: Vec<Vec<f64>> = (0..nj).map(|j| skelup.joint_row(j).to_vec()).collect();
+    let base_parts = RigParts {
+        mesh: parts.mesh.clone(),
+        skeleton: parts.skeleton.clone(),
+        skin_weights: parts.skin_weights.clone(),
+        cage: parts.cage.clone(),
+        cage_coords: None,
+        maxvol_rows: None,
+        cor_rows: None,
+        joint_coords: None,
+        cor_centre_coords: None,
+    };
     let session_parts = RigParts {
         cage_coords: Some(phi),
         maxvol_rows: Some(rows.clone()),
         cor_rows: None,
-        joint_coords: Some(joint_coords),
+        joint_coords: Some(joint_coords.clone()),
         cor_centre_coords: Some(lambda),
         ..parts
     };
@@ -333,47 +348,42 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     session.reset_pose();
     session.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
 
-    // Rest-cage drag of the 5 cage vertices nearest the bent joint.
-    let joint_pos = session.rest_world_from_joint()[bend_joint].translation;
-    let mut by_distance: Vec<usize> = (0..nc).collect();
-    by_distance.sort_by(|&a, &b| {
-        session.rest_cage()[a]
-            .distance(joint_pos)
-            .total_cmp(&session.rest_cage()[b].distance(joint_pos))
-    });
-    let drag: Vec<usize> = by_distance[..5.min(nc)].to_vec();
-    let step = 1e-3 * {
-        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
-        (hi - lo).length()
-    };
-    let mut sign = 1.0;
-    let drag_stat = time(frame_reps, 5, || {
-        sign = -sign;
-        let _ = session.move_rest_cage(&drag, &[DVec3::new(sign * step, 0.0, 0.0)]);
-    })
-    .with_bytes(skin_bytes + (nv * drag.len() * 8) as u64 + nv as u64 * 48);
+    let (drag_stat, grab_stat) = bench_cage_events(
+        &mut session,
+        bend_joint,
+        frame_reps,
+        reps(51, scale, nv),
+        skin_bytes,
+        8,
+    )?;
 
-    // Current-cage grab right after a skeleton edit (refactor + solve + full chain).
-    let grab_reps = reps(51, scale, nv);
-    let mut samples = Vec::with_capacity(grab_reps);
-    for i in 0..grab_reps + 3 {
-        let angle = if i % 2 == 0 { 0.01 } else { -0.01 };
-        session.rotate_joint(bend_joint, DVec3::Y, angle)?;
-        let t = Instant::now();
-        session.move_posed_cage(&drag[..1], &[DVec3::new(0.0, sign * step, 0.0)])?;
-        let ms = t.elapsed().as_secs_f64() * 1e3;
-        sign = -sign;
-        if i >= 3 {
-            samples.push(ms);
-        }
-    }
-    samples.sort_by(f64::total_cmp);
-    let grab_stat = Stat {
-        median_ms: samples[samples.len() / 2],
-        min_ms: samples[0],
-        max_ms: samples[samples.len() - 1],
-        bytes_moved: Some(skin_bytes + (nv * nc * 8) as u64 + nv as u64 * 48),
+    // The same cage events with Φ rounded to f32 (`CoordsPrecision::F32`): a second session
+    // from the base parts (Φ recomputed, MaxVol rows and Ψ reused), built after the f64 one
+    // is dropped so the two never coexist in memory.
+    drop(player);
+    drop(session);
+    let f32_parts = RigParts {
+        cage_coords: None,
+        maxvol_rows: Some(rows),
+        cor_rows: None,
+        joint_coords: Some(joint_coords),
+        cor_centre_coords: None,
+        ..base_parts
     };
+    let f32_options = SessionOptions {
+        cage_coords_precision: CoordsPrecision::F32,
+        ..SessionOptions::default()
+    };
+    let (mut session32, _) = RigSession::new(f32_parts, f32_options)?;
+    session32.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
+    let (drag32_stat, grab32_stat) = bench_cage_events(
+        &mut session32,
+        bend_joint,
+        frame_reps,
+        reps(51, scale, nv),
+        skin_bytes,
+        4,
+    )?;
 
     Ok(ModelRow {
         model,
@@ -395,10 +405,65 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         animation_frame: anim_stat,
         rest_cage_drag: drag_stat,
         grab_after_skeleton_edit: grab_stat,
+        rest_cage_drag_f32_coords: drag32_stat,
+        grab_after_skeleton_edit_f32_coords: grab32_stat,
         lbs_f32: lbs32_stat,
         dqs_f32: dqs32_stat,
         cor_f32: cor32_stat,
     })
+}
+
+/// A rest-cage drag of the 5 cage vertices nearest `bend_joint` (`drag_reps` events), then
+/// `grab_reps` current-cage grabs each right after a small skeleton edit (refactor + solve +
+/// full chain). `phi_bytes` is the size of one stored coordinate (8 for f64, 4 for f32).
+fn bench_cage_events(
+    session: &mut RigSession,
+    bend_joint: usize,
+    drag_reps: usize,
+    grab_reps: usize,
+    skin_bytes: u64,
+    phi_bytes: usize,
+) -> anyhow::Result<(Stat, Stat)> {
+    let (nv, nc) = (session.rest_mesh().len(), session.rest_cage().len());
+    let joint_pos = session.rest_world_from_joint()[bend_joint].translation;
+    let mut by_distance: Vec<usize> = (0..nc).collect();
+    by_distance.sort_by(|&a, &b| {
+        session.rest_cage()[a]
+            .distance(joint_pos)
+            .total_cmp(&session.rest_cage()[b].distance(joint_pos))
+    });
+    let drag: Vec<usize> = by_distance[..5.min(nc)].to_vec();
+    let step = 1e-3 * {
+        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
+        (hi - lo).length()
+    };
+    let mut sign = 1.0;
+    let drag_stat = time(drag_reps, 5, || {
+        sign = -sign;
+        let _ = session.move_rest_cage(&drag, &[DVec3::new(sign * step, 0.0, 0.0)]);
+    })
+    .with_bytes(skin_bytes + (nv * drag.len() * phi_bytes) as u64 + nv as u64 * 48);
+
+    let mut samples = Vec::with_capacity(grab_reps);
+    for i in 0..grab_reps + 3 {
+        let angle = if i % 2 == 0 { 0.01 } else { -0.01 };
+        session.rotate_joint(bend_joint, DVec3::Y, angle)?;
+        let t = Instant::now();
+        session.move_posed_cage(&drag[..1], &[DVec3::new(0.0, sign * step, 0.0)])?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        sign = -sign;
+        if i >= 3 {
+            samples.push(ms);
+        }
+    }
+    samples.sort_by(f64::total_cmp);
+    let grab_stat = Stat {
+        median_ms: samples[samples.len() / 2],
+        min_ms: samples[0],
+        max_ms: samples[samples.len() - 1],
+        bytes_moved: Some(skin_bytes + (nv * nc * phi_bytes) as u64 + nv as u64 * 48),
+    };
+    Ok((drag_stat, grab_stat))
 }
 
 /// A 5-key skeleton track bending every joint a little about alternating axes, and a 3-key
@@ -489,5 +554,10 @@ fn print_table(rows: &[ModelRow]) {
         line("animation frame (LBS)", &r.animation_frame);
         line("rest-cage drag, 5 v, sync", &r.rest_cage_drag);
         line("grab after skeleton edit", &r.grab_after_skeleton_edit);
+        line("rest-cage drag (f32 Φ)", &r.rest_cage_drag_f32_coords);
+        line(
+            "grab after skel. edit (f32 Φ)",
+            &r.grab_after_skeleton_edit_f32_coords,
+        );
     }
 }

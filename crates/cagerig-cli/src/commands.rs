@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use cagerig::Warning;
+use cagerig::cage_coords::CoordsPrecision;
 use cagerig::coords::maxvol;
 use cagerig::io::obj::write_obj_to;
 use cagerig::io::text::FloatFormat;
@@ -62,6 +63,16 @@ pub enum FitSourceArg {
     Displayed,
 }
 
+#[derive(Debug, Clone, Copy, ValueEnum, Default)]
+pub enum PrecisionArg {
+    /// Φ as computed (exact; matches the paper tool's outputs to 1e-9).
+    #[default]
+    F64,
+    /// Φ rounded to f32 once: half the memory traffic per frame, invariants still exact for the
+    /// rounded Φ, rest mesh moved by ~1e-7 of its size.
+    F32,
+}
+
 /// Session options shared by `edit` and `animate`.
 #[derive(Debug, Clone, Args)]
 pub struct SessionArgs {
@@ -74,6 +85,9 @@ pub struct SessionArgs {
     /// What CageUp fits with DQS/CoR.
     #[arg(long, value_enum, default_value_t)]
     pub fit_source: FitSourceArg,
+    /// Precision of the cage coordinates Φ in the per-frame products M = ΦC.
+    #[arg(long, value_enum, default_value_t)]
+    pub coords_precision: PrecisionArg,
 }
 
 impl SessionArgs {
@@ -90,6 +104,10 @@ impl SessionArgs {
             fit_source: match self.fit_source {
                 FitSourceArg::Ghost => CageFitSource::GhostLbs,
                 FitSourceArg::Displayed => CageFitSource::DisplayedMesh,
+            },
+            cage_coords_precision: match self.coords_precision {
+                PrecisionArg::F64 => CoordsPrecision::F64,
+                PrecisionArg::F32 => CoordsPrecision::F32,
             },
             ..SessionOptions::default()
         }

@@ -10,7 +10,7 @@
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
 use crate::cage::validate_cage;
-use crate::cage_coords::CageCoords;
+use crate::cage_coords::{CageCoords, CoordsPrecision};
 use crate::coords::{maxvol, mvc};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
@@ -35,6 +35,10 @@ pub const GRID_COR_CENTRES_ABOVE: usize = 20_000;
 
 /// Φ reproduces the given rest mesh when max |ΦC − M| ≤ this × the cage's bbox diagonal.
 pub const PHI_C_TOLERANCE: f64 = 1e-9;
+
+/// With [`CoordsPrecision::F32`], ΦC within this × the cage's bbox diagonal of the given rest
+/// mesh differs from it by the rounding of Φ only, and replaces it when the session is built.
+pub const PHI_C_TOLERANCE_F32: f64 = 1e-5;
 
 /// How [`compute_centre_coords`] computes Λ for a mesh of `num_vertices` vertices with the
 /// default (exact) options.
@@ -112,6 +116,12 @@ pub struct SessionOptions {
     pub fit_source: CageFitSource,
     pub skinning: SkinningMethod,
     pub cor_centres: CorCentresOptions,
+    /// Precision of Φ (and Λ) in the per-frame products M = ΦC. With
+    /// [`CoordsPrecision::F32`] the coordinates are rounded once when the session is built,
+    /// everything (MaxVol rows, CageUp, Ψ, CageRev, Λ) is derived from the rounded Φ, and the
+    /// rest mesh becomes ΦC at once (it moves by ~1e-7 of the cage size); the invariants then
+    /// hold to f64 round-off as in the default f64 mode.
+    pub cage_coords_precision: CoordsPrecision,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).
@@ -247,7 +257,7 @@ impl RigSession {
         }
         let (cage, mut warnings) = validate_cage(cage)?;
         let nc = cage.num_vertices();
-        let cage_coords = match cage_coords {
+        let mut cage_coords = match cage_coords {
             Some(phi) => {
                 if phi.num_vertices() != nv || phi.num_cage_vertices() != nc {
                     return Err(RigError::SizeMismatch {
@@ -260,6 +270,10 @@ impl RigSession {
             }
             None => mvc::compute_cage_coords(&cage, &mesh.positions, None)?,
         };
+        let precision = options.cage_coords_precision;
+        if precision == CoordsPrecision::F32 {
+            cage_coords.round_to_f32();
+        }
         let (rows, mode) = match options.fit_rows {
             FitRows::MaxVol => match maxvol_rows {
                 Some(rows) => (rows, CageFitMode::Interpolate),
@@ -284,7 +298,17 @@ impl RigSession {
         cage_coords.apply(&rest_cage, &mut phi_c);
         let residual = crate::mesh::max_distance(&phi_c, &mesh.positions);
         let (lo, hi) = cage.bounding_box();
-        let rest_mesh_is_phi_c = residual <= PHI_C_TOLERANCE * (hi - lo).length();
+        let mut rest_mesh_is_phi_c = residual <= PHI_C_TOLERANCE * (hi - lo).length();
+        let mut mesh = mesh;
+        if precision == CoordsPrecision::F32
+            && !rest_mesh_is_phi_c
+            && residual <= PHI_C_TOLERANCE_F32 * (hi - lo).length()
+        {
+            // Only the rounding of Φ separates M from ΦC: adopt ΦC now (documented in
+            // `SessionOptions::cage_coords_precision`).
+            mesh.positions.copy_from_slice(&phi_c);
+            rest_mesh_is_phi_c = true;
+        }
         if !rest_mesh_is_phi_c {
             warnings.push(Warning::Note {
                 message: format!(
@@ -803,6 +827,10 @@ impl RigSession {
                 &self.cor_options,
             )?,
         };
+        let mut centre_coords = centre_coords;
+        if self.cage_coords.precision() == CoordsPrecision::F32 {
+            centre_coords.round_to_f32();
+        }
         let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
         centre_coords.apply(&self.rest_cage, &mut centres);
         self.cor = Some(CorState {

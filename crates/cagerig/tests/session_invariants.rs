@@ -2,6 +2,7 @@
 //! identity pose gives the rest mesh, the loop C' → C → S → S' → C' is exact under LBS (and with
 //! the ghost fit for DQS/CoR), M = ΦC and A = ΨC hold after any number of events (no drift).
 
+use cagerig::cage_coords::CoordsPrecision;
 use cagerig::demo;
 use cagerig::mesh::max_distance;
 use cagerig::session::{CageFitSource, RigParts, RigSession, SessionOptions};
@@ -10,6 +11,10 @@ use cagerig::sync::cage_reverser::ReverserMethod;
 use glam::DVec3;
 
 fn session(name: &str) -> RigSession {
+    session_with(name, SessionOptions::default())
+}
+
+fn session_with(name: &str, options: SessionOptions) -> RigSession {
     let rig = demo::builtin(name, None).unwrap();
     let parts = RigParts {
         mesh: rig.mesh,
@@ -22,7 +27,7 @@ fn session(name: &str) -> RigSession {
         joint_coords: None,
         cor_centre_coords: None,
     };
-    RigSession::new(parts, SessionOptions::default()).unwrap().0
+    RigSession::new(parts, options).unwrap().0
 }
 
 /// Scale of the rig, for relative tolerances.
@@ -119,13 +124,46 @@ fn loop_is_exact_under_lbs_and_ghost_fit() {
 
 #[test]
 fn thousand_interleaved_events_keep_consensus_and_do_not_drift() {
-    let mut s = session("bar_irregular");
+    interleaved_events_keep_consensus(session("bar_irregular"), 1000);
+}
+
+#[test]
+fn f32_coordinates_keep_every_invariant() {
+    let options = SessionOptions {
+        cage_coords_precision: CoordsPrecision::F32,
+        ..SessionOptions::default()
+    };
+    let s = session_with("bar_irregular", options.clone());
+    assert_eq!(s.cage_coords().precision(), CoordsPrecision::F32);
+    let sc = scale(&s);
+    // The rest mesh became ΦC of the rounded Φ: within f32 rounding of the f64 rig's.
+    let exact = session("bar_irregular");
+    let moved = max_distance(s.rest_mesh(), exact.rest_mesh());
+    assert!(
+        moved > 0.0 && moved < 1e-6 * sc,
+        "rest mesh moved by {moved}"
+    );
+    assert!(max_distance(s.posed_mesh(), s.rest_mesh()) < 1e-12 * sc);
+    check_consensus(&s, 1e-12 * sc);
+    interleaved_events_keep_consensus(s, 300);
+    // CoR centres (Λ rounded too) and the exact loop with the ghost fit.
+    let mut s = session_with("bar", options);
+    s.set_skinning(SkinningMethod::Cor).unwrap();
+    let tol = 1e-9 * scale(&s);
+    s.rotate_joint(1, DVec3::Z, 0.8).unwrap();
+    grab_lands_exactly(&mut s, &[3, 5], DVec3::new(0.3, -0.2, 0.4), tol);
+    check_consensus(&s, tol);
+}
+
+/// Random rotations, rest-cage drags, grabs (checked to land) and skinning switches; M = ΦC and
+/// A = ΨC checked every 50 events and at the end, then C' = C after a pose reset.
+fn interleaved_events_keep_consensus(mut s: RigSession, events: usize) {
     let mut rng = Lcg(7);
     let nc = s.rest_cage().len();
     let nj = s.skeleton().len();
     let sc = scale(&s);
     let tol = 1e-9 * sc;
-    for event in 0..1000 {
+    for event in 0..events {
         match rng.index(5) {
             0 | 1 => {
                 let axis = rng.vec(1.0) + DVec3::splat(1e-3);
