@@ -147,12 +147,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         let parts = if levels == 0 {
             base.clone()
         } else {
-            let sub = cagerig::subdivide::subdivide_rig(
-                &base.mesh,
-                &base.skin_weights,
-                base.cor_rows.as_ref(),
-                levels,
-            )?;
+            // The bench computes Λ itself (as a session does when no CoR rows are loaded), so
+            // the loaded CoR rows are not carried: subdivided, they would only hold memory.
+            let sub =
+                cagerig::subdivide::subdivide_rig(&base.mesh, &base.skin_weights, None, levels)?;
             RigParts {
                 mesh: sub.mesh,
                 skeleton: base.skeleton.clone(),
@@ -160,7 +158,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 cage: base.cage.clone(),
                 cage_coords: None,
                 maxvol_rows: None,
-                cor_rows: sub.cor_rows,
+                cor_rows: None,
                 joint_coords: None,
                 cor_centre_coords: None,
             }
@@ -208,6 +206,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
 
     let mut phi = None;
     let mvc_stat = time(reps(5, scale, nv), 1, || {
+        drop(phi.take()); // one Φ alive at a time
         phi = mvc::compute_cage_coords(&cage, &parts.mesh.positions, None).ok();
     });
     let phi = phi.context("computing mean value coordinates")?;
