@@ -1,7 +1,7 @@
 //! Per-frame timings of LBS / DQS / CoR, f64 and f32 kernels, on
 //! (1) a synthetic rig (133 073 vertices × 25 joints, 1–7 random influences per vertex) and
 //! (2) the Arm subdivided 3 times (133 073 vertices, reference step-ii pose).
-//! Run with `cargo run --release -p cagerig --example skinning_bench [repetitions]`.
+//! Run with `cargo run --release -p cagerig --example skinning_bench [repetitions] [kernel filter]`.
 
 use std::path::Path;
 use std::time::Instant;
@@ -31,7 +31,16 @@ impl Rng {
 }
 
 /// Prints min and median (ms) of `repetitions` runs after 10 warm-up runs.
+///
+/// An optional second command-line argument keeps only the kernels whose label contains it
+/// (e.g. `DQS f32`), so that one kernel can be profiled on its own (`perf stat`).
 fn time(label: &str, repetitions: usize, mut f: impl FnMut()) {
+    if std::env::args()
+        .nth(2)
+        .is_some_and(|filter| !label.contains(&filter))
+    {
+        return;
+    }
     for _ in 0..10 {
         f();
     }

@@ -163,47 +163,146 @@ impl CountSortedWeights {
             .zip(self.pivot.par_chunks(VERTEX_GRAIN_F32))
             .enumerate()
             .for_each(|(chunk, (((out, inputs), local_index), pivots))| {
-                let runs =
-                    &self.runs[self.run_start[chunk] as usize..self.run_start[chunk + 1] as usize];
-                let mut influence = self.influence_start[chunk] as usize;
-                let mut slot = 0;
-                for run in runs {
-                    let (k, len) = (run.influences as usize, run.len as usize);
-                    let j = &self.joints[influence..influence + k * len];
-                    let w = &self.weights[influence..influence + k * len];
-                    let p = &pivots[slot..slot + len];
-                    let x = &inputs[slot..slot + len];
-                    let i = &local_index[slot..slot + len];
-                    match k {
-                        0 => {
-                            for (&x, &i) in x.iter().zip(i) {
-                                out[usize::from(i)] = kernel.unweighted(x).into();
-                            }
-                        }
-                        1 => skin_run::<Kernel, 1>(kernel, j, w, p, x, i, out),
-                        2 => skin_run::<Kernel, 2>(kernel, j, w, p, x, i, out),
-                        3 => skin_run::<Kernel, 3>(kernel, j, w, p, x, i, out),
-                        4 => skin_run::<Kernel, 4>(kernel, j, w, p, x, i, out),
-                        5 => skin_run::<Kernel, 5>(kernel, j, w, p, x, i, out),
-                        6 => skin_run::<Kernel, 6>(kernel, j, w, p, x, i, out),
-                        7 => skin_run::<Kernel, 7>(kernel, j, w, p, x, i, out),
-                        8 => skin_run::<Kernel, 8>(kernel, j, w, p, x, i, out),
-                        _ => {
-                            for ((((js, ws), &pivot), &x), &i) in j
-                                .chunks_exact(k)
-                                .zip(w.chunks_exact(k))
-                                .zip(p)
-                                .zip(x)
-                                .zip(i)
-                            {
-                                out[usize::from(i)] = kernel.skin(js, ws, pivot, x).into();
-                            }
-                        }
-                    }
-                    influence += k * len;
-                    slot += len;
-                }
+                self.skin_chunk(kernel, chunk, inputs, local_index, pivots, out)
             });
+    }
+
+    /// One chunk of [`Self::skin`], compiled for AVX2 where the CPU has it (wider registers and
+    /// three-operand forms for the glam SSE arithmetic; no fused multiply-add, so the results
+    /// are the same on every path).
+    fn skin_chunk<Kernel: VertexKernel>(
+        &self,
+        kernel: &Kernel,
+        chunk: usize,
+        inputs: &[Kernel::Input],
+        local_index: &[u16],
+        pivots: &[u16],
+        out: &mut [Vec3],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports the enabled feature (checked just above).
+                return unsafe {
+                    self.skin_chunk_avx2(kernel, chunk, inputs, local_index, pivots, out)
+                };
+            }
+        }
+        self.skin_chunk_generic(kernel, chunk, inputs, local_index, pivots, out)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn skin_chunk_avx2<Kernel: VertexKernel>(
+        &self,
+        kernel: &Kernel,
+        chunk: usize,
+        inputs: &[Kernel::Input],
+        local_index: &[u16],
+        pivots: &[u16],
+        out: &mut [Vec3],
+    ) {
+        self.skin_chunk_generic(kernel, chunk, inputs, local_index, pivots, out)
+    }
+
+    #[inline(always)]
+    fn skin_chunk_generic<Kernel: VertexKernel>(
+        &self,
+        kernel: &Kernel,
+        chunk: usize,
+        inputs: &[Kernel::Input],
+        local_index: &[u16],
+        pivots: &[u16],
+        out: &mut [Vec3],
+    ) {
+        let runs = &self.runs[self.run_start[chunk] as usize..self.run_start[chunk + 1] as usize];
+        let mut influence = self.influence_start[chunk] as usize;
+        let mut slot = 0;
+        for run in runs {
+            let (k, len) = (run.influences as usize, run.len as usize);
+            let j = &self.joints[influence..influence + k * len];
+            let w = &self.weights[influence..influence + k * len];
+            let p = &pivots[slot..slot + len];
+            let x = &inputs[slot..slot + len];
+            let i = &local_index[slot..slot + len];
+            match k {
+                0 => {
+                    for (&x, &i) in x.iter().zip(i) {
+                        out[usize::from(i)] = kernel.unweighted(x).into();
+                    }
+                }
+                1 => skin_run::<Kernel, 1>(kernel, j, w, p, x, i, out),
+                2 => skin_run::<Kernel, 2>(kernel, j, w, p, x, i, out),
+                3 => skin_run::<Kernel, 3>(kernel, j, w, p, x, i, out),
+                4 => skin_run::<Kernel, 4>(kernel, j, w, p, x, i, out),
+                5 => skin_run::<Kernel, 5>(kernel, j, w, p, x, i, out),
+                6 => skin_run::<Kernel, 6>(kernel, j, w, p, x, i, out),
+                7 => skin_run::<Kernel, 7>(kernel, j, w, p, x, i, out),
+                8 => skin_run::<Kernel, 8>(kernel, j, w, p, x, i, out),
+                _ => {
+                    for ((((js, ws), &pivot), &x), &i) in j
+                        .chunks_exact(k)
+                        .zip(w.chunks_exact(k))
+                        .zip(p)
+                        .zip(x)
+                        .zip(i)
+                    {
+                        out[usize::from(i)] = kernel.skin(js, ws, pivot, x).into();
+                    }
+                }
+            }
+            influence += k * len;
+            slot += len;
+        }
+    }
+}
+
+/// Count-sorted Ω with the rest mesh M stored beside it, in sorted order, as f32 offsets from a
+/// local origin `o` (the state shared by the f32 LBS and DQS kernels).
+#[derive(Debug, Clone)]
+pub(crate) struct SortedRestMesh {
+    pub weights: CountSortedWeights,
+    pub origin: DVec3,
+    /// `v − o` per vertex, `#V`, sorted order.
+    pub rest_local: Vec<Vec3A>,
+}
+
+impl SortedRestMesh {
+    /// `what` names the kernel in the size-mismatch error.
+    pub fn new(
+        skin_weights: &SkinWeights,
+        rest_positions: &[DVec3],
+        what: &'static str,
+    ) -> Result<Self, RigError> {
+        let weights = CountSortedWeights::new(skin_weights)?;
+        let mut mesh = Self {
+            rest_local: vec![Vec3A::ZERO; weights.num_vertices()],
+            weights,
+            origin: DVec3::ZERO,
+        };
+        mesh.set_rest_positions(rest_positions, what)?;
+        Ok(mesh)
+    }
+
+    /// Replaces the stored rest mesh M (`#V`). Parallel, no allocation.
+    pub fn set_rest_positions(
+        &mut self,
+        rest_positions: &[DVec3],
+        what: &'static str,
+    ) -> Result<(), RigError> {
+        if rest_positions.len() != self.weights.num_vertices() {
+            return Err(RigError::SizeMismatch {
+                what,
+                expected: self.weights.num_vertices(),
+                actual: rest_positions.len(),
+            });
+        }
+        self.origin = local_origin(rest_positions);
+        let origin = self.origin;
+        self.weights.gather(&mut self.rest_local, |v| {
+            Vec3A::from((rest_positions[v] - origin).as_vec3())
+        });
+        Ok(())
     }
 }
 

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 
 use super::VERTEX_GRAIN;
 use super::lbs::{blend_affine_cols, transform_point_cols};
+use super::pivoted_weights::PivotedWeights;
 use super::rigid_rotation::rotation_quaternion;
 use crate::SkinWeights;
 
@@ -45,11 +46,7 @@ impl CorScratch {
 /// Precomputed CoR skinning: flat Ω (CSR) and the per-vertex pivot (heaviest) joint.
 #[derive(Debug, Clone)]
 pub struct CorSkinning {
-    num_joints: usize,
-    row_start: Vec<u32>,
-    joints: Vec<u32>,
-    weights: Vec<f64>,
-    pivot: Vec<u32>,
+    csr: PivotedWeights,
 }
 
 /// Normalised sign-aligned quaternion blend `Σ_j ω_j s_j r_j / |…|` (DQBlendRot).
@@ -75,33 +72,25 @@ pub(crate) fn blend_rotations(
 
 impl CorSkinning {
     pub fn new(weights: &SkinWeights) -> Self {
-        let (row_start, joints, w) = weights.csr();
-        let pivot = (0..weights.num_vertices())
-            .map(|v| weights.heaviest(v).unwrap_or(0) as u32)
-            .collect();
         Self {
-            num_joints: weights.num_joints(),
-            row_start: row_start.to_vec(),
-            joints: joints.to_vec(),
-            weights: w.to_vec(),
-            pivot,
+            csr: PivotedWeights::new(weights),
         }
     }
 
     pub fn num_vertices(&self) -> usize {
-        self.row_start.len() - 1
+        self.csr.num_vertices()
     }
 
     pub fn num_joints(&self) -> usize {
-        self.num_joints
+        self.csr.num_joints
     }
 
     /// Fills `scratch` with the joint rotation quaternions of `transforms` (`#J`, serial).
     pub fn prepare(&self, transforms: &[DAffine3], scratch: &mut CorScratch) {
-        assert_eq!(transforms.len(), self.num_joints, "CoR: transforms");
+        assert_eq!(transforms.len(), self.csr.num_joints, "CoR: transforms");
         assert_eq!(
             scratch.joint_rotations.len(),
-            self.num_joints,
+            self.csr.num_joints,
             "CoR: scratch"
         );
         for (q, t) in scratch.joint_rotations.iter_mut().zip(transforms) {
@@ -112,14 +101,14 @@ impl CorSkinning {
     /// The blended rotation `R(i)` of vertex `v` (needs a prepared `scratch`); identity for an
     /// unweighted vertex.
     pub fn blended_rotation(&self, v: usize, scratch: &CorScratch) -> DMat3 {
-        let range = self.row_start[v] as usize..self.row_start[v + 1] as usize;
+        let range = self.csr.row_start[v] as usize..self.csr.row_start[v + 1] as usize;
         if range.is_empty() {
             return DMat3::IDENTITY;
         }
         DMat3::from_quat(blend_rotations(
-            &self.joints[range.clone()],
-            &self.weights[range],
-            self.pivot[v] as usize,
+            &self.csr.joints[range.clone()],
+            &self.csr.weights[range],
+            self.csr.pivot[v] as usize,
             &scratch.joint_rotations,
         ))
     }
@@ -148,8 +137,8 @@ impl CorSkinning {
             .enumerate()
             .for_each(|(chunk, ((out_chunk, rest_chunk), centre_chunk))| {
                 let first = chunk * VERTEX_GRAIN;
-                let row_start = &self.row_start[first..=first + out_chunk.len()];
-                let pivots = &self.pivot[first..first + out_chunk.len()];
+                let row_start = &self.csr.row_start[first..=first + out_chunk.len()];
+                let pivots = &self.csr.pivot[first..first + out_chunk.len()];
                 for ((((o, &p), &c), bounds), &pivot) in out_chunk
                     .iter_mut()
                     .zip(rest_chunk)
@@ -162,8 +151,8 @@ impl CorSkinning {
                         *o = p;
                         continue;
                     }
-                    let joints = &self.joints[range.clone()];
-                    let weights = &self.weights[range];
+                    let joints = &self.csr.joints[range.clone()];
+                    let weights = &self.csr.weights[range];
                     let blended = blend_affine_cols(joints, weights, transforms);
                     if !c.is_finite() {
                         *o = transform_point_cols(&blended, p);

@@ -13,6 +13,7 @@ use glam::{DAffine3, DQuat, DVec3};
 use rayon::prelude::*;
 
 use super::VERTEX_GRAIN;
+use super::pivoted_weights::PivotedWeights;
 use super::rigid_rotation::rotation_quaternion;
 use crate::SkinWeights;
 
@@ -79,12 +80,7 @@ impl DqsScratch {
 /// Precomputed DQS: flat Ω (CSR) and the per-vertex pivot joint.
 #[derive(Debug, Clone)]
 pub struct DualQuaternionSkinning {
-    num_joints: usize,
-    row_start: Vec<u32>,
-    joints: Vec<u32>,
-    weights: Vec<f64>,
-    /// Heaviest joint per vertex (0 for unweighted vertices, unused there), `#V`.
-    pivot: Vec<u32>,
+    csr: PivotedWeights,
 }
 
 /// Sign-aligned blend `Σ_j ω_j s_j q̂_j`, `s_j = sign(r_pivot · r_j)`, normalised by `|Σ ω s r|`.
@@ -118,38 +114,30 @@ pub(crate) fn blend_dual_quats(
 
 impl DualQuaternionSkinning {
     pub fn new(weights: &SkinWeights) -> Self {
-        let (row_start, joints, w) = weights.csr();
-        let pivot = (0..weights.num_vertices())
-            .map(|v| weights.heaviest(v).unwrap_or(0) as u32)
-            .collect();
         Self {
-            num_joints: weights.num_joints(),
-            row_start: row_start.to_vec(),
-            joints: joints.to_vec(),
-            weights: w.to_vec(),
-            pivot,
+            csr: PivotedWeights::new(weights),
         }
     }
 
     pub fn num_vertices(&self) -> usize {
-        self.row_start.len() - 1
+        self.csr.num_vertices()
     }
 
     pub fn num_joints(&self) -> usize {
-        self.num_joints
+        self.csr.num_joints
     }
 
     /// Heaviest joint of vertex `v` (the antipodality pivot).
     pub fn pivot(&self, v: usize) -> usize {
-        self.pivot[v] as usize
+        self.csr.pivot[v] as usize
     }
 
     /// Fills `scratch` with the joint dual quaternions of `transforms` (`#J`, serial).
     pub fn prepare(&self, transforms: &[DAffine3], scratch: &mut DqsScratch) {
-        assert_eq!(transforms.len(), self.num_joints, "DQS: transforms");
+        assert_eq!(transforms.len(), self.csr.num_joints, "DQS: transforms");
         assert_eq!(
             scratch.joint_dual_quats.len(),
-            self.num_joints,
+            self.csr.num_joints,
             "DQS: scratch"
         );
         for (q, t) in scratch.joint_dual_quats.iter_mut().zip(transforms) {
@@ -178,8 +166,8 @@ impl DualQuaternionSkinning {
             .enumerate()
             .for_each(|(chunk, (out_chunk, rest_chunk))| {
                 let first = chunk * VERTEX_GRAIN;
-                let row_start = &self.row_start[first..=first + out_chunk.len()];
-                let pivots = &self.pivot[first..first + out_chunk.len()];
+                let row_start = &self.csr.row_start[first..=first + out_chunk.len()];
+                let pivots = &self.csr.pivot[first..first + out_chunk.len()];
                 for (((o, &p), bounds), &pivot) in out_chunk
                     .iter_mut()
                     .zip(rest_chunk)
@@ -191,8 +179,8 @@ impl DualQuaternionSkinning {
                         p
                     } else {
                         blend_dual_quats(
-                            &self.joints[range.clone()],
-                            &self.weights[range],
+                            &self.csr.joints[range.clone()],
+                            &self.csr.weights[range],
                             pivot as usize,
                             joint_dual_quats,
                         )

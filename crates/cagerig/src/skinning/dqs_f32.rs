@@ -10,7 +10,7 @@
 
 use glam::{DAffine3, DVec3, Quat, Vec3, Vec3A};
 
-use super::compact_weights::{CountSortedWeights, VertexKernel, local_origin};
+use super::compact_weights::{SortedRestMesh, VertexKernel};
 use super::dqs::DualQuat;
 use crate::{RigError, SkinWeights};
 
@@ -45,9 +45,7 @@ impl DqsF32Scratch {
 /// Precomputed f32 DQS: compact Ω, pivots and the rest mesh M (`#V`, f32, local origin).
 #[derive(Debug, Clone)]
 pub struct DqsF32 {
-    weights: CountSortedWeights,
-    origin: DVec3,
-    rest_local: Vec<Vec3A>,
+    mesh: SortedRestMesh,
 }
 
 /// Per-frame DQS rule: input = local rest position `v − o`.
@@ -113,39 +111,27 @@ pub(crate) fn rotate_unnormalised(v: Vec3A, w: f32, p: Vec3A) -> Vec3A {
 impl DqsF32 {
     /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ or `#J` > 65 536.
     pub fn new(skin_weights: &SkinWeights, rest_positions: &[DVec3]) -> Result<Self, RigError> {
-        let weights = CountSortedWeights::new(skin_weights)?;
-        let mut dqs = Self {
-            rest_local: vec![Vec3A::ZERO; weights.num_vertices()],
-            weights,
-            origin: DVec3::ZERO,
-        };
-        dqs.set_rest_positions(rest_positions)?;
-        Ok(dqs)
+        Ok(Self {
+            mesh: SortedRestMesh::new(
+                skin_weights,
+                rest_positions,
+                "DQS f32 rest positions vs. weight rows",
+            )?,
+        })
     }
 
     pub fn num_vertices(&self) -> usize {
-        self.weights.num_vertices()
+        self.mesh.weights.num_vertices()
     }
 
     pub fn num_joints(&self) -> usize {
-        self.weights.num_joints
+        self.mesh.weights.num_joints
     }
 
     /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
     pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
-        if rest_positions.len() != self.num_vertices() {
-            return Err(RigError::SizeMismatch {
-                what: "DQS f32 rest positions vs. weight rows",
-                expected: self.num_vertices(),
-                actual: rest_positions.len(),
-            });
-        }
-        self.origin = local_origin(rest_positions);
-        let origin = self.origin;
-        self.weights.gather(&mut self.rest_local, |v| {
-            Vec3A::from((rest_positions[v] - origin).as_vec3())
-        });
-        Ok(())
+        self.mesh
+            .set_rest_positions(rest_positions, "DQS f32 rest positions vs. weight rows")
     }
 
     /// Fills `scratch` with the dual quaternions of `T_j ∘ translate(o)` (`#J`, f64 → f32).
@@ -156,7 +142,7 @@ impl DqsF32 {
             self.num_joints(),
             "DQS f32: scratch"
         );
-        let to_local = DAffine3::from_translation(self.origin);
+        let to_local = DAffine3::from_translation(self.mesh.origin);
         for (q, t) in scratch.joint_dual_quats.iter_mut().zip(transforms) {
             let dq = DualQuat::from_affine(&(*t * to_local));
             *q = DualQuatF32 {
@@ -175,9 +161,9 @@ impl DqsF32 {
         self.prepare(transforms, scratch);
         let kernel = DqsKernel {
             joint_dual_quats: &scratch.joint_dual_quats,
-            origin: Vec3A::from(self.origin.as_vec3()),
+            origin: Vec3A::from(self.mesh.origin.as_vec3()),
         };
-        self.weights.skin(&kernel, &self.rest_local, out);
+        self.mesh.weights.skin(&kernel, &self.mesh.rest_local, out);
     }
 }
 

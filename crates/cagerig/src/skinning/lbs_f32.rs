@@ -9,7 +9,7 @@
 
 use glam::{Affine3A, DAffine3, DVec3, Vec3, Vec3A};
 
-use super::compact_weights::{CountSortedWeights, VertexKernel, affine_from_local, local_origin};
+use super::compact_weights::{SortedRestMesh, VertexKernel, affine_from_local};
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: the `#J` transforms `T_j ∘ translate(o)` in f32.
@@ -30,9 +30,7 @@ impl LbsF32Scratch {
 /// local origin, in sorted order; see [`super::compact_weights`]).
 #[derive(Debug, Clone)]
 pub struct LbsF32 {
-    weights: CountSortedWeights,
-    origin: DVec3,
-    rest_local: Vec<Vec3A>,
+    mesh: SortedRestMesh,
 }
 
 /// `Σ_j ω_j A_j` for the influences of one vertex (`A_j` local-to-world, f32).
@@ -82,39 +80,27 @@ impl VertexKernel for LbsKernel<'_> {
 impl LbsF32 {
     /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ or `#J` > 65 536.
     pub fn new(skin_weights: &SkinWeights, rest_positions: &[DVec3]) -> Result<Self, RigError> {
-        let weights = CountSortedWeights::new(skin_weights)?;
-        let mut lbs = Self {
-            rest_local: vec![Vec3A::ZERO; weights.num_vertices()],
-            weights,
-            origin: DVec3::ZERO,
-        };
-        lbs.set_rest_positions(rest_positions)?;
-        Ok(lbs)
+        Ok(Self {
+            mesh: SortedRestMesh::new(
+                skin_weights,
+                rest_positions,
+                "LBS f32 rest positions vs. weight rows",
+            )?,
+        })
     }
 
     pub fn num_vertices(&self) -> usize {
-        self.weights.num_vertices()
+        self.mesh.weights.num_vertices()
     }
 
     pub fn num_joints(&self) -> usize {
-        self.weights.num_joints
+        self.mesh.weights.num_joints
     }
 
     /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
     pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
-        if rest_positions.len() != self.num_vertices() {
-            return Err(RigError::SizeMismatch {
-                what: "LBS f32 rest positions vs. weight rows",
-                expected: self.num_vertices(),
-                actual: rest_positions.len(),
-            });
-        }
-        self.origin = local_origin(rest_positions);
-        let origin = self.origin;
-        self.weights.gather(&mut self.rest_local, |v| {
-            Vec3A::from((rest_positions[v] - origin).as_vec3())
-        });
-        Ok(())
+        self.mesh
+            .set_rest_positions(rest_positions, "LBS f32 rest positions vs. weight rows")
     }
 
     /// Fills `scratch` with `T_j ∘ translate(o)` in f32 (`#J`, serial).
@@ -126,7 +112,7 @@ impl LbsF32 {
             "LBS f32: scratch"
         );
         for (a, t) in scratch.transforms.iter_mut().zip(transforms) {
-            *a = affine_from_local(t, self.origin);
+            *a = affine_from_local(t, self.mesh.origin);
         }
     }
 
@@ -139,9 +125,9 @@ impl LbsF32 {
         self.prepare(transforms, scratch);
         let kernel = LbsKernel {
             transforms: &scratch.transforms,
-            origin: Vec3A::from(self.origin.as_vec3()),
+            origin: Vec3A::from(self.mesh.origin.as_vec3()),
         };
-        self.weights.skin(&kernel, &self.rest_local, out);
+        self.mesh.weights.skin(&kernel, &self.mesh.rest_local, out);
     }
 }
 

@@ -15,6 +15,7 @@ pub mod dqs;
 pub mod dqs_f32;
 pub mod lbs;
 pub mod lbs_f32;
+pub(crate) mod pivoted_weights;
 pub mod rigid_rotation;
 
 pub use cor::{CorScratch, CorSkinning};
