@@ -1,5 +1,6 @@
 //! Barycentric coordinates: mean value (Φ), max-entropy (Ψ projection), MaxVol row selection.
 
+pub(crate) mod local_mvc;
 pub mod maxvol;
 pub mod mec;
 pub mod mec_signed;

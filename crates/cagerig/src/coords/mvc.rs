@@ -280,6 +280,56 @@ pub fn compute_cage_coords(
     CageCoords::from_matrix(matrix)
 }
 
+/// What one triangle contributes to the unnormalised MVC weights of `point`
+/// ([`triangle_weights`]).
+pub(crate) enum TriangleWeights {
+    /// Unnormalised weights of the three corners, in triangle order.
+    Add([f64; 3]),
+    /// The point lies on the triangle's plane outside it: no contribution.
+    Skip,
+    /// The point lies on one of the triangle's edges or inside it: the coordinates are the
+    /// edge/face interpolation that [`mean_value_coordinates`] returns, not a weighted sum.
+    Degenerate,
+}
+
+/// The unnormalised MVC weights that triangle `tri` gives its corners at `point`: one iteration
+/// of the triangle loop of [`mean_value_coordinates`], with bitwise the same values (so that a
+/// vertex's weight summed over its incident triangles in ascending order equals that function's
+/// weight before normalisation). Does not handle the snapped-vertex case.
+pub(crate) fn triangle_weights(
+    positions: &[DVec3],
+    tri: [u32; 3],
+    point: DVec3,
+) -> TriangleWeights {
+    let idx = tri.map(|i| i as usize);
+    let mut unit = [DVec3::ZERO; 3];
+    let mut dist = [0.0; 3];
+    for j in 0..3 {
+        let v = positions[idx[j]] - point;
+        dist[j] = v.length();
+        unit[j] = v / dist[j];
+    }
+    let mut cross = [DVec3::ZERO; 3];
+    let mut half_angle_over_sin = [0.0; 3];
+    let mut theta = [0.0; 3];
+    for j in 0..3 {
+        let (a, b) = ((j + 1) % 3, (j + 2) % 3);
+        match edge_terms(unit[a], unit[b]) {
+            EdgeTerms::Regular { c, k, angle } => {
+                cross[j] = c;
+                half_angle_over_sin[j] = k;
+                theta[j] = angle;
+            }
+            EdgeTerms::OnEdge => return TriangleWeights::Degenerate,
+        }
+    }
+    match triangle_contribution(&unit, &dist, &cross, &half_angle_over_sin, &theta) {
+        Contribution::Add(w) => TriangleWeights::Add(w),
+        Contribution::Skip => TriangleWeights::Skip,
+        Contribution::OnTriangle => TriangleWeights::Degenerate,
+    }
+}
+
 /// The cage vertex `point` coincides with (within `EPS · max distance`), if any.
 fn snapped_vertex(positions: &[DVec3], point: DVec3) -> Option<usize> {
     let mut nearest = (usize::MAX, f64::INFINITY);

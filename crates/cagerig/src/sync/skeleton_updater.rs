@@ -14,6 +14,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::cage_coords::CageCoords;
+use crate::coords::local_mvc::{LocalMvc, LocalMvcScratch};
 use crate::coords::{mec, mec_signed, mvc};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
@@ -53,6 +54,9 @@ impl JointLocalisation {
     }
 }
 
+/// Cage columns accumulated together in [`project_prior`].
+const MASS_BLOCK: usize = 8;
+
 /// Positive masses are floored at this fraction of the largest one in `Articulation` mode.
 pub const MASS_FLOOR_RATIO: f64 = 1e-8;
 
@@ -88,6 +92,28 @@ impl SkeletonUpdater {
         rest_cage: &[DVec3],
         localisation: JointLocalisation,
     ) -> Result<(Self, Vec<Warning>), RigError> {
+        Self::build(
+            rest_mesh,
+            skeleton,
+            skin_weights,
+            cage_coords,
+            rest_cage,
+            localisation,
+            true,
+        )
+    }
+
+    /// [`Self::new`]; `use_local_mvc` = false forces the reference full-MVC prior
+    /// ([`full_prior`]) in Articulation mode too (for tests).
+    fn build(
+        rest_mesh: &TriMesh,
+        skeleton: &Skeleton,
+        skin_weights: &SkinWeights,
+        cage_coords: &CageCoords,
+        rest_cage: &[DVec3],
+        localisation: JointLocalisation,
+        use_local_mvc: bool,
+    ) -> Result<(Self, Vec<Warning>), RigError> {
         let num_cage = cage_coords.num_cage_vertices();
         let num_vertices = rest_mesh.num_vertices();
         if cage_coords.num_vertices() != num_vertices || skin_weights.num_vertices() != num_vertices
@@ -105,19 +131,33 @@ impl SkeletonUpdater {
                 actual: rest_cage.len(),
             });
         }
+        let articulation =
+            use_local_mvc && matches!(localisation, JointLocalisation::Articulation { .. });
+        let inputs = JointInputs {
+            rest_mesh,
+            skeleton,
+            skin_weights,
+            cage_coords,
+            rest_cage,
+            localisation,
+            reference_floor_power: match localisation {
+                JointLocalisation::ReferenceTool { exponent, epsilon } => epsilon.powf(exponent),
+                JointLocalisation::Articulation { .. } => 0.0,
+            },
+            candidates: if articulation {
+                articulation_candidates(skeleton, skin_weights)
+            } else {
+                Vec::new()
+            },
+            local_mvc: articulation
+                .then(|| LocalMvc::new(&rest_mesh.positions, &rest_mesh.triangles)),
+        };
         let per_joint: Vec<(Vec<f64>, JointCoordsReport)> = (0..skeleton.len())
             .into_par_iter()
-            .map(|j| {
-                joint_coordinates(
-                    j,
-                    rest_mesh,
-                    skeleton,
-                    skin_weights,
-                    cage_coords,
-                    rest_cage,
-                    localisation,
-                )
-            })
+            .map_init(
+                || inputs.local_mvc.as_ref().map(LocalMvc::scratch),
+                |scratch, j| joint_coordinates(j, &inputs, scratch),
+            )
             .collect();
         let mut joint_coords = Vec::with_capacity(skeleton.len() * num_cage);
         let mut reports = Vec::with_capacity(skeleton.len());
@@ -199,7 +239,14 @@ impl SkeletonUpdater {
 }
 
 /// Eq. 9 localisation value of vertex weights `own` (ω_ij) and `parent` (ω_if, if any).
-fn localisation_value(loc: JointLocalisation, own: f64, parent: Option<f64>) -> f64 {
+/// `reference_floor_power` is `ε^s` for [`JointLocalisation::ReferenceTool`] (unused otherwise):
+/// weights at most ε use it instead of a `powf` (same value).
+fn localisation_value(
+    loc: JointLocalisation,
+    own: f64,
+    parent: Option<f64>,
+    reference_floor_power: f64,
+) -> f64 {
     match loc {
         JointLocalisation::Articulation { exponent: s } => {
             let other = parent.unwrap_or(1.0 - own).max(0.0);
@@ -209,62 +256,206 @@ fn localisation_value(loc: JointLocalisation, own: f64, parent: Option<f64>) -> 
             exponent: s,
             epsilon: eps,
         } => {
-            let mut l = -1.0 + own.abs().max(eps).powf(s);
+            let power = |w: f64| {
+                if w.abs() <= eps {
+                    reference_floor_power
+                } else {
+                    w.abs().powf(s)
+                }
+            };
+            let mut l = -1.0 + power(own);
             if let Some(p) = parent {
-                l += p.abs().max(eps).powf(s);
+                l += power(p);
             }
             l.max(eps)
         }
     }
 }
 
-fn joint_coordinates(
-    j: usize,
-    rest_mesh: &TriMesh,
-    skeleton: &Skeleton,
-    skin_weights: &SkinWeights,
-    cage_coords: &CageCoords,
-    rest_cage: &[DVec3],
-    localisation: JointLocalisation,
-) -> (Vec<f64>, JointCoordsReport) {
-    let num_vertices = rest_mesh.num_vertices();
-    let num_cage = cage_coords.num_cage_vertices();
-    let target = skeleton.joint(j).rest_world_from_joint.translation;
-    let parent = skeleton.parent(j);
+/// One vertex where the articulation localisation of a joint may be non-zero: its index and
+/// the weights (ω_ij, ω_if) of the joint and of its parent (`None` for a root).
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    vertex: usize,
+    own: f64,
+    parent: Option<f64>,
+}
 
-    let mut mesh_mvc = vec![0.0; num_vertices];
+/// For every joint j, the vertices with ω_ij ≠ 0 and (unless j is a root) ω_if ≠ 0 — the only
+/// ones where the [`JointLocalisation::Articulation`] L_j can be non-zero — in ascending vertex
+/// order, from one pass over the rows of Ω.
+fn articulation_candidates(skeleton: &Skeleton, skin_weights: &SkinWeights) -> Vec<Vec<Candidate>> {
+    let mut candidates = vec![Vec::new(); skeleton.len()];
+    for vertex in 0..skin_weights.num_vertices() {
+        let (joints, weights) = skin_weights.row(vertex);
+        // ω_vk as `SkinWeights::get` reads it (first entry of k).
+        let weight_of = |k: usize| {
+            joints
+                .iter()
+                .position(|&q| q as usize == k)
+                .map_or(0.0, |i| weights[i])
+        };
+        for (idx, &j) in joints.iter().enumerate() {
+            let j = j as usize;
+            if j >= skeleton.len() || joints[..idx].contains(&(j as u32)) {
+                continue;
+            }
+            let own = weights[idx];
+            let parent = skeleton.parent(j).map(weight_of);
+            if own == 0.0 || parent == Some(0.0) {
+                continue;
+            }
+            candidates[j].push(Candidate {
+                vertex,
+                own,
+                parent,
+            });
+        }
+    }
+    candidates
+}
+
+/// Shared, read-only inputs of the per-joint work.
+struct JointInputs<'a> {
+    rest_mesh: &'a TriMesh,
+    skeleton: &'a Skeleton,
+    skin_weights: &'a SkinWeights,
+    cage_coords: &'a CageCoords,
+    rest_cage: &'a [DVec3],
+    localisation: JointLocalisation,
+    /// ε^s in `ReferenceTool` mode (see [`localisation_value`]).
+    reference_floor_power: f64,
+    /// Articulation mode: per joint the vertices where L_j may be non-zero.
+    candidates: Vec<Vec<Candidate>>,
+    /// Articulation mode: unnormalised MVC at a few vertices (see [`LocalMvc`]).
+    local_mvc: Option<LocalMvc<'a>>,
+}
+
+/// The prior π_j of Eq. 10 (`mvc_ji · L_ji`, up to a positive factor) as a sparse list
+/// `(vertex, π_i)`, and whether it is the unlocalised fallback. Articulation mode goes through
+/// [`local_prior`] when a [`LocalMvc`] is available, else (and in ReferenceTool mode) through
+/// [`full_prior`].
+fn joint_prior(
+    j: usize,
+    inputs: &JointInputs,
+    scratch: &mut Option<LocalMvcScratch>,
+) -> (Vec<(usize, f64)>, bool) {
+    if let (Some(local_mvc), Some(scratch)) = (&inputs.local_mvc, scratch.as_mut())
+        && let Some(prior) = local_prior(j, inputs, local_mvc, scratch)
+    {
+        return (prior, false);
+    }
+    full_prior(j, inputs)
+}
+
+/// The reference computation of the prior: the full MVC `mvc_j` (`#V`) of joint j w.r.t. the
+/// whole rest mesh, times L_j (Eq. 9) at every vertex. In Articulation mode, L_j vanishes
+/// wherever ω_ij or ω_if is zero; if no prior value is positive, the unlocalised prior
+/// `π = mvc_j` is returned instead.
+fn full_prior(j: usize, inputs: &JointInputs) -> (Vec<(usize, f64)>, bool) {
+    let rest_mesh = inputs.rest_mesh;
+    let target = inputs.skeleton.joint(j).rest_world_from_joint.translation;
+    let parent = inputs.skeleton.parent(j);
+    let mut mesh_mvc = vec![0.0; rest_mesh.num_vertices()];
     mvc::mean_value_coordinates(
         &rest_mesh.positions,
         &rest_mesh.triangles,
         target,
         &mut mesh_mvc,
     );
-    let floor_masses = matches!(localisation, JointLocalisation::Articulation { .. });
-    // The prior π_i = mvc_i · L_i as a sparse list: in the articulation localisation L vanishes
-    // wherever the joint's or its parent's weight is zero, i.e. on most of the mesh.
-    let mut prior: Vec<(usize, f64)> = (0..num_vertices)
+    let articulation = matches!(inputs.localisation, JointLocalisation::Articulation { .. });
+    let prior: Vec<(usize, f64)> = (0..rest_mesh.num_vertices())
         .filter_map(|i| {
-            let own = skin_weights.get(i, j);
-            let par = parent.map(|p| skin_weights.get(i, p));
-            if floor_masses && (own == 0.0 || par == Some(0.0)) {
+            let own = inputs.skin_weights.get(i, j);
+            let par = parent.map(|p| inputs.skin_weights.get(i, p));
+            if articulation && (own == 0.0 || par == Some(0.0)) {
                 return None;
             }
-            let l = localisation_value(localisation, own, par);
+            let l = localisation_value(inputs.localisation, own, par, inputs.reference_floor_power);
             (l != 0.0).then(|| (i, mesh_mvc[i] * l))
         })
         .collect();
-    let mut unlocalised = false;
-    if floor_masses && prior.iter().all(|&(_, p)| p <= 0.0) {
-        prior = mesh_mvc.iter().copied().enumerate().collect();
-        unlocalised = true;
+    if articulation && prior.iter().all(|&(_, p)| p <= 0.0) {
+        return (mesh_mvc.into_iter().enumerate().collect(), true);
     }
-    // μ_k = Σ_i prior_i Φ_ik (Eq. 10).
-    let mut masses: Vec<f64> = (0..num_cage)
-        .map(|k| {
-            let column = cage_coords.column(k);
-            prior.iter().map(|&(i, p)| column[i] * p).sum()
+    (prior, false)
+}
+
+/// The Articulation prior from the MVC weights at the candidate vertices only (L_j vanishes
+/// elsewhere): `π_i = w_i · sign(W) · L_ji`, i.e. [`full_prior`]'s `mvc_ji · L_ji` times the
+/// positive factor |W| (W = Σ_i w_i), to which the floored cage masses and the max-entropy
+/// solve (Eq. 11) are blind — the MEC objective changes by a constant times Σψ = 1. `None`
+/// when [`full_prior`] is needed: no localised vertex, uncertified sign or degenerate joint
+/// position (see [`LocalMvc::weights_at`]), or no positive prior value (unlocalised fallback).
+fn local_prior(
+    j: usize,
+    inputs: &JointInputs,
+    local_mvc: &LocalMvc,
+    scratch: &mut LocalMvcScratch,
+) -> Option<Vec<(usize, f64)>> {
+    let target = inputs.skeleton.joint(j).rest_world_from_joint.translation;
+    let (vertices, localisation): (Vec<usize>, Vec<f64>) = inputs.candidates[j]
+        .iter()
+        .filter_map(|c| {
+            let l = localisation_value(inputs.localisation, c.own, c.parent, 0.0);
+            (l != 0.0).then_some((c.vertex, l))
         })
+        .unzip();
+    if vertices.is_empty() {
+        return None;
+    }
+    let mut weights = vec![0.0; vertices.len()];
+    let sign = local_mvc.weights_at(target, &vertices, scratch, &mut weights)?;
+    let prior: Vec<(usize, f64)> = vertices
+        .iter()
+        .zip(weights.iter().zip(&localisation))
+        .map(|(&i, (&w, &l))| (i, w * sign * l))
         .collect();
+    prior.iter().any(|&(_, p)| p > 0.0).then_some(prior)
+}
+
+/// Cage masses μ_k = Σ_i π_i Φ_ik (Eq. 10), `#C`, for a sparse prior `(i, π_i)`. Each sum runs
+/// over the prior in order; [`MASS_BLOCK`] columns at a time, so that their chains of additions
+/// overlap.
+fn project_prior(prior: &[(usize, f64)], cage_coords: &CageCoords) -> Vec<f64> {
+    let num_cage = cage_coords.num_cage_vertices();
+    let mut masses = vec![0.0; num_cage];
+    for (block, block_masses) in masses.chunks_mut(MASS_BLOCK).enumerate() {
+        let first = block * MASS_BLOCK;
+        let mut columns = [&[][..]; MASS_BLOCK];
+        for (c, column) in columns.iter_mut().enumerate().take(block_masses.len()) {
+            *column = cage_coords.column(first + c);
+        }
+        let mut sums = [0.0; MASS_BLOCK];
+        if block_masses.len() == MASS_BLOCK {
+            for &(i, p) in prior {
+                for (sum, column) in sums.iter_mut().zip(&columns) {
+                    *sum += column[i] * p;
+                }
+            }
+        } else {
+            for &(i, p) in prior {
+                for (sum, column) in sums.iter_mut().zip(&columns).take(block_masses.len()) {
+                    *sum += column[i] * p;
+                }
+            }
+        }
+        block_masses.copy_from_slice(&sums[..block_masses.len()]);
+    }
+    masses
+}
+
+fn joint_coordinates(
+    j: usize,
+    inputs: &JointInputs,
+    scratch: &mut Option<LocalMvcScratch>,
+) -> (Vec<f64>, JointCoordsReport) {
+    let num_cage = inputs.cage_coords.num_cage_vertices();
+    let rest_cage = inputs.rest_cage;
+    let target = inputs.skeleton.joint(j).rest_world_from_joint.translation;
+    let floor_masses = matches!(inputs.localisation, JointLocalisation::Articulation { .. });
+    let (prior, unlocalised) = joint_prior(j, inputs, scratch);
+    let mut masses = project_prior(&prior, inputs.cage_coords);
     if floor_masses {
         let max = masses.iter().copied().fold(0.0f64, f64::max);
         if max <= 0.0 {
@@ -301,4 +492,141 @@ fn joint_coordinates(
         residual: reached.distance(target),
     };
     (psi, report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::coords::mvc::compute_cage_coords;
+    use crate::subdivide::subdivide_midpoint;
+
+    const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+
+    /// Ψ through the local MVC path and through the reference full-MVC path.
+    fn both_paths(
+        levels: usize,
+        localisation: JointLocalisation,
+    ) -> (SkeletonUpdater, SkeletonUpdater) {
+        let dir = std::path::Path::new(ARM);
+        let mesh = crate::io::read_obj(&dir.join("arm.obj")).unwrap();
+        let skeleton = crate::io::read_skt(&dir.join("arm.skt")).unwrap();
+        let (weights, _) =
+            crate::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), skeleton.len()).unwrap();
+        let cage = crate::io::read_obj(&dir.join("arm_cage.obj")).unwrap();
+        let sub = subdivide_midpoint(&mesh, &weights, levels).unwrap();
+        let phi = compute_cage_coords(&cage, &sub.mesh.positions, None).unwrap();
+        let run = |local| {
+            SkeletonUpdater::build(
+                &sub.mesh,
+                &skeleton,
+                &sub.skin_weights,
+                &phi,
+                &cage.positions,
+                localisation,
+                local,
+            )
+            .unwrap()
+            .0
+        };
+        (run(true), run(false))
+    }
+
+    /// How many joints take the local path (no fallback to the full MVC).
+    fn local_path_joints(levels: usize, localisation: JointLocalisation) -> usize {
+        let dir = std::path::Path::new(ARM);
+        let mesh = crate::io::read_obj(&dir.join("arm.obj")).unwrap();
+        let skeleton = crate::io::read_skt(&dir.join("arm.skt")).unwrap();
+        let (weights, _) =
+            crate::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), skeleton.len()).unwrap();
+        let cage = crate::io::read_obj(&dir.join("arm_cage.obj")).unwrap();
+        let sub = subdivide_midpoint(&mesh, &weights, levels).unwrap();
+        let phi = compute_cage_coords(&cage, &sub.mesh.positions, None).unwrap();
+        let local_mvc = LocalMvc::new(&sub.mesh.positions, &sub.mesh.triangles);
+        let mut scratch = local_mvc.scratch();
+        let inputs = JointInputs {
+            rest_mesh: &sub.mesh,
+            skeleton: &skeleton,
+            skin_weights: &sub.skin_weights,
+            cage_coords: &phi,
+            rest_cage: &cage.positions,
+            localisation,
+            reference_floor_power: 0.0,
+            candidates: articulation_candidates(&skeleton, &sub.skin_weights),
+            local_mvc: None,
+        };
+        (0..skeleton.len())
+            .filter(|&j| local_prior(j, &inputs, &local_mvc, &mut scratch).is_some())
+            .count()
+    }
+
+    #[test]
+    fn the_arm_joints_take_the_local_path() {
+        // Every joint of the Arm lies well inside the skin and has a blend region.
+        assert_eq!(local_path_joints(0, JointLocalisation::default()), 25);
+        assert_eq!(local_path_joints(2, JointLocalisation::default()), 25);
+    }
+
+    fn assert_same_psi(fast: &SkeletonUpdater, reference: &SkeletonUpdater) {
+        assert_eq!(fast.num_joints(), reference.num_joints());
+        for j in 0..fast.num_joints() {
+            let (a, b) = (fast.joint_row(j), reference.joint_row(j));
+            let scale = b.iter().map(|w| w.abs()).fold(0.0, f64::max);
+            for (k, (x, y)) in a.iter().zip(b).enumerate() {
+                assert!(
+                    (x - y).abs() <= 1e-9 * scale,
+                    "joint {j}, cage vertex {k}: {x} vs {y}"
+                );
+            }
+            let (r, s) = (&fast.reports()[j], &reference.reports()[j]);
+            assert_eq!(
+                (r.joint, r.unlocalised, &r.method),
+                (s.joint, s.unlocalised, &s.method)
+            );
+            assert!(r.residual < 1e-9 && s.residual < 1e-9, "{r:?} {s:?}");
+        }
+    }
+
+    #[test]
+    fn local_mvc_prior_gives_the_full_mvc_psi_on_the_arm() {
+        let (fast, reference) = both_paths(0, JointLocalisation::default());
+        assert_same_psi(&fast, &reference);
+    }
+
+    #[test]
+    fn local_mvc_prior_gives_the_full_mvc_psi_on_the_subdivided_arm() {
+        let (fast, reference) = both_paths(2, JointLocalisation::default());
+        assert_same_psi(&fast, &reference);
+        // Another exponent changes the localised regions.
+        let (fast, reference) = both_paths(1, JointLocalisation::Articulation { exponent: 0.5 });
+        assert_same_psi(&fast, &reference);
+    }
+
+    #[test]
+    fn reference_tool_mode_is_unchanged_by_the_switch() {
+        let (a, b) = both_paths(0, JointLocalisation::reference_tool());
+        for j in 0..a.num_joints() {
+            assert_eq!(a.joint_row(j), b.joint_row(j));
+        }
+    }
+
+    #[test]
+    fn reference_floor_power_matches_powf() {
+        let loc = JointLocalisation::reference_tool();
+        let JointLocalisation::ReferenceTool { exponent, epsilon } = loc else {
+            unreachable!()
+        };
+        let floor = epsilon.powf(exponent);
+        for own in [0.0f64, 1e-3, 0.01, 0.0100001, 0.3, 1.0] {
+            for parent in [None, Some(0.0), Some(0.005), Some(0.7)] {
+                let slow = {
+                    let mut l = -1.0 + own.abs().max(epsilon).powf(exponent);
+                    if let Some(p) = parent {
+                        l += f64::abs(p).max(epsilon).powf(exponent);
+                    }
+                    l.max(epsilon)
+                };
+                assert_eq!(localisation_value(loc, own, parent, floor), slow);
+            }
+        }
+    }
 }
