@@ -278,12 +278,7 @@ fn dominance_violations(
         .par_chunks_mut(CHECK_BLOCK)
         .enumerate()
         .map_init(
-            || {
-                (
-                    Mat::<f64>::zeros(CHECK_BLOCK, rank),
-                    Vec::with_capacity(CHECK_BLOCK),
-                )
-            },
+            || (Mat::<f64>::new(), Vec::with_capacity(CHECK_BLOCK)),
             |(buffer, recompute), (block, row_max)| {
                 let start = block * CHECK_BLOCK;
                 let height = row_max.len();
@@ -300,29 +295,29 @@ fn dominance_violations(
                 if recompute.is_empty() {
                     return Vec::new();
                 }
-                let count = recompute.len();
-                let mut b = buffer.as_mut().subrows_mut(0, count);
-                if count == height {
-                    faer::linalg::matmul::matmul(
-                        b.as_mut(),
-                        faer::Accum::Replace,
-                        matrix.as_ref().subrows(start, height),
-                        inverse.as_ref(),
-                        1.0,
-                        faer::Par::Seq,
-                    );
-                } else {
-                    let gathered =
-                        Mat::<f64>::from_fn(count, rank, |r, k| matrix[(start + recompute[r], k)]);
-                    faer::linalg::matmul::matmul(
-                        b.as_mut(),
-                        faer::Accum::Replace,
-                        gathered.as_ref(),
-                        inverse.as_ref(),
-                        1.0,
-                        faer::Par::Seq,
-                    );
+                // Few rows: gather them; many: multiply the whole block (a gather costs about as
+                // much as the product).
+                let gather = 4 * recompute.len() < height;
+                let count = if gather { recompute.len() } else { height };
+                if buffer.nrows() < count {
+                    buffer.resize_with(count, rank, |_, _| 0.0);
                 }
+                let mut b = buffer.as_mut().subrows_mut(0, count);
+                let gathered: Mat<f64>;
+                let source = if gather {
+                    gathered = Mat::from_fn(count, rank, |r, k| matrix[(start + recompute[r], k)]);
+                    gathered.as_ref()
+                } else {
+                    matrix.as_ref().subrows(start, height)
+                };
+                faer::linalg::matmul::matmul(
+                    b.as_mut(),
+                    faer::Accum::Replace,
+                    source,
+                    inverse.as_ref(),
+                    1.0,
+                    faer::Par::Seq,
+                );
                 let mut exact = vec![0.0f64; count];
                 for k in 0..rank {
                     let col = b.as_ref().col(k);
@@ -330,6 +325,13 @@ fn dominance_violations(
                         let a = v.abs();
                         *m = if a > *m { a } else { *m };
                     }
+                }
+                if !gather {
+                    // Keep the recomputed rows' values, in `recompute` order.
+                    for (slot, &r) in recompute.iter().enumerate() {
+                        exact[slot] = exact[r];
+                    }
+                    exact.truncate(recompute.len());
                 }
                 for (&r, &m) in recompute.iter().zip(&exact) {
                     row_max[r] = m;
