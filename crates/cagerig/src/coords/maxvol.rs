@@ -12,6 +12,9 @@
 //! 3. Multi-start ([`MaxVolOptions`]): the swap refinement has many local maxima, so further
 //!    starts (LU with shuffled column orders) run on a reduced candidate row set and the best
 //!    result is refined once more on all rows.
+//! 4. Dominance checks over all rows compute B block by block without storing it; after the
+//!    first, rows whose previous max |B[i, :]| times the growth bound ‖Φ̃_old Φ̃_new⁻¹‖₁ stays
+//!    below the threshold are skipped (see [`dominance_violations`]).
 //!
 //! At convergence every row of Φ is a combination of the selected rows with coefficients of
 //! magnitude ≤ [`SWAP_THRESHOLD`] (a "dominant" submatrix).
@@ -100,10 +103,7 @@ pub fn select_maxvol_rows_with(
             actual: num_rows,
         });
     }
-    let scale = (0..rank)
-        .map(|k| phi.column(k).iter().fold(0.0f64, |m, v| m.max(v.abs())))
-        .fold(0.0, f64::max);
-    let mut candidates = top_rows_per_column(phi, CANDIDATES_PER_COLUMN);
+    let (mut candidates, scale) = top_rows_per_column(phi, CANDIDATES_PER_COLUMN);
     let reduced = CageCoords::from_matrix(phi.select_rows(&candidates))?;
     // Start 0: LU pivots of the candidates (of all rows if the candidates are rank deficient).
     let first_rows = match lu_pivot_rows(reduced.matrix(), None, scale) {
@@ -123,25 +123,31 @@ pub fn select_maxvol_rows_with(
             .collect()
     };
     let mut state = options.seed;
-    let initial_rows: Vec<Vec<usize>> = (0..options.starts.max(1))
-        .filter_map(|start| {
-            if start == 0 {
-                return Some(local_rows(&candidates, &first_rows));
-            }
-            let mut order: Vec<usize> = (0..rank).collect();
-            for i in (1..rank).rev() {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                order.swap(i, (state >> 33) as usize % (i + 1));
-            }
-            lu_pivot_rows(reduced.matrix(), Some(&order), scale).ok()
+    // Column orders of the starts (start 0: the LU pivots found above).
+    let orders: Vec<Option<Vec<usize>>> = (0..options.starts.max(1))
+        .map(|start| {
+            (start > 0).then(|| {
+                let mut order: Vec<usize> = (0..rank).collect();
+                for i in (1..rank).rev() {
+                    state = state
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    order.swap(i, (state >> 33) as usize % (i + 1));
+                }
+                order
+            })
         })
         .collect();
     // The starts are independent: run them in parallel, keep the first best (deterministic).
-    let outcomes: Vec<Option<MaxVolSelection>> = initial_rows
+    let outcomes: Vec<Option<MaxVolSelection>> = orders
         .par_iter()
-        .map(|initial| refine(&reduced, initial).ok().map(|(local, _)| local))
+        .map(|order| {
+            let initial = match order {
+                None => local_rows(&candidates, &first_rows),
+                Some(order) => lu_pivot_rows(reduced.matrix(), Some(order), scale).ok()?,
+            };
+            refine(&reduced, &initial).ok().map(|(local, _)| local)
+        })
         .collect();
     for local in outcomes.into_iter().flatten() {
         if best
@@ -159,8 +165,9 @@ pub fn select_maxvol_rows_with(
         what: "cage coordinates Φ (rank deficient: MaxVol needs rank #C)",
     })?;
     // Later rounds: add the rows of Φ that violate dominance, refine from the current best.
+    let mut bounds = None;
     loop {
-        let violators = dominance_violations(phi, &best.rows)?;
+        let violators = dominance_violations(phi, &best.rows, &mut bounds)?;
         let before = candidates.len();
         candidates = merged(&candidates, &violators);
         if candidates.len() == before {
@@ -187,10 +194,11 @@ fn merged(sorted: &[usize], extra: &[usize]) -> Vec<usize> {
     rows
 }
 
-/// Union over columns k of the `per_column` rows with the largest |Φ[i, k]|, sorted.
-fn top_rows_per_column(phi: &CageCoords, per_column: usize) -> Vec<usize> {
+/// Union over columns k of the `per_column` rows with the largest |Φ[i, k]|, sorted, and
+/// max |Φ[i, k]| over all entries.
+fn top_rows_per_column(phi: &CageCoords, per_column: usize) -> (Vec<usize>, f64) {
     let rank = phi.num_cage_vertices();
-    let mut rows: Vec<usize> = (0..rank)
+    let kept: Vec<(f64, usize)> = (0..rank)
         .into_par_iter()
         .flat_map_iter(|k| {
             let col = phi.column(k);
@@ -212,18 +220,39 @@ fn top_rows_per_column(phi: &CageCoords, per_column: usize) -> Vec<usize> {
                     (slot, floor) = minimum(&kept);
                 }
             }
-            kept.into_iter().map(|(_, i)| i)
+            kept
         })
         .collect();
+    let scale = kept.iter().fold(0.0f64, |m, e| m.max(e.0));
+    let mut rows: Vec<usize> = kept.into_iter().map(|(_, i)| i).collect();
     rows.sort_unstable();
     rows.dedup();
-    rows
+    (rows, scale)
 }
+
+/// Upper bounds on max_j |B[i, j]| (`#V`) for the selection `rows`, from a previous
+/// [`dominance_violations`] call.
+struct DominanceBounds {
+    rows: Vec<usize>,
+    row_max: Vec<f64>,
+}
+
+/// Relative safety margin of the bounds in [`dominance_violations`] (rounding in B, M).
+const BOUND_MARGIN: f64 = 1e-9;
 
 /// Rows i of Φ with max_j |B[i, j]| > [`SWAP_THRESHOLD`], B = Φ Φ̃⁻¹ (`#V × #C`) computed in
 /// parallel blocks without storing it; at most [`CANDIDATES_PER_COLUMN`]·#C of them (largest
 /// first). Errors if the selected submatrix is singular.
-fn dominance_violations(phi: &CageCoords, rows: &[usize]) -> Result<Vec<usize>, RigError> {
+///
+/// `bounds` carries max_j |B[i, j]| from call to call. With the previous selection S and its
+/// B_S, the new one is B' = B_S M with M = Φ̃_S Φ̃'⁻¹, so max_j |B'[i, j]| ≤ max_j |B_S[i, j]| ·
+/// ‖M‖₁ (maximum absolute column sum). Rows whose bound stays below the threshold are not
+/// recomputed; after a few swaps ‖M‖₁ is close to 1 and most rows are skipped.
+fn dominance_violations(
+    phi: &CageCoords,
+    rows: &[usize],
+    bounds: &mut Option<DominanceBounds>,
+) -> Result<Vec<usize>, RigError> {
     let selected = phi.select_rows(rows);
     let lu = selected.partial_piv_lu();
     let inverse = lu.inverse();
@@ -234,39 +263,93 @@ fn dominance_violations(phi: &CageCoords, rows: &[usize]) -> Result<Vec<usize>, 
     }
     let matrix = phi.matrix();
     let (num_rows, rank) = (matrix.nrows(), matrix.ncols());
-    let mut violators: Vec<(f64, usize)> = (0..num_rows.div_ceil(CHECK_BLOCK))
-        .into_par_iter()
+    // Growth of the row maxima since the bounds were taken (∞: recompute every row).
+    let (mut row_max, growth) = match bounds.take() {
+        Some(previous) => {
+            let change = phi.select_rows(&previous.rows) * &inverse;
+            let norm = (0..rank)
+                .map(|j| change.col(j).iter().map(|v| v.abs()).sum::<f64>())
+                .fold(0.0f64, f64::max);
+            (previous.row_max, norm * (1.0 + BOUND_MARGIN))
+        }
+        None => (vec![f64::INFINITY; num_rows], f64::INFINITY),
+    };
+    let mut violators: Vec<(f64, usize)> = row_max
+        .par_chunks_mut(CHECK_BLOCK)
+        .enumerate()
         .map_init(
-            || Mat::<f64>::zeros(CHECK_BLOCK, rank),
-            |buffer, block| {
+            || (Mat::<f64>::new(), Vec::with_capacity(CHECK_BLOCK)),
+            |(buffer, recompute), (block, row_max)| {
                 let start = block * CHECK_BLOCK;
-                let height = CHECK_BLOCK.min(num_rows - start);
-                let mut b = buffer.as_mut().subrows_mut(0, height);
+                let height = row_max.len();
+                // Rows of the block whose bound does not settle them.
+                recompute.clear();
+                for (r, m) in row_max.iter_mut().enumerate() {
+                    let bound = *m * growth;
+                    if bound < SWAP_THRESHOLD {
+                        *m = bound;
+                    } else {
+                        recompute.push(r);
+                    }
+                }
+                if recompute.is_empty() {
+                    return Vec::new();
+                }
+                // Few rows: gather them; many: multiply the whole block (a gather costs about as
+                // much as the product).
+                let gather = 4 * recompute.len() < height;
+                let count = if gather { recompute.len() } else { height };
+                if buffer.nrows() < count {
+                    buffer.resize_with(count, rank, |_, _| 0.0);
+                }
+                let mut b = buffer.as_mut().subrows_mut(0, count);
+                let gathered: Mat<f64>;
+                let source = if gather {
+                    gathered = Mat::from_fn(count, rank, |r, k| matrix[(start + recompute[r], k)]);
+                    gathered.as_ref()
+                } else {
+                    matrix.as_ref().subrows(start, height)
+                };
                 faer::linalg::matmul::matmul(
                     b.as_mut(),
                     faer::Accum::Replace,
-                    matrix.as_ref().subrows(start, height),
+                    source,
                     inverse.as_ref(),
                     1.0,
                     faer::Par::Seq,
                 );
-                let mut row_max = vec![0.0f64; height];
+                let mut exact = vec![0.0f64; count];
                 for k in 0..rank {
                     let col = b.as_ref().col(k);
-                    for (m, v) in row_max.iter_mut().zip(col.iter()) {
-                        *m = m.max(v.abs());
+                    for (m, v) in exact.iter_mut().zip(col.iter()) {
+                        let a = v.abs();
+                        *m = if a > *m { a } else { *m };
                     }
                 }
-                row_max
-                    .into_iter()
-                    .enumerate()
+                if !gather {
+                    // Keep the recomputed rows' values, in `recompute` order.
+                    for (slot, &r) in recompute.iter().enumerate() {
+                        exact[slot] = exact[r];
+                    }
+                    exact.truncate(recompute.len());
+                }
+                for (&r, &m) in recompute.iter().zip(&exact) {
+                    row_max[r] = m;
+                }
+                recompute
+                    .iter()
+                    .zip(exact)
                     .filter(|(_, m)| *m > SWAP_THRESHOLD)
-                    .map(|(i, m)| (m, start + i))
+                    .map(|(&r, m)| (m, start + r))
                     .collect::<Vec<_>>()
             },
         )
         .flatten()
         .collect();
+    *bounds = Some(DominanceBounds {
+        rows: rows.to_vec(),
+        row_max,
+    });
     violators.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
     violators.truncate(CANDIDATES_PER_COLUMN * rank);
     Ok(violators.into_iter().map(|(_, i)| i).collect())
@@ -403,23 +486,91 @@ fn column(m: &Mat<f64>, k: usize) -> &[f64] {
         .unwrap_or(&[])
 }
 
-/// (row, column, |value|) of the entry with the largest magnitude.
+/// (row, column, |value|) of the entry with the largest magnitude (first row, then first column,
+/// on ties).
 fn argmax_abs(b: &Mat<f64>) -> (usize, usize, f64) {
     (0..b.ncols())
         .into_par_iter()
-        .map(|k| {
-            column(b, k)
-                .iter()
-                .enumerate()
-                .fold((0, k, -1.0), |best, (i, v)| {
-                    if v.abs() > best.2 {
-                        (i, k, v.abs())
-                    } else {
-                        best
-                    }
-                })
+        .map(|k| match first_max_abs(column(b, k), -1.0) {
+            Some((i, value)) => (i, k, value),
+            None => (0, k, -1.0),
         })
         .reduce(|| (0, 0, -1.0), max_entry)
+}
+
+/// Lanes of the vectorised column scans.
+const SCAN_LANES: usize = 8;
+
+/// Lane-wise `max |v|` (vectorises: no loop-carried index); NaN entries are ignored.
+#[inline]
+fn lane_max_abs(lanes: &mut [f64; SCAN_LANES], values: &[f64; SCAN_LANES]) {
+    for (m, v) in lanes.iter_mut().zip(values) {
+        let a = v.abs();
+        *m = if a > *m { a } else { *m };
+    }
+}
+
+/// (index, |value|) of the first entry of `column` with the largest magnitude, if that magnitude
+/// exceeds `floor`. The maximum is found lane-wise, the index by a second scan (only when needed).
+#[inline]
+fn first_max_abs(column: &[f64], floor: f64) -> Option<(usize, f64)> {
+    let mut lanes = [0.0f64; SCAN_LANES];
+    let mut chunks = column.chunks_exact(SCAN_LANES);
+    for chunk in &mut chunks {
+        lane_max_abs(&mut lanes, chunk.try_into().unwrap_or(&[0.0; SCAN_LANES]));
+    }
+    finish_max_abs(column, lanes, chunks.remainder(), floor)
+}
+
+/// Folds the lanes and the tail, then locates the maximum (see [`first_max_abs`]).
+#[inline]
+fn finish_max_abs(
+    column: &[f64],
+    lanes: [f64; SCAN_LANES],
+    tail: &[f64],
+    floor: f64,
+) -> Option<(usize, f64)> {
+    let largest = lanes
+        .iter()
+        .chain(tail)
+        .map(|v| v.abs())
+        .fold(0.0f64, |m, a| if a > m { a } else { m });
+    if largest <= floor || column.is_empty() {
+        return None;
+    }
+    column
+        .iter()
+        .position(|v| v.abs() == largest)
+        .map(|i| (i, largest))
+}
+
+/// `column -= source · factor`, then [`first_max_abs`] of the result (one vectorised pass).
+#[inline]
+fn update_and_first_max_abs(
+    column: &mut [f64],
+    source: &[f64],
+    factor: f64,
+    floor: f64,
+) -> Option<(usize, f64)> {
+    let mut lanes = [0.0f64; SCAN_LANES];
+    let mut chunks = column.chunks_exact_mut(SCAN_LANES);
+    let mut sources = source.chunks_exact(SCAN_LANES);
+    for (chunk, src) in (&mut chunks).zip(&mut sources) {
+        for (v, s) in chunk.iter_mut().zip(src) {
+            *v -= s * factor;
+        }
+        lane_max_abs(
+            &mut lanes,
+            chunk.as_ref().try_into().unwrap_or(&[0.0; SCAN_LANES]),
+        );
+    }
+    let tail = chunks.into_remainder();
+    for (v, s) in tail.iter_mut().zip(sources.remainder()) {
+        *v -= s * factor;
+    }
+    let tail_len = tail.len();
+    let tail = &column[column.len() - tail_len..];
+    finish_max_abs(column, lanes, tail, floor)
 }
 
 fn max_entry(a: (usize, usize, f64), b: (usize, usize, f64)) -> (usize, usize, f64) {
@@ -443,16 +594,10 @@ fn rank_one_update_and_argmax(
                 let Some(col) = chunk.as_mut().col_mut(k).try_as_col_major_mut() else {
                     continue;
                 };
-                let col = col.as_slice_mut();
-                let mut local = (0, -1.0f64);
-                for (r, (v, s)) in col.iter_mut().zip(source).enumerate() {
-                    *v -= s * factor;
-                    if v.abs() > local.1 {
-                        local = (r, v.abs());
-                    }
-                }
-                if local.1 > best.2 {
-                    best = (start + local.0, k, local.1);
+                if let Some((r, value)) =
+                    update_and_first_max_abs(col.as_slice_mut(), source, factor, best.2)
+                {
+                    best = (start + r, k, value);
                 }
             }
             best
@@ -475,15 +620,10 @@ fn rank_one_update_and_argmax_seq(
         let Some(col) = b.as_mut().col_mut(k).try_as_col_major_mut() else {
             continue;
         };
-        let mut local = (0, -1.0f64);
-        for (r, (v, s)) in col.as_slice_mut().iter_mut().zip(pivot_column).enumerate() {
-            *v -= s * factor;
-            if v.abs() > local.1 {
-                local = (r, v.abs());
-            }
-        }
-        if local.1 > best.2 {
-            best = (local.0, k, local.1);
+        if let Some((r, value)) =
+            update_and_first_max_abs(col.as_slice_mut(), pivot_column, factor, best.2)
+        {
+            best = (r, k, value);
         }
     }
     best

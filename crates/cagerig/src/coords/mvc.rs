@@ -26,7 +26,7 @@ use faer::Mat;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::mvc_batch::{BatchScratch, evaluate_rows};
+use super::mvc_batch::{BatchScratch, RowBlock, evaluate_rows};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::mesh::TriMesh;
@@ -259,25 +259,78 @@ pub fn compute_cage_coords(
         });
     }
     let evaluator = MvcEvaluator::new(&cage.positions, &cage.triangles);
-    let num_cage = cage.num_vertices();
-    let mut matrix = Mat::<f64>::zeros(points.len(), num_cage);
+    let (num_points, num_cage) = (points.len(), cage.num_vertices());
+    // Φ is 8 · #V · #C bytes (62 MB at N = 3): not zero-filled first; the blocks below write every
+    // entry, so the page faults of first touch are spread over the worker threads.
+    let mut matrix = Mat::<f64>::with_capacity(num_points, num_cage);
+    let storage = SharedColumns {
+        base: matrix.as_ptr_mut(),
+        col_stride: matrix.col_stride().unsigned_abs(),
+        num_cols: num_cage,
+    };
     let done = AtomicUsize::new(0);
-    matrix
-        .par_row_chunks_mut(POINT_BLOCK)
-        .enumerate()
+    let first_non_finite = AtomicUsize::new(usize::MAX);
+    (0..num_points.div_ceil(POINT_BLOCK))
+        .into_par_iter()
         .for_each_init(
             || BatchScratch::new(&evaluator),
-            |scratch, (block, rows)| {
+            |scratch, block| {
                 let start = block * POINT_BLOCK;
-                let count = rows.nrows();
-                evaluate_rows(&evaluator, &points[start..start + count], scratch, rows);
+                let count = POINT_BLOCK.min(num_points - start);
+                // SAFETY: the allocation holds `col_stride ≥ num_points` rows for each of the
+                // `num_cage` columns; row blocks are disjoint, so no two tasks write the same entry,
+                // and nothing reads the storage before the loop ends.
+                let mut rows = unsafe { storage.rows(start, count) };
+                if let Some(row) = evaluate_rows(
+                    &evaluator,
+                    &points[start..start + count],
+                    scratch,
+                    &mut rows,
+                ) {
+                    first_non_finite.fetch_min(start + row, Ordering::Relaxed);
+                }
                 let finished = done.fetch_add(count, Ordering::Relaxed) + count;
                 if let Some(report) = progress {
                     report(finished);
                 }
             },
         );
-    CageCoords::from_matrix(matrix)
+    // SAFETY: capacity is (num_points, num_cage) and every entry was written above
+    // (`evaluate_rows` writes all rows × columns of its block).
+    unsafe { matrix.set_dims(num_points, num_cage) };
+    match first_non_finite.into_inner() {
+        usize::MAX => Ok(CageCoords::from_checked_matrix(matrix)),
+        index => Err(RigError::NonFinite {
+            what: "cage coordinate row",
+            index,
+        }),
+    }
+}
+
+/// The column-major storage of Φ shared by the workers of [`compute_cage_coords`].
+struct SharedColumns {
+    base: *mut f64,
+    col_stride: usize,
+    num_cols: usize,
+}
+
+// SAFETY: workers only write disjoint row blocks (see `compute_cage_coords`).
+unsafe impl Sync for SharedColumns {}
+
+impl SharedColumns {
+    /// # Safety
+    /// Rows `start..start + count` must lie within the allocation and be written by no one else.
+    unsafe fn rows(&self, start: usize, count: usize) -> RowBlock {
+        // SAFETY: forwarded to the caller.
+        unsafe {
+            RowBlock::new(
+                self.base.wrapping_add(start),
+                self.col_stride,
+                count,
+                self.num_cols,
+            )
+        }
+    }
 }
 
 /// What one triangle contributes to the unnormalised MVC weights of `point`

@@ -1,6 +1,6 @@
 //! Batched mean value coordinates: the regular (off-surface) case of [`super::mvc`] for
 //! [`LANES`] points at a time, in structure-of-arrays layout so the compiler vectorises across
-//! points (runtime-dispatched to AVX-512 / AVX2 where available).
+//! points (runtime-dispatched to AVX-512 / AVX2+FMA where available).
 //!
 //! Same formulation as [`MvcEvaluator::evaluate`]: per point x and cage vertex k, `u_k` and
 //! `1/d_k`; per edge (a, b), `c = u_a × u_b`, θ = atan2(|c|, u_a·u_b) and `θ / (2|c|)`; per
@@ -8,11 +8,18 @@
 //! the branch-free Cephes rational approximation with a single division per edge
 //! ([`half_angle_over_sin`], a few ulp).
 //!
+//! Cost per batch of 8 points (58-vertex cage: 168 edges, 112 triangles): one reciprocal square
+//! root per vertex, one reciprocal square root and one reciprocal per edge, one reciprocal per
+//! triangle. On AVX-512 these use the 14-bit hardware estimates refined by two Newton steps
+//! (≈ 1 ulp, several times cheaper than `vsqrtpd` / `vdivpd`); elsewhere plain `sqrt` and `/`.
+//! Edges are evaluated lazily in triangle order (see [`BatchPlan`]) so the per-edge lane data is
+//! consumed while still in L1.
+//!
 //! A lane is flagged (and recomputed by the robust scalar [`MvcEvaluator::evaluate`]) if its point
 //! is near a vertex, on an edge line (`|c| < ε`), near a triangle's plane (`|det| < ε`) or the
 //! weight sum is not usable — exactly the situations where the scalar code takes a special case.
+//! Flagged lanes may hold NaN or ∞ (approximate reciprocals of 0); lanes never mix.
 
-use faer::MatMut;
 use glam::DVec3;
 
 use super::mvc::{EPS, MvcEvaluator, MvcScratch};
@@ -22,15 +29,336 @@ pub(crate) const LANES: usize = 8;
 
 type Lanes = [f64; LANES];
 
+/// [`LANES`] f64 values, one per point of a batch; element-wise operators (each a single vector
+/// instruction once inlined into a `target_feature` function).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct V8(Lanes);
+
+/// Per-lane booleans as all-ones / all-zeros 64-bit lanes (the form vector compares produce;
+/// `[bool; 8]` makes LLVM shuffle bytes around).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Mask([u64; LANES]);
+
+impl Mask {
+    #[inline(always)]
+    fn from_fn(f: impl Fn(usize) -> bool) -> Self {
+        Self(std::array::from_fn(|l| if f(l) { u64::MAX } else { 0 }))
+    }
+    #[inline(always)]
+    fn test(self, l: usize) -> bool {
+        self.0[l] != 0
+    }
+}
+
+impl V8 {
+    #[inline(always)]
+    fn splat(value: f64) -> Self {
+        Self([value; LANES])
+    }
+    #[inline(always)]
+    fn map(self, f: impl Fn(f64) -> f64) -> Self {
+        Self(std::array::from_fn(|l| f(self.0[l])))
+    }
+    #[inline(always)]
+    fn zip(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self {
+        Self(std::array::from_fn(|l| f(self.0[l], other.0[l])))
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        self.map(f64::abs)
+    }
+    #[inline(always)]
+    fn min(self, other: Self) -> Self {
+        self.zip(other, |a, b| if b < a { b } else { a })
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        self.zip(other, |a, b| if b > a { b } else { a })
+    }
+    /// `self > other` per lane.
+    #[inline(always)]
+    fn gt(self, other: Self) -> Mask {
+        Mask::from_fn(|l| self.0[l] > other.0[l])
+    }
+    /// `self >= other` per lane (false for NaN).
+    #[inline(always)]
+    fn ge(self, other: Self) -> Mask {
+        Mask::from_fn(|l| self.0[l] >= other.0[l])
+    }
+    /// `if mask { a } else { b }` per lane.
+    #[inline(always)]
+    fn select(mask: Mask, a: Self, b: Self) -> Self {
+        Self(std::array::from_fn(|l| {
+            if mask.test(l) { a.0[l] } else { b.0[l] }
+        }))
+    }
+}
+
+impl std::ops::Add for V8 {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, other: Self) -> Self {
+        self.zip(other, |a, b| a + b)
+    }
+}
+
+impl std::ops::Sub for V8 {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, other: Self) -> Self {
+        self.zip(other, |a, b| a - b)
+    }
+}
+
+impl std::ops::Mul for V8 {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, other: Self) -> Self {
+        self.zip(other, |a, b| a * b)
+    }
+}
+
+impl std::ops::Mul<f64> for V8 {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, other: f64) -> Self {
+        self.map(|a| a * other)
+    }
+}
+
+impl std::ops::Neg for V8 {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self.map(|a| -a)
+    }
+}
+
+/// Per-lane `a | b`.
+#[inline(always)]
+fn or(a: Mask, b: Mask) -> Mask {
+    Mask(std::array::from_fn(|l| a.0[l] | b.0[l]))
+}
+
+/// Per-lane `!a`.
+#[inline(always)]
+fn not(a: Mask) -> Mask {
+    Mask(a.0.map(|x| !x))
+}
+
+/// Element-wise arithmetic whose fastest form depends on the instruction set.
+trait LaneMath {
+    /// `a · b + c` (fused where the target has FMA).
+    fn mul_add(a: V8, b: V8, c: V8) -> V8;
+    /// `1 / x` per lane (to about 1 ulp).
+    fn recip(x: V8) -> V8;
+    /// `1 / √x` per lane (to about 1 ulp).
+    fn rsqrt(x: V8) -> V8;
+}
+
+/// Plain IEEE operations (no FMA: `mul_add` would be a libm call).
+struct PlainMath;
+
+impl LaneMath for PlainMath {
+    #[inline(always)]
+    fn mul_add(a: V8, b: V8, c: V8) -> V8 {
+        a * b + c
+    }
+    #[inline(always)]
+    fn recip(x: V8) -> V8 {
+        x.map(|v| 1.0 / v)
+    }
+    #[inline(always)]
+    fn rsqrt(x: V8) -> V8 {
+        x.map(|v| 1.0 / v.sqrt())
+    }
+}
+
+/// FMA with IEEE division and square root (AVX2 + FMA).
+#[cfg(target_arch = "x86_64")]
+struct FusedMath;
+
+#[cfg(target_arch = "x86_64")]
+impl LaneMath for FusedMath {
+    #[inline(always)]
+    fn mul_add(a: V8, b: V8, c: V8) -> V8 {
+        V8(std::array::from_fn(|l| a.0[l].mul_add(b.0[l], c.0[l])))
+    }
+    #[inline(always)]
+    fn recip(x: V8) -> V8 {
+        PlainMath::recip(x)
+    }
+    #[inline(always)]
+    fn rsqrt(x: V8) -> V8 {
+        PlainMath::rsqrt(x)
+    }
+}
+
+/// AVX-512: FMA, and `vrcp14pd` / `vrsqrt14pd` estimates (relative error < 2⁻¹⁴) refined by two
+/// Newton steps (error ≈ 2⁻⁵⁶ plus rounding). Only instantiated inside
+/// `#[target_feature(enable = "avx512f")]` functions reached after runtime detection.
+#[cfg(target_arch = "x86_64")]
+struct Avx512Math;
+
+#[cfg(target_arch = "x86_64")]
+impl LaneMath for Avx512Math {
+    #[inline(always)]
+    fn mul_add(a: V8, b: V8, c: V8) -> V8 {
+        FusedMath::mul_add(a, b, c)
+    }
+    #[inline(always)]
+    fn recip(x: V8) -> V8 {
+        use std::arch::x86_64::*;
+        const { assert!(LANES == 8) };
+        let mut out = V8::splat(0.0);
+        // SAFETY: only reached from `evaluate_rows_avx512`, after `avx512f` was detected; the
+        // loads/stores cover exactly the 8 lanes.
+        unsafe {
+            let v = _mm512_loadu_pd(x.0.as_ptr());
+            let one = _mm512_set1_pd(1.0);
+            let mut y = _mm512_rcp14_pd(v);
+            for _ in 0..2 {
+                // y ← y + y (1 − v y)
+                let e = _mm512_fnmadd_pd(v, y, one);
+                y = _mm512_fmadd_pd(y, e, y);
+            }
+            _mm512_storeu_pd(out.0.as_mut_ptr(), y);
+        }
+        out
+    }
+    #[inline(always)]
+    fn rsqrt(x: V8) -> V8 {
+        use std::arch::x86_64::*;
+        let mut out = V8::splat(0.0);
+        // SAFETY: as in `recip`.
+        unsafe {
+            let v = _mm512_loadu_pd(x.0.as_ptr());
+            let half_v = _mm512_mul_pd(v, _mm512_set1_pd(0.5));
+            let half = _mm512_set1_pd(0.5);
+            let mut y = _mm512_rsqrt14_pd(v);
+            for _ in 0..2 {
+                // y ← y + y (½ − ½ v y²)
+                let e = _mm512_fnmadd_pd(_mm512_mul_pd(half_v, y), y, half);
+                y = _mm512_fmadd_pd(y, e, y);
+            }
+            _mm512_storeu_pd(out.0.as_mut_ptr(), y);
+        }
+        out
+    }
+}
+
+/// One cage triangle as the batch kernel reads it.
+#[derive(Debug, Clone, Copy)]
+struct BatchTriangle {
+    /// Cage vertices (i0, i1, i2).
+    vertices: [u32; 3],
+    /// Per corner j: the edge opposite j, as an index into the edge arrays.
+    edges: [u32; 3],
+    /// Per corner j: +1, or −1 if the stored edge `(a, b)` runs against the triangle order.
+    edge_sign: [f64; 3],
+    /// Per corner j: `edge_sign[j] · edge_sign[0]` (det(u_i0, u_i1, u_i2) = ±u_i0·c_{e0}).
+    corner_factor: [f64; 3],
+}
+
+/// Evaluation schedule: triangles in cage order, each preceded by the edges it is the first to
+/// use (so every edge is computed once, right before its first triangle).
+#[derive(Debug, Clone)]
+struct BatchPlan {
+    triangles: Vec<BatchTriangle>,
+    /// Edges `(a, b)` in first-use order.
+    edges: Vec<[u32; 2]>,
+    /// `edges[edge_starts[t]..edge_starts[t + 1]]` are computed before triangle t.
+    edge_starts: Vec<usize>,
+}
+
+impl BatchPlan {
+    fn new(evaluator: &MvcEvaluator) -> Self {
+        let mut renumbered = vec![u32::MAX; evaluator.edges.len()];
+        let mut edges = Vec::with_capacity(evaluator.edges.len());
+        let mut edge_starts = Vec::with_capacity(evaluator.triangles.len() + 1);
+        let mut triangles = Vec::with_capacity(evaluator.triangles.len());
+        for (tri, tri_edges) in evaluator.triangles.iter().zip(&evaluator.triangle_edges) {
+            edge_starts.push(edges.len());
+            let local = tri_edges.map(|(e, _)| {
+                let e = e as usize;
+                if renumbered[e] == u32::MAX {
+                    renumbered[e] = edges.len() as u32;
+                    edges.push(evaluator.edges[e]);
+                }
+                renumbered[e]
+            });
+            let edge_sign = tri_edges.map(|(_, reversed)| if reversed { -1.0 } else { 1.0 });
+            triangles.push(BatchTriangle {
+                vertices: *tri,
+                edges: local,
+                edge_sign,
+                corner_factor: edge_sign.map(|s| s * edge_sign[0]),
+            });
+        }
+        edge_starts.push(edges.len());
+        Self {
+            triangles,
+            edges,
+            edge_starts,
+        }
+    }
+}
+
+/// Column-major destination for a block of rows of a `#points × #C` matrix whose storage may
+/// still be uninitialised: only ever written, through raw pointers.
+pub(crate) struct RowBlock {
+    /// Entry (0, 0) of the block.
+    base: *mut f64,
+    col_stride: usize,
+    nrows: usize,
+    ncols: usize,
+}
+
+impl RowBlock {
+    /// # Safety
+    /// For every column `k < ncols`, the `nrows` values from `base + k · col_stride` must be
+    /// valid for writes and not accessed through any other pointer while the block lives.
+    pub(crate) unsafe fn new(
+        base: *mut f64,
+        col_stride: usize,
+        nrows: usize,
+        ncols: usize,
+    ) -> Self {
+        Self {
+            base,
+            col_stride,
+            nrows,
+            ncols,
+        }
+    }
+
+    /// Writes `values` into column `col` from row `row` on.
+    #[inline(always)]
+    fn write(&mut self, row: usize, col: usize, values: &[f64]) {
+        assert!(col < self.ncols && row + values.len() <= self.nrows);
+        // SAFETY: in bounds (checked above) of memory the constructor's caller vouched for.
+        unsafe {
+            let target = self.base.add(col * self.col_stride + row);
+            if values.len() == LANES {
+                // Constant length: one vector store instead of a `memmove` call.
+                std::ptr::copy_nonoverlapping(values.as_ptr(), target, LANES);
+            } else {
+                std::ptr::copy_nonoverlapping(values.as_ptr(), target, values.len());
+            }
+        }
+    }
+}
+
 /// Per-thread buffers for [`evaluate_rows`].
 #[derive(Debug, Clone)]
 pub(crate) struct BatchScratch {
+    plan: BatchPlan,
     /// Per cage vertex: u_k (x, y, z) and 1/d_k, per lane.
     unit_x: Vec<Lanes>,
     unit_y: Vec<Lanes>,
     unit_z: Vec<Lanes>,
     inv_dist: Vec<Lanes>,
-    /// Per edge: c = u_a × u_b and θ / (2|c|), per lane.
+    /// Per edge (plan order): c = u_a × u_b and θ / (2|c|), per lane.
     cross_x: Vec<Lanes>,
     cross_y: Vec<Lanes>,
     cross_z: Vec<Lanes>,
@@ -48,6 +376,7 @@ impl BatchScratch {
         let per_vertex = vec![[0.0; LANES]; num_vertices];
         let per_edge = vec![[0.0; LANES]; num_edges];
         Self {
+            plan: BatchPlan::new(evaluator),
             unit_x: per_vertex.clone(),
             unit_y: per_vertex.clone(),
             unit_z: per_vertex.clone(),
@@ -63,25 +392,27 @@ impl BatchScratch {
     }
 }
 
-/// MVC of `points` (`n`) into the rows of `out` (`n × #C`, any strides).
+/// MVC of `points` (`n`) into the rows of `out` (`n × #C`). Every entry of `out` is written.
+/// Returns the first row (index into `points`) holding a non-finite weight, if any.
 pub(crate) fn evaluate_rows(
     evaluator: &MvcEvaluator,
     points: &[DVec3],
     scratch: &mut BatchScratch,
-    out: MatMut<'_, f64>,
-) {
+    out: &mut RowBlock,
+) -> Option<usize> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the enabled feature (checked just above).
             return unsafe { evaluate_rows_avx512(evaluator, points, scratch, out) };
         }
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
             // SAFETY: as above.
             return unsafe { evaluate_rows_avx2(evaluator, points, scratch, out) };
         }
     }
-    evaluate_rows_generic(evaluator, points, scratch, out)
+    evaluate_rows_generic::<PlainMath>(evaluator, points, scratch, out)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -90,191 +421,168 @@ fn evaluate_rows_avx512(
     evaluator: &MvcEvaluator,
     points: &[DVec3],
     scratch: &mut BatchScratch,
-    out: MatMut<'_, f64>,
-) {
-    evaluate_rows_generic(evaluator, points, scratch, out)
+    out: &mut RowBlock,
+) -> Option<usize> {
+    evaluate_rows_generic::<Avx512Math>(evaluator, points, scratch, out)
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 fn evaluate_rows_avx2(
     evaluator: &MvcEvaluator,
     points: &[DVec3],
     scratch: &mut BatchScratch,
-    out: MatMut<'_, f64>,
-) {
-    evaluate_rows_generic(evaluator, points, scratch, out)
+    out: &mut RowBlock,
+) -> Option<usize> {
+    evaluate_rows_generic::<FusedMath>(evaluator, points, scratch, out)
 }
 
 #[inline(always)]
-fn evaluate_rows_generic(
+fn evaluate_rows_generic<M: LaneMath>(
     evaluator: &MvcEvaluator,
     points: &[DVec3],
     scratch: &mut BatchScratch,
-    mut out: MatMut<'_, f64>,
-) {
-    debug_assert_eq!(out.nrows(), points.len());
+    out: &mut RowBlock,
+) -> Option<usize> {
+    debug_assert_eq!(out.nrows, points.len());
     let num_cage = evaluator.num_vertices();
+    let mut first_non_finite = None;
     for (batch, chunk) in points.chunks(LANES).enumerate() {
         let start = batch * LANES;
+        let count = chunk.len();
         // Pad a short last batch with its last point.
-        let lane_point = |l: usize| chunk[l.min(chunk.len() - 1)];
+        let lane_point = |l: usize| chunk[l.min(count - 1)];
         let px: Lanes = std::array::from_fn(|l| lane_point(l).x);
         let py: Lanes = std::array::from_fn(|l| lane_point(l).y);
         let pz: Lanes = std::array::from_fn(|l| lane_point(l).z);
-        let needs_robust = evaluate_batch(evaluator, &px, &py, &pz, scratch);
+        let (needs_robust, inv_total) = evaluate_batch::<M>(evaluator, &px, &py, &pz, scratch);
+        let inv_total = V8(inv_total);
+        let mut finite = Mask([u64::MAX; LANES]);
         for k in 0..num_cage {
-            let w = &scratch.weights[k];
-            for (l, &value) in w.iter().enumerate().take(chunk.len()) {
-                out[(start + l, k)] = value;
-            }
+            let normalised = V8(scratch.weights[k]) * inv_total;
+            finite = Mask::from_fn(|l| finite.test(l) & normalised.0[l].is_finite());
+            out.write(start, k, &normalised.0[..count]);
         }
         for (l, &point) in chunk.iter().enumerate() {
-            if needs_robust[l] {
-                evaluator.evaluate(point, &mut scratch.robust, &mut scratch.row);
-                for (k, &w) in scratch.row.iter().enumerate() {
-                    out[(start + l, k)] = w;
+            if needs_robust.test(l) {
+                let row = &mut scratch.row;
+                evaluator.evaluate(point, &mut scratch.robust, row);
+                for (k, &w) in row.iter().enumerate() {
+                    out.write(start + l, k, &[w]);
                 }
+                finite.0[l] = if row.iter().all(|w| w.is_finite()) {
+                    u64::MAX
+                } else {
+                    0
+                };
             }
         }
+        if first_non_finite.is_none() {
+            first_non_finite = (0..count).find(|&l| !finite.test(l)).map(|l| start + l);
+        }
     }
+    first_non_finite
 }
 
-/// Normalised weights of the batch into `scratch.weights`; returns the lanes that need the
-/// robust scalar path (their weights are garbage).
+/// Unnormalised weights of the batch into `scratch.weights`; returns the lanes that need the
+/// robust scalar path (their weights are garbage) and 1 / (sum of the weights) per lane.
 #[inline(always)]
-fn evaluate_batch(
+fn evaluate_batch<M: LaneMath>(
     evaluator: &MvcEvaluator,
     px: &Lanes,
     py: &Lanes,
     pz: &Lanes,
     scratch: &mut BatchScratch,
-) -> [bool; LANES] {
-    let mut nearest = [f64::INFINITY; LANES];
-    let mut farthest = [0.0f64; LANES];
+) -> (Mask, Lanes) {
+    let (px, py, pz) = (V8(*px), V8(*py), V8(*pz));
+    let mut nearest_sq = V8::splat(f64::INFINITY);
+    let mut farthest_sq = V8::splat(0.0);
     for (k, p) in evaluator.positions.iter().enumerate() {
-        let vx: Lanes = std::array::from_fn(|l| p.x - px[l]);
-        let vy: Lanes = std::array::from_fn(|l| p.y - py[l]);
-        let vz: Lanes = std::array::from_fn(|l| p.z - pz[l]);
-        let dist: Lanes =
-            std::array::from_fn(|l| (vx[l] * vx[l] + vy[l] * vy[l] + vz[l] * vz[l]).sqrt());
-        let inv: Lanes = std::array::from_fn(|l| 1.0 / dist[l]);
-        scratch.unit_x[k] = std::array::from_fn(|l| vx[l] * inv[l]);
-        scratch.unit_y[k] = std::array::from_fn(|l| vy[l] * inv[l]);
-        scratch.unit_z[k] = std::array::from_fn(|l| vz[l] * inv[l]);
-        scratch.inv_dist[k] = inv;
-        nearest = std::array::from_fn(|l| {
-            if dist[l] < nearest[l] {
-                dist[l]
-            } else {
-                nearest[l]
-            }
-        });
-        farthest = std::array::from_fn(|l| {
-            if dist[l] > farthest[l] {
-                dist[l]
-            } else {
-                farthest[l]
-            }
-        });
+        let vx = V8::splat(p.x) - px;
+        let vy = V8::splat(p.y) - py;
+        let vz = V8::splat(p.z) - pz;
+        let dist_sq = M::mul_add(vx, vx, M::mul_add(vy, vy, vz * vz));
+        let inv = M::rsqrt(dist_sq);
+        scratch.unit_x[k] = (vx * inv).0;
+        scratch.unit_y[k] = (vy * inv).0;
+        scratch.unit_z[k] = (vz * inv).0;
+        scratch.inv_dist[k] = inv.0;
+        nearest_sq = nearest_sq.min(dist_sq);
+        farthest_sq = farthest_sq.max(dist_sq);
         scratch.weights[k] = [0.0; LANES];
     }
-    let mut degenerate = [false; LANES];
-    for l in 0..LANES {
-        degenerate[l] = nearest[l] <= EPS * farthest[l];
-    }
-    for (e, &[a, b]) in evaluator.edges.iter().enumerate() {
-        let (a, b) = (a as usize, b as usize);
-        let (ax, ay, az) = (scratch.unit_x[a], scratch.unit_y[a], scratch.unit_z[a]);
-        let (bx, by, bz) = (scratch.unit_x[b], scratch.unit_y[b], scratch.unit_z[b]);
-        let mut cx = [0.0; LANES];
-        let mut cy = [0.0; LANES];
-        let mut cz = [0.0; LANES];
-        let mut k = [0.0; LANES];
-        for l in 0..LANES {
-            cx[l] = ay[l] * bz[l] - az[l] * by[l];
-            cy[l] = az[l] * bx[l] - ax[l] * bz[l];
-            cz[l] = ax[l] * by[l] - ay[l] * bx[l];
-            let sin = (cx[l] * cx[l] + cy[l] * cy[l] + cz[l] * cz[l]).sqrt();
-            let cos = ax[l] * bx[l] + ay[l] * by[l] + az[l] * bz[l];
-            k[l] = half_angle_over_sin(sin, cos);
-            // Near the edge's line: the scalar code decides (on the edge, or a tiny |c|).
-            degenerate[l] |= sin < EPS;
-        }
-        scratch.cross_x[e] = cx;
-        scratch.cross_y[e] = cy;
-        scratch.cross_z[e] = cz;
-        scratch.half_angle_over_sin[e] = k;
-    }
-    for (tri, tri_edges) in evaluator.triangles.iter().zip(&evaluator.triangle_edges) {
-        let idx = tri.map(|i| i as usize);
-        let [e0, e1, e2] = tri_edges.map(|(e, _)| e as usize);
-        let sign = tri_edges.map(|(_, reversed)| if reversed { -1.0 } else { 1.0 });
-        let (u0x, u0y, u0z) = (
-            &scratch.unit_x[idx[0]],
-            &scratch.unit_y[idx[0]],
-            &scratch.unit_z[idx[0]],
-        );
-        let inv = idx.map(|i| scratch.inv_dist[i]);
-        let mut w = [[0.0; LANES]; 3];
-        for l in 0..LANES {
-            let c0 = [
-                sign[0] * scratch.cross_x[e0][l],
-                sign[0] * scratch.cross_y[e0][l],
-                sign[0] * scratch.cross_z[e0][l],
-            ];
-            let c1 = [
-                sign[1] * scratch.cross_x[e1][l],
-                sign[1] * scratch.cross_y[e1][l],
-                sign[1] * scratch.cross_z[e1][l],
-            ];
-            let c2 = [
-                sign[2] * scratch.cross_x[e2][l],
-                sign[2] * scratch.cross_y[e2][l],
-                sign[2] * scratch.cross_z[e2][l],
-            ];
-            let (k0, k1, k2) = (
-                scratch.half_angle_over_sin[e0][l],
-                scratch.half_angle_over_sin[e1][l],
-                scratch.half_angle_over_sin[e2][l],
+    // Same test as the scalar code (nearest ≤ ε · farthest), squared.
+    let mut degenerate = not(nearest_sq.gt(farthest_sq * (EPS * EPS)));
+    let plan = &scratch.plan;
+    for (t, tri) in plan.triangles.iter().enumerate() {
+        for e in plan.edge_starts[t]..plan.edge_starts[t + 1] {
+            let [a, b] = plan.edges[e];
+            let (a, b) = (a as usize, b as usize);
+            let (ax, ay, az) = (
+                V8(scratch.unit_x[a]),
+                V8(scratch.unit_y[a]),
+                V8(scratch.unit_z[a]),
             );
-            let det = u0x[l] * c0[0] + u0y[l] * c0[1] + u0z[l] * c0[2];
-            degenerate[l] |= det.abs() < EPS;
-            let mean = [
-                k0 * c0[0] + k1 * c1[0] + k2 * c2[0],
-                k0 * c0[1] + k1 * c1[1] + k2 * c2[1],
-                k0 * c0[2] + k1 * c1[2] + k2 * c2[2],
-            ];
-            let inv_det = 1.0 / det;
-            let dot = |c: [f64; 3]| c[0] * mean[0] + c[1] * mean[1] + c[2] * mean[2];
-            w[0][l] = dot(c0) * inv_det * inv[0][l];
-            w[1][l] = dot(c1) * inv_det * inv[1][l];
-            w[2][l] = dot(c2) * inv_det * inv[2][l];
+            let (bx, by, bz) = (
+                V8(scratch.unit_x[b]),
+                V8(scratch.unit_y[b]),
+                V8(scratch.unit_z[b]),
+            );
+            let cx = M::mul_add(ay, bz, -(az * by));
+            let cy = M::mul_add(az, bx, -(ax * bz));
+            let cz = M::mul_add(ax, by, -(ay * bx));
+            let sin_sq = M::mul_add(cx, cx, M::mul_add(cy, cy, cz * cz));
+            let cos = M::mul_add(ax, bx, M::mul_add(ay, by, az * bz));
+            // Near the edge's line: the scalar code decides (on the edge, or a tiny |c|).
+            degenerate = or(degenerate, not(sin_sq.ge(V8::splat(EPS * EPS))));
+            let inv_sin = M::rsqrt(sin_sq);
+            let (numerator, denominator) = angle_fraction::<M>(sin_sq * inv_sin, cos);
+            scratch.cross_x[e] = cx.0;
+            scratch.cross_y[e] = cy.0;
+            scratch.cross_z[e] = cz.0;
+            scratch.half_angle_over_sin[e] = (numerator * M::recip(denominator) * inv_sin * 0.5).0;
         }
+        let idx = tri.vertices.map(|i| i as usize);
+        let edges = tri.edges.map(|e| e as usize);
+        let cross = edges.map(|e| {
+            [
+                V8(scratch.cross_x[e]),
+                V8(scratch.cross_y[e]),
+                V8(scratch.cross_z[e]),
+            ]
+        });
+        let k: [V8; 3] =
+            std::array::from_fn(|j| V8(scratch.half_angle_over_sin[edges[j]]) * tri.edge_sign[j]);
+        let u0 = [
+            V8(scratch.unit_x[idx[0]]),
+            V8(scratch.unit_y[idx[0]]),
+            V8(scratch.unit_z[idx[0]]),
+        ];
+        let dot =
+            |a: &[V8; 3], b: &[V8; 3]| M::mul_add(a[0], b[0], M::mul_add(a[1], b[1], a[2] * b[2]));
+        // det(u_i0, u_i1, u_i2) = s0 · (u_i0 · c_e0); the sign s0 is in corner_factor.
+        let det = dot(&u0, &cross[0]);
+        degenerate = or(degenerate, not(det.abs().ge(V8::splat(EPS))));
+        let mean: [V8; 3] = std::array::from_fn(|i| {
+            M::mul_add(
+                k[0],
+                cross[0][i],
+                M::mul_add(k[1], cross[1][i], k[2] * cross[2][i]),
+            )
+        });
+        let inv_det = M::recip(det);
         for j in 0..3 {
+            let scaled = dot(&cross[j], &mean) * inv_det * tri.corner_factor[j];
             let target = &mut scratch.weights[idx[j]];
-            for l in 0..LANES {
-                target[l] += w[j][l];
-            }
+            *target = M::mul_add(scaled, V8(scratch.inv_dist[idx[j]]), V8(*target)).0;
         }
     }
-    let mut total = [0.0; LANES];
+    let mut total = V8::splat(0.0);
     for w in &scratch.weights {
-        for l in 0..LANES {
-            total[l] += w[l];
-        }
+        total = total + V8(*w);
     }
-    let mut inv_total = [0.0; LANES];
-    for l in 0..LANES {
-        degenerate[l] |= !(total[l] != 0.0 && total[l].is_finite());
-        inv_total[l] = 1.0 / total[l];
-    }
-    for w in &mut scratch.weights {
-        for l in 0..LANES {
-            w[l] *= inv_total[l];
-        }
-    }
-    degenerate
+    let usable = Mask::from_fn(|l| total.0[l] != 0.0 && total.0[l].is_finite());
+    (or(degenerate, not(usable)), M::recip(total).0)
 }
 
 /// Cephes `atan` coefficients: atan x = x + x·z·P(z)/Q(z), z = x², |x| ≤ 0.66.
@@ -295,44 +603,61 @@ const ATAN_Q: [f64; 5] = [
 /// Low part of π/2 (π/2 = FRAC_PI_2 + this, to ~1e-33).
 const FRAC_PI_2_LOW: f64 = 6.123_233_995_736_766e-17;
 
-/// `θ / (2 sin θ)` with θ = atan2(sin, cos) ∈ [0, π], for the sine and cosine of the angle
-/// between two unit vectors (`sin ≥ 0`, `sin² + cos² ≈ 1`; other inputs give garbage, never a
-/// trap). Branch-free (selects only) with ONE division: the Cephes reduction of t = sin/|cos| to
-/// x = num/den ∈ {t, (t−1)/(t+1), −1/t} (|x| ≤ 0.66, den ∈ [0.8, 2]) and the rational
-/// approximation atan x = x + x·z·P(z)/Q(z), z = x², written homogeneously in (num, den):
-/// atan x = num·(Q̃ + num²·P̃) / (den·Q̃) with P̃ = den⁸ P(z), Q̃ = den¹⁰ Q(z). Relative error a
-/// few ulp. `sin = 0` gives ½ (the limit θ/sin θ → 1) when `cos > 0`.
+/// θ = atan2(sin, cos) ∈ [0, π] as a fraction `(numerator, denominator)`, for the sine and
+/// cosine of the angle between two unit vectors (`sin ≥ 0`, `sin² + cos² ≈ 1`; other inputs give
+/// garbage, never a trap). Branch-free (selects only), no division: the Cephes reduction of
+/// t = sin/|cos| to x = num/den ∈ {t, (t−1)/(t+1), −1/t} (|x| ≤ 0.66, den ∈ [0.8, 2]) and the
+/// rational approximation atan x = x + x·z·P(z)/Q(z), z = x², written homogeneously in
+/// (num, den): atan x = num·(Q̃ + num²·P̃) / (den·Q̃) with P̃ = den⁸ P(z), Q̃ = den¹⁰ Q(z).
+/// Relative error a few ulp.
 #[inline(always)]
-pub(crate) fn half_angle_over_sin(sin: f64, cos: f64) -> f64 {
+fn angle_fraction<M: LaneMath>(sin: V8, cos: V8) -> (V8, V8) {
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
     let abs_cos = cos.abs();
-    let big = sin > 2.414_213_562_373_095 * abs_cos;
-    let mid = sin > 0.66 * abs_cos;
-    let (num, den, base, low) = if big {
-        (-abs_cos, sin, FRAC_PI_2, FRAC_PI_2_LOW)
-    } else if mid {
-        (sin - abs_cos, sin + abs_cos, FRAC_PI_4, 0.5 * FRAC_PI_2_LOW)
-    } else {
-        (sin, abs_cos, 0.0, 0.0)
-    };
+    let big = sin.gt(abs_cos * 2.414_213_562_373_095);
+    let mid = sin.gt(abs_cos * 0.66);
+    let splat = V8::splat;
+    let num = V8::select(big, -abs_cos, V8::select(mid, sin - abs_cos, sin));
+    let den = V8::select(big, sin, V8::select(mid, sin + abs_cos, abs_cos));
+    let base = V8::select(
+        big,
+        splat(FRAC_PI_2),
+        V8::select(mid, splat(FRAC_PI_4), splat(0.0)),
+    );
+    let low = V8::select(
+        big,
+        splat(FRAC_PI_2_LOW),
+        V8::select(mid, splat(0.5 * FRAC_PI_2_LOW), splat(0.0)),
+    );
     // θ = base + atan x (cos ≥ 0) or π − base − atan x (cos < 0).
-    let (sign, offset) = if cos < 0.0 {
-        (-1.0, (PI - base) - low)
-    } else {
-        (1.0, base + low)
-    };
+    let negative = splat(0.0).gt(cos);
+    let signed_num = V8::select(negative, -num, num);
+    let offset = V8::select(negative, (splat(PI) - base) - low, base + low);
     let (n2, d2) = (num * num, den * den);
-    let (d4, d6, d8) = (d2 * d2, d2 * d2 * d2, d2 * d2 * d2 * d2);
-    let p = (((ATAN_P[0] * n2 + ATAN_P[1] * d2) * n2 + ATAN_P[2] * d4) * n2 + ATAN_P[3] * d6) * n2
-        + ATAN_P[4] * d8;
-    let q = ((((n2 + ATAN_Q[0] * d2) * n2 + ATAN_Q[1] * d4) * n2 + ATAN_Q[2] * d6) * n2
-        + ATAN_Q[3] * d8)
-        * n2
-        + ATAN_Q[4] * d8 * d2;
+    let d4 = d2 * d2;
+    let (d6, d8) = (d4 * d2, d4 * d4);
+    let p = M::mul_add(splat(ATAN_P[0]), n2, d2 * ATAN_P[1]);
+    let p = M::mul_add(p, n2, d4 * ATAN_P[2]);
+    let p = M::mul_add(p, n2, d6 * ATAN_P[3]);
+    let p = M::mul_add(p, n2, d8 * ATAN_P[4]);
+    let q = M::mul_add(splat(ATAN_Q[0]), d2, n2);
+    let q = M::mul_add(q, n2, d4 * ATAN_Q[1]);
+    let q = M::mul_add(q, n2, d6 * ATAN_Q[2]);
+    let q = M::mul_add(q, n2, d8 * ATAN_Q[3]);
+    let q = M::mul_add(q, n2, (d8 * d2) * ATAN_Q[4]);
     let den_q = den * q;
-    let theta_times_den_q = offset * den_q + sign * num * (q + n2 * p);
+    let theta_times_den_q = M::mul_add(offset, den_q, signed_num * M::mul_add(n2, p, q));
+    (theta_times_den_q, den_q)
+}
+
+/// `θ / (2 sin θ)` with θ = atan2(sin, cos) ∈ [0, π] (see [`angle_fraction`]), for the sine and
+/// cosine of the angle between two unit vectors. `sin = 0` gives ½ (the limit θ/sin θ → 1) when
+/// `cos > 0`. Scalar reference of the batch kernel's per-edge term.
+#[cfg(test)]
+fn half_angle_over_sin(sin: f64, cos: f64) -> f64 {
+    let (numerator, denominator) = angle_fraction::<PlainMath>(V8::splat(sin), V8::splat(cos));
     if sin > 0.0 {
-        0.5 * theta_times_den_q / (den_q * sin)
+        0.5 * numerator.0[0] / (denominator.0[0] * sin)
     } else {
         0.5
     }
@@ -341,6 +666,65 @@ pub(crate) fn half_angle_over_sin(sin: f64, cos: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every instruction-set variant of the batch kernel agrees with the robust scalar evaluator
+    /// (regular points, a point on a vertex and one on a face, a short last batch).
+    #[test]
+    fn all_lane_math_variants_match_scalar() {
+        let radii: Vec<f64> = (0..42).map(|i| 1.0 + 0.1 * (i % 5) as f64).collect();
+        let (pos, tris) = super::super::mvc::tests::icosphere(&radii);
+        let evaluator = MvcEvaluator::new(&pos, &tris);
+        let mut points: Vec<DVec3> = (0..45)
+            .map(|i| {
+                let f = i as f64;
+                DVec3::new((f * 0.37).sin(), (f * 0.73).cos(), (f * 0.11).sin()) * 0.7
+            })
+            .collect();
+        points[3] = pos[5];
+        points[11] =
+            (pos[tris[4][0] as usize] + pos[tris[4][1] as usize] + pos[tris[4][2] as usize]) / 3.0;
+        let (n, c) = (points.len(), pos.len());
+        let check = |name: &str, values: &[f64]| {
+            let mut robust = evaluator.scratch();
+            let mut expected = vec![0.0; c];
+            for (i, &x) in points.iter().enumerate() {
+                evaluator.evaluate(x, &mut robust, &mut expected);
+                for k in 0..c {
+                    let got = values[k * n + i];
+                    assert!((got - expected[k]).abs() < 1e-12, "{name}: row {i} col {k}");
+                }
+            }
+        };
+        let run = |variant: u8| -> Vec<f64> {
+            let mut values = vec![f64::NAN; n * c];
+            let mut scratch = BatchScratch::new(&evaluator);
+            // SAFETY: `values` is n × c column-major, owned here.
+            let mut out = unsafe { RowBlock::new(values.as_mut_ptr(), n, n, c) };
+            let bad = match variant {
+                0 => {
+                    evaluate_rows_generic::<PlainMath>(&evaluator, &points, &mut scratch, &mut out)
+                }
+                #[cfg(target_arch = "x86_64")]
+                1 if std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("fma") =>
+                // SAFETY: features checked.
+                unsafe { evaluate_rows_avx2(&evaluator, &points, &mut scratch, &mut out) },
+                #[cfg(target_arch = "x86_64")]
+                2 if std::arch::is_x86_feature_detected!("avx512f") =>
+                // SAFETY: feature checked.
+                unsafe { evaluate_rows_avx512(&evaluator, &points, &mut scratch, &mut out) },
+                _ => return Vec::new(),
+            };
+            assert_eq!(bad, None);
+            values
+        };
+        for (variant, name) in [(0, "plain"), (1, "avx2+fma"), (2, "avx512")] {
+            let values = run(variant);
+            if !values.is_empty() {
+                check(name, &values);
+            }
+        }
+    }
 
     #[test]
     fn half_angle_over_sin_matches_libm() {
