@@ -67,7 +67,10 @@ impl CageCoords {
     /// Wraps a `#V × #C` matrix whose entries the caller has already checked to be finite.
     pub(crate) fn from_checked_matrix(matrix: Mat<f64>) -> Self {
         debug_assert!((0..matrix.ncols()).all(|k| matrix.col(k).iter().all(|v| v.is_finite())));
-        Self { matrix }
+        Self {
+            matrix,
+            compact: None,
+        }
     }
 
     /// Builds Φ from `#V` rows of `#C` weights each.
