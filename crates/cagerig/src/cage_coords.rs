@@ -319,11 +319,21 @@ impl TileSums {
     fn add_four_columns<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if std::arch::is_x86_feature_detected!("avx512f") {
                 // SAFETY: the CPU supports the enabled feature (checked just above).
+                return unsafe { self.add_four_columns_avx512(columns, d) };
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: as above.
                 return unsafe { self.add_four_columns_avx2(columns, d) };
             }
         }
+        self.add_four_columns_generic(columns, d)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn add_four_columns_avx512<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
         self.add_four_columns_generic(columns, d)
     }
 

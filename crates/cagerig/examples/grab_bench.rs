@@ -1,0 +1,75 @@
+//! Times a current-cage grab right after a skeleton edit on the Arm subdivided N times, with Φ
+//! in f64 and in f32, next to its two big parts (M = ΦC and LBS):
+//! `cargo run --release -p cagerig --example grab_bench -- [N]`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use cagerig::cage_coords::CoordsPrecision;
+use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::skinning::LinearBlendSkinning;
+use cagerig::subdivide::subdivide_midpoint;
+use glam::DVec3;
+
+fn stats(mut samples: Vec<f64>) -> String {
+    samples.sort_by(f64::total_cmp);
+    format!(
+        "min {:.3} ms, median {:.3} ms",
+        samples[0],
+        samples[samples.len() / 2]
+    )
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let levels: usize = std::env::args().nth(1).map_or(Ok(3), |a| a.parse())?;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm");
+    let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
+    let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
+    let (weights, _) = cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), 25)?;
+    let cage = cagerig::io::read_obj(&dir.join("arm_cage.obj"))?;
+    let sub = subdivide_midpoint(&mesh, &weights, levels)?;
+    let nv = sub.mesh.num_vertices();
+    println!("Arm N={levels}: {nv} vertices");
+    for precision in [CoordsPrecision::F64, CoordsPrecision::F32] {
+        let parts = RigParts {
+            mesh: sub.mesh.clone(),
+            skeleton: skeleton.clone(),
+            skin_weights: sub.skin_weights.clone(),
+            cage: cage.clone(),
+            cage_coords: None,
+            maxvol_rows: None,
+            cor_rows: None,
+            joint_coords: None,
+            cor_centre_coords: None,
+        };
+        let options = SessionOptions {
+            cage_coords_precision: precision,
+            ..SessionOptions::default()
+        };
+        let (mut session, _) = RigSession::new(parts, options)?;
+        let joint = session.skeleton().find("lowerarm01.R").unwrap_or(3);
+        session.rotate_joint(joint, DVec3::X, 60f64.to_radians())?;
+        let (mut grab, mut product, mut skin) = (Vec::new(), Vec::new(), Vec::new());
+        let mut m = vec![DVec3::ZERO; nv];
+        let mut out = vec![DVec3::ZERO; nv];
+        let lbs = LinearBlendSkinning::new(session.skin_weights());
+        for i in 0..60 {
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            session.rotate_joint(joint, DVec3::Y, 0.01 * sign)?;
+            let t = Instant::now();
+            session.move_posed_cage(&[7], &[DVec3::new(0.0, 0.01 * sign, 0.0)])?;
+            grab.push(t.elapsed().as_secs_f64() * 1e3);
+            let t = Instant::now();
+            session.cage_coords().apply(session.rest_cage(), &mut m);
+            product.push(t.elapsed().as_secs_f64() * 1e3);
+            let t = Instant::now();
+            lbs.apply(session.posed_from_rest(), &m, &mut out);
+            skin.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        println!("Φ {precision:?}:");
+        println!("  grab after skeleton edit: {}", stats(grab));
+        println!("  M = ΦC alone:             {}", stats(product));
+        println!("  LBS alone:                {}", stats(skin));
+    }
+    Ok(())
+}
