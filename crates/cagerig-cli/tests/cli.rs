@@ -89,6 +89,67 @@ fn edit_writes_every_step_and_outputs_reload_bit_exactly() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Runs `edit` on the Arm with `SCRIPT` and extra options; returns the output directory.
+fn run_edit(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    let script = dir.join("edits.json");
+    std::fs::write(&script, SCRIPT).unwrap();
+    let out = dir.join(name);
+    let status = cagerig()
+        .arg("edit")
+        .arg(arm())
+        .arg("--script")
+        .arg(&script)
+        .arg("--out")
+        .arg(&out)
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    out
+}
+
+#[test]
+fn f32_coordinates_land_the_grab_and_stay_close_to_f64() {
+    let dir = temp_dir("edit-f32");
+    let exact = run_edit(&dir, "f64", &[]);
+    let rounded = run_edit(&dir, "f32", &["--coords-precision", "f32"]);
+    let read = |out: &Path, f: &str| cagerig::io::read_obj(&out.join(f)).unwrap().positions;
+    // The grab lands exactly in f32 mode too.
+    let (c2, c3) = (
+        read(&rounded, "step2_cage_posed.obj"),
+        read(&rounded, "step3_cage_posed.obj"),
+    );
+    let offset = glam::DVec3::new(-1.5, 2.0, 0.5);
+    for (k, (a, b)) in c2.iter().zip(&c3).enumerate() {
+        let expect = if [20, 23, 25].contains(&k) {
+            *a + offset
+        } else {
+            *a
+        };
+        assert!(b.distance(expect) < 1e-9, "cage vertex {k}");
+    }
+    // Every output stays within f32 rounding effects of the f64 run (relative to the size).
+    let rest = read(&exact, "step0_mesh_rest.obj");
+    let (lo, hi) = cagerig::mesh::bounding_box(&rest);
+    let diagonal = (hi - lo).length();
+    for f in [
+        "step4_mesh_posed.obj",
+        "step4_cage_posed.obj",
+        "step4_cage_rest.obj",
+    ] {
+        let d = cagerig::mesh::max_distance(&read(&exact, f), &read(&rounded, f));
+        assert!(
+            d > 0.0 && d < 1e-5 * diagonal,
+            "{f}: {d} vs diagonal {diagonal}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn bad_scripts_name_the_step_and_write_nothing() {
     let dir = temp_dir("bad");
