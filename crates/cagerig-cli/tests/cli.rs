@@ -28,23 +28,7 @@ const SCRIPT: &str = r#"{"skinning":"lbs","steps":[
 #[test]
 fn edit_writes_every_step_and_outputs_reload_bit_exactly() {
     let dir = temp_dir("edit");
-    let script = dir.join("edits.json");
-    std::fs::write(&script, SCRIPT).unwrap();
-    let out = dir.join("out");
-    let status = cagerig()
-        .arg("edit")
-        .arg(arm())
-        .arg("--script")
-        .arg(&script)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    let out = run_edit(&dir, "out", &[]);
     for k in 0..=4 {
         for f in [
             "mesh_rest.obj",

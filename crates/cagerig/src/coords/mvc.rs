@@ -58,39 +58,23 @@ pub fn mean_value_coordinates(
     }
     for tri in cage_triangles {
         let idx = tri.map(|i| i as usize);
-        let mut unit = [DVec3::ZERO; 3];
-        let mut dist = [0.0; 3];
-        for j in 0..3 {
-            let v = cage_positions[idx[j]] - point;
-            dist[j] = v.length();
-            unit[j] = v / dist[j];
-        }
-        // Edge j is opposite corner j: (j+1, j+2).
-        let mut cross = [DVec3::ZERO; 3];
-        let mut half_angle_over_sin = [0.0; 3];
-        let mut theta = [0.0; 3];
-        for j in 0..3 {
-            let (a, b) = ((j + 1) % 3, (j + 2) % 3);
-            match edge_terms(unit[a], unit[b]) {
-                EdgeTerms::Regular { c, k, angle } => {
-                    cross[j] = c;
-                    half_angle_over_sin[j] = k;
-                    theta[j] = angle;
-                }
-                EdgeTerms::OnEdge => {
-                    write_on_edge(idx[a], idx[b], dist[a], dist[b], out);
-                    return;
-                }
-            }
-        }
-        match triangle_contribution(&unit, &dist, &cross, &half_angle_over_sin, &theta) {
-            Contribution::Add(w) => {
+        match evaluate_triangle(cage_positions, idx, point) {
+            TriangleOutcome::Add(w) => {
                 for j in 0..3 {
                     out[idx[j]] += w[j];
                 }
             }
-            Contribution::Skip => {}
-            Contribution::OnTriangle => {
+            TriangleOutcome::Skip => {}
+            TriangleOutcome::OnEdge {
+                a,
+                b,
+                dist_a,
+                dist_b,
+            } => {
+                write_on_edge(a, b, dist_a, dist_b, out);
+                return;
+            }
+            TriangleOutcome::OnTriangle => {
                 write_on_triangle(cage_positions, idx, point, out);
                 return;
             }
@@ -354,7 +338,34 @@ pub(crate) fn triangle_weights(
     tri: [u32; 3],
     point: DVec3,
 ) -> TriangleWeights {
-    let idx = tri.map(|i| i as usize);
+    match evaluate_triangle(positions, tri.map(|i| i as usize), point) {
+        TriangleOutcome::Add(w) => TriangleWeights::Add(w),
+        TriangleOutcome::Skip => TriangleWeights::Skip,
+        TriangleOutcome::OnEdge { .. } | TriangleOutcome::OnTriangle => TriangleWeights::Degenerate,
+    }
+}
+
+/// What one triangle (corner indices `idx`) does to the MVC of `point`.
+enum TriangleOutcome {
+    /// Unnormalised weights of the three corners, in triangle order.
+    Add([f64; 3]),
+    /// The point lies on the triangle's plane outside it: no contribution.
+    Skip,
+    /// The point lies on the edge (a, b), at distances `dist_a`, `dist_b` from its ends.
+    OnEdge {
+        a: usize,
+        b: usize,
+        dist_a: f64,
+        dist_b: f64,
+    },
+    /// The point lies inside the triangle.
+    OnTriangle,
+}
+
+/// The per-triangle step of [`mean_value_coordinates`] (Ju et al. 2005): unit vectors and
+/// distances to the corners, the edge terms (edge j is opposite corner j: (j+1, j+2)), then the
+/// triangle's contribution.
+fn evaluate_triangle(positions: &[DVec3], idx: [usize; 3], point: DVec3) -> TriangleOutcome {
     let mut unit = [DVec3::ZERO; 3];
     let mut dist = [0.0; 3];
     for j in 0..3 {
@@ -373,13 +384,20 @@ pub(crate) fn triangle_weights(
                 half_angle_over_sin[j] = k;
                 theta[j] = angle;
             }
-            EdgeTerms::OnEdge => return TriangleWeights::Degenerate,
+            EdgeTerms::OnEdge => {
+                return TriangleOutcome::OnEdge {
+                    a: idx[a],
+                    b: idx[b],
+                    dist_a: dist[a],
+                    dist_b: dist[b],
+                };
+            }
         }
     }
     match triangle_contribution(&unit, &dist, &cross, &half_angle_over_sin, &theta) {
-        Contribution::Add(w) => TriangleWeights::Add(w),
-        Contribution::Skip => TriangleWeights::Skip,
-        Contribution::OnTriangle => TriangleWeights::Degenerate,
+        Contribution::Add(w) => TriangleOutcome::Add(w),
+        Contribution::Skip => TriangleOutcome::Skip,
+        Contribution::OnTriangle => TriangleOutcome::OnTriangle,
     }
 }
 
