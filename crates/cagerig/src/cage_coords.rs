@@ -162,30 +162,6 @@ impl CageCoords {
         self.accumulate(cage.iter().enumerate().map(|(k, c)| (k, *c)), false, out);
     }
 
-    /// Rows `first_row..first_row + out.len()` of M = Φ·C, serially: for callers that process
-    /// a mesh in row blocks on their own threads (e.g. fused with skinning). No allocation.
-    ///
-    /// # Panics
-    /// If the rows run past `#V` or `cage` is not `#C` long.
-    pub fn apply_rows(&self, cage: &[DVec3], first_row: usize, out: &mut [DVec3]) {
-        assert_eq!(cage.len(), self.num_cage_vertices(), "ΦC: cage");
-        assert!(first_row + out.len() <= self.num_vertices(), "ΦC: rows");
-        let terms = cage.iter().enumerate().map(|(k, c)| (k, *c));
-        match &self.compact {
-            Some(compact) => {
-                let nv = self.num_vertices();
-                accumulate_rows(
-                    &|k| &compact[k * nv..(k + 1) * nv],
-                    terms,
-                    false,
-                    first_row,
-                    out,
-                )
-            }
-            None => accumulate_rows(&|k| self.column(k), terms, false, first_row, out),
-        }
-    }
-
     /// M += Φ[:, k]·ΔC_k for the edited cage vertices only: O(#V · k). No allocation.
     pub fn apply_delta(&self, cage_vertices: &[usize], deltas: &[DVec3], out: &mut [DVec3]) {
         debug_assert_eq!(cage_vertices.len(), deltas.len());
@@ -243,46 +219,33 @@ fn accumulate_columns<'a, W, I>(
     out.par_chunks_mut(ROW_BLOCK)
         .enumerate()
         .for_each(|(block, chunk)| {
-            accumulate_rows(&column, terms.clone(), add_to_out, block * ROW_BLOCK, chunk)
-        });
-}
-
-/// [`accumulate_columns`] for the rows `first_row..first_row + out.len()` only, serially.
-fn accumulate_rows<'a, W, I>(
-    column: &impl Fn(usize) -> &'a [W],
-    terms: I,
-    add_to_out: bool,
-    first_row: usize,
-    out: &mut [DVec3],
-) where
-    W: Weight + 'a,
-    I: Iterator<Item = (usize, DVec3)> + Clone,
-{
-    for (tile, tile_out) in out.chunks_mut(LANE_BLOCK).enumerate() {
-        let start = first_row + tile * LANE_BLOCK;
-        let len = tile_out.len();
-        let mut sums = TileSums::default();
-        if add_to_out {
-            sums.load(tile_out);
-        }
-        let mut terms = terms.clone();
-        // Four columns per pass over the sums, then the remainder one by one.
-        loop {
-            match [terms.next(), terms.next(), terms.next(), terms.next()] {
-                [Some(a), Some(b), Some(c), Some(d)] => sums.add_four_columns(
-                    [a, b, c, d].map(|(k, _)| &column(k)[start..start + len]),
-                    [a.1, b.1, c.1, d.1],
-                ),
-                rest => {
-                    for (k, d) in rest.into_iter().flatten() {
-                        sums.add_column(&column(k)[start..start + len], d);
-                    }
-                    break;
+            let block_start = block * ROW_BLOCK;
+            for (tile, tile_out) in chunk.chunks_mut(LANE_BLOCK).enumerate() {
+                let start = block_start + tile * LANE_BLOCK;
+                let len = tile_out.len();
+                let mut sums = TileSums::default();
+                if add_to_out {
+                    sums.load(tile_out);
                 }
+                let mut terms = terms.clone();
+                // Four columns per pass over the sums, then the remainder one by one.
+                loop {
+                    match [terms.next(), terms.next(), terms.next(), terms.next()] {
+                        [Some(a), Some(b), Some(c), Some(d)] => sums.add_four_columns(
+                            [a, b, c, d].map(|(k, _)| &column(k)[start..start + len]),
+                            [a.1, b.1, c.1, d.1],
+                        ),
+                        rest => {
+                            for (k, d) in rest.into_iter().flatten() {
+                                sums.add_column(&column(k)[start..start + len], d);
+                            }
+                            break;
+                        }
+                    }
+                }
+                sums.store(tile_out);
             }
-        }
-        sums.store(tile_out);
-    }
+        });
 }
 
 /// A stored coordinate: f64, or f32 widened exactly to f64.
@@ -466,26 +429,6 @@ mod tests {
                 // Small integers times small integers: exact in any summation order.
                 assert_eq!(*o, expected, "row {i}, {nc} columns");
             }
-        }
-    }
-
-    #[test]
-    fn apply_rows_matches_apply_in_both_precisions() {
-        let (nv, nc) = (3 * LANE_BLOCK + 17, 6);
-        let matrix = Mat::from_fn(nv, nc, |i, k| ((i * 11 + k * 5) % 29) as f64 / 29.0 - 0.3);
-        let mut phi = CageCoords::from_matrix(matrix).unwrap();
-        let cage: Vec<DVec3> = (0..nc)
-            .map(|k| DVec3::new(1.0 + k as f64, 0.5 * k as f64, -(k as f64)))
-            .collect();
-        for _ in 0..2 {
-            let mut full = vec![DVec3::ZERO; nv];
-            phi.apply(&cage, &mut full);
-            for (first, len) in [(0, nv), (5, LANE_BLOCK + 3), (nv - 9, 9)] {
-                let mut rows = vec![DVec3::splat(7.0); len];
-                phi.apply_rows(&cage, first, &mut rows);
-                assert_eq!(rows, full[first..first + len]);
-            }
-            phi.round_to_f32();
         }
     }
 

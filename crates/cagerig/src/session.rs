@@ -8,7 +8,6 @@
 //! Every event ends with C' = CageUp(M') so that the loop C' → C → S → S' → C' is closed.
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
-use rayon::prelude::*;
 
 use crate::cage::validate_cage;
 use crate::cage_coords::{CageCoords, CoordsPrecision};
@@ -36,9 +35,6 @@ pub const GRID_COR_CENTRES_ABOVE: usize = 20_000;
 
 /// Φ reproduces the given rest mesh when max |ΦC − M| ≤ this × the cage's bbox diagonal.
 pub const PHI_C_TOLERANCE: f64 = 1e-9;
-
-/// Rows per task when M = ΦC and LBS run fused over row blocks.
-const FUSED_ROW_BLOCK: usize = 2048;
 
 /// With [`CoordsPrecision::F32`], ΦC within this × the cage's bbox diagonal of the given rest
 /// mesh differs from it by the rounding of Φ only, and replaces it when the session is built.
@@ -641,11 +637,12 @@ impl RigSession {
             for (c, d) in self.rest_cage.iter_mut().zip(&rest_delta) {
                 *c += *d;
             }
+            self.rest_from_cage_in_full();
         }
         self.scratch_cage_a = posed_delta;
         self.scratch_cage_b = rest_delta;
         solved?;
-        self.sync_all_from_rest_cage();
+        self.sync_from_rest_cage();
         Ok(())
     }
 
@@ -679,10 +676,9 @@ impl RigSession {
             {
                 *c = *c0 + *o;
             }
-            self.sync_all_from_rest_cage();
-        } else {
-            self.sync_from_rest_cage();
+            self.rest_from_cage_in_full();
         }
+        self.sync_from_rest_cage();
         Ok(())
     }
 
@@ -885,41 +881,6 @@ impl RigSession {
 
     /// After C changed: SkelUp (A = ΨC, rest frames re-placed), FK, skinning, CageUp.
     fn sync_from_rest_cage(&mut self) {
-        self.rest_joints_from_cage();
-        self.pose_and_fit();
-    }
-
-    /// After C changed everywhere: M = ΦC (and the CoR centres), SkelUp, FK, skinning, CageUp.
-    /// Under LBS, M and M' are computed in one pass over row blocks, each block of M skinned
-    /// while it is still in cache (the same numbers as the two full passes).
-    fn sync_all_from_rest_cage(&mut self) {
-        if self.method != SkinningMethod::Lbs {
-            self.rest_from_cage_in_full();
-            self.sync_from_rest_cage();
-            return;
-        }
-        self.rest_mesh_is_phi_c = true;
-        if let Some(cor) = &mut self.cor {
-            cor.stale = true;
-        }
-        self.rest_joints_from_cage();
-        self.pose();
-        let (cage_coords, lbs) = (&self.cage_coords, &self.lbs);
-        let (rest_cage, transforms) = (&self.rest_cage[..], &self.posed_from_rest[..]);
-        self.rest_mesh
-            .par_chunks_mut(FUSED_ROW_BLOCK)
-            .zip(self.posed_mesh.par_chunks_mut(FUSED_ROW_BLOCK))
-            .enumerate()
-            .for_each(|(block, (rest, posed))| {
-                let first = block * FUSED_ROW_BLOCK;
-                cage_coords.apply_rows(rest_cage, first, rest);
-                lbs.apply_block(transforms, first, rest, posed);
-            });
-        self.fit_cage();
-    }
-
-    /// Rest joints A = ΨC (Eq. 13) into the rest frames' translations.
-    fn rest_joints_from_cage(&mut self) {
         self.skeleton_updater
             .apply(&self.rest_cage, &mut self.scratch_joints);
         for (frame, a) in self
@@ -929,17 +890,11 @@ impl RigSession {
         {
             frame.translation = *a;
         }
+        self.pose_and_fit();
     }
 
     /// FK of the current pose on the current rest skeleton, skinning, CageUp.
     fn pose_and_fit(&mut self) {
-        self.pose();
-        self.skin();
-        self.fit_cage();
-    }
-
-    /// FK of the current pose on the current rest skeleton: posed frames and T = posed_from_rest.
-    fn pose(&mut self) {
         // Locals: current rotation, rest bone offset (+ root motion).
         for j in 0..self.skeleton.len() {
             let translation = match self.skeleton.parent(j) {
@@ -958,6 +913,8 @@ impl RigSession {
             &self.posed_world_from_joint,
             &mut self.posed_from_rest,
         );
+        self.skin();
+        self.fit_cage();
     }
 
     fn skin(&mut self) {
@@ -1030,6 +987,7 @@ fn scatter_edit(vertices: &[usize], offsets: &[DVec3], dense: &mut [DVec3]) {
 
 /// out = (1 − a)·lo + a·hi, in parallel for big point sets.
 fn lerp_into(lo: &[DVec3], hi: &[DVec3], a: f64, out: &mut [DVec3]) {
+    use rayon::prelude::*;
     out.par_chunks_mut(8192)
         .zip(lo.par_chunks(8192).zip(hi.par_chunks(8192)))
         .for_each(|(o, (l, h))| {

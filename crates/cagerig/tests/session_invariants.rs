@@ -123,32 +123,6 @@ fn loop_is_exact_under_lbs_and_ghost_fit() {
 }
 
 #[test]
-fn fused_refresh_after_a_grab_equals_separate_passes() {
-    // Under LBS a grab computes M = ΦC and M' = LBS(M) in one pass over row blocks; the result
-    // must be exactly that of the two separate full passes.
-    for precision in [CoordsPrecision::F64, CoordsPrecision::F32] {
-        let options = SessionOptions {
-            cage_coords_precision: precision,
-            ..SessionOptions::default()
-        };
-        let mut s = session_with("snake", options);
-        s.rotate_joint(3, DVec3::Z, 0.6).unwrap();
-        s.move_posed_cage(&[4], &[DVec3::new(0.1, 0.2, -0.1)])
-            .unwrap();
-        let mut rest = vec![DVec3::ZERO; s.rest_mesh().len()];
-        s.cage_coords().apply(s.rest_cage(), &mut rest);
-        assert_eq!(rest, s.rest_mesh(), "{precision:?}: M");
-        let mut posed = vec![DVec3::ZERO; rest.len()];
-        cagerig::skinning::LinearBlendSkinning::new(s.skin_weights()).apply(
-            s.posed_from_rest(),
-            &rest,
-            &mut posed,
-        );
-        assert_eq!(posed, s.posed_mesh(), "{precision:?}: M'");
-    }
-}
-
-#[test]
 fn thousand_interleaved_events_keep_consensus_and_do_not_drift() {
     interleaved_events_keep_consensus(session("bar_irregular"), 1000);
 }

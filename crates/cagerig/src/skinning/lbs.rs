@@ -99,50 +99,26 @@ impl LinearBlendSkinning {
             .zip(rest_positions.par_chunks(VERTEX_GRAIN))
             .enumerate()
             .for_each(|(chunk, (out_chunk, rest_chunk))| {
-                self.skin_block(transforms, chunk * VERTEX_GRAIN, rest_chunk, out_chunk)
+                let first = chunk * VERTEX_GRAIN;
+                let row_start = &self.row_start[first..=first + out_chunk.len()];
+                for ((o, &p), bounds) in out_chunk
+                    .iter_mut()
+                    .zip(rest_chunk)
+                    .zip(row_start.windows(2))
+                {
+                    let range = bounds[0] as usize..bounds[1] as usize;
+                    *o = if range.is_empty() {
+                        p
+                    } else {
+                        let blended = blend_affine_cols(
+                            &self.joints[range.clone()],
+                            &self.weights[range],
+                            transforms,
+                        );
+                        transform_point_cols(&blended, p)
+                    };
+                }
             });
-    }
-
-    /// LBS of the vertices `first..first + out.len()` (rest positions `rest_positions`, same
-    /// length), serially: for callers that process a mesh in blocks on their own threads.
-    ///
-    /// # Panics
-    /// If the block runs past `#V`, the lengths differ or `transforms` is not `#J` long.
-    pub fn apply_block(
-        &self,
-        transforms: &[DAffine3],
-        first: usize,
-        rest_positions: &[DVec3],
-        out: &mut [DVec3],
-    ) {
-        assert_eq!(transforms.len(), self.num_joints, "LBS: transforms");
-        assert_eq!(rest_positions.len(), out.len(), "LBS: block");
-        assert!(first + out.len() <= self.num_vertices(), "LBS: block rows");
-        self.skin_block(transforms, first, rest_positions, out);
-    }
-
-    #[inline(always)]
-    fn skin_block(
-        &self,
-        transforms: &[DAffine3],
-        first: usize,
-        rest_positions: &[DVec3],
-        out: &mut [DVec3],
-    ) {
-        let row_start = &self.row_start[first..=first + out.len()];
-        for ((o, &p), bounds) in out.iter_mut().zip(rest_positions).zip(row_start.windows(2)) {
-            let range = bounds[0] as usize..bounds[1] as usize;
-            *o = if range.is_empty() {
-                p
-            } else {
-                let blended = blend_affine_cols(
-                    &self.joints[range.clone()],
-                    &self.weights[range],
-                    transforms,
-                );
-                transform_point_cols(&blended, p)
-            };
-        }
     }
 
     /// LBS of a subset of vertices (e.g. the MaxVol rows of the ghost mesh used by CageUp):
