@@ -28,6 +28,7 @@ use rayon::prelude::*;
 
 use super::cor_centres::{
     CorCentresFactored, CorCentresOptions, CorProblem, RowScratch, centre_row,
+    check_cage_coord_rows,
 };
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
@@ -52,13 +53,7 @@ pub fn compute_cor_cage_coords(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<CageCoords, RigError> {
     let num_vertices = rest_positions.len();
-    if cage_coords.num_vertices() != num_vertices {
-        return Err(RigError::SizeMismatch {
-            what: "cage coordinate rows vs rest vertices",
-            expected: num_vertices,
-            actual: cage_coords.num_vertices(),
-        });
-    }
+    check_cage_coord_rows(cage_coords, num_vertices)?;
     let num_cage = cage_coords.num_cage_vertices();
     let problem = CorProblem::new(rest_positions, triangles, weights, options)?;
     let num_patches = problem.num_patches();

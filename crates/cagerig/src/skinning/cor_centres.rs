@@ -35,6 +35,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::SkinWeights;
+use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::sparse_rows::SparseRows;
 
@@ -452,6 +453,63 @@ pub(crate) fn centre_row(
     Some(row)
 }
 
+/// The checks shared by every computation of CoR centres (exact, clustered, Λ from clusters, Λ
+/// from similarity tables): Ω has one row per rest vertex, the rest positions are finite,
+/// triangles index existing vertices, and the similarity width σ is positive.
+pub(crate) fn validate_cor_inputs(
+    rest_positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    weights: &SkinWeights,
+    sigma: f64,
+) -> Result<(), RigError> {
+    let num_vertices = rest_positions.len();
+    if weights.num_vertices() != num_vertices {
+        return Err(RigError::SizeMismatch {
+            what: "skinning weight rows vs rest vertices",
+            expected: num_vertices,
+            actual: weights.num_vertices(),
+        });
+    }
+    if let Some(index) = rest_positions.iter().position(|p| !p.is_finite()) {
+        return Err(RigError::NonFinite {
+            what: "vertex",
+            index,
+        });
+    }
+    for tri in triangles {
+        for &i in tri {
+            if i as usize >= num_vertices {
+                return Err(RigError::IndexOutOfRange {
+                    what: "triangle vertex",
+                    index: i as usize,
+                    len: num_vertices,
+                });
+            }
+        }
+    }
+    if !(sigma.is_finite() && sigma > 0.0) {
+        return Err(RigError::Invalid(format!(
+            "CoR similarity width sigma must be positive, got {sigma}"
+        )));
+    }
+    Ok(())
+}
+
+/// The check of the Λ computations: Φ has one row per rest vertex.
+pub(crate) fn check_cage_coord_rows(
+    cage_coords: &CageCoords,
+    num_vertices: usize,
+) -> Result<(), RigError> {
+    if cage_coords.num_vertices() != num_vertices {
+        return Err(RigError::SizeMismatch {
+            what: "cage coordinate rows vs rest vertices",
+            expected: num_vertices,
+            actual: cage_coords.num_vertices(),
+        });
+    }
+    Ok(())
+}
+
 /// The inputs of the row evaluations: patches, vertex clusters and their mean weight rows.
 pub(crate) struct CorProblem {
     pub(crate) patches: PatchTable,
@@ -469,37 +527,8 @@ impl CorProblem {
         weights: &SkinWeights,
         options: &CorCentresOptions,
     ) -> Result<Self, RigError> {
+        validate_cor_inputs(rest_positions, triangles, weights, options.sigma)?;
         let num_vertices = rest_positions.len();
-        if weights.num_vertices() != num_vertices {
-            return Err(RigError::SizeMismatch {
-                what: "skinning weight rows vs rest vertices",
-                expected: num_vertices,
-                actual: weights.num_vertices(),
-            });
-        }
-        if let Some(index) = rest_positions.iter().position(|p| !p.is_finite()) {
-            return Err(RigError::NonFinite {
-                what: "vertex",
-                index,
-            });
-        }
-        for tri in triangles {
-            for &i in tri {
-                if i as usize >= num_vertices {
-                    return Err(RigError::IndexOutOfRange {
-                        what: "triangle vertex",
-                        index: i as usize,
-                        len: num_vertices,
-                    });
-                }
-            }
-        }
-        if !(options.sigma.is_finite() && options.sigma > 0.0) {
-            return Err(RigError::Invalid(format!(
-                "CoR similarity width sigma must be positive, got {}",
-                options.sigma
-            )));
-        }
         let (vertex_quantiser, patch_quantiser) = match options.method {
             CorCentresMethod::Exact => (None, None),
             CorCentresMethod::Clustered {

@@ -33,6 +33,7 @@ use faer::{Accum, Mat, Par};
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::cor_centres::{check_cage_coord_rows, validate_cor_inputs};
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
@@ -505,44 +506,8 @@ fn validate(
     cage_coords: &CageCoords,
     options: &CorGridOptions,
 ) -> Result<(), RigError> {
-    let num_vertices = rest_positions.len();
-    if weights.num_vertices() != num_vertices {
-        return Err(RigError::SizeMismatch {
-            what: "skinning weight rows vs rest vertices",
-            expected: num_vertices,
-            actual: weights.num_vertices(),
-        });
-    }
-    if cage_coords.num_vertices() != num_vertices {
-        return Err(RigError::SizeMismatch {
-            what: "cage coordinate rows vs rest vertices",
-            expected: num_vertices,
-            actual: cage_coords.num_vertices(),
-        });
-    }
-    if let Some(index) = rest_positions.iter().position(|p| !p.is_finite()) {
-        return Err(RigError::NonFinite {
-            what: "vertex",
-            index,
-        });
-    }
-    for tri in triangles {
-        for &i in tri {
-            if i as usize >= num_vertices {
-                return Err(RigError::IndexOutOfRange {
-                    what: "triangle vertex",
-                    index: i as usize,
-                    len: num_vertices,
-                });
-            }
-        }
-    }
-    if !(options.sigma.is_finite() && options.sigma > 0.0) {
-        return Err(RigError::Invalid(format!(
-            "CoR similarity width sigma must be positive, got {}",
-            options.sigma
-        )));
-    }
+    validate_cor_inputs(rest_positions, triangles, weights, options.sigma)?;
+    check_cage_coord_rows(cage_coords, rest_positions.len())?;
     if !(options.grid_step.is_finite() && options.grid_step > 0.0 && options.grid_step <= 0.5) {
         return Err(RigError::Invalid(format!(
             "CoR grid step must be in (0, 0.5], got {}",
