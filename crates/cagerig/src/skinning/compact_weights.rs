@@ -265,10 +265,12 @@ pub(crate) struct SortedRestMesh {
     pub origin: DVec3,
     /// `v − o` per vertex, `#V`, sorted order.
     pub rest_local: Vec<Vec3A>,
+    /// Names the kernel in size-mismatch errors.
+    what: &'static str,
 }
 
 impl SortedRestMesh {
-    /// `what` names the kernel in the size-mismatch error.
+    /// `what` names the kernel in size-mismatch errors.
     pub fn new(
         skin_weights: &SkinWeights,
         rest_positions: &[DVec3],
@@ -279,20 +281,17 @@ impl SortedRestMesh {
             rest_local: vec![Vec3A::ZERO; weights.num_vertices()],
             weights,
             origin: DVec3::ZERO,
+            what,
         };
-        mesh.set_rest_positions(rest_positions, what)?;
+        mesh.set_rest_positions(rest_positions)?;
         Ok(mesh)
     }
 
     /// Replaces the stored rest mesh M (`#V`). Parallel, no allocation.
-    pub fn set_rest_positions(
-        &mut self,
-        rest_positions: &[DVec3],
-        what: &'static str,
-    ) -> Result<(), RigError> {
+    pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
         if rest_positions.len() != self.weights.num_vertices() {
             return Err(RigError::SizeMismatch {
-                what,
+                what: self.what,
                 expected: self.weights.num_vertices(),
                 actual: rest_positions.len(),
             });

@@ -130,8 +130,7 @@ impl DqsF32 {
 
     /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
     pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
-        self.mesh
-            .set_rest_positions(rest_positions, "DQS f32 rest positions vs. weight rows")
+        self.mesh.set_rest_positions(rest_positions)
     }
 
     /// Fills `scratch` with the dual quaternions of `T_j ∘ translate(o)` (`#J`, f64 → f32).

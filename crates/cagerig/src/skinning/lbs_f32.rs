@@ -99,8 +99,7 @@ impl LbsF32 {
 
     /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
     pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
-        self.mesh
-            .set_rest_positions(rest_positions, "LBS f32 rest positions vs. weight rows")
+        self.mesh.set_rest_positions(rest_positions)
     }
 
     /// Fills `scratch` with `T_j ∘ translate(o)` in f32 (`#J`, serial).
