@@ -151,17 +151,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             // the loaded CoR rows are not carried: subdivided, they would only hold memory.
             let sub =
                 cagerig::subdivide::subdivide_rig(&base.mesh, &base.skin_weights, None, levels)?;
-            RigParts {
-                mesh: sub.mesh,
-                skeleton: base.skeleton.clone(),
-                skin_weights: sub.skin_weights,
-                cage: base.cage.clone(),
-                cage_coords: None,
-                maxvol_rows: None,
-                cor_rows: None,
-                joint_coords: None,
-                cor_centre_coords: None,
-            }
+            RigParts::new(
+                sub.mesh,
+                base.skeleton.clone(),
+                sub.skin_weights,
+                base.cage.clone(),
+            )
         };
         let model = if levels == 0 {
             name.clone()
@@ -252,17 +247,12 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
 
     // The session, from the precomputed parts (Φ moved in, not copied).
     let joint_coords: Vec<Vec<f64>> = (0..nj).map(|j| skelup.joint_row(j).to_vec()).collect();
-    let base_parts = RigParts {
-        mesh: parts.mesh.clone(),
-        skeleton: parts.skeleton.clone(),
-        skin_weights: parts.skin_weights.clone(),
-        cage: parts.cage.clone(),
-        cage_coords: None,
-        maxvol_rows: None,
-        cor_rows: None,
-        joint_coords: None,
-        cor_centre_coords: None,
-    };
+    let base_parts = RigParts::new(
+        parts.mesh.clone(),
+        parts.skeleton.clone(),
+        parts.skin_weights.clone(),
+        parts.cage.clone(),
+    );
     let session_parts = RigParts {
         cage_coords: Some(phi),
         maxvol_rows: Some(rows.clone()),

@@ -50,17 +50,7 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
                 .with_context(|| format!("building the built-in rig {name:?}"))?;
             LoadedRig {
                 name: format!("builtin:{name}"),
-                parts: RigParts {
-                    mesh: rig.mesh,
-                    skeleton: rig.skeleton,
-                    skin_weights: rig.skin_weights,
-                    cage: rig.cage,
-                    cage_coords: None,
-                    maxvol_rows: None,
-                    cor_rows: None,
-                    joint_coords: None,
-                    cor_centre_coords: None,
-                },
+                parts: RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage),
                 files: Vec::new(),
                 warnings: Vec::new(),
                 maxvol_path: None,
@@ -145,15 +135,13 @@ pub fn subdivide_and_write(
         t.elapsed().as_secs_f64() * 1e3
     );
     let sub_parts = RigParts {
-        mesh: sub.mesh,
-        skeleton: p.skeleton.clone(),
-        skin_weights: sub.skin_weights,
-        cage: p.cage.clone(),
-        cage_coords: None,
-        maxvol_rows: None,
         cor_rows: sub.cor_rows,
-        joint_coords: None,
-        cor_centre_coords: None,
+        ..RigParts::new(
+            sub.mesh,
+            p.skeleton.clone(),
+            sub.skin_weights,
+            p.cage.clone(),
+        )
     };
     let phi = compute_coords_with_progress(&sub_parts, true)?;
     let rows = cagerig::coords::maxvol::select_maxvol_rows(&phi)?.rows;

@@ -88,17 +88,12 @@ fn cage_ops(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("mvc", &id), |b| {
             b.iter(|| compute_cage_coords(&rig.cage, &rig.mesh.positions, None).unwrap())
         });
-        let parts = RigParts {
-            mesh: rig.mesh.clone(),
-            skeleton: rig.skeleton.clone(),
-            skin_weights: rig.skin_weights.clone(),
-            cage: rig.cage.clone(),
-            cage_coords: None,
-            maxvol_rows: None,
-            cor_rows: None,
-            joint_coords: None,
-            cor_centre_coords: None,
-        };
+        let parts = RigParts::new(
+            rig.mesh.clone(),
+            rig.skeleton.clone(),
+            rig.skin_weights.clone(),
+            rig.cage.clone(),
+        );
         let (mut s, _) = RigSession::new(parts, SessionOptions::default()).unwrap();
         s.rotate_joint(1, DVec3::Z, 0.5).unwrap();
         s.rotate_joint(2, DVec3::Y, 0.3).unwrap();

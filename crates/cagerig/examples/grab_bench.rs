@@ -31,17 +31,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let nv = sub.mesh.num_vertices();
     println!("Arm N={levels}: {nv} vertices");
     for precision in [CoordsPrecision::F64, CoordsPrecision::F32] {
-        let parts = RigParts {
-            mesh: sub.mesh.clone(),
-            skeleton: skeleton.clone(),
-            skin_weights: sub.skin_weights.clone(),
-            cage: cage.clone(),
-            cage_coords: None,
-            maxvol_rows: None,
-            cor_rows: None,
-            joint_coords: None,
-            cor_centre_coords: None,
-        };
+        let parts = RigParts::new(
+            sub.mesh.clone(),
+            skeleton.clone(),
+            sub.skin_weights.clone(),
+            cage.clone(),
+        );
         let options = SessionOptions {
             cage_coords_precision: precision,
             ..SessionOptions::default()

@@ -148,6 +148,29 @@ pub struct RigParts {
     pub cor_centre_coords: Option<CageCoords>,
 }
 
+impl RigParts {
+    /// The four structures a rig needs — rest skin M, rest skeleton S, Ω and rest cage C — with
+    /// no precomputed data: the session computes Φ, the MaxVol rows, Ψ and Λ when it needs them.
+    pub fn new(
+        mesh: TriMesh,
+        skeleton: Skeleton,
+        skin_weights: SkinWeights,
+        cage: TriMesh,
+    ) -> Self {
+        Self {
+            mesh,
+            skeleton,
+            skin_weights,
+            cage,
+            cage_coords: None,
+            maxvol_rows: None,
+            cor_rows: None,
+            joint_coords: None,
+            cor_centre_coords: None,
+        }
+    }
+}
+
 /// CoR data: Λ = S·Φ (`#V × #C`, Eq. 14) and the current centres Λ·C.
 #[derive(Debug, Clone)]
 struct CorState {

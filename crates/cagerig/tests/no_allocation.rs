@@ -50,17 +50,7 @@ fn per_event_work_does_not_allocate() {
 fn run_events() {
     // One test in this binary, so no other test thread allocates meanwhile.
     let rig = demo::builtin("snake", Some(20_000)).unwrap();
-    let parts = RigParts {
-        mesh: rig.mesh,
-        skeleton: rig.skeleton,
-        skin_weights: rig.skin_weights,
-        cage: rig.cage,
-        cage_coords: None,
-        maxvol_rows: None,
-        cor_rows: None,
-        joint_coords: None,
-        cor_centre_coords: None,
-    };
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
     let (mut s, _) = RigSession::new(parts, SessionOptions::default()).unwrap();
     s.set_skinning(SkinningMethod::Cor).unwrap();
     s.set_skinning(SkinningMethod::Lbs).unwrap();

@@ -16,17 +16,7 @@ fn session(name: &str) -> RigSession {
 
 fn session_with(name: &str, options: SessionOptions) -> RigSession {
     let rig = demo::builtin(name, None).unwrap();
-    let parts = RigParts {
-        mesh: rig.mesh,
-        skeleton: rig.skeleton,
-        skin_weights: rig.skin_weights,
-        cage: rig.cage,
-        cage_coords: None,
-        maxvol_rows: None,
-        cor_rows: None,
-        joint_coords: None,
-        cor_centre_coords: None,
-    };
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
     RigSession::new(parts, options).unwrap().0
 }
 
