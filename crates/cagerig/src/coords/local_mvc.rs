@@ -252,7 +252,7 @@ impl<'a> LocalMvc<'a> {
                     sum.add(w);
                 }
                 TriangleWeights::Skip => {}
-                TriangleWeights::Degenerate => return None,
+                TriangleWeights::OnEdge { .. } | TriangleWeights::OnTriangle => return None,
             }
         }
         for (o, &v) in out.iter_mut().zip(vertices) {
@@ -325,7 +325,7 @@ impl<'a> LocalMvc<'a> {
             match mvc::triangle_weights(self.positions, self.triangles[t as usize], point) {
                 TriangleWeights::Add(w) => sum.add(w),
                 TriangleWeights::Skip => {}
-                TriangleWeights::Degenerate => return None,
+                TriangleWeights::OnEdge { .. } | TriangleWeights::OnTriangle => return None,
             }
         }
         Some(())

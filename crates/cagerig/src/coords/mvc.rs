@@ -58,14 +58,14 @@ pub fn mean_value_coordinates(
     }
     for tri in cage_triangles {
         let idx = tri.map(|i| i as usize);
-        match evaluate_triangle(cage_positions, idx, point) {
-            TriangleOutcome::Add(w) => {
+        match triangle_weights(cage_positions, *tri, point) {
+            TriangleWeights::Add(w) => {
                 for j in 0..3 {
                     out[idx[j]] += w[j];
                 }
             }
-            TriangleOutcome::Skip => {}
-            TriangleOutcome::OnEdge {
+            TriangleWeights::Skip => {}
+            TriangleWeights::OnEdge {
                 a,
                 b,
                 dist_a,
@@ -74,7 +74,7 @@ pub fn mean_value_coordinates(
                 write_on_edge(a, b, dist_a, dist_b, out);
                 return;
             }
-            TriangleOutcome::OnTriangle => {
+            TriangleWeights::OnTriangle => {
                 write_on_triangle(cage_positions, idx, point, out);
                 return;
             }
@@ -317,36 +317,8 @@ impl SharedColumns {
     }
 }
 
-/// What one triangle contributes to the unnormalised MVC weights of `point`
-/// ([`triangle_weights`]).
+/// What one triangle does to the MVC of `point` ([`triangle_weights`]).
 pub(crate) enum TriangleWeights {
-    /// Unnormalised weights of the three corners, in triangle order.
-    Add([f64; 3]),
-    /// The point lies on the triangle's plane outside it: no contribution.
-    Skip,
-    /// The point lies on one of the triangle's edges or inside it: the coordinates are the
-    /// edge/face interpolation that [`mean_value_coordinates`] returns, not a weighted sum.
-    Degenerate,
-}
-
-/// The unnormalised MVC weights that triangle `tri` gives its corners at `point`: one iteration
-/// of the triangle loop of [`mean_value_coordinates`], with bitwise the same values (so that a
-/// vertex's weight summed over its incident triangles in ascending order equals that function's
-/// weight before normalisation). Does not handle the snapped-vertex case.
-pub(crate) fn triangle_weights(
-    positions: &[DVec3],
-    tri: [u32; 3],
-    point: DVec3,
-) -> TriangleWeights {
-    match evaluate_triangle(positions, tri.map(|i| i as usize), point) {
-        TriangleOutcome::Add(w) => TriangleWeights::Add(w),
-        TriangleOutcome::Skip => TriangleWeights::Skip,
-        TriangleOutcome::OnEdge { .. } | TriangleOutcome::OnTriangle => TriangleWeights::Degenerate,
-    }
-}
-
-/// What one triangle (corner indices `idx`) does to the MVC of `point`.
-enum TriangleOutcome {
     /// Unnormalised weights of the three corners, in triangle order.
     Add([f64; 3]),
     /// The point lies on the triangle's plane outside it: no contribution.
@@ -362,10 +334,17 @@ enum TriangleOutcome {
     OnTriangle,
 }
 
-/// The per-triangle step of [`mean_value_coordinates`] (Ju et al. 2005): unit vectors and
-/// distances to the corners, the edge terms (edge j is opposite corner j: (j+1, j+2)), then the
-/// triangle's contribution.
-fn evaluate_triangle(positions: &[DVec3], idx: [usize; 3], point: DVec3) -> TriangleOutcome {
+/// The per-triangle step of [`mean_value_coordinates`] (Ju et al. 2005) for triangle `tri`:
+/// unit vectors and distances to the corners, the edge terms (edge j is opposite corner j:
+/// (j+1, j+2)), then the triangle's contribution. Summing a vertex's `Add` weights over its
+/// incident triangles in ascending order gives bitwise that function's weight before
+/// normalisation. Does not handle the snapped-vertex case.
+pub(crate) fn triangle_weights(
+    positions: &[DVec3],
+    tri: [u32; 3],
+    point: DVec3,
+) -> TriangleWeights {
+    let idx = tri.map(|i| i as usize);
     let mut unit = [DVec3::ZERO; 3];
     let mut dist = [0.0; 3];
     for j in 0..3 {
@@ -385,7 +364,7 @@ fn evaluate_triangle(positions: &[DVec3], idx: [usize; 3], point: DVec3) -> Tria
                 theta[j] = angle;
             }
             EdgeTerms::OnEdge => {
-                return TriangleOutcome::OnEdge {
+                return TriangleWeights::OnEdge {
                     a: idx[a],
                     b: idx[b],
                     dist_a: dist[a],
@@ -395,9 +374,9 @@ fn evaluate_triangle(positions: &[DVec3], idx: [usize; 3], point: DVec3) -> Tria
         }
     }
     match triangle_contribution(&unit, &dist, &cross, &half_angle_over_sin, &theta) {
-        Contribution::Add(w) => TriangleOutcome::Add(w),
-        Contribution::Skip => TriangleOutcome::Skip,
-        Contribution::OnTriangle => TriangleOutcome::OnTriangle,
+        Contribution::Add(w) => TriangleWeights::Add(w),
+        Contribution::Skip => TriangleWeights::Skip,
+        Contribution::OnTriangle => TriangleWeights::OnTriangle,
     }
 }
 
