@@ -253,7 +253,7 @@ impl RigSession {
     /// and places the rig at rest. Returns the warnings gathered on the way.
     pub fn new(parts: RigParts, options: SessionOptions) -> Result<(Self, Vec<Warning>), RigError> {
         let RigParts {
-            mesh,
+            mut mesh,
             skeleton,
             skin_weights,
             cage,
@@ -322,7 +322,6 @@ impl RigSession {
         let residual = crate::mesh::max_distance(&phi_c, &mesh.positions);
         let (lo, hi) = cage.bounding_box();
         let mut rest_mesh_is_phi_c = residual <= PHI_C_TOLERANCE * (hi - lo).length();
-        let mut mesh = mesh;
         if precision == CoordsPrecision::F32
             && !rest_mesh_is_phi_c
             && residual <= PHI_C_TOLERANCE_F32 * (hi - lo).length()
