@@ -114,7 +114,7 @@ impl SessionArgs {
     }
 }
 
-fn start_session(
+pub(crate) fn start_session(
     loaded: LoadedRig,
     options: SessionOptions,
 ) -> anyhow::Result<(RigSession, Vec<Warning>)> {
@@ -443,7 +443,58 @@ pub fn animate(
 
 // ----- demo ----------------------------------------------------------------------------------
 
-pub fn demo(builtin: &str, resolution: Option<usize>, out: &Path) -> anyhow::Result<()> {
+/// Pictures of the demo's steps, kept in memory until the run succeeded; `None` when pictures
+/// are off or no graphics adapter exists (then the run goes on without them and says why).
+struct DemoPictures {
+    maker: Option<crate::pictures::PictureMaker>,
+    images: Vec<(String, cagerig_render::RgbaImage)>,
+}
+
+impl DemoPictures {
+    fn new(enabled: bool) -> Self {
+        let maker = enabled.then(|| crate::pictures::PictureMaker::new(Default::default()));
+        let maker = match maker {
+            Some(Ok(maker)) => Some(maker),
+            Some(Err(e)) => {
+                println!("warning: no pictures: {e:#}");
+                None
+            }
+            None => None,
+        };
+        Self {
+            maker,
+            images: Vec::new(),
+        }
+    }
+
+    fn add(&mut self, name: &str, session: &RigSession) -> anyhow::Result<()> {
+        if let Some(maker) = &mut self.maker {
+            let camera = maker.camera(session, 0.0);
+            let image = maker.picture(session, &camera)?;
+            self.images.push((format!("{name}.png"), image));
+        }
+        Ok(())
+    }
+
+    fn write_all(&self, out: &Path) -> anyhow::Result<()> {
+        for (name, image) in &self.images {
+            let path = out.join(name);
+            image.write_png(&path)?;
+            println!(
+                "picture (rest pose left, current pose right): {}",
+                path.display()
+            );
+        }
+        Ok(())
+    }
+}
+
+pub fn demo(
+    builtin: &str,
+    resolution: Option<usize>,
+    out: &Path,
+    pictures: bool,
+) -> anyhow::Result<()> {
     let args = RigArgs {
         mesh: None,
         cage: None,
@@ -463,8 +514,10 @@ pub fn demo(builtin: &str, resolution: Option<usize>, out: &Path) -> anyhow::Res
     for w in &warnings {
         println!("warning: {w}");
     }
+    let mut pictures = DemoPictures::new(pictures);
     let mut files = StateFiles::new();
     files.add_state("0_loaded", &s)?;
+    pictures.add("0_loaded", &s)?;
     let (lo, hi) = cagerig::mesh::bounding_box(s.rest_cage());
     let centre = (lo + hi) * 0.5;
     let size = (hi - lo).length();
@@ -479,6 +532,7 @@ pub fn demo(builtin: &str, resolution: Option<usize>, out: &Path) -> anyhow::Res
         t.elapsed().as_secs_f64() * 1e3
     );
     files.add_state("1_bend", &s)?;
+    pictures.add("1_bend", &s)?;
 
     // 2. Inflate with the rest cage: push the cage vertices on the far half outwards.
     let (verts, offsets): (Vec<usize>, Vec<DVec3>) = s
@@ -500,6 +554,7 @@ pub fn demo(builtin: &str, resolution: Option<usize>, out: &Path) -> anyhow::Res
         t.elapsed().as_secs_f64() * 1e3
     );
     files.add_state("2_inflate", &s)?;
+    pictures.add("2_inflate", &s)?;
 
     // 3. Grab the current cage: pull the vertex farthest along +X.
     let far = s
@@ -518,8 +573,10 @@ pub fn demo(builtin: &str, resolution: Option<usize>, out: &Path) -> anyhow::Res
         s.posed_cage()[far].distance(target)
     );
     files.add_state("3_grab", &s)?;
+    pictures.add("3_grab", &s)?;
     let n = files.write_all(out)?;
     println!("{n} files written to {}", out.display());
+    pictures.write_all(out)?;
     Ok(())
 }
 

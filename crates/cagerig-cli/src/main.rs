@@ -2,6 +2,8 @@
 
 mod bench;
 mod commands;
+mod pictures;
+mod render;
 mod rig_source;
 
 use std::path::PathBuf;
@@ -100,6 +102,9 @@ enum Command {
         /// Output directory.
         #[arg(long, default_value = "cagerig-demo")]
         out: PathBuf,
+        /// Do not render the PNG picture of each step (rest and current pose side by side).
+        #[arg(long)]
+        no_pictures: bool,
     },
     /// Midpoint-subdivide a rig N times and write its files (mesh, .skt, .skw, cage, Φ, MaxVol).
     Subdivide {
@@ -115,6 +120,9 @@ enum Command {
     },
     /// Per-operator timings in the layout of the paper's Table 1.
     Bench(bench::BenchArgs),
+    /// Render the rig (rest and/or current pose, cage, skeleton, colour maps) to PNG, after an
+    /// edit script or at animation times; needs a Vulkan or GL adapter (software ones work).
+    Render(Box<render::RenderArgs>),
 }
 
 fn main() -> std::process::ExitCode {
@@ -151,7 +159,8 @@ fn main() -> std::process::ExitCode {
             builtin,
             resolution,
             out,
-        } => commands::demo(&builtin, resolution, &out),
+            no_pictures,
+        } => commands::demo(&builtin, resolution, &out, !no_pictures),
         Command::Subdivide {
             rig,
             levels,
@@ -159,6 +168,7 @@ fn main() -> std::process::ExitCode {
             name,
         } => commands::subdivide(&rig, levels, &out, &name),
         Command::Bench(args) => bench::run(&args),
+        Command::Render(args) => render::run(&args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,0 +1,162 @@
+//! Pictures of a rig's state for `render`, `demo`, `edit --render` and `animate --render`:
+//! the rest pose (M, C, S) and/or the current pose (M', C', S') rendered offscreen, side by side
+//! for `both` (rest on the left, current on the right, as the paper tool shows them).
+
+use std::path::Path;
+
+use anyhow::Context;
+use cagerig::session::RigSession;
+use cagerig_render::rig_scene::{ColorBy, Layers, Pose, RigSceneData};
+use cagerig_render::{CameraPreset, OffscreenRenderer, OrbitCamera, RgbaImage, Style};
+use clap::ValueEnum;
+use glam::DVec3;
+
+/// Which pose(s) a picture shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
+pub enum ViewArg {
+    /// The current pose M', C', S'.
+    Current,
+    /// The rest pose M, C, S.
+    Rest,
+    /// Rest pose on the left, current pose on the right.
+    #[default]
+    Both,
+}
+
+/// Where the camera is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CameraChoice {
+    /// A preset, framing everything shown.
+    Preset(CameraPreset),
+    /// An explicit eye and target (world space).
+    LookAt { eye: DVec3, target: DVec3 },
+}
+
+/// Everything that decides how a picture looks.
+#[derive(Debug, Clone, Copy)]
+pub struct PictureOptions {
+    pub view: ViewArg,
+    /// Size of the whole picture in pixels (both views together for `both`).
+    pub size: (u32, u32),
+    pub camera: CameraChoice,
+    pub layers: Layers,
+    pub color_by: ColorBy,
+}
+
+impl Default for PictureOptions {
+    fn default() -> Self {
+        Self {
+            view: ViewArg::Both,
+            size: (1600, 700),
+            camera: CameraChoice::Preset(CameraPreset::ThreeQuarter),
+            layers: Layers::default(),
+            color_by: ColorBy::None,
+        }
+    }
+}
+
+/// Gap between the two views of a `both` picture (pixels).
+const GAP: u32 = 4;
+
+/// An offscreen renderer with its scratch data, reused from picture to picture.
+pub struct PictureMaker {
+    renderer: OffscreenRenderer,
+    data: RigSceneData,
+    pub options: PictureOptions,
+}
+
+impl PictureMaker {
+    /// Opens the GPU (fails with what to install when there is no adapter).
+    pub fn new(options: PictureOptions) -> anyhow::Result<Self> {
+        let renderer = OffscreenRenderer::new().context("starting the renderer")?;
+        Ok(Self {
+            renderer,
+            data: RigSceneData::new(),
+            options,
+        })
+    }
+
+    pub fn adapter_name(&self) -> &str {
+        self.renderer.adapter_name()
+    }
+
+    fn poses(&self) -> &'static [Pose] {
+        match self.options.view {
+            ViewArg::Current => &[Pose::Current],
+            ViewArg::Rest => &[Pose::Rest],
+            ViewArg::Both => &[Pose::Rest, Pose::Current],
+        }
+    }
+
+    /// Bounds of what the picture shows in every pose drawn (one camera frames all views).
+    fn bounds(&mut self, session: &RigSession) -> (DVec3, DVec3) {
+        let mut bounds: Option<(DVec3, DVec3)> = None;
+        for &pose in self.poses() {
+            let scene = self
+                .data
+                .scene(session, pose, self.options.layers, ColorBy::None);
+            if let Some((lo, hi)) = scene.bounds() {
+                bounds = Some(match bounds {
+                    Some((a, b)) => (a.min(lo), b.max(hi)),
+                    None => (lo, hi),
+                });
+            }
+        }
+        bounds.unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)))
+    }
+
+    /// Size of one view of the picture.
+    fn view_size(&self) -> (u32, u32) {
+        let (w, h) = self.options.size;
+        match self.options.view {
+            ViewArg::Both => (w.saturating_sub(GAP).div_ceil(2).max(1), h.max(1)),
+            _ => (w.max(1), h.max(1)),
+        }
+    }
+
+    /// The camera for `session`, turned by `extra_yaw` radians about the vertical axis.
+    pub fn camera(&mut self, session: &RigSession, extra_yaw: f64) -> OrbitCamera {
+        let (w, h) = self.view_size();
+        let mut camera = match self.options.camera {
+            CameraChoice::Preset(preset) => {
+                let (lo, hi) = self.bounds(session);
+                OrbitCamera::framing(preset, lo, hi, w as f64 / h as f64)
+            }
+            CameraChoice::LookAt { eye, target } => OrbitCamera::looking_at(eye, target),
+        };
+        camera.yaw += extra_yaw;
+        camera
+    }
+
+    /// Renders the picture of `session` with `camera`.
+    pub fn picture(
+        &mut self,
+        session: &RigSession,
+        camera: &OrbitCamera,
+    ) -> anyhow::Result<RgbaImage> {
+        let (w, h) = self.view_size();
+        let style = Style {
+            scale: (h as f32 / 700.0).max(0.75),
+            ..Style::default()
+        };
+        let mut views = Vec::with_capacity(2);
+        for &pose in self.poses() {
+            let scene = self
+                .data
+                .scene(session, pose, self.options.layers, self.options.color_by);
+            views.push(self.renderer.render(&scene, &style, camera, w, h)?);
+        }
+        Ok(match views.as_slice() {
+            [rest, current] => RgbaImage::side_by_side(rest, current, GAP),
+            _ => views.remove(0),
+        })
+    }
+
+    /// Renders `session` (framed) and writes the PNG at `path`.
+    pub fn write(&mut self, session: &RigSession, path: &Path) -> anyhow::Result<()> {
+        let camera = self.camera(session, 0.0);
+        let image = self.picture(session, &camera)?;
+        image.write_png(path)?;
+        Ok(())
+    }
+}

@@ -1,0 +1,84 @@
+//! A GPU buffer written in place every frame and re-created only when its content outgrows it.
+
+use bytemuck::Pod;
+
+/// A vertex/index/instance buffer with spare capacity.
+pub struct GrowBuffer {
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+    buffer: wgpu::Buffer,
+    capacity: u64,
+    /// Elements written by the last [`write`](Self::write).
+    len: u32,
+}
+
+impl GrowBuffer {
+    pub fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages) -> Self {
+        let usage = usage | wgpu::BufferUsages::COPY_DST;
+        let capacity = 256;
+        Self {
+            label,
+            usage,
+            buffer: create(device, label, usage, capacity),
+            capacity,
+            len: 0,
+        }
+    }
+
+    /// Writes `data` at offset 0 through the queue. Returns `true` when the buffer had to be
+    /// re-created (first use of a larger size; capacity grows by 1.5× to absorb small growth).
+    pub fn write<T: Pod>(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        data: &[T],
+    ) -> bool {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        // Buffer writes must be a multiple of 4 bytes.
+        let size = (bytes.len() as u64).next_multiple_of(4);
+        let recreated = size > self.capacity;
+        if recreated {
+            self.capacity = (size + size / 2).next_multiple_of(256);
+            self.buffer = create(device, self.label, self.usage, self.capacity);
+        }
+        if !bytes.is_empty() {
+            if bytes.len() % 4 == 0 {
+                queue.write_buffer(&self.buffer, 0, bytes);
+            } else {
+                let mut padded = bytes.to_vec();
+                padded.resize(size as usize, 0);
+                queue.write_buffer(&self.buffer, 0, &padded);
+            }
+        }
+        self.len = data.len() as u32;
+        recreated
+    }
+
+    /// Number of elements of the last write.
+    pub fn len(&self) -> u32 {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The written part, for binding.
+    pub fn slice(&self, element_size: u64) -> wgpu::BufferSlice<'_> {
+        self.buffer.slice(..(self.len as u64 * element_size).max(4))
+    }
+}
+
+fn create(
+    device: &wgpu::Device,
+    label: &str,
+    usage: wgpu::BufferUsages,
+    size: u64,
+) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage,
+        mapped_at_creation: false,
+    })
+}

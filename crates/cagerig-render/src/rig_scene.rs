@@ -1,0 +1,182 @@
+//! A [`RigSession`]'s rest pose (M, C, S) or current pose (M', C', S') as a [`Scene`], with
+//! optional colour maps: skin weights Ω of a joint, cage coordinates Φ of a cage vertex, or the
+//! joint coordinates Ψ of a joint on the cage handles.
+
+use cagerig::session::RigSession;
+use glam::DVec3;
+
+use crate::palette::ColorMap;
+use crate::scene::{CageLayer, MeshLayer, Scene, SkeletonLayer};
+
+/// Which of the rig's two poses a view shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pose {
+    /// M, C, S.
+    Rest,
+    /// M', C', S'.
+    Current,
+}
+
+/// A per-vertex scalar shown as colours.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ColorBy {
+    #[default]
+    None,
+    /// Skin weights Ω[:, j] of joint `j` on the skin (sequential map, [0, 1]).
+    JointWeights(usize),
+    /// Mean value coordinates Φ[:, k] of cage vertex `k` on the skin (diverging map: they go
+    /// negative).
+    CageCoords(usize),
+    /// Joint coordinates Ψ[j, :] of joint `j` on the cage handles (diverging map).
+    JointCageCoords(usize),
+}
+
+/// Which layers to draw.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layers {
+    pub mesh: bool,
+    pub wireframe: bool,
+    pub cage: bool,
+    pub skeleton: bool,
+    pub flat: bool,
+    pub ground: bool,
+}
+
+impl Default for Layers {
+    fn default() -> Self {
+        Self {
+            mesh: true,
+            wireframe: false,
+            cage: true,
+            skeleton: true,
+            flat: false,
+            ground: true,
+        }
+    }
+}
+
+/// Scratch data behind a rig's scene (colours, joint positions), reused between frames.
+#[derive(Debug, Default)]
+pub struct RigSceneData {
+    mesh_colors: Vec<[u8; 4]>,
+    handle_colors: Vec<[u8; 4]>,
+    joints: Vec<DVec3>,
+    parents: Vec<Option<usize>>,
+    scalars: Vec<f64>,
+}
+
+/// Why a colour map cannot be shown.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ColorByError {
+    #[error("joint {index} does not exist: the rig has {count} joints")]
+    Joint { index: usize, count: usize },
+    #[error("cage vertex {index} does not exist: the cage has {count} vertices")]
+    CageVertex { index: usize, count: usize },
+}
+
+impl ColorBy {
+    /// Checks the index against the rig.
+    pub fn validate(self, session: &RigSession) -> Result<(), ColorByError> {
+        let joints = session.skeleton().len();
+        let cage = session.rest_cage().len();
+        match self {
+            ColorBy::None => Ok(()),
+            ColorBy::JointWeights(j) | ColorBy::JointCageCoords(j) if j >= joints => {
+                Err(ColorByError::Joint {
+                    index: j,
+                    count: joints,
+                })
+            }
+            ColorBy::CageCoords(k) if k >= cage => Err(ColorByError::CageVertex {
+                index: k,
+                count: cage,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// The scalar per skin vertex (`#V`) written into `out`, and its map; `None` when this
+    /// colours the cage handles or nothing.
+    pub fn mesh_scalars(self, session: &RigSession, out: &mut Vec<f64>) -> Option<ColorMap> {
+        out.clear();
+        match self {
+            ColorBy::JointWeights(j) => {
+                let weights = session.skin_weights();
+                out.extend((0..weights.num_vertices()).map(|v| weights.get(v, j)));
+                Some(ColorMap::Sequential { lo: 0.0, hi: 1.0 })
+            }
+            ColorBy::CageCoords(k) => {
+                out.extend_from_slice(session.cage_coords().column(k));
+                Some(ColorMap::diverging_for(out))
+            }
+            ColorBy::None | ColorBy::JointCageCoords(_) => None,
+        }
+    }
+}
+
+impl RigSceneData {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The scene of `pose`. `color_by` must have passed [`ColorBy::validate`] for this
+    /// session (an invalid index draws no colour map).
+    pub fn scene<'a>(
+        &'a mut self,
+        session: &'a RigSession,
+        pose: Pose,
+        layers: Layers,
+        color_by: ColorBy,
+    ) -> Scene<'a> {
+        let (mesh, cage) = match pose {
+            Pose::Rest => (session.rest_mesh(), session.rest_cage()),
+            Pose::Current => (session.posed_mesh(), session.posed_cage()),
+        };
+        self.joints.clear();
+        match pose {
+            Pose::Rest => self.joints.extend(session.rest_joints()),
+            Pose::Current => self.joints.extend(session.posed_joints()),
+        }
+        self.parents.clear();
+        self.parents
+            .extend(session.skeleton().joints().iter().map(|j| j.parent));
+        let valid = color_by.validate(session).is_ok();
+        let mesh_map = if valid {
+            color_by.mesh_scalars(session, &mut self.scalars)
+        } else {
+            None
+        };
+        self.mesh_colors.clear();
+        if let Some(map) = mesh_map {
+            self.mesh_colors
+                .extend(self.scalars.iter().map(|&s| map.color_u8(s)));
+        }
+        self.handle_colors.clear();
+        if let (true, ColorBy::JointCageCoords(j)) = (valid, color_by) {
+            let row = session.skeleton_updater().joint_row(j);
+            let map = ColorMap::diverging_for(row);
+            self.handle_colors
+                .extend(row.iter().map(|&s| map.color_u8(s)));
+        }
+        Scene {
+            mesh: layers.mesh.then_some(MeshLayer {
+                positions: mesh,
+                triangles: session.mesh_triangles(),
+                colors: (!self.mesh_colors.is_empty()).then_some(&self.mesh_colors[..]),
+                flat: layers.flat,
+                wireframe: layers.wireframe,
+            }),
+            cage: layers.cage.then_some(CageLayer {
+                positions: cage,
+                triangles: session.cage_triangles(),
+                handle_colors: (!self.handle_colors.is_empty()).then_some(&self.handle_colors[..]),
+            }),
+            skeleton: layers.skeleton.then_some(SkeletonLayer {
+                joints: &self.joints,
+                parents: &self.parents,
+                joint_colors: None,
+            }),
+            ground: layers.ground,
+        }
+    }
+}

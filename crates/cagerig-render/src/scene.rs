@@ -1,0 +1,163 @@
+//! What to draw, as plain slices borrowed from the caller (the rig's data stays where it lives),
+//! and how it looks.
+
+use glam::DVec3;
+
+/// The character's skin.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshLayer<'a> {
+    /// Vertex positions (world), `#V`.
+    pub positions: &'a [DVec3],
+    /// Triangles as vertex indices, `#T × 3`.
+    pub triangles: &'a [[u32; 3]],
+    /// Per-vertex sRGB colours (`#V`, e.g. a colour map); `None` = the neutral material.
+    pub colors: Option<&'a [[u8; 4]]>,
+    /// Faceted shading (normals per triangle) instead of smooth.
+    pub flat: bool,
+    /// Draw the triangle edges over the surface.
+    pub wireframe: bool,
+}
+
+/// The deformation cage: translucent faces, edges and vertex handles.
+#[derive(Clone, Copy, Debug)]
+pub struct CageLayer<'a> {
+    /// Cage vertex positions (world), `#C`.
+    pub positions: &'a [DVec3],
+    /// Cage triangles, `#CT × 3`.
+    pub triangles: &'a [[u32; 3]],
+    /// Per-handle sRGB colours (`#C`, e.g. selection or a colour map); `None` = the cage colour.
+    pub handle_colors: Option<&'a [[u8; 4]]>,
+}
+
+/// The skeleton: bones from each joint to its parent, joints as discs, drawn on top.
+#[derive(Clone, Copy, Debug)]
+pub struct SkeletonLayer<'a> {
+    /// Joint positions (world), `#J`.
+    pub joints: &'a [DVec3],
+    /// Parent of each joint (`#J`), `None` for roots.
+    pub parents: &'a [Option<usize>],
+    /// Per-joint sRGB colours (`#J`); `None` = the skeleton colour.
+    pub joint_colors: Option<&'a [[u8; 4]]>,
+}
+
+/// One view's content.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Scene<'a> {
+    pub mesh: Option<MeshLayer<'a>>,
+    pub cage: Option<CageLayer<'a>>,
+    pub skeleton: Option<SkeletonLayer<'a>>,
+    /// Draw a ground grid with a contact shadow below the content.
+    pub ground: bool,
+}
+
+impl Scene<'_> {
+    /// Axis-aligned bounds `(lo, hi)` of everything drawn; `None` when the scene is empty.
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        let mesh = self.mesh.map(|m| m.positions).unwrap_or(&[]);
+        let cage = self.cage.map(|c| c.positions).unwrap_or(&[]);
+        let joints = self.skeleton.map(|s| s.joints).unwrap_or(&[]);
+        let mut points = mesh
+            .iter()
+            .chain(cage)
+            .chain(joints)
+            .filter(|p| p.is_finite());
+        let first = *points.next()?;
+        Some(points.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+    }
+}
+
+/// Colours (8-bit sRGB + alpha) and sizes (pixels at 1× scale) of the layers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Style {
+    /// Neutral clay material of the skin.
+    pub mesh: [u8; 4],
+    pub wireframe: [u8; 4],
+    pub cage_faces: [u8; 4],
+    pub cage_edges: [u8; 4],
+    pub cage_handles: [u8; 4],
+    /// Opacity (0–255) of cage edges and handles hidden behind the skin.
+    pub hidden_alpha: u8,
+    pub bones: [u8; 4],
+    pub joints: [u8; 4],
+    pub line_width: f32,
+    pub bone_width: f32,
+    pub handle_radius: f32,
+    pub joint_radius: f32,
+    /// Multiplies every width and radius (e.g. 2 for a picture at twice the size).
+    pub scale: f32,
+}
+
+impl Default for Style {
+    fn default() -> Self {
+        Self {
+            mesh: [200, 194, 184, 255],
+            wireframe: [40, 40, 48, 110],
+            cage_faces: [255, 140, 30, 34],
+            cage_edges: [235, 110, 10, 255],
+            cage_handles: [255, 150, 40, 255],
+            hidden_alpha: 70,
+            bones: [30, 90, 200, 255],
+            joints: [120, 190, 255, 255],
+            line_width: 1.8,
+            bone_width: 3.5,
+            handle_radius: 4.5,
+            joint_radius: 5.5,
+            scale: 1.0,
+        }
+    }
+}
+
+/// Unique undirected edges of a triangle list, sorted `(min, max)`.
+pub fn unique_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let mut edges: Vec<[u32; 2]> = triangles
+        .iter()
+        .flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]])
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edges_of_a_tetrahedron_are_six() {
+        let tris = [[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]];
+        assert_eq!(unique_edges(&tris).len(), 6);
+    }
+
+    #[test]
+    fn bounds_cover_every_layer_and_skip_non_finite_points() {
+        let mesh = [DVec3::ZERO, DVec3::ONE];
+        let cage = [DVec3::splat(-2.0), DVec3::NAN];
+        let joints = [DVec3::new(0.0, 5.0, 0.0)];
+        let scene = Scene {
+            mesh: Some(MeshLayer {
+                positions: &mesh,
+                triangles: &[],
+                colors: None,
+                flat: false,
+                wireframe: false,
+            }),
+            cage: Some(CageLayer {
+                positions: &cage,
+                triangles: &[],
+                handle_colors: None,
+            }),
+            skeleton: Some(SkeletonLayer {
+                joints: &joints,
+                parents: &[None],
+                joint_colors: None,
+            }),
+            ground: true,
+        };
+        assert_eq!(
+            scene.bounds(),
+            Some((DVec3::splat(-2.0), DVec3::new(1.0, 5.0, 1.0)))
+        );
+        assert_eq!(Scene::default().bounds(), None);
+    }
+}
