@@ -1,0 +1,249 @@
+//! End-to-end tests of `cagerig render` and of the demo's pictures, on the machine's adapter
+//! (lavapipe / llvmpipe in CI), and of the path where no adapter exists.
+//!
+//! The picture tests need a Vulkan or GL adapter (software ones are fine); set
+//! `CAGERIG_SKIP_GPU_TESTS=1` to skip them on a machine without one.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn cagerig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_cagerig"))
+}
+
+fn gpu_tests() -> bool {
+    std::env::var_os("CAGERIG_SKIP_GPU_TESTS").is_none()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cagerig-render-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn arm_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm")
+}
+
+fn run(args: &[&str]) -> Output {
+    let out = cagerig().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "cagerig {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Decodes a PNG: (width, height, RGBA bytes).
+fn decode(path: &Path) -> (u32, u32, Vec<u8>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    (info.width, info.height, buf)
+}
+
+/// Pixels of the columns `x0..x1` that are not the backdrop (bluish grey: blue above red) —
+/// the skin is warm, the cage orange, the skeleton strongly blue.
+fn content_pixels(image: &(u32, u32, Vec<u8>), x0: u32, x1: u32) -> usize {
+    let (w, h, px) = image;
+    let mut n = 0;
+    for y in 0..*h {
+        for x in x0..x1 {
+            let i = ((y * w + x) * 4) as usize;
+            let (r, g, b) = (px[i] as i32, px[i + 1] as i32, px[i + 2] as i32);
+            let backdrop = b >= r && b - r < 30 && g > 150;
+            n += usize::from(!backdrop);
+        }
+    }
+    n
+}
+
+#[test]
+fn both_views_are_drawn_side_by_side_at_the_requested_size() {
+    if !gpu_tests() {
+        return;
+    }
+    let dir = temp_dir("both");
+    let out = dir.join("bar.png");
+    run(&[
+        "render",
+        "--builtin",
+        "bar",
+        "--view",
+        "both",
+        "--size",
+        "400x200",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let image = decode(&out);
+    assert_eq!((image.0, image.1), (400, 200));
+    let left = content_pixels(&image, 0, 196);
+    let right = content_pixels(&image, 204, 400);
+    assert!(
+        left > 2000 && right > 2000,
+        "both views drawn: {left} / {right} content pixels"
+    );
+}
+
+#[test]
+fn arm_edit_script_colour_map_and_animation_times_render() {
+    if !gpu_tests() {
+        return;
+    }
+    let dir = temp_dir("arm");
+    let script = dir.join("edits.json");
+    std::fs::write(
+        &script,
+        r#"{"steps":[{"op":"rotate_joint","joint":"lowerarm01.R","axis":[1,0,0],"degrees":60},
+                     {"op":"move_posed_cage","vertices":[20,23,25],"offset":[-1.5,2,0.5]}]}"#,
+    )
+    .unwrap();
+    let arm = arm_dir();
+    let mesh = arm.join("arm.obj");
+    let out = dir.join("arm.png");
+    run(&[
+        "render",
+        mesh.to_str().unwrap(),
+        "--script",
+        script.to_str().unwrap(),
+        "--size",
+        "320x240",
+        "--color-by",
+        "joint:lowerarm01.R",
+        "--camera",
+        "side",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let image = decode(&out);
+    assert_eq!((image.0, image.1), (320, 240));
+    assert!(content_pixels(&image, 0, 320) > 1000);
+
+    let anim = dir.join("anim.png");
+    let stdout = run(&[
+        "render",
+        mesh.to_str().unwrap(),
+        "--skeleton-anim",
+        arm.join("arm_skelAnim.txt").to_str().unwrap(),
+        "--cage-anim",
+        arm.join("arm_cageAnim.txt").to_str().unwrap(),
+        "--times",
+        "0.75,2.25",
+        "--size",
+        "160x120",
+        "--out",
+        anim.to_str().unwrap(),
+    ])
+    .stdout;
+    let listed = String::from_utf8(stdout).unwrap();
+    for t in ["0.75", "2.25"] {
+        let path = dir.join(format!("anim_t{t}.png"));
+        assert!(path.is_file(), "{}", path.display());
+        assert!(listed.contains(path.to_str().unwrap()), "{listed}");
+    }
+}
+
+#[test]
+fn turntable_writes_frames_and_an_animated_png() {
+    if !gpu_tests() {
+        return;
+    }
+    let dir = temp_dir("turntable");
+    let out = dir.join("spin.png");
+    run(&[
+        "render",
+        "--builtin",
+        "bar",
+        "--turntable",
+        "3",
+        "--size",
+        "96x64",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    for k in 0..3 {
+        assert!(dir.join(format!("spin_{k:03}.png")).is_file());
+    }
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()));
+    let reader = decoder.read_info().unwrap();
+    assert_eq!(reader.info().animation_control().unwrap().num_frames, 3);
+}
+
+#[test]
+fn demo_prints_where_its_pictures_are() {
+    if !gpu_tests() {
+        return;
+    }
+    let dir = temp_dir("demo");
+    let stdout = String::from_utf8(run(&["demo", "--out", dir.to_str().unwrap()]).stdout).unwrap();
+    for step in ["0_loaded", "1_bend", "2_inflate", "3_grab"] {
+        let path = dir.join(format!("{step}.png"));
+        assert!(path.is_file(), "{}", path.display());
+        assert!(stdout.contains(path.to_str().unwrap()), "{stdout}");
+    }
+}
+
+#[test]
+fn bad_options_fail_with_what_was_expected() {
+    let dir = temp_dir("bad");
+    let out = dir.join("x.png");
+    let cases: [(&[&str], &str); 5] = [
+        (&["--size", "12"], "WIDTHxHEIGHT"),
+        (&["--show", "mesh,hair"], "unknown layer \"hair\""),
+        (&["--camera", "behind"], "front, side, top, three-quarter"),
+        (&["--color-by", "joint:nope"], "no joint named \"nope\""),
+        (
+            &["--color-by", "cage-vertex:999"],
+            "cage vertex 999 does not exist",
+        ),
+    ];
+    for (extra, expected) in cases {
+        let mut args = vec!["render", "--builtin", "bar", "--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let result = cagerig().args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{args:?} should fail");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn without_an_adapter_render_says_what_to_install_and_demo_still_works() {
+    // DX12 does not exist on Linux (nor is it compiled in there): no adapter at all.
+    let dir = temp_dir("noadapter");
+    let out = dir.join("x.png");
+    let result = cagerig()
+        .args(["render", "--builtin", "bar", "--out", out.to_str().unwrap()])
+        .env("WGPU_BACKEND", "dx12")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("no graphics adapter found"), "{stderr}");
+    assert!(stderr.contains("mesa-vulkan-drivers"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!out.exists());
+
+    let demo = dir.join("demo");
+    let result = cagerig()
+        .args(["demo", "--out", demo.to_str().unwrap()])
+        .env("WGPU_BACKEND", "dx12")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    assert!(stdout.contains("warning: no pictures"), "{stdout}");
+    assert!(demo.join("3_grab_mesh_posed.obj").is_file());
+    assert!(!demo.join("3_grab.png").exists());
+}
