@@ -448,6 +448,8 @@ pub fn animate(
 struct DemoPictures {
     maker: Option<crate::pictures::PictureMaker>,
     images: Vec<(String, cagerig_render::RgbaImage)>,
+    /// The current pose after each step, for `sequence.png`.
+    sequence: Option<cagerig_render::RgbaImage>,
 }
 
 impl DemoPictures {
@@ -464,6 +466,7 @@ impl DemoPictures {
         Self {
             maker,
             images: Vec::new(),
+            sequence: None,
         }
     }
 
@@ -472,6 +475,18 @@ impl DemoPictures {
             let camera = maker.camera(session, 0.0);
             let image = maker.picture(session, &camera)?;
             self.images.push((format!("{name}.png"), image));
+            // The current pose alone, appended to the sequence strip.
+            let both = maker.options;
+            maker.options.view = crate::pictures::ViewArg::Current;
+            maker.options.size = (560, 560);
+            let camera = maker.camera(session, 0.0);
+            let current = maker.picture(session, &camera);
+            maker.options = both;
+            let current = current?;
+            self.sequence = Some(match self.sequence.take() {
+                Some(strip) => cagerig_render::RgbaImage::side_by_side(&strip, &current, 4),
+                None => current,
+            });
         }
         Ok(())
     }
@@ -482,6 +497,14 @@ impl DemoPictures {
             image.write_png(&path)?;
             println!(
                 "picture (rest pose left, current pose right): {}",
+                path.display()
+            );
+        }
+        if let Some(strip) = &self.sequence {
+            let path = out.join("sequence.png");
+            strip.write_png(&path)?;
+            println!(
+                "picture (current pose after each step, left to right): {}",
                 path.display()
             );
         }

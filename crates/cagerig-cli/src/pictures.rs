@@ -6,6 +6,7 @@ use std::path::Path;
 
 use anyhow::Context;
 use cagerig::session::RigSession;
+use cagerig_render::annotate;
 use cagerig_render::rig_scene::{ColorBy, Layers, Pose, RigSceneData};
 use cagerig_render::{CameraPreset, OffscreenRenderer, OrbitCamera, RgbaImage, Style};
 use clap::ValueEnum;
@@ -41,6 +42,8 @@ pub struct PictureOptions {
     pub camera: CameraChoice,
     pub layers: Layers,
     pub color_by: ColorBy,
+    /// Name the pose(s) in the picture's top-left corner.
+    pub labels: bool,
 }
 
 impl Default for PictureOptions {
@@ -51,6 +54,7 @@ impl Default for PictureOptions {
             camera: CameraChoice::Preset(CameraPreset::ThreeQuarter),
             layers: Layers::default(),
             color_by: ColorBy::None,
+            labels: true,
         }
     }
 }
@@ -139,12 +143,47 @@ impl PictureMaker {
             scale: (h as f32 / 700.0).max(0.75),
             ..Style::default()
         };
+        let text_scale = (h.saturating_add(150) / 300).clamp(1, 4);
+        let legend = self.data.legend(session, self.options.color_by);
         let mut views = Vec::with_capacity(2);
         for &pose in self.poses() {
             let scene = self
                 .data
                 .scene(session, pose, self.options.layers, self.options.color_by);
-            views.push(self.renderer.render(&scene, &style, camera, w, h)?);
+            let mut image = self.renderer.render(&scene, &style, camera, w, h)?;
+            let margin = 6 * text_scale;
+            if self.options.labels {
+                let label = match pose {
+                    Pose::Rest => "rest pose (M, C, S)",
+                    Pose::Current => "current pose (M', C', S')",
+                };
+                annotate::draw_text(
+                    &mut image,
+                    margin,
+                    margin,
+                    label,
+                    text_scale,
+                    [30, 32, 38, 255],
+                );
+            }
+            if let Some((map, title)) = &legend {
+                let bar_height = h / 3;
+                let x = w.saturating_sub(
+                    annotate::text_width(title, text_scale).max(70 * text_scale) + margin,
+                );
+                let y = margin;
+                annotate::draw_legend(
+                    &mut image,
+                    *map,
+                    x,
+                    y,
+                    6 * text_scale,
+                    bar_height,
+                    text_scale,
+                    title,
+                );
+            }
+            views.push(image);
         }
         Ok(match views.as_slice() {
             [rest, current] => RgbaImage::side_by_side(rest, current, GAP),

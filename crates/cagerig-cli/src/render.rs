@@ -58,6 +58,9 @@ pub struct RenderArgs {
     /// coordinates Φ, diverging), or on the cage handles: psi:NAME|INDEX (joint coordinates Ψ).
     #[arg(long)]
     pub color_by: Option<String>,
+    /// Leave out the pose labels.
+    #[arg(long)]
+    pub no_labels: bool,
     /// Write N pictures around the model (OUT_000.png …) and an animated PNG at OUT.
     #[arg(long)]
     pub turntable: Option<u32>,
@@ -262,6 +265,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         camera,
         layers,
         color_by,
+        labels: !args.no_labels,
     })?;
     let mut written = Vec::new();
     if args.times.is_empty() {

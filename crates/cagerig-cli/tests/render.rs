@@ -181,7 +181,7 @@ fn demo_prints_where_its_pictures_are() {
     }
     let dir = temp_dir("demo");
     let stdout = String::from_utf8(run(&["demo", "--out", dir.to_str().unwrap()]).stdout).unwrap();
-    for step in ["0_loaded", "1_bend", "2_inflate", "3_grab"] {
+    for step in ["0_loaded", "1_bend", "2_inflate", "3_grab", "sequence"] {
         let path = dir.join(format!("{step}.png"));
         assert!(path.is_file(), "{}", path.display());
         assert!(stdout.contains(path.to_str().unwrap()), "{stdout}");

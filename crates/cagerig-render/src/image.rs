@@ -46,6 +46,26 @@ impl RgbaImage {
         ]
     }
 
+    /// Fills the rectangle at `(x, y)` of `width × height` pixels with `color` blended by its
+    /// alpha; the parts outside the image are skipped.
+    pub fn fill_rect(&mut self, x: i64, y: i64, width: u32, height: u32, color: [u8; 4]) {
+        let (x0, y0) = (x.max(0), y.max(0));
+        let x1 = (x + width as i64).min(self.width as i64);
+        let y1 = (y + height as i64).min(self.height as i64);
+        let a = color[3] as u32;
+        for py in y0..y1 {
+            for px in x0..x1 {
+                let i = (py as usize * self.width as usize + px as usize) * 4;
+                for c in 0..3 {
+                    let old = self.pixels[i + c] as u32;
+                    self.pixels[i + c] =
+                        ((color[c] as u32 * a + old * (255 - a) + 127) / 255) as u8;
+                }
+                self.pixels[i + 3] = 255;
+            }
+        }
+    }
+
     /// `left` and `right` next to each other (same height), with a `gap`-pixel divider.
     pub fn side_by_side(left: &RgbaImage, right: &RgbaImage, gap: u32) -> RgbaImage {
         let height = left.height.max(right.height);

@@ -18,10 +18,12 @@
 //! | `renderer.rs` | per-frame uniforms, lights, pass recording |
 //! | `target.rs` | colour + depth targets, readback |
 //! | `image.rs` | side-by-side composition, PNG and animated PNG |
+//! | `annotate.rs` | text labels and colour-map legends on pictures |
 //! | `rig_scene.rs` | a [`cagerig::session::RigSession`]'s rest or current pose as a scene |
 //!
 //! Positions are converted to f32 for display only; the rig's exact state stays f64.
 
+pub mod annotate;
 pub mod camera;
 pub mod error;
 pub mod gpu;

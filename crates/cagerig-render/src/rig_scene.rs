@@ -119,6 +119,30 @@ impl RigSceneData {
         Self::default()
     }
 
+    /// The colour map `color_by` shows on `session` and a legend title (`Ω joint NAME`,
+    /// `Φ cage vertex K`, `Ψ joint NAME`); `None` for no colour map or an invalid index.
+    pub fn legend(
+        &mut self,
+        session: &RigSession,
+        color_by: ColorBy,
+    ) -> Option<(ColorMap, String)> {
+        color_by.validate(session).ok()?;
+        let joint_name = |j: usize| session.skeleton().joint(j).name.clone();
+        match color_by {
+            ColorBy::None => None,
+            ColorBy::JointWeights(j) => color_by
+                .mesh_scalars(session, &mut self.scalars)
+                .map(|m| (m, format!("Ω {}", joint_name(j)))),
+            ColorBy::CageCoords(k) => color_by
+                .mesh_scalars(session, &mut self.scalars)
+                .map(|m| (m, format!("Φ cage vertex {k}"))),
+            ColorBy::JointCageCoords(j) => Some((
+                ColorMap::diverging_for(session.skeleton_updater().joint_row(j)),
+                format!("Ψ {}", joint_name(j)),
+            )),
+        }
+    }
+
     /// The scene of `pose`. `color_by` must have passed [`ColorBy::validate`] for this
     /// session (an invalid index draws no colour map).
     pub fn scene<'a>(
