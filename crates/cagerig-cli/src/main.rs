@@ -2,6 +2,7 @@
 
 mod bench;
 mod commands;
+mod interchange;
 mod rig_source;
 
 use std::path::PathBuf;
@@ -78,6 +79,9 @@ enum Command {
         /// Cage animation (rest-cage offsets).
         #[arg(long)]
         cage_anim: Option<PathBuf>,
+        /// glTF/FBX: the file's animation to play, by name or index (all channels).
+        #[arg(long)]
+        animation: Option<String>,
         /// Comma-separated sample times in seconds.
         #[arg(long, value_delimiter = ',', required = true)]
         times: Vec<f64>,
@@ -120,7 +124,12 @@ enum Command {
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Info { rig, json } => commands::info(&rig, json),
+        Command::Info { rig, json } => match &rig.mesh {
+            Some(m) if interchange::is_interchange(m) => {
+                interchange::info(m, rig.skin.as_deref(), json)
+            }
+            _ => commands::info(&rig, json),
+        },
         Command::Coords { rig, out, fixed6 } => commands::coords(&rig, &out, fixed6),
         Command::Maxvol { rig, out, json } => commands::maxvol(&rig, &out, json),
         Command::Edit {
@@ -134,6 +143,7 @@ fn main() -> std::process::ExitCode {
             rig,
             skeleton_anim,
             cage_anim,
+            animation,
             times,
             out,
             skinning,
@@ -142,6 +152,7 @@ fn main() -> std::process::ExitCode {
             &rig,
             skeleton_anim.as_deref(),
             cage_anim.as_deref(),
+            animation.as_deref(),
             &times,
             &out,
             skinning,

@@ -1,0 +1,8 @@
+//! glTF 2.0 import (and export).
+
+pub mod animation;
+pub mod buffers;
+pub mod import;
+pub mod scene;
+
+pub use import::{import_gltf, import_gltf_bytes};
