@@ -2,6 +2,7 @@
 
 mod bench;
 mod commands;
+mod export;
 mod interchange;
 mod rig_source;
 
@@ -119,6 +120,8 @@ enum Command {
     },
     /// Per-operator timings in the layout of the paper's Table 1.
     Bench(bench::BenchArgs),
+    /// Export the (edited) character as a rigged glTF binary (.glb).
+    Export(export::ExportArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -170,6 +173,7 @@ fn main() -> std::process::ExitCode {
             name,
         } => commands::subdivide(&rig, levels, &out, &name),
         Command::Bench(args) => bench::run(&args),
+        Command::Export(args) => export::run(&args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -12,6 +12,7 @@
 
 use cagerig::animation::SkeletonTrack;
 use cagerig::{Skeleton, SkinWeights, TriMesh, Warning};
+use glam::{DAffine3, DQuat, DVec3};
 use serde::Serialize;
 
 /// A skinned character read from an interchange file.
@@ -28,6 +29,11 @@ pub struct ImportedCharacter {
     /// Animations as skeleton tracks of local transforms (play them with
     /// [`cagerig::playback::PoseChannels::Full`]).
     pub animations: Vec<ImportedAnimation>,
+    /// Joint locals `parent_from_joint` of the file's own node transforms (`#J`): the pose the
+    /// file shows without animation (equal to the rest pose when its nodes are in the bind
+    /// pose; an exported cagerig pose otherwise). Play it as a one-key track with
+    /// [`cagerig::playback::PoseChannels::Full`].
+    pub node_pose: Vec<glam::DAffine3>,
     pub summary: ImportSummary,
     pub warnings: Vec<Warning>,
 }
@@ -142,4 +148,28 @@ impl ImportedCharacter {
             })
             .collect();
     }
+}
+
+/// Column lengths within this relative spread count as one uniform scale.
+const UNIFORM_SCALE_TOLERANCE: f64 = 1e-5;
+
+/// A rest frame whose linear part is a rotation times a nearly uniform scale (the usual case;
+/// f32 inverse bind matrices are orthogonal only to ~1e-7) is snapped to exactly `s·R`, so that
+/// rest locals `B_parent⁻¹ B_j` decompose exactly into rotation and scale and M' = M at rest to
+/// round-off. The skinning then differs from the file's own matrices by their f32 rounding
+/// (≈ 1e-7 relative). Frames with a genuinely non-uniform scale are kept as they are.
+pub(crate) fn snap_to_similarity(frame: DAffine3) -> DAffine3 {
+    let m = frame.matrix3;
+    let lengths = DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
+    let mean = (lengths.x + lengths.y + lengths.z) / 3.0;
+    let det = m.determinant();
+    if !(mean > 0.0)
+        || det <= 0.0
+        || (lengths - DVec3::splat(mean)).abs().max_element() > UNIFORM_SCALE_TOLERANCE * mean
+    {
+        return frame;
+    }
+    let scale = det.cbrt();
+    let rotation = DQuat::from_mat3(&(m * (1.0 / scale))).normalize();
+    DAffine3::from_scale_rotation_translation(DVec3::splat(scale), rotation, frame.translation)
 }

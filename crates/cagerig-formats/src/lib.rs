@@ -5,6 +5,7 @@
 
 pub mod character;
 pub mod error;
+pub mod fbx;
 pub mod gltf;
 
 use std::path::Path;
@@ -47,6 +48,7 @@ pub fn import_character(
 ) -> Result<ImportedCharacter, FormatError> {
     match format_of(path) {
         Some("glTF") => gltf::import_gltf(path, options),
+        Some("FBX") => fbx::import_fbx(path, options),
         _ => Err(FormatError::Io {
             path: path.to_path_buf(),
             message: "unsupported interchange format (expected .glb, .gltf or .fbx)".into(),

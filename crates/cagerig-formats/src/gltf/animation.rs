@@ -104,7 +104,8 @@ impl Channel {
     }
 }
 
-/// Every animation of the document as a skeleton track for the skin's joints.
+/// Every animation of the document as a skeleton track for the skin's joints, and the joint
+/// locals of the nodes' own (unanimated) transforms.
 pub fn import_animations(
     document: &gltf::Document,
     buffers: &Buffers,
@@ -113,7 +114,7 @@ pub fn import_animations(
     joint_parent: &[Option<usize>],
     options: &ImportOptions,
     path: &Path,
-) -> Result<(Vec<ImportedAnimation>, Vec<Warning>), FormatError> {
+) -> Result<(Vec<ImportedAnimation>, Vec<DAffine3>, Vec<Warning>), FormatError> {
     let nn = tree.parent.len();
     // Nodes whose transform moves the skeleton: joints and all their ancestors.
     let mut relevant = vec![false; nn];
@@ -142,6 +143,15 @@ pub fn import_animations(
             }
             chain.reverse();
             chain
+        })
+        .collect();
+    let rest_locals = tree.rest_affines();
+    let node_pose: Vec<DAffine3> = chains
+        .iter()
+        .map(|chain| {
+            chain
+                .iter()
+                .fold(DAffine3::IDENTITY, |acc, &n| acc * rest_locals[n])
         })
         .collect();
     let mut warnings = Vec::new();
@@ -322,5 +332,5 @@ pub fn import_animations(
             exact,
         });
     }
-    Ok((animations, warnings))
+    Ok((animations, node_pose, warnings))
 }

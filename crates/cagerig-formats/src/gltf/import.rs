@@ -3,12 +3,13 @@
 //!
 //! Spaces. glTF skins a bind-shape vertex v as `Σ_j w_j G_j(t) IBM_j v` (G_j: world transform
 //! of joint j's node at time t; the skinned mesh node's own transform is ignored, as the
-//! specification requires). We place the bind shape in world space with
-//! `X = G_{j0}(rest) · IBM_{j0}` (j0: the first root joint), so that M = X v and the rest frames
-//! are `B_j = X · IBM_j⁻¹`: the skinning transform `T_j = G_j(t) B_j⁻¹ = G_j(t) IBM_j X⁻¹` then
-//! gives exactly the viewer's `Σ_j w_j G_j(t) IBM_j v`, and M' = M at rest whenever the file's node
-//! rest pose is its bind pose (otherwise a warning says by how much they differ). Ancestors
-//! above the skeleton (Z-up roots written as `matrix`) are part of G and so of X.
+//! specification requires). We place the bind shape in world space with X = the world transform
+//! of the first node that uses the skin (where exporters put the bound mesh; Z-up roots written
+//! as `matrix` are part of it), so that M = X v and the rest frames are `B_j = X · IBM_j⁻¹`: the
+//! skinning transform `T_j = G_j(t) B_j⁻¹ = G_j(t) IBM_j X⁻¹` then gives exactly the viewer's
+//! `Σ_j w_j G_j(t) IBM_j v`. When the file's nodes are in the bind pose (`G_j · IBM_j = X`) its
+//! rest view is M; otherwise a warning says by how much they differ, and the nodes' transforms
+//! are available as [`ImportedCharacter::node_pose`] (an exported cagerig pose, for instance).
 
 use std::path::Path;
 
@@ -21,7 +22,9 @@ use super::animation::import_animations;
 use super::buffers::Buffers;
 use super::scene::{NodeTree, affine_from_cols};
 use crate::ImportOptions;
-use crate::character::{ImportSummary, ImportedCharacter, PrimitiveSummary, SkinSummary};
+use crate::character::{
+    ImportSummary, ImportedCharacter, PrimitiveSummary, SkinSummary, snap_to_similarity,
+};
 use crate::error::{FormatError, invalid};
 
 /// Relative difference between G_j(rest)·IBM_j over the joints above which the file's node rest
@@ -155,13 +158,18 @@ pub fn import_gltf_bytes(
         })
         .collect();
     let j0 = (0..nj).find(|&j| joint_parent[j].is_none()).unwrap_or(0);
-    let world_from_bind = rest_globals[joint_nodes[j0]] * inverse_bind[j0];
+    let world_from_bind = document
+        .nodes()
+        .find(|n| n.mesh().is_some() && n.skin().map(|s| s.index()) == Some(skin.index()))
+        .map_or(rest_globals[joint_nodes[j0]] * inverse_bind[j0], |n| {
+            rest_globals[n.index()]
+        });
     let scale = world_from_bind
         .matrix3
         .to_cols_array()
         .iter()
         .fold(1.0f64, |a, x| a.max(x.abs()));
-    let mut worst = (0.0f64, j0);
+    let mut worst = (0.0f64, 0);
     for j in 0..nj {
         let xj = rest_globals[joint_nodes[j]] * inverse_bind[j];
         let d = max_abs_diff(&xj, &world_from_bind)
@@ -173,7 +181,7 @@ pub fn import_gltf_bytes(
     if worst.0 > BIND_POSE_TOLERANCE {
         warnings.push(Warning::Note {
             message: format!(
-                "the file's node rest pose is not its bind pose (joint {} differs by {:.2e} relative); the rest skeleton is the bind pose and the first pose is the bind pose, not the nodes' rest transforms",
+                "the file's node rest pose is not its bind pose (joint {} differs by {:.2e} relative); the rest skeleton is the bind pose; the nodes' transforms are kept as the file's pose",
                 worst.1, worst.0
             ),
         });
@@ -279,7 +287,7 @@ pub fn import_gltf_bytes(
     })?;
     let cage = find_cage(document, &buffers, &tree, &rest_globals, path)?;
 
-    let (animations, animation_warnings) = import_animations(
+    let (animations, node_pose, animation_warnings) = import_animations(
         document,
         &buffers,
         &tree,
@@ -296,6 +304,7 @@ pub fn import_gltf_bytes(
         skin_weights,
         cage,
         animations,
+        node_pose,
         summary: ImportSummary {
             format: "glTF".into(),
             primitives,
@@ -307,30 +316,6 @@ pub fn import_gltf_bytes(
     };
     character.fill_influence_summary();
     Ok(character)
-}
-
-/// Column lengths within this relative spread count as one uniform scale.
-const UNIFORM_SCALE_TOLERANCE: f64 = 1e-5;
-
-/// A rest frame whose linear part is a rotation times a nearly uniform scale (the usual case;
-/// f32 inverse bind matrices are orthogonal only to ~1e-7) is snapped to exactly `s·R`, so that
-/// rest locals `B_parent⁻¹ B_j` decompose exactly into rotation and scale and M' = M at rest to
-/// round-off. The skinning then differs from the file's own matrices by their f32 rounding
-/// (≈ 1e-7 relative). Frames with a genuinely non-uniform scale are kept as they are.
-fn snap_to_similarity(frame: DAffine3) -> DAffine3 {
-    let m = frame.matrix3;
-    let lengths = DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
-    let mean = (lengths.x + lengths.y + lengths.z) / 3.0;
-    let det = m.determinant();
-    if !(mean > 0.0)
-        || det <= 0.0
-        || (lengths - DVec3::splat(mean)).abs().max_element() > UNIFORM_SCALE_TOLERANCE * mean
-    {
-        return frame;
-    }
-    let scale = det.cbrt();
-    let rotation = glam::DQuat::from_mat3(&(m * (1.0 / scale))).normalize();
-    DAffine3::from_scale_rotation_translation(DVec3::splat(scale), rotation, frame.translation)
 }
 
 fn max_abs_diff(a: &DAffine3, b: &DAffine3) -> f64 {

@@ -6,3 +6,4 @@ pub mod import;
 pub mod scene;
 
 pub use import::{import_gltf, import_gltf_bytes};
+pub mod export;
