@@ -390,6 +390,9 @@ pub fn edit(
     Ok(())
 }
 
+// The animation sources (file track, file animation by name, cage track) stay separate
+// arguments so that each can be validated and reported on its own.
+#[allow(clippy::too_many_arguments)]
 pub fn animate(
     rig: &RigArgs,
     skeleton_anim: Option<&Path>,

@@ -163,7 +163,7 @@ pub(crate) fn snap_to_similarity(frame: DAffine3) -> DAffine3 {
     let lengths = DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
     let mean = (lengths.x + lengths.y + lengths.z) / 3.0;
     let det = m.determinant();
-    if !(mean > 0.0)
+    if mean.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
         || det <= 0.0
         || (lengths - DVec3::splat(mean)).abs().max_element() > UNIFORM_SCALE_TOLERANCE * mean
     {
@@ -172,4 +172,12 @@ pub(crate) fn snap_to_similarity(frame: DAffine3) -> DAffine3 {
     let scale = det.cbrt();
     let rotation = DQuat::from_mat3(&(m * (1.0 / scale))).normalize();
     DAffine3::from_scale_rotation_translation(DVec3::splat(scale), rotation, frame.translation)
+}
+
+/// Largest entry-wise difference of two affine transforms.
+pub(crate) fn max_abs_diff(a: &DAffine3, b: &DAffine3) -> f64 {
+    let (x, y) = (a.to_cols_array(), b.to_cols_array());
+    x.iter()
+        .zip(&y)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
 }

@@ -22,7 +22,7 @@ use glam::{DAffine3, DMat3, DVec3};
 use crate::ImportOptions;
 use crate::character::{
     ImportSummary, ImportedAnimation, ImportedCharacter, PrimitiveSummary, SkinSummary,
-    snap_to_similarity,
+    max_abs_diff, snap_to_similarity,
 };
 use crate::error::{FormatError, invalid};
 
@@ -350,11 +350,4 @@ pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharac
     };
     character.fill_influence_summary();
     Ok(character)
-}
-
-fn max_abs_diff(a: &DAffine3, b: &DAffine3) -> f64 {
-    let (x, y) = (a.to_cols_array(), b.to_cols_array());
-    x.iter()
-        .zip(&y)
-        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
 }

@@ -104,6 +104,9 @@ impl Channel {
     }
 }
 
+/// Animations, the nodes' own pose (joint locals) and warnings.
+pub type AnimationImport = (Vec<ImportedAnimation>, Vec<DAffine3>, Vec<Warning>);
+
 /// Every animation of the document as a skeleton track for the skin's joints, and the joint
 /// locals of the nodes' own (unanimated) transforms.
 pub fn import_animations(
@@ -114,7 +117,7 @@ pub fn import_animations(
     joint_parent: &[Option<usize>],
     options: &ImportOptions,
     path: &Path,
-) -> Result<(Vec<ImportedAnimation>, Vec<DAffine3>, Vec<Warning>), FormatError> {
+) -> Result<AnimationImport, FormatError> {
     let nn = tree.parent.len();
     // Nodes whose transform moves the skeleton: joints and all their ancestors.
     let mut relevant = vec![false; nn];

@@ -35,7 +35,7 @@ struct Builder {
 impl Builder {
     /// Appends bytes as a new buffer view (4-byte aligned) and an accessor over it.
     fn accessor(&mut self, bytes: &[u8], target: Option<u32>, accessor: Value) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut view =
@@ -232,7 +232,7 @@ pub fn session_to_gltf(session: &RigSession, name: &str) -> Result<(Value, Vec<u
 /// Writes a GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
 pub fn write_glb(out: &mut dyn Write, document: &Value, bin: &[u8]) -> std::io::Result<()> {
     let mut json_bytes = serde_json::to_vec(document).map_err(std::io::Error::other)?;
-    while json_bytes.len() % 4 != 0 {
+    while !json_bytes.len().is_multiple_of(4) {
         json_bytes.push(b' ');
     }
     let bin_len = bin.len().div_ceil(4) * 4;

@@ -23,7 +23,8 @@ use super::buffers::Buffers;
 use super::scene::{NodeTree, affine_from_cols};
 use crate::ImportOptions;
 use crate::character::{
-    ImportSummary, ImportedCharacter, PrimitiveSummary, SkinSummary, snap_to_similarity,
+    ImportSummary, ImportedCharacter, PrimitiveSummary, SkinSummary, max_abs_diff,
+    snap_to_similarity,
 };
 use crate::error::{FormatError, invalid};
 
@@ -285,7 +286,7 @@ pub fn import_gltf_bytes(
         element: "skinned mesh".into(),
         source,
     })?;
-    let cage = find_cage(document, &buffers, &tree, &rest_globals, path)?;
+    let cage = find_cage(document, &buffers, &rest_globals, path)?;
 
     let (animations, node_pose, animation_warnings) = import_animations(
         document,
@@ -318,13 +319,6 @@ pub fn import_gltf_bytes(
     Ok(character)
 }
 
-fn max_abs_diff(a: &DAffine3, b: &DAffine3) -> f64 {
-    let (x, y) = (a.to_cols_array(), b.to_cols_array());
-    x.iter()
-        .zip(&y)
-        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
-}
-
 /// Triangles of a primitive (local vertex indices) from its mode and optional indices.
 fn primitive_triangles(
     mode: Mode,
@@ -347,7 +341,7 @@ fn primitive_triangles(
     }
     let tris: Vec<[u32; 3]> = match mode {
         Mode::Triangles => {
-            if idx.len() % 3 != 0 {
+            if !idx.len().is_multiple_of(3) {
                 warnings.push(Warning::Note {
                     message: format!(
                         "{source}: {} indices is not a multiple of 3; the last {} were ignored",
@@ -519,16 +513,36 @@ fn to_vec3(v: &[f64]) -> Vec<DVec3> {
         .collect()
 }
 
+/// Merges vertices with bit-identical positions (a cage written without an index buffer is a
+/// triangle soup); first occurrence order is kept.
+fn weld_exact(positions: &[DVec3], triangles: &[[u32; 3]]) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut index = std::collections::HashMap::with_capacity(positions.len());
+    let mut welded = Vec::with_capacity(positions.len());
+    let remap: Vec<u32> = positions
+        .iter()
+        .map(|p| {
+            let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+            *index.entry(key).or_insert_with(|| {
+                welded.push(*p);
+                (welded.len() - 1) as u32
+            })
+        })
+        .collect();
+    let triangles = triangles
+        .iter()
+        .map(|t| t.map(|i| remap[i as usize]))
+        .collect();
+    (welded, triangles)
+}
+
 /// A mesh node marked as the character's cage: node or mesh name ending in `_cage`, or
 /// `extras.cagerig_cage`; its positions in world space (the node's world transform applied).
 fn find_cage(
     document: &gltf::Document,
     buffers: &Buffers,
-    tree: &NodeTree,
     rest_globals: &[DAffine3],
     path: &Path,
 ) -> Result<Option<TriMesh>, FormatError> {
-    let _ = tree;
     for node in document.nodes() {
         let Some(mesh) = node.mesh() else { continue };
         let named = node.name().is_some_and(|n| n.ends_with("_cage"))
@@ -571,6 +585,7 @@ fn find_cage(
                 );
             }
         }
+        let (positions, triangles) = weld_exact(&positions, &triangles);
         let cage = TriMesh::new(positions, triangles).map_err(|source_err| FormatError::Rig {
             path: path.to_path_buf(),
             element: source.clone(),
@@ -579,4 +594,24 @@ fn find_cage(
         return Ok(Some(cage));
     }
     Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn welding_merges_identical_positions_only() {
+        let p = [
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::Y,
+            DVec3::X,
+            DVec3::Y,
+            DVec3::new(1.0, 1.0, 1e-300),
+        ];
+        let (w, t) = weld_exact(&p, &[[0, 1, 2], [3, 4, 5]]);
+        assert_eq!(w.len(), 4);
+        assert_eq!(t, vec![[0, 1, 2], [1, 2, 3]]);
+    }
 }
