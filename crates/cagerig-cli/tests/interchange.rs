@@ -99,6 +99,22 @@ fn fox_edit_animate_and_export() {
     let json = run_ok(cagerig().arg("info").arg(&out).arg("--json"));
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert_eq!(v["vertices"], 1728);
+    // The Walk as a standalone animated glTF: reimported, it has one animation of Walk's length.
+    let walk = dir.join("walk.glb");
+    run_ok(
+        cagerig()
+            .arg("export")
+            .arg(&fox)
+            .arg("--cage")
+            .arg(&cage)
+            .args(["--animation", "Walk", "--fps", "24"])
+            .arg("--out")
+            .arg(&walk),
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&run_ok(cagerig().arg("info").arg(&walk).arg("--json"))).unwrap();
+    let duration = v["animations"][0]["duration"].as_f64().unwrap();
+    assert!((duration - 0.7083).abs() < 1e-3, "{v}");
     // Unknown animation: the error lists the file's animations.
     let bad = cagerig()
         .arg("animate")

@@ -26,15 +26,33 @@ const UNSIGNED_INT: u32 = 5125;
 
 /// Binary chunk and the JSON arrays that describe it.
 #[derive(Default)]
-struct Builder {
+pub(crate) struct Builder {
     bin: Vec<u8>,
     views: Vec<Value>,
     accessors: Vec<Value>,
 }
 
 impl Builder {
+    /// Continues a document written by [`session_to_gltf`] (its accessors and views).
+    pub(crate) fn from_document(document: &Value, bin: Vec<u8>) -> Self {
+        let list = |key: &str| document[key].as_array().cloned().unwrap_or_default();
+        Self {
+            bin,
+            views: list("bufferViews"),
+            accessors: list("accessors"),
+        }
+    }
+
+    /// Puts the accessors, views and buffer length into `document`; returns it with the chunk.
+    pub(crate) fn finish(self, mut document: Value) -> (Value, Vec<u8>) {
+        document["accessors"] = Value::Array(self.accessors);
+        document["bufferViews"] = Value::Array(self.views);
+        document["buffers"] = json!([{"byteLength": self.bin.len()}]);
+        (document, self.bin)
+    }
+
     /// Appends bytes as a new buffer view (4-byte aligned) and an accessor over it.
-    fn accessor(&mut self, bytes: &[u8], target: Option<u32>, accessor: Value) -> usize {
+    pub(crate) fn accessor(&mut self, bytes: &[u8], target: Option<u32>, accessor: Value) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -52,11 +70,32 @@ impl Builder {
     }
 }
 
-fn f32_bytes(values: impl IntoIterator<Item = f64>) -> Vec<u8> {
+pub(crate) fn f32_bytes(values: impl IntoIterator<Item = f64>) -> Vec<u8> {
     values
         .into_iter()
         .flat_map(|v| (v as f32).to_le_bytes())
         .collect()
+}
+
+/// A VEC3 float accessor of `points` with the min/max the specification requires for POSITION
+/// (bounds of the f32 values written).
+pub(crate) fn position_accessor(b: &mut Builder, points: &[DVec3], vertex_target: bool) -> usize {
+    let mut min = [f32::INFINITY; 3];
+    let mut max = [f32::NEG_INFINITY; 3];
+    for p in points {
+        for (c, x) in [p.x as f32, p.y as f32, p.z as f32].into_iter().enumerate() {
+            min[c] = min[c].min(x);
+            max[c] = max[c].max(x);
+        }
+    }
+    if points.is_empty() {
+        (min, max) = ([0.0; 3], [0.0; 3]);
+    }
+    b.accessor(
+        &f32_bytes(points.iter().flat_map(|p| [p.x, p.y, p.z])),
+        vertex_target.then_some(ARRAY_BUFFER),
+        json!({"componentType": FLOAT, "count": points.len(), "type": "VEC3", "min": min, "max": max}),
+    )
 }
 
 /// TRS of an affine transform as glTF node fields (rotation normalised).
@@ -97,27 +136,7 @@ pub fn session_to_gltf(session: &RigSession, name: &str) -> Result<(Value, Vec<u
     let nv = rest.len();
     let weights = session.skin_weights();
     let mut b = Builder::default();
-    // Positions with bounds (required by the specification).
-    let f32v = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
-    let (min, max) = if nv == 0 {
-        ([0.0f32; 3], [0.0f32; 3])
-    } else {
-        // Bounds of the f32 values actually written.
-        let mut min = [f32::INFINITY; 3];
-        let mut max = [f32::NEG_INFINITY; 3];
-        for p in rest {
-            for (c, x) in f32v(*p).into_iter().enumerate() {
-                min[c] = min[c].min(x);
-                max[c] = max[c].max(x);
-            }
-        }
-        (min, max)
-    };
-    let positions = b.accessor(
-        &f32_bytes(rest.iter().flat_map(|p| [p.x, p.y, p.z])),
-        Some(ARRAY_BUFFER),
-        json!({"componentType": FLOAT, "count": nv, "type": "VEC3", "min": min, "max": max}),
-    );
+    let positions = position_accessor(&mut b, rest, true);
     let tris = session.mesh_triangles();
     let index_bytes: Vec<u8> = tris
         .iter()
@@ -222,11 +241,8 @@ pub fn session_to_gltf(session: &RigSession, name: &str) -> Result<(Value, Vec<u
         "nodes": nodes,
         "meshes": [{"name": name, "primitives": [{"attributes": attributes, "indices": indices, "mode": 4}]}],
         "skins": [{"joints": (0..nj).collect::<Vec<_>>(), "inverseBindMatrices": ibm}],
-        "accessors": b.accessors,
-        "bufferViews": b.views,
-        "buffers": [{"byteLength": b.bin.len()}],
     });
-    Ok((document, b.bin))
+    Ok(b.finish(document))
 }
 
 /// Writes a GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).

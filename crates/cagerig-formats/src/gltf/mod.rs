@@ -7,3 +7,4 @@ pub mod scene;
 
 pub use import::{import_gltf, import_gltf_bytes};
 pub mod export;
+pub mod export_animation;

@@ -45,8 +45,8 @@ pub fn box_cage(points: &[DVec3], pad: f64) -> TriMesh {
 
 /// Straightforward glTF skinning written from the specification, on the `gltf` crate's own
 /// loader and readers (an evaluation independent of cagerig-formats): node TRS at time t
-/// (LINEAR channels only), world transforms by recursion, `v' = Σ w_j G_j(t) IBM_j v / Σ w`,
-/// skinned primitives of skin 0 in node order.
+/// (LINEAR channels only), morph targets at the (animated) weights, world transforms by
+/// recursion, `v' = Σ w_j G_j(t) IBM_j v / Σ w`, skinned primitives of skin 0 in node order.
 pub fn reference_skinning(path: &std::path::Path, animation: Option<usize>, t: f64) -> Vec<DVec3> {
     let (doc, buffers, _) = gltf::import(path).unwrap();
     let get = |b: gltf::Buffer| Some(&*buffers[b.index()]);
@@ -72,6 +72,14 @@ pub fn reference_skinning(path: &std::path::Path, animation: Option<usize>, t: f
                 DVec3::from(scale.map(f64::from)),
                 None,
             ),
+        })
+        .collect();
+    let mut morph: Vec<Option<Vec<f64>>> = doc
+        .nodes()
+        .map(|n| {
+            n.mesh()
+                .and_then(|m| m.weights())
+                .map(|w| w.iter().map(|&x| x as f64).collect())
         })
         .collect();
     if let Some(a) = animation.and_then(|a| doc.animations().nth(a)) {
@@ -107,7 +115,15 @@ pub fn reference_skinning(path: &std::path::Path, animation: Option<usize>, t: f
                         .collect();
                     node.1 = v[lo].slerp(v[hi], s);
                 }
-                _ => {}
+                gltf::animation::util::ReadOutputs::MorphTargetWeights(it) => {
+                    let v: Vec<f64> = it.into_f32().map(f64::from).collect();
+                    let n = v.len() / times.len();
+                    morph[ch.target().node().index()] = Some(
+                        (0..n)
+                            .map(|k| v[lo * n + k] + (v[hi * n + k] - v[lo * n + k]) * s)
+                            .collect(),
+                    );
+                }
             }
         }
     }
@@ -148,11 +164,20 @@ pub fn reference_skinning(path: &std::path::Path, animation: Option<usize>, t: f
         }
         for prim in node.mesh().unwrap().primitives() {
             let r = prim.reader(get);
-            let pos: Vec<DVec3> = r
+            let mut pos: Vec<DVec3> = r
                 .read_positions()
                 .unwrap()
                 .map(|p| DVec3::from(p.map(f64::from)))
                 .collect();
+            if let Some(w) = &morph[node.index()] {
+                for (k, target) in r.read_morph_targets().enumerate() {
+                    if let Some(d) = target.0 {
+                        for (p, d) in pos.iter_mut().zip(d) {
+                            *p += DVec3::from(d.map(f64::from)) * w[k];
+                        }
+                    }
+                }
+            }
             let joints: Vec<[u16; 4]> = r.read_joints(0).unwrap().into_u16().collect();
             let weights: Vec<[f32; 4]> = r.read_weights(0).unwrap().into_f32().collect();
             for ((p, j), w) in pos.iter().zip(&joints).zip(&weights) {
