@@ -60,3 +60,20 @@ fn sausage_posed_at_the_reference_times_matches_ufbx_meshes() {
         assert!(err < 1e-6, "{take} at t = {t}: {err:e} of the diagonal");
     }
 }
+
+#[test]
+fn truncated_fbx_files_are_errors_naming_the_file() {
+    let bytes = std::fs::read(data("fbx/blender_279_sausage_7400_binary.fbx")).unwrap();
+    let dir = std::env::temp_dir().join(format!("cagerig-fbx-trunc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("cut.fbx");
+    for k in (0..16).map(|i| i * bytes.len() / 16) {
+        std::fs::write(&file, &bytes[..k]).unwrap();
+        match import_character(&file, &ImportOptions::default()) {
+            Err(e) => assert!(e.to_string().contains("cut.fbx"), "{k}: {e}"),
+            // ufbx may recover a prefix that still holds a whole skinned mesh; it must be valid.
+            Ok(c) => assert_eq!(c.mesh.num_vertices(), 290, "{k}"),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
