@@ -2,6 +2,7 @@
 
 pub mod animation;
 pub mod buffers;
+mod cage;
 pub mod import;
 pub mod scene;
 
