@@ -135,6 +135,7 @@ fn load_parts(args: &BenchArgs) -> anyhow::Result<(String, RigParts)> {
         } else {
             None
         },
+        skin: None,
     };
     let loaded = crate::rig_source::load_rig(&rig_args, false, false)?;
     Ok((loaded.name, loaded.parts))

@@ -390,28 +390,29 @@ pub fn edit(
     Ok(())
 }
 
+// The animation sources (file track, file animation by name, cage track) stay separate
+// arguments so that each can be validated and reported on its own.
+#[allow(clippy::too_many_arguments)]
 pub fn animate(
     rig: &RigArgs,
     skeleton_anim: Option<&Path>,
     cage_anim: Option<&Path>,
+    animation: Option<&str>,
     times: &[f64],
     out: &Path,
     skinning: Option<SkinningArg>,
     session_args: &SessionArgs,
 ) -> anyhow::Result<()> {
-    if skeleton_anim.is_none() && cage_anim.is_none() {
-        bail!("give --skeleton-anim and/or --cage-anim");
+    if skeleton_anim.is_none() && cage_anim.is_none() && animation.is_none() {
+        bail!("give --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
     }
     if let Some(t) = times.iter().find(|t| !t.is_finite()) {
         bail!("sample time {t} is not finite");
     }
     let loaded = load_rig(rig, true, true)?;
-    let skeleton = loaded.parts.skeleton.clone();
     let num_cage = loaded.parts.cage.num_vertices();
-    let skeleton_track = match skeleton_anim {
-        Some(p) => Some(cagerig::io::skeleton_animation::read_skeleton_animation(p, &skeleton)?.0),
-        None => None,
-    };
+    let (skeleton_track, channels) =
+        crate::interchange::skeleton_track(&loaded, skeleton_anim, animation)?;
     let cage_track = match cage_anim {
         Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
             p, num_cage,
@@ -424,7 +425,12 @@ pub fn animate(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let mut player = cagerig::playback::AnimationPlayer::new(&session, skeleton_track, cage_track)?;
+    let mut player = cagerig::playback::AnimationPlayer::with_channels(
+        &session,
+        skeleton_track,
+        cage_track,
+        channels,
+    )?;
     let mut session = session;
     let mut files = StateFiles::new();
     for &t in times {
@@ -523,6 +529,7 @@ pub fn demo(
         cage: None,
         builtin: Some(builtin.to_string()),
         resolution,
+        skin: None,
     };
     let t = Instant::now();
     let loaded = load_rig(&args, true, true)?;

@@ -4,6 +4,8 @@ mod bench;
 mod commands;
 mod pictures;
 mod render;
+mod export;
+mod interchange;
 mod rig_source;
 
 use std::path::PathBuf;
@@ -80,6 +82,9 @@ enum Command {
         /// Cage animation (rest-cage offsets).
         #[arg(long)]
         cage_anim: Option<PathBuf>,
+        /// glTF/FBX: the file's animation to play, by name or index (all channels).
+        #[arg(long)]
+        animation: Option<String>,
         /// Comma-separated sample times in seconds.
         #[arg(long, value_delimiter = ',', required = true)]
         times: Vec<f64>,
@@ -123,12 +128,19 @@ enum Command {
     /// Render the rig (rest and/or current pose, cage, skeleton, colour maps) to PNG, after an
     /// edit script or at animation times; needs a Vulkan or GL adapter (software ones work).
     Render(Box<render::RenderArgs>),
+    /// Export the (edited) character as a rigged glTF binary (.glb).
+    Export(export::ExportArgs),
 }
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Info { rig, json } => commands::info(&rig, json),
+        Command::Info { rig, json } => match &rig.mesh {
+            Some(m) if interchange::is_interchange(m) => {
+                interchange::info(m, rig.skin.as_deref(), json)
+            }
+            _ => commands::info(&rig, json),
+        },
         Command::Coords { rig, out, fixed6 } => commands::coords(&rig, &out, fixed6),
         Command::Maxvol { rig, out, json } => commands::maxvol(&rig, &out, json),
         Command::Edit {
@@ -142,6 +154,7 @@ fn main() -> std::process::ExitCode {
             rig,
             skeleton_anim,
             cage_anim,
+            animation,
             times,
             out,
             skinning,
@@ -150,6 +163,7 @@ fn main() -> std::process::ExitCode {
             &rig,
             skeleton_anim.as_deref(),
             cage_anim.as_deref(),
+            animation.as_deref(),
             &times,
             &out,
             skinning,
@@ -169,6 +183,7 @@ fn main() -> std::process::ExitCode {
         } => commands::subdivide(&rig, levels, &out, &name),
         Command::Bench(args) => bench::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Export(args) => export::run(&args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

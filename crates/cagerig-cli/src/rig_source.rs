@@ -15,14 +15,18 @@ use crate::commands::FileUse;
 /// Rig selection shared by the subcommands.
 #[derive(Debug, Clone, Args)]
 pub struct RigArgs {
-    /// Character mesh (OBJ). Companions are discovered beside it: `<stem>.skt`, `<stem>.skw`,
+    /// Character mesh (OBJ), or a skinned character in glTF 2.0 (`.glb`/`.gltf`) or FBX (`.fbx`).
+    /// OBJ companions are discovered beside it: `<stem>.skt`, `<stem>.skw`,
     /// `<stem>_corWeights.txt`, `<stem>_cage.obj`; beside the cage `<cage>_cageWeights.txt`,
     /// `<cage>.maxvol` (or `<stem>_maxvol.txt`).
     #[arg(required_unless_present = "builtin")]
     pub mesh: Option<PathBuf>,
-    /// Cage (OBJ); default `<stem>_cage.obj` beside the mesh.
+    /// Cage (OBJ); default `<stem>_cage.obj` beside the mesh (glTF/FBX: a cage node in the file).
     #[arg(long)]
     pub cage: Option<PathBuf>,
+    /// glTF/FBX: the skin to import, by name or index (default: the first).
+    #[arg(long)]
+    pub skin: Option<String>,
     /// Use a built-in demo rig instead of files (bar, bar_irregular, snake).
     #[arg(long, conflicts_with = "mesh")]
     pub builtin: Option<String>,
@@ -39,6 +43,8 @@ pub struct LoadedRig {
     pub warnings: Vec<Warning>,
     /// Path of the shipped MaxVol selection, when one was found.
     pub maxvol_path: Option<PathBuf>,
+    /// Animations of an imported glTF/FBX character (empty otherwise).
+    pub animations: Vec<cagerig_formats::ImportedAnimation>,
 }
 
 /// Loads the rig. With `compute_coords`, Φ is computed (with a progress bar when `progress` and
@@ -54,7 +60,11 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
                 files: Vec::new(),
                 warnings: Vec::new(),
                 maxvol_path: None,
+                animations: Vec::new(),
             }
+        }
+        (None, Some(mesh)) if crate::interchange::is_interchange(mesh) => {
+            crate::interchange::load_interchange(mesh, args.cage.as_deref(), args.skin.as_deref())?
         }
         (None, Some(mesh)) => load_files(mesh, args.cage.as_deref())?,
         (None, None) => bail!("give a mesh file or --builtin NAME"),
@@ -80,6 +90,7 @@ fn load_files(mesh: &Path, cage: Option<&Path>) -> anyhow::Result<LoadedRig> {
         parts: rig.parts,
         warnings: rig.warnings,
         maxvol_path: rig.maxvol_path,
+        animations: Vec::new(),
     })
 }
 

@@ -17,6 +17,7 @@ pub mod error;
 pub mod io;
 pub mod mesh;
 pub mod playback;
+pub mod pose;
 pub mod script;
 pub mod session;
 pub mod skeleton;

@@ -3,15 +3,31 @@
 //! C = C₀ + offsets(t) and the joint rotations of the skeleton track, then SkelUp moves the
 //! bones with the cage before skinning and CageUp.
 //!
-//! Skeleton keys are local transforms `parent_from_joint`: only their rotations are used, plus
-//! the translation of each root relative to the rest skeleton as loaded (root motion). Bone
-//! offsets come from the current rest skeleton, which follows the cage.
+//! Skeleton keys are local transforms `parent_from_joint`. With [`PoseChannels::RotationsAndRootMotion`]
+//! (the paper tool's model, the default) only their rotations are used, plus the translation of
+//! each root relative to the rest skeleton as loaded (root motion). With [`PoseChannels::Full`]
+//! (imported glTF/FBX animations) rotation, scale and the translation offset of every joint from
+//! its rest bone offset are used (see [`crate::pose`]). Either way bone offsets come from the
+//! current rest skeleton, which follows the cage.
 
 use glam::{DAffine3, DQuat, DVec3};
 
 use crate::animation::{CageTrack, SkeletonTrack, bracket};
 use crate::error::RigError;
+use crate::pose::{LocalPose, rotation_of};
 use crate::session::{RestKeyframe, RigSession};
+
+/// Which parts of the skeleton keys drive the pose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PoseChannels {
+    /// Local rotations and root translation (the paper tool's model; non-root translations and
+    /// scales in the keys are ignored).
+    #[default]
+    RotationsAndRootMotion,
+    /// Local rotation, scale and translation of every joint: an imported animation plays exactly
+    /// as in its file (translation as an offset from the rest bone, kept when SkelUp moves it).
+    Full,
+}
 
 /// Plays tracks on a session; holds the per-frame buffers (no allocation per sample).
 #[derive(Debug, Clone)]
@@ -23,19 +39,38 @@ pub struct AnimationPlayer {
     cage_keys: Vec<RestKeyframe>,
     /// Whether `cage_keys` hold CoR centres (rebuilt when the session gains CoR data).
     keys_have_centres: bool,
-    /// Root translations of the rest skeleton as loaded, `#J` (zero for non-roots).
-    original_root_translation: Vec<DVec3>,
+    /// Local translations of the rest skeleton as loaded, `#J` (roots: world translation).
+    original_local_translation: Vec<DVec3>,
+    channels: PoseChannels,
     locals: Vec<DAffine3>,
     rotations: Vec<DQuat>,
-    root_motion: Vec<DVec3>,
+    scales: Vec<DVec3>,
+    /// d_j of [`crate::pose`] (roots only in the paper tool's model: root motion).
+    translation_offsets: Vec<DVec3>,
 }
 
 impl AnimationPlayer {
-    /// Checks the tracks against the session's rig (joint and cage vertex counts).
+    /// Checks the tracks against the session's rig (joint and cage vertex counts); the paper
+    /// tool's pose channels.
     pub fn new(
         session: &RigSession,
         skeleton_track: Option<SkeletonTrack>,
         cage_track: Option<CageTrack>,
+    ) -> Result<Self, RigError> {
+        Self::with_channels(
+            session,
+            skeleton_track,
+            cage_track,
+            PoseChannels::RotationsAndRootMotion,
+        )
+    }
+
+    /// As [`AnimationPlayer::new`], with the given use of the skeleton keys.
+    pub fn with_channels(
+        session: &RigSession,
+        skeleton_track: Option<SkeletonTrack>,
+        cage_track: Option<CageTrack>,
+        channels: PoseChannels,
     ) -> Result<Self, RigError> {
         let nj = session.skeleton().len();
         let nc = session.rest_cage().len();
@@ -57,15 +92,6 @@ impl AnimationPlayer {
                 actual: t.num_cage_vertices(),
             });
         }
-        let original_root_translation = session
-            .skeleton()
-            .joints()
-            .iter()
-            .map(|j| match j.parent {
-                None => j.rest_world_from_joint.translation,
-                Some(_) => DVec3::ZERO,
-            })
-            .collect();
         let cage_keys = match &cage_track {
             Some(track) => track
                 .offsets()
@@ -83,13 +109,12 @@ impl AnimationPlayer {
             cage_keys,
             skeleton_track,
             cage_track,
-            original_root_translation,
-            rotations: locals
-                .iter()
-                .map(|l| DQuat::from_mat3(&l.matrix3))
-                .collect(),
+            original_local_translation: locals.iter().map(|l| l.translation).collect(),
+            channels,
+            rotations: locals.iter().map(|l| rotation_of(&l.matrix3)).collect(),
+            scales: session.rest_local_scales().to_vec(),
             locals,
-            root_motion: vec![DVec3::ZERO; nj],
+            translation_offsets: vec![DVec3::ZERO; nj],
         })
     }
 
@@ -107,17 +132,30 @@ impl AnimationPlayer {
     /// Samples both tracks at `t` seconds (clamped to each track's range) and runs the full
     /// sync on the session.
     pub fn apply(&mut self, t: f64, session: &mut RigSession) -> Result<(), RigError> {
+        let full = self.channels == PoseChannels::Full;
         if let Some(track) = &self.skeleton_track {
             track.sample(t, &mut self.locals);
             for (j, local) in self.locals.iter().enumerate() {
-                self.rotations[j] = DQuat::from_mat3(&local.matrix3).normalize();
-                self.root_motion[j] = if session.skeleton().parent(j).is_none() {
-                    local.translation - self.original_root_translation[j]
+                if full {
+                    let (scale, rotation, _) = local.to_scale_rotation_translation();
+                    self.rotations[j] = rotation.normalize();
+                    self.scales[j] = scale;
+                } else {
+                    self.rotations[j] = DQuat::from_mat3(&local.matrix3).normalize();
+                }
+                self.translation_offsets[j] = if full || session.skeleton().parent(j).is_none() {
+                    local.translation - self.original_local_translation[j]
                 } else {
                     DVec3::ZERO
                 };
             }
         }
+        let pose = LocalPose {
+            rotations: &self.rotations,
+            scales: full.then_some(self.scales.as_slice()),
+            translation_offsets: &self.translation_offsets,
+            roots_only: !full,
+        };
         match &self.cage_track {
             Some(track) => {
                 if self.keys_have_centres != session.cor_centres().is_some() {
@@ -129,15 +167,14 @@ impl AnimationPlayer {
                     self.keys_have_centres = session.cor_centres().is_some();
                 }
                 let b = bracket(track.times(), t);
-                session.set_animation_sample_between(
+                session.set_animation_sample_between_local(
                     &self.cage_keys[b.lo],
                     &self.cage_keys[b.hi],
                     b.a,
-                    &self.rotations,
-                    &self.root_motion,
+                    &pose,
                 )
             }
-            None => session.set_animation_sample(None, &self.rotations, &self.root_motion),
+            None => session.set_animation_sample_local(None, &pose),
         }
     }
 }

@@ -2,9 +2,11 @@
 //! consensus under any interleaving of the three user interactions (Section 4, Figures 3–4):
 //! editing the current skeleton S', the rest cage C, or the current cage C'.
 //!
-//! Pose parametrisation: the current skeleton is given by local joint rotations plus a motion of
-//! each root; bone offsets always come from the rest skeleton. When SkelUp moves the rest joints,
-//! the rotations T_j^r are thus kept and the translations T_j^t re-derived root-first (Sec. 4.2).
+//! Pose parametrisation ([`crate::pose`]): the current skeleton is given by local joint rotations,
+//! local scales and translation offsets (root motion, and for imported animations the animated
+//! translation of any joint); bone offsets always come from the rest skeleton. When SkelUp moves
+//! the rest joints, rotations, scales and offsets are thus kept and the translations T_j^t
+//! re-derived root-first (Sec. 4.2).
 //! Every event ends with C' = CageUp(M') so that the loop C' → C → S → S' → C' is closed.
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
@@ -14,6 +16,7 @@ use crate::cage_coords::{CageCoords, CoordsPrecision};
 use crate::coords::{maxvol, mvc};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
+use crate::pose::{LocalPose, decompose_rest_local, local_transform, rotation_of};
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::SkinningMethod;
@@ -229,8 +232,12 @@ pub struct RigSession {
     // Current state.
     /// Local rotations of the current pose (parent_from_joint linear part), `#J`.
     posed_local_rotation: Vec<DQuat>,
-    /// For roots: current translation minus rest translation (zero for other joints).
-    root_motion: Vec<DVec3>,
+    /// Local scales s_j of the current pose, `#J`.
+    posed_local_scale: Vec<DVec3>,
+    /// Local scales of the rest skeleton as loaded, `#J` (kept by SkelUp, which moves positions).
+    rest_local_scale: Vec<DVec3>,
+    /// d_j: current local translation minus the rest bone offset, `#J` (for roots: root motion).
+    translation_offset: Vec<DVec3>,
     posed_world_from_joint: Vec<DAffine3>,
     posed_from_rest: Vec<DAffine3>,
     posed_mesh: Vec<DVec3>,
@@ -368,10 +375,13 @@ impl RigSession {
         let rest_world_from_joint = skeleton.rest_world_from_joint();
         let mut locals = vec![DAffine3::IDENTITY; nj];
         skeleton.locals_from_worlds(&rest_world_from_joint, &mut locals);
-        let posed_local_rotation = locals
+        let (rest_local_scale, posed_local_rotation): (Vec<DVec3>, Vec<DQuat>) = locals
             .iter()
-            .map(|l| DQuat::from_mat3(&l.matrix3))
-            .collect();
+            .enumerate()
+            .map(|(j, l)| decompose_rest_local(l, j))
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .unzip();
         let mut session = Self {
             mesh_triangles: mesh.triangles.clone(),
             cage_triangles: cage.triangles.clone(),
@@ -397,7 +407,9 @@ impl RigSession {
             rest_mesh: mesh.positions,
             rest_world_from_joint,
             posed_local_rotation,
-            root_motion: vec![DVec3::ZERO; nj],
+            posed_local_scale: rest_local_scale.clone(),
+            rest_local_scale,
+            translation_offset: vec![DVec3::ZERO; nj],
             posed_world_from_joint: vec![DAffine3::IDENTITY; nj],
             posed_from_rest: vec![DAffine3::IDENTITY; nj],
             posed_mesh: vec![DVec3::ZERO; nv],
@@ -538,9 +550,9 @@ impl RigSession {
             )));
         }
         let world_rotation = DQuat::from_axis_angle(axis, angle);
-        let joint_world = DQuat::from_mat3(&self.posed_world_from_joint[joint].matrix3);
+        let joint_world = rotation_of(&self.posed_world_from_joint[joint].matrix3);
         let parent_world = match self.skeleton.parent(joint) {
-            Some(p) => DQuat::from_mat3(&self.posed_world_from_joint[p].matrix3),
+            Some(p) => rotation_of(&self.posed_world_from_joint[p].matrix3),
             None => DQuat::IDENTITY,
         };
         self.posed_local_rotation[joint] =
@@ -551,46 +563,68 @@ impl RigSession {
     }
 
     /// S' edit: sets all local rotations (parent_from_joint linear parts, `#J`) and root motions
-    /// (current minus rest translation of each root; ignored for other joints).
+    /// (current minus rest translation of each root; ignored for other joints). Scales return to
+    /// the rest scales.
     pub fn set_pose(
         &mut self,
         local_rotations: &[DQuat],
         root_motion: &[DVec3],
     ) -> Result<(), RigError> {
-        self.store_pose(local_rotations, root_motion)?;
+        self.set_local_pose(&roots_only(local_rotations, root_motion))
+    }
+
+    /// S' edit: sets the full pose of [`crate::pose`] (rotations, scales, translation offsets).
+    pub fn set_local_pose(&mut self, pose: &LocalPose) -> Result<(), RigError> {
+        self.store_pose(pose)?;
         self.pose_and_fit();
         Ok(())
     }
 
+    /// Local scales of the rest skeleton as loaded, `#J` (what [`LocalPose::scales`] = `None` means).
+    pub fn rest_local_scales(&self) -> &[DVec3] {
+        &self.rest_local_scale
+    }
+
     /// Validates and stores a pose without running the sync chain.
-    fn store_pose(
-        &mut self,
-        local_rotations: &[DQuat],
-        root_motion: &[DVec3],
-    ) -> Result<(), RigError> {
+    fn store_pose(&mut self, pose: &LocalPose) -> Result<(), RigError> {
         let nj = self.skeleton.len();
-        if local_rotations.len() != nj || root_motion.len() != nj {
+        let scales_len = pose.scales.map_or(nj, <[DVec3]>::len);
+        if pose.rotations.len() != nj || pose.translation_offsets.len() != nj || scales_len != nj {
             return Err(RigError::SizeMismatch {
                 what: "pose joints",
                 expected: nj,
-                actual: local_rotations.len().min(root_motion.len()),
+                actual: pose
+                    .rotations
+                    .len()
+                    .min(pose.translation_offsets.len())
+                    .min(scales_len),
             });
         }
         if let Some(j) = (0..nj).find(|&j| {
-            let q = local_rotations[j];
-            !q.is_finite() || q.length_squared() == 0.0 || !root_motion[j].is_finite()
+            let q = pose.rotations[j];
+            let bad_scale = pose
+                .scales
+                .is_some_and(|s| !s[j].is_finite() || s[j].cmpeq(DVec3::ZERO).any());
+            !q.is_finite()
+                || q.length_squared() == 0.0
+                || !pose.translation_offsets[j].is_finite()
+                || bad_scale
         }) {
             return Err(RigError::NonFinite {
-                what: "pose joint",
+                what: "pose joint (rotation, scale or translation)",
                 index: j,
             });
         }
-        for (j, (q, m)) in local_rotations.iter().zip(root_motion).enumerate() {
-            self.posed_local_rotation[j] = q.normalize();
-            self.root_motion[j] = if self.skeleton.parent(j).is_none() {
-                *m
-            } else {
+        for j in 0..nj {
+            self.posed_local_rotation[j] = pose.rotations[j].normalize();
+            self.posed_local_scale[j] = match pose.scales {
+                Some(s) => s[j],
+                None => self.rest_local_scale[j],
+            };
+            self.translation_offset[j] = if pose.roots_only && self.skeleton.parent(j).is_some() {
                 DVec3::ZERO
+            } else {
+                pose.translation_offsets[j]
             };
         }
         self.reverser.invalidate();
@@ -603,10 +637,14 @@ impl RigSession {
         self.skeleton
             .locals_from_worlds(&self.rest_world_from_joint, &mut locals);
         for (q, l) in self.posed_local_rotation.iter_mut().zip(&locals) {
-            *q = DQuat::from_mat3(&l.matrix3);
+            *q = rotation_of(&l.matrix3);
         }
         self.scratch_locals = locals;
-        self.root_motion.iter_mut().for_each(|m| *m = DVec3::ZERO);
+        self.posed_local_scale
+            .copy_from_slice(&self.rest_local_scale);
+        self.translation_offset
+            .iter_mut()
+            .for_each(|m| *m = DVec3::ZERO);
         self.reverser.invalidate();
         self.pose_and_fit();
     }
@@ -685,10 +723,22 @@ impl RigSession {
         local_rotations: &[DQuat],
         root_motion: &[DVec3],
     ) -> Result<(), RigError> {
+        self.set_animation_sample_local(
+            rest_cage_offsets,
+            &roots_only(local_rotations, root_motion),
+        )
+    }
+
+    /// [`RigSession::set_animation_sample`] with the full pose of [`crate::pose`].
+    pub fn set_animation_sample_local(
+        &mut self,
+        rest_cage_offsets: Option<&[DVec3]>,
+        pose: &LocalPose,
+    ) -> Result<(), RigError> {
         if let Some(offsets) = rest_cage_offsets {
             self.check_cage_offsets(offsets)?;
         }
-        self.store_pose(local_rotations, root_motion)?;
+        self.store_pose(pose)?;
         if let Some(offsets) = rest_cage_offsets {
             for ((c, o), c0) in self
                 .rest_cage
@@ -738,6 +788,22 @@ impl RigSession {
         local_rotations: &[DQuat],
         root_motion: &[DVec3],
     ) -> Result<(), RigError> {
+        self.set_animation_sample_between_local(
+            lo,
+            hi,
+            a,
+            &roots_only(local_rotations, root_motion),
+        )
+    }
+
+    /// [`RigSession::set_animation_sample_between`] with the full pose of [`crate::pose`].
+    pub fn set_animation_sample_between_local(
+        &mut self,
+        lo: &RestKeyframe,
+        hi: &RestKeyframe,
+        a: f64,
+        pose: &LocalPose,
+    ) -> Result<(), RigError> {
         let nv = self.rest_mesh.len();
         let nc = self.rest_cage.len();
         if lo.mesh.len() != nv || hi.mesh.len() != nv || lo.cage.len() != nc || hi.cage.len() != nc
@@ -751,7 +817,7 @@ impl RigSession {
         if !a.is_finite() {
             return Err(RigError::Invalid(format!("blend weight {a} is not finite")));
         }
-        self.store_pose(local_rotations, root_motion)?;
+        self.store_pose(pose)?;
         lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
         lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
         self.rest_mesh_is_phi_c = true;
@@ -917,16 +983,19 @@ impl RigSession {
 
     /// FK of the current pose on the current rest skeleton, skinning, CageUp.
     fn pose_and_fit(&mut self) {
-        // Locals: current rotation, rest bone offset (+ root motion).
+        // Locals: rest bone offset o_j + offset d_j, current rotation and scale.
         for j in 0..self.skeleton.len() {
-            let translation = match self.skeleton.parent(j) {
+            let rest_offset = match self.skeleton.parent(j) {
                 Some(p) => self.rest_world_from_joint[p]
                     .inverse()
                     .transform_point3(self.rest_world_from_joint[j].translation),
-                None => self.rest_world_from_joint[j].translation + self.root_motion[j],
+                None => self.rest_world_from_joint[j].translation,
             };
-            self.scratch_locals[j] =
-                DAffine3::from_rotation_translation(self.posed_local_rotation[j], translation);
+            self.scratch_locals[j] = local_transform(
+                rest_offset + self.translation_offset[j],
+                self.posed_local_rotation[j],
+                self.posed_local_scale[j],
+            );
         }
         self.skeleton
             .forward_kinematics(&self.scratch_locals, &mut self.posed_world_from_joint);
@@ -1004,6 +1073,16 @@ fn scatter_edit(vertices: &[usize], offsets: &[DVec3], dense: &mut [DVec3]) {
     dense.iter_mut().for_each(|d| *d = DVec3::ZERO);
     for (i, &v) in vertices.iter().enumerate() {
         dense[v] += offsets[if offsets.len() == 1 { 0 } else { i }];
+    }
+}
+
+/// The paper tool's pose: rotations, rest scales, root motion for roots only.
+fn roots_only<'a>(rotations: &'a [DQuat], root_motion: &'a [DVec3]) -> LocalPose<'a> {
+    LocalPose {
+        rotations,
+        scales: None,
+        translation_offsets: root_motion,
+        roots_only: true,
     }
 }
 

@@ -1,0 +1,154 @@
+//! `cagerig export RIG [--script EDITS.json] --out FILE.glb`: the (edited) character as a
+//! standard rigged glTF binary — the rest mesh and skeleton after cage edits as the bind shape,
+//! Ω as JOINTS_n/WEIGHTS_n, the current pose as the joint nodes' transforms.
+//!
+//! With `--skeleton-anim A --cage-anim B` or `--animation NAME` (glTF/FBX) `[--fps F]`: the
+//! hybrid animation, sampled at F samples/s plus every key time, as node TRS animation and cage
+//! keys as morph targets (see `cagerig_formats::gltf::export_animation`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use cagerig::script::EditScript;
+use cagerig::session::RigSession;
+use cagerig_formats::gltf::export_animation;
+use clap::Args;
+
+use crate::commands::SessionArgs;
+use crate::rig_source::{RigArgs, load_rig};
+
+#[derive(Debug, Clone, Args)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    pub rig: RigArgs,
+    /// Edit script replayed before exporting (as for `edit`).
+    #[arg(long)]
+    pub script: Option<PathBuf>,
+    /// Output `.glb` file (replaced atomically).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Skeleton animation to export (the paper tool's text format).
+    #[arg(long)]
+    pub skeleton_anim: Option<PathBuf>,
+    /// Cage animation to export (rest-cage offsets; keys become morph targets).
+    #[arg(long)]
+    pub cage_anim: Option<PathBuf>,
+    /// glTF/FBX: the file's animation to export, by name or index.
+    #[arg(long)]
+    pub animation: Option<String>,
+    /// Samples per second of the exported animation (key times are always samples).
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    #[command(flatten)]
+    pub session: SessionArgs,
+}
+
+pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
+    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !ext.eq_ignore_ascii_case("glb") {
+        bail!(
+            "{}: export writes binary glTF: give an --out path ending in .glb",
+            args.out.display()
+        );
+    }
+    let script = match &args.script {
+        Some(p) => {
+            let text =
+                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+            Some(EditScript::parse(&text).with_context(|| format!("in {}", p.display()))?)
+        }
+        None => None,
+    };
+    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 1000.0) {
+        bail!("--fps {} must be in (0, 1000]", args.fps);
+    }
+    let loaded = load_rig(&args.rig, true, true)?;
+    let (skeleton_track, channels) = crate::interchange::skeleton_track(
+        &loaded,
+        args.skeleton_anim.as_deref(),
+        args.animation.as_deref(),
+    )?;
+    let cage_track = match &args.cage_anim {
+        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
+            p,
+            loaded.parts.cage.num_vertices(),
+        )?),
+        None => None,
+    };
+    let name = loaded
+        .name
+        .rsplit(['/', '\\'])
+        .next()
+        .and_then(|f| f.split('.').next())
+        .unwrap_or("cagerig")
+        .to_string();
+    let mut options = args.session.options();
+    if let Some(s) = script.as_ref().and_then(|s| s.skinning) {
+        options.skinning = s;
+    }
+    let (mut session, warnings) =
+        RigSession::new(loaded.parts, options).context("assembling the rig")?;
+    for w in loaded.warnings.iter().chain(&warnings) {
+        eprintln!("warning: {w}");
+    }
+    if let (Some(script), Some(path)) = (&script, &args.script) {
+        script
+            .validate(&session)
+            .with_context(|| format!("in {}", path.display()))?;
+        for k in 0..script.steps.len() {
+            script
+                .run_step(k, &mut session)
+                .with_context(|| format!("in {}", path.display()))?;
+        }
+    }
+    if skeleton_track.is_none() && cage_track.is_none() {
+        return export(&session, &args.out, &name);
+    }
+    let t = std::time::Instant::now();
+    let mut keys: Vec<f64> = Vec::new();
+    if let Some(s) = &skeleton_track {
+        keys.extend(s.times());
+    }
+    if let Some(c) = &cage_track {
+        keys.extend(c.times());
+    }
+    let mut player = cagerig::playback::AnimationPlayer::with_channels(
+        &session,
+        skeleton_track,
+        cage_track.clone(),
+        channels,
+    )?;
+    let times = export_animation::sample_times(player.duration(), args.fps, &keys);
+    let (document, bin) = export_animation::animation_to_gltf(
+        &mut session,
+        &mut player,
+        cage_track.as_ref(),
+        &times,
+        &name,
+    )
+    .map_err(|e| anyhow::anyhow!("exporting the animation: {e}"))?;
+    cagerig::io::atomic::write_atomically(&args.out, |w| {
+        cagerig_formats::gltf::export::write_glb(w, &document, &bin)
+    })?;
+    println!(
+        "{} written: {} samples over {:.3} s in {:.1} ms",
+        args.out.display(),
+        times.len(),
+        player.duration(),
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    Ok(())
+}
+
+fn export(session: &RigSession, out: &Path, name: &str) -> anyhow::Result<()> {
+    let t = std::time::Instant::now();
+    cagerig_formats::gltf::export::export_glb(session, out, name)?;
+    println!(
+        "{} written ({} vertices, {} joints) in {:.1} ms",
+        out.display(),
+        session.rest_mesh().len(),
+        session.skeleton().len(),
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    Ok(())
+}

@@ -1,0 +1,221 @@
+//! Characters from interchange files (`.glb`, `.gltf`, `.fbx`) through `cagerig-formats`: the
+//! rig loader's hook, `info` for such files, and the `--animation` track of `animate`.
+
+use std::path::Path;
+
+use anyhow::{Context, bail};
+use cagerig::animation::SkeletonTrack;
+use cagerig::playback::PoseChannels;
+use cagerig::session::RigParts;
+use cagerig_formats::{ImportOptions, ImportedCharacter, import_character};
+use serde::Serialize;
+
+use crate::commands::FileUse;
+use crate::rig_source::LoadedRig;
+
+/// Whether `path` is read by `cagerig-formats` rather than as the paper tool's OBJ file set.
+pub fn is_interchange(path: &Path) -> bool {
+    cagerig_formats::format_of(path).is_some()
+}
+
+fn import(path: &Path, skin: Option<&str>) -> anyhow::Result<ImportedCharacter> {
+    let options = ImportOptions {
+        skin: skin.map(str::to_owned),
+        ..ImportOptions::default()
+    };
+    Ok(import_character(path, &options)?)
+}
+
+/// Loads a character and its cage (`--cage` OBJ, else a cage node inside the file).
+pub fn load_interchange(
+    path: &Path,
+    cage: Option<&Path>,
+    skin: Option<&str>,
+) -> anyhow::Result<LoadedRig> {
+    let character = import(path, skin)?;
+    let mut files = vec![FileUse {
+        role: "character".into(),
+        path: path.to_path_buf(),
+    }];
+    let cage_mesh = match (cage, &character.cage) {
+        (Some(c), _) => {
+            files.push(FileUse {
+                role: "cage".into(),
+                path: c.to_path_buf(),
+            });
+            cagerig::io::obj::read_obj(c)
+                .with_context(|| format!("reading the cage {}", c.display()))?
+        }
+        (None, Some(c)) => c.clone(),
+        (None, None) => bail!(
+            "{}: no cage: give --cage CAGE.obj (in the file's world space), or add a mesh node named \
+             `<name>_cage` (or with extras.cagerig_cage) to the file",
+            path.display()
+        ),
+    };
+    let ImportedCharacter {
+        mesh,
+        skeleton,
+        skin_weights,
+        animations,
+        warnings,
+        ..
+    } = character;
+    Ok(LoadedRig {
+        name: path.display().to_string(),
+        parts: RigParts::new(mesh, skeleton, skin_weights, cage_mesh),
+        files,
+        warnings,
+        maxvol_path: None,
+        animations,
+    })
+}
+
+/// The skeleton track `animate` plays: `--animation NAME|INDEX` from the imported file (all
+/// channels), or `--skeleton-anim` in the paper tool's format (rotations and root motion).
+pub fn skeleton_track(
+    loaded: &LoadedRig,
+    skeleton_anim: Option<&Path>,
+    animation: Option<&str>,
+) -> anyhow::Result<(Option<SkeletonTrack>, PoseChannels)> {
+    match (animation, skeleton_anim) {
+        (Some(_), Some(_)) => bail!("give --animation or --skeleton-anim, not both"),
+        (Some(sel), None) => {
+            let found = loaded
+                .animations
+                .iter()
+                .find(|a| a.name == sel)
+                .or_else(|| {
+                    sel.parse::<usize>()
+                        .ok()
+                        .and_then(|i| loaded.animations.get(i))
+                });
+            match found {
+                Some(a) => Ok((Some(a.track.clone()), PoseChannels::Full)),
+                None => {
+                    let names: Vec<String> = loaded
+                        .animations
+                        .iter()
+                        .enumerate()
+                        .map(|(i, a)| format!("{i} {:?}", a.name))
+                        .collect();
+                    bail!(
+                        "{}: no animation named or numbered {sel:?}; it has: {}",
+                        loaded.name,
+                        if names.is_empty() {
+                            "none".into()
+                        } else {
+                            names.join(", ")
+                        }
+                    )
+                }
+            }
+        }
+        (None, Some(p)) => Ok((
+            Some(
+                cagerig::io::skeleton_animation::read_skeleton_animation(
+                    p,
+                    &loaded.parts.skeleton,
+                )?
+                .0,
+            ),
+            PoseChannels::RotationsAndRootMotion,
+        )),
+        (None, None) => Ok((None, PoseChannels::RotationsAndRootMotion)),
+    }
+}
+
+#[derive(Serialize)]
+struct InterchangeInfo<'a> {
+    file: String,
+    #[serde(flatten)]
+    summary: &'a cagerig_formats::ImportSummary,
+    warnings: Vec<String>,
+}
+
+/// `cagerig info FILE.glb|.gltf|.fbx [--json]`: counts, skins, animations, influences.
+pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
+    let c = import(path, skin)?;
+    let s = &c.summary;
+    let report = InterchangeInfo {
+        file: path.display().to_string(),
+        summary: s,
+        warnings: c.warnings.iter().map(|w| w.to_string()).collect(),
+    };
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    println!("file           {} ({})", report.file, s.format);
+    println!(
+        "mesh           {} vertices, {} triangles, {} primitives",
+        s.vertices,
+        s.triangles,
+        s.primitives.len()
+    );
+    for p in &s.primitives {
+        println!(
+            "primitive      {}: vertices {}..{}, {} triangles{}",
+            p.source,
+            p.first_vertex,
+            p.first_vertex + p.vertices,
+            p.triangles,
+            if p.indexed { "" } else { " (no index buffer)" }
+        );
+    }
+    for k in &s.skins {
+        println!(
+            "skin           {} {:?}: {} joints{}",
+            k.index,
+            k.name.as_deref().unwrap_or(""),
+            k.joints,
+            if k.index == s.chosen_skin {
+                " (imported)"
+            } else {
+                ""
+            }
+        );
+    }
+    println!("skeleton       {} joints", s.joints);
+    let histogram: Vec<String> = s
+        .influences_histogram
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| **n > 0)
+        .map(|(k, n)| format!("{k}: {n}"))
+        .collect();
+    println!(
+        "influences     max {} per vertex; vertices by count {{{}}}",
+        s.max_influences,
+        histogram.join(", ")
+    );
+    println!("renormalised   {} weight rows", s.renormalised_rows);
+    for a in &s.animations {
+        println!(
+            "animation      {} {:?}: {:.3} s, {} keys{}",
+            a.index,
+            a.name,
+            a.duration,
+            a.keys,
+            if a.exact { "" } else { " (resampled)" }
+        );
+    }
+    if s.animations.is_empty() {
+        println!("animation      none");
+    }
+    println!(
+        "cage in file   {}",
+        if s.cage_in_file {
+            "yes"
+        } else {
+            "no (give --cage)"
+        }
+    );
+    if report.warnings.is_empty() {
+        println!("warnings       none");
+    }
+    for w in &report.warnings {
+        println!("warning        {w}");
+    }
+    Ok(())
+}

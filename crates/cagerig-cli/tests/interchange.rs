@@ -1,0 +1,160 @@
+//! The CLI on glTF/FBX characters: info, edit, animate --animation, export, and clear errors.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn cagerig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_cagerig"))
+}
+
+fn data(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel)
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cagerig-cli-x-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run_ok(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+#[test]
+fn info_lists_the_fox() {
+    let json = run_ok(cagerig().arg("info").arg(data("fox/Fox.glb")).arg("--json"));
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["vertices"], 1728);
+    assert_eq!(v["joints"], 24);
+    assert_eq!(v["animations"][1]["name"], "Walk");
+    assert_eq!(v["primitives"][0]["indexed"], false);
+    let text = run_ok(
+        cagerig()
+            .arg("info")
+            .arg(data("fbx/blender_279_sausage_7400_binary.fbx")),
+    );
+    assert!(
+        text.contains("290 vertices") && text.contains("FBX"),
+        "{text}"
+    );
+}
+
+#[test]
+fn fox_edit_animate_and_export() {
+    let dir = temp_dir("fox");
+    let script = dir.join("edits.json");
+    std::fs::write(
+        &script,
+        r#"{"steps":[{"op":"rotate_joint","joint":"b_Neck_04","axis":[1,0,0],"degrees":30},
+                     {"op":"move_rest_cage","vertices":[0,1,2],"offset":[0,5,0]}]}"#,
+    )
+    .unwrap();
+    let fox = data("fox/Fox.glb");
+    let cage = data("fox/Fox_cage.obj");
+    run_ok(
+        cagerig()
+            .arg("edit")
+            .arg(&fox)
+            .arg("--cage")
+            .arg(&cage)
+            .arg("--script")
+            .arg(&script)
+            .arg("--out")
+            .arg(dir.join("edit")),
+    );
+    assert!(dir.join("edit/step2_mesh_posed.obj").is_file());
+    run_ok(
+        cagerig()
+            .arg("animate")
+            .arg(&fox)
+            .arg("--cage")
+            .arg(&cage)
+            .args(["--animation", "Walk", "--times", "0,0.3"])
+            .arg("--out")
+            .arg(dir.join("walk")),
+    );
+    assert!(dir.join("walk/t0.3_mesh_posed.obj").is_file());
+    let out = dir.join("fox.glb");
+    run_ok(
+        cagerig()
+            .arg("export")
+            .arg(&fox)
+            .arg("--cage")
+            .arg(&cage)
+            .arg("--script")
+            .arg(&script)
+            .arg("--out")
+            .arg(&out),
+    );
+    let json = run_ok(cagerig().arg("info").arg(&out).arg("--json"));
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["vertices"], 1728);
+    // The Walk as a standalone animated glTF: reimported, it has one animation of Walk's length.
+    let walk = dir.join("walk.glb");
+    run_ok(
+        cagerig()
+            .arg("export")
+            .arg(&fox)
+            .arg("--cage")
+            .arg(&cage)
+            .args(["--animation", "Walk", "--fps", "24"])
+            .arg("--out")
+            .arg(&walk),
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&run_ok(cagerig().arg("info").arg(&walk).arg("--json"))).unwrap();
+    let duration = v["animations"][0]["duration"].as_f64().unwrap();
+    assert!((duration - 0.7083).abs() < 1e-3, "{v}");
+    // Unknown animation: the error lists the file's animations.
+    let bad = cagerig()
+        .arg("animate")
+        .arg(&fox)
+        .arg("--cage")
+        .arg(&cage)
+        .args(["--animation", "Fly", "--times", "0"])
+        .arg("--out")
+        .arg(dir.join("x"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && err.contains("Fly") && err.contains("Walk"),
+        "{err}"
+    );
+    // No cage: the error names the options.
+    let bad = cagerig()
+        .arg("edit")
+        .arg(&fox)
+        .arg("--script")
+        .arg(&script)
+        .arg("--out")
+        .arg(dir.join("y"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("--cage"), "{err}");
+}
+
+#[test]
+fn a_truncated_glb_is_a_clear_error() {
+    let dir = temp_dir("trunc");
+    let bytes = std::fs::read(data("fox/Fox.glb")).unwrap();
+    let file = dir.join("half.glb");
+    std::fs::write(&file, &bytes[..bytes.len() / 2]).unwrap();
+    let out = cagerig().arg("info").arg(&file).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("half.glb") && !err.contains("panicked"),
+        "{err}"
+    );
+}

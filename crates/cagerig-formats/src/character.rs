@@ -1,0 +1,183 @@
+//! The format-independent result of importing a skinned character (glTF or FBX).
+//!
+//! Spaces, stated once: the rest skin M and the rest skeleton S are the bind shape placed in the
+//! file's world space (ancestors of the skeleton composed in), so that at rest M' = M; a posed
+//! mesh at an animation time equals what a viewer of the file shows at that time (LBS). A cage
+//! given for the character must be in that same space.
+//!
+//! Vertex order: skinned primitives in file order (glTF: nodes in index order, then the
+//! primitives of each node's mesh; FBX: mesh nodes in scene order), vertices in accessor order
+//! within a primitive (glTF) or polygon-vertex order (FBX); no reordering, no welding — vertex i
+//! of M is the i-th vertex of that concatenation.
+
+use cagerig::animation::SkeletonTrack;
+use cagerig::{Skeleton, SkinWeights, TriMesh, Warning};
+use glam::{DAffine3, DQuat, DVec3};
+use serde::Serialize;
+
+/// A skinned character read from an interchange file.
+#[derive(Debug, Clone)]
+pub struct ImportedCharacter {
+    /// Rest skin M (world space, file vertex order; see the module doc).
+    pub mesh: TriMesh,
+    /// Rest skeleton S: one joint per skin joint, in the skin's joint order.
+    pub skeleton: Skeleton,
+    /// Ω, `#V × #J`.
+    pub skin_weights: SkinWeights,
+    /// A cage found in the file (a mesh node named `<name>_cage` or with `extras.cagerig_cage`).
+    pub cage: Option<TriMesh>,
+    /// Animations as skeleton tracks of local transforms (play them with
+    /// [`cagerig::playback::PoseChannels::Full`]).
+    pub animations: Vec<ImportedAnimation>,
+    /// Joint locals `parent_from_joint` of the file's own node transforms (`#J`): the pose the
+    /// file shows without animation (equal to the rest pose when its nodes are in the bind
+    /// pose; an exported cagerig pose otherwise). Play it as a one-key track with
+    /// [`cagerig::playback::PoseChannels::Full`].
+    pub node_pose: Vec<glam::DAffine3>,
+    pub summary: ImportSummary,
+    pub warnings: Vec<Warning>,
+}
+
+/// One animation of the file as a skeleton track.
+#[derive(Debug, Clone)]
+pub struct ImportedAnimation {
+    pub name: String,
+    /// Last key time in seconds.
+    pub duration: f64,
+    /// Keys at the union of the channels' key times (plus resampled times, see `exact`).
+    pub track: SkeletonTrack,
+    /// True when sampling the track reproduces the file's channels at every time (LINEAR and
+    /// key-aligned channels); false when STEP or CUBICSPLINE channels were resampled.
+    pub exact: bool,
+}
+
+/// What `cagerig info` lists about an imported file.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ImportSummary {
+    /// "glTF" or "FBX".
+    pub format: String,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub primitives: Vec<PrimitiveSummary>,
+    pub joints: usize,
+    pub skins: Vec<SkinSummary>,
+    /// Index into `skins` of the skin that was imported.
+    pub chosen_skin: usize,
+    pub max_influences: usize,
+    /// `influences_histogram[k]` = number of vertices with k non-zero weights.
+    pub influences_histogram: Vec<usize>,
+    /// Weight rows that did not sum to 1 and were renormalised.
+    pub renormalised_rows: usize,
+    pub animations: Vec<AnimationSummary>,
+    /// Whether a cage was found inside the file.
+    pub cage_in_file: bool,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PrimitiveSummary {
+    /// Where it comes from, e.g. `node 1 "fox", mesh 0 primitive 0`.
+    pub source: String,
+    /// First vertex of this primitive in M.
+    pub first_vertex: usize,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub indexed: bool,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct SkinSummary {
+    pub index: usize,
+    pub name: Option<String>,
+    pub joints: usize,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct AnimationSummary {
+    pub index: usize,
+    pub name: String,
+    pub duration: f64,
+    pub keys: usize,
+    pub exact: bool,
+}
+
+impl ImportedCharacter {
+    /// The animation called `selector`, or with that index.
+    pub fn find_animation(&self, selector: &str) -> Option<&ImportedAnimation> {
+        self.animations
+            .iter()
+            .find(|a| a.name == selector)
+            .or_else(|| {
+                selector
+                    .parse::<usize>()
+                    .ok()
+                    .and_then(|i| self.animations.get(i))
+            })
+    }
+
+    /// Histogram and max of the influences per vertex, filled into the summary.
+    pub(crate) fn fill_influence_summary(&mut self) {
+        let n = self.skin_weights.num_vertices();
+        let mut histogram = vec![0usize; self.skin_weights.max_influences() + 1];
+        for v in 0..n {
+            histogram[self.skin_weights.row(v).0.len()] += 1;
+        }
+        self.summary.max_influences = histogram.len() - 1;
+        self.summary.influences_histogram = histogram;
+        self.summary.vertices = self.mesh.num_vertices();
+        self.summary.triangles = self.mesh.num_triangles();
+        self.summary.joints = self.skeleton.len();
+        self.summary.renormalised_rows = self
+            .warnings
+            .iter()
+            .map(|w| match w {
+                Warning::WeightsRenormalised { rows, .. } => *rows,
+                _ => 0,
+            })
+            .sum();
+        self.summary.cage_in_file = self.cage.is_some();
+        self.summary.animations = self
+            .animations
+            .iter()
+            .enumerate()
+            .map(|(index, a)| AnimationSummary {
+                index,
+                name: a.name.clone(),
+                duration: a.duration,
+                keys: a.track.num_keyframes(),
+                exact: a.exact,
+            })
+            .collect();
+    }
+}
+
+/// Column lengths within this relative spread count as one uniform scale.
+const UNIFORM_SCALE_TOLERANCE: f64 = 1e-5;
+
+/// A rest frame whose linear part is a rotation times a nearly uniform scale (the usual case;
+/// f32 inverse bind matrices are orthogonal only to ~1e-7) is snapped to exactly `s·R`, so that
+/// rest locals `B_parent⁻¹ B_j` decompose exactly into rotation and scale and M' = M at rest to
+/// round-off. The skinning then differs from the file's own matrices by their f32 rounding
+/// (≈ 1e-7 relative). Frames with a genuinely non-uniform scale are kept as they are.
+pub(crate) fn snap_to_similarity(frame: DAffine3) -> DAffine3 {
+    let m = frame.matrix3;
+    let lengths = DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
+    let mean = (lengths.x + lengths.y + lengths.z) / 3.0;
+    let det = m.determinant();
+    if mean.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+        || det <= 0.0
+        || (lengths - DVec3::splat(mean)).abs().max_element() > UNIFORM_SCALE_TOLERANCE * mean
+    {
+        return frame;
+    }
+    let scale = det.cbrt();
+    let rotation = DQuat::from_mat3(&(m * (1.0 / scale))).normalize();
+    DAffine3::from_scale_rotation_translation(DVec3::splat(scale), rotation, frame.translation)
+}
+
+/// Largest entry-wise difference of two affine transforms.
+pub(crate) fn max_abs_diff(a: &DAffine3, b: &DAffine3) -> f64 {
+    let (x, y) = (a.to_cols_array(), b.to_cols_array());
+    x.iter()
+        .zip(&y)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
+}

@@ -1,0 +1,353 @@
+//! glTF buffers and accessors, read defensively (files come from anywhere).
+//!
+//! - Buffer URIs resolve only inside the glTF file's own folder: `data:` base64 URIs are decoded,
+//!   relative paths are percent-decoded and joined to the folder; absolute paths, `..`
+//!   components, other schemes and symbolic links leading outside are refused.
+//! - Every accessor's declared count, offset and stride are checked against the bytes actually
+//!   present before anything is allocated, with overflow-checked arithmetic.
+
+use std::path::{Component, Path, PathBuf};
+
+use base64::Engine;
+use gltf::accessor::{DataType, Dimensions};
+
+use crate::error::{FormatError, invalid};
+
+/// The bytes of every buffer of a document, in buffer order.
+pub struct Buffers {
+    data: Vec<Vec<u8>>,
+    path: PathBuf,
+}
+
+/// Resolves a relative URI inside `folder`, refusing anything that could leave it.
+pub fn resolve_uri(
+    folder: &Path,
+    uri: &str,
+    file: &Path,
+    element: &str,
+) -> Result<PathBuf, FormatError> {
+    let refuse = |why: &str| invalid(file, element, format!("URI {uri:?} refused: {why}"));
+    if let Some(colon) = uri.find(':') {
+        let scheme_end = uri.find('/').unwrap_or(uri.len());
+        if colon < scheme_end {
+            return Err(refuse(
+                "only relative file paths inside the file's folder are read (no URI scheme)",
+            ));
+        }
+    }
+    let decoded = percent_decode(uri).ok_or_else(|| refuse("malformed percent-encoding"))?;
+    if decoded.starts_with('/') || decoded.starts_with('\\') || decoded.contains('\0') {
+        return Err(refuse("absolute paths are not allowed"));
+    }
+    let relative = Path::new(&decoded);
+    for c in relative.components() {
+        match c {
+            Component::Normal(_) | Component::CurDir => {}
+            _ => return Err(refuse("'..' and absolute components are not allowed")),
+        }
+    }
+    let joined = folder.join(relative);
+    let canon_folder = folder
+        .canonicalize()
+        .map_err(|e| refuse(&format!("the file's folder cannot be resolved: {e}")))?;
+    let canon = joined.canonicalize().map_err(|e| FormatError::Io {
+        path: joined.clone(),
+        message: format!("{element} (URI {uri:?}) cannot be opened: {e}"),
+    })?;
+    if !canon.starts_with(&canon_folder) {
+        return Err(refuse("it leads outside the file's folder (symbolic link)"));
+    }
+    Ok(canon)
+}
+
+fn percent_decode(s: &str) -> Option<String> {
+    let bytes = s.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' {
+            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+impl Buffers {
+    /// Loads every buffer of `document` (`blob`: the GLB binary chunk), checking each has at
+    /// least its declared `byteLength`.
+    pub fn load(
+        document: &gltf::Document,
+        blob: Option<&[u8]>,
+        path: &Path,
+    ) -> Result<Self, FormatError> {
+        let folder = path.parent().unwrap_or(Path::new("."));
+        let folder = if folder.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            folder
+        };
+        let mut data = Vec::with_capacity(document.buffers().len());
+        for buffer in document.buffers() {
+            let element = format!("buffer {}", buffer.index());
+            let bytes = match buffer.source() {
+                gltf::buffer::Source::Bin => blob
+                    .ok_or_else(|| {
+                        invalid(
+                            path,
+                            &element,
+                            "refers to the GLB binary chunk, which is missing",
+                        )
+                    })?
+                    .to_vec(),
+                gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                    let (_, payload) = uri.split_once(";base64,").ok_or_else(|| {
+                        invalid(
+                            path,
+                            &element,
+                            "data URI is not base64 (expected 'data:<type>;base64,')",
+                        )
+                    })?;
+                    // Decoded size ≤ 3/4 of the text: bounded by what the file holds.
+                    base64::engine::general_purpose::STANDARD
+                        .decode(payload)
+                        .map_err(|e| invalid(path, &element, format!("bad base64 data URI: {e}")))?
+                }
+                gltf::buffer::Source::Uri(uri) => {
+                    let file = resolve_uri(folder, uri, path, &element)?;
+                    let len = std::fs::metadata(&file)
+                        .map_err(|e| FormatError::Io {
+                            path: file.clone(),
+                            message: format!("{element}: {e}"),
+                        })?
+                        .len();
+                    if len < buffer.length() as u64 {
+                        return Err(invalid(
+                            path,
+                            &element,
+                            format!(
+                                "declares {} bytes but {} holds {len}",
+                                buffer.length(),
+                                file.display()
+                            ),
+                        ));
+                    }
+                    std::fs::read(&file).map_err(|e| FormatError::Io {
+                        path: file.clone(),
+                        message: format!("{element}: {e}"),
+                    })?
+                }
+            };
+            if bytes.len() < buffer.length() {
+                return Err(invalid(
+                    path,
+                    &element,
+                    format!(
+                        "declares {} bytes but only {} are present",
+                        buffer.length(),
+                        bytes.len()
+                    ),
+                ));
+            }
+            data.push(bytes);
+        }
+        Ok(Self {
+            data,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// The accessor's elements as f64, `count × components` row-major, with normalised integer
+    /// types mapped to [0, 1] (or [−1, 1]) as the glTF specification says. `allowed` lists the
+    /// dimensions the caller accepts.
+    pub fn read(
+        &self,
+        accessor: &gltf::Accessor,
+        what: &str,
+        allowed: &[Dimensions],
+    ) -> Result<Vec<f64>, FormatError> {
+        let element = format!("accessor {} ({what})", accessor.index());
+        let err = |m: String| invalid(&self.path, &element, m);
+        let dims = accessor.dimensions();
+        if !allowed.contains(&dims) {
+            return Err(err(format!(
+                "has type {dims:?}, expected one of {allowed:?}"
+            )));
+        }
+        if accessor.sparse().is_some() {
+            return Err(err("sparse accessors are not supported".into()));
+        }
+        let ncomp = dims.multiplicity();
+        let size = match accessor.data_type() {
+            DataType::I8 | DataType::U8 => 1,
+            DataType::I16 | DataType::U16 => 2,
+            DataType::U32 | DataType::F32 => 4,
+        };
+        if matches!(dims, Dimensions::Mat2 | Dimensions::Mat3) && size < 4 {
+            return Err(err(
+                "small-integer matrices (column padding) are not supported".into(),
+            ));
+        }
+        let count = accessor.count();
+        let Some(view) = accessor.view() else {
+            // No buffer view and no sparse data: all zeros (specification). Bounded by the
+            // file: a document this small cannot claim more than 2^24 zero elements.
+            if count > 1 << 24 {
+                return Err(err(format!(
+                    "claims {count} zero elements without any data"
+                )));
+            }
+            return Ok(vec![0.0; count * ncomp]);
+        };
+        let buffer = &self.data[view.buffer().index()];
+        let elem = size * ncomp;
+        let stride = view.stride().unwrap_or(elem);
+        if stride < elem {
+            return Err(err(format!(
+                "stride {stride} is smaller than its element ({elem} bytes)"
+            )));
+        }
+        let view_end = view
+            .offset()
+            .checked_add(view.length())
+            .filter(|&e| e <= buffer.len())
+            .ok_or_else(|| {
+                err(format!(
+                    "buffer view {} (offset {}, length {}) exceeds buffer {} ({} bytes)",
+                    view.index(),
+                    view.offset(),
+                    view.length(),
+                    view.buffer().index(),
+                    buffer.len()
+                ))
+            })?;
+        let start = view.offset().checked_add(accessor.offset());
+        let needed = count.checked_sub(1).map_or(Some(0), |c| {
+            c.checked_mul(stride).and_then(|x| x.checked_add(elem))
+        });
+        let end = start.zip(needed).and_then(|(s, n)| s.checked_add(n));
+        match end {
+            Some(e) if e <= view_end => {}
+            _ => {
+                return Err(err(format!(
+                    "declares {count} elements of {elem} bytes (stride {stride}) at offset {} but its buffer view {} holds {} bytes",
+                    accessor.offset(),
+                    view.index(),
+                    view.length()
+                )));
+            }
+        }
+        let start = start.unwrap_or(0);
+        let normalized = accessor.normalized();
+        let mut out = Vec::with_capacity(count * ncomp);
+        for i in 0..count {
+            let base = start + i * stride;
+            for c in 0..ncomp {
+                let o = base + c * size;
+                let b = &buffer[o..o + size];
+                let v = match accessor.data_type() {
+                    DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                    DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                    DataType::U16 => {
+                        let x = u16::from_le_bytes([b[0], b[1]]) as f64;
+                        if normalized { x / 65535.0 } else { x }
+                    }
+                    DataType::I16 => {
+                        let x = i16::from_le_bytes([b[0], b[1]]) as f64;
+                        if normalized {
+                            (x / 32767.0).max(-1.0)
+                        } else {
+                            x
+                        }
+                    }
+                    DataType::U8 => {
+                        let x = b[0] as f64;
+                        if normalized { x / 255.0 } else { x }
+                    }
+                    DataType::I8 => {
+                        let x = b[0] as i8 as f64;
+                        if normalized { (x / 127.0).max(-1.0) } else { x }
+                    }
+                };
+                out.push(v);
+            }
+        }
+        if let Some(i) = out.iter().position(|v| !v.is_finite()) {
+            return Err(err(format!(
+                "element {} component {} is not finite ({})",
+                i / ncomp,
+                i % ncomp,
+                out[i]
+            )));
+        }
+        Ok(out)
+    }
+
+    /// Integer accessor (indices, joints): unsigned 8/16/32-bit, not normalised.
+    pub fn read_indices(
+        &self,
+        accessor: &gltf::Accessor,
+        what: &str,
+        allowed: &[Dimensions],
+    ) -> Result<Vec<u32>, FormatError> {
+        if !matches!(
+            accessor.data_type(),
+            DataType::U8 | DataType::U16 | DataType::U32
+        ) || accessor.normalized()
+        {
+            return Err(invalid(
+                &self.path,
+                format!("accessor {} ({what})", accessor.index()),
+                format!(
+                    "has component type {:?}{}, expected unsigned 8/16/32-bit integers",
+                    accessor.data_type(),
+                    if accessor.normalized() {
+                        " (normalized)"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
+        Ok(self
+            .read(accessor, what, allowed)?
+            .into_iter()
+            .map(|v| v as u32)
+            .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uris_stay_inside_the_folder() {
+        let dir = std::env::temp_dir().join(format!("cagerig-uri-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        std::fs::write(dir.join("sub/a b.bin"), b"xy").unwrap();
+        let file = dir.join("x.gltf");
+        let ok = resolve_uri(&dir, "sub/a%20b.bin", &file, "buffer 0").unwrap();
+        assert!(ok.ends_with("sub/a b.bin"));
+        for bad in [
+            "../x.bin",
+            "/etc/passwd",
+            "http://example.com/a.bin",
+            "file:///etc/passwd",
+            "sub/../../x",
+        ] {
+            let e = resolve_uri(&dir, bad, &file, "buffer 0")
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("refused") && e.contains("buffer 0"),
+                "{bad}: {e}"
+            );
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

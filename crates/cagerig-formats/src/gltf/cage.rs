@@ -1,0 +1,116 @@
+//! A cage stored inside a glTF file: a mesh node named `<name>_cage` (node or mesh name) or with
+//! `extras.cagerig_cage`, in world space, its vertices welded by exact position (a cage written
+//! without an index buffer is a triangle soup).
+
+use std::path::Path;
+
+use cagerig::TriMesh;
+use glam::{DAffine3, DVec3};
+use gltf::accessor::Dimensions;
+
+use super::buffers::Buffers;
+use super::import::{primitive_triangles, to_vec3};
+use crate::error::{FormatError, invalid};
+
+/// Merges vertices with bit-identical positions (a cage written without an index buffer is a
+/// triangle soup); first occurrence order is kept.
+fn weld_exact(positions: &[DVec3], triangles: &[[u32; 3]]) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut index = std::collections::HashMap::with_capacity(positions.len());
+    let mut welded = Vec::with_capacity(positions.len());
+    let remap: Vec<u32> = positions
+        .iter()
+        .map(|p| {
+            let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+            *index.entry(key).or_insert_with(|| {
+                welded.push(*p);
+                (welded.len() - 1) as u32
+            })
+        })
+        .collect();
+    let triangles = triangles
+        .iter()
+        .map(|t| t.map(|i| remap[i as usize]))
+        .collect();
+    (welded, triangles)
+}
+
+/// A mesh node marked as the character's cage: node or mesh name ending in `_cage`, or
+/// `extras.cagerig_cage`; its positions in world space (the node's world transform applied).
+pub(super) fn find_cage(
+    document: &gltf::Document,
+    buffers: &Buffers,
+    rest_globals: &[DAffine3],
+    path: &Path,
+) -> Result<Option<TriMesh>, FormatError> {
+    for node in document.nodes() {
+        let Some(mesh) = node.mesh() else { continue };
+        let named = node.name().is_some_and(|n| n.ends_with("_cage"))
+            || mesh.name().is_some_and(|n| n.ends_with("_cage"));
+        let marked = node
+            .extras()
+            .as_ref()
+            .is_some_and(|e| e.get().contains("cagerig_cage"));
+        if !(named || marked) || node.skin().is_some() {
+            continue;
+        }
+        let source = format!("cage node {} {:?}", node.index(), node.name().unwrap_or(""));
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        let mut notes = Vec::new();
+        for primitive in mesh.primitives() {
+            let acc = primitive
+                .get(&gltf::Semantic::Positions)
+                .ok_or_else(|| invalid(path, &source, "has no POSITION"))?;
+            let p = to_vec3(&buffers.read(&acc, "cage POSITION", &[Dimensions::Vec3])?);
+            let indices = match primitive.indices() {
+                Some(acc) => {
+                    Some(buffers.read_indices(&acc, "cage indices", &[Dimensions::Scalar])?)
+                }
+                None => None,
+            };
+            if let Some(t) = primitive_triangles(
+                primitive.mode(),
+                indices,
+                p.len(),
+                path,
+                &source,
+                &mut notes,
+            )? {
+                let base = positions.len() as u32;
+                triangles.extend(t.iter().map(|t| t.map(|i| i + base)));
+                positions.extend(
+                    p.iter()
+                        .map(|x| rest_globals[node.index()].transform_point3(*x)),
+                );
+            }
+        }
+        let (positions, triangles) = weld_exact(&positions, &triangles);
+        let cage = TriMesh::new(positions, triangles).map_err(|source_err| FormatError::Rig {
+            path: path.to_path_buf(),
+            element: source.clone(),
+            source: source_err,
+        })?;
+        return Ok(Some(cage));
+    }
+    Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn welding_merges_identical_positions_only() {
+        let p = [
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::Y,
+            DVec3::X,
+            DVec3::Y,
+            DVec3::new(1.0, 1.0, 1e-300),
+        ];
+        let (w, t) = weld_exact(&p, &[[0, 1, 2], [3, 4, 5]]);
+        assert_eq!(w.len(), 4);
+        assert_eq!(t, vec![[0, 1, 2], [1, 2, 3]]);
+    }
+}

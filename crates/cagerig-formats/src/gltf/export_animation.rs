@@ -1,0 +1,175 @@
+//! The hybrid animation (skeleton track + cage track) as standard glTF that plays without
+//! cagerig.
+//!
+//! - The bind shape is the session's rest mesh M₀ when the export starts; each cage key k
+//!   becomes a morph target `ΦC_k − M₀`, and the morph weights are animated LINEAR with
+//!   `w_lo = 1 − a, w_hi = a` at the cage keys' bracket, which is exactly cagerig's linear
+//!   interpolation of cage keys (M(t) = Σ_k w_k ΦC_k) at every time, as long as every cage key
+//!   time is a sample time (it always is).
+//! - The inverse bind matrices are `B_j(0)⁻¹` (rest frames at the start). SkelUp moves the rest
+//!   joints with the cage; that motion is folded into the joint nodes: the node world transform
+//!   written at time t is `G_j(t) = T_j(t) · B_j(0)` with `T_j(t)` cagerig's skinning transform,
+//!   so a viewer's `G_j(t) · IBM_j · M(t) = T_j(t) · M(t)` — cagerig's LBS result.
+//! - Exactness: under LBS, exact (to the f32 rounding of glTF) at every sample time; samples are
+//!   the union of the skeleton keys, the cage keys and a grid at `fps`. Between samples a viewer
+//!   slerps/lerps the node TRS, which differs from cagerig's interpolation by the resampling.
+//!   Under DQS/CoR the file still carries the LBS rig (glTF skins with LBS only).
+
+use cagerig::animation::{CageTrack, bracket};
+use cagerig::playback::AnimationPlayer;
+use cagerig::session::RigSession;
+use glam::{DAffine3, DVec3};
+use serde_json::{Value, json};
+
+use super::export::{Builder, f32_bytes, position_accessor, session_to_gltf};
+
+/// Sample times: a grid at `fps` over `[0, duration]` plus every key time, sorted, unique as f32.
+pub fn sample_times(duration: f64, fps: f64, key_times: &[f64]) -> Vec<f64> {
+    let steps = (duration * fps).ceil().clamp(0.0, 1e6) as usize;
+    let mut times: Vec<f64> = (0..=steps)
+        .map(|i| (i as f64 / fps).min(duration))
+        .chain(
+            key_times
+                .iter()
+                .copied()
+                .filter(|t| *t >= 0.0 && *t <= duration),
+        )
+        .collect();
+    times.sort_by(f64::total_cmp);
+    // glTF stores times as f32: keep one time per f32 value (key times before grid times).
+    let is_key = |t: f64| key_times.contains(&t);
+    let mut out: Vec<f64> = Vec::with_capacity(times.len());
+    for t in times {
+        match out.last_mut() {
+            Some(last) if *last as f32 == t as f32 => {
+                if is_key(t) && !is_key(*last) {
+                    *last = t;
+                }
+            }
+            _ => out.push(t),
+        }
+    }
+    out
+}
+
+/// Plays `player` at every time of `times` on `session` and writes the glTF document (JSON and
+/// binary chunk) of the animation. `cage_track` must be the player's cage track (its keys
+/// become the morph targets). The session is left at the last sample.
+pub fn animation_to_gltf(
+    session: &mut RigSession,
+    player: &mut AnimationPlayer,
+    cage_track: Option<&CageTrack>,
+    times: &[f64],
+    name: &str,
+) -> Result<(Value, Vec<u8>), String> {
+    if times.is_empty() {
+        return Err("no sample times".into());
+    }
+    let base: Vec<DVec3> = session.rest_mesh().to_vec();
+    let bind: Vec<DAffine3> = session.rest_world_from_joint().to_vec();
+    let (mut document, bin) = session_to_gltf(session, name)?;
+    let mut b = Builder::from_document(&document, bin);
+    let nj = session.skeleton().len();
+    // Morph targets: the rest mesh at each cage key.
+    let mut targets = Vec::new();
+    if let Some(track) = cage_track {
+        for &t in track.times() {
+            player.apply(t, session).map_err(|e| e.to_string())?;
+            let delta: Vec<DVec3> = session
+                .rest_mesh()
+                .iter()
+                .zip(&base)
+                .map(|(m, m0)| *m - *m0)
+                .collect();
+            targets.push(json!({"POSITION": position_accessor(&mut b, &delta, false)}));
+        }
+    }
+    // Node TRS and morph weights at each sample.
+    let mut translations = Vec::with_capacity(nj * times.len());
+    let mut rotations = Vec::with_capacity(nj * times.len());
+    let mut scales = Vec::with_capacity(nj * times.len());
+    let mut weights = Vec::with_capacity(targets.len() * times.len());
+    let mut world = vec![DAffine3::IDENTITY; nj];
+    for &t in times {
+        player.apply(t, session).map_err(|e| e.to_string())?;
+        for (j, w) in world.iter_mut().enumerate() {
+            *w = session.posed_from_rest()[j] * bind[j];
+        }
+        for j in 0..nj {
+            let local = match session.skeleton().parent(j) {
+                Some(p) => world[p].inverse() * world[j],
+                None => world[j],
+            };
+            let (s, r, tr) = local.to_scale_rotation_translation();
+            translations.push(tr);
+            rotations.push(r.normalize());
+            scales.push(s);
+        }
+        if let Some(track) = cage_track {
+            let br = bracket(track.times(), t);
+            weights.extend((0..targets.len()).map(|k| {
+                if br.lo == br.hi {
+                    f64::from(u8::from(k == br.lo))
+                } else if k == br.lo {
+                    1.0 - br.a
+                } else if k == br.hi {
+                    br.a
+                } else {
+                    0.0
+                }
+            }));
+        }
+    }
+    // Keep consecutive quaternions in one hemisphere (viewers slerp without flipping).
+    for j in 0..nj {
+        for k in 1..times.len() {
+            let (prev, cur) = (rotations[(k - 1) * nj + j], rotations[k * nj + j]);
+            if prev.dot(cur) < 0.0 {
+                rotations[k * nj + j] = -cur;
+            }
+        }
+    }
+    let (t_min, t_max) = (times[0], times[times.len() - 1]);
+    let input = b.accessor(
+        &f32_bytes(times.iter().copied()),
+        None,
+        json!({"componentType": 5126, "count": times.len(), "type": "SCALAR",
+               "min": [t_min as f32], "max": [t_max as f32]}),
+    );
+    let mut samplers = Vec::new();
+    let mut channels = Vec::new();
+    for j in 0..nj {
+        let column = |k: usize| k * nj + j;
+        let tr = f32_bytes((0..times.len()).flat_map(|k| translations[column(k)].to_array()));
+        let ro = f32_bytes((0..times.len()).flat_map(|k| rotations[column(k)].to_array()));
+        let sc = f32_bytes((0..times.len()).flat_map(|k| scales[column(k)].to_array()));
+        for (bytes, kind, path) in [
+            (tr, "VEC3", "translation"),
+            (ro, "VEC4", "rotation"),
+            (sc, "VEC3", "scale"),
+        ] {
+            let output = b.accessor(
+                &bytes,
+                None,
+                json!({"componentType": 5126, "count": times.len(), "type": kind}),
+            );
+            channels.push(json!({"sampler": samplers.len(), "target": {"node": j, "path": path}}));
+            samplers.push(json!({"input": input, "output": output, "interpolation": "LINEAR"}));
+        }
+    }
+    if !targets.is_empty() {
+        let output = b.accessor(
+            &f32_bytes(weights.iter().copied()),
+            None,
+            json!({"componentType": 5126, "count": weights.len(), "type": "SCALAR"}),
+        );
+        channels
+            .push(json!({"sampler": samplers.len(), "target": {"node": nj, "path": "weights"}}));
+        samplers.push(json!({"input": input, "output": output, "interpolation": "LINEAR"}));
+        let initial: Vec<f64> = weights[..targets.len()].to_vec();
+        document["meshes"][0]["primitives"][0]["targets"] = Value::Array(targets);
+        document["meshes"][0]["weights"] = json!(initial);
+    }
+    document["animations"] = json!([{"name": name, "channels": channels, "samplers": samplers}]);
+    Ok(b.finish(document))
+}

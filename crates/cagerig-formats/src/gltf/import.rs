@@ -1,0 +1,515 @@
+//! glTF 2.0 → [`ImportedCharacter`]: the skinned primitives of one skin merged into the rest skin
+//! M, the skin's joints as the rest skeleton S, Ω from every `JOINTS_n`/`WEIGHTS_n` set.
+//!
+//! Spaces. glTF skins a bind-shape vertex v as `Σ_j w_j G_j(t) IBM_j v` (G_j: world transform
+//! of joint j's node at time t; the skinned mesh node's own transform is ignored, as the
+//! specification requires). We place the bind shape in world space with X = the world transform
+//! of the first node that uses the skin (where exporters put the bound mesh; Z-up roots written
+//! as `matrix` are part of it), so that M = X v and the rest frames are `B_j = X · IBM_j⁻¹`: the
+//! skinning transform `T_j = G_j(t) B_j⁻¹ = G_j(t) IBM_j X⁻¹` then gives exactly the viewer's
+//! `Σ_j w_j G_j(t) IBM_j v`. When the file's nodes are in the bind pose (`G_j · IBM_j = X`) its
+//! rest view is M; otherwise a warning says by how much they differ, and the nodes' transforms
+//! are available as [`ImportedCharacter::node_pose`] (an exported cagerig pose, for instance).
+
+use std::path::Path;
+
+use cagerig::{Joint, Skeleton, SkinWeights, TriMesh, Warning};
+use glam::{DAffine3, DVec3};
+use gltf::accessor::Dimensions;
+use gltf::mesh::Mode;
+
+use super::animation::import_animations;
+use super::buffers::Buffers;
+use super::cage::find_cage;
+use super::scene::{NodeTree, affine_from_cols};
+use crate::ImportOptions;
+use crate::character::{
+    ImportSummary, ImportedCharacter, PrimitiveSummary, SkinSummary, max_abs_diff,
+    snap_to_similarity,
+};
+use crate::error::{FormatError, invalid};
+
+/// Relative difference between G_j(rest)·IBM_j over the joints above which the file's node rest
+/// pose is reported as different from its bind pose.
+const BIND_POSE_TOLERANCE: f64 = 1e-4;
+
+/// Reads a `.gltf` or `.glb` file.
+pub fn import_gltf(path: &Path, options: &ImportOptions) -> Result<ImportedCharacter, FormatError> {
+    let bytes = std::fs::read(path).map_err(|e| FormatError::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    import_gltf_bytes(&bytes, path, options)
+}
+
+/// Reads glTF/GLB bytes; `path` names the file in messages and locates external buffers.
+pub fn import_gltf_bytes(
+    bytes: &[u8],
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<ImportedCharacter, FormatError> {
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| FormatError::Gltf {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let document = &gltf.document;
+    let buffers = Buffers::load(document, gltf.blob.as_deref(), path)?;
+    let tree = NodeTree::new(document, path)?;
+    let mut warnings = Vec::new();
+
+    // ----- the skin ---------------------------------------------------------------------------
+    let skins: Vec<SkinSummary> = document
+        .skins()
+        .map(|s| SkinSummary {
+            index: s.index(),
+            name: s.name().map(str::to_owned),
+            joints: s.joints().count(),
+        })
+        .collect();
+    let listing = || {
+        skins
+            .iter()
+            .map(|s| {
+                format!(
+                    "{} {:?} ({} joints)",
+                    s.index,
+                    s.name.as_deref().unwrap_or(""),
+                    s.joints
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let skin = match &options.skin {
+        Some(sel) => document
+            .skins()
+            .find(|s| s.name() == Some(sel.as_str()))
+            .or_else(|| sel.parse::<usize>().ok().and_then(|i| document.skins().nth(i)))
+            .ok_or_else(|| invalid(path, "skins", format!("no skin named or numbered {sel:?}; the file has: {}", listing())))?,
+        None => document.skins().next().ok_or_else(|| {
+            invalid(path, "skins", "the file has no skin: cagerig needs a skinned character (a skin with joints and JOINTS_0/WEIGHTS_0)")
+        })?,
+    };
+    if skins.len() > 1 && options.skin.is_none() {
+        warnings.push(Warning::Note {
+            message: format!(
+                "the file has {} skins; imported skin {} (choose with --skin NAME|INDEX): {}",
+                skins.len(),
+                skin.index(),
+                listing()
+            ),
+        });
+    }
+    let skin_element = format!("skin {}", skin.index());
+    let joint_nodes: Vec<usize> = skin.joints().map(|n| n.index()).collect();
+    if joint_nodes.is_empty() {
+        return Err(invalid(path, &skin_element, "has no joints"));
+    }
+    let nj = joint_nodes.len();
+    let mut joint_of_node = vec![None; tree.parent.len()];
+    for (j, &n) in joint_nodes.iter().enumerate() {
+        if let Some(first) = joint_of_node[n] {
+            return Err(invalid(
+                path,
+                &skin_element,
+                format!("lists node {n} twice (joints {first} and {j})"),
+            ));
+        }
+        joint_of_node[n] = Some(j);
+    }
+    let inverse_bind = match skin.inverse_bind_matrices() {
+        Some(acc) => {
+            if acc.count() < nj {
+                return Err(invalid(
+                    path,
+                    &skin_element,
+                    format!("has {nj} joints but {} inverse bind matrices", acc.count()),
+                ));
+            }
+            let values = buffers.read(&acc, "inverse bind matrices", &[Dimensions::Mat4])?;
+            (0..nj)
+                .map(|j| {
+                    let mut cols = [0.0; 16];
+                    cols.copy_from_slice(&values[16 * j..16 * j + 16]);
+                    affine_from_cols(
+                        cols,
+                        path,
+                        &format!("{skin_element} inverse bind matrix {j}"),
+                    )
+                })
+                .collect::<Result<Vec<_>, _>>()?
+        }
+        None => vec![DAffine3::IDENTITY; nj],
+    };
+
+    // ----- skeleton -------------------------------------------------------------------------------
+    let rest_locals = tree.rest_affines();
+    let mut rest_globals = vec![DAffine3::IDENTITY; rest_locals.len()];
+    tree.globals(&rest_locals, &mut rest_globals);
+    let joint_parent: Vec<Option<usize>> = joint_nodes
+        .iter()
+        .map(|&n| {
+            let mut k = tree.parent[n];
+            while let Some(p) = k {
+                if let Some(j) = joint_of_node[p] {
+                    return Some(j);
+                }
+                k = tree.parent[p];
+            }
+            None
+        })
+        .collect();
+    let j0 = (0..nj).find(|&j| joint_parent[j].is_none()).unwrap_or(0);
+    let world_from_bind = document
+        .nodes()
+        .find(|n| n.mesh().is_some() && n.skin().map(|s| s.index()) == Some(skin.index()))
+        .map_or(rest_globals[joint_nodes[j0]] * inverse_bind[j0], |n| {
+            rest_globals[n.index()]
+        });
+    let scale = world_from_bind
+        .matrix3
+        .to_cols_array()
+        .iter()
+        .fold(1.0f64, |a, x| a.max(x.abs()));
+    let mut worst = (0.0f64, 0);
+    for j in 0..nj {
+        let xj = rest_globals[joint_nodes[j]] * inverse_bind[j];
+        let d = max_abs_diff(&xj, &world_from_bind)
+            / scale.max(world_from_bind.translation.abs().max_element());
+        if d > worst.0 {
+            worst = (d, j);
+        }
+    }
+    if worst.0 > BIND_POSE_TOLERANCE {
+        warnings.push(Warning::Note {
+            message: format!(
+                "the file's node rest pose is not its bind pose (joint {} differs by {:.2e} relative); the rest skeleton is the bind pose; the nodes' transforms are kept as the file's pose",
+                worst.1, worst.0
+            ),
+        });
+    }
+    let mut names = std::collections::HashSet::new();
+    let mut joints = Vec::with_capacity(nj);
+    for (j, &n) in joint_nodes.iter().enumerate() {
+        let ibm = inverse_bind[j];
+        let det = ibm.matrix3.determinant();
+        if !det.is_finite() || det.abs() < 1e-12 {
+            return Err(invalid(
+                path,
+                format!("{skin_element} inverse bind matrix {j}"),
+                format!("is singular (det {det:e})"),
+            ));
+        }
+        let base = document
+            .nodes()
+            .nth(n)
+            .and_then(|node| node.name().map(str::to_owned))
+            .unwrap_or_else(|| format!("joint{j}"));
+        let mut name = base.clone();
+        if !names.insert(name.clone()) {
+            name = format!("{base}#node{n}");
+            names.insert(name.clone());
+        }
+        joints.push(Joint {
+            name,
+            parent: joint_parent[j],
+            rest_world_from_joint: snap_to_similarity(world_from_bind * ibm.inverse()),
+        });
+    }
+    let skeleton = Skeleton::new(joints).map_err(|source| FormatError::Rig {
+        path: path.to_path_buf(),
+        element: skin_element.clone(),
+        source,
+    })?;
+
+    // ----- skinned primitives, merged ----------------------------------------------------------------
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
+    let mut primitives = Vec::new();
+    for node in document.nodes() {
+        let (Some(mesh), Some(node_skin)) = (node.mesh(), node.skin()) else {
+            continue;
+        };
+        if node_skin.index() != skin.index() {
+            continue;
+        }
+        for primitive in mesh.primitives() {
+            let source = format!(
+                "node {} {:?}, mesh {} primitive {}",
+                node.index(),
+                node.name().unwrap_or(""),
+                mesh.index(),
+                primitive.index()
+            );
+            let base = positions.len();
+            let summary = read_primitive(
+                &primitive,
+                &node,
+                &buffers,
+                path,
+                &source,
+                nj,
+                &world_from_bind,
+                &mut positions,
+                &mut triangles,
+                &mut triplets,
+                &mut warnings,
+            )?;
+            if let Some((vertices, tris, indexed)) = summary {
+                primitives.push(PrimitiveSummary {
+                    source,
+                    first_vertex: base,
+                    vertices,
+                    triangles: tris,
+                    indexed,
+                });
+            }
+        }
+    }
+    if positions.is_empty() {
+        return Err(invalid(
+            path,
+            &skin_element,
+            "no mesh node uses this skin with triangles",
+        ));
+    }
+    let nv = positions.len();
+    let (skin_weights, weight_warnings) =
+        SkinWeights::from_triplets(nv, nj, triplets).map_err(|source| FormatError::Rig {
+            path: path.to_path_buf(),
+            element: "skinning weights (JOINTS_n/WEIGHTS_n)".into(),
+            source,
+        })?;
+    warnings.extend(weight_warnings);
+    let mesh = TriMesh::new(positions, triangles).map_err(|source| FormatError::Rig {
+        path: path.to_path_buf(),
+        element: "skinned mesh".into(),
+        source,
+    })?;
+    let cage = find_cage(document, &buffers, &rest_globals, path)?;
+
+    let (animations, node_pose, animation_warnings) = import_animations(
+        document,
+        &buffers,
+        &tree,
+        &joint_nodes,
+        &joint_parent,
+        options,
+        path,
+    )?;
+    warnings.extend(animation_warnings);
+
+    let mut character = ImportedCharacter {
+        mesh,
+        skeleton,
+        skin_weights,
+        cage,
+        animations,
+        node_pose,
+        summary: ImportSummary {
+            format: "glTF".into(),
+            primitives,
+            skins,
+            chosen_skin: skin.index(),
+            ..Default::default()
+        },
+        warnings,
+    };
+    character.fill_influence_summary();
+    Ok(character)
+}
+
+/// Triangles of a primitive (local vertex indices) from its mode and optional indices.
+pub(super) fn primitive_triangles(
+    mode: Mode,
+    indices: Option<Vec<u32>>,
+    num_vertices: usize,
+    path: &Path,
+    source: &str,
+    warnings: &mut Vec<Warning>,
+) -> Result<Option<Vec<[u32; 3]>>, FormatError> {
+    let idx: Vec<u32> = match indices {
+        Some(i) => i,
+        None => (0..num_vertices as u32).collect(),
+    };
+    if let Some(&bad) = idx.iter().find(|&&i| i as usize >= num_vertices) {
+        return Err(invalid(
+            path,
+            source,
+            format!("index {bad} is out of range (the primitive has {num_vertices} vertices)"),
+        ));
+    }
+    let tris: Vec<[u32; 3]> = match mode {
+        Mode::Triangles => {
+            if !idx.len().is_multiple_of(3) {
+                warnings.push(Warning::Note {
+                    message: format!(
+                        "{source}: {} indices is not a multiple of 3; the last {} were ignored",
+                        idx.len(),
+                        idx.len() % 3
+                    ),
+                });
+            }
+            idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+        }
+        Mode::TriangleStrip => (2..idx.len())
+            .map(|k| {
+                if k % 2 == 0 {
+                    [idx[k - 2], idx[k - 1], idx[k]]
+                } else {
+                    [idx[k - 1], idx[k - 2], idx[k]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (2..idx.len())
+            .map(|k| [idx[0], idx[k - 1], idx[k]])
+            .collect(),
+        other => {
+            warnings.push(Warning::Note {
+                message: format!(
+                    "{source}: mode {other:?} is not triangles; the primitive was skipped"
+                ),
+            });
+            return Ok(None);
+        }
+    };
+    Ok(Some(tris))
+}
+
+/// Appends one skinned primitive to the merged mesh. Returns (vertices, triangles, indexed),
+/// or None when the primitive was skipped (with a warning).
+#[allow(clippy::too_many_arguments)]
+fn read_primitive(
+    primitive: &gltf::Primitive,
+    node: &gltf::Node,
+    buffers: &Buffers,
+    path: &Path,
+    source: &str,
+    num_joints: usize,
+    world_from_bind: &DAffine3,
+    positions: &mut Vec<DVec3>,
+    triangles: &mut Vec<[u32; 3]>,
+    triplets: &mut Vec<(usize, usize, f64)>,
+    warnings: &mut Vec<Warning>,
+) -> Result<Option<(usize, usize, bool)>, FormatError> {
+    let position_accessor = primitive
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| invalid(path, source, "has no POSITION attribute"))?;
+    let mut local = to_vec3(&buffers.read(&position_accessor, "POSITION", &[Dimensions::Vec3])?);
+    let nv = local.len();
+    let indices = match primitive.indices() {
+        Some(acc) => Some(buffers.read_indices(&acc, "indices", &[Dimensions::Scalar])?),
+        None => None,
+    };
+    let indexed = indices.is_some();
+    let Some(tris) = primitive_triangles(primitive.mode(), indices, nv, path, source, warnings)?
+    else {
+        return Ok(None);
+    };
+    // Morph targets at their default weights (node weights override mesh weights), before skinning.
+    let targets: Vec<_> = primitive.morph_targets().collect();
+    if !targets.is_empty() {
+        let weights: Vec<f32> = node
+            .weights()
+            .or_else(|| node.mesh().and_then(|m| m.weights()))
+            .map(<[f32]>::to_vec)
+            .unwrap_or_default();
+        let mut applied = 0;
+        for (k, target) in targets.iter().enumerate() {
+            let w = weights.get(k).copied().unwrap_or(0.0) as f64;
+            if w == 0.0 {
+                continue;
+            }
+            if let Some(acc) = target.positions() {
+                let d =
+                    to_vec3(&buffers.read(&acc, "morph target POSITION", &[Dimensions::Vec3])?);
+                if d.len() != nv {
+                    return Err(invalid(
+                        path,
+                        source,
+                        format!(
+                            "morph target {k} has {} positions for {nv} vertices",
+                            d.len()
+                        ),
+                    ));
+                }
+                for (p, dp) in local.iter_mut().zip(&d) {
+                    *p += *dp * w;
+                }
+                applied += 1;
+            }
+        }
+        warnings.push(Warning::Note {
+            message: format!(
+                "{source}: {} morph targets; {applied} with non-zero default weight applied to the bind shape before skinning (morph animation is not imported)",
+                targets.len()
+            ),
+        });
+    }
+    // Every JOINTS_n / WEIGHTS_n set.
+    let base = positions.len();
+    let mut set = 0;
+    loop {
+        let joints = primitive.get(&gltf::Semantic::Joints(set));
+        let weights = primitive.get(&gltf::Semantic::Weights(set));
+        let (joints, weights) = match (joints, weights) {
+            (None, None) => break,
+            (Some(j), Some(w)) => (j, w),
+            _ => {
+                return Err(invalid(
+                    path,
+                    source,
+                    format!("has only one of JOINTS_{set} and WEIGHTS_{set}"),
+                ));
+            }
+        };
+        let j = buffers.read_indices(&joints, &format!("JOINTS_{set}"), &[Dimensions::Vec4])?;
+        let w = buffers.read(&weights, &format!("WEIGHTS_{set}"), &[Dimensions::Vec4])?;
+        if j.len() != 4 * nv || w.len() != 4 * nv {
+            return Err(invalid(
+                path,
+                source,
+                format!(
+                    "JOINTS_{set}/WEIGHTS_{set} have {}/{} elements for {nv} vertices",
+                    j.len() / 4,
+                    w.len() / 4
+                ),
+            ));
+        }
+        for (k, (&joint, &weight)) in j.iter().zip(&w).enumerate() {
+            if weight == 0.0 {
+                continue;
+            }
+            if joint as usize >= num_joints {
+                return Err(invalid(
+                    path,
+                    source,
+                    format!(
+                        "JOINTS_{set} of vertex {} names joint {joint} with weight {weight}, but the skin has {num_joints} joints",
+                        k / 4
+                    ),
+                ));
+            }
+            triplets.push((base + k / 4, joint as usize, weight));
+        }
+        set += 1;
+    }
+    if set == 0 {
+        return Err(invalid(
+            path,
+            source,
+            "is used with a skin but has no JOINTS_0/WEIGHTS_0",
+        ));
+    }
+    positions.extend(local.iter().map(|p| world_from_bind.transform_point3(*p)));
+    let ntri = tris.len();
+    triangles.extend(tris.iter().map(|t| t.map(|i| i + base as u32)));
+    Ok(Some((nv, ntri, indexed)))
+}
+
+pub(super) fn to_vec3(v: &[f64]) -> Vec<DVec3> {
+    v.chunks_exact(3)
+        .map(|c| DVec3::new(c[0], c[1], c[2]))
+        .collect()
+}

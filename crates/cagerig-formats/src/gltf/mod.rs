@@ -1,0 +1,11 @@
+//! glTF 2.0 import (and export).
+
+pub mod animation;
+pub mod buffers;
+mod cage;
+pub mod import;
+pub mod scene;
+
+pub use import::{import_gltf, import_gltf_bytes};
+pub mod export;
+pub mod export_animation;
