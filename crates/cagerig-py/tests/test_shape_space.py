@@ -30,7 +30,7 @@ def test_variants_on_a_local_dask_cluster_equal_the_local_loop(tmp_path):
     source = str(ARM)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-        remote = shape_space.explore(source, 6, str(tmp_path / "dask"), client=client)
+        remote = shape_space.explore(source, 6, str(tmp_path / "dask"), client=client, batch=2)
     local = shape_space.explore(source, 6, str(tmp_path / "local"))
     assert [r["seed"] for r in remote] == list(range(6))
     for r, l in zip(remote, local):

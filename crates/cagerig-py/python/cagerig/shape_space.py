@@ -98,8 +98,11 @@ def random_script(rig: Rig, seed: int, bounds: Bounds = Bounds()) -> dict[str, A
     return {"steps": steps}
 
 
-def make_variant(source: str, seed: int, directory: str, bounds: Bounds = Bounds()) -> dict[str, Any]:
-    """Builds variant ``seed`` of the rig ``source`` and writes its files into ``directory``.
+def make_variant(
+    source: str, seed: int, directory: Optional[str], bounds: Bounds = Bounds()
+) -> dict[str, Any]:
+    """Builds variant ``seed`` of the rig ``source`` and writes its files into ``directory``
+    (nothing is written when it is None: for timing the edits alone).
 
     Returns
     -------
@@ -111,6 +114,9 @@ def make_variant(source: str, seed: int, directory: str, bounds: Bounds = Bounds
     rig = base.copy()
     script = random_script(base, seed, bounds)
     rig.run_script(script)
+    if directory is None:
+        return {"seed": seed, "files": [], "seconds": time.perf_counter() - start,
+                "steps": len(script["steps"])}
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"variant_{seed:06d}"
@@ -127,14 +133,23 @@ def make_variant(source: str, seed: int, directory: str, bounds: Bounds = Bounds
     }
 
 
+def make_variants(
+    source: str, seeds: list[int], directory: Optional[str], bounds: Bounds = Bounds()
+) -> list[dict[str, Any]]:
+    """:func:`make_variant` for several seeds: one distributed task (a variant takes a few
+    milliseconds, less than a scheduler round trip)."""
+    return [make_variant(source, s, directory, bounds) for s in seeds]
+
+
 def explore(
     source: str,
     count: int,
-    directory: str,
+    directory: Optional[str],
     *,
     client: Optional[Any] = None,
     first_seed: int = 0,
     bounds: Bounds = Bounds(),
+    batch: int = 16,
 ) -> list[dict[str, Any]]:
     """Builds ``count`` variants (seeds ``first_seed …``) and writes them into ``directory``.
 
@@ -144,23 +159,26 @@ def explore(
         A mesh path (its rig files discovered beside it) or ``"builtin:<name>"``; every worker
         must be able to read it.
     count : int
-    directory : str
-        Output directory, shared by the workers.
+    directory : str or None
+        Output directory, shared by the workers (None: build the variants, write nothing).
     client : dask.distributed.Client, optional
         Run the variants as tasks on this cluster; in this process when None.
     first_seed : int
     bounds : Bounds
+    batch : int, default 16
+        Variants per distributed task.
 
     Returns
     -------
     list of dict
         One :func:`make_variant` result per variant, in seed order.
     """
-    seeds = range(first_seed, first_seed + count)
+    seeds = list(range(first_seed, first_seed + count))
     if client is None:
-        return [make_variant(source, s, directory, bounds) for s in seeds]
+        return make_variants(source, seeds, directory, bounds)
+    batches = [seeds[i : i + max(batch, 1)] for i in range(0, count, max(batch, 1))]
+    n = len(batches)
     futures = client.map(
-        make_variant, [source] * count, list(seeds), [directory] * count, [bounds] * count,
-        pure=False,
+        make_variants, [source] * n, batches, [directory] * n, [bounds] * n, pure=False
     )
-    return client.gather(futures)
+    return [result for batch_results in client.gather(futures) for result in batch_results]
