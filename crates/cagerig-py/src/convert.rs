@@ -237,7 +237,7 @@ pub fn triangles(
     let a = int_array(obj, name)?;
     let ro = a.readonly();
     let v = ro.as_array();
-    if v.len() == 0 && v.ndim() == 1 {
+    if v.is_empty() && v.ndim() == 1 {
         return Ok(Vec::new());
     }
     if v.ndim() != 2 || v.shape()[1] != 3 {
@@ -402,6 +402,11 @@ pub fn skin_weights(
 }
 
 // ----- outputs ---------------------------------------------------------------------------------
+
+/// A float64 `(n, 3)` (or other 2-D) array returned to Python.
+pub type F64Array2<'py> = Bound<'py, PyArray2<f64>>;
+/// An int64 `(m, 3)` array returned to Python.
+pub type I64Array2<'py> = Bound<'py, PyArray2<i64>>;
 
 /// `(n, 3)` float64 array (a new array: a copy).
 pub fn points_to_py<'py>(py: Python<'py>, pts: &[DVec3]) -> PyResult<Bound<'py, PyArray2<f64>>> {

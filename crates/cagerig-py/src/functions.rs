@@ -459,7 +459,7 @@ pub fn subdivide<'py>(
 pub fn read_obj<'py>(
     py: Python<'py>,
     path: PathBuf,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
+) -> PyResult<(convert::F64Array2<'py>, convert::I64Array2<'py>)> {
     let mesh = py
         .detach(|| cagerig::io::obj::read_obj(&path))
         .map_err(file_error)?;

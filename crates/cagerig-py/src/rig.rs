@@ -489,7 +489,7 @@ impl Rig {
     fn pose<'py>(
         &self,
         py: Python<'py>,
-    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+    ) -> PyResult<(convert::F64Array2<'py>, convert::F64Array2<'py>)> {
         let s = &self.session;
         let skeleton = s.skeleton();
         let mut locals = vec![DAffine3::IDENTITY; skeleton.len()];

@@ -22,18 +22,25 @@ fn times_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
     Ok(a.readonly().as_array().iter().copied().collect())
 }
 
+/// Where a track comes from.
+enum TrackSource<'py> {
+    /// `(times, keyframes)` arrays.
+    Arrays(Bound<'py, PyAny>, Bound<'py, PyAny>),
+    File(PathBuf),
+}
+
 /// A `(times, keys)` pair or a path.
-fn pair_or_path<'py>(
-    obj: &Bound<'py, PyAny>,
-) -> PyResult<Result<(Bound<'py, PyAny>, Bound<'py, PyAny>), PathBuf>> {
+fn pair_or_path<'py>(obj: &Bound<'py, PyAny>) -> PyResult<TrackSource<'py>> {
     if let Ok((t, k)) = obj.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>)>() {
-        return Ok(Ok((t, k)));
+        return Ok(TrackSource::Arrays(t, k));
     }
-    Ok(Err(obj.extract::<PathBuf>().map_err(|_| {
-        pyo3::exceptions::PyTypeError::new_err(
-            "an animation must be a file path or a (times, keyframes) pair of arrays",
-        )
-    })?))
+    Ok(TrackSource::File(obj.extract::<PathBuf>().map_err(
+        |_| {
+            pyo3::exceptions::PyTypeError::new_err(
+                "an animation must be a file path or a (times, keyframes) pair of arrays",
+            )
+        },
+    )?))
 }
 
 /// Skeleton track: a path (V1/V2/V3 text format) or `(times (K,), locals (K, J, 4, 4))` with
@@ -44,11 +51,11 @@ pub fn skeleton_track(
     skeleton: &Skeleton,
 ) -> PyResult<SkeletonTrack> {
     match pair_or_path(obj)? {
-        Err(path) => py
+        TrackSource::File(path) => py
             .detach(|| cagerig::io::read_skeleton_animation(&path, skeleton))
             .map(|(track, _)| track)
             .map_err(file_error),
-        Ok((times, keys)) => {
+        TrackSource::Arrays(times, keys) => {
             let times = times_arg(&times, "skeleton times")?;
             let a = convert::float_array(&keys, "skeleton keyframes")?;
             let shape = a.shape().to_vec();
@@ -75,10 +82,10 @@ pub fn skeleton_track(
 /// of rest-cage offsets from the cage as loaded.
 pub fn cage_track(py: Python<'_>, obj: &Bound<'_, PyAny>, num_cage: usize) -> PyResult<CageTrack> {
     match pair_or_path(obj)? {
-        Err(path) => py
+        TrackSource::File(path) => py
             .detach(|| cagerig::io::read_cage_animation(&path, num_cage))
             .map_err(file_error),
-        Ok((times, keys)) => {
+        TrackSource::Arrays(times, keys) => {
             let times = times_arg(&times, "cage times")?;
             let a = convert::float_array(&keys, "cage keyframes")?;
             let shape = a.shape().to_vec();

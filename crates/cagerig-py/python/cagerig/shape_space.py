@@ -47,7 +47,7 @@ class Bounds:
 def load_rig(source: str) -> Rig:
     """A rig from ``"builtin:<name>"`` or a mesh path (companions discovered beside it)."""
     if source.startswith("builtin:"):
-        return Rig.builtin(source.split(":", 1)[1])
+        return Rig.builtin(source.split(":", 1)[1])  # type: ignore[arg-type]  # checked by the library
     return Rig.load(source)
 
 

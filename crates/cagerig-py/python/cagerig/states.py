@@ -12,6 +12,44 @@ from ._cagerig import EditScript, Rig, write_obj
 PathLike = Union[str, "os.PathLike[str]"]
 
 
+def _snapshot(rig: Rig) -> dict:
+    """The arrays and joints of the rig's current state (copies)."""
+    parents = rig.joint_parents
+    return {
+        "mesh_rest": (rig.rest_mesh, rig.triangles),
+        "mesh_posed": (rig.posed_mesh, rig.triangles),
+        "cage_rest": (rig.rest_cage, rig.cage_triangles),
+        "cage_posed": (rig.posed_cage, rig.cage_triangles),
+        "joints": [
+            {
+                "name": name,
+                "parent": None if parents[j] < 0 else int(parents[j]),
+                "rest": [float(x) for x in rest],
+                "posed": [float(x) for x in posed],
+            }
+            for j, (name, rest, posed) in enumerate(
+                zip(rig.joint_names, rig.rest_joints, rig.posed_joints)
+            )
+        ],
+    }
+
+
+def _write_snapshot(snapshot: dict, directory: PathLike, prefix: str) -> list[Path]:
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for what in ("mesh_rest", "mesh_posed", "cage_rest", "cage_posed"):
+        path = out / f"{prefix}_{what}.obj"
+        write_obj(path, *snapshot[what])
+        written.append(path)
+    path = out / f"{prefix}_joints.json"
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    tmp.write_text(json.dumps(snapshot["joints"], indent=2))
+    os.replace(tmp, path)
+    written.append(path)
+    return written
+
+
 def save_state(rig: Rig, directory: PathLike, prefix: str) -> list[Path]:
     """Write the rig's current state as ``cagerig edit`` names it.
 
@@ -32,43 +70,15 @@ def save_state(rig: Rig, directory: PathLike, prefix: str) -> list[Path]:
     list of pathlib.Path
         The files written.
     """
-    out = Path(directory)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for what, vertices, triangles in (
-        ("mesh_rest", rig.rest_mesh, rig.triangles),
-        ("mesh_posed", rig.posed_mesh, rig.triangles),
-        ("cage_rest", rig.rest_cage, rig.cage_triangles),
-        ("cage_posed", rig.posed_cage, rig.cage_triangles),
-    ):
-        path = out / f"{prefix}_{what}.obj"
-        write_obj(path, vertices, triangles)
-        written.append(path)
-    parents = rig.joint_parents
-    joints = [
-        {
-            "name": name,
-            "parent": None if parents[j] < 0 else int(parents[j]),
-            "rest": [float(x) for x in rest],
-            "posed": [float(x) for x in posed],
-        }
-        for j, (name, rest, posed) in enumerate(
-            zip(rig.joint_names, rig.rest_joints, rig.posed_joints)
-        )
-    ]
-    path = out / f"{prefix}_joints.json"
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(joints, indent=2))
-    os.replace(tmp, path)
-    written.append(path)
-    return written
+    return _write_snapshot(_snapshot(rig), directory, prefix)
 
 
 def replay_script(rig: Rig, script, directory: PathLike) -> list[Path]:
     """Replay an edit script and write every state, like ``cagerig edit --out directory``.
 
     ``step0_*`` is the rig as given (after the script's ``skinning``, if any), then
-    ``stepK_*`` after step K. The script is checked against the rig before any step runs.
+    ``stepK_*`` after step K. The script is checked against the rig before any step runs, and,
+    as with the CLI, nothing is written unless every step succeeded.
 
     Parameters
     ----------
@@ -87,8 +97,11 @@ def replay_script(rig: Rig, script, directory: PathLike) -> list[Path]:
     script.validate(rig)
     if script.skinning is not None:
         rig.set_skinning(script.skinning)
-    written = save_state(rig, directory, "step0")
+    states = [_snapshot(rig)]
     for k in range(len(script)):
         script.run_step(rig, k)
-        written += save_state(rig, directory, f"step{k + 1}")
+        states.append(_snapshot(rig))
+    written = []
+    for k, state in enumerate(states):
+        written += _write_snapshot(state, directory, f"step{k}")
     return written
