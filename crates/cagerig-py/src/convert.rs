@@ -149,11 +149,13 @@ pub fn points_n(
     Ok(p)
 }
 
-/// A 3-vector (list, tuple or array of 3 finite numbers).
+/// A 3-vector (list, tuple or array of 3 finite numbers). Arrays are read directly and lists
+/// or tuples element by element (no temporary array, no failed conversion on the way).
 pub fn vec3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<DVec3> {
-    let v = match obj.extract::<[f64; 3]>() {
-        Ok(v) => v,
-        Err(_) => {
+    let is_array = obj.is_instance_of::<PyUntypedArray>();
+    let v = match (!is_array).then(|| obj.extract::<[f64; 3]>()) {
+        Some(Ok(v)) => v,
+        _ => {
             let a = float_array(obj, name)?;
             let ro = a.readonly();
             let view = ro.as_array();
@@ -166,15 +168,14 @@ pub fn vec3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<DVec3> {
             [view[[0]], view[[1]], view[[2]]]
         }
     };
-    for (c, &x) in v.iter().enumerate() {
-        check_finite(x, name, || format!("[{c}]"))?;
-    }
-    Ok(DVec3::from_array(v))
+    vec3_checked(v, name)
 }
 
 /// Offsets of a cage edit: one `(3,)` offset for every vertex, or `(k, 3)` with one row per vertex.
 pub fn offsets(obj: &Bound<'_, PyAny>, name: &str, count: usize) -> PyResult<Vec<DVec3>> {
-    if let Ok(v) = obj.extract::<[f64; 3]>() {
+    if !obj.is_instance_of::<PyUntypedArray>()
+        && let Ok(v) = obj.extract::<[f64; 3]>()
+    {
         return Ok(vec![vec3_checked(v, name)?]);
     }
     let a = float_array(obj, name)?;
@@ -201,8 +202,10 @@ fn vec3_checked(v: [f64; 3], name: &str) -> PyResult<DVec3> {
 
 /// Indices into `len` elements: an int, or a 1-D integer sequence/array; each in `0..len`.
 pub fn indices(obj: &Bound<'_, PyAny>, name: &str, len: usize, what: &str) -> PyResult<Vec<usize>> {
-    let raw: Vec<i64> = match obj.extract::<i64>() {
-        Ok(i) if !obj.is_instance_of::<pyo3::types::PyBool>() => vec![i],
+    let scalar =
+        obj.is_instance_of::<pyo3::types::PyInt>() && !obj.is_instance_of::<pyo3::types::PyBool>();
+    let raw: Vec<i64> = match scalar.then(|| obj.extract::<i64>()) {
+        Some(Ok(i)) => vec![i],
         _ => {
             let a = int_array(obj, name)?;
             let ro = a.readonly();

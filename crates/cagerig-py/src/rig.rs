@@ -74,8 +74,8 @@ impl Rig {
     }
 
     fn joint_index(&self, joint: &Bound<'_, PyAny>) -> PyResult<usize> {
-        let reference = if let Ok(name) = joint.extract::<String>() {
-            JointRef::Name(name)
+        let reference = if joint.is_instance_of::<pyo3::types::PyString>() {
+            JointRef::Name(joint.extract::<String>()?)
         } else {
             let index: i64 = joint.extract().map_err(|_| {
                 pyo3::exceptions::PyTypeError::new_err(format!(
