@@ -8,6 +8,10 @@ mod errors;
 mod functions;
 mod options;
 mod rig;
+mod rig_output;
+mod rig_sequences;
+mod rig_structures;
+mod rig_timing;
 mod script;
 mod tracks;
 

@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use cagerig::io::rig_files::{load_rig_files, write_rig_files};
+use cagerig::io::rig_files::load_rig_files;
 use cagerig::mesh::TriMesh;
 use cagerig::playback::AnimationPlayer;
 use cagerig::script::{JointRef, resolve_joint};
@@ -15,17 +15,13 @@ use cagerig::session::{RigParts, RigSession, SessionOptions};
 use cagerig::skeleton::Joint;
 use cagerig::{Skeleton, Warning};
 use glam::{DAffine3, DQuat, DVec3};
-use numpy::ndarray::{ArrayView2, ShapeBuilder};
-use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
+use numpy::PyArrayMethods;
 use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyList;
 
 use crate::convert;
 use crate::errors::{file_error, rig_error, warn_all};
 use crate::options;
-use crate::script::EditScriptPy;
-use crate::tracks;
 
 /// A coupled cage + skeleton rig (Corda et al. 2020): rest skin M, skeleton S, cage C and their
 /// current counterparts M', S', C', kept in sync under the three edits (rotate a joint, move the
@@ -38,10 +34,10 @@ use crate::tracks;
 /// copies M' only (``#V × 3`` floats), never Φ.
 #[pyclass(module = "cagerig", name = "Rig")]
 pub struct Rig {
-    session: RigSession,
-    warnings: Vec<String>,
-    source: String,
-    player: Option<AnimationPlayer>,
+    pub(crate) session: RigSession,
+    pub(crate) warnings: Vec<String>,
+    pub(crate) source: String,
+    pub(crate) player: Option<AnimationPlayer>,
 }
 
 impl Rig {
@@ -73,7 +69,7 @@ impl Rig {
         })
     }
 
-    fn joint_index(&self, joint: &Bound<'_, PyAny>) -> PyResult<usize> {
+    pub(crate) fn joint_index(&self, joint: &Bound<'_, PyAny>) -> PyResult<usize> {
         let reference = if joint.is_instance_of::<pyo3::types::PyString>() {
             JointRef::Name(joint.extract::<String>()?)
         } else {
@@ -101,7 +97,7 @@ impl Rig {
         })
     }
 
-    fn cage_edit_args(
+    pub(crate) fn cage_edit_args(
         &self,
         indices: &Bound<'_, PyAny>,
         offsets: &Bound<'_, PyAny>,
@@ -117,7 +113,7 @@ impl Rig {
 
     /// Times `n` calls of `edit` in Rust (alternating the sign of the edit so the rig returns
     /// to where it started); seconds in total.
-    fn time_in_rust(
+    pub(crate) fn time_in_rust(
         &mut self,
         py: Python<'_>,
         n: usize,
@@ -135,7 +131,7 @@ impl Rig {
     }
 }
 
-fn rest_joints(session: &RigSession) -> Vec<DVec3> {
+pub(crate) fn rest_joints(session: &RigSession) -> Vec<DVec3> {
     session.rest_joints().collect()
 }
 
@@ -517,387 +513,5 @@ impl Rig {
     fn reset_pose(&mut self, py: Python<'_>) {
         let session = &mut self.session;
         py.detach(|| session.reset_pose());
-    }
-
-    // ----- animation -------------------------------------------------------------------------
-
-    /// Attaches animation tracks, sampled by :meth:`sample_animation` (Section 5: each track
-    /// has its own keyframe times).
-    ///
-    /// Parameters
-    /// ----------
-    /// skeleton : path or (times, keyframes), optional
-    ///     A skeleton animation file (the paper tool's text format), or ``times`` (K,) with
-    ///     local transforms ``parent_from_joint`` (K, J, 4, 4).
-    /// cage : path or (times, offsets), optional
-    ///     A cage animation file, or ``times`` (K,) with rest-cage offsets from the cage as
-    ///     loaded (K, #C, 3).
-    #[pyo3(signature = (skeleton = None, cage = None))]
-    fn set_animation(
-        &mut self,
-        py: Python<'_>,
-        skeleton: Option<&Bound<'_, PyAny>>,
-        cage: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<()> {
-        if skeleton.is_none() && cage.is_none() {
-            return Err(PyValueError::new_err(
-                "give a skeleton and/or a cage animation",
-            ));
-        }
-        let skeleton_track = skeleton
-            .map(|s| tracks::skeleton_track(py, s, self.session.skeleton()))
-            .transpose()?;
-        let nc = self.session.rest_cage().len();
-        let cage_track = cage.map(|c| tracks::cage_track(py, c, nc)).transpose()?;
-        let session = &self.session;
-        let player = py
-            .detach(|| AnimationPlayer::new(session, skeleton_track, cage_track))
-            .map_err(rig_error)?;
-        self.player = Some(player);
-        Ok(())
-    }
-
-    /// Last keyframe time over the attached tracks (seconds); 0 without animation.
-    #[getter]
-    fn animation_duration(&self) -> f64 {
-        self.player.as_ref().map_or(0.0, |p| p.duration())
-    }
-
-    /// Poses the rig at time ``t`` (seconds, clamped to each track's range): rest cage from the
-    /// cage track, SkelUp, pose from the skeleton track, skinning, CageUp.
-    fn sample_animation(&mut self, py: Python<'_>, t: f64) -> PyResult<()> {
-        if !t.is_finite() {
-            return Err(PyValueError::new_err(format!(
-                "t is {t}: the time must be finite"
-            )));
-        }
-        let Self {
-            session, player, ..
-        } = self;
-        let player = player.as_mut().ok_or_else(|| {
-            PyValueError::new_err("no animation attached: call set_animation first")
-        })?;
-        py.detach(|| player.apply(t, session)).map_err(rig_error)
-    }
-
-    // ----- scripts ---------------------------------------------------------------------------
-
-    /// Runs an edit script (the ``cagerig edit`` JSON format: ``{"skinning": ..., "steps":
-    /// [...]}``) on this rig: the script's skinning first, then every step. The script is
-    /// checked against the rig before any step runs.
-    ///
-    /// Parameters
-    /// ----------
-    /// script : EditScript, str, dict or os.PathLike
-    ///     A parsed script, JSON text, the parsed JSON, or a file.
-    fn run_script(&mut self, py: Python<'_>, script: &Bound<'_, PyAny>) -> PyResult<()> {
-        let script = EditScriptPy::from_any(script)?;
-        script.run_all(py, self)
-    }
-
-    // ----- output ----------------------------------------------------------------------------
-
-    /// Writes the current REST state as a rig file set that :meth:`load` reads back:
-    /// ``<name>.obj`` (M), ``.skt`` (S), ``.skw`` (Ω), ``<name>_cage.obj`` (C),
-    /// ``<name>_cage_cageWeights.txt`` (Φ, with M = ΦC) and ``<name>_cage.maxvol`` (CageUp's
-    /// rows), each replaced atomically. The directory is created if needed.
-    #[pyo3(signature = (directory, name = "rig"))]
-    fn save(&self, py: Python<'_>, directory: PathBuf, name: &str) -> PyResult<()> {
-        let s = &self.session;
-        let parts = RigParts::new(
-            TriMesh {
-                positions: s.rest_mesh().to_vec(),
-                triangles: s.mesh_triangles().to_vec(),
-            },
-            s.skeleton().with_rest_positions(&rest_joints(s)),
-            s.skin_weights().clone(),
-            TriMesh {
-                positions: s.rest_cage().to_vec(),
-                triangles: s.cage_triangles().to_vec(),
-            },
-        );
-        py.detach(|| {
-            std::fs::create_dir_all(&directory).map_err(|e| cagerig::io::ParseError::Io {
-                path: directory.clone(),
-                kind: e.kind(),
-                message: e.to_string(),
-            })?;
-            write_rig_files(
-                &directory,
-                name,
-                &parts,
-                s.cage_coords(),
-                s.cage_updater().rows(),
-            )
-        })
-        .map_err(file_error)
-    }
-
-    /// Writes one structure as OBJ: ``what`` is ``"posed_mesh"`` (M', default),
-    /// ``"rest_mesh"`` (M), ``"posed_cage"`` (C') or ``"rest_cage"`` (C).
-    #[pyo3(signature = (path, what = "posed_mesh"))]
-    fn export_obj(&self, py: Python<'_>, path: PathBuf, what: &str) -> PyResult<()> {
-        let s = &self.session;
-        let (positions, triangles) = match what {
-            "posed_mesh" => (s.posed_mesh(), s.mesh_triangles()),
-            "rest_mesh" => (s.rest_mesh(), s.mesh_triangles()),
-            "posed_cage" => (s.posed_cage(), s.cage_triangles()),
-            "rest_cage" => (s.rest_cage(), s.cage_triangles()),
-            _ => {
-                return Err(PyValueError::new_err(format!(
-                    "what must be 'posed_mesh', 'rest_mesh', 'posed_cage' or 'rest_cage', got {what:?}"
-                )));
-            }
-        };
-        py.detach(|| cagerig::io::obj::write_obj(&path, positions, triangles))
-            .map_err(file_error)
-    }
-
-    // ----- structures (copies unless said otherwise) -----------------------------------------
-
-    /// Rest skin M, (#V, 3) float64 (copy).
-    #[getter]
-    fn rest_mesh<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        convert::points_to_py(py, self.session.rest_mesh())
-    }
-
-    /// Current skin M', (#V, 3) float64 (copy of M' only: Φ is not touched).
-    #[getter]
-    fn posed_mesh<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        convert::points_to_py(py, self.session.posed_mesh())
-    }
-
-    /// Rest cage C, (#C, 3) float64 (copy).
-    #[getter]
-    fn rest_cage<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        convert::points_to_py(py, self.session.rest_cage())
-    }
-
-    /// Current cage C', (#C, 3) float64 (copy).
-    #[getter]
-    fn posed_cage<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        convert::points_to_py(py, self.session.posed_cage())
-    }
-
-    /// The rest cage as loaded, C₀ (cage-animation offsets are relative to it), (#C, 3) (copy).
-    #[getter]
-    fn original_rest_cage<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        convert::points_to_py(py, self.session.original_rest_cage())
-    }
-
-    /// Rest joint positions (S), (#J, 3) float64 (copy).
-    #[getter]
-    fn rest_joints<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        convert::points_to_py(py, &rest_joints(&self.session))
-    }
-
-    /// Current joint positions (S'), (#J, 3) float64 (copy).
-    #[getter]
-    fn posed_joints<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let p: Vec<DVec3> = self.session.posed_joints().collect();
-        convert::points_to_py(py, &p)
-    }
-
-    /// Rest joint frames ``rest_world_from_joint``, (#J, 4, 4) (copy).
-    #[getter]
-    fn rest_joint_frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        convert::transforms_to_py(py, self.session.rest_world_from_joint())
-    }
-
-    /// Current joint frames ``posed_world_from_joint``, (#J, 4, 4) (copy).
-    #[getter]
-    fn posed_joint_frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        convert::transforms_to_py(py, self.session.posed_world_from_joint())
-    }
-
-    /// Skinning transforms ``T_j = posed_from_rest`` (Eq. 1–3), (#J, 4, 4) (copy).
-    #[getter]
-    fn skinning_transforms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        convert::transforms_to_py(py, self.session.posed_from_rest())
-    }
-
-    /// Skin triangles, (#F, 3) int64 (copy).
-    #[getter]
-    fn triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
-        convert::triangles_to_py(py, self.session.mesh_triangles())
-    }
-
-    /// Cage triangles, (#T, 3) int64 (copy).
-    #[getter]
-    fn cage_triangles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
-        convert::triangles_to_py(py, self.session.cage_triangles())
-    }
-
-    /// Joint names, in index order.
-    #[getter]
-    fn joint_names<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        PyList::new(
-            py,
-            self.session
-                .skeleton()
-                .joints()
-                .iter()
-                .map(|j| j.name.as_str()),
-        )
-    }
-
-    /// Parent of each joint, (#J,) int64, -1 for roots (copy).
-    #[getter]
-    fn joint_parents<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        let p: Vec<i64> = self
-            .session
-            .skeleton()
-            .joints()
-            .iter()
-            .map(|j| j.parent.map_or(-1, |p| p as i64))
-            .collect();
-        PyArray1::from_vec(py, p)
-    }
-
-    /// Φ, the cage coordinates (#V, #C) float64 with M = ΦC: a READ-ONLY VIEW of the rig's
-    /// storage (no copy; Fortran order; it keeps the rig alive). Φ never changes after the rig
-    /// is built. ``np.array(rig.cage_coords)`` makes a writable copy.
-    #[getter]
-    fn cage_coords<'py>(slf: Bound<'py, Self>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let view = {
-            let this = slf.borrow();
-            let m = this.session.cage_coords().matrix();
-            let stride = usize::try_from(m.col_stride()).unwrap_or(0);
-            // SAFETY: faer's owned matrix stores column k at `ptr + k·col_stride`, rows
-            // contiguous; the view covers exactly nrows × ncols of that allocation.
-            unsafe {
-                ArrayView2::from_shape_ptr((m.nrows(), m.ncols()).strides((1, stride)), m.as_ptr())
-            }
-        };
-        // SAFETY: the array's base is the Rig object, which owns the session and thus Φ; Φ is
-        // never reallocated or written after construction (no method replaces the session or
-        // its cage coordinates), so the memory stays valid and unchanged while the array lives.
-        let array = unsafe { PyArray2::borrow_from_array(&view, slf.into_any()) };
-        array.readwrite().make_nonwriteable();
-        Ok(array)
-    }
-
-    /// Alias of :attr:`cage_coords` (Φ, read-only view).
-    #[getter]
-    fn phi<'py>(slf: Bound<'py, Self>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        Self::cage_coords(slf)
-    }
-
-    /// Ψ, the joint coordinates (#J, #C) float64 with rest joints = ΨC (SkelUp, Eq. 11) (copy).
-    #[getter]
-    fn joint_coords<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let up = self.session.skeleton_updater();
-        let (nj, nc) = (up.num_joints(), self.session.rest_cage().len());
-        let data: Vec<f64> = (0..nj).flat_map(|j| up.joint_row(j).to_vec()).collect();
-        convert::matrix_to_py(py, nj, nc, data)
-    }
-
-    /// Alias of :attr:`joint_coords` (Ψ, copy).
-    #[getter]
-    fn psi<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.joint_coords(py)
-    }
-
-    /// Ω, the skinning weights (#V, #J) float64, dense (copy; rows sum to 1).
-    #[getter]
-    fn skin_weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        convert::skin_weights_to_py(py, self.session.skin_weights())
-    }
-
-    /// Alias of :attr:`skin_weights` (Ω, dense copy).
-    #[getter]
-    fn omega<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.skin_weights(py)
-    }
-
-    /// CoR centres (#V, 3) (copy) once CoR data exists (after ``set_skinning("cor")``), else
-    /// None. They follow the rest cage while CoR skinning is active.
-    #[getter]
-    fn cor_centres<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
-        self.session
-            .cor_centres()
-            .map(|c| convert::points_to_py(py, c))
-            .transpose()
-    }
-
-    /// Mesh rows CageUp/CageRev fit (MaxVol rows by default), (k,) int64 (copy).
-    #[getter]
-    fn fit_rows<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        let rows: Vec<i64> = self
-            .session
-            .cage_updater()
-            .rows()
-            .iter()
-            .map(|&r| r as i64)
-            .collect();
-        PyArray1::from_vec(py, rows)
-    }
-
-    /// The active skinning method: ``"lbs"``, ``"dqs"`` or ``"cor"``.
-    #[getter]
-    fn skinning(&self) -> &'static str {
-        options::skinning_name(self.session.skinning())
-    }
-
-    /// Warnings gathered while loading and building the rig.
-    #[getter]
-    fn warnings(&self) -> Vec<String> {
-        self.warnings.clone()
-    }
-
-    #[getter]
-    fn num_vertices(&self) -> usize {
-        self.session.rest_mesh().len()
-    }
-
-    #[getter]
-    fn num_joints(&self) -> usize {
-        self.session.skeleton().len()
-    }
-
-    #[getter]
-    fn num_cage_vertices(&self) -> usize {
-        self.session.rest_cage().len()
-    }
-
-    // ----- benchmark support -------------------------------------------------------------------
-
-    /// Seconds for ``n`` calls of ``rotate_joint`` made in Rust (sign alternating), to measure
-    /// the Python call overhead against (see ``bench/overhead.py``).
-    fn _time_rotate_joint_in_rust(
-        &mut self,
-        py: Python<'_>,
-        joint: &Bound<'_, PyAny>,
-        axis: &Bound<'_, PyAny>,
-        degrees: f64,
-        n: usize,
-    ) -> PyResult<f64> {
-        let j = self.joint_index(joint)?;
-        let axis = convert::vec3(axis, "axis")?;
-        self.time_in_rust(py, n, move |s, sign| {
-            s.rotate_joint(j, axis, (sign * degrees).to_radians())
-        })
-    }
-
-    /// As :meth:`_time_rotate_joint_in_rust` for ``move_rest_cage`` (posed: ``move_posed_cage``).
-    #[pyo3(signature = (indices, offsets, n, posed = false))]
-    fn _time_move_cage_in_rust(
-        &mut self,
-        py: Python<'_>,
-        indices: &Bound<'_, PyAny>,
-        offsets: &Bound<'_, PyAny>,
-        n: usize,
-        posed: bool,
-    ) -> PyResult<f64> {
-        let (vertices, offsets) = self.cage_edit_args(indices, offsets)?;
-        let negated: Vec<DVec3> = offsets.iter().map(|o| -*o).collect();
-        self.time_in_rust(py, n, move |s, sign| {
-            let o = if sign > 0.0 { &offsets } else { &negated };
-            if posed {
-                s.move_posed_cage(&vertices, o)
-            } else {
-                s.move_rest_cage(&vertices, o)
-            }
-        })
     }
 }
