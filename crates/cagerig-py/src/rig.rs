@@ -1,0 +1,517 @@
+//! `cagerig.Rig`: a live coupled rig (the library's `RigSession`) with numpy in and out.
+//!
+//! Arrays returned by properties are **copies** (snapshots that later edits do not change),
+//! except `cage_coords` (Φ), which is a **read-only view** of the rig's own storage: Φ never
+//! changes after the rig is built, and the view keeps the rig alive.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use cagerig::io::rig_files::load_rig_files;
+use cagerig::mesh::TriMesh;
+use cagerig::playback::AnimationPlayer;
+use cagerig::script::{JointRef, resolve_joint};
+use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::skeleton::Joint;
+use cagerig::{Skeleton, Warning};
+use glam::{DAffine3, DQuat, DVec3};
+use numpy::PyArrayMethods;
+use pyo3::exceptions::{PyIndexError, PyValueError};
+use pyo3::prelude::*;
+
+use crate::convert;
+use crate::errors::{file_error, rig_error, warn_all};
+use crate::options;
+
+/// A coupled cage + skeleton rig (Corda et al. 2020): rest skin M, skeleton S, cage C and their
+/// current counterparts M', S', C', kept in sync under the three edits (rotate a joint, move the
+/// rest cage, move the current cage).
+///
+/// Build one with :meth:`Rig.load`, :meth:`Rig.builtin` or :meth:`Rig.from_arrays`.
+///
+/// Array properties return copies (snapshots), except :attr:`cage_coords` (Φ), a read-only view
+/// of the rig's storage (Φ never changes once the rig is built). Reading :attr:`posed_mesh`
+/// copies M' only (``#V × 3`` floats), never Φ.
+#[pyclass(module = "cagerig", name = "Rig")]
+pub struct Rig {
+    pub(crate) session: RigSession,
+    pub(crate) warnings: Vec<String>,
+    pub(crate) source: String,
+    pub(crate) player: Option<AnimationPlayer>,
+}
+
+impl Rig {
+    pub fn session_mut(&mut self) -> &mut RigSession {
+        &mut self.session
+    }
+
+    pub fn session(&self) -> &RigSession {
+        &self.session
+    }
+
+    fn build(
+        py: Python<'_>,
+        parts: RigParts,
+        options: SessionOptions,
+        mut warnings: Vec<Warning>,
+        source: String,
+    ) -> PyResult<Self> {
+        let (session, more) = py
+            .detach(|| RigSession::new(parts, options))
+            .map_err(rig_error)?;
+        warnings.extend(more);
+        warn_all(py, &warnings)?;
+        Ok(Self {
+            session,
+            warnings: warnings.iter().map(|w| w.to_string()).collect(),
+            source,
+            player: None,
+        })
+    }
+
+    pub(crate) fn joint_index(&self, joint: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let reference = if joint.is_instance_of::<pyo3::types::PyString>() {
+            JointRef::Name(joint.extract::<String>()?)
+        } else {
+            let index: i64 = joint.extract().map_err(|_| {
+                pyo3::exceptions::PyTypeError::new_err(format!(
+                    "joint must be a joint name (str) or index (int), got {}",
+                    joint
+                        .get_type()
+                        .name()
+                        .map(|n| n.to_string())
+                        .unwrap_or_default()
+                ))
+            })?;
+            let n = self.session.skeleton().len();
+            let index = usize::try_from(index).map_err(|_| {
+                PyIndexError::new_err(format!(
+                    "joint {index} is out of range (the rig has {n} joints)"
+                ))
+            })?;
+            JointRef::Index(index)
+        };
+        resolve_joint(&self.session, &reference).map_err(|message| match reference {
+            JointRef::Index(_) => PyIndexError::new_err(message),
+            JointRef::Name(_) => PyValueError::new_err(message),
+        })
+    }
+
+    pub(crate) fn cage_edit_args(
+        &self,
+        indices: &Bound<'_, PyAny>,
+        offsets: &Bound<'_, PyAny>,
+    ) -> PyResult<(Vec<usize>, Vec<DVec3>)> {
+        let nc = self.session.rest_cage().len();
+        let vertices = convert::indices(indices, "indices", nc, "cage vertices")?;
+        if vertices.is_empty() {
+            return Err(PyValueError::new_err("indices: no cage vertex given"));
+        }
+        let offsets = convert::offsets(offsets, "offsets", vertices.len())?;
+        Ok((vertices, offsets))
+    }
+
+    /// Times `n` calls of `edit` in Rust (alternating the sign of the edit so the rig returns
+    /// to where it started); seconds in total.
+    pub(crate) fn time_in_rust(
+        &mut self,
+        py: Python<'_>,
+        n: usize,
+        mut edit: impl FnMut(&mut RigSession, f64) -> Result<(), cagerig::RigError> + Send,
+    ) -> PyResult<f64> {
+        let session = &mut self.session;
+        py.detach(|| {
+            let start = Instant::now();
+            for i in 0..n {
+                edit(session, if i % 2 == 0 { 1.0 } else { -1.0 })?;
+            }
+            Ok(start.elapsed().as_secs_f64())
+        })
+        .map_err(rig_error)
+    }
+}
+
+pub(crate) fn rest_joints(session: &RigSession) -> Vec<DVec3> {
+    session.rest_joints().collect()
+}
+
+#[pymethods]
+impl Rig {
+    /// Loads a rig from files: the mesh (OBJ) and its companions discovered beside it as the
+    /// paper tool does (``<stem>.skt``, ``<stem>.skw``, ``<stem>_cage.obj``, and optionally
+    /// ``<cage>_cageWeights.txt`` (Φ), ``<cage>.maxvol``, ``<stem>_corWeights.txt``).
+    ///
+    /// Parameters
+    /// ----------
+    /// path : str or os.PathLike
+    ///     The character mesh (OBJ).
+    /// cage : str or os.PathLike, optional
+    ///     The cage (OBJ); default ``<stem>_cage.obj`` beside the mesh.
+    /// skinning : {"lbs", "dqs", "cor"}, default "lbs"
+    /// fit_rows : {"maxvol", "all"}, default "maxvol"
+    ///     Mesh rows used by CageUp/CageRev (MaxVol square system, or least squares on all rows).
+    /// localisation : {"articulation", "reference_tool"}, default "articulation"
+    ///     SkelUp prior (see the README).
+    /// fit_source : {"ghost", "displayed"}, default "ghost"
+    ///     What CageUp fits under DQS/CoR.
+    /// coords_precision : {"f64", "f32"}, default "f64"
+    ///     Storage of Φ in the per-frame products.
+    ///
+    /// Raises
+    /// ------
+    /// FileNotFoundError, RigFileError, RigError
+    ///     With the file, line or element at fault. Accepted oddities (weights renormalised, …)
+    ///     are issued as RigWarning and kept in :attr:`warnings`.
+    #[staticmethod]
+    #[pyo3(signature = (path, cage = None, *, skinning = "lbs", fit_rows = "maxvol",
+                        localisation = "articulation", fit_source = "ghost", coords_precision = "f64"))]
+    #[allow(clippy::too_many_arguments)]
+    fn load(
+        py: Python<'_>,
+        path: PathBuf,
+        cage: Option<PathBuf>,
+        skinning: &str,
+        fit_rows: &str,
+        localisation: &str,
+        fit_source: &str,
+        coords_precision: &str,
+    ) -> PyResult<Self> {
+        let options = options::session_options(
+            skinning,
+            fit_rows,
+            localisation,
+            fit_source,
+            coords_precision,
+        )?;
+        let files = py
+            .detach(|| load_rig_files(&path, cage.as_deref()))
+            .map_err(file_error)?;
+        Self::build(
+            py,
+            files.parts,
+            options,
+            files.warnings,
+            path.display().to_string(),
+        )
+    }
+
+    /// A built-in demo rig generated by the library: ``"bar"``, ``"bar_irregular"`` (the
+    /// paper's Figure 5 bar) or ``"snake"`` (16 joints; ``resolution`` ≈ skin vertex count).
+    /// Options as for :meth:`load`.
+    #[staticmethod]
+    #[pyo3(signature = (name, resolution = None, *, skinning = "lbs", fit_rows = "maxvol",
+                        localisation = "articulation", fit_source = "ghost", coords_precision = "f64"))]
+    #[allow(clippy::too_many_arguments)]
+    fn builtin(
+        py: Python<'_>,
+        name: &str,
+        resolution: Option<usize>,
+        skinning: &str,
+        fit_rows: &str,
+        localisation: &str,
+        fit_source: &str,
+        coords_precision: &str,
+    ) -> PyResult<Self> {
+        let options = options::session_options(
+            skinning,
+            fit_rows,
+            localisation,
+            fit_source,
+            coords_precision,
+        )?;
+        let rig = py
+            .detach(|| cagerig::demo::builtin(name, resolution))
+            .map_err(rig_error)?;
+        let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+        Self::build(py, parts, options, Vec::new(), format!("builtin:{name}"))
+    }
+
+    /// Builds a rig from arrays. Joint rest frames get identity rotations.
+    ///
+    /// Parameters
+    /// ----------
+    /// vertices : (n, 3) float64 array
+    ///     Rest skin M.
+    /// triangles : (f, 3) int array
+    /// skin_weights : (n, J) float64 array or scipy.sparse matrix
+    ///     Ω.
+    /// joint_positions : (J, 3) float64 array
+    ///     Rest joint positions.
+    /// joint_parents : (J,) int array
+    ///     Parent index of each joint, -1 for a root.
+    /// cage_vertices : (c, 3) float64 array
+    ///     Rest cage C (must enclose the skin).
+    /// cage_triangles : (g, 3) int array
+    /// joint_names : list of str, optional
+    ///     Default ``"joint0"``, ``"joint1"``, …
+    ///
+    /// Other keyword options as for :meth:`load`.
+    #[staticmethod]
+    #[pyo3(signature = (vertices, triangles, skin_weights, joint_positions, joint_parents,
+                        cage_vertices, cage_triangles, joint_names = None, *, skinning = "lbs",
+                        fit_rows = "maxvol", localisation = "articulation", fit_source = "ghost",
+                        coords_precision = "f64"))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_arrays(
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        triangles: &Bound<'_, PyAny>,
+        skin_weights: &Bound<'_, PyAny>,
+        joint_positions: &Bound<'_, PyAny>,
+        joint_parents: &Bound<'_, PyAny>,
+        cage_vertices: &Bound<'_, PyAny>,
+        cage_triangles: &Bound<'_, PyAny>,
+        joint_names: Option<Vec<String>>,
+        skinning: &str,
+        fit_rows: &str,
+        localisation: &str,
+        fit_source: &str,
+        coords_precision: &str,
+    ) -> PyResult<Self> {
+        let options = options::session_options(
+            skinning,
+            fit_rows,
+            localisation,
+            fit_source,
+            coords_precision,
+        )?;
+        let positions = convert::points(vertices, "vertices")?;
+        let tris = convert::triangles(triangles, "triangles", positions.len())?;
+        let (weights, warnings) =
+            convert::skin_weights(skin_weights, "skin_weights", Some(positions.len()))?;
+        let joints = convert::points(joint_positions, "joint_positions")?;
+        let nj = joints.len();
+        let parents_arr = convert::int_array(joint_parents, "joint_parents")?;
+        let parents: Vec<i64> = parents_arr.readonly().as_array().iter().copied().collect();
+        if parents.len() != nj {
+            return Err(PyValueError::new_err(format!(
+                "joint_parents must have one entry per joint ({nj}), got {}",
+                parents.len()
+            )));
+        }
+        let names = joint_names.unwrap_or_else(|| (0..nj).map(|j| format!("joint{j}")).collect());
+        if names.len() != nj {
+            return Err(PyValueError::new_err(format!(
+                "joint_names must have one name per joint ({nj}), got {}",
+                names.len()
+            )));
+        }
+        let mut skeleton_joints = Vec::with_capacity(nj);
+        for (j, ((p, name), position)) in parents.iter().zip(names).zip(&joints).enumerate() {
+            let parent = match *p {
+                -1 => None,
+                p if p >= 0 && (p as usize) < nj => Some(p as usize),
+                p => {
+                    return Err(PyIndexError::new_err(format!(
+                        "joint_parents[{j}] = {p} is out of range (-1 for a root, else 0..{nj})"
+                    )));
+                }
+            };
+            skeleton_joints.push(Joint {
+                name,
+                parent,
+                rest_world_from_joint: DAffine3::from_translation(*position),
+            });
+        }
+        let skeleton = Skeleton::new(skeleton_joints).map_err(rig_error)?;
+        let cage_pos = convert::points(cage_vertices, "cage_vertices")?;
+        let cage_tris = convert::triangles(cage_triangles, "cage_triangles", cage_pos.len())?;
+        let mesh = TriMesh::new(positions, tris).map_err(rig_error)?;
+        let cage = TriMesh::new(cage_pos, cage_tris).map_err(rig_error)?;
+        let parts = RigParts::new(mesh, skeleton, weights, cage);
+        Self::build(py, parts, options, warnings, "arrays".into())
+    }
+
+    /// An independent copy of the rig in its current state (cheap next to loading: no
+    /// precomputation is repeated).
+    fn copy(&self) -> Self {
+        Self {
+            session: self.session.clone(),
+            warnings: self.warnings.clone(),
+            source: self.source.clone(),
+            player: self.player.clone(),
+        }
+    }
+
+    fn __copy__(&self) -> Self {
+        self.copy()
+    }
+
+    fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+        self.copy()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Rig({:?}: {} vertices, {} joints, {} cage vertices, skinning={:?})",
+            self.source,
+            self.session.rest_mesh().len(),
+            self.session.skeleton().len(),
+            self.session.rest_cage().len(),
+            options::skinning_name(self.session.skinning())
+        )
+    }
+
+    // ----- edits ---------------------------------------------------------------------------
+
+    /// S' edit: rotates a joint by ``degrees`` about the world-space ``axis`` through the
+    /// joint's current position; descendants follow, then M' and C' (CageUp).
+    ///
+    /// Parameters
+    /// ----------
+    /// joint : str or int
+    ///     Joint name or index.
+    /// axis : (3,) array-like
+    ///     World-space axis (any non-zero length).
+    /// degrees : float
+    fn rotate_joint(
+        &mut self,
+        py: Python<'_>,
+        joint: &Bound<'_, PyAny>,
+        axis: &Bound<'_, PyAny>,
+        degrees: f64,
+    ) -> PyResult<()> {
+        let j = self.joint_index(joint)?;
+        let axis = convert::vec3(axis, "axis")?;
+        if axis.length_squared() == 0.0 {
+            return Err(PyValueError::new_err(
+                "axis must be non-zero, got (0, 0, 0)",
+            ));
+        }
+        if !degrees.is_finite() {
+            return Err(PyValueError::new_err(format!(
+                "degrees is {degrees}: the angle must be finite"
+            )));
+        }
+        let session = &mut self.session;
+        py.detach(|| session.rotate_joint(j, axis, degrees.to_radians()))
+            .map_err(rig_error)
+    }
+
+    /// C edit: moves rest-cage vertices. M follows (M += Φ[:, k]·ΔC_k), then SkelUp moves the
+    /// bones, skinning gives M' and CageUp C'.
+    ///
+    /// Parameters
+    /// ----------
+    /// indices : int or (k,) int array
+    ///     Rest-cage vertices (a vertex listed twice moves twice).
+    /// offsets : (3,) or (k, 3) float64 array
+    ///     One offset for all, or one per index.
+    fn move_rest_cage(
+        &mut self,
+        py: Python<'_>,
+        indices: &Bound<'_, PyAny>,
+        offsets: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let (vertices, offsets) = self.cage_edit_args(indices, offsets)?;
+        let session = &mut self.session;
+        py.detach(|| session.move_rest_cage(&vertices, &offsets))
+            .map_err(rig_error)
+    }
+
+    /// C' edit: moves current-cage vertices; CageRev (Eq. 19) turns the grab into a rest-cage
+    /// edit and the chain lands C' on the requested positions (exactly under LBS, and under
+    /// DQS/CoR with ``fit_source="ghost"``). Arguments as for :meth:`move_rest_cage`.
+    fn move_posed_cage(
+        &mut self,
+        py: Python<'_>,
+        indices: &Bound<'_, PyAny>,
+        offsets: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let (vertices, offsets) = self.cage_edit_args(indices, offsets)?;
+        let session = &mut self.session;
+        py.detach(|| session.move_posed_cage(&vertices, &offsets))
+            .map_err(rig_error)
+    }
+
+    /// Switches the skinning method: ``"lbs"``, ``"dqs"`` or ``"cor"`` (CoR centres are
+    /// computed on the first switch to CoR).
+    fn set_skinning(&mut self, py: Python<'_>, method: &str) -> PyResult<()> {
+        let method = options::skinning_method(method)?;
+        let session = &mut self.session;
+        py.detach(|| session.set_skinning(method))
+            .map_err(rig_error)
+    }
+
+    /// Selects what CageUp fits under DQS/CoR: ``"ghost"`` (exact loop) or ``"displayed"``.
+    fn set_fit_source(&mut self, py: Python<'_>, source: &str) -> PyResult<()> {
+        let source = options::fit_source(source)?;
+        let session = &mut self.session;
+        py.detach(|| session.set_fit_source(source));
+        Ok(())
+    }
+
+    /// Sets the whole pose (S' edit).
+    ///
+    /// Parameters
+    /// ----------
+    /// local_rotations : (J, 4) float64 array
+    ///     Local rotation of every joint (relative to its parent's frame) as quaternions
+    ///     ``(x, y, z, w)``; normalised here.
+    /// root_motion : (J, 3) float64 array, optional
+    ///     Translation of each root from its rest position (ignored for non-roots).
+    #[pyo3(signature = (local_rotations, root_motion = None))]
+    fn set_pose(
+        &mut self,
+        py: Python<'_>,
+        local_rotations: &Bound<'_, PyAny>,
+        root_motion: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let nj = self.session.skeleton().len();
+        let (rows, cols, q) = convert::matrix(local_rotations, "local_rotations")?;
+        if rows != nj || cols != 4 {
+            return Err(PyValueError::new_err(format!(
+                "local_rotations must have shape ({nj}, 4) (x, y, z, w per joint), got ({rows}, {cols})"
+            )));
+        }
+        let rotations: Vec<DQuat> = q.chunks(4).map(DQuat::from_slice).collect();
+        if let Some(j) = rotations.iter().position(|r| r.length_squared() == 0.0) {
+            return Err(PyValueError::new_err(format!(
+                "local_rotations[{j}] is the zero quaternion"
+            )));
+        }
+        let motion = match root_motion {
+            Some(m) => convert::points_n(m, "root_motion", nj, "joint")?,
+            None => vec![DVec3::ZERO; nj],
+        };
+        let session = &mut self.session;
+        py.detach(|| session.set_pose(&rotations, &motion))
+            .map_err(rig_error)
+    }
+
+    /// The current pose as ``(local_rotations (J, 4) xyzw, root_motion (J, 3))``, the
+    /// arguments of :meth:`set_pose` (copies).
+    #[getter]
+    fn pose<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(convert::F64Array2<'py>, convert::F64Array2<'py>)> {
+        let s = &self.session;
+        let skeleton = s.skeleton();
+        let mut locals = vec![DAffine3::IDENTITY; skeleton.len()];
+        skeleton.locals_from_worlds(s.posed_world_from_joint(), &mut locals);
+        let q: Vec<f64> = locals
+            .iter()
+            .flat_map(|l| DQuat::from_mat3(&l.matrix3).normalize().to_array())
+            .collect();
+        let motion: Vec<DVec3> = (0..skeleton.len())
+            .map(|j| match skeleton.parent(j) {
+                None => {
+                    s.posed_world_from_joint()[j].translation
+                        - s.rest_world_from_joint()[j].translation
+                }
+                Some(_) => DVec3::ZERO,
+            })
+            .collect();
+        Ok((
+            convert::matrix_to_py(py, skeleton.len(), 4, q)?,
+            convert::points_to_py(py, &motion)?,
+        ))
+    }
+
+    /// Back to the rest pose (rest-cage edits are kept).
+    fn reset_pose(&mut self, py: Python<'_>) {
+        let session = &mut self.session;
+        py.detach(|| session.reset_pose());
+    }
+}
