@@ -1,6 +1,7 @@
 //! `cagerig`: command-line front end of the cagerig library.
 
 mod bench;
+mod cage;
 mod commands;
 mod rig_source;
 
@@ -115,6 +116,8 @@ enum Command {
     },
     /// Per-operator timings in the layout of the paper's Table 1.
     Bench(bench::BenchArgs),
+    /// Generate a validated deformation cage for a mesh.
+    Cage(cage::CageArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -159,6 +162,7 @@ fn main() -> std::process::ExitCode {
             name,
         } => commands::subdivide(&rig, levels, &out, &name),
         Command::Bench(args) => bench::run(&args),
+        Command::Cage(args) => cage::run(&args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
