@@ -6,8 +6,8 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use cagerig::TriMesh;
 use cagerig::cage_gen::{
-    CageOptions, CageReport, CageTarget, DEFAULT_MARGIN, DEFAULT_VERTICES, GeneratedCage,
-    check_coordinates, generate_cage,
+    CageOptions, CageReport, CageRequirements, CageTarget, DEFAULT_MARGIN, DEFAULT_VERTICES, GeneratedCage,
+    check_coordinates, generate_cage, validate_cage_geometry,
 };
 use cagerig::io::obj::{read_obj, write_obj};
 use clap::Args;
@@ -149,6 +149,26 @@ fn print_report(o: &CageOutput) {
         "time           {:.3} s generation, {:.3} s coordinates check",
         o.generation_seconds, o.coordinates_seconds
     );
+    print_checks(r);
+    match o.out {
+        Some(p) => println!("written        {}", p.display()),
+        None => println!("written        nothing (use --out CAGE.obj)"),
+    }
+}
+
+/// The validator's geometric checks of a rig's cage against its mesh (for `info`): no margin is
+/// required; the figures say how close the cage comes.
+pub fn validate_rig_cage(cage: &TriMesh, mesh: &TriMesh) -> CageReport {
+    let requirements = CageRequirements {
+        margin: 0.0,
+        target_vertices: None,
+        target_faces: None,
+    };
+    validate_cage_geometry(cage, mesh, &requirements)
+}
+
+/// One line per check.
+pub fn print_checks(r: &CageReport) {
     for c in &r.checks {
         println!(
             "check          {:<22} {}  {}",
@@ -156,9 +176,5 @@ fn print_report(o: &CageOutput) {
             if c.passed { "ok  " } else { "FAIL" },
             c.detail
         );
-    }
-    match o.out {
-        Some(p) => println!("written        {}", p.display()),
-        None => println!("written        nothing (use --out CAGE.obj)"),
     }
 }

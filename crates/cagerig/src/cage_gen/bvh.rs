@@ -4,7 +4,9 @@
 
 use glam::DVec3;
 
-use super::geometry::{Triangle, closest_point_on_triangle, triangle_triangle_distance};
+use super::geometry::{
+    Triangle, closest_point_on_triangle, separated_by_a_plane, triangle_triangle_distance,
+};
 
 /// Triangles per leaf.
 const LEAF_SIZE: usize = 4;
@@ -217,8 +219,11 @@ impl TriangleBvh {
     /// Whether some triangle of the tree comes closer than `r` to triangle `t`.
     pub fn any_within(&self, t: Triangle, r: f64) -> bool {
         let mut found = false;
+        let query = Aabb::of_triangle(&t).expanded(r);
         self.visit_near_triangle(t, r, |other| {
-            found = triangle_triangle_distance(t, other) < r;
+            found = Aabb::of_triangle(&other).overlaps(&query)
+                && !separated_by_a_plane(t, other, r)
+                && triangle_triangle_distance(t, other) < r;
             found
         });
         found

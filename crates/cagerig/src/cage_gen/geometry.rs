@@ -169,6 +169,23 @@ pub fn triangle_triangle_distance(t1: Triangle, t2: Triangle) -> f64 {
     best2.sqrt()
 }
 
+/// Cheap sufficient test that two triangles are farther apart than `r`: all corners of one lie
+/// more than `r` to one side of the other's plane.
+pub fn separated_by_a_plane(t1: Triangle, t2: Triangle, r: f64) -> bool {
+    let beyond = |plane: Triangle, other: Triangle| {
+        let n = area_normal(plane);
+        let len = n.length();
+        if len <= 0.0 {
+            return false;
+        }
+        let d = other.map(|p| (p - plane[0]).dot(n));
+        let reach = r * len;
+        (d[0] > reach && d[1] > reach && d[2] > reach)
+            || (d[0] < -reach && d[1] < -reach && d[2] < -reach)
+    };
+    beyond(t1, t2) || beyond(t2, t1)
+}
+
 /// Distance from segment `pq` to triangle `t` (0 when it crosses it).
 pub fn segment_triangle_distance(p: DVec3, q: DVec3, t: Triangle) -> f64 {
     if segment_crosses_triangle(p, q, t) {
@@ -231,12 +248,21 @@ pub fn cage_triangles_conflict(
         }
     }
     match count {
-        0 => triangle_triangle_distance(t1, t2) < separation,
+        0 => {
+            !separated_by_a_plane(t1, t2, separation)
+                && triangle_triangle_distance(t1, t2) < separation
+        }
         1 => {
             let (i, j) = shared[0];
             let v = t1[i];
             let (p1, q1) = (t1[(i + 1) % 3], t1[(i + 2) % 3]);
             let (p2, q2) = (t2[(j + 1) % 3], t2[(j + 2) % 3]);
+            if one_side_of_plane(v, area_normal(t1), p2, q2, separation)
+                || one_side_of_plane(v, area_normal(t2), p1, q1, separation)
+            {
+                // One triangle meets the other's plane only at v.
+                return false;
+            }
             segment_triangle_distance(p1, q1, t2) < separation
                 || segment_triangle_distance(p2, q2, t1) < separation
                 || edge_in_wedge(v, p1, v, p2, q2)
@@ -255,6 +281,22 @@ pub fn cage_triangles_conflict(
         }
         _ => true,
     }
+}
+
+/// Whether `p` and `q` lie strictly on one side of the plane through `v` with normal `normal`:
+/// farther than `separation` and at an angle above [`FOLD_SINE`] seen from `v`.
+fn one_side_of_plane(v: DVec3, normal: DVec3, p: DVec3, q: DVec3, separation: f64) -> bool {
+    let len = normal.length();
+    if len <= 0.0 {
+        return false;
+    }
+    let n = normal / len;
+    let (dp, dq) = ((p - v).dot(n), (q - v).dot(n));
+    let (mp, mq) = (
+        FOLD_SINE * p.distance(v) + separation,
+        FOLD_SINE * q.distance(v) + separation,
+    );
+    (dp > mp && dq > mq) || (dp < -mp && dq < -mq)
 }
 
 /// Whether the edge from `v` to `e` lies (within [`FOLD_SINE`]) in the plane of the wedge at `w`

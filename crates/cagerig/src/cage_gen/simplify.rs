@@ -113,19 +113,13 @@ pub fn simplify(
         triangles: faces,
     } = surface;
     let num_vertices = positions.len();
-    let mut bounds = positions
-        .iter()
-        .fold(Aabb::EMPTY, |b, &p| b.union(Aabb { min: p, max: p }));
-    bounds = bounds.expanded(1e-9 * (bounds.max - bounds.min).length() + 1e-300);
-    // About 24 cells along the longest side: coarse enough for the late, large triangles.
-    let cell = (bounds.max - bounds.min).max_element() / 24.0;
     let mut state = State {
         quadrics: vec![Quadric::default(); num_vertices],
         vertex_faces: vec![Vec::new(); num_vertices],
         vertex_alive: vec![true; num_vertices],
         versions: vec![0; num_vertices],
         face_alive: vec![true; faces.len()],
-        hash: TriangleHash::new(bounds, cell.max(f64::MIN_POSITIVE)),
+        hash: TriangleHash::new(Aabb::EMPTY.expanded(-1.0), 1.0),
         positions,
         faces,
         constraints,
@@ -144,8 +138,8 @@ pub fn simplify(
         for &v in tri {
             state.vertex_faces[v as usize].push(f as u32);
         }
-        state.hash.insert(f as u32, &Aabb::of_triangle(&corners));
     }
+    state.rebuild_hash();
     let mut num_alive_vertices = num_vertices;
     let mut num_alive_faces = state.faces.len();
     let done = |v: usize, f: usize| match stop {
@@ -154,6 +148,7 @@ pub fn simplify(
     };
     let mut heap = BinaryHeap::new();
     let mut collapses = 0;
+    let mut faces_at_rebuild = num_alive_faces;
     loop {
         let collapses_before_sweep = collapses;
         for f in 0..state.faces.len() {
@@ -180,6 +175,10 @@ pub fn simplify(
                 collapses += 1;
                 num_alive_vertices -= 1;
                 num_alive_faces -= 2;
+                if 2 * num_alive_faces < faces_at_rebuild {
+                    state.rebuild_hash();
+                    faces_at_rebuild = num_alive_faces;
+                }
                 for &f in &state.vertex_faces[a] {
                     let tri = state.faces[f as usize];
                     for k in 0..3 {
@@ -222,6 +221,34 @@ pub fn simplify(
 }
 
 impl State<'_> {
+    /// Rebuilds the triangle hash with cells of about twice the mean edge length (triangles
+    /// grow as the surface coarsens; the hash is rebuilt whenever the face count halves).
+    fn rebuild_hash(&mut self) {
+        let mut bounds = Aabb::EMPTY;
+        let (mut edge_sum, mut edges) = (0.0, 0usize);
+        for (tri, _) in self.faces.iter().zip(&self.face_alive).filter(|(_, a)| **a) {
+            let c = self.corners(*tri);
+            bounds = bounds.union(Aabb::of_triangle(&c));
+            edge_sum += c[0].distance(c[1]) + c[1].distance(c[2]) + c[2].distance(c[0]);
+            edges += 3;
+        }
+        if edges == 0 {
+            return;
+        }
+        let extent = (bounds.max - bounds.min).max_element();
+        // At most ≈ 2M cells.
+        let cell = (2.0 * edge_sum / edges as f64)
+            .max(extent / 128.0)
+            .max(f64::MIN_POSITIVE);
+        self.hash = TriangleHash::new(bounds.expanded(cell), cell);
+        for f in 0..self.faces.len() {
+            if self.face_alive[f] {
+                let c = self.corners(self.faces[f]);
+                self.hash.insert(f as u32, &Aabb::of_triangle(&c));
+            }
+        }
+    }
+
     fn candidate(&self, a: u32, b: u32) -> Candidate {
         let positions = self.candidate_positions(a as usize, b as usize);
         Candidate {
@@ -339,9 +366,17 @@ impl State<'_> {
                 return false;
             }
         }
-        // 3. Margin to the mesh.
-        if new_corners.iter().any(|t| c.mesh.any_within(*t, c.margin)) {
-            return false;
+        // 3. Margin to the mesh. Fast path: the centroid's distance minus the triangle's radius
+        // about it bounds the triangle's distance from below (distance is 1-Lipschitz).
+        for t in new_corners {
+            let centroid = (t[0] + t[1] + t[2]) / 3.0;
+            let radius = t.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
+            let needed = c.margin + radius;
+            if c.mesh.nearest_distance(centroid, needed) < needed
+                && c.mesh.any_within(*t, c.margin)
+            {
+                return false;
+            }
         }
         // 4. No self-intersection, new vs new and new vs the rest of the cage.
         for i in 0..new_ids.len() {
