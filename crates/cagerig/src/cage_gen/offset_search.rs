@@ -20,7 +20,7 @@ use crate::mesh::TriMesh;
 
 /// Grid samples of the starting surface per target cage vertex (sets the spacing h):
 /// enough for the quadric order to pick the cage's features, few enough to stay fast.
-pub const SURFACE_SAMPLES_PER_CAGE_VERTEX: f64 = 10.0;
+pub const SURFACE_SAMPLES_PER_CAGE_VERTEX: f64 = 20.0;
 /// Growth of the offset between attempts.
 pub const OFFSET_GROWTH: f64 = 1.5;
 /// Largest offset tried, × diagonal.
