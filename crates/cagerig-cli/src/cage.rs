@@ -6,8 +6,8 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use cagerig::TriMesh;
 use cagerig::cage_gen::{
-    CageOptions, CageReport, CageRequirements, CageTarget, DEFAULT_MARGIN, DEFAULT_VERTICES, GeneratedCage,
-    check_coordinates, generate_cage, validate_cage_geometry,
+    CageOptions, CageReport, CageRequirements, CageTarget, DEFAULT_MARGIN, DEFAULT_VERTICES,
+    GeneratedCage, check_coordinates, generate_cage, validate_cage_geometry,
 };
 use cagerig::io::obj::{read_obj, write_obj};
 use clap::Args;

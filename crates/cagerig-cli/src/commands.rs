@@ -167,7 +167,9 @@ pub fn info(rig: &RigArgs, json: bool) -> anyhow::Result<()> {
         max_influences: p.skin_weights.max_influences(),
         files: loaded.files.clone(),
         warnings,
-        cage_checks: cage_check.is_ok().then(|| crate::cage::validate_rig_cage(&p.cage, &p.mesh)),
+        cage_checks: cage_check
+            .is_ok()
+            .then(|| crate::cage::validate_rig_cage(&p.cage, &p.mesh)),
     };
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);

@@ -55,7 +55,11 @@ fn star_sphere(
         let theta = std::f64::consts::PI * i as f64 / rings as f64;
         for j in 0..segments {
             let phi = 2.0 * std::f64::consts::PI * j as f64 / segments as f64;
-            let d = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            let d = DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
             p.push(centre + d * radius(d));
         }
     }
@@ -67,7 +71,12 @@ fn star_sphere(
         t.push([0, ring(1, j), ring(1, j + 1)]);
         t.push([south, ring(rings - 1, j + 1), ring(rings - 1, j)]);
         for i in 1..rings - 1 {
-            let (a, b, c, d) = (ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1));
+            let (a, b, c, d) = (
+                ring(i, j),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+                ring(i, j + 1),
+            );
             t.push([a, b, c]);
             t.push([a, c, d]);
         }
@@ -212,15 +221,9 @@ fn face_target_is_met() {
 #[test]
 fn adversarial_meshes_pass_or_fail_clearly() {
     // Two disjoint spheres, near and far apart.
-    let near = merge(
-        &sphere(DVec3::ZERO, 1.0),
-        &sphere(DVec3::X * 2.3, 1.0),
-    );
+    let near = merge(&sphere(DVec3::ZERO, 1.0), &sphere(DVec3::X * 2.3, 1.0));
     generate_validated(&near, &options(60), "two near spheres");
-    let far = merge(
-        &sphere(DVec3::ZERO, 1.0),
-        &sphere(DVec3::X * 40.0, 1.0),
-    );
+    let far = merge(&sphere(DVec3::ZERO, 1.0), &sphere(DVec3::X * 40.0, 1.0));
     if let Err(e) = generate_or_explain(&far, &options(60), "two far spheres") {
         assert!(e.contains("pieces"), "{e}");
     }

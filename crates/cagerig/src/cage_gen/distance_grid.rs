@@ -105,7 +105,9 @@ pub fn fill_from_outside(
     for i in 0..n {
         let [x, y, z] = grid.coords(i);
         if x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz {
-            let bound = mesh_bounds.distance_squared(grid.position([x, y, z])).sqrt();
+            let bound = mesh_bounds
+                .distance_squared(grid.position([x, y, z]))
+                .sqrt();
             if bound > offset {
                 state[i] = OUTSIDE;
                 value[i] = bound;

@@ -195,12 +195,7 @@ pub fn segment_triangle_distance(p: DVec3, q: DVec3, t: Triangle) -> f64 {
         .distance_squared(p)
         .min(closest_point_on_triangle(q, t).distance_squared(q));
     for k in 0..3 {
-        best2 = best2.min(segment_segment_distance_squared(
-            p,
-            q,
-            t[k],
-            t[(k + 1) % 3],
-        ));
+        best2 = best2.min(segment_segment_distance_squared(p, q, t[k], t[(k + 1) % 3]));
     }
     best2.sqrt()
 }
@@ -391,7 +386,11 @@ mod tests {
         ];
         assert!(!cage_triangles_conflict(T, ids, away, [0, 4, 5], 1e-9));
         // Shared corner, coplanar, second wedge inside the first.
-        let inside = [DVec3::ZERO, DVec3::new(0.3, 0.1, 0.0), DVec3::new(0.1, 0.3, 0.0)];
+        let inside = [
+            DVec3::ZERO,
+            DVec3::new(0.3, 0.1, 0.0),
+            DVec3::new(0.1, 0.3, 0.0),
+        ];
         assert!(cage_triangles_conflict(T, ids, inside, [0, 4, 5], 1e-9));
     }
 

@@ -99,7 +99,12 @@ pub fn extract_surface(field: &OutsideField) -> Surface {
                             let (o0, o1, i0, i1) = (outside[0], outside[1], inside[0], inside[1]);
                             outside_centre = vec![o0, o1];
                             inside_centre = vec![i0, i1];
-                            vec![vertex(o0, i0), vertex(o0, i1), vertex(o1, i1), vertex(o1, i0)]
+                            vec![
+                                vertex(o0, i0),
+                                vertex(o0, i1),
+                                vertex(o1, i1),
+                                vertex(o1, i0),
+                            ]
                         }
                         _ => continue,
                     };

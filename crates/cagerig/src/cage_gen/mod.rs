@@ -32,7 +32,9 @@ pub mod weld;
 use thiserror::Error;
 
 pub use offset_search::{GeneratedCage, generate_cage};
-pub use validate::{CageReport, CageRequirements, Check, check_coordinates, validate_cage_geometry};
+pub use validate::{
+    CageReport, CageRequirements, Check, check_coordinates, validate_cage_geometry,
+};
 
 /// Default target vertex count of `cagerig cage`.
 pub const DEFAULT_VERTICES: usize = 100;

@@ -67,6 +67,10 @@ mod tests {
         assert!(q.evaluate(corner) < 1e-12);
         assert!((q.evaluate(corner + DVec3::Y) - 2.0).abs() < 1e-12);
         // One plane: singular.
-        assert!(Quadric::from_plane(DVec3::Z, corner, 1.0).minimiser().is_none());
+        assert!(
+            Quadric::from_plane(DVec3::Z, corner, 1.0)
+                .minimiser()
+                .is_none()
+        );
     }
 }

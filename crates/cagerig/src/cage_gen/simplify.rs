@@ -27,6 +27,28 @@ use super::marching_tets::Surface;
 use super::quadric::Quadric;
 use super::triangle_hash::TriangleHash;
 
+/// Passes over all edges (the first, then retries of edges rejected before their
+/// neighbourhood changed).
+const MAX_SWEEPS: usize = 3;
+
+/// Least shape quality ([`shape_quality`]) a collapse may create, unless the star was already
+/// worse, while more than [`QUALITY_PHASE`] × the target count remain. Quadric error alone is
+/// zero along flat and cylindrical directions, where it grows slivers across the whole part:
+/// they slow every intersection query. Near the target the floor is dropped, so that it never
+/// keeps a cage from reaching its size.
+const MIN_SHAPE_QUALITY: f64 = 0.1;
+const QUALITY_PHASE: usize = 3;
+
+/// 4√3·area / Σ squared edge lengths: 1 for an equilateral triangle, 0 for a degenerate one.
+fn shape_quality(t: Triangle) -> f64 {
+    let sum =
+        t[0].distance_squared(t[1]) + t[1].distance_squared(t[2]) + t[2].distance_squared(t[0]);
+    if sum <= 0.0 {
+        return 0.0;
+    }
+    2.0 * 3f64.sqrt() * area_normal(t).length() / sum
+}
+
 /// What must hold after every collapse.
 #[derive(Debug, Clone, Copy)]
 pub struct CollapseConstraints<'a> {
@@ -100,6 +122,8 @@ struct State<'a> {
     hash: TriangleHash,
     constraints: CollapseConstraints<'a>,
     rejections: usize,
+    /// [`MIN_SHAPE_QUALITY`] while many vertices remain, then 0.
+    quality_floor: f64,
 }
 
 /// Simplifies `surface` (closed, embedded, enclosing the mesh with the margin) until `stop`.
@@ -124,6 +148,7 @@ pub fn simplify(
         faces,
         constraints,
         rejections: 0,
+        quality_floor: MIN_SHAPE_QUALITY,
     };
     for (f, tri) in state.faces.iter().enumerate() {
         let corners = tri.map(|v| state.positions[v as usize]);
@@ -149,6 +174,7 @@ pub fn simplify(
     let mut heap = BinaryHeap::new();
     let mut collapses = 0;
     let mut faces_at_rebuild = num_alive_faces;
+    let mut sweeps = 0;
     loop {
         let collapses_before_sweep = collapses;
         for f in 0..state.faces.len() {
@@ -162,6 +188,24 @@ pub fn simplify(
             }
         }
         while !done(num_alive_vertices, num_alive_faces) {
+            let remaining = match stop {
+                StopAt::Vertices(n) => num_alive_vertices > QUALITY_PHASE * n,
+                StopAt::Faces(n) => num_alive_faces > QUALITY_PHASE * n,
+            };
+            if !remaining && state.quality_floor > 0.0 {
+                // Entering the final phase: edges blocked by the floor become candidates again.
+                state.quality_floor = 0.0;
+                for f in 0..state.faces.len() {
+                    if state.face_alive[f] {
+                        for k in 0..3 {
+                            let (a, b) = (state.faces[f][k], state.faces[f][(k + 1) % 3]);
+                            if a < b {
+                                heap.push(state.candidate(a, b));
+                            }
+                        }
+                    }
+                }
+            }
             let Some(c) = heap.pop() else { break };
             let (a, b) = (c.a as usize, c.b as usize);
             if !state.vertex_alive[a]
@@ -190,7 +234,11 @@ pub fn simplify(
                 }
             }
         }
-        if done(num_alive_vertices, num_alive_faces) || collapses == collapses_before_sweep {
+        sweeps += 1;
+        if done(num_alive_vertices, num_alive_faces)
+            || collapses == collapses_before_sweep
+            || sweeps >= MAX_SWEEPS
+        {
             break;
         }
     }
@@ -336,7 +384,15 @@ impl State<'_> {
         for (_, p) in self.candidate_positions(a, b) {
             let new_corners: Vec<Triangle> = new_ids
                 .iter()
-                .map(|tri| tri.map(|v| if v == a32 { p } else { self.positions[v as usize] }))
+                .map(|tri| {
+                    tri.map(|v| {
+                        if v == a32 {
+                            p
+                        } else {
+                            self.positions[v as usize]
+                        }
+                    })
+                })
                 .collect();
             if self.acceptable(&old_faces, &old_corners, &kept_old, &new_ids, &new_corners) {
                 self.apply(a, b, p, &shared, &kept);
@@ -356,7 +412,15 @@ impl State<'_> {
         new_corners: &[Triangle],
     ) -> bool {
         let c = self.constraints;
-        // 2. No flip, no degenerate triangle.
+        // 2. No flip, no degenerate triangle, no sliver worse than the star already had.
+        let worst_old = kept_old
+            .iter()
+            .map(|t| shape_quality(*t))
+            .fold(1.0, f64::min);
+        let min_quality = self.quality_floor.min(worst_old);
+        if new_corners.iter().any(|t| shape_quality(*t) < min_quality) {
+            return false;
+        }
         for (old, new) in kept_old.iter().zip(new_corners) {
             let (n_old, n_new) = (area_normal(*old), area_normal(*new));
             let scale = (new[1] - new[0])
@@ -372,8 +436,7 @@ impl State<'_> {
             let centroid = (t[0] + t[1] + t[2]) / 3.0;
             let radius = t.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
             let needed = c.margin + radius;
-            if c.mesh.nearest_distance(centroid, needed) < needed
-                && c.mesh.any_within(*t, c.margin)
+            if c.mesh.nearest_distance(centroid, needed) < needed && c.mesh.any_within(*t, c.margin)
             {
                 return false;
             }

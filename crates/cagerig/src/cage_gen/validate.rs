@@ -214,7 +214,9 @@ pub fn mesh_primitives(mesh: &TriMesh) -> Vec<Triangle> {
     let mut used = vec![false; mesh.num_vertices()];
     let mut prims: Vec<Triangle> = (0..mesh.num_triangles())
         .map(|t| {
-            mesh.triangles[t].iter().for_each(|&v| used[v as usize] = true);
+            mesh.triangles[t]
+                .iter()
+                .for_each(|&v| used[v as usize] = true);
             mesh.corners(t)
         })
         .collect();
@@ -345,7 +347,11 @@ pub fn validate_cage_geometry(
         ),
     });
     for (target, found, what) in [
-        (requirements.target_vertices, cage.num_vertices(), "vertices"),
+        (
+            requirements.target_vertices,
+            cage.num_vertices(),
+            "vertices",
+        ),
         (requirements.target_faces, cage.num_triangles(), "triangles"),
     ] {
         if let Some(target) = target {
@@ -410,9 +416,9 @@ pub fn check_coordinates(cage: &TriMesh, mesh: &TriMesh, report: &mut CageReport
         if let Ok(selection) = select_maxvol_rows(&phi) {
             let block = phi.select_rows(&selection.rows);
             if let Ok(sv) = block.singular_values() {
-                let (max, min) = sv
-                    .iter()
-                    .fold((0.0f64, f64::INFINITY), |(hi, lo), &s| (hi.max(s), lo.min(s)));
+                let (max, min) = sv.iter().fold((0.0f64, f64::INFINITY), |(hi, lo), &s| {
+                    (hi.max(s), lo.min(s))
+                });
                 report.maxvol_condition = Some(if min > 0.0 { max / min } else { f64::INFINITY });
             }
         }
@@ -465,8 +471,16 @@ mod tests {
         assert!(report.maxvol_condition.unwrap() >= 1.0);
         // Too small: the mesh crosses it.
         let small = validate_cage_geometry(&cube(0.9), &mesh, &req);
-        let failed: Vec<_> = small.checks.iter().filter(|c| !c.passed).map(|c| c.name).collect();
-        assert!(failed.contains(&"mesh_inside") && failed.contains(&"margin"), "{failed:?}");
+        let failed: Vec<_> = small
+            .checks
+            .iter()
+            .filter(|c| !c.passed)
+            .map(|c| c.name)
+            .collect();
+        assert!(
+            failed.contains(&"mesh_inside") && failed.contains(&"margin"),
+            "{failed:?}"
+        );
         // Flipped.
         let mut flipped = cage.clone();
         flipped.triangles.iter_mut().for_each(|t| t.swap(1, 2));
@@ -480,7 +494,12 @@ mod tests {
         two.triangles
             .extend(other.triangles.iter().map(|t| t.map(|v| v + 8)));
         let r = validate_cage_geometry(&two, &mesh, &req);
-        let failed: Vec<_> = r.checks.iter().filter(|c| !c.passed).map(|c| c.name).collect();
+        let failed: Vec<_> = r
+            .checks
+            .iter()
+            .filter(|c| !c.passed)
+            .map(|c| c.name)
+            .collect();
         assert!(failed.contains(&"one_piece"), "{failed:?}");
         assert!(failed.contains(&"no_self_intersection"), "{failed:?}");
         assert!(failed.contains(&"vertex_count"), "{failed:?}");
@@ -491,12 +510,27 @@ mod tests {
         let cube = cube(1.0);
         let mut open = cube.triangles.clone();
         open.pop();
-        assert!(check_closed_manifold(&open, 8).unwrap_err().contains("no opposite"));
-        assert!(check_closed_manifold(&cube.triangles, 9).unwrap_err().contains("vertex 8"));
+        assert!(
+            check_closed_manifold(&open, 8)
+                .unwrap_err()
+                .contains("no opposite")
+        );
+        assert!(
+            check_closed_manifold(&cube.triangles, 9)
+                .unwrap_err()
+                .contains("vertex 8")
+        );
         // Two tetrahedra sharing one vertex: a pinched vertex.
         let tet = [[0u32, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let mut pinched: Vec<[u32; 3]> = tet.to_vec();
-        pinched.extend(tet.iter().map(|t| t.map(|v| if v == 0 { 0 } else { v + 3 })));
-        assert!(check_closed_manifold(&pinched, 7).unwrap_err().contains("pinched"));
+        pinched.extend(
+            tet.iter()
+                .map(|t| t.map(|v| if v == 0 { 0 } else { v + 3 })),
+        );
+        assert!(
+            check_closed_manifold(&pinched, 7)
+                .unwrap_err()
+                .contains("pinched")
+        );
     }
 }

@@ -27,7 +27,11 @@ pub fn weld_by_position(positions: &[DVec3], tolerance: f64) -> Welded {
         let mut exact: HashMap<[u64; 3], u32> = HashMap::with_capacity(positions.len());
         for p in positions {
             // +0.0 so that -0.0 and 0.0 weld.
-            let key = [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits(), (p.z + 0.0).to_bits()];
+            let key = [
+                (p.x + 0.0).to_bits(),
+                (p.y + 0.0).to_bits(),
+                (p.z + 0.0).to_bits(),
+            ];
             let next = exact.len() as u32;
             welded_of.push(*exact.entry(key).or_insert(next));
         }
