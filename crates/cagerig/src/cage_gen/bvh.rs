@@ -229,6 +229,27 @@ impl TriangleBvh {
         found
     }
 
+    /// Whether triangle `t` stays at least `r` from every tree triangle. Exact; fast for large
+    /// triangles far from a dense tree: a (sub)triangle whose centroid lies farther than `r` +
+    /// its radius about the centroid is clear (distance is 1-Lipschitz); otherwise it is split
+    /// into four, down to `depth` levels, then tested pair by pair ([`Self::any_within`]).
+    pub fn clear_of(&self, t: Triangle, r: f64, depth: u32) -> bool {
+        let centroid = (t[0] + t[1] + t[2]) / 3.0;
+        let radius = t.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
+        let needed = r + radius;
+        if self.nearest_distance(centroid, needed) >= needed {
+            return true;
+        }
+        if depth == 0 {
+            return !self.any_within(t, r);
+        }
+        let [a, b, c] = t;
+        let (ab, bc, ca) = (0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a));
+        [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+            .into_iter()
+            .all(|sub| self.clear_of(sub, r, depth - 1))
+    }
+
     /// Calls `visit` with every tree triangle whose box comes within `r` of `t`'s box and of
     /// `t`'s plane, until it returns `true`.
     fn visit_near_triangle(&self, t: Triangle, r: f64, mut visit: impl FnMut(Triangle) -> bool) {
@@ -342,6 +363,10 @@ mod tests {
         assert!((bvh.triangle_distance(probe, 10.0) - brute).abs() < 1e-12);
         assert!(bvh.any_within(probe, brute * 1.01));
         assert!(!bvh.any_within(probe, brute * 0.99));
+        for depth in [0, 2, 4] {
+            assert!(!bvh.clear_of(probe, brute * 1.01, depth));
+            assert!(bvh.clear_of(probe, brute * 0.99, depth));
+        }
         let mut hits = Vec::new();
         let query = Aabb {
             min: DVec3::new(0.5, 0.5, -1.0),

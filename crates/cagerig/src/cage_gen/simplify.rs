@@ -49,6 +49,9 @@ fn shape_quality(t: Triangle) -> f64 {
     2.0 * 3f64.sqrt() * area_normal(t).length() / sum
 }
 
+/// Subdivision depth of the clearance test ([`TriangleBvh::clear_of`]).
+const CLEARANCE_DEPTH: u32 = 4;
+
 /// What must hold after every collapse.
 #[derive(Debug, Clone, Copy)]
 pub struct CollapseConstraints<'a> {
@@ -430,16 +433,12 @@ impl State<'_> {
                 return false;
             }
         }
-        // 3. Margin to the mesh. Fast path: the centroid's distance minus the triangle's radius
-        // about it bounds the triangle's distance from below (distance is 1-Lipschitz).
-        for t in new_corners {
-            let centroid = (t[0] + t[1] + t[2]) / 3.0;
-            let radius = t.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
-            let needed = c.margin + radius;
-            if c.mesh.nearest_distance(centroid, needed) < needed && c.mesh.any_within(*t, c.margin)
-            {
-                return false;
-            }
+        // 3. Margin to the mesh.
+        if new_corners
+            .iter()
+            .any(|t| !c.mesh.clear_of(*t, c.margin, CLEARANCE_DEPTH))
+        {
+            return false;
         }
         // 4. No self-intersection, new vs new and new vs the rest of the cage.
         for i in 0..new_ids.len() {

@@ -288,9 +288,30 @@ pub fn validate_cage_geometry(
     let min_distance = distances.iter().copied().fold(f64::INFINITY, f64::min);
     let mean_distance = distances.iter().sum::<f64>() / distances.len().max(1) as f64;
     let prims = mesh_primitives(mesh);
-    let triangle_distances: Vec<f64> = prims
-        .par_iter()
-        .map(|t| cage_bvh.triangle_distance(*t, min_distance))
+    // Corner distances bound a triangle's: every point is within its longest edge of a corner,
+    // so triangles whose corners are all farther than min_distance + longest edge need no test.
+    let triangle_distances: Vec<f64> = (0..prims.len())
+        .into_par_iter()
+        .map(|i| {
+            let t = prims[i];
+            let near = if i < mesh.num_triangles() {
+                mesh.triangles[i]
+                    .iter()
+                    .map(|&v| distances[v as usize])
+                    .fold(f64::INFINITY, f64::min)
+            } else {
+                cage_bvh.nearest_distance(t[0], f64::INFINITY)
+            };
+            let longest = t[0]
+                .distance(t[1])
+                .max(t[1].distance(t[2]))
+                .max(t[2].distance(t[0]));
+            if near - longest > min_distance {
+                near - longest
+            } else {
+                cage_bvh.triangle_distance(t, min_distance)
+            }
+        })
         .collect();
     let min_triangle_distance = triangle_distances
         .iter()
