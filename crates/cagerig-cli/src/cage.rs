@@ -1,6 +1,6 @@
 //! `cagerig cage`: generate a validated deformation cage for a mesh.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
@@ -114,7 +114,7 @@ pub fn run(args: &CageArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn write_cage(out: &PathBuf, cage: &TriMesh) -> anyhow::Result<()> {
+fn write_cage(out: &Path, cage: &TriMesh) -> anyhow::Result<()> {
     write_obj(out, &cage.positions, &cage.triangles)
         .with_context(|| format!("writing the cage to {}", out.display()))
 }

@@ -234,9 +234,9 @@ pub fn cage_triangles_conflict(
 ) -> bool {
     let mut shared = [(0usize, 0usize); 3];
     let mut count = 0;
-    for i in 0..3 {
-        for j in 0..3 {
-            if ids1[i] == ids2[j] {
+    for (i, id1) in ids1.iter().enumerate() {
+        for (j, id2) in ids2.iter().enumerate() {
+            if id1 == id2 {
                 shared[count] = (i, j);
                 count += 1;
             }

@@ -318,10 +318,10 @@ impl State<'_> {
         let (pa, pb) = (self.positions[a], self.positions[b]);
         let mid = 0.5 * (pa + pb);
         let mut out = Vec::with_capacity(4);
-        if let Some(x) = q.minimiser() {
-            if x.distance(mid) <= 2.0 * pa.distance(pb) {
-                out.push((q.evaluate(x), x));
-            }
+        if let Some(x) = q.minimiser()
+            && x.distance(mid) <= 2.0 * pa.distance(pb)
+        {
+            out.push((q.evaluate(x), x));
         }
         for p in [mid, pa, pb] {
             out.push((q.evaluate(p), p));

@@ -433,16 +433,14 @@ pub fn check_coordinates(cage: &TriMesh, mesh: &TriMesh, report: &mut CageReport
         passed: finite && error <= REPRODUCTION_TOLERANCE * diag,
         detail: format!("Φ finite, ‖ΦC − M‖∞ = {:.2e} of the diagonal", error / diag),
     });
-    if mesh.num_vertices() >= cage.num_vertices() {
-        if let Ok(selection) = select_maxvol_rows(&phi) {
-            let block = phi.select_rows(&selection.rows);
-            if let Ok(sv) = block.singular_values() {
-                let (max, min) = sv.iter().fold((0.0f64, f64::INFINITY), |(hi, lo), &s| {
-                    (hi.max(s), lo.min(s))
-                });
-                report.maxvol_condition = Some(if min > 0.0 { max / min } else { f64::INFINITY });
-            }
-        }
+    if mesh.num_vertices() >= cage.num_vertices()
+        && let Ok(selection) = select_maxvol_rows(&phi)
+        && let Ok(sv) = phi.select_rows(&selection.rows).singular_values()
+    {
+        let (max, min) = sv.iter().fold((0.0f64, f64::INFINITY), |(hi, lo), &s| {
+            (hi.max(s), lo.min(s))
+        });
+        report.maxvol_condition = Some(if min > 0.0 { max / min } else { f64::INFINITY });
     }
 }
 

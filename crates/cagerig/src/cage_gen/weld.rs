@@ -49,14 +49,13 @@ pub fn weld_by_position(positions: &[DVec3], tolerance: f64) -> Welded {
         'search: for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    if let Some(list) = cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
-                        if let Some(&r) = list
+                    if let Some(list) = cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+                        && let Some(&r) = list
                             .iter()
                             .find(|&&r| representatives[r as usize].distance(*p) <= tolerance)
-                        {
-                            found = Some(r);
-                            break 'search;
-                        }
+                    {
+                        found = Some(r);
+                        break 'search;
                     }
                 }
             }
