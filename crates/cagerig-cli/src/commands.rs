@@ -138,6 +138,8 @@ struct InfoReport {
     max_influences: usize,
     files: Vec<FileUse>,
     warnings: Vec<String>,
+    /// The cage validator's checks and figures for this mesh (margin required: none).
+    cage_checks: Option<cagerig::cage_gen::CageReport>,
 }
 
 #[derive(Clone, Serialize)]
@@ -165,6 +167,9 @@ pub fn info(rig: &RigArgs, json: bool) -> anyhow::Result<()> {
         max_influences: p.skin_weights.max_influences(),
         files: loaded.files.clone(),
         warnings,
+        cage_checks: cage_check
+            .is_ok()
+            .then(|| crate::cage::validate_rig_cage(&p.cage, &p.mesh)),
     };
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -184,6 +189,14 @@ pub fn info(rig: &RigArgs, json: bool) -> anyhow::Result<()> {
         );
         for f in &report.files {
             println!("file           {:<14} {}", f.role, f.path.display());
+        }
+        if let Some(checks) = &report.cage_checks {
+            println!(
+                "cage distance  min {:.3} %, mean {:.3} % of the diagonal",
+                100.0 * checks.min_distance_fraction,
+                100.0 * checks.mean_distance_fraction
+            );
+            crate::cage::print_checks(checks);
         }
         if report.warnings.is_empty() {
             println!("warnings       none");

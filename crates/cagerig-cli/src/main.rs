@@ -1,11 +1,12 @@
 //! `cagerig`: command-line front end of the cagerig library.
 
 mod bench;
+mod cage;
 mod commands;
-mod pictures;
-mod render;
 mod export;
 mod interchange;
+mod pictures;
+mod render;
 mod rig_source;
 
 use std::path::PathBuf;
@@ -130,6 +131,8 @@ enum Command {
     Render(Box<render::RenderArgs>),
     /// Export the (edited) character as a rigged glTF binary (.glb).
     Export(export::ExportArgs),
+    /// Generate a validated deformation cage for a mesh.
+    Cage(cage::CageArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -184,6 +187,7 @@ fn main() -> std::process::ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Export(args) => export::run(&args),
+        Command::Cage(args) => cage::run(&args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

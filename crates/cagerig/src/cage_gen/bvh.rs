@@ -1,0 +1,382 @@
+//! Static bounding-volume hierarchy over a triangle soup (axis-aligned boxes, median split on the
+//! longest centroid axis, ≤ [`LEAF_SIZE`] triangles per leaf): nearest distance from a point,
+//! "is any triangle within r of this triangle", and box-overlap enumeration.
+
+use glam::DVec3;
+
+use super::geometry::{
+    Triangle, closest_point_on_triangle, separated_by_a_plane, triangle_triangle_distance,
+};
+
+/// Triangles per leaf.
+const LEAF_SIZE: usize = 4;
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Self = Self {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
+
+    pub fn of_triangle(t: &Triangle) -> Self {
+        Self {
+            min: t[0].min(t[1]).min(t[2]),
+            max: t[0].max(t[1]).max(t[2]),
+        }
+    }
+
+    pub fn union(self, other: Self) -> Self {
+        Self {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
+    }
+
+    pub fn expanded(self, r: f64) -> Self {
+        Self {
+            min: self.min - DVec3::splat(r),
+            max: self.max + DVec3::splat(r),
+        }
+    }
+
+    pub fn overlaps(&self, other: &Self) -> bool {
+        self.min.cmple(other.max).all() && other.min.cmple(self.max).all()
+    }
+
+    pub fn contains(&self, p: DVec3) -> bool {
+        self.min.cmple(p).all() && p.cmple(self.max).all()
+    }
+
+    /// Squared distance from `p` to the box (0 inside).
+    pub fn distance_squared(&self, p: DVec3) -> f64 {
+        let d = (self.min - p).max(p - self.max).max(DVec3::ZERO);
+        d.length_squared()
+    }
+
+    /// Whether the whole box lies farther than `r` from the plane through `point` with unit
+    /// normal `normal` (then no triangle in the box comes within `r` of a triangle in that plane).
+    fn beyond_plane(&self, point: DVec3, normal: DVec3, r: f64) -> bool {
+        let centre = 0.5 * (self.min + self.max);
+        let half = 0.5 * (self.max - self.min);
+        let radius = half.dot(normal.abs());
+        (centre - point).dot(normal).abs() > radius + r
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    bounds: Aabb,
+    /// Leaf: first triangle in `order`; inner: index of the left child (right = left + 1).
+    start: u32,
+    /// Leaf: number of triangles (> 0); inner: 0.
+    count: u32,
+}
+
+/// BVH over triangles given by corner positions (`#T`).
+#[derive(Debug, Clone)]
+pub struct TriangleBvh {
+    nodes: Vec<Node>,
+    /// Triangle corners in leaf order.
+    triangles: Vec<Triangle>,
+    /// Original index of each triangle in leaf order.
+    order: Vec<u32>,
+}
+
+impl TriangleBvh {
+    /// Builds the tree over `triangles` (any count, degenerate ones included).
+    pub fn new(triangles: Vec<Triangle>) -> Self {
+        let n = triangles.len();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let centroids: Vec<DVec3> = triangles
+            .iter()
+            .map(|t| (t[0] + t[1] + t[2]) / 3.0)
+            .collect();
+        let boxes: Vec<Aabb> = triangles.iter().map(Aabb::of_triangle).collect();
+        let mut nodes = Vec::with_capacity(2 * n / LEAF_SIZE + 1);
+        if n > 0 {
+            nodes.push(Node {
+                bounds: Aabb::EMPTY,
+                start: 0,
+                count: 0,
+            });
+            let mut stack = vec![(0usize, 0usize, n)];
+            while let Some((node, start, end)) = stack.pop() {
+                let bounds = order[start..end]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, &t| b.union(boxes[t as usize]));
+                nodes[node].bounds = bounds;
+                if end - start <= LEAF_SIZE {
+                    nodes[node].start = start as u32;
+                    nodes[node].count = (end - start) as u32;
+                    continue;
+                }
+                let (lo, hi) = order[start..end].iter().fold(
+                    (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                    |(lo, hi), &t| (lo.min(centroids[t as usize]), hi.max(centroids[t as usize])),
+                );
+                let extent = hi - lo;
+                let axis = if extent.x >= extent.y && extent.x >= extent.z {
+                    0
+                } else if extent.y >= extent.z {
+                    1
+                } else {
+                    2
+                };
+                let mid = (start + end) / 2;
+                order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
+                    centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+                });
+                let left = nodes.len();
+                nodes[node].start = left as u32;
+                nodes[node].count = 0;
+                for _ in 0..2 {
+                    nodes.push(Node {
+                        bounds: Aabb::EMPTY,
+                        start: 0,
+                        count: 0,
+                    });
+                }
+                stack.push((left, start, mid));
+                stack.push((left + 1, mid, end));
+            }
+        }
+        let triangles = order.iter().map(|&t| triangles[t as usize]).collect();
+        Self {
+            nodes,
+            triangles,
+            order,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// Distance from `p` to the nearest triangle, or `cap` if none is closer than `cap`.
+    pub fn nearest_distance(&self, p: DVec3, cap: f64) -> f64 {
+        self.nearest(p, cap).map_or(cap, |(d, _)| d)
+    }
+
+    /// Nearest triangle (original index) to `p` and its distance, if one is closer than `cap`.
+    pub fn nearest(&self, p: DVec3, cap: f64) -> Option<(f64, usize)> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let mut best2 = cap * cap;
+        let mut best = None;
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = self.nodes[stack[top] as usize];
+            if node.bounds.distance_squared(p) >= best2 {
+                continue;
+            }
+            if node.count > 0 {
+                let range = node.start as usize..(node.start + node.count) as usize;
+                for i in range {
+                    let d2 = closest_point_on_triangle(p, self.triangles[i]).distance_squared(p);
+                    if d2 < best2 {
+                        best2 = d2;
+                        best = Some(self.order[i] as usize);
+                    }
+                }
+            } else {
+                let (l, r) = (node.start as usize, node.start as usize + 1);
+                let (dl, dr) = (
+                    self.nodes[l].bounds.distance_squared(p),
+                    self.nodes[r].bounds.distance_squared(p),
+                );
+                // Visit the nearer child first (pushed last).
+                let (first, second) = if dl <= dr { (l, r) } else { (r, l) };
+                if top + 2 <= stack.len() {
+                    stack[top] = second as u32;
+                    stack[top + 1] = first as u32;
+                    top += 2;
+                }
+            }
+        }
+        best.map(|t| (best2.sqrt(), t))
+    }
+
+    /// Least distance from triangle `t` to the tree's triangles, or `cap` when none is closer
+    /// than `cap`.
+    pub fn triangle_distance(&self, t: Triangle, cap: f64) -> f64 {
+        let mut best = cap;
+        self.visit_near_triangle(t, cap, |other| {
+            best = best.min(triangle_triangle_distance(t, other));
+            best <= 0.0
+        });
+        best
+    }
+
+    /// Whether some triangle of the tree comes closer than `r` to triangle `t`.
+    pub fn any_within(&self, t: Triangle, r: f64) -> bool {
+        let mut found = false;
+        let query = Aabb::of_triangle(&t).expanded(r);
+        self.visit_near_triangle(t, r, |other| {
+            found = Aabb::of_triangle(&other).overlaps(&query)
+                && !separated_by_a_plane(t, other, r)
+                && triangle_triangle_distance(t, other) < r;
+            found
+        });
+        found
+    }
+
+    /// Whether triangle `t` stays at least `r` from every tree triangle. Exact; fast for large
+    /// triangles far from a dense tree: a (sub)triangle whose centroid lies farther than `r` +
+    /// its radius about the centroid is clear (distance is 1-Lipschitz); otherwise it is split
+    /// into four, down to `depth` levels, then tested pair by pair ([`Self::any_within`]).
+    pub fn clear_of(&self, t: Triangle, r: f64, depth: u32) -> bool {
+        let centroid = (t[0] + t[1] + t[2]) / 3.0;
+        let radius = t.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
+        let needed = r + radius;
+        if self.nearest_distance(centroid, needed) >= needed {
+            return true;
+        }
+        if depth == 0 {
+            return !self.any_within(t, r);
+        }
+        let [a, b, c] = t;
+        let (ab, bc, ca) = (0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a));
+        [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+            .into_iter()
+            .all(|sub| self.clear_of(sub, r, depth - 1))
+    }
+
+    /// Calls `visit` with every tree triangle whose box comes within `r` of `t`'s box and of
+    /// `t`'s plane, until it returns `true`.
+    fn visit_near_triangle(&self, t: Triangle, r: f64, mut visit: impl FnMut(Triangle) -> bool) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let query = Aabb::of_triangle(&t).expanded(r);
+        let normal = super::geometry::area_normal(t).normalize_or_zero();
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = self.nodes[stack[top] as usize];
+            if !node.bounds.overlaps(&query)
+                || (normal != DVec3::ZERO && node.bounds.beyond_plane(t[0], normal, r))
+            {
+                continue;
+            }
+            if node.count > 0 {
+                for i in node.start as usize..(node.start + node.count) as usize {
+                    if visit(self.triangles[i]) {
+                        return;
+                    }
+                }
+            } else if top + 2 <= stack.len() {
+                stack[top] = node.start;
+                stack[top + 1] = node.start + 1;
+                top += 2;
+            }
+        }
+    }
+
+    /// Calls `visit(original index)` for every triangle whose box overlaps `query`.
+    pub fn for_each_overlapping(&self, query: &Aabb, mut visit: impl FnMut(usize)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = self.nodes[stack[top] as usize];
+            if !node.bounds.overlaps(query) {
+                continue;
+            }
+            if node.count > 0 {
+                for i in node.start as usize..(node.start + node.count) as usize {
+                    if Aabb::of_triangle(&self.triangles[i]).overlaps(query) {
+                        visit(self.order[i] as usize);
+                    }
+                }
+            } else if top + 2 <= stack.len() {
+                stack[top] = node.start;
+                stack[top + 1] = node.start + 1;
+                top += 2;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cage_gen::geometry::point_triangle_distance;
+
+    fn grid_triangles(n: usize) -> Vec<Triangle> {
+        let mut out = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let p = DVec3::new(i as f64, j as f64, ((i * 7 + j * 3) % 5) as f64 * 0.1);
+                out.push([p, p + DVec3::X, p + DVec3::Y]);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn nearest_matches_brute_force() {
+        let tris = grid_triangles(12);
+        let bvh = TriangleBvh::new(tris.clone());
+        for k in 0..50 {
+            let p = DVec3::new(
+                (k * 37 % 130) as f64 * 0.1 - 0.5,
+                (k * 53 % 127) as f64 * 0.1,
+                (k % 7) as f64 * 0.3 - 1.0,
+            );
+            let brute = tris
+                .iter()
+                .map(|t| point_triangle_distance(p, *t))
+                .fold(f64::INFINITY, f64::min);
+            let (d, idx) = bvh.nearest(p, f64::INFINITY).unwrap();
+            assert!((d - brute).abs() < 1e-12);
+            assert!((point_triangle_distance(p, tris[idx]) - brute).abs() < 1e-12);
+            assert_eq!(bvh.nearest_distance(p, brute * 0.5), brute * 0.5);
+        }
+    }
+
+    #[test]
+    fn triangle_queries_match_brute_force() {
+        let tris = grid_triangles(8);
+        let bvh = TriangleBvh::new(tris.clone());
+        let probe = [
+            DVec3::new(2.2, 3.1, 0.9),
+            DVec3::new(5.0, 1.0, 1.4),
+            DVec3::new(3.0, 6.0, 0.7),
+        ];
+        let brute = tris
+            .iter()
+            .map(|t| triangle_triangle_distance(probe, *t))
+            .fold(f64::INFINITY, f64::min);
+        assert!((bvh.triangle_distance(probe, 10.0) - brute).abs() < 1e-12);
+        assert!(bvh.any_within(probe, brute * 1.01));
+        assert!(!bvh.any_within(probe, brute * 0.99));
+        for depth in [0, 2, 4] {
+            assert!(!bvh.clear_of(probe, brute * 1.01, depth));
+            assert!(bvh.clear_of(probe, brute * 0.99, depth));
+        }
+        let mut hits = Vec::new();
+        let query = Aabb {
+            min: DVec3::new(0.5, 0.5, -1.0),
+            max: DVec3::new(1.5, 1.2, 1.0),
+        };
+        bvh.for_each_overlapping(&query, |i| hits.push(i));
+        hits.sort();
+        let expected: Vec<usize> = (0..tris.len())
+            .filter(|&i| Aabb::of_triangle(&tris[i]).overlaps(&query))
+            .collect();
+        assert_eq!(hits, expected);
+    }
+}

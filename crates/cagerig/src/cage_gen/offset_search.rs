@@ -1,0 +1,218 @@
+//! The offset search of cage generation (see the module docs of [`crate::cage_gen`]): grid
+//! spacing from the target, then offsets from the tightest the grid guarantees upwards until a
+//! cage reaches the target and passes the validator.
+
+use std::time::Instant;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use super::bvh::{Aabb, TriangleBvh};
+use super::distance_grid::{SampleGrid, fill_from_outside};
+use super::marching_tets::extract_surface;
+use super::simplify::{CollapseConstraints, StopAt, simplify};
+use super::validate::{
+    CageReport, CageRequirements, count_pieces, mesh_primitives, validate_cage_geometry,
+};
+use super::weld::{piece_representatives, weld_by_position};
+use super::{CageGenError, CageOptions, CageTarget, MIN_VERTICES};
+use crate::mesh::TriMesh;
+
+/// Grid samples of the starting surface per target cage vertex (sets the spacing h):
+/// enough for the quadric order to pick the cage's features, few enough to stay fast.
+pub const SURFACE_SAMPLES_PER_CAGE_VERTEX: f64 = 20.0;
+/// Growth of the offset between attempts.
+pub const OFFSET_GROWTH: f64 = 1.5;
+/// Largest offset tried, × diagonal.
+pub const MAX_OFFSET: f64 = 0.5;
+/// Cage self-separation kept during simplification, × diagonal.
+pub const SEPARATION: f64 = 1e-6;
+
+/// Figures of one generation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GenerationStats {
+    /// Offset of the accepted surface, × diagonal.
+    pub offset_fraction: f64,
+    /// Grid spacing h, × diagonal.
+    pub spacing_fraction: f64,
+    pub grid_points: usize,
+    pub exact_distance_queries: usize,
+    /// Vertices of the marching-tetrahedra surface before simplification.
+    pub surface_vertices: usize,
+    pub collapses: usize,
+    pub rejected_positions: usize,
+    /// Connected pieces of the (welded) mesh.
+    pub mesh_pieces: usize,
+    /// One line per offset tried.
+    pub attempts: Vec<String>,
+    pub seconds: f64,
+}
+
+/// A cage that passed [`validate_cage_geometry`], its report and how it was made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GeneratedCage {
+    pub cage: TriMesh,
+    pub report: CageReport,
+    pub stats: GenerationStats,
+}
+
+/// Generates a cage for `mesh` (see [`crate::cage_gen`]).
+pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedCage, CageGenError> {
+    let start = Instant::now();
+    if let Some(vertex) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(CageGenError::NonFinite { vertex });
+    }
+    if mesh.triangles.is_empty() {
+        return Err(CageGenError::NoTriangles);
+    }
+    let target = options.target.vertices();
+    if target < MIN_VERTICES {
+        return Err(CageGenError::TargetTooSmall {
+            requested: target,
+            minimum: MIN_VERTICES,
+        });
+    }
+    if !(0.0..0.1).contains(&options.margin) {
+        return Err(CageGenError::InvalidMargin {
+            margin: options.margin,
+        });
+    }
+    let (lo, hi) = mesh.bounding_box();
+    let diag = (hi - lo).length();
+    if diag <= 0.0 {
+        return Err(CageGenError::NoExtent);
+    }
+    let bounds = Aabb { min: lo, max: hi };
+    let margin = options.margin * diag;
+    let welded = weld_by_position(&mesh.positions, 0.0);
+    let reps = piece_representatives(mesh.num_vertices(), &mesh.triangles, &welded);
+    let piece_points: Vec<DVec3> = reps.iter().map(|&v| mesh.positions[v]).collect();
+    let bvh = TriangleBvh::new(mesh_primitives(mesh));
+    let area: f64 = (0..mesh.num_triangles())
+        .map(|t| {
+            let [a, b, c] = mesh.corners(t);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    let longest = (hi - lo).max_element();
+    let mut spacing = (area / (SURFACE_SAMPLES_PER_CAGE_VERTEX * target as f64))
+        .sqrt()
+        .clamp(longest / 200.0, longest / 16.0);
+    let requirements = CageRequirements {
+        margin,
+        target_vertices: matches!(options.target, CageTarget::Vertices(_)).then_some(target),
+        target_faces: match options.target {
+            CageTarget::Faces(f) => Some(f),
+            CageTarget::Vertices(_) => None,
+        },
+    };
+    let stop = match options.target {
+        CageTarget::Vertices(n) => StopAt::Vertices(n),
+        CageTarget::Faces(f) => StopAt::Faces(f),
+    };
+    let constraints = CollapseConstraints {
+        mesh: &bvh,
+        margin,
+        separation: SEPARATION * diag,
+        piece_points: &piece_points,
+    };
+    let mut attempts = Vec::new();
+    let mut best_reached: Option<(usize, f64)> = None;
+    let mut last_pieces: Option<(usize, f64)> = None;
+    let mut last_failures = Vec::new();
+    let mut refinements = 0;
+    // Offset ≥ margin + h√3 guarantees the starting surface keeps the margin (marching_tets).
+    let mut offset = margin + spacing * 3f64.sqrt() * 1.01;
+    while offset <= MAX_OFFSET * diag {
+        let grid = SampleGrid::around(bounds, spacing, offset + 2.0 * spacing);
+        let grid_points = grid.num_points();
+        let field = fill_from_outside(grid, &bvh, bounds, offset);
+        let queries = field.exact_queries;
+        let surface = extract_surface(&field);
+        drop(field);
+        let surface_vertices = surface.positions.len();
+        let pieces = count_pieces(&surface.triangles, surface_vertices);
+        let offset_percent = 100.0 * offset / diag;
+        if pieces != 1 {
+            attempts.push(format!(
+                "offset {offset_percent:.2} %: {pieces} separate surface pieces"
+            ));
+            last_pieces = Some((pieces, offset_percent));
+            offset *= OFFSET_GROWTH;
+            continue;
+        }
+        if surface_vertices < target + target / 2 && refinements < 3 {
+            // Too coarse to simplify down to the target: refine the grid at the same offset.
+            attempts.push(format!(
+                "offset {offset_percent:.2} %: surface has only {surface_vertices} vertices; halving the spacing"
+            ));
+            spacing *= 0.5;
+            refinements += 1;
+            offset = offset.max(margin + spacing * 3f64.sqrt() * 1.01);
+            continue;
+        }
+        let simplified = simplify(surface, stop, constraints);
+        let reached = simplified.positions.len();
+        if !simplified.reached {
+            attempts.push(format!(
+                "offset {offset_percent:.2} %: simplification stopped at {reached} vertices"
+            ));
+            if best_reached.is_none_or(|(r, _)| reached < r) {
+                best_reached = Some((reached, offset_percent));
+            }
+            offset *= OFFSET_GROWTH;
+            continue;
+        }
+        let cage = TriMesh {
+            positions: simplified.positions,
+            triangles: simplified.triangles,
+        };
+        let report = validate_cage_geometry(&cage, mesh, &requirements);
+        if !report.passed() {
+            last_failures = report.failures();
+            attempts.push(format!(
+                "offset {offset_percent:.2} %: validation failed: {}",
+                last_failures.join("; ")
+            ));
+            offset *= OFFSET_GROWTH;
+            continue;
+        }
+        attempts.push(format!(
+            "offset {offset_percent:.2} %: {reached} vertices, validated"
+        ));
+        let stats = GenerationStats {
+            offset_fraction: offset / diag,
+            spacing_fraction: spacing / diag,
+            grid_points,
+            exact_distance_queries: queries,
+            surface_vertices,
+            collapses: simplified.collapses,
+            rejected_positions: simplified.rejections,
+            mesh_pieces: reps.len(),
+            attempts,
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        return Ok(GeneratedCage {
+            cage,
+            report,
+            stats,
+        });
+    }
+    if !last_failures.is_empty() {
+        return Err(CageGenError::ValidationFailed {
+            failures: last_failures,
+        });
+    }
+    if let Some((reached, offset_percent)) = best_reached {
+        return Err(CageGenError::TargetNotReached {
+            target,
+            reached,
+            offset_percent,
+        });
+    }
+    let (pieces, offset_percent) = last_pieces.unwrap_or((0, 100.0 * offset / diag));
+    Err(CageGenError::SeparatePieces {
+        pieces,
+        offset_percent,
+    })
+}
