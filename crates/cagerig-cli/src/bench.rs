@@ -135,6 +135,7 @@ fn load_parts(args: &BenchArgs) -> anyhow::Result<(String, RigParts)> {
         } else {
             None
         },
+        allow_outside_cage: false,
     };
     let loaded = crate::rig_source::load_rig(&rig_args, false, false)?;
     Ok((loaded.name, loaded.parts))
@@ -142,6 +143,17 @@ fn load_parts(args: &BenchArgs) -> anyhow::Result<(String, RigParts)> {
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let (name, base) = load_parts(args)?;
+    for &levels in &args.subdivide {
+        crate::memory_estimate::check_fits(
+            &format!("bench --subdivide {levels}"),
+            crate::memory_estimate::subdivided_vertices(
+                base.mesh.num_vertices() as u64,
+                base.mesh.num_triangles() as u64,
+                u32::try_from(levels).unwrap_or(u32::MAX),
+            ),
+            base.cage.num_vertices() as u64,
+        )?;
+    }
     let mut rows = Vec::new();
     for &levels in &args.subdivide {
         let parts = if levels == 0 {

@@ -1,8 +1,14 @@
 //! `cagerig`: command-line front end of the cagerig library.
 
+mod animate;
 mod bench;
 mod commands;
+mod edit;
+mod errors;
+mod memory_estimate;
+mod output_dir;
 mod rig_source;
+mod state_files;
 
 use std::path::PathBuf;
 
@@ -49,19 +55,24 @@ enum Command {
         /// Output `.maxvol` file.
         #[arg(long)]
         out: PathBuf,
+        /// Machine-readable output (errors too).
         #[arg(long)]
         json: bool,
     },
     /// Replay an edit script (JSON) and write every structure after each step.
+    #[command(after_long_help = edit::SCRIPT_HELP)]
     Edit {
         #[command(flatten)]
         rig: RigArgs,
-        /// The script: {"skinning":..., "steps":[{"op":...}, ...]}.
+        /// The script: {"skinning":..., "steps":[{"op":...}, ...]} (operations: see --help).
         #[arg(long)]
         script: PathBuf,
-        /// Output directory.
+        /// Output folder; it appears complete, only after every step succeeded.
         #[arg(long)]
         out: PathBuf,
+        /// Replace a non-empty --out that holds an earlier run's state files.
+        #[arg(long)]
+        force: bool,
         /// Skinning method (overrides the script's).
         #[arg(long, value_enum)]
         skinning: Option<commands::SkinningArg>,
@@ -78,11 +89,16 @@ enum Command {
         /// Cage animation (rest-cage offsets).
         #[arg(long)]
         cage_anim: Option<PathBuf>,
-        /// Comma-separated sample times in seconds.
-        #[arg(long, value_delimiter = ',', required = true)]
+        /// Comma-separated sample times in seconds, each once (negative times allowed).
+        #[arg(long, value_delimiter = ',', required = true, allow_hyphen_values = true)]
         times: Vec<f64>,
+        /// Output folder; it appears complete, only after every sample succeeded.
         #[arg(long)]
         out: PathBuf,
+        /// Replace a non-empty --out that holds an earlier run's state files.
+        #[arg(long)]
+        force: bool,
+        /// Skinning method.
         #[arg(long, value_enum)]
         skinning: Option<commands::SkinningArg>,
         #[command(flatten)]
@@ -105,11 +121,13 @@ enum Command {
     Subdivide {
         #[command(flatten)]
         rig: RigArgs,
+        /// Rounds of midpoint subdivision (each multiplies the triangles by 4).
         #[arg(long, default_value_t = 1)]
         levels: usize,
+        /// Output folder.
         #[arg(long)]
         out: PathBuf,
-        /// Base name of the written files.
+        /// Base name of the written files (no path separator).
         #[arg(long, default_value = "rig")]
         name: String,
     },
@@ -119,6 +137,11 @@ enum Command {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    let json = match &cli.command {
+        Command::Info { json, .. } | Command::Maxvol { json, .. } => *json,
+        Command::Bench(args) => args.json,
+        _ => false,
+    };
     let result = match cli.command {
         Command::Info { rig, json } => commands::info(&rig, json),
         Command::Coords { rig, out, fixed6 } => commands::coords(&rig, &out, fixed6),
@@ -127,23 +150,26 @@ fn main() -> std::process::ExitCode {
             rig,
             script,
             out,
+            force,
             skinning,
             session,
-        } => commands::edit(&rig, &script, &out, skinning, &session),
+        } => edit::edit(&rig, &script, &out, force, skinning, &session),
         Command::Animate {
             rig,
             skeleton_anim,
             cage_anim,
             times,
             out,
+            force,
             skinning,
             session,
-        } => commands::animate(
+        } => animate::animate(
             &rig,
             skeleton_anim.as_deref(),
             cage_anim.as_deref(),
             &times,
             &out,
+            force,
             skinning,
             &session,
         ),
@@ -160,11 +186,5 @@ fn main() -> std::process::ExitCode {
         } => commands::subdivide(&rig, levels, &out, &name),
         Command::Bench(args) => bench::run(&args),
     };
-    match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    errors::exit(result, json)
 }

@@ -10,6 +10,7 @@
 
 pub mod animation;
 pub mod cage;
+pub mod cage_enclosure;
 pub mod cage_coords;
 pub mod coords;
 pub mod demo;

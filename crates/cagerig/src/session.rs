@@ -9,7 +9,7 @@
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
-use crate::cage::validate_cage;
+use crate::cage_enclosure::validate_cage_for_mesh;
 use crate::cage_coords::{CageCoords, CoordsPrecision};
 use crate::coords::{maxvol, mvc};
 use crate::error::{RigError, Warning};
@@ -27,6 +27,10 @@ use crate::sparse_rows::SparseRows;
 use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
+
+mod checkpoint;
+pub use checkpoint::MAX_STATE_MAGNITUDE;
+use checkpoint::Checkpoint;
 
 /// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
 /// the similarity tables of [`crate::skinning::cor_grid`] (seconds, centre error ≈ 1e-4 × bbox
@@ -108,6 +112,26 @@ pub enum FitRows {
     Rows(Vec<usize>),
 }
 
+/// What a session does with given cage coordinates Φ that do not reproduce the rest mesh
+/// (max |ΦC − M| above [`PHI_C_TOLERANCE`] × the cage's bbox diagonal).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GivenCageCoords {
+    /// Recompute Φ (mean value coordinates) and report it: M = ΦC holds from the start, so the
+    /// first cage edit moves only what it touches (the default).
+    #[default]
+    RecomputeIfInexact,
+    /// Keep the given Φ (to compare with the tool that wrote it): M stays as loaded until the
+    /// first cage edit, which sets M = ΦC everywhere (untouched vertices jump by the residual).
+    Keep,
+}
+
+/// max |ΦC − M| over the mesh vertices.
+fn phi_c_residual(cage_coords: &CageCoords, cage: &[DVec3], mesh: &[DVec3]) -> f64 {
+    let mut phi_c = vec![DVec3::ZERO; mesh.len()];
+    cage_coords.apply(cage, &mut phi_c);
+    crate::mesh::max_distance(&phi_c, mesh)
+}
+
 /// Options for assembling a session.
 #[derive(Debug, Clone, Default)]
 pub struct SessionOptions {
@@ -122,6 +146,11 @@ pub struct SessionOptions {
     /// rest mesh becomes ΦC at once (it moves by ~1e-7 of the cage size); the invariants then
     /// hold to f64 round-off as in the default f64 mode.
     pub cage_coords_precision: CoordsPrecision,
+    /// Given Φ that does not reproduce M: recomputed (default) or kept.
+    pub given_cage_coords: GivenCageCoords,
+    /// Accept mesh vertices outside the cage (reported as a warning) instead of failing with
+    /// [`RigError::MeshOutsideCage`].
+    pub allow_mesh_outside_cage: bool,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).
@@ -246,6 +275,8 @@ pub struct RigSession {
     scratch_rows_rest: Vec<DVec3>,
     scratch_rows_posed: Vec<DVec3>,
     dqs_scratch: DqsScratch,
+    /// The small state saved before each event (see [`checkpoint`]).
+    checkpoint: Checkpoint,
 }
 
 impl RigSession {
@@ -278,8 +309,17 @@ impl RigSession {
                 actual: skin_weights.num_joints(),
             });
         }
-        let (cage, mut warnings) = validate_cage(cage)?;
+        if mesh.triangles.is_empty() {
+            return Err(RigError::Invalid(format!(
+                "the rest mesh has {nv} vertices and no triangle: expected a surface (the \
+                 skeleton updater and CoR skinning need its faces)"
+            )));
+        }
+        let (cage, mut warnings) =
+            validate_cage_for_mesh(cage, &mesh.positions, options.allow_mesh_outside_cage)?;
         let nc = cage.num_vertices();
+        let (lo, hi) = cage.bounding_box();
+        let phi_c_tolerance = PHI_C_TOLERANCE * (hi - lo).length();
         let mut cage_coords = match cage_coords {
             Some(phi) => {
                 if phi.num_vertices() != nv || phi.num_cage_vertices() != nc {
@@ -289,7 +329,21 @@ impl RigSession {
                         actual: phi.num_vertices() * phi.num_cage_vertices(),
                     });
                 }
-                phi
+                let residual = phi_c_residual(&phi, &cage.positions, &mesh.positions);
+                if residual > phi_c_tolerance
+                    && options.given_cage_coords == GivenCageCoords::RecomputeIfInexact
+                {
+                    warnings.push(Warning::Note {
+                        message: format!(
+                            "the given cage coordinates reproduce the rest mesh only to \
+                             {residual:.3e} (M ≠ ΦC, e.g. a file with 6 decimals): recomputed, so \
+                             that nothing the user does not touch moves at the first cage edit"
+                        ),
+                    });
+                    mvc::compute_cage_coords(&cage, &mesh.positions, None)?
+                } else {
+                    phi
+                }
             }
             None => mvc::compute_cage_coords(&cage, &mesh.positions, None)?,
         };
@@ -320,8 +374,7 @@ impl RigSession {
         let mut phi_c = vec![DVec3::ZERO; nv];
         cage_coords.apply(&rest_cage, &mut phi_c);
         let residual = crate::mesh::max_distance(&phi_c, &mesh.positions);
-        let (lo, hi) = cage.bounding_box();
-        let mut rest_mesh_is_phi_c = residual <= PHI_C_TOLERANCE * (hi - lo).length();
+        let mut rest_mesh_is_phi_c = residual <= phi_c_tolerance;
         if precision == CoordsPrecision::F32
             && !rest_mesh_is_phi_c
             && residual <= PHI_C_TOLERANCE_F32 * (hi - lo).length()
@@ -410,6 +463,7 @@ impl RigSession {
             scratch_touched: Vec::with_capacity(nc),
             scratch_rows_rest: vec![DVec3::ZERO; nr],
             scratch_rows_posed: vec![DVec3::ZERO; nr],
+            checkpoint: Checkpoint::new(nc, nj),
         };
         session.set_skinning(options.skinning)?;
         session.pose_and_fit();
@@ -511,6 +565,13 @@ impl RigSession {
 
     /// Switches the skinning method; computes CoR centres on the first switch to CoR.
     pub fn set_skinning(&mut self, method: SkinningMethod) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_skinning_event(method);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_skinning`] without the checkpoint.
+    fn set_skinning_event(&mut self, method: SkinningMethod) -> Result<(), RigError> {
         if method == SkinningMethod::Cor && self.cor.is_none() {
             self.build_cor()?;
         }
@@ -528,6 +589,13 @@ impl RigSession {
     /// S' edit: rotates joint `joint` by `angle` radians about the world-space `axis`, pivoting
     /// on the joint's current position; descendants follow. Then M' and C' follow.
     pub fn rotate_joint(&mut self, joint: usize, axis: DVec3, angle: f64) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.rotate_joint_event(joint, axis, angle);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::rotate_joint`] without the checkpoint.
+    fn rotate_joint_event(&mut self, joint: usize, axis: DVec3, angle: f64) -> Result<(), RigError> {
         self.check_joint(joint)?;
         let axis = axis
             .try_normalize()
@@ -552,7 +620,14 @@ impl RigSession {
 
     /// S' edit: sets all local rotations (parent_from_joint linear parts, `#J`) and root motions
     /// (current minus rest translation of each root; ignored for other joints).
-    pub fn set_pose(
+    pub fn set_pose(&mut self, local_rotations: &[DQuat], root_motion: &[DVec3]) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_pose_event(local_rotations, root_motion);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_pose`] without the checkpoint.
+    fn set_pose_event(
         &mut self,
         local_rotations: &[DQuat],
         root_motion: &[DVec3],
@@ -613,7 +688,14 @@ impl RigSession {
 
     /// C edit: moves rest-cage vertices `vertices` by `offsets` (one per vertex, or one for all).
     /// M follows incrementally (M += Φ[:, k]·ΔC_k), then SkelUp, skinning and CageUp.
-    pub fn move_rest_cage(
+    pub fn move_rest_cage(&mut self, vertices: &[usize], offsets: &[DVec3]) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.move_rest_cage_event(vertices, offsets);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::move_rest_cage`] without the checkpoint.
+    fn move_rest_cage_event(
         &mut self,
         vertices: &[usize],
         offsets: &[DVec3],
@@ -642,7 +724,14 @@ impl RigSession {
     /// rest-cage edit (refactorising first if the skeleton moved since the last grab); the full
     /// chain then re-fits C', which lands on the requested positions (exactly under LBS, or with
     /// the ghost fit for DQS/CoR).
-    pub fn move_posed_cage(
+    pub fn move_posed_cage(&mut self, vertices: &[usize], offsets: &[DVec3]) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.move_posed_cage_event(vertices, offsets);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::move_posed_cage`] without the checkpoint.
+    fn move_posed_cage_event(
         &mut self,
         vertices: &[usize],
         offsets: &[DVec3],
@@ -679,7 +768,14 @@ impl RigSession {
 
     /// Animation sample: rest-cage offsets from C₀ (`#C`), local rotations and root motions
     /// (`#J`); runs SkelUp so that bones follow the cage, then skinning and CageUp.
-    pub fn set_animation_sample(
+    pub fn set_animation_sample(&mut self, rest_cage_offsets: Option<&[DVec3]>, local_rotations: &[DQuat], root_motion: &[DVec3]) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_animation_sample_event(rest_cage_offsets, local_rotations, root_motion);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_animation_sample`] without the checkpoint.
+    fn set_animation_sample_event(
         &mut self,
         rest_cage_offsets: Option<&[DVec3]>,
         local_rotations: &[DQuat],
@@ -730,7 +826,14 @@ impl RigSession {
     /// Animation sample between two precomputed cage keyframes (weight `a` on `hi`): C, M and
     /// the CoR centres are lerped, then pose, SkelUp, skinning and CageUp as in
     /// [`RigSession::set_animation_sample`]. No allocation.
-    pub fn set_animation_sample_between(
+    pub fn set_animation_sample_between(&mut self, lo: &RestKeyframe, hi: &RestKeyframe, a: f64, local_rotations: &[DQuat], root_motion: &[DVec3]) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_animation_sample_between_event(lo, hi, a, local_rotations, root_motion);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_animation_sample_between`] without the checkpoint.
+    fn set_animation_sample_between_event(
         &mut self,
         lo: &RestKeyframe,
         hi: &RestKeyframe,

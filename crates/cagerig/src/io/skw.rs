@@ -86,7 +86,7 @@ pub fn write_skw_to(
     for v in 0..weights.num_vertices() {
         let (joints, values) = weights.row(v);
         for (j, x) in joints.iter().zip(values) {
-            writeln!(w, "{j} {v} {}", format.format(*x))?;
+            writeln!(w, "{j} {v} {}", format.checked(*x)?)?;
         }
     }
     Ok(())
