@@ -211,6 +211,9 @@ pub fn info(rig: &RigArgs, json: bool) -> anyhow::Result<()> {
 
 pub fn coords(rig: &RigArgs, out: &Path, fixed6: bool) -> anyhow::Result<()> {
     let mut loaded = load_rig(rig, true, false)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
     let t = Instant::now();
     let phi = crate::rig_source::compute_coords_with_progress(&loaded.parts, true)?;
     let elapsed = t.elapsed();
@@ -247,6 +250,9 @@ struct ShippedMaxvol {
 
 pub fn maxvol(rig: &RigArgs, out: &Path, json: bool) -> anyhow::Result<()> {
     let loaded = load_rig(rig, !json, true)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
     let phi = match &loaded.parts.cage_coords {
         Some(phi) => phi.clone(),
         None => crate::rig_source::compute_coords_with_progress(&loaded.parts, !json)?,

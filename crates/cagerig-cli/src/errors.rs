@@ -39,7 +39,6 @@ pub fn exit(result: anyhow::Result<()>, json: bool) -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use anyhow::Context;
 
     #[derive(Debug, thiserror::Error)]
     #[error("step 3: {source}")]

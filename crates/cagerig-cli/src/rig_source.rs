@@ -161,6 +161,9 @@ pub fn subdivide_and_write(
         );
     }
     let loaded = load_rig(args, true, false)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
     let p = &loaded.parts;
     let levels_u32 = u32::try_from(levels).unwrap_or(u32::MAX);
     crate::memory_estimate::check_fits(

@@ -298,7 +298,7 @@ fn output_is_complete_or_absent_and_never_stale() {
     // A run failing at its second step leaves the earlier output and nothing else.
     let failing = edit_script(
         &dir,
-        r#"{"steps":[{"op":"reset_pose"},{"op":"move_posed_cage","vertices":[0],"offset":[1e12,0,0]}]}"#,
+        r#"{"steps":[{"op":"reset_pose"},{"op":"move_posed_cage","vertices":[0],"offset":[1e13,0,0]}]}"#,
     );
     let o = edit(&mesh, &failing, &out, &["--force"]);
     assert_error(&o, &["step 2"]);
