@@ -26,6 +26,7 @@ use serde::Serialize;
 pub struct BenchArgs {
     /// Character mesh (OBJ) with its companions; default: the built-in rig.
     pub mesh: Option<PathBuf>,
+    /// Cage (OBJ); default `<stem>_cage.obj` beside the mesh.
     #[arg(long)]
     pub cage: Option<PathBuf>,
     /// Built-in rig when no mesh is given.
@@ -209,34 +210,44 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     let nv = parts.mesh.num_vertices();
     let nj = parts.skeleton.len();
     let nc = parts.cage.num_vertices();
-    let (cage, _) = cagerig::cage::validate_cage(parts.cage.clone())?;
+    let (cage, _) = cagerig::cage_enclosure::validate_cage_for_mesh(
+        parts.cage.clone(),
+        &parts.mesh.positions,
+        false,
+    )?;
 
     let mut phi = None;
     let mvc_stat = time(reps(5, scale, nv), 1, || {
         drop(phi.take()); // one Φ alive at a time
-        phi = mvc::compute_cage_coords(&cage, &parts.mesh.positions, None).ok();
+        phi = Some(mvc::compute_cage_coords(&cage, &parts.mesh.positions, None));
     });
-    let phi = phi.context("computing mean value coordinates")?;
+    let phi = phi
+        .context("no timing run")?
+        .context("computing mean value coordinates")?;
 
     let mut selection = None;
     let maxvol_stat = time(reps(5, scale, nv), 1, || {
-        selection = maxvol::select_maxvol_rows(&phi).ok();
+        selection = Some(maxvol::select_maxvol_rows(&phi));
     });
-    let rows = selection.context("MaxVol selection")?.rows;
+    let rows = selection
+        .context("no timing run")?
+        .context("MaxVol selection")?
+        .rows;
 
     let mut skelup = None;
     let skelup_stat = time(reps(5, scale, nv), 1, || {
-        skelup = SkeletonUpdater::new(
+        skelup = Some(SkeletonUpdater::new(
             &parts.mesh,
             &parts.skeleton,
             &parts.skin_weights,
             &phi,
             &cage.positions,
             JointLocalisation::default(),
-        )
-        .ok();
+        ));
     });
-    let (skelup, _) = skelup.context("skeleton updater")?;
+    let (skelup, _) = skelup
+        .context("no timing run")?
+        .context("skeleton updater")?;
 
     let cageup_stat = time(reps(21, scale, nv), 2, || {
         let _ = CageUpdater::new(&phi, rows.clone(), CageFitMode::Interpolate);
@@ -245,16 +256,15 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     // CoR centres as the session computes them when none are loaded: Λ (Eq. 14) directly.
     let mut lambda = None;
     let cor_centres_stat = time(if nv > 20_000 { 1 } else { 3 }, 0, || {
-        lambda = cagerig::session::compute_centre_coords(
+        lambda = Some(cagerig::session::compute_centre_coords(
             &parts.mesh.positions,
             &parts.mesh.triangles,
             &parts.skin_weights,
             &phi,
             &cagerig::skinning::CorCentresOptions::default(),
-        )
-        .ok();
+        ));
     });
-    let lambda = lambda.context("CoR centres")?;
+    let lambda = lambda.context("no timing run")?.context("CoR centres")?;
     let cor_centres_method = cagerig::session::centre_coords_method(nv).to_string();
 
     // The session, from the precomputed parts (Φ moved in, not copied).

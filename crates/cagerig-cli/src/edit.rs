@@ -37,8 +37,8 @@ pub fn edit(
 ) -> anyhow::Result<()> {
     let text = std::fs::read_to_string(script_path)
         .with_context(|| format!("reading the script {}", script_path.display()))?;
-    let script = EditScript::parse(&text)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", script_path.display()))?;
+    let script =
+        EditScript::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", script_path.display()))?;
     let mut staged = StagedDir::create(out, force)?;
     let loaded = load_rig(rig, true, true)?;
     let mut options = session_args.options();

@@ -52,6 +52,9 @@ mod tests {
         let inner = std::io::Error::other("cage vertex 99 is out of range");
         let e = anyhow::Error::new(Outer { source: inner }).context("in edits.json");
         let m = messages(&e);
-        assert_eq!(m, ["in edits.json", "step 3: cage vertex 99 is out of range"]);
+        assert_eq!(
+            m,
+            ["in edits.json", "step 3: cage vertex 99 is out of range"]
+        );
     }
 }

@@ -90,7 +90,12 @@ enum Command {
         #[arg(long)]
         cage_anim: Option<PathBuf>,
         /// Comma-separated sample times in seconds, each once (negative times allowed).
-        #[arg(long, value_delimiter = ',', required = true, allow_hyphen_values = true)]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            required = true,
+            allow_hyphen_values = true
+        )]
         times: Vec<f64>,
         /// Output folder; it appears complete, only after every sample succeeded.
         #[arg(long)]

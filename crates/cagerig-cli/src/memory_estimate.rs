@@ -82,10 +82,19 @@ mod tests {
         assert!((130_000..136_000).contains(&v3), "{v3}");
         let v8 = subdivided_vertices(2089, 4156, 8);
         assert!(v8 > 100_000_000);
-        let e = check_bytes_fit("subdivide --levels 8", v8, 58, session_bytes(v8, 58), Some(24 << 30))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("GiB") && e.contains("subdivide --levels 8"), "{e}");
+        let e = check_bytes_fit(
+            "subdivide --levels 8",
+            v8,
+            58,
+            session_bytes(v8, 58),
+            Some(24 << 30),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("GiB") && e.contains("subdivide --levels 8"),
+            "{e}"
+        );
         assert!(check_bytes_fit("N=3", v3, 58, session_bytes(v3, 58), Some(24 << 30)).is_ok());
     }
 }

@@ -137,8 +137,8 @@ impl StagedDir {
         if path.exists() {
             bail!("two outputs of this run are both named {name}");
         }
-        let file = std::fs::File::create(&path)
-            .with_context(|| format!("creating {}", path.display()))?;
+        let file =
+            std::fs::File::create(&path).with_context(|| format!("creating {}", path.display()))?;
         let mut w = std::io::BufWriter::new(file);
         write(&mut w)
             .and_then(|()| w.flush())
@@ -192,7 +192,8 @@ mod tests {
     use super::*;
 
     fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("cagerig-staged-{name}-{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("cagerig-staged-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         dir
@@ -212,7 +213,8 @@ mod tests {
         let root = scratch("complete");
         let out = root.join("out");
         let mut d = StagedDir::create(&out, false).unwrap();
-        d.write("step0_joints.json", &|w| w.write_all(b"[]")).unwrap();
+        d.write("step0_joints.json", &|w| w.write_all(b"[]"))
+            .unwrap();
         assert!(!out.exists(), "nothing visible before finish");
         assert_eq!(d.finish().unwrap(), 1);
         assert_eq!(entries(&out), ["step0_joints.json"]);
@@ -221,10 +223,14 @@ mod tests {
         // A failed run leaves the earlier output untouched and no staging folder.
         {
             let mut d = StagedDir::create(&out, true).unwrap();
-            d.write("step0_joints.json", &|w| w.write_all(b"[1]")).unwrap();
-            assert!(d
-                .write("step1_joints.json", &|_| Err(std::io::Error::other("disk full")))
-                .is_err());
+            d.write("step0_joints.json", &|w| w.write_all(b"[1]"))
+                .unwrap();
+            assert!(
+                d.write("step1_joints.json", &|_| Err(std::io::Error::other(
+                    "disk full"
+                )))
+                .is_err()
+            );
         }
         assert_eq!(entries(&root), ["out"]);
         assert_eq!(std::fs::read(out.join("step0_joints.json")).unwrap(), b"[]");
@@ -232,7 +238,8 @@ mod tests {
         // Non-empty without --force: refused. With --force: replaced, no stale files.
         assert!(StagedDir::create(&out, false).is_err());
         let mut d = StagedDir::create(&out, true).unwrap();
-        d.write("step5_mesh_rest.obj", &|w| w.write_all(b"")).unwrap();
+        d.write("step5_mesh_rest.obj", &|w| w.write_all(b""))
+            .unwrap();
         d.finish().unwrap();
         assert_eq!(entries(&out), ["step5_mesh_rest.obj"]);
         assert_eq!(entries(&root), ["out"]);

@@ -68,11 +68,10 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
         (None, None) => bail!("give a mesh file or --builtin NAME"),
     };
     // The one cage validation, the same for every command (and again in the session).
-    let cage_name = loaded
-        .files
-        .iter()
-        .find(|f| f.role == "cage")
-        .map_or_else(|| format!("the cage of {}", loaded.name), |f| f.path.display().to_string());
+    let cage_name = loaded.files.iter().find(|f| f.role == "cage").map_or_else(
+        || format!("the cage of {}", loaded.name),
+        |f| f.path.display().to_string(),
+    );
     let (cage, cage_warnings) = cagerig::cage_enclosure::validate_cage_for_mesh(
         std::mem::take(&mut loaded.parts.cage),
         &loaded.parts.mesh.positions,

@@ -28,7 +28,16 @@ impl Rng {
 }
 
 const EXTREMES: [&str; 10] = [
-    "1e308", "-1e308", "nan", "inf", "1e13", "-0", "0", "-1", "99999999999", "1e-320",
+    "1e308",
+    "-1e308",
+    "nan",
+    "inf",
+    "1e13",
+    "-0",
+    "0",
+    "-1",
+    "99999999999",
+    "1e-320",
 ];
 
 /// One structured mutation of `text`; returns the new text and a description.
@@ -49,7 +58,10 @@ fn mutate(text: &str, rng: &mut Rng) -> (String, String) {
         2 => {
             let j = rng.below(n);
             lines.swap(i, j);
-            (lines.join("\n") + "\n", format!("swap lines {} and {}", i + 1, j + 1))
+            (
+                lines.join("\n") + "\n",
+                format!("swap lines {} and {}", i + 1, j + 1),
+            )
         }
         3 => {
             let cut = rng.below(text.len());
@@ -147,13 +159,19 @@ fn mutated_arm_files_through_every_command() {
         std::fs::write(rig.join(files[which]), text).unwrap();
         let mesh = rig.join("arm.obj");
         let out = root.join("out");
-        let anim_args: Vec<PathBuf> = vec![rig.join("arm_skelAnim.txt"), rig.join("arm_cageAnim.txt")];
+        let anim_args: Vec<PathBuf> =
+            vec![rig.join("arm_skelAnim.txt"), rig.join("arm_cageAnim.txt")];
         // `edit` for most, `animate` for the animation files, `info`/`coords` for a few.
         let mut runs: Vec<Command> = Vec::new();
         let mut c = Command::new(env!("CARGO_BIN_EXE_cagerig"));
         if which >= 7 {
-            c.arg("animate").arg(&mesh).arg("--skeleton-anim").arg(&anim_args[0]);
-            c.arg("--cage-anim").arg(&anim_args[1]).args(["--times", "0.75,2.25,4"]);
+            c.arg("animate")
+                .arg(&mesh)
+                .arg("--skeleton-anim")
+                .arg(&anim_args[0]);
+            c.arg("--cage-anim")
+                .arg(&anim_args[1])
+                .args(["--times", "0.75,2.25,4"]);
         } else {
             c.arg("edit").arg(&mesh).arg("--script").arg(&script);
         }

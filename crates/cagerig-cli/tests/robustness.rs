@@ -87,14 +87,26 @@ fn edit(mesh: &Path, script: &Path, out: &Path, extra: &[&str]) -> Output {
 fn overflowing_values_are_rejected_with_file_line_and_value() {
     let dir = temp_dir("overflow");
     let cases: [(&str, fn(String) -> String, &str); 4] = [
-        ("arm.skt", |t| t.replacen("-23.712885 132.778816", "1e308 132.778816", 1), "arm.skt:4"),
-        ("arm.skw", |t| t.replacen("1 0 0.301943", "1 0 1e308", 1), "arm.skw:2"),
+        (
+            "arm.skt",
+            |t| t.replacen("-23.712885 132.778816", "1e308 132.778816", 1),
+            "arm.skt:4",
+        ),
+        (
+            "arm.skw",
+            |t| t.replacen("1 0 0.301943", "1 0 1e308", 1),
+            "arm.skw:2",
+        ),
         (
             "arm_cage_cageWeights.txt",
             |t| t.replacen("1 0 0.002031", "1 0 1e308", 1),
             "arm_cage_cageWeights.txt:2",
         ),
-        ("arm_cageAnim.txt", |t| t.replacen("c 0 0.000000", "c 0 -1e308", 1), "arm_cageAnim.txt:"),
+        (
+            "arm_cageAnim.txt",
+            |t| t.replacen("c 0 0.000000", "c 0 -1e308", 1),
+            "arm_cageAnim.txt:",
+        ),
     ];
     for (file, mutate, location) in cases {
         let case = dir.join(file);
@@ -140,12 +152,17 @@ fn skt_index_column_is_honoured() {
         std::fs::read(b.join("step1_joints.json")).unwrap()
     );
     // A repeated index is an error naming the line.
-    let dup = arm_copy(&dir.join("dup"), "arm.skt", |t| t.replacen("j 6 ", "j 5 ", 1));
+    let dup = arm_copy(&dir.join("dup"), "arm.skt", |t| {
+        t.replacen("j 6 ", "j 5 ", 1)
+    });
     assert_error(&run(&["info"], &[("", &dup)]), &["arm.skt:", "used twice"]);
     let own = arm_copy(&dir.join("own"), "arm.skt", |t| {
         t.replacen("j 4 lowerarm02.R 3 ", "j 4 lowerarm02.R 4 ", 1)
     });
-    assert_error(&run(&["info"], &[("", &own)]), &["arm.skt:", "itself as its father"]);
+    assert_error(
+        &run(&["info"], &[("", &own)]),
+        &["arm.skt:", "itself as its father"],
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -153,7 +170,10 @@ fn skt_index_column_is_honoured() {
 fn faceless_and_truncated_meshes_are_reported() {
     let dir = temp_dir("mesh");
     let faceless = arm_copy(&dir.join("faceless"), "arm.obj", |t| {
-        t.lines().filter(|l| !l.starts_with("f ")).collect::<Vec<_>>().join("\n")
+        t.lines()
+            .filter(|l| !l.starts_with("f "))
+            .collect::<Vec<_>>()
+            .join("\n")
     });
     assert_error(&run(&["info"], &[("", &faceless)]), &["arm.obj", "no face"]);
     let truncated = arm_copy(&dir.join("truncated"), "arm.obj", |t| {
@@ -177,7 +197,10 @@ fn one_cage_validation_for_every_command() {
         t.lines()
             .map(|l| match l.strip_prefix("v ") {
                 Some(rest) => {
-                    let v: Vec<f64> = rest.split_whitespace().map(|x| x.parse().unwrap()).collect();
+                    let v: Vec<f64> = rest
+                        .split_whitespace()
+                        .map(|x| x.parse().unwrap())
+                        .collect();
                     format!("v {} {} {}", v[0] * 0.5, v[1] * 0.5, v[2] * 0.5)
                 }
                 None => l.to_string(),
@@ -192,11 +215,22 @@ fn one_cage_validation_for_every_command() {
         run(&["coords"], &[("", &small), ("--out", &phi)]),
         run(&["maxvol"], &[("", &small), ("--out", &rows)]),
         run(&["subdivide"], &[("", &small), ("--out", &sub)]),
-        edit(&small, &edit_script(&dir, SMALL_SCRIPT), &dir.join("e"), &[]),
+        edit(
+            &small,
+            &edit_script(&dir, SMALL_SCRIPT),
+            &dir.join("e"),
+            &[],
+        ),
     ] {
-        assert_error(&o, &["arm_cage.obj", "outside the cage", "farthest: vertex"]);
+        assert_error(
+            &o,
+            &["arm_cage.obj", "outside the cage", "farthest: vertex"],
+        );
     }
-    let o = run(&["coords", "--allow-outside-cage"], &[("", &small), ("--out", &phi)]);
+    let o = run(
+        &["coords", "--allow-outside-cage"],
+        &[("", &small), ("--out", &phi)],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("outside the cage"));
     // An open cage: the same error from coords as from edit.
@@ -223,7 +257,10 @@ fn repeated_script_vertices_are_refused() {
     );
     let out = dir.join("out");
     let mesh = shared_arm().join("arm.obj");
-    assert_error(&edit(&mesh, &script, &out, &[]), &["step 1", "listed 3 times"]);
+    assert_error(
+        &edit(&mesh, &script, &out, &[]),
+        &["step 1", "listed 3 times"],
+    );
     assert!(!out.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -271,10 +308,17 @@ fn shipped_arm_cage_edit_moves_only_what_it_touches() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("recomputed"), "{}", stderr(&o));
     let jump = max_jump(&out);
-    assert!(jump < 1e-8, "untouched current-cage vertices moved by {jump}");
+    assert!(
+        jump < 1e-8,
+        "untouched current-cage vertices moved by {jump}"
+    );
     // The tool's Φ, kept on request: the documented jump of the 6 decimals.
     let kept = dir.join("kept");
-    assert!(edit(&mesh, &script, &kept, &["--keep-file-coords"]).status.success());
+    assert!(
+        edit(&mesh, &script, &kept, &["--keep-file-coords"])
+            .status
+            .success()
+    );
     assert!(max_jump(&kept) > 1e-4);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -294,7 +338,11 @@ fn output_is_complete_or_absent_and_never_stale() {
     assert_error(&edit(&mesh, &two, &out, &[]), &["--force"]);
     let one = edit_script(&dir, r#"{"steps":[{"op":"reset_pose"}]}"#);
     assert!(edit(&mesh, &one, &out, &["--force"]).status.success());
-    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 10, "stale step2 files");
+    assert_eq!(
+        std::fs::read_dir(&out).unwrap().count(),
+        10,
+        "stale step2 files"
+    );
     // A run failing at its second step leaves the earlier output and nothing else.
     let failing = edit_script(
         &dir,
@@ -320,14 +368,32 @@ fn subdivide_name_cannot_escape_and_huge_requests_are_refused_up_front() {
     let dir = temp_dir("escape");
     let mesh = shared_arm().join("arm.obj");
     let out = dir.join("out");
-    let o = run(&["subdivide", "--name", "../escaped"], &[("", &mesh), ("--out", &out)]);
+    let o = run(
+        &["subdivide", "--name", "../escaped"],
+        &[("", &mesh), ("--out", &out)],
+    );
     assert_error(&o, &["--name", "path separator"]);
     assert!(!dir.join("escaped.obj").exists());
     let start = std::time::Instant::now();
     for args in [
-        vec!["subdivide", "--levels", "8", "--out", out.to_str().unwrap(), mesh.to_str().unwrap()],
+        vec![
+            "subdivide",
+            "--levels",
+            "8",
+            "--out",
+            out.to_str().unwrap(),
+            mesh.to_str().unwrap(),
+        ],
         vec!["bench", "--subdivide", "8", mesh.to_str().unwrap()],
-        vec!["demo", "--builtin", "snake", "--resolution", "10000000", "--out", out.to_str().unwrap()],
+        vec![
+            "demo",
+            "--builtin",
+            "snake",
+            "--resolution",
+            "10000000",
+            "--out",
+            out.to_str().unwrap(),
+        ],
     ] {
         let o = cagerig().args(&args).output().unwrap();
         assert_error(&o, &["GiB", "would need"]);
@@ -350,9 +416,19 @@ fn json_errors_are_json_and_script_errors_print_once() {
         &dir,
         r#"{"steps":[{"op":"rotate_joint","joint":{"x":1},"axis":[1,0,0],"degrees":1}]}"#,
     );
-    let o = run(&["edit", "--builtin", "bar", "--script"], &[("", &script), ("--out", &dir.join("o"))]);
+    let o = run(
+        &["edit", "--builtin", "bar", "--script"],
+        &[("", &script), ("--out", &dir.join("o"))],
+    );
     let e = stderr(&o);
-    assert_error(&o, &["edits.json", "step 1", "joint name or a non-negative integer"]);
+    assert_error(
+        &o,
+        &[
+            "edits.json",
+            "step 1",
+            "joint name or a non-negative integer",
+        ],
+    );
     assert!(!e.contains("untagged"), "{e}");
     assert_eq!(e.matches("step 1").count(), 1, "{e}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -360,8 +436,8 @@ fn json_errors_are_json_and_script_errors_print_once() {
 
 #[test]
 fn readme_example_runs_on_the_arm_and_the_bar_and_help_lists_operations() {
-    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md"))
-        .unwrap();
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
     assert!(!readme.contains("(from\n`docs/reference-tool.md`)"));
     let start = readme.find("```json\n").unwrap() + 8;
     let end = readme[start..].find("```").unwrap() + start;
@@ -370,11 +446,20 @@ fn readme_example_runs_on_the_arm_and_the_bar_and_help_lists_operations() {
     let arm = shared_arm().join("arm.obj");
     let o = edit(&arm, &script, &dir.join("arm"), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let o = run(&["edit", "--builtin", "bar", "--script"], &[("", &script), ("--out", &dir.join("bar"))]);
+    let o = run(
+        &["edit", "--builtin", "bar", "--script"],
+        &[("", &script), ("--out", &dir.join("bar"))],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let help = cagerig().args(["edit", "--help"]).output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
-    for op in ["rotate_joint", "move_rest_cage", "move_posed_cage", "set_skinning", "reset_pose"] {
+    for op in [
+        "rotate_joint",
+        "move_rest_cage",
+        "move_posed_cage",
+        "set_skinning",
+        "reset_pose",
+    ] {
         assert!(help.contains(op), "{op} missing from edit --help");
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -178,9 +178,17 @@ mod tests {
     fn winding_number_separates_inside_from_outside() {
         let c = cube();
         assert!(c.signed_volume() > 0.0);
-        let inside = [DVec3::splat(0.5), DVec3::new(0.01, 0.99, 0.5), DVec3::new(0.0, 0.5, 0.5)];
+        let inside = [
+            DVec3::splat(0.5),
+            DVec3::new(0.01, 0.99, 0.5),
+            DVec3::new(0.0, 0.5, 0.5),
+        ];
         assert_eq!(vertices_outside_cage(&c, &inside), None);
-        let points = [DVec3::splat(0.5), DVec3::new(1.5, 0.5, 0.5), DVec3::new(0.5, -3.0, 0.5)];
+        let points = [
+            DVec3::splat(0.5),
+            DVec3::new(1.5, 0.5, 0.5),
+            DVec3::new(0.5, -3.0, 0.5),
+        ];
         let out = vertices_outside_cage(&c, &points).unwrap();
         assert_eq!(out.count, 2);
         assert_eq!(out.worst_vertex, 2);
@@ -193,7 +201,11 @@ mod tests {
         let e = validate_cage_for_mesh(cube(), &far, false).unwrap_err();
         assert!(matches!(
             e,
-            RigError::MeshOutsideCage { count: 1, worst_vertex: 0, .. }
+            RigError::MeshOutsideCage {
+                count: 1,
+                worst_vertex: 0,
+                ..
+            }
         ));
         assert!(e.to_string().contains("1 of 1"), "{e}");
         let (_, w) = validate_cage_for_mesh(cube(), &far, true).unwrap();
@@ -204,8 +216,14 @@ mod tests {
     fn point_triangle_distance_regions() {
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
         assert!((point_triangle_distance(DVec3::new(0.2, 0.2, 1.0), a, b, c) - 1.0).abs() < 1e-15);
-        assert!((point_triangle_distance(DVec3::new(-1.0, -1.0, 0.0), a, b, c) - 2f64.sqrt()).abs() < 1e-15);
+        assert!(
+            (point_triangle_distance(DVec3::new(-1.0, -1.0, 0.0), a, b, c) - 2f64.sqrt()).abs()
+                < 1e-15
+        );
         assert!((point_triangle_distance(DVec3::new(0.5, -2.0, 0.0), a, b, c) - 2.0).abs() < 1e-15);
-        assert!((point_triangle_distance(DVec3::new(1.0, 1.0, 0.0), a, b, c) - 0.5f64.sqrt()).abs() < 1e-15);
+        assert!(
+            (point_triangle_distance(DVec3::new(1.0, 1.0, 0.0), a, b, c) - 0.5f64.sqrt()).abs()
+                < 1e-15
+        );
     }
 }

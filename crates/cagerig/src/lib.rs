@@ -10,8 +10,8 @@
 
 pub mod animation;
 pub mod cage;
-pub mod cage_enclosure;
 pub mod cage_coords;
+pub mod cage_enclosure;
 pub mod coords;
 pub mod demo;
 pub mod error;

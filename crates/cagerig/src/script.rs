@@ -298,9 +298,14 @@ mod tests {
             Err(ScriptError::Step { step: 1, .. })
         ));
         // No serde internals in the message (issue 11).
-        let err = EditScript::parse(r#"{"steps":[{"op":"rotate_joint","joint":[1],"axis":[1,0,0],"degrees":1}]}"#)
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("joint name or a non-negative integer") && !err.contains("untagged"), "{err}");
+        let err = EditScript::parse(
+            r#"{"steps":[{"op":"rotate_joint","joint":[1],"axis":[1,0,0],"degrees":1}]}"#,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("joint name or a non-negative integer") && !err.contains("untagged"),
+            "{err}"
+        );
     }
 }

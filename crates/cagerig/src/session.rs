@@ -9,8 +9,8 @@
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
-use crate::cage_enclosure::validate_cage_for_mesh;
 use crate::cage_coords::{CageCoords, CoordsPrecision};
+use crate::cage_enclosure::validate_cage_for_mesh;
 use crate::coords::{maxvol, mvc};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
@@ -29,8 +29,8 @@ use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
 mod checkpoint;
-pub use checkpoint::MAX_STATE_MAGNITUDE;
 use checkpoint::Checkpoint;
+pub use checkpoint::MAX_STATE_MAGNITUDE;
 
 /// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
 /// the similarity tables of [`crate::skinning::cor_grid`] (seconds, centre error ≈ 1e-4 × bbox
@@ -353,6 +353,14 @@ impl RigSession {
         }
         let (rows, mode) = match options.fit_rows {
             FitRows::MaxVol => match maxvol_rows {
+                Some(rows) if rows.len() < nc => {
+                    return Err(RigError::SizeMismatch {
+                        what: "given MaxVol rows (at least one per cage vertex)",
+                        expected: nc,
+                        actual: rows.len(),
+                    });
+                }
+                Some(rows) if rows.len() > nc => (rows, CageFitMode::LeastSquares),
                 Some(rows) => (rows, CageFitMode::Interpolate),
                 None => (
                     maxvol::select_maxvol_rows(&cage_coords)?.rows,
@@ -595,7 +603,12 @@ impl RigSession {
     }
 
     /// [`RigSession::rotate_joint`] without the checkpoint.
-    fn rotate_joint_event(&mut self, joint: usize, axis: DVec3, angle: f64) -> Result<(), RigError> {
+    fn rotate_joint_event(
+        &mut self,
+        joint: usize,
+        axis: DVec3,
+        angle: f64,
+    ) -> Result<(), RigError> {
         self.check_joint(joint)?;
         let axis = axis
             .try_normalize()
@@ -620,7 +633,11 @@ impl RigSession {
 
     /// S' edit: sets all local rotations (parent_from_joint linear parts, `#J`) and root motions
     /// (current minus rest translation of each root; ignored for other joints).
-    pub fn set_pose(&mut self, local_rotations: &[DQuat], root_motion: &[DVec3]) -> Result<(), RigError> {
+    pub fn set_pose(
+        &mut self,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
         self.save_checkpoint();
         let result = self.set_pose_event(local_rotations, root_motion);
         self.finish_event(result)
@@ -688,7 +705,11 @@ impl RigSession {
 
     /// C edit: moves rest-cage vertices `vertices` by `offsets` (one per vertex, or one for all).
     /// M follows incrementally (M += Φ[:, k]·ΔC_k), then SkelUp, skinning and CageUp.
-    pub fn move_rest_cage(&mut self, vertices: &[usize], offsets: &[DVec3]) -> Result<(), RigError> {
+    pub fn move_rest_cage(
+        &mut self,
+        vertices: &[usize],
+        offsets: &[DVec3],
+    ) -> Result<(), RigError> {
         self.save_checkpoint();
         let result = self.move_rest_cage_event(vertices, offsets);
         self.finish_event(result)
@@ -724,7 +745,11 @@ impl RigSession {
     /// rest-cage edit (refactorising first if the skeleton moved since the last grab); the full
     /// chain then re-fits C', which lands on the requested positions (exactly under LBS, or with
     /// the ghost fit for DQS/CoR).
-    pub fn move_posed_cage(&mut self, vertices: &[usize], offsets: &[DVec3]) -> Result<(), RigError> {
+    pub fn move_posed_cage(
+        &mut self,
+        vertices: &[usize],
+        offsets: &[DVec3],
+    ) -> Result<(), RigError> {
         self.save_checkpoint();
         let result = self.move_posed_cage_event(vertices, offsets);
         self.finish_event(result)
@@ -768,9 +793,15 @@ impl RigSession {
 
     /// Animation sample: rest-cage offsets from C₀ (`#C`), local rotations and root motions
     /// (`#J`); runs SkelUp so that bones follow the cage, then skinning and CageUp.
-    pub fn set_animation_sample(&mut self, rest_cage_offsets: Option<&[DVec3]>, local_rotations: &[DQuat], root_motion: &[DVec3]) -> Result<(), RigError> {
+    pub fn set_animation_sample(
+        &mut self,
+        rest_cage_offsets: Option<&[DVec3]>,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
         self.save_checkpoint();
-        let result = self.set_animation_sample_event(rest_cage_offsets, local_rotations, root_motion);
+        let result =
+            self.set_animation_sample_event(rest_cage_offsets, local_rotations, root_motion);
         self.finish_event(result)
     }
 
@@ -826,9 +857,17 @@ impl RigSession {
     /// Animation sample between two precomputed cage keyframes (weight `a` on `hi`): C, M and
     /// the CoR centres are lerped, then pose, SkelUp, skinning and CageUp as in
     /// [`RigSession::set_animation_sample`]. No allocation.
-    pub fn set_animation_sample_between(&mut self, lo: &RestKeyframe, hi: &RestKeyframe, a: f64, local_rotations: &[DQuat], root_motion: &[DVec3]) -> Result<(), RigError> {
+    pub fn set_animation_sample_between(
+        &mut self,
+        lo: &RestKeyframe,
+        hi: &RestKeyframe,
+        a: f64,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
         self.save_checkpoint();
-        let result = self.set_animation_sample_between_event(lo, hi, a, local_rotations, root_motion);
+        let result =
+            self.set_animation_sample_between_event(lo, hi, a, local_rotations, root_motion);
         self.finish_event(result)
     }
 

@@ -31,7 +31,8 @@ fn close(a: &[Vec<DVec3>], b: &[Vec<DVec3>], tol: f64) -> bool {
 fn an_event_that_would_overflow_is_refused_and_the_rig_stays_as_it_was() {
     let (mut s, _) = RigSession::new(bar_parts(), SessionOptions::default()).unwrap();
     s.rotate_joint(2, DVec3::Z, 0.7).unwrap();
-    s.move_rest_cage(&[3], &[DVec3::new(0.0, 0.2, 0.0)]).unwrap();
+    s.move_rest_cage(&[3], &[DVec3::new(0.0, 0.2, 0.0)])
+        .unwrap();
     let before = snapshot(&s);
     // Finite offsets whose sum leaves the bound: refused, nothing moved.
     let huge = DVec3::new(MAX_STATE_MAGNITUDE * 0.75, 0.0, 0.0);
@@ -40,7 +41,11 @@ fn an_event_that_would_overflow_is_refused_and_the_rig_stays_as_it_was() {
     let e = s.move_rest_cage(&[5], &[huge]).unwrap_err();
     assert!(matches!(e, RigError::EventRefused { .. }), "{e}");
     assert!(e.to_string().contains("rest cage vertex 5"), "{e}");
-    assert!(close(&snapshot(&s), &after_first, 1e-9 * MAX_STATE_MAGNITUDE));
+    assert!(close(
+        &snapshot(&s),
+        &after_first,
+        1e-9 * MAX_STATE_MAGNITUDE
+    ));
     // (Moving back by −huge would lose the small offsets to cancellation: start afresh.)
     let (mut s, _) = RigSession::new(bar_parts(), SessionOptions::default()).unwrap();
     s.rotate_joint(2, DVec3::Z, 0.7).unwrap();
@@ -72,7 +77,11 @@ fn constructors_refuse_a_cage_that_does_not_enclose_the_mesh() {
         ..SessionOptions::default()
     };
     let (_, warnings) = RigSession::new(parts, options).unwrap();
-    assert!(warnings.iter().any(|w| w.to_string().contains("outside the cage")));
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.to_string().contains("outside the cage"))
+    );
     // A mesh without faces.
     let mut faceless = bar_parts();
     faceless.mesh.triangles.clear();

@@ -74,6 +74,16 @@ pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, Pars
         Some(p) => {
             let rows = super::maxvol::read_maxvol(p, nv)?;
             files.push(("maxvol", p.clone()));
+            if rows.len() < nc {
+                return Err(ParseError::Rig {
+                    path: p.clone(),
+                    source: crate::error::RigError::Invalid(format!(
+                        "expected at least {nc} mesh rows (one per cage vertex), found {}: the \
+                         cage could not be fitted; delete the file to have the rows computed",
+                        rows.len()
+                    )),
+                });
+            }
             if rows.len() != nc {
                 warnings.push(Warning::Note {
                     message: format!(

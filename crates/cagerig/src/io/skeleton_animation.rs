@@ -245,7 +245,9 @@ pub fn skeleton_animation_text(
         }
     }
     if let Some(t) = track.times().iter().find(|t| !t.is_finite()) {
-        return Err(format!("keyframe time {t} is not finite (refusing to write it)"));
+        return Err(format!(
+            "keyframe time {t} is not finite (refusing to write it)"
+        ));
     }
     let f = |x: f64| format.format(x);
     let mut out = String::new();

@@ -66,6 +66,8 @@ pub(crate) fn lines<'a>(
     data: &'a [u8],
     source: &'a Path,
 ) -> impl Iterator<Item = Result<Line<'a>, ParseError>> + 'a {
+    // A UTF-8 byte-order mark (some Windows editors write one) is not part of the first line.
+    let data = data.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(data);
     // A final newline ends the last line; it does not start another one.
     let data = data.strip_suffix(b"\n").unwrap_or(data);
     let mut parts = data.split(|&b| b == b'\n');
@@ -265,17 +267,39 @@ mod tests {
     #[test]
     fn numbers_past_the_input_bound_are_rejected_with_line_and_value() {
         let src = Path::new("mem");
-        for (text, ok) in [("1e12", true), ("-1e12", true), ("1.0000001e12", false), ("1e308", false), ("-1e308", false), ("inf", false), ("NaN", false)] {
+        for (text, ok) in [
+            ("1e12", true),
+            ("-1e12", true),
+            ("1.0000001e12", false),
+            ("1e308", false),
+            ("-1e308", false),
+            ("inf", false),
+            ("NaN", false),
+        ] {
             let line = lines(text.as_bytes(), src).next().unwrap().unwrap();
             let got = line.tokens().f64("weight");
             assert_eq!(got.is_ok(), ok, "{text}");
             if let Err(e) = got {
-                assert!(matches!(&e, ParseError::Malformed { line: 1, found, .. } if found == text), "{e}");
+                assert!(
+                    matches!(&e, ParseError::Malformed { line: 1, found, .. } if found == text),
+                    "{e}"
+                );
             }
         }
         assert!(FloatFormat::RoundTrip.checked(f64::NAN).is_err());
         assert!(FloatFormat::TOOL.checked(f64::NEG_INFINITY).is_err());
         assert_eq!(FloatFormat::RoundTrip.checked(0.5).unwrap(), "0.5");
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let src = Path::new("mem");
+        let first = lines(b"\xEF\xBB\xBF12 0 0.5\n", src)
+            .next()
+            .unwrap()
+            .unwrap();
+        assert_eq!(first.text, "12 0 0.5");
+        assert_eq!(first.tokens().usize("joint").unwrap(), 12);
     }
 
     #[test]

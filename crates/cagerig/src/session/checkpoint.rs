@@ -53,9 +53,7 @@ fn bad_point(points: &[DVec3]) -> Option<(usize, DVec3)> {
 fn bad_frame(frames: &[DAffine3]) -> Option<(usize, DVec3)> {
     frames
         .iter()
-        .position(|f| {
-            !(f.is_finite() && f.translation.abs().max_element() <= MAX_STATE_MAGNITUDE)
-        })
+        .position(|f| !(f.is_finite() && f.translation.abs().max_element() <= MAX_STATE_MAGNITUDE))
         .map(|k| (k, frames[k].translation))
 }
 
