@@ -71,7 +71,7 @@ fn mutate(text: &str, rng: &mut Rng) -> (String, String) {
             }
             (text[..cut].to_string(), format!("cut at byte {cut}"))
         }
-        4 | 5 | 6 => {
+        4..=6 => {
             let mut tokens: Vec<String> = lines[i].split_whitespace().map(str::to_string).collect();
             if tokens.len() > 1 {
                 let k = 1 + rng.below(tokens.len() - 1);

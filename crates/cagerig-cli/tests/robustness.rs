@@ -86,7 +86,9 @@ fn edit(mesh: &Path, script: &Path, out: &Path, extra: &[&str]) -> Output {
 #[test]
 fn overflowing_values_are_rejected_with_file_line_and_value() {
     let dir = temp_dir("overflow");
-    let cases: [(&str, fn(String) -> String, &str); 4] = [
+    /// (file, mutation, expected location in the error)
+    type Case = (&'static str, fn(String) -> String, &'static str);
+    let cases: [Case; 4] = [
         (
             "arm.skt",
             |t| t.replacen("-23.712885 132.778816", "1e308 132.778816", 1),
