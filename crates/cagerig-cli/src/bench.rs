@@ -26,6 +26,7 @@ use serde::Serialize;
 pub struct BenchArgs {
     /// Character mesh (OBJ) with its companions; default: the built-in rig.
     pub mesh: Option<PathBuf>,
+    /// Cage (OBJ); default `<stem>_cage.obj` beside the mesh.
     #[arg(long)]
     pub cage: Option<PathBuf>,
     /// Built-in rig when no mesh is given.
@@ -136,6 +137,7 @@ fn load_parts(args: &BenchArgs) -> anyhow::Result<(String, RigParts)> {
             None
         },
         skin: None,
+        allow_outside_cage: false,
     };
     let loaded = crate::rig_source::load_rig(&rig_args, false, false)?;
     Ok((loaded.name, loaded.parts))
@@ -143,6 +145,17 @@ fn load_parts(args: &BenchArgs) -> anyhow::Result<(String, RigParts)> {
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let (name, base) = load_parts(args)?;
+    for &levels in &args.subdivide {
+        crate::memory_estimate::check_fits(
+            &format!("bench --subdivide {levels}"),
+            crate::memory_estimate::subdivided_vertices(
+                base.mesh.num_vertices() as u64,
+                base.mesh.num_triangles() as u64,
+                u32::try_from(levels).unwrap_or(u32::MAX),
+            ),
+            base.cage.num_vertices() as u64,
+        )?;
+    }
     let mut rows = Vec::new();
     for &levels in &args.subdivide {
         let parts = if levels == 0 {
@@ -198,34 +211,44 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     let nv = parts.mesh.num_vertices();
     let nj = parts.skeleton.len();
     let nc = parts.cage.num_vertices();
-    let (cage, _) = cagerig::cage::validate_cage(parts.cage.clone())?;
+    let (cage, _) = cagerig::cage_enclosure::validate_cage_for_mesh(
+        parts.cage.clone(),
+        &parts.mesh.positions,
+        false,
+    )?;
 
     let mut phi = None;
     let mvc_stat = time(reps(5, scale, nv), 1, || {
         drop(phi.take()); // one Φ alive at a time
-        phi = mvc::compute_cage_coords(&cage, &parts.mesh.positions, None).ok();
+        phi = Some(mvc::compute_cage_coords(&cage, &parts.mesh.positions, None));
     });
-    let phi = phi.context("computing mean value coordinates")?;
+    let phi = phi
+        .context("no timing run")?
+        .context("computing mean value coordinates")?;
 
     let mut selection = None;
     let maxvol_stat = time(reps(5, scale, nv), 1, || {
-        selection = maxvol::select_maxvol_rows(&phi).ok();
+        selection = Some(maxvol::select_maxvol_rows(&phi));
     });
-    let rows = selection.context("MaxVol selection")?.rows;
+    let rows = selection
+        .context("no timing run")?
+        .context("MaxVol selection")?
+        .rows;
 
     let mut skelup = None;
     let skelup_stat = time(reps(5, scale, nv), 1, || {
-        skelup = SkeletonUpdater::new(
+        skelup = Some(SkeletonUpdater::new(
             &parts.mesh,
             &parts.skeleton,
             &parts.skin_weights,
             &phi,
             &cage.positions,
             JointLocalisation::default(),
-        )
-        .ok();
+        ));
     });
-    let (skelup, _) = skelup.context("skeleton updater")?;
+    let (skelup, _) = skelup
+        .context("no timing run")?
+        .context("skeleton updater")?;
 
     let cageup_stat = time(reps(21, scale, nv), 2, || {
         let _ = CageUpdater::new(&phi, rows.clone(), CageFitMode::Interpolate);
@@ -234,16 +257,15 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     // CoR centres as the session computes them when none are loaded: Λ (Eq. 14) directly.
     let mut lambda = None;
     let cor_centres_stat = time(if nv > 20_000 { 1 } else { 3 }, 0, || {
-        lambda = cagerig::session::compute_centre_coords(
+        lambda = Some(cagerig::session::compute_centre_coords(
             &parts.mesh.positions,
             &parts.mesh.triangles,
             &parts.skin_weights,
             &phi,
             &cagerig::skinning::CorCentresOptions::default(),
-        )
-        .ok();
+        ));
     });
-    let lambda = lambda.context("CoR centres")?;
+    let lambda = lambda.context("no timing run")?.context("CoR centres")?;
     let cor_centres_method = cagerig::session::centre_coords_method(nv).to_string();
 
     // The session, from the precomputed parts (Φ moved in, not copied).

@@ -3,14 +3,11 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use cagerig::Warning;
 use cagerig::cage_coords::CoordsPrecision;
 use cagerig::coords::maxvol;
-use cagerig::io::obj::write_obj_to;
-use cagerig::io::text::FloatFormat;
-use cagerig::script::EditScript;
-use cagerig::session::{CageFitSource, FitRows, RigSession, SessionOptions};
+use cagerig::session::{CageFitSource, FitRows, GivenCageCoords, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use cagerig::sync::skeleton_updater::JointLocalisation;
 use clap::{Args, ValueEnum};
@@ -18,6 +15,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::rig_source::{LoadedRig, RigArgs, load_rig};
+use crate::state_files::StateFiles;
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum SkinningArg {
@@ -88,6 +86,11 @@ pub struct SessionArgs {
     /// Precision of the cage coordinates Φ in the per-frame products M = ΦC.
     #[arg(long, value_enum, default_value_t)]
     pub coords_precision: PrecisionArg,
+    /// Keep a cage-weights file's Φ even when it does not reproduce the mesh (M ≠ ΦC, e.g. the
+    /// tool's 6 decimals): to compare with the tool. By default such a Φ is recomputed, so that
+    /// the first cage edit moves only what it touches.
+    #[arg(long)]
+    pub keep_file_coords: bool,
 }
 
 impl SessionArgs {
@@ -109,15 +112,24 @@ impl SessionArgs {
                 PrecisionArg::F64 => CoordsPrecision::F64,
                 PrecisionArg::F32 => CoordsPrecision::F32,
             },
+            given_cage_coords: if self.keep_file_coords {
+                GivenCageCoords::Keep
+            } else {
+                GivenCageCoords::RecomputeIfInexact
+            },
             ..SessionOptions::default()
         }
     }
 }
 
-pub(crate) fn start_session(
+pub fn start_session(
     loaded: LoadedRig,
     options: SessionOptions,
 ) -> anyhow::Result<(RigSession, Vec<Warning>)> {
+    let options = SessionOptions {
+        allow_mesh_outside_cage: loaded.allow_outside_cage,
+        ..options
+    };
     let (session, mut warnings) =
         RigSession::new(loaded.parts, options).context("assembling the rig")?;
     let mut all = loaded.warnings;
@@ -212,6 +224,9 @@ pub fn info(rig: &RigArgs, json: bool) -> anyhow::Result<()> {
 
 pub fn coords(rig: &RigArgs, out: &Path, fixed6: bool) -> anyhow::Result<()> {
     let mut loaded = load_rig(rig, true, false)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
     let t = Instant::now();
     let phi = crate::rig_source::compute_coords_with_progress(&loaded.parts, true)?;
     let elapsed = t.elapsed();
@@ -248,6 +263,9 @@ struct ShippedMaxvol {
 
 pub fn maxvol(rig: &RigArgs, out: &Path, json: bool) -> anyhow::Result<()> {
     let loaded = load_rig(rig, !json, true)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
     let phi = match &loaded.parts.cage_coords {
         Some(phi) => phi.clone(),
         None => crate::rig_source::compute_coords_with_progress(&loaded.parts, !json)?,
@@ -286,177 +304,6 @@ pub fn maxvol(rig: &RigArgs, out: &Path, json: bool) -> anyhow::Result<()> {
             );
         }
     }
-    Ok(())
-}
-
-// ----- edit / animate ------------------------------------------------------------------------
-
-/// A triangle as vertex indices.
-type Triangle = [u32; 3];
-
-/// Files produced for one state, kept in memory until the whole run succeeded.
-pub struct StateFiles {
-    files: Vec<(PathBuf, Vec<u8>)>,
-}
-
-#[derive(Serialize)]
-struct JointState {
-    name: String,
-    parent: Option<usize>,
-    rest: [f64; 3],
-    posed: [f64; 3],
-}
-
-impl StateFiles {
-    pub fn new() -> Self {
-        Self { files: Vec::new() }
-    }
-
-    /// Adds `{prefix}_mesh_rest.obj`, `_mesh_posed.obj`, `_cage_rest.obj`, `_cage_posed.obj`
-    /// and `_joints.json` for the session's current state.
-    pub fn add_state(&mut self, prefix: &str, s: &RigSession) -> anyhow::Result<()> {
-        let objs: [(&str, &[DVec3], &[Triangle]); 4] = [
-            ("mesh_rest", s.rest_mesh(), s.mesh_triangles()),
-            ("mesh_posed", s.posed_mesh(), s.mesh_triangles()),
-            ("cage_rest", s.rest_cage(), s.cage_triangles()),
-            ("cage_posed", s.posed_cage(), s.cage_triangles()),
-        ];
-        for (what, positions, triangles) in objs {
-            let mut bytes = Vec::new();
-            write_obj_to(&mut bytes, positions, triangles, FloatFormat::RoundTrip)?;
-            self.files
-                .push((PathBuf::from(format!("{prefix}_{what}.obj")), bytes));
-        }
-        let joints: Vec<JointState> = s
-            .skeleton()
-            .joints()
-            .iter()
-            .zip(s.rest_joints().zip(s.posed_joints()))
-            .map(|(j, (rest, posed))| JointState {
-                name: j.name.clone(),
-                parent: j.parent,
-                rest: rest.to_array(),
-                posed: posed.to_array(),
-            })
-            .collect();
-        self.files.push((
-            PathBuf::from(format!("{prefix}_joints.json")),
-            serde_json::to_vec_pretty(&joints)?,
-        ));
-        Ok(())
-    }
-
-    /// Writes every file into `dir` (created if needed), each through a temporary file.
-    pub fn write_all(&self, dir: &Path) -> anyhow::Result<usize> {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("creating output directory {}", dir.display()))?;
-        for (name, bytes) in &self.files {
-            let path = dir.join(name);
-            cagerig::io::atomic::write_atomically(&path, |w| w.write_all(bytes))
-                .with_context(|| format!("writing {}", path.display()))?;
-        }
-        Ok(self.files.len())
-    }
-}
-
-pub fn edit(
-    rig: &RigArgs,
-    script_path: &Path,
-    out: &Path,
-    skinning: Option<SkinningArg>,
-    session_args: &SessionArgs,
-) -> anyhow::Result<()> {
-    let text = std::fs::read_to_string(script_path)
-        .with_context(|| format!("reading {}", script_path.display()))?;
-    let script =
-        EditScript::parse(&text).with_context(|| format!("in {}", script_path.display()))?;
-    let loaded = load_rig(rig, true, true)?;
-    let mut options = session_args.options();
-    options.skinning = skinning
-        .map(SkinningMethod::from)
-        .or(script.skinning)
-        .unwrap_or_default();
-    let (mut session, warnings) = start_session(loaded, options)?;
-    for w in &warnings {
-        eprintln!("warning: {w}");
-    }
-    script
-        .validate(&session)
-        .with_context(|| format!("in {}", script_path.display()))?;
-    let mut files = StateFiles::new();
-    files.add_state("step0", &session)?;
-    for k in 0..script.steps.len() {
-        let t = Instant::now();
-        script
-            .run_step(k, &mut session)
-            .with_context(|| format!("in {}", script_path.display()))?;
-        eprintln!(
-            "step {}: {:?} ({:.3} ms)",
-            k + 1,
-            script.steps[k],
-            t.elapsed().as_secs_f64() * 1e3
-        );
-        files.add_state(&format!("step{}", k + 1), &session)?;
-    }
-    let n = files.write_all(out)?;
-    println!("{n} files written to {}", out.display());
-    Ok(())
-}
-
-// The animation sources (file track, file animation by name, cage track) stay separate
-// arguments so that each can be validated and reported on its own.
-#[allow(clippy::too_many_arguments)]
-pub fn animate(
-    rig: &RigArgs,
-    skeleton_anim: Option<&Path>,
-    cage_anim: Option<&Path>,
-    animation: Option<&str>,
-    times: &[f64],
-    out: &Path,
-    skinning: Option<SkinningArg>,
-    session_args: &SessionArgs,
-) -> anyhow::Result<()> {
-    if skeleton_anim.is_none() && cage_anim.is_none() && animation.is_none() {
-        bail!("give --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
-    }
-    if let Some(t) = times.iter().find(|t| !t.is_finite()) {
-        bail!("sample time {t} is not finite");
-    }
-    let loaded = load_rig(rig, true, true)?;
-    let num_cage = loaded.parts.cage.num_vertices();
-    let (skeleton_track, channels) =
-        crate::interchange::skeleton_track(&loaded, skeleton_anim, animation)?;
-    let cage_track = match cage_anim {
-        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
-            p, num_cage,
-        )?),
-        None => None,
-    };
-    let mut options = session_args.options();
-    options.skinning = skinning.map(SkinningMethod::from).unwrap_or_default();
-    let (session, warnings) = start_session(loaded, options)?;
-    for w in &warnings {
-        eprintln!("warning: {w}");
-    }
-    let mut player = cagerig::playback::AnimationPlayer::with_channels(
-        &session,
-        skeleton_track,
-        cage_track,
-        channels,
-    )?;
-    let mut session = session;
-    let mut files = StateFiles::new();
-    for &t in times {
-        let start = Instant::now();
-        player.apply(t, &mut session)?;
-        eprintln!(
-            "t = {t}: frame in {:.3} ms",
-            start.elapsed().as_secs_f64() * 1e3
-        );
-        files.add_state(&format!("t{t}"), &session)?;
-    }
-    let n = files.write_all(out)?;
-    println!("{n} files written to {}", out.display());
     Ok(())
 }
 
@@ -543,7 +390,17 @@ pub fn demo(
         builtin: Some(builtin.to_string()),
         resolution,
         skin: None,
+        allow_outside_cage: false,
     };
+    let (vertices, cage_vertices) = match builtin {
+        "snake" => (resolution.unwrap_or(8192) as u64, 96),
+        _ => ((resolution.unwrap_or(40) as u64).saturating_mul(24), 24),
+    };
+    crate::memory_estimate::check_fits(
+        &format!("demo --builtin {builtin}"),
+        vertices,
+        cage_vertices,
+    )?;
     let t = Instant::now();
     let loaded = load_rig(&args, true, true)?;
     let (mut s, warnings) = start_session(loaded, SessionOptions::default())?;

@@ -68,6 +68,7 @@ pub fn load_interchange(
         warnings,
         maxvol_path: None,
         animations,
+        allow_outside_cage: false,
     })
 }
 

@@ -1,13 +1,19 @@
 //! `cagerig`: command-line front end of the cagerig library.
 
+mod animate;
 mod bench;
 mod cage;
 mod commands;
+mod edit;
+mod errors;
 mod export;
 mod interchange;
+mod memory_estimate;
+mod output_dir;
 mod pictures;
 mod render;
 mod rig_source;
+mod state_files;
 
 use std::path::PathBuf;
 
@@ -54,19 +60,24 @@ enum Command {
         /// Output `.maxvol` file.
         #[arg(long)]
         out: PathBuf,
+        /// Machine-readable output (errors too).
         #[arg(long)]
         json: bool,
     },
     /// Replay an edit script (JSON) and write every structure after each step.
+    #[command(after_long_help = edit::SCRIPT_HELP)]
     Edit {
         #[command(flatten)]
         rig: RigArgs,
-        /// The script: {"skinning":..., "steps":[{"op":...}, ...]}.
+        /// The script: {"skinning":..., "steps":[{"op":...}, ...]} (operations: see --help).
         #[arg(long)]
         script: PathBuf,
-        /// Output directory.
+        /// Output folder; it appears complete, only after every step succeeded.
         #[arg(long)]
         out: PathBuf,
+        /// Replace a non-empty --out that holds an earlier run's state files.
+        #[arg(long)]
+        force: bool,
         /// Skinning method (overrides the script's).
         #[arg(long, value_enum)]
         skinning: Option<commands::SkinningArg>,
@@ -86,11 +97,21 @@ enum Command {
         /// glTF/FBX: the file's animation to play, by name or index (all channels).
         #[arg(long)]
         animation: Option<String>,
-        /// Comma-separated sample times in seconds.
-        #[arg(long, value_delimiter = ',', required = true)]
+        /// Comma-separated sample times in seconds, each once (negative times allowed).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            required = true,
+            allow_hyphen_values = true
+        )]
         times: Vec<f64>,
+        /// Output folder; it appears complete, only after every sample succeeded.
         #[arg(long)]
         out: PathBuf,
+        /// Replace a non-empty --out that holds an earlier run's state files.
+        #[arg(long)]
+        force: bool,
+        /// Skinning method.
         #[arg(long, value_enum)]
         skinning: Option<commands::SkinningArg>,
         #[command(flatten)]
@@ -116,11 +137,13 @@ enum Command {
     Subdivide {
         #[command(flatten)]
         rig: RigArgs,
+        /// Rounds of midpoint subdivision (each multiplies the triangles by 4).
         #[arg(long, default_value_t = 1)]
         levels: usize,
+        /// Output folder.
         #[arg(long)]
         out: PathBuf,
-        /// Base name of the written files.
+        /// Base name of the written files (no path separator).
         #[arg(long, default_value = "rig")]
         name: String,
     },
@@ -137,6 +160,11 @@ enum Command {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    let json = match &cli.command {
+        Command::Info { json, .. } | Command::Maxvol { json, .. } => *json,
+        Command::Bench(args) => args.json,
+        _ => false,
+    };
     let result = match cli.command {
         Command::Info { rig, json } => match &rig.mesh {
             Some(m) if interchange::is_interchange(m) => {
@@ -150,9 +178,10 @@ fn main() -> std::process::ExitCode {
             rig,
             script,
             out,
+            force,
             skinning,
             session,
-        } => commands::edit(&rig, &script, &out, skinning, &session),
+        } => edit::edit(&rig, &script, &out, force, skinning, &session),
         Command::Animate {
             rig,
             skeleton_anim,
@@ -160,15 +189,17 @@ fn main() -> std::process::ExitCode {
             animation,
             times,
             out,
+            force,
             skinning,
             session,
-        } => commands::animate(
+        } => animate::animate(
             &rig,
             skeleton_anim.as_deref(),
             cage_anim.as_deref(),
             animation.as_deref(),
             &times,
             &out,
+            force,
             skinning,
             &session,
         ),
@@ -189,11 +220,5 @@ fn main() -> std::process::ExitCode {
         Command::Export(args) => export::run(&args),
         Command::Cage(args) => cage::run(&args),
     };
-    match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    errors::exit(result, json)
 }

@@ -30,9 +30,14 @@ pub struct RigArgs {
     /// Use a built-in demo rig instead of files (bar, bar_irregular, snake).
     #[arg(long, conflicts_with = "mesh")]
     pub builtin: Option<String>,
-    /// Mesh resolution parameter of the built-in rig.
+    /// Mesh resolution parameter of the built-in rig (bar: ring intervals, default 40; snake:
+    /// about the vertex count, default 8192).
     #[arg(long, requires = "builtin")]
     pub resolution: Option<usize>,
+    /// Accept mesh vertices outside the cage (reported with their count and farthest distance)
+    /// instead of failing: mean value coordinates extrapolate there.
+    #[arg(long)]
+    pub allow_outside_cage: bool,
 }
 
 /// A loaded rig and what was used to build it.
@@ -45,6 +50,8 @@ pub struct LoadedRig {
     pub maxvol_path: Option<PathBuf>,
     /// Animations of an imported glTF/FBX character (empty otherwise).
     pub animations: Vec<cagerig_formats::ImportedAnimation>,
+    /// `--allow-outside-cage` (passed on to the session).
+    pub allow_outside_cage: bool,
 }
 
 /// Loads the rig. With `compute_coords`, Φ is computed (with a progress bar when `progress` and
@@ -61,21 +68,44 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
                 warnings: Vec::new(),
                 maxvol_path: None,
                 animations: Vec::new(),
+                allow_outside_cage: args.allow_outside_cage,
             }
         }
-        (None, Some(mesh)) if crate::interchange::is_interchange(mesh) => {
-            crate::interchange::load_interchange(mesh, args.cage.as_deref(), args.skin.as_deref())?
-        }
-        (None, Some(mesh)) => load_files(mesh, args.cage.as_deref())?,
+        (None, Some(mesh)) if crate::interchange::is_interchange(mesh) => LoadedRig {
+            allow_outside_cage: args.allow_outside_cage,
+            ..crate::interchange::load_interchange(
+                mesh,
+                args.cage.as_deref(),
+                args.skin.as_deref(),
+            )?
+        },
+        (None, Some(mesh)) => load_files(mesh, args.cage.as_deref(), args.allow_outside_cage)?,
         (None, None) => bail!("give a mesh file or --builtin NAME"),
     };
+    // The one cage validation, the same for every command (and again in the session).
+    let cage_name = loaded.files.iter().find(|f| f.role == "cage").map_or_else(
+        || format!("the cage of {}", loaded.name),
+        |f| f.path.display().to_string(),
+    );
+    let (cage, cage_warnings) = cagerig::cage_enclosure::validate_cage_for_mesh(
+        std::mem::take(&mut loaded.parts.cage),
+        &loaded.parts.mesh.positions,
+        args.allow_outside_cage,
+    )
+    .map_err(|e| anyhow::anyhow!("{cage_name}: {e}"))?;
+    loaded.parts.cage = cage;
+    loaded.warnings.extend(cage_warnings);
     if compute_coords && loaded.parts.cage_coords.is_none() {
         loaded.parts.cage_coords = Some(compute_coords_with_progress(&loaded.parts, progress)?);
     }
     Ok(loaded)
 }
 
-fn load_files(mesh: &Path, cage: Option<&Path>) -> anyhow::Result<LoadedRig> {
+fn load_files(
+    mesh: &Path,
+    cage: Option<&Path>,
+    allow_outside_cage: bool,
+) -> anyhow::Result<LoadedRig> {
     let rig = cagerig::io::rig_files::load_rig_files(mesh, cage)?;
     Ok(LoadedRig {
         name: mesh.display().to_string(),
@@ -91,6 +121,7 @@ fn load_files(mesh: &Path, cage: Option<&Path>) -> anyhow::Result<LoadedRig> {
         warnings: rig.warnings,
         maxvol_path: rig.maxvol_path,
         animations: Vec::new(),
+        allow_outside_cage,
     })
 }
 
@@ -133,8 +164,32 @@ pub fn subdivide_and_write(
     out: &Path,
     name: &str,
 ) -> anyhow::Result<()> {
+    if name.is_empty()
+        || name.contains(['/', '\\'])
+        || name == "."
+        || name == ".."
+        || name.starts_with('.')
+    {
+        bail!(
+            "--name {name:?}: expected a plain base name for the files written into --out (no \
+             path separator, not starting with a dot)"
+        );
+    }
     let loaded = load_rig(args, true, false)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
     let p = &loaded.parts;
+    let levels_u32 = u32::try_from(levels).unwrap_or(u32::MAX);
+    crate::memory_estimate::check_fits(
+        &format!("subdivide --levels {levels}"),
+        crate::memory_estimate::subdivided_vertices(
+            p.mesh.num_vertices() as u64,
+            p.mesh.num_triangles() as u64,
+            levels_u32,
+        ),
+        p.cage.num_vertices() as u64,
+    )?;
     let t = std::time::Instant::now();
     let sub =
         cagerig::subdivide::subdivide_rig(&p.mesh, &p.skin_weights, p.cor_rows.as_ref(), levels)?;

@@ -45,15 +45,17 @@ pub struct CageCoords {
 }
 
 impl CageCoords {
-    /// Wraps a `#V × #C` matrix, checking every entry is finite.
+    /// Wraps a `#V × #C` matrix, checking every entry is finite and at most
+    /// [`crate::error::MAX_INPUT_MAGNITUDE`] in magnitude.
     pub fn from_matrix(matrix: Mat<f64>) -> Result<Self, RigError> {
         for k in 0..matrix.ncols() {
             let col = matrix.col(k);
             for i in 0..matrix.nrows() {
-                if !col[i].is_finite() {
-                    return Err(RigError::NonFinite {
+                if !crate::error::is_input_value(col[i]) {
+                    return Err(RigError::ValueOutOfBounds {
                         what: "cage coordinate row",
                         index: i,
+                        value: col[i],
                     });
                 }
             }

@@ -2,6 +2,22 @@
 
 use thiserror::Error;
 
+/// Largest magnitude accepted for any number a rig is built from (coordinates, weights, cage
+/// coordinates, offsets, angles, times): far beyond any real rig, and small enough that the
+/// sums and products of the method (ΦC, Ω row sums, squared distances, solid angles) cannot
+/// overflow f64. Larger values are rejected where they enter (file, line, value).
+pub const MAX_INPUT_MAGNITUDE: f64 = 1e12;
+
+/// True when `x` is finite and at most [`MAX_INPUT_MAGNITUDE`] in magnitude.
+pub fn is_input_value(x: f64) -> bool {
+    x.is_finite() && x.abs() <= MAX_INPUT_MAGNITUDE
+}
+
+/// The first component of `v` that is not an input value ([`is_input_value`]).
+pub fn first_bad_component(v: glam::DVec3) -> Option<f64> {
+    v.to_array().into_iter().find(|&x| !is_input_value(x))
+}
+
 /// A structural problem that makes a rig unusable. Every variant names the offending element.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum RigError {
@@ -13,6 +29,14 @@ pub enum RigError {
     },
     #[error("{what} {index} has a non-finite coordinate")]
     NonFinite { what: &'static str, index: usize },
+    #[error(
+        "{what} {index} has the value {value}: expected a finite number of magnitude at most 1e12"
+    )]
+    ValueOutOfBounds {
+        what: &'static str,
+        index: usize,
+        value: f64,
+    },
     #[error("joint {joint} ({name}) has unknown parent {parent}")]
     UnknownParent {
         joint: usize,
@@ -28,7 +52,7 @@ pub enum RigError {
         second: usize,
     },
     #[error(
-        "skinning weight of vertex {vertex} for joint {joint} is {weight}: weights must be finite and non-negative"
+        "skinning weight of vertex {vertex} for joint {joint} is {weight}: weights must be finite, non-negative and at most 1e12"
     )]
     InvalidWeight {
         vertex: usize,
@@ -58,8 +82,28 @@ pub enum RigError {
     CageDegenerateTriangle { triangle: usize, area: f64 },
     #[error("cage triangle {triangle} repeats a vertex")]
     CageRepeatedVertex { triangle: usize },
+    #[error(
+        "{count} of {total} mesh vertices are outside the cage (farthest: vertex {worst_vertex}, \
+         {worst_distance:.3e} from the cage surface); expected the cage to enclose the mesh \
+         (accept it explicitly to let mean value coordinates extrapolate)"
+    )]
+    MeshOutsideCage {
+        count: usize,
+        total: usize,
+        worst_vertex: usize,
+        worst_distance: f64,
+    },
     #[error("the cage has no triangles")]
     EmptyCage,
+    #[error(
+        "the event was refused and the rig left as it was: it would have moved {what} {index} to \
+         {value:?}, which is not a finite position of magnitude at most 1e15"
+    )]
+    EventRefused {
+        what: &'static str,
+        index: usize,
+        value: [f64; 3],
+    },
     #[error("{what} is singular or too ill-conditioned to factorise")]
     Singular { what: &'static str },
     #[error("{0}")]

@@ -11,6 +11,7 @@
 pub mod animation;
 pub mod cage;
 pub mod cage_coords;
+pub mod cage_enclosure;
 pub mod cage_gen;
 pub mod coords;
 pub mod demo;

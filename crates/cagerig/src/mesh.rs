@@ -14,13 +14,17 @@ pub struct TriMesh {
 }
 
 impl TriMesh {
-    /// Builds a mesh, checking that positions are finite and every index is in range.
+    /// Builds a mesh, checking that positions are finite and at most
+    /// [`crate::error::MAX_INPUT_MAGNITUDE`] in magnitude, and that every index is in range.
     pub fn new(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Result<Self, RigError> {
-        if let Some(index) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(RigError::NonFinite {
-                what: "vertex",
-                index,
-            });
+        for (index, p) in positions.iter().enumerate() {
+            if let Some(value) = crate::error::first_bad_component(*p) {
+                return Err(RigError::ValueOutOfBounds {
+                    what: "vertex",
+                    index,
+                    value,
+                });
+            }
         }
         let len = positions.len();
         for tri in &triangles {
@@ -143,7 +147,14 @@ mod tests {
         q[1].y = f64::NAN;
         assert!(matches!(
             TriMesh::new(q, vec![[0, 1, 2]]),
-            Err(RigError::NonFinite { index: 1, .. })
+            Err(RigError::ValueOutOfBounds { index: 1, .. })
+        ));
+        // Finite but large enough to overflow the method's products (issue 11).
+        let mut r = p.clone();
+        r[2].x = 1e308;
+        assert!(matches!(
+            TriMesh::new(r, vec![[0, 1, 2]]),
+            Err(RigError::ValueOutOfBounds { index: 2, value, .. }) if value == 1e308
         ));
         assert!(TriMesh::new(p, vec![[0, 1, 2]]).is_ok());
     }

@@ -14,16 +14,35 @@ use glam::DVec3;
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::error::RigError;
+use crate::error::{RigError, first_bad_component, is_input_value};
 use crate::session::RigSession;
 use crate::skinning::SkinningMethod;
 
 /// A joint given by name or by index.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(untagged)]
+#[serde(try_from = "serde_json::Value")]
 pub enum JointRef {
     Index(usize),
     Name(String),
+}
+
+impl TryFrom<serde_json::Value> for JointRef {
+    type Error = String;
+
+    fn try_from(value: serde_json::Value) -> Result<Self, String> {
+        match &value {
+            serde_json::Value::String(name) => Ok(JointRef::Name(name.clone())),
+            serde_json::Value::Number(n) => match n.as_u64() {
+                Some(j) => Ok(JointRef::Index(j as usize)),
+                None => Err(format!(
+                    "\"joint\": expected a joint name or a non-negative integer index, found {n}"
+                )),
+            },
+            other => Err(format!(
+                "\"joint\": expected a joint name or a non-negative integer index, found {other}"
+            )),
+        }
+    }
 }
 
 /// One user event.
@@ -127,11 +146,17 @@ impl EditScript {
                 } => {
                     resolve_joint(session, joint).map_err(fail)?;
                     let axis = DVec3::from_array(*axis);
-                    if !axis.is_finite() || axis.length_squared() == 0.0 {
-                        return Err(fail(format!("axis {axis} must be finite and non-zero")));
+                    if first_bad_component(axis).is_some() || axis.length_squared() == 0.0 {
+                        return Err(fail(format!(
+                            "\"axis\": expected a non-zero direction of finite numbers of \
+                             magnitude at most 1e12, found {axis}"
+                        )));
                     }
-                    if !degrees.is_finite() {
-                        return Err(fail(format!("angle {degrees} is not finite")));
+                    if !is_input_value(*degrees) {
+                        return Err(fail(format!(
+                            "\"degrees\": expected a finite angle of magnitude at most 1e12, \
+                             found {degrees}"
+                        )));
                     }
                 }
                 EditStep::MoveRestCage { vertices, offset }
@@ -142,11 +167,27 @@ impl EditScript {
                     }
                     if let Some(v) = vertices.iter().find(|&&v| v >= n) {
                         return Err(fail(format!(
-                            "cage vertex {v} is out of range (the cage has {n} vertices)"
+                            "\"vertices\": cage vertex {v} is out of range (the cage has {n} \
+                             vertices, 0 to {})",
+                            n - 1
                         )));
                     }
-                    if !DVec3::from_array(*offset).is_finite() {
-                        return Err(fail("offset is not finite".into()));
+                    let mut sorted = vertices.clone();
+                    sorted.sort_unstable();
+                    if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+                        let times = vertices.iter().filter(|&&v| v == w[0]).count();
+                        return Err(fail(format!(
+                            "\"vertices\": cage vertex {} is listed {times} times; list each \
+                             vertex once (the offset moves every listed vertex once)",
+                            w[0]
+                        )));
+                    }
+                    let offset = DVec3::from_array(*offset);
+                    if first_bad_component(offset).is_some() {
+                        return Err(fail(format!(
+                            "\"offset\": expected finite numbers of magnitude at most 1e12, \
+                             found {offset}"
+                        )));
                     }
                 }
                 EditStep::SetSkinning { .. } | EditStep::ResetPose {} => {}
@@ -199,10 +240,22 @@ pub fn resolve_joint(session: &RigSession, joint: &JointRef) -> Result<usize, St
         JointRef::Index(j) => Err(format!(
             "joint {j} is out of range (the rig has {n} joints)"
         )),
-        JointRef::Name(name) => session
-            .skeleton()
-            .find(name)
-            .ok_or_else(|| format!("unknown joint {name:?}")),
+        JointRef::Name(name) => session.skeleton().find(name).ok_or_else(|| {
+            let names: Vec<&str> = session
+                .skeleton()
+                .joints()
+                .iter()
+                .take(12)
+                .map(|j| j.name.as_str())
+                .collect();
+            format!(
+                "unknown joint {name:?}: expected one of the rig's {n} joint names ({}{}) or an \
+                 index 0 to {}",
+                names.join(", "),
+                if n > names.len() { ", …" } else { "" },
+                n.saturating_sub(1)
+            )
+        }),
     }
 }
 
@@ -244,5 +297,15 @@ mod tests {
             EditScript::parse(r#"{"steps":[{"op":"move_rest_cage","vertices":[1]}]}"#),
             Err(ScriptError::Step { step: 1, .. })
         ));
+        // No serde internals in the message (issue 11).
+        let err = EditScript::parse(
+            r#"{"steps":[{"op":"rotate_joint","joint":[1],"axis":[1,0,0],"degrees":1}]}"#,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("joint name or a non-negative integer") && !err.contains("untagged"),
+            "{err}"
+        );
     }
 }

@@ -11,8 +11,8 @@
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
-use crate::cage::validate_cage;
 use crate::cage_coords::{CageCoords, CoordsPrecision};
+use crate::cage_enclosure::validate_cage_for_mesh;
 use crate::coords::{maxvol, mvc};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
@@ -30,6 +30,10 @@ use crate::sparse_rows::SparseRows;
 use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
+
+mod checkpoint;
+use checkpoint::Checkpoint;
+pub use checkpoint::MAX_STATE_MAGNITUDE;
 
 /// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
 /// the similarity tables of [`crate::skinning::cor_grid`] (seconds, centre error ≈ 1e-4 × bbox
@@ -111,6 +115,26 @@ pub enum FitRows {
     Rows(Vec<usize>),
 }
 
+/// What a session does with given cage coordinates Φ that do not reproduce the rest mesh
+/// (max |ΦC − M| above [`PHI_C_TOLERANCE`] × the cage's bbox diagonal).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GivenCageCoords {
+    /// Recompute Φ (mean value coordinates) and report it: M = ΦC holds from the start, so the
+    /// first cage edit moves only what it touches (the default).
+    #[default]
+    RecomputeIfInexact,
+    /// Keep the given Φ (to compare with the tool that wrote it): M stays as loaded until the
+    /// first cage edit, which sets M = ΦC everywhere (untouched vertices jump by the residual).
+    Keep,
+}
+
+/// max |ΦC − M| over the mesh vertices.
+fn phi_c_residual(cage_coords: &CageCoords, cage: &[DVec3], mesh: &[DVec3]) -> f64 {
+    let mut phi_c = vec![DVec3::ZERO; mesh.len()];
+    cage_coords.apply(cage, &mut phi_c);
+    crate::mesh::max_distance(&phi_c, mesh)
+}
+
 /// Options for assembling a session.
 #[derive(Debug, Clone, Default)]
 pub struct SessionOptions {
@@ -125,6 +149,11 @@ pub struct SessionOptions {
     /// rest mesh becomes ΦC at once (it moves by ~1e-7 of the cage size); the invariants then
     /// hold to f64 round-off as in the default f64 mode.
     pub cage_coords_precision: CoordsPrecision,
+    /// Given Φ that does not reproduce M: recomputed (default) or kept.
+    pub given_cage_coords: GivenCageCoords,
+    /// Accept mesh vertices outside the cage (reported as a warning) instead of failing with
+    /// [`RigError::MeshOutsideCage`].
+    pub allow_mesh_outside_cage: bool,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).
@@ -253,6 +282,8 @@ pub struct RigSession {
     scratch_rows_rest: Vec<DVec3>,
     scratch_rows_posed: Vec<DVec3>,
     dqs_scratch: DqsScratch,
+    /// The small state saved before each event (see [`checkpoint`]).
+    checkpoint: Checkpoint,
 }
 
 impl RigSession {
@@ -285,8 +316,17 @@ impl RigSession {
                 actual: skin_weights.num_joints(),
             });
         }
-        let (cage, mut warnings) = validate_cage(cage)?;
+        if mesh.triangles.is_empty() {
+            return Err(RigError::Invalid(format!(
+                "the rest mesh has {nv} vertices and no triangle: expected a surface (the \
+                 skeleton updater and CoR skinning need its faces)"
+            )));
+        }
+        let (cage, mut warnings) =
+            validate_cage_for_mesh(cage, &mesh.positions, options.allow_mesh_outside_cage)?;
         let nc = cage.num_vertices();
+        let (lo, hi) = cage.bounding_box();
+        let phi_c_tolerance = PHI_C_TOLERANCE * (hi - lo).length();
         let mut cage_coords = match cage_coords {
             Some(phi) => {
                 if phi.num_vertices() != nv || phi.num_cage_vertices() != nc {
@@ -296,7 +336,21 @@ impl RigSession {
                         actual: phi.num_vertices() * phi.num_cage_vertices(),
                     });
                 }
-                phi
+                let residual = phi_c_residual(&phi, &cage.positions, &mesh.positions);
+                if residual > phi_c_tolerance
+                    && options.given_cage_coords == GivenCageCoords::RecomputeIfInexact
+                {
+                    warnings.push(Warning::Note {
+                        message: format!(
+                            "the given cage coordinates reproduce the rest mesh only to \
+                             {residual:.3e} (M ≠ ΦC, e.g. a file with 6 decimals): recomputed, so \
+                             that nothing the user does not touch moves at the first cage edit"
+                        ),
+                    });
+                    mvc::compute_cage_coords(&cage, &mesh.positions, None)?
+                } else {
+                    phi
+                }
             }
             None => mvc::compute_cage_coords(&cage, &mesh.positions, None)?,
         };
@@ -306,6 +360,14 @@ impl RigSession {
         }
         let (rows, mode) = match options.fit_rows {
             FitRows::MaxVol => match maxvol_rows {
+                Some(rows) if rows.len() < nc => {
+                    return Err(RigError::SizeMismatch {
+                        what: "given MaxVol rows (at least one per cage vertex)",
+                        expected: nc,
+                        actual: rows.len(),
+                    });
+                }
+                Some(rows) if rows.len() > nc => (rows, CageFitMode::LeastSquares),
                 Some(rows) => (rows, CageFitMode::Interpolate),
                 None => (
                     maxvol::select_maxvol_rows(&cage_coords)?.rows,
@@ -327,8 +389,7 @@ impl RigSession {
         let mut phi_c = vec![DVec3::ZERO; nv];
         cage_coords.apply(&rest_cage, &mut phi_c);
         let residual = crate::mesh::max_distance(&phi_c, &mesh.positions);
-        let (lo, hi) = cage.bounding_box();
-        let mut rest_mesh_is_phi_c = residual <= PHI_C_TOLERANCE * (hi - lo).length();
+        let mut rest_mesh_is_phi_c = residual <= phi_c_tolerance;
         if precision == CoordsPrecision::F32
             && !rest_mesh_is_phi_c
             && residual <= PHI_C_TOLERANCE_F32 * (hi - lo).length()
@@ -422,6 +483,7 @@ impl RigSession {
             scratch_touched: Vec::with_capacity(nc),
             scratch_rows_rest: vec![DVec3::ZERO; nr],
             scratch_rows_posed: vec![DVec3::ZERO; nr],
+            checkpoint: Checkpoint::new(nc, nj),
         };
         session.set_skinning(options.skinning)?;
         session.pose_and_fit();
@@ -523,6 +585,13 @@ impl RigSession {
 
     /// Switches the skinning method; computes CoR centres on the first switch to CoR.
     pub fn set_skinning(&mut self, method: SkinningMethod) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_skinning_event(method);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_skinning`] without the checkpoint.
+    fn set_skinning_event(&mut self, method: SkinningMethod) -> Result<(), RigError> {
         if method == SkinningMethod::Cor && self.cor.is_none() {
             self.build_cor()?;
         }
@@ -540,6 +609,18 @@ impl RigSession {
     /// S' edit: rotates joint `joint` by `angle` radians about the world-space `axis`, pivoting
     /// on the joint's current position; descendants follow. Then M' and C' follow.
     pub fn rotate_joint(&mut self, joint: usize, axis: DVec3, angle: f64) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.rotate_joint_event(joint, axis, angle);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::rotate_joint`] without the checkpoint.
+    fn rotate_joint_event(
+        &mut self,
+        joint: usize,
+        axis: DVec3,
+        angle: f64,
+    ) -> Result<(), RigError> {
         self.check_joint(joint)?;
         let axis = axis
             .try_normalize()
@@ -575,6 +656,13 @@ impl RigSession {
 
     /// S' edit: sets the full pose of [`crate::pose`] (rotations, scales, translation offsets).
     pub fn set_local_pose(&mut self, pose: &LocalPose) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_local_pose_event(pose);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_local_pose`] without the checkpoint.
+    fn set_local_pose_event(&mut self, pose: &LocalPose) -> Result<(), RigError> {
         self.store_pose(pose)?;
         self.pose_and_fit();
         Ok(())
@@ -656,6 +744,17 @@ impl RigSession {
         vertices: &[usize],
         offsets: &[DVec3],
     ) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.move_rest_cage_event(vertices, offsets);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::move_rest_cage`] without the checkpoint.
+    fn move_rest_cage_event(
+        &mut self,
+        vertices: &[usize],
+        offsets: &[DVec3],
+    ) -> Result<(), RigError> {
         self.check_cage_edit(vertices, offsets)?;
         let mut dense = std::mem::take(&mut self.scratch_cage_a);
         scatter_edit(vertices, offsets, &mut dense);
@@ -681,6 +780,17 @@ impl RigSession {
     /// chain then re-fits C', which lands on the requested positions (exactly under LBS, or with
     /// the ghost fit for DQS/CoR).
     pub fn move_posed_cage(
+        &mut self,
+        vertices: &[usize],
+        offsets: &[DVec3],
+    ) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.move_posed_cage_event(vertices, offsets);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::move_posed_cage`] without the checkpoint.
+    fn move_posed_cage_event(
         &mut self,
         vertices: &[usize],
         offsets: &[DVec3],
@@ -731,6 +841,17 @@ impl RigSession {
 
     /// [`RigSession::set_animation_sample`] with the full pose of [`crate::pose`].
     pub fn set_animation_sample_local(
+        &mut self,
+        rest_cage_offsets: Option<&[DVec3]>,
+        pose: &LocalPose,
+    ) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_animation_sample_local_event(rest_cage_offsets, pose);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_animation_sample_local`] without the checkpoint.
+    fn set_animation_sample_local_event(
         &mut self,
         rest_cage_offsets: Option<&[DVec3]>,
         pose: &LocalPose,
@@ -798,6 +919,19 @@ impl RigSession {
 
     /// [`RigSession::set_animation_sample_between`] with the full pose of [`crate::pose`].
     pub fn set_animation_sample_between_local(
+        &mut self,
+        lo: &RestKeyframe,
+        hi: &RestKeyframe,
+        a: f64,
+        pose: &LocalPose,
+    ) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_animation_sample_between_local_event(lo, hi, a, pose);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_animation_sample_between_local`] without the checkpoint.
+    fn set_animation_sample_between_local_event(
         &mut self,
         lo: &RestKeyframe,
         hi: &RestKeyframe,

@@ -56,6 +56,15 @@ impl Skeleton {
                     index: j,
                 });
             }
+            if let Some(value) =
+                crate::error::first_bad_component(joint.rest_world_from_joint.translation)
+            {
+                return Err(RigError::ValueOutOfBounds {
+                    what: "joint position",
+                    index: j,
+                    value,
+                });
+            }
         }
         // Depth of each joint by walking up; a walk longer than n means a cycle.
         let mut depth = vec![0usize; n];

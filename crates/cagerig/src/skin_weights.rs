@@ -46,7 +46,7 @@ impl SkinWeights {
                     len: num_joints,
                 });
             }
-            if !weight.is_finite() || weight < 0.0 {
+            if !crate::error::is_input_value(weight) || weight < 0.0 {
                 return Err(RigError::InvalidWeight {
                     vertex,
                     joint,

@@ -60,16 +60,16 @@ pub fn write_cage_animation_to(
     format: FloatFormat,
 ) -> std::io::Result<()> {
     for t in track.times() {
-        writeln!(w, "k {}", format.format(*t))?;
+        writeln!(w, "k {}", format.checked(*t)?)?;
     }
     for (k, key) in track.offsets().iter().enumerate() {
         for d in key {
             writeln!(
                 w,
                 "c {k} {} {} {}",
-                format.format(d.x),
-                format.format(d.y),
-                format.format(d.z)
+                format.checked(d.x)?,
+                format.checked(d.y)?,
+                format.checked(d.z)?
             )?;
         }
     }

@@ -79,7 +79,7 @@ pub fn write_cage_weights_to(
 ) -> std::io::Result<()> {
     for i in 0..coords.num_vertices() {
         for k in 0..coords.num_cage_vertices() {
-            writeln!(w, "{k} {i} {}", format.format(coords.get(i, k)))?;
+            writeln!(w, "{k} {i} {}", format.checked(coords.get(i, k))?)?;
         }
     }
     Ok(())

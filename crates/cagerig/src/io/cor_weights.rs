@@ -58,7 +58,7 @@ pub fn write_cor_weights_to(
     format: FloatFormat,
 ) -> std::io::Result<()> {
     for (i, k, x) in weights.triplets() {
-        writeln!(w, "{i} {k} {}", format.format(x))?;
+        writeln!(w, "{i} {k} {}", format.checked(x)?)?;
     }
     Ok(())
 }

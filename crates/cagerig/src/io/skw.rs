@@ -62,6 +62,16 @@ pub fn parse_skw(
     num_joints: usize,
 ) -> Result<(SkinWeights, Vec<Warning>), ParseError> {
     let triplets = parse_skw_triplets(data, source, num_vertices, num_joints)?;
+    if triplets.is_empty() && num_vertices > 0 {
+        return Err(ParseError::Rig {
+            path: source.to_path_buf(),
+            source: crate::error::RigError::Invalid(format!(
+                "expected `<joint> <meshVertex> <weight>` lines for {num_vertices} vertices, \
+                 found no weight: every vertex would stay at rest and the cage could not \
+                 follow the skeleton"
+            )),
+        });
+    }
     SkinWeights::from_triplets(num_vertices, num_joints, triplets).map_err(|e| ParseError::Rig {
         path: source.to_path_buf(),
         source: e,
@@ -86,7 +96,7 @@ pub fn write_skw_to(
     for v in 0..weights.num_vertices() {
         let (joints, values) = weights.row(v);
         for (j, x) in joints.iter().zip(values) {
-            writeln!(w, "{j} {v} {}", format.format(*x))?;
+            writeln!(w, "{j} {v} {}", format.checked(*x)?)?;
         }
     }
     Ok(())

@@ -34,6 +34,23 @@ impl FloatFormat {
             FloatFormat::Fixed(decimals) => format!("{x:.decimals$}"),
         }
     }
+
+    /// Formats `x`, refusing a non-finite value: no writer ever writes NaN or ±inf.
+    pub fn checked(self, x: f64) -> std::io::Result<String> {
+        if x.is_finite() {
+            Ok(self.format(x))
+        } else {
+            Err(non_finite_output(&format!("the value {x}")))
+        }
+    }
+}
+
+/// The error of a writer asked to write a non-finite number (`what` names the element).
+pub fn non_finite_output(what: &str) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        format!("refusing to write {what}: it is not a finite number"),
+    )
 }
 
 /// One non-empty source line.
@@ -49,6 +66,8 @@ pub(crate) fn lines<'a>(
     data: &'a [u8],
     source: &'a Path,
 ) -> impl Iterator<Item = Result<Line<'a>, ParseError>> + 'a {
+    // A UTF-8 byte-order mark (some Windows editors write one) is not part of the first line.
+    let data = data.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(data);
     // A final newline ends the last line; it does not start another one.
     let data = data.strip_suffix(b"\n").unwrap_or(data);
     let mut parts = data.split(|&b| b == b'\n');
@@ -140,12 +159,16 @@ impl<'a> Tokens<'a> {
             .ok_or_else(|| self.error(what, "end of line"))
     }
 
-    /// The next token, which must be a finite number.
+    /// The next token, which must be a finite number of magnitude at most
+    /// [`crate::error::MAX_INPUT_MAGNITUDE`] (so that no sum or product of the method overflows).
     pub fn f64(&mut self, what: &str) -> Result<f64, ParseError> {
         let t = self.text(what)?;
         match t.parse::<f64>() {
-            Ok(x) if x.is_finite() => Ok(x),
-            _ => Err(self.error(&format!("{what} (a finite number)"), t)),
+            Ok(x) if crate::error::is_input_value(x) => Ok(x),
+            _ => Err(self.error(
+                &format!("{what} (a finite number of magnitude at most 1e12)"),
+                t,
+            )),
         }
     }
 
@@ -239,6 +262,44 @@ mod tests {
         }
         assert_eq!(FloatFormat::RoundTrip.format(1e-7), "1e-7");
         assert_eq!(FloatFormat::TOOL.format(0.5), "0.500000");
+    }
+
+    #[test]
+    fn numbers_past_the_input_bound_are_rejected_with_line_and_value() {
+        let src = Path::new("mem");
+        for (text, ok) in [
+            ("1e12", true),
+            ("-1e12", true),
+            ("1.0000001e12", false),
+            ("1e308", false),
+            ("-1e308", false),
+            ("inf", false),
+            ("NaN", false),
+        ] {
+            let line = lines(text.as_bytes(), src).next().unwrap().unwrap();
+            let got = line.tokens().f64("weight");
+            assert_eq!(got.is_ok(), ok, "{text}");
+            if let Err(e) = got {
+                assert!(
+                    matches!(&e, ParseError::Malformed { line: 1, found, .. } if found == text),
+                    "{e}"
+                );
+            }
+        }
+        assert!(FloatFormat::RoundTrip.checked(f64::NAN).is_err());
+        assert!(FloatFormat::TOOL.checked(f64::NEG_INFINITY).is_err());
+        assert_eq!(FloatFormat::RoundTrip.checked(0.5).unwrap(), "0.5");
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let src = Path::new("mem");
+        let first = lines(b"\xEF\xBB\xBF12 0 0.5\n", src)
+            .next()
+            .unwrap()
+            .unwrap();
+        assert_eq!(first.text, "12 0 0.5");
+        assert_eq!(first.tokens().usize("joint").unwrap(), 12);
     }
 
     #[test]

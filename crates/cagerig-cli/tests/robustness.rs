@@ -1,0 +1,468 @@
+//! Issue 11, one test per defect: every case gives a correct result or a clear error (file,
+//! line or element, expected, found), never exit 0 with a non-finite number, stale or partial
+//! output.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn cagerig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_cagerig"))
+}
+
+fn shared_arm() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cagerig-robust-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A private copy of the Arm rig in `dir/arm`, with `edit` applied to the text of `file`.
+fn arm_copy(dir: &Path, file: &str, edit: impl FnOnce(String) -> String) -> PathBuf {
+    let rig = dir.join("arm");
+    std::fs::create_dir_all(&rig).unwrap();
+    for entry in std::fs::read_dir(shared_arm()).unwrap() {
+        let entry = entry.unwrap();
+        if entry.path().is_file() {
+            std::fs::copy(entry.path(), rig.join(entry.file_name())).unwrap();
+        }
+    }
+    let path = rig.join(file);
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, edit(text)).unwrap();
+    rig.join("arm.obj")
+}
+
+fn run(args: &[&str], paths: &[(&str, &Path)]) -> Output {
+    let mut c = cagerig();
+    c.args(args);
+    for (flag, p) in paths {
+        if !flag.is_empty() {
+            c.arg(flag);
+        }
+        c.arg(p);
+    }
+    c.output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Asserts a clean failure: exit 1 (not a panic), one `error:` line holding every needle.
+fn assert_error(o: &Output, needles: &[&str]) {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+    for n in needles {
+        assert!(e.contains(n), "expected {n:?} in: {e}");
+    }
+}
+
+fn edit_script(dir: &Path, text: &str) -> PathBuf {
+    let p = dir.join("edits.json");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const SMALL_SCRIPT: &str =
+    r#"{"steps":[{"op":"rotate_joint","joint":3,"axis":[1,0,0],"degrees":30}]}"#;
+
+fn edit(mesh: &Path, script: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut c = cagerig();
+    c.arg("edit")
+        .arg(mesh)
+        .arg("--script")
+        .arg(script)
+        .arg("--out")
+        .arg(out)
+        .args(extra);
+    c.output().unwrap()
+}
+
+#[test]
+fn overflowing_values_are_rejected_with_file_line_and_value() {
+    let dir = temp_dir("overflow");
+    /// (file, mutation, expected location in the error)
+    type Case = (&'static str, fn(String) -> String, &'static str);
+    let cases: [Case; 4] = [
+        (
+            "arm.skt",
+            |t| t.replacen("-23.712885 132.778816", "1e308 132.778816", 1),
+            "arm.skt:4",
+        ),
+        (
+            "arm.skw",
+            |t| t.replacen("1 0 0.301943", "1 0 1e308", 1),
+            "arm.skw:2",
+        ),
+        (
+            "arm_cage_cageWeights.txt",
+            |t| t.replacen("1 0 0.002031", "1 0 1e308", 1),
+            "arm_cage_cageWeights.txt:2",
+        ),
+        (
+            "arm_cageAnim.txt",
+            |t| t.replacen("c 0 0.000000", "c 0 -1e308", 1),
+            "arm_cageAnim.txt:",
+        ),
+    ];
+    for (file, mutate, location) in cases {
+        let case = dir.join(file);
+        let mesh = arm_copy(&case, file, mutate);
+        let out = case.join("out");
+        let o = if file == "arm_cageAnim.txt" {
+            let anim = mesh.with_file_name("arm_cageAnim.txt");
+            let mut c = cagerig();
+            c.arg("animate").arg(&mesh).arg("--cage-anim").arg(&anim);
+            c.args(["--times", "0.5,2"]).arg("--out").arg(&out);
+            c.output().unwrap()
+        } else {
+            edit(&mesh, &edit_script(&case, SMALL_SCRIPT), &out, &[])
+        };
+        assert_error(&o, &[location, "1e308", "1e12"]);
+        assert!(!out.exists(), "{file}: output written");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn skt_index_column_is_honoured() {
+    let dir = temp_dir("skt-index");
+    let swap = |t: String| {
+        let mut lines: Vec<&str> = t.lines().collect();
+        let a = lines.iter().position(|l| l.starts_with("j 5 ")).unwrap();
+        let b = lines.iter().position(|l| l.starts_with("j 6 ")).unwrap();
+        lines.swap(a, b);
+        lines.join("\n") + "\n"
+    };
+    let swapped = arm_copy(&dir.join("swapped"), "arm.skt", swap);
+    let original = arm_copy(&dir.join("original"), "arm.skt", |t| t);
+    let script = edit_script(
+        &dir,
+        r#"{"steps":[{"op":"move_rest_cage","vertices":[3],"offset":[0,2,0]}]}"#,
+    );
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    assert!(edit(&original, &script, &a, &[]).status.success());
+    let o = edit(&swapped, &script, &b, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(a.join("step1_joints.json")).unwrap(),
+        std::fs::read(b.join("step1_joints.json")).unwrap()
+    );
+    // A repeated index is an error naming the line.
+    let dup = arm_copy(&dir.join("dup"), "arm.skt", |t| {
+        t.replacen("j 6 ", "j 5 ", 1)
+    });
+    assert_error(&run(&["info"], &[("", &dup)]), &["arm.skt:", "used twice"]);
+    let own = arm_copy(&dir.join("own"), "arm.skt", |t| {
+        t.replacen("j 4 lowerarm02.R 3 ", "j 4 lowerarm02.R 4 ", 1)
+    });
+    assert_error(
+        &run(&["info"], &[("", &own)]),
+        &["arm.skt:", "itself as its father"],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn faceless_and_truncated_meshes_are_reported() {
+    let dir = temp_dir("mesh");
+    let faceless = arm_copy(&dir.join("faceless"), "arm.obj", |t| {
+        t.lines()
+            .filter(|l| !l.starts_with("f "))
+            .collect::<Vec<_>>()
+            .join("\n")
+    });
+    assert_error(&run(&["info"], &[("", &faceless)]), &["arm.obj", "no face"]);
+    let truncated = arm_copy(&dir.join("truncated"), "arm.obj", |t| {
+        let first_face = t.find("\nf ").unwrap();
+        let cut = first_face + (t.len() - first_face) / 2;
+        let end = t[cut..].find('\n').unwrap() + cut;
+        t[..end].to_string()
+    });
+    let o = run(&["info", "--json"], &[("", &truncated)]);
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("used by no face"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn one_cage_validation_for_every_command() {
+    let dir = temp_dir("cage");
+    // Scale the cage by 0.5 about the origin: the mesh pokes out.
+    let small = arm_copy(&dir.join("small"), "arm_cage.obj", |t| {
+        t.lines()
+            .map(|l| match l.strip_prefix("v ") {
+                Some(rest) => {
+                    let v: Vec<f64> = rest
+                        .split_whitespace()
+                        .map(|x| x.parse().unwrap())
+                        .collect();
+                    format!("v {} {} {}", v[0] * 0.5, v[1] * 0.5, v[2] * 0.5)
+                }
+                None => l.to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    });
+    let phi = dir.join("phi.txt");
+    let rows = dir.join("rows.maxvol");
+    let sub = dir.join("sub");
+    for o in [
+        run(&["coords"], &[("", &small), ("--out", &phi)]),
+        run(&["maxvol"], &[("", &small), ("--out", &rows)]),
+        run(&["subdivide"], &[("", &small), ("--out", &sub)]),
+        edit(
+            &small,
+            &edit_script(&dir, SMALL_SCRIPT),
+            &dir.join("e"),
+            &[],
+        ),
+    ] {
+        assert_error(
+            &o,
+            &["arm_cage.obj", "outside the cage", "farthest: vertex"],
+        );
+    }
+    let o = run(
+        &["coords", "--allow-outside-cage"],
+        &[("", &small), ("--out", &phi)],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("outside the cage"));
+    // An open cage: the same error from coords as from edit.
+    let open = arm_copy(&dir.join("open"), "arm_cage.obj", |t| {
+        let k = t.find("\nf ").unwrap();
+        let end = t[k + 1..].find('\n').unwrap() + k + 1;
+        format!("{}{}", &t[..k], &t[end..])
+    });
+    for o in [
+        run(&["coords"], &[("", &open), ("--out", &phi)]),
+        edit(&open, &edit_script(&dir, SMALL_SCRIPT), &dir.join("e"), &[]),
+    ] {
+        assert_error(&o, &["arm_cage.obj", "open boundary"]);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn repeated_script_vertices_are_refused() {
+    let dir = temp_dir("repeat");
+    let script = edit_script(
+        &dir,
+        r#"{"steps":[{"op":"move_rest_cage","vertices":[2,2,2],"offset":[1,0,0]}]}"#,
+    );
+    let out = dir.join("out");
+    let mesh = shared_arm().join("arm.obj");
+    assert_error(
+        &edit(&mesh, &script, &out, &[]),
+        &["step 1", "listed 3 times"],
+    );
+    assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn animate_times_each_once_and_negative_allowed() {
+    let dir = temp_dir("times");
+    let mesh = shared_arm().join("arm.obj");
+    let anim = shared_arm().join("arm_skelAnim.txt");
+    let out = dir.join("out");
+    let o = run(
+        &["animate", "--times", "1,1.0,1.00"],
+        &[("", &mesh), ("--skeleton-anim", &anim), ("--out", &out)],
+    );
+    assert_error(&o, &["--times", "twice"]);
+    assert!(!out.exists());
+    let o = run(
+        &["animate", "--times", "-5,1"],
+        &[("", &mesh), ("--skeleton-anim", &anim), ("--out", &out)],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 10);
+    assert!(out.join("t-5_mesh_posed.obj").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn shipped_arm_cage_edit_moves_only_what_it_touches() {
+    let dir = temp_dir("arm-phi");
+    let script = edit_script(
+        &dir,
+        r#"{"steps":[{"op":"move_rest_cage","vertices":[7],"offset":[0,0.5,0]}]}"#,
+    );
+    let mesh = shared_arm().join("arm.obj");
+    let max_jump = |out: &Path| {
+        let read = |f: &str| cagerig::io::read_obj(&out.join(f)).unwrap().positions;
+        let (a, b) = (read("step0_cage_posed.obj"), read("step1_cage_posed.obj"));
+        (0..a.len())
+            .filter(|&k| k != 7)
+            .map(|k| a[k].distance(b[k]))
+            .fold(0.0, f64::max)
+    };
+    let out = dir.join("default");
+    let o = edit(&mesh, &script, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("recomputed"), "{}", stderr(&o));
+    let jump = max_jump(&out);
+    assert!(
+        jump < 1e-8,
+        "untouched current-cage vertices moved by {jump}"
+    );
+    // The tool's Φ, kept on request: the documented jump of the 6 decimals.
+    let kept = dir.join("kept");
+    assert!(
+        edit(&mesh, &script, &kept, &["--keep-file-coords"])
+            .status
+            .success()
+    );
+    assert!(max_jump(&kept) > 1e-4);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn output_is_complete_or_absent_and_never_stale() {
+    let dir = temp_dir("stale");
+    let mesh = shared_arm().join("arm.obj");
+    let out = dir.join("out");
+    let two = edit_script(
+        &dir,
+        r#"{"steps":[{"op":"reset_pose"},{"op":"reset_pose"}]}"#,
+    );
+    assert!(edit(&mesh, &two, &out, &[]).status.success());
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 15);
+    // Non-empty --out: refused without --force, untouched.
+    assert_error(&edit(&mesh, &two, &out, &[]), &["--force"]);
+    let one = edit_script(&dir, r#"{"steps":[{"op":"reset_pose"}]}"#);
+    assert!(edit(&mesh, &one, &out, &["--force"]).status.success());
+    assert_eq!(
+        std::fs::read_dir(&out).unwrap().count(),
+        10,
+        "stale step2 files"
+    );
+    // A run failing at its second step leaves the earlier output and nothing else.
+    let failing = edit_script(
+        &dir,
+        r#"{"steps":[{"op":"reset_pose"},{"op":"move_posed_cage","vertices":[0],"offset":[1e13,0,0]}]}"#,
+    );
+    let o = edit(&mesh, &failing, &out, &["--force"]);
+    assert_error(&o, &["step 2"]);
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 10);
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.contains("partial")), "{names:?}");
+    // Foreign files are never deleted.
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    assert_error(&edit(&mesh, &one, &out, &["--force"]), &["notes.txt"]);
+    assert!(out.join("notes.txt").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn subdivide_name_cannot_escape_and_huge_requests_are_refused_up_front() {
+    let dir = temp_dir("escape");
+    let mesh = shared_arm().join("arm.obj");
+    let out = dir.join("out");
+    let o = run(
+        &["subdivide", "--name", "../escaped"],
+        &[("", &mesh), ("--out", &out)],
+    );
+    assert_error(&o, &["--name", "path separator"]);
+    assert!(!dir.join("escaped.obj").exists());
+    let start = std::time::Instant::now();
+    for args in [
+        vec![
+            "subdivide",
+            "--levels",
+            "8",
+            "--out",
+            out.to_str().unwrap(),
+            mesh.to_str().unwrap(),
+        ],
+        vec!["bench", "--subdivide", "8", mesh.to_str().unwrap()],
+        vec![
+            "demo",
+            "--builtin",
+            "snake",
+            "--resolution",
+            "10000000",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    ] {
+        let o = cagerig().args(&args).output().unwrap();
+        assert_error(&o, &["GiB", "would need"]);
+    }
+    // Refused before any work (each run is a load of the Arm, not a subdivision).
+    assert!(start.elapsed().as_secs() < 30);
+    assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn json_errors_are_json_and_script_errors_print_once() {
+    let dir = temp_dir("json");
+    let missing = dir.join("missing.obj");
+    let o = run(&["info", "--json"], &[("", &missing)]);
+    assert_eq!(o.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["error"].as_str().unwrap().contains("missing.obj"));
+    let script = edit_script(
+        &dir,
+        r#"{"steps":[{"op":"rotate_joint","joint":{"x":1},"axis":[1,0,0],"degrees":1}]}"#,
+    );
+    let o = run(
+        &["edit", "--builtin", "bar", "--script"],
+        &[("", &script), ("--out", &dir.join("o"))],
+    );
+    let e = stderr(&o);
+    assert_error(
+        &o,
+        &[
+            "edits.json",
+            "step 1",
+            "joint name or a non-negative integer",
+        ],
+    );
+    assert!(!e.contains("untagged"), "{e}");
+    assert_eq!(e.matches("step 1").count(), 1, "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn readme_example_runs_on_the_arm_and_the_bar_and_help_lists_operations() {
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
+    assert!(!readme.contains("(from\n`docs/reference-tool.md`)"));
+    let start = readme.find("```json\n").unwrap() + 8;
+    let end = readme[start..].find("```").unwrap() + start;
+    let dir = temp_dir("readme");
+    let script = edit_script(&dir, &readme[start..end]);
+    let arm = shared_arm().join("arm.obj");
+    let o = edit(&arm, &script, &dir.join("arm"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run(
+        &["edit", "--builtin", "bar", "--script"],
+        &[("", &script), ("--out", &dir.join("bar"))],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let help = cagerig().args(["edit", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    for op in [
+        "rotate_joint",
+        "move_rest_cage",
+        "move_posed_cage",
+        "set_skinning",
+        "reset_pose",
+    ] {
+        assert!(help.contains(op), "{op} missing from edit --help");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
