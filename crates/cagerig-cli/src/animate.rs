@@ -36,7 +36,6 @@ pub fn check_times(times: &[f64]) -> anyhow::Result<()> {
 #[allow(clippy::too_many_arguments)]
 // The animation sources (file track, file animation by name, cage track) stay separate
 // arguments so that each can be validated and reported on its own.
-#[allow(clippy::too_many_arguments)]
 pub fn animate(
     rig: &RigArgs,
     skeleton_anim: Option<&Path>,
@@ -45,6 +44,7 @@ pub fn animate(
     times: &[f64],
     out: &Path,
     force: bool,
+    render: bool,
     skinning: Option<SkinningArg>,
     session_args: &SessionArgs,
 ) -> anyhow::Result<()> {
@@ -52,6 +52,7 @@ pub fn animate(
         bail!("give --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
     }
     check_times(times)?;
+    let mut pictures = crate::pictures::PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force)?;
     let loaded = load_rig(rig, true, true)?;
     let num_cage = loaded.parts.cage.num_vertices();
@@ -86,6 +87,9 @@ pub fn animate(
             start.elapsed().as_secs_f64() * 1e3
         );
         write_state(&mut staged, &format!("t{t}"), &session)?;
+        if let Some(p) = &mut pictures {
+            p.write_staged(&session, &mut staged, &format!("t{t}.png"))?;
+        }
     }
     let n = staged.finish()?;
     println!("{n} files written to {}", out.display());

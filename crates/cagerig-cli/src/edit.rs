@@ -9,6 +9,7 @@ use cagerig::skinning::SkinningMethod;
 
 use crate::commands::{SessionArgs, SkinningArg, start_session};
 use crate::output_dir::StagedDir;
+use crate::pictures::PictureMaker;
 use crate::rig_source::{RigArgs, load_rig};
 use crate::state_files::write_state;
 
@@ -25,13 +26,15 @@ Script: {\"skinning\": \"lbs\"|\"dqs\"|\"cor\" (optional), \"steps\": [step, ...
   {\"op\":\"reset_pose\"}
 The whole script is checked against the rig before the first step runs. Files stepK_mesh_rest.obj,
 stepK_mesh_posed.obj, stepK_cage_rest.obj, stepK_cage_posed.obj and stepK_joints.json (K = 0 as
-loaded, then after each step) appear in --out only when every step succeeded.";
+loaded, then after each step) appear in --out only when every step succeeded; with --render also
+stepK.png (rest pose left, current pose right).";
 
 pub fn edit(
     rig: &RigArgs,
     script_path: &Path,
     out: &Path,
     force: bool,
+    render: bool,
     skinning: Option<SkinningArg>,
     session_args: &SessionArgs,
 ) -> anyhow::Result<()> {
@@ -39,6 +42,7 @@ pub fn edit(
         .with_context(|| format!("reading the script {}", script_path.display()))?;
     let script =
         EditScript::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", script_path.display()))?;
+    let mut pictures = PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force)?;
     let loaded = load_rig(rig, true, true)?;
     let mut options = session_args.options();
@@ -54,6 +58,9 @@ pub fn edit(
         .validate(&session)
         .map_err(|e| anyhow::anyhow!("{}: {e}", script_path.display()))?;
     write_state(&mut staged, "step0", &session)?;
+    if let Some(p) = &mut pictures {
+        p.write_staged(&session, &mut staged, "step0.png")?;
+    }
     for k in 0..script.steps.len() {
         let t = Instant::now();
         script
@@ -66,6 +73,9 @@ pub fn edit(
             t.elapsed().as_secs_f64() * 1e3
         );
         write_state(&mut staged, &format!("step{}", k + 1), &session)?;
+        if let Some(p) = &mut pictures {
+            p.write_staged(&session, &mut staged, &format!("step{}.png", k + 1))?;
+        }
     }
     let n = staged.finish()?;
     println!("{n} files written to {}", out.display());

@@ -78,6 +78,10 @@ enum Command {
         /// Replace a non-empty --out that holds an earlier run's state files.
         #[arg(long)]
         force: bool,
+        /// Also write a picture of each state (rest pose left, current pose right) as PNG;
+        /// needs a Vulkan or GL adapter (software ones work).
+        #[arg(long)]
+        render: bool,
         /// Skinning method (overrides the script's).
         #[arg(long, value_enum)]
         skinning: Option<commands::SkinningArg>,
@@ -111,6 +115,10 @@ enum Command {
         /// Replace a non-empty --out that holds an earlier run's state files.
         #[arg(long)]
         force: bool,
+        /// Also write a picture of each state (rest pose left, current pose right) as PNG;
+        /// needs a Vulkan or GL adapter (software ones work).
+        #[arg(long)]
+        render: bool,
         /// Skinning method.
         #[arg(long, value_enum)]
         skinning: Option<commands::SkinningArg>,
@@ -179,9 +187,10 @@ fn main() -> std::process::ExitCode {
             script,
             out,
             force,
+            render,
             skinning,
             session,
-        } => edit::edit(&rig, &script, &out, force, skinning, &session),
+        } => edit::edit(&rig, &script, &out, force, render, skinning, &session),
         Command::Animate {
             rig,
             skeleton_anim,
@@ -190,6 +199,7 @@ fn main() -> std::process::ExitCode {
             times,
             out,
             force,
+            render,
             skinning,
             session,
         } => animate::animate(
@@ -200,6 +210,7 @@ fn main() -> std::process::ExitCode {
             &times,
             &out,
             force,
+            render,
             skinning,
             &session,
         ),

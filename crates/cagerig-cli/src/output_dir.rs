@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 
 /// Suffixes of the files written for one rig state (see [`crate::state_files`]).
-pub const STATE_FILE_SUFFIXES: [&str; 5] = [
+pub const STATE_FILE_SUFFIXES: [&str; 6] = [
+    ".png",
     "_mesh_rest.obj",
     "_mesh_posed.obj",
     "_cage_rest.obj",

@@ -191,6 +191,26 @@ impl PictureMaker {
         })
     }
 
+    /// Renders `session` (framed) as `name` into a staged output folder.
+    pub fn write_staged(
+        &mut self,
+        session: &RigSession,
+        staged: &mut crate::output_dir::StagedDir,
+        name: &str,
+    ) -> anyhow::Result<()> {
+        let camera = self.camera(session, 0.0);
+        let png = self.picture(session, &camera)?.to_png()?;
+        staged.write(name, &|w| w.write_all(&png))
+    }
+
+    /// Pictures for `edit --render` / `animate --render`: rest | current side by side.
+    pub fn for_steps(render: bool) -> anyhow::Result<Option<Self>> {
+        render
+            .then(|| Self::new(PictureOptions::default()))
+            .transpose()
+            .context("--render")
+    }
+
     /// Renders `session` (framed) and writes the PNG at `path`.
     pub fn write(&mut self, session: &RigSession, path: &Path) -> anyhow::Result<()> {
         let camera = self.camera(session, 0.0);

@@ -247,3 +247,53 @@ fn without_an_adapter_render_says_what_to_install_and_demo_still_works() {
     assert!(demo.join("3_grab_mesh_posed.obj").is_file());
     assert!(!demo.join("3_grab.png").exists());
 }
+
+#[test]
+fn edit_and_animate_render_a_picture_per_state_and_force_replaces_them() {
+    if !gpu_tests() {
+        return;
+    }
+    let dir = temp_dir("steps");
+    let script = dir.join("edits.json");
+    std::fs::write(
+        &script,
+        r#"{"steps":[{"op":"rotate_joint","joint":2,"axis":[0,0,1],"degrees":45}]}"#,
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let args = [
+        "edit",
+        "--builtin",
+        "bar",
+        "--script",
+        script.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--render",
+    ];
+    run(&args);
+    for k in 0..=1 {
+        let image = decode(&out.join(format!("step{k}.png")));
+        assert!(content_pixels(&image, 0, image.0) > 2000);
+    }
+    // A second run with --force replaces the folder, pictures included.
+    let mut forced = args.to_vec();
+    forced.push("--force");
+    run(&forced);
+    assert!(out.join("step1.png").is_file());
+
+    let arm = arm_dir();
+    let anim = dir.join("anim");
+    run(&[
+        "animate",
+        arm.join("arm.obj").to_str().unwrap(),
+        "--skeleton-anim",
+        arm.join("arm_skelAnim.txt").to_str().unwrap(),
+        "--times",
+        "0.75",
+        "--out",
+        anim.to_str().unwrap(),
+        "--render",
+    ]);
+    assert!(anim.join("t0.75.png").is_file());
+}

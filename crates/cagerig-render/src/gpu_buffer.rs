@@ -42,7 +42,7 @@ impl GrowBuffer {
             self.buffer = create(device, self.label, self.usage, self.capacity);
         }
         if !bytes.is_empty() {
-            if bytes.len() % 4 == 0 {
+            if bytes.len().is_multiple_of(4) {
                 queue.write_buffer(&self.buffer, 0, bytes);
             } else {
                 let mut padded = bytes.to_vec();

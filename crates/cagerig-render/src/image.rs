@@ -56,10 +56,9 @@ impl RgbaImage {
         for py in y0..y1 {
             for px in x0..x1 {
                 let i = (py as usize * self.width as usize + px as usize) * 4;
-                for c in 0..3 {
-                    let old = self.pixels[i + c] as u32;
-                    self.pixels[i + c] =
-                        ((color[c] as u32 * a + old * (255 - a) + 127) / 255) as u8;
+                for (channel, &value) in self.pixels[i..i + 3].iter_mut().zip(&color) {
+                    let old = *channel as u32;
+                    *channel = ((value as u32 * a + old * (255 - a) + 127) / 255) as u8;
                 }
                 self.pixels[i + 3] = 255;
             }
