@@ -21,11 +21,14 @@ pub struct RenderArgs {
     pub rig: RigArgs,
     /// Edit script (the JSON of `cagerig edit`) applied before rendering; the picture shows
     /// the state after its last step.
-    #[arg(long, conflicts_with_all = ["skeleton_anim", "cage_anim"])]
+    #[arg(long, conflicts_with_all = ["skeleton_anim", "cage_anim", "animation"])]
     pub script: Option<PathBuf>,
     /// Skeleton animation (V1/V2/V3 text format) sampled at `--times`.
     #[arg(long, requires = "times")]
     pub skeleton_anim: Option<PathBuf>,
+    /// glTF/FBX: the file's animation (name or index) sampled at `--times`.
+    #[arg(long, requires = "times", conflicts_with = "skeleton_anim")]
+    pub animation: Option<String>,
     /// Cage animation (rest-cage offsets) sampled at `--times`.
     #[arg(long, requires = "times")]
     pub cage_anim: Option<PathBuf>,
@@ -210,8 +213,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.turntable == Some(0) {
         bail!("--turntable 0: expected at least one frame");
     }
-    if !args.times.is_empty() && args.skeleton_anim.is_none() && args.cage_anim.is_none() {
-        bail!("--times needs --skeleton-anim and/or --cage-anim");
+    if !args.times.is_empty()
+        && args.skeleton_anim.is_none()
+        && args.cage_anim.is_none()
+        && args.animation.is_none()
+    {
+        bail!("--times needs --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
     }
     let script = match &args.script {
         Some(path) => {
@@ -222,12 +229,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => None,
     };
     let loaded = load_rig(&args.rig, true, true)?;
-    let skeleton = loaded.parts.skeleton.clone();
+    let (skeleton_track, channels) = crate::interchange::skeleton_track(
+        &loaded,
+        args.skeleton_anim.as_deref(),
+        args.animation.as_deref(),
+    )?;
     let num_cage = loaded.parts.cage.num_vertices();
-    let skeleton_track = match &args.skeleton_anim {
-        Some(p) => Some(cagerig::io::skeleton_animation::read_skeleton_animation(p, &skeleton)?.0),
-        None => None,
-    };
     let cage_track = match &args.cage_anim {
         Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
             p, num_cage,
@@ -271,8 +278,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.times.is_empty() {
         render_state(&mut maker, &session, args, &args.out, &mut written)?;
     } else {
-        let mut player =
-            cagerig::playback::AnimationPlayer::new(&session, skeleton_track, cage_track)?;
+        let mut player = cagerig::playback::AnimationPlayer::with_channels(
+            &session,
+            skeleton_track,
+            cage_track,
+            channels,
+        )?;
         for &t in &args.times {
             player.apply(t, &mut session)?;
             let path = if args.times.len() == 1 {

@@ -297,3 +297,29 @@ fn edit_and_animate_render_a_picture_per_state_and_force_replaces_them() {
     ]);
     assert!(anim.join("t0.75.png").is_file());
 }
+
+#[test]
+fn a_gltf_character_renders_at_an_animation_time() {
+    if !gpu_tests() {
+        return;
+    }
+    let dir = temp_dir("fox");
+    let fox = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/fox");
+    let out = dir.join("fox.png");
+    run(&[
+        "render",
+        fox.join("Fox.glb").to_str().unwrap(),
+        "--cage",
+        fox.join("Fox_cage.obj").to_str().unwrap(),
+        "--animation",
+        "Walk",
+        "--times",
+        "0.5",
+        "--size",
+        "200x150",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let image = decode(&out);
+    assert!(content_pixels(&image, 0, 200) > 1000);
+}
