@@ -156,6 +156,10 @@ impl Rig {
     ///     What CageUp fits under DQS/CoR.
     /// coords_precision : {"f64", "f32"}, default "f64"
     ///     Storage of Φ in the per-frame products.
+    /// keep_file_coords : bool, default False
+    ///     Keep a cage-weights file's Φ even when it does not reproduce the mesh (the paper
+    ///     tool's 6-decimal files; for conformance). By default such a Φ is recomputed, so that
+    ///     nothing the user did not touch moves at the first cage edit.
     ///
     /// Raises
     /// ------
@@ -164,7 +168,8 @@ impl Rig {
     ///     are issued as RigWarning and kept in :attr:`warnings`.
     #[staticmethod]
     #[pyo3(signature = (path, cage = None, *, skinning = "lbs", fit_rows = "maxvol",
-                        localisation = "articulation", fit_source = "ghost", coords_precision = "f64"))]
+                        localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
+                        keep_file_coords = false))]
     #[allow(clippy::too_many_arguments)]
     fn load(
         py: Python<'_>,
@@ -175,14 +180,18 @@ impl Rig {
         localisation: &str,
         fit_source: &str,
         coords_precision: &str,
+        keep_file_coords: bool,
     ) -> PyResult<Self> {
-        let options = options::session_options(
+        let mut options = options::session_options(
             skinning,
             fit_rows,
             localisation,
             fit_source,
             coords_precision,
         )?;
+        if keep_file_coords {
+            options.given_cage_coords = cagerig::session::GivenCageCoords::Keep;
+        }
         let files = py
             .detach(|| load_rig_files(&path, cage.as_deref()))
             .map_err(file_error)?;

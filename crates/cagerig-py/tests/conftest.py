@@ -46,6 +46,19 @@ def arm_base(arm_path):
         return cagerig.Rig.load(arm_path)
 
 
+@pytest.fixture(scope="session")
+def arm_file_coords_base(arm_path):
+    """The Arm with the shipped (6-decimal) Φ kept, as the paper tool and `cagerig maxvol` use it."""
+    with pytest.warns(cagerig.RigWarning):
+        return cagerig.Rig.load(arm_path, keep_file_coords=True)
+
+
+@pytest.fixture
+def arm_file_coords(arm_file_coords_base):
+    """A fresh copy of the Arm with the shipped Φ kept."""
+    return arm_file_coords_base.copy()
+
+
 @pytest.fixture
 def arm(arm_base):
     """A fresh copy of the loaded Arm for each test."""

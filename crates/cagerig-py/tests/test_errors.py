@@ -66,7 +66,7 @@ def test_bad_skinning_inputs():
     cagerig.lbs(v, w, scaled)  # LBS takes any affine transform
     with pytest.raises(ValueError, match="rigid"):
         cagerig.dqs(v, w, scaled)
-    with pytest.raises(cagerig.RigError, match="must be finite and non-negative"):
+    with pytest.raises(cagerig.RigError, match="must be finite, non-negative"):
         cagerig.lbs(v, -w, t)
     with pytest.warns(cagerig.RigWarning, match="renormalised"):
         cagerig.lbs(v, w * 0.9, t)
@@ -119,7 +119,7 @@ def test_bad_scripts(arm):
     with pytest.raises(cagerig.ScriptError, match="step 2"):
         cagerig.EditScript({"steps": [{"op": "reset_pose"}, {"op": "explode"}]})
     script = cagerig.EditScript({"steps": [{"op": "move_rest_cage", "vertices": [999], "offset": [1, 0, 0]}]})
-    with pytest.raises(cagerig.ScriptError, match="step 1: cage vertex 999 is out of range"):
+    with pytest.raises(cagerig.ScriptError, match="step 1: .*cage vertex 999 is out of range"):
         arm.run_script(script)
     with pytest.raises(cagerig.ScriptError, match="not valid JSON"):
         cagerig.EditScript("{nope")

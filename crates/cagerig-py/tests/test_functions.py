@@ -33,7 +33,8 @@ def test_mvc_accepts_lists_and_other_dtypes():
     np.testing.assert_array_equal(phi, cagerig.mvc(np.array(points), cube_v.astype(float), cube_f))
 
 
-def test_maxvol_rows_equal_the_cli(arm, cli, tmp_path):
+def test_maxvol_rows_equal_the_cli(arm_file_coords, cli, tmp_path):
+    arm = arm_file_coords  # `cagerig maxvol` selects rows of the shipped Φ
     report = json.loads(
         run_cli(cli, "maxvol", ARM_DIR / "arm.obj", "--out", tmp_path / "r.maxvol", "--json").stdout
     )

@@ -48,9 +48,11 @@ def test_run_script_equals_the_same_calls(arm):
     assert len(script) == 6 and script.skinning == "lbs" and script.steps[0]["op"] == "rotate_joint"
 
 
-def test_paper_tool_steps_ii_to_iv(arm):
+def test_paper_tool_steps_ii_to_iv(arm_file_coords):
     """The scenario of reference/README.txt against the paper tool's outputs (tolerances of the
-    Rust conformance test; step iii/iv joints near the shoulder differ by the tool's defect)."""
+    Rust conformance test; step iii/iv joints near the shoulder differ by the tool's defect).
+    Uses the tool's own Φ file, as the Rust conformance test does."""
+    arm = arm_file_coords
     arm.rotate_joint("lowerarm01.R", [1, 0, 0], 60)
     np.testing.assert_allclose(arm.posed_mesh, read_obj_vertices(REFERENCE / "s2_Mdef.obj"), atol=1e-9)
     np.testing.assert_allclose(arm.posed_cage, read_obj_vertices(REFERENCE / "s2_Cdef.obj"), atol=1e-9)

@@ -105,6 +105,7 @@ class Rig:
         localisation: _Localisation = "articulation",
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
+        keep_file_coords: bool = False,
     ) -> Rig: ...
     @staticmethod
     def builtin(
