@@ -55,15 +55,8 @@ pub fn animate(
     let mut pictures = crate::pictures::PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force)?;
     let loaded = load_rig(rig, true, true)?;
-    let num_cage = loaded.parts.cage.num_vertices();
-    let (skeleton_track, channels) =
-        crate::interchange::skeleton_track(&loaded, skeleton_anim, animation)?;
-    let cage_track = match cage_anim {
-        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
-            p, num_cage,
-        )?),
-        None => None,
-    };
+    let (skeleton_track, channels, cage_track) =
+        crate::interchange::animation_tracks(&loaded, skeleton_anim, animation, cage_anim)?;
     let mut options = session_args.options();
     options.skinning = skinning.map(SkinningMethod::from).unwrap_or_default();
     let (session, warnings) = start_session(loaded, options)?;

@@ -29,6 +29,13 @@ stepK_mesh_posed.obj, stepK_cage_rest.obj, stepK_cage_posed.obj and stepK_joints
 loaded, then after each step) appear in --out only when every step succeeded; with --render also
 stepK.png (rest pose left, current pose right).";
 
+/// Reads and parses an edit script; errors name the file once.
+pub fn read_script(path: &Path) -> anyhow::Result<EditScript> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading the script {}", path.display()))?;
+    EditScript::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
 pub fn edit(
     rig: &RigArgs,
     script_path: &Path,
@@ -38,10 +45,7 @@ pub fn edit(
     skinning: Option<SkinningArg>,
     session_args: &SessionArgs,
 ) -> anyhow::Result<()> {
-    let text = std::fs::read_to_string(script_path)
-        .with_context(|| format!("reading the script {}", script_path.display()))?;
-    let script =
-        EditScript::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", script_path.display()))?;
+    let script = read_script(script_path)?;
     let mut pictures = PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force)?;
     let loaded = load_rig(rig, true, true)?;

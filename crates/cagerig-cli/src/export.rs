@@ -9,7 +9,6 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use cagerig::script::EditScript;
 use cagerig::session::RigSession;
 use cagerig_formats::gltf::export_animation;
 use clap::Args;
@@ -51,30 +50,21 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             args.out.display()
         );
     }
-    let script = match &args.script {
-        Some(p) => {
-            let text =
-                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
-            Some(EditScript::parse(&text).with_context(|| format!("in {}", p.display()))?)
-        }
-        None => None,
-    };
+    let script = args
+        .script
+        .as_deref()
+        .map(crate::edit::read_script)
+        .transpose()?;
     if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 1000.0) {
         bail!("--fps {} must be in (0, 1000]", args.fps);
     }
     let loaded = load_rig(&args.rig, true, true)?;
-    let (skeleton_track, channels) = crate::interchange::skeleton_track(
+    let (skeleton_track, channels, cage_track) = crate::interchange::animation_tracks(
         &loaded,
         args.skeleton_anim.as_deref(),
         args.animation.as_deref(),
+        args.cage_anim.as_deref(),
     )?;
-    let cage_track = match &args.cage_anim {
-        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
-            p,
-            loaded.parts.cage.num_vertices(),
-        )?),
-        None => None,
-    };
     let name = loaded
         .name
         .rsplit(['/', '\\'])

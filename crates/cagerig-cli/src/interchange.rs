@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use anyhow::{Context, bail};
-use cagerig::animation::SkeletonTrack;
+use cagerig::animation::{CageTrack, SkeletonTrack};
 use cagerig::playback::PoseChannels;
 use cagerig::session::RigParts;
 use cagerig_formats::{ImportOptions, ImportedCharacter, import_character};
@@ -70,6 +70,26 @@ pub fn load_interchange(
         animations,
         allow_outside_cage: false,
     })
+}
+
+/// Every track an animation command (`animate`, `render`, `export`) plays: the skeleton track
+/// of [`skeleton_track`] with its channels, and the cage track of `--cage-anim` (rest-cage
+/// offsets for the rig's cage).
+pub fn animation_tracks(
+    loaded: &LoadedRig,
+    skeleton_anim: Option<&Path>,
+    animation: Option<&str>,
+    cage_anim: Option<&Path>,
+) -> anyhow::Result<(Option<SkeletonTrack>, PoseChannels, Option<CageTrack>)> {
+    let (skeleton_track, channels) = skeleton_track(loaded, skeleton_anim, animation)?;
+    let cage_track = match cage_anim {
+        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
+            p,
+            loaded.parts.cage.num_vertices(),
+        )?),
+        None => None,
+    };
+    Ok((skeleton_track, channels, cage_track))
 }
 
 /// The skeleton track `animate` plays: `--animation NAME|INDEX` from the imported file (all

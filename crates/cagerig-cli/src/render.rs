@@ -3,7 +3,6 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use cagerig::script::EditScript;
 use cagerig::session::RigSession;
 use cagerig::skinning::SkinningMethod;
 use cagerig_render::CameraPreset;
@@ -220,27 +219,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     {
         bail!("--times needs --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
     }
-    let script = match &args.script {
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("reading {}", path.display()))?;
-            Some(EditScript::parse(&text).with_context(|| format!("in {}", path.display()))?)
-        }
-        None => None,
-    };
+    let script = args
+        .script
+        .as_deref()
+        .map(crate::edit::read_script)
+        .transpose()?;
     let loaded = load_rig(&args.rig, true, true)?;
-    let (skeleton_track, channels) = crate::interchange::skeleton_track(
+    let (skeleton_track, channels, cage_track) = crate::interchange::animation_tracks(
         &loaded,
         args.skeleton_anim.as_deref(),
         args.animation.as_deref(),
+        args.cage_anim.as_deref(),
     )?;
-    let num_cage = loaded.parts.cage.num_vertices();
-    let cage_track = match &args.cage_anim {
-        Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
-            p, num_cage,
-        )?),
-        None => None,
-    };
     let mut options = args.session.options();
     options.skinning = args
         .skinning
