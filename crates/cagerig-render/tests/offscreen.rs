@@ -23,29 +23,8 @@ fn renderer() -> Option<OffscreenRenderer> {
 
 /// An axis-aligned box `[lo, hi]` as 8 vertices and 12 outward triangles.
 fn cuboid(lo: DVec3, hi: DVec3) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-    let p = |i: u32| {
-        DVec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
-    let positions = (0..8).map(p).collect();
-    let triangles = vec![
-        [0, 2, 1],
-        [1, 2, 3], // −z
-        [4, 5, 6],
-        [5, 7, 6], // +z
-        [0, 1, 4],
-        [1, 5, 4], // −y
-        [2, 6, 3],
-        [3, 6, 7], // +y
-        [0, 4, 2],
-        [2, 4, 6], // −x
-        [1, 3, 5],
-        [3, 7, 5], // +x
-    ];
-    (positions, triangles)
+    let mesh = cagerig::TriMesh::cuboid(lo, hi).unwrap();
+    (mesh.positions, mesh.triangles)
 }
 
 fn mesh_scene<'a>(

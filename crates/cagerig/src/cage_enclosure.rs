@@ -156,22 +156,7 @@ mod tests {
 
     /// Unit cube [0,1]³, outward triangles.
     fn cube() -> TriMesh {
-        let p = (0..8)
-            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
-            .collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let t = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
-        TriMesh::new(p, t).unwrap()
+        TriMesh::cuboid(DVec3::ZERO, DVec3::ONE).unwrap()
     }
 
     #[test]

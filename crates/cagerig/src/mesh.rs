@@ -44,6 +44,33 @@ impl TriMesh {
         })
     }
 
+    /// The axis-aligned box `[lo, hi]`: 8 vertices (vertex `i` takes `hi.x` when bit 0 of `i`
+    /// is set, else `lo.x`; bit 1 → y, bit 2 → z) and 12 outward-oriented triangles.
+    pub fn cuboid(lo: DVec3, hi: DVec3) -> Result<Self, RigError> {
+        let positions = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            })
+            .collect();
+        let quads: [[u32; 4]; 6] = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        Self::new(positions, triangles)
+    }
+
     pub fn num_vertices(&self) -> usize {
         self.positions.len()
     }
@@ -134,6 +161,15 @@ pub fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn cuboid_is_closed_outward_with_the_box_volume() {
+        let m = TriMesh::cuboid(DVec3::new(-1.0, 0.0, 2.0), DVec3::new(1.0, 3.0, 2.5)).unwrap();
+        assert_eq!((m.num_vertices(), m.num_triangles()), (8, 12));
+        assert!((m.signed_volume() - 2.0 * 3.0 * 0.5).abs() < 1e-12);
+        assert_eq!(m.positions[5], DVec3::new(1.0, 0.0, 2.5));
+    }
+
     use super::*;
 
     #[test]

@@ -20,27 +20,7 @@ pub fn box_cage(points: &[DVec3], pad: f64) -> TriMesh {
     let d = (hi - lo).length() * pad;
     lo -= DVec3::splat(d);
     hi += DVec3::splat(d);
-    let p = |i: usize| {
-        DVec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
-    let positions = (0..8).map(p).collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let triangles = quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
-    TriMesh::new(positions, triangles).unwrap()
+    TriMesh::cuboid(lo, hi).unwrap()
 }
 
 /// Straightforward glTF skinning written from the specification, on the `gltf` crate's own

@@ -449,28 +449,7 @@ mod tests {
     use super::*;
 
     fn cube(half: f64) -> TriMesh {
-        let p: Vec<DVec3> = (0..8)
-            .map(|i| {
-                DVec3::new(
-                    if i & 1 != 0 { half } else { -half },
-                    if i & 2 != 0 { half } else { -half },
-                    if i & 4 != 0 { half } else { -half },
-                )
-            })
-            .collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let tris = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
-        TriMesh::new(p, tris).unwrap()
+        TriMesh::cuboid(DVec3::splat(-half), DVec3::splat(half)).unwrap()
     }
 
     #[test]
