@@ -14,6 +14,7 @@
 //! | `palette.rs` | sequential and diverging colour maps |
 //! | `scene.rs` | what to draw (borrowed slices) and the style |
 //! | `scene_buffers.rs` | GPU buffers updated in place per frame |
+//! | `vertex_normals.rs` | parallel smooth normals of a deforming mesh |
 //! | `pipelines.rs`, `shaders/` | pipeline states and WGSL |
 //! | `renderer.rs` | per-frame uniforms, lights, pass recording |
 //! | `target.rs` | colour + depth targets, readback |
@@ -38,6 +39,7 @@ pub mod rig_scene;
 pub mod scene;
 pub mod scene_buffers;
 pub mod target;
+pub mod vertex_normals;
 
 pub use camera::{CameraPreset, OrbitCamera};
 pub use error::RenderError;

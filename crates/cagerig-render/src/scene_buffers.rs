@@ -3,6 +3,7 @@
 //! current positions.
 
 use glam::DVec3;
+use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
@@ -10,6 +11,7 @@ use crate::gpu_buffer::GrowBuffer;
 use crate::gpu_types::{LineInstance, MaterialUniform, MeshVertex, PointInstance};
 use crate::pipelines::Pipelines;
 use crate::scene::{Scene, Style, unique_edges};
+use crate::vertex_normals::VertexNormals;
 
 /// A shaded triangle layer (the skin or the cage faces).
 struct SurfaceBuffers {
@@ -21,6 +23,7 @@ struct SurfaceBuffers {
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
     normals: Vec<DVec3>,
+    vertex_normals: VertexNormals,
     packed: Vec<MeshVertex>,
     visible: bool,
 }
@@ -48,6 +51,7 @@ impl SurfaceBuffers {
             triangles: Vec::new(),
             edges: Vec::new(),
             normals: Vec::new(),
+            vertex_normals: VertexNormals::default(),
             packed: Vec::new(),
             visible: false,
         }
@@ -67,7 +71,9 @@ impl SurfaceBuffers {
         material: MaterialUniform,
     ) -> u32 {
         let mut created = 0;
+        let mut topology_changed = false;
         if self.triangles != triangles || self.indices.is_empty() != triangles.is_empty() {
+            topology_changed = true;
             self.triangles.clear();
             self.triangles.extend_from_slice(triangles);
             self.edges = unique_edges(triangles);
@@ -75,22 +81,28 @@ impl SurfaceBuffers {
         }
         self.normals.resize(positions.len(), DVec3::ZERO);
         if smooth {
-            cagerig::mesh::TriMesh::vertex_normals(positions, triangles, &mut self.normals);
+            if self.vertex_normals.num_vertices() != positions.len() || topology_changed {
+                self.vertex_normals = VertexNormals::new(positions.len(), triangles);
+            }
+            self.vertex_normals
+                .apply(positions, triangles, &mut self.normals);
         } else {
             self.normals.iter_mut().for_each(|n| *n = DVec3::ZERO);
         }
-        self.packed.clear();
-        self.packed.extend(
-            positions
-                .iter()
-                .zip(&self.normals)
-                .enumerate()
-                .map(|(i, (p, n))| MeshVertex {
-                    position: p.as_vec3().to_array(),
-                    normal: n.as_vec3().to_array(),
+        self.packed
+            .resize(positions.len(), bytemuck::Zeroable::zeroed());
+        let normals = &self.normals;
+        self.packed
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(16_384)
+            .for_each(|(i, v)| {
+                *v = MeshVertex {
+                    position: positions[i].as_vec3().to_array(),
+                    normal: normals[i].as_vec3().to_array(),
                     color: colors.map_or([255; 4], |c| c[i]),
-                }),
-        );
+                };
+            });
         created += u32::from(self.vertices.write(device, queue, &self.packed));
         queue.write_buffer(&self.material, 0, bytemuck::bytes_of(&material));
         self.visible = !triangles.is_empty();

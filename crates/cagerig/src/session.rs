@@ -32,8 +32,10 @@ use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
 mod checkpoint;
+mod editable_state;
 use checkpoint::Checkpoint;
 pub use checkpoint::MAX_STATE_MAGNITUDE;
+pub use editable_state::{EditableState, SyncLocks};
 
 /// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
 /// the similarity tables of [`crate::skinning::cor_grid`] (seconds, centre error ≈ 1e-4 × bbox
@@ -284,6 +286,8 @@ pub struct RigSession {
     dqs_scratch: DqsScratch,
     /// The small state saved before each event (see [`checkpoint`]).
     checkpoint: Checkpoint,
+    /// SkelUp / CageUp switched off by the user (see [`SyncLocks`]).
+    locks: SyncLocks,
 }
 
 impl RigSession {
@@ -484,6 +488,7 @@ impl RigSession {
             scratch_rows_rest: vec![DVec3::ZERO; nr],
             scratch_rows_posed: vec![DVec3::ZERO; nr],
             checkpoint: Checkpoint::new(nc, nj),
+            locks: SyncLocks::default(),
         };
         session.set_skinning(options.skinning)?;
         session.pose_and_fit();
@@ -796,6 +801,13 @@ impl RigSession {
         offsets: &[DVec3],
     ) -> Result<(), RigError> {
         self.check_cage_edit(vertices, offsets)?;
+        if self.locks.cage_up {
+            return Err(RigError::Invalid(
+                "the current cage C' cannot be edited while CageUp is locked (CageRev assumes \
+                 C' is CageUp's fit of M'); unlock CageUp first"
+                    .into(),
+            ));
+        }
         if !self.reverser.is_factorised() {
             self.refactor_reverser()?;
         }
@@ -1103,14 +1115,16 @@ impl RigSession {
 
     /// After C changed: SkelUp (A = ΨC, rest frames re-placed), FK, skinning, CageUp.
     fn sync_from_rest_cage(&mut self) {
-        self.skeleton_updater
-            .apply(&self.rest_cage, &mut self.scratch_joints);
-        for (frame, a) in self
-            .rest_world_from_joint
-            .iter_mut()
-            .zip(&self.scratch_joints)
-        {
-            frame.translation = *a;
+        if !self.locks.skel_up {
+            self.skeleton_updater
+                .apply(&self.rest_cage, &mut self.scratch_joints);
+            for (frame, a) in self
+                .rest_world_from_joint
+                .iter_mut()
+                .zip(&self.scratch_joints)
+            {
+                frame.translation = *a;
+            }
         }
         self.pose_and_fit();
     }
@@ -1139,7 +1153,9 @@ impl RigSession {
             &mut self.posed_from_rest,
         );
         self.skin();
-        self.fit_cage();
+        if !self.locks.cage_up {
+            self.fit_cage();
+        }
     }
 
     fn skin(&mut self) {

@@ -1,0 +1,163 @@
+//! `cagerig-studio`: the interactive editor.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::bail;
+use cagerig_studio::benchmark_drag::DragBenchmark;
+use cagerig_studio::rig_open::RigSource;
+use cagerig_studio::{StartupOptions, StudioApp};
+use clap::Parser;
+
+/// cagerig studio: pose a character with its skeleton and sculpt it with its cage, in the rest
+/// pose or the current pose, with every structure kept in sync.
+#[derive(Debug, Parser)]
+#[command(name = "cagerig-studio", version, after_help = AFTER_HELP)]
+struct Args {
+    /// A character (OBJ with its companion files, .glb, .gltf, .fbx) or a .cagerig session.
+    /// Without it, the built-in demo rig opens.
+    path: Option<PathBuf>,
+    /// The cage (OBJ) of the character, instead of the discovered or embedded one.
+    #[arg(long, requires = "path")]
+    cage: Option<PathBuf>,
+    /// A built-in demo rig instead of a file (bar, bar_irregular, snake).
+    #[arg(long, conflicts_with = "path")]
+    builtin: Option<String>,
+    /// Resolution of the built-in rig (bar: ring intervals; snake: about the vertex count).
+    #[arg(long, requires = "builtin")]
+    resolution: Option<usize>,
+    /// A .cagerig session file to open.
+    #[arg(long, conflicts_with_all = ["path", "builtin"])]
+    session: Option<PathBuf>,
+    /// An edit script (the JSON of `cagerig edit`) applied through the editor before the first
+    /// frame, one undo step per step.
+    #[arg(long)]
+    script: Option<PathBuf>,
+    /// Save the session to this file (after --script).
+    #[arg(long)]
+    save_session: Option<PathBuf>,
+    /// Write a PNG of the window after the first frames, then quit.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Window size, WIDTHxHEIGHT in points.
+    #[arg(long, default_value = "1600x900", value_parser = parse_size)]
+    size: (f32, f32),
+    /// Quit after this many frames.
+    #[arg(long)]
+    quit_after_frames: Option<u64>,
+    /// Write per-frame timings (median and max of sync, normals/upload, UI, frame time) as JSON.
+    #[arg(long)]
+    frame_stats: Option<PathBuf>,
+    /// Simulate a drag (one event per frame) to measure interactive frame times.
+    #[arg(long, value_enum)]
+    benchmark_drag: Option<DragBenchmark>,
+}
+
+const AFTER_HELP: &str = "\
+Without a display (a server, CI), run it under a virtual one:
+  xvfb-run -a cagerig-studio --script edits.json --screenshot out.png
+For pictures without any window, use `cagerig render` or `cagerig demo`.
+Shortcuts: Help ▸ Shortcuts in the editor.";
+
+fn parse_size(text: &str) -> Result<(f32, f32), String> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT (e.g. 1600x900), found {text:?}"))?;
+    let parse = |s: &str| {
+        s.trim()
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite() && (64.0..=16384.0).contains(v))
+            .ok_or_else(|| {
+                format!(
+                    "expected WIDTHxHEIGHT with sizes 64 to 16384 (e.g. 1600x900), found {text:?}"
+                )
+            })
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+/// Whether a display server is reachable (Linux / BSD: X11 or Wayland).
+fn display_available() -> bool {
+    if cfg!(any(target_os = "windows", target_os = "macos")) {
+        return true;
+    }
+    let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    set("DISPLAY") || set("WAYLAND_DISPLAY")
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    if !display_available() {
+        bail!(
+            "no display: neither DISPLAY nor WAYLAND_DISPLAY is set, so no window can open.\n\
+             Run it under a virtual display: xvfb-run -a cagerig-studio [ARGS]\n\
+             (for pictures without any window: `cagerig render` or `cagerig demo`)"
+        );
+    }
+    let (source, session) = match (&args.path, &args.builtin, &args.session) {
+        (_, _, Some(s)) => (None, Some(s.clone())),
+        (Some(p), _, None)
+            if p.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("cagerig")) =>
+        {
+            (None, Some(p.clone()))
+        }
+        (Some(p), _, None) => (
+            Some(RigSource::File {
+                path: p.clone(),
+                cage: args.cage.clone(),
+                skin: None,
+            }),
+            None,
+        ),
+        (None, Some(name), None) => (
+            Some(RigSource::Builtin {
+                name: name.clone(),
+                resolution: args.resolution,
+            }),
+            None,
+        ),
+        (None, None, None) => (None, None),
+    };
+    let options = StartupOptions {
+        source,
+        session,
+        script: args.script,
+        save_session: args.save_session,
+        screenshot: args.screenshot,
+        quit_after_frames: args.quit_after_frames,
+        frame_stats: args.frame_stats,
+        state_dir: None,
+        drag_benchmark: args.benchmark_drag,
+    };
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size(egui::vec2(args.size.0, args.size.1))
+            .with_title("cagerig studio")
+            .with_drag_and_drop(true),
+        renderer: eframe::Renderer::Wgpu,
+        ..Default::default()
+    };
+    eframe::run_native(
+        "cagerig studio",
+        native,
+        Box::new(move |cc| Ok(Box::new(StudioApp::new(cc, options)))),
+    )
+    .map_err(|e| {
+        anyhow::anyhow!(
+            "could not start the window: {e}\n(without a GPU, install a software Vulkan driver: \
+             mesa-vulkan-drivers; without a display, run under xvfb-run -a)"
+        )
+    })
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("cagerig-studio: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

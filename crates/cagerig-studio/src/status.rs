@@ -1,0 +1,75 @@
+//! The status bar (sync time of the last event, frame time, counts, undo depth) and the log
+//! panel where load warnings and errors are shown.
+
+use crate::app::{LogLevel, StudioApp};
+
+/// The bottom status bar and, above it, the log panel (collapsible).
+pub fn status_bar_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
+    egui::Panel::bottom("status").show(ui, |ui| {
+        ui.horizontal(|ui| {
+            match &app.doc {
+                Some(doc) => {
+                    let s = &doc.session;
+                    ui.label(format!(
+                        "sync {:.2} ms | frame {} | {} vertices, {} joints, {} cage vertices | \
+                         {} | undo {} / redo {}",
+                        doc.last_sync_ms,
+                        app.stats
+                            .last_frame_ms()
+                            .map_or_else(|| "–".to_string(), |f| format!("{f:.1} ms")),
+                        s.rest_mesh().len(),
+                        s.skeleton().len(),
+                        s.rest_cage().len(),
+                        crate::document::method_name(s.skinning()),
+                        doc.history().undo_len(),
+                        doc.history().redo_len(),
+                    ));
+                    let n = app.selection.cage.len();
+                    if n > 0 {
+                        ui.label(format!("| {n} cage vertices selected"));
+                    }
+                    if let Some(j) = app.selection.joint {
+                        ui.label(format!("| joint {}", s.skeleton().joint(j).name));
+                    }
+                }
+                None => {
+                    ui.label("no rig open");
+                }
+            }
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                if ui.small_button("Shortcuts").clicked() {
+                    app.dialogs.help = true;
+                }
+            });
+        });
+    });
+    let errors = app
+        .log
+        .iter()
+        .filter(|l| l.level == LogLevel::Error)
+        .count();
+    let warnings = app
+        .log
+        .iter()
+        .filter(|l| l.level == LogLevel::Warning)
+        .count();
+    egui::Panel::bottom("log")
+        .resizable(false)
+        .exact_size(84.0)
+        .show(ui, |ui| {
+            ui.label(format!("Log ({errors} errors, {warnings} warnings)"));
+            egui::ScrollArea::vertical()
+                .auto_shrink([false, false])
+                .stick_to_bottom(true)
+                .show(ui, |ui| {
+                    for line in &app.log {
+                        let color = match line.level {
+                            LogLevel::Info => ui.visuals().text_color(),
+                            LogLevel::Warning => egui::Color32::from_rgb(200, 140, 0),
+                            LogLevel::Error => egui::Color32::from_rgb(220, 40, 40),
+                        };
+                        ui.colored_label(color, &line.text);
+                    }
+                });
+        });
+}

@@ -1,0 +1,360 @@
+//! Interactive transforms of the selection — grab / rotate / scale of cage vertices (C in the
+//! rest view, C' in the current view) and rotation of a joint (S', current view) — started by
+//! a gizmo handle, by dragging a selected element, or by Blender-like keys (G / R / S, then
+//! X / Y / Z, typed values, Enter / Esc). Each mouse move is one session event; the whole
+//! transform is one undo step.
+
+use glam::{DQuat, DVec2, DVec3};
+
+use crate::app::{CURRENT, StudioApp};
+use crate::document::Command;
+use crate::gizmo::{self, Axis, Constraint};
+
+/// Grab, rotate or scale.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TransformOp {
+    Grab,
+    Rotate,
+    Scale,
+}
+
+impl TransformOp {
+    pub fn label(self) -> &'static str {
+        match self {
+            TransformOp::Grab => "grab",
+            TransformOp::Rotate => "rotate",
+            TransformOp::Scale => "scale",
+        }
+    }
+}
+
+/// What a transform moves.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TransformTarget {
+    /// Cage vertices and their positions when the transform started.
+    Cage {
+        vertices: Vec<usize>,
+        start: Vec<DVec3>,
+    },
+    /// A joint of the current skeleton; `applied` is the world rotation applied so far.
+    Joint {
+        joint: usize,
+        applied: DQuat,
+        trackball: bool,
+    },
+}
+
+/// A transform in progress.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Transform {
+    /// Which view ([`CURRENT`] or [`crate::app::REST`]).
+    pub view: usize,
+    pub op: TransformOp,
+    pub constraint: Constraint,
+    pub target: TransformTarget,
+    /// Mouse position (view pixels) when it started.
+    pub start_mouse: DVec2,
+    /// Started by a key: follows the mouse without a button, confirmed by a click or Enter.
+    pub modal: bool,
+    /// A value typed during a modal transform (distance, degrees or factor).
+    pub typed: String,
+    pub pivot: DVec3,
+}
+
+impl Transform {
+    /// The typed value, if it parses.
+    pub fn typed_value(&self) -> Option<f64> {
+        let t = self.typed.trim();
+        if t.is_empty() || t == "-" {
+            return None;
+        }
+        t.parse::<f64>().ok().filter(|v| v.is_finite())
+    }
+
+    /// Sets the constraint from an axis key (X / Y / Z; with shift the plane normal to it);
+    /// the same key again frees it.
+    pub fn toggle_axis(&mut self, axis: Axis, plane: bool) {
+        let wanted = if plane {
+            Constraint::Plane(axis)
+        } else {
+            Constraint::Axis(axis)
+        };
+        self.constraint = if self.constraint == wanted {
+            Constraint::Free
+        } else {
+            wanted
+        };
+    }
+
+    /// One line for the status bar.
+    pub fn describe(&self) -> String {
+        let c = match self.constraint {
+            Constraint::Free => String::new(),
+            Constraint::Axis(a) => format!(" along {}", a.name()),
+            Constraint::Plane(a) => format!(" in the plane normal to {}", a.name()),
+        };
+        let typed = if self.typed.is_empty() {
+            String::new()
+        } else {
+            format!(" = {}", self.typed)
+        };
+        format!(
+            "{}{c}{typed} — X/Y/Z constrain (Shift: plane), type a value, Enter/click confirm, \
+             Esc/right-click cancel",
+            self.op.label()
+        )
+    }
+}
+
+/// Axis a rotation turns about: the constraint's axis, or the view axis.
+fn rotation_axis(constraint: Constraint, view_back: DVec3) -> DVec3 {
+    match constraint {
+        Constraint::Axis(a) | Constraint::Plane(a) => a.vector(),
+        Constraint::Free => view_back,
+    }
+}
+
+impl StudioApp {
+    /// Starts a transform of the active selection in `view` (one undo step until it ends).
+    pub fn begin_transform(
+        &mut self,
+        view: usize,
+        op: TransformOp,
+        constraint: Constraint,
+        mouse: DVec2,
+        modal: bool,
+        trackball: bool,
+    ) -> bool {
+        let Some(doc) = &mut self.doc else {
+            return false;
+        };
+        let target = if self.selection.joint_active() {
+            let Some(joint) = self.selection.joint else {
+                return false;
+            };
+            if view != CURRENT || op != TransformOp::Rotate {
+                self.log_warning(
+                    "joints are rotated in the current-pose view (R); the rest skeleton follows \
+                     the rest cage (SkelUp)",
+                );
+                return false;
+            }
+            TransformTarget::Joint {
+                joint,
+                applied: DQuat::IDENTITY,
+                trackball,
+            }
+        } else {
+            if self.selection.cage.is_empty() {
+                return false;
+            }
+            let positions = if view == CURRENT {
+                doc.session.posed_cage()
+            } else {
+                doc.session.rest_cage()
+            };
+            let vertices: Vec<usize> = self.selection.cage.iter().copied().collect();
+            TransformTarget::Cage {
+                start: vertices.iter().map(|&k| positions[k]).collect(),
+                vertices,
+            }
+        };
+        let pivot = match &target {
+            TransformTarget::Cage { start, .. } => {
+                start.iter().copied().sum::<DVec3>() / start.len() as f64
+            }
+            TransformTarget::Joint { joint, .. } => {
+                doc.session.posed_world_from_joint()[*joint].translation
+            }
+        };
+        let what = match (&target, view == CURRENT) {
+            (TransformTarget::Joint { .. }, _) => "rotate joint".to_string(),
+            (TransformTarget::Cage { .. }, true) => format!("{} current cage", op.label()),
+            (TransformTarget::Cage { .. }, false) => format!("{} rest cage", op.label()),
+        };
+        doc.begin_gesture(what);
+        self.interaction.transform = Some(Transform {
+            view,
+            op,
+            constraint,
+            target,
+            start_mouse: mouse,
+            modal,
+            typed: String::new(),
+            pivot,
+        });
+        true
+    }
+
+    /// Updates the transform for the mouse at `mouse` (view pixels): one session event.
+    pub fn update_transform(&mut self, mouse: DVec2) {
+        let Some(mut t) = self.interaction.transform.take() else {
+            return;
+        };
+        let projection = self.views[t.view].projection();
+        let back = projection.camera.backward();
+        let typed = t.typed_value();
+        let command = match &mut t.target {
+            TransformTarget::Cage { vertices, start } => {
+                let targets: Vec<DVec3> = match t.op {
+                    TransformOp::Grab => {
+                        let d = match (typed, t.constraint) {
+                            (Some(v), Constraint::Axis(a)) => v * a.vector(),
+                            (Some(v), _) => DVec3::new(v, 0.0, 0.0),
+                            (None, c) => gizmo::drag_translation(
+                                &projection,
+                                t.pivot,
+                                c,
+                                t.start_mouse,
+                                mouse,
+                            ),
+                        };
+                        start.iter().map(|p| *p + d).collect()
+                    }
+                    TransformOp::Rotate => {
+                        let axis = rotation_axis(t.constraint, back);
+                        let angle = typed.map(f64::to_radians).unwrap_or_else(|| {
+                            gizmo::drag_rotation_angle(
+                                &projection,
+                                t.pivot,
+                                axis,
+                                t.start_mouse,
+                                mouse,
+                            )
+                        });
+                        let q = DQuat::from_axis_angle(axis, angle);
+                        start.iter().map(|p| t.pivot + q * (*p - t.pivot)).collect()
+                    }
+                    TransformOp::Scale => {
+                        let f = typed.unwrap_or_else(|| {
+                            gizmo::drag_scale(&projection, t.pivot, t.start_mouse, mouse)
+                        });
+                        let s = gizmo::scale_vector(f, t.constraint);
+                        start.iter().map(|p| t.pivot + s * (*p - t.pivot)).collect()
+                    }
+                };
+                let Some(doc) = &self.doc else { return };
+                let current = if t.view == CURRENT {
+                    doc.session.posed_cage()
+                } else {
+                    doc.session.rest_cage()
+                };
+                let offsets: Vec<DVec3> = vertices
+                    .iter()
+                    .zip(&targets)
+                    .map(|(&k, p)| *p - current[k])
+                    .collect();
+                if offsets.iter().all(|o| o.length_squared() == 0.0) {
+                    None
+                } else if t.view == CURRENT {
+                    Some(Command::MovePosedCage {
+                        vertices: vertices.clone(),
+                        offsets,
+                    })
+                } else {
+                    Some(Command::MoveRestCage {
+                        vertices: vertices.clone(),
+                        offsets,
+                    })
+                }
+            }
+            TransformTarget::Joint {
+                joint,
+                applied,
+                trackball,
+            } => {
+                let total = if *trackball && typed.is_none() && t.constraint == Constraint::Free {
+                    gizmo::trackball(&projection, t.start_mouse, mouse, 0.01)
+                } else {
+                    let axis = rotation_axis(t.constraint, back);
+                    let angle = typed.map(f64::to_radians).unwrap_or_else(|| {
+                        gizmo::drag_rotation_angle(&projection, t.pivot, axis, t.start_mouse, mouse)
+                    });
+                    DQuat::from_axis_angle(axis, angle)
+                };
+                let delta = (total * applied.inverse()).normalize();
+                let (axis, angle) = delta.to_axis_angle();
+                *applied = total;
+                (angle.abs() > 1e-12 && axis.is_finite()).then_some(Command::RotateJoint {
+                    joint: *joint,
+                    axis,
+                    angle,
+                })
+            }
+        };
+        self.interaction.transform = Some(t);
+        if let (Some(command), Some(doc)) = (command, &mut self.doc) {
+            match doc.gesture_event(&command) {
+                Ok(()) => self.stats.sync_ms += doc.last_sync_ms,
+                Err(e) => {
+                    let message = format!("{}: {e}", command.label());
+                    self.cancel_transform();
+                    self.log_error(message);
+                }
+            }
+        }
+    }
+
+    /// Confirms the transform (one undo step).
+    pub fn confirm_transform(&mut self) {
+        if self.interaction.transform.take().is_some()
+            && let Some(doc) = &mut self.doc
+        {
+            doc.end_gesture();
+        }
+    }
+
+    /// Cancels the transform: back to the state before it.
+    pub fn cancel_transform(&mut self) {
+        if self.interaction.transform.take().is_some()
+            && let Some(doc) = &mut self.doc
+            && let Err(e) = doc.cancel_gesture()
+        {
+            self.log_error(format!("cancelling the transform: {e}"));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn transform() -> Transform {
+        Transform {
+            view: CURRENT,
+            op: TransformOp::Grab,
+            constraint: Constraint::Free,
+            target: TransformTarget::Cage {
+                vertices: vec![0],
+                start: vec![DVec3::ZERO],
+            },
+            start_mouse: DVec2::ZERO,
+            modal: true,
+            typed: String::new(),
+            pivot: DVec3::ZERO,
+        }
+    }
+
+    #[test]
+    fn axis_keys_toggle_between_axis_plane_and_free() {
+        let mut t = transform();
+        t.toggle_axis(Axis::X, false);
+        assert_eq!(t.constraint, Constraint::Axis(Axis::X));
+        t.toggle_axis(Axis::X, false);
+        assert_eq!(t.constraint, Constraint::Free);
+        t.toggle_axis(Axis::Z, true);
+        assert_eq!(t.constraint, Constraint::Plane(Axis::Z));
+    }
+
+    #[test]
+    fn typed_values_parse_or_are_ignored() {
+        let mut t = transform();
+        assert_eq!(t.typed_value(), None);
+        t.typed = "-1.5".into();
+        assert_eq!(t.typed_value(), Some(-1.5));
+        t.typed = "-".into();
+        assert_eq!(t.typed_value(), None);
+        t.typed = "1e999".into();
+        assert_eq!(t.typed_value(), None);
+    }
+}

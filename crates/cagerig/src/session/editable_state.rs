@@ -1,0 +1,251 @@
+//! The editable state of a session as one value — what an editor's undo history and session
+//! files hold — and the user's SkelUp / CageUp locks.
+//!
+//! Everything else in a [`RigSession`] (M, M', the skinning transforms, the CoR centres) is
+//! derived from this state by the sync chain, so restoring it restores the rig: C, the joint
+//! positions of S, the pose parameters and the skinning method bit for bit; M = ΦC and M' to
+//! round-off (M is recomputed in full where edits had updated it incrementally).
+
+use glam::{DAffine3, DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+
+use super::RigSession;
+use crate::error::RigError;
+use crate::pose::LocalPose;
+use crate::skinning::SkinningMethod;
+
+/// Sync operators the user has switched off (the paper tool's locks). While a lock is on the
+/// structures are deliberately out of consensus; switching it off runs the full sync again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct SyncLocks {
+    /// SkelUp off: rest-cage edits (C) no longer move the rest joints (S stays).
+    pub skel_up: bool,
+    /// CageUp off: posing (S') no longer refits the current cage (C' stays); C' edits are
+    /// refused meanwhile (CageRev assumes C' is CageUp's fit).
+    pub cage_up: bool,
+}
+
+impl SyncLocks {
+    /// Whether every sync operator is on (the rig is in consensus).
+    pub fn none(self) -> bool {
+        !self.skel_up && !self.cage_up
+    }
+}
+
+/// A session's editable state; all `#C` or `#J` long.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EditableState {
+    /// C, rest cage (`#C`).
+    pub rest_cage: Vec<DVec3>,
+    /// Rest joint positions A of S (`#J`, world space); ΨC unless SkelUp was locked.
+    pub rest_joints: Vec<DVec3>,
+    /// C' (`#C`) while CageUp is locked (then it is state, not derived); `None` otherwise
+    /// (C' is CageUp's fit of M').
+    pub posed_cage: Option<Vec<DVec3>>,
+    /// Local rotations q_j of the current pose (`#J`).
+    pub rotations: Vec<DQuat>,
+    /// Local scales s_j of the current pose (`#J`).
+    pub scales: Vec<DVec3>,
+    /// d_j, current local translation minus the rest bone offset (`#J`).
+    pub translation_offsets: Vec<DVec3>,
+    pub skinning: SkinningMethod,
+    pub locks: SyncLocks,
+}
+
+impl RigSession {
+    /// Local rotations q_j of the current pose (parent_from_joint rotation), `#J`.
+    pub fn posed_local_rotations(&self) -> &[DQuat] {
+        &self.posed_local_rotation
+    }
+
+    /// Local scales s_j of the current pose, `#J`.
+    pub fn posed_local_scales(&self) -> &[DVec3] {
+        &self.posed_local_scale
+    }
+
+    /// d_j of [`crate::pose`]: current local translation minus the rest bone offset, `#J`.
+    pub fn translation_offsets(&self) -> &[DVec3] {
+        &self.translation_offset
+    }
+
+    /// The locks in force.
+    pub fn sync_locks(&self) -> SyncLocks {
+        self.locks
+    }
+
+    /// Switches SkelUp / CageUp off or on. Switching one back on runs the full sync (S = ΨC,
+    /// FK, skinning, C' fit), so the rig is in consensus again.
+    pub fn set_sync_locks(&mut self, locks: SyncLocks) {
+        let unlocked =
+            (self.locks.skel_up && !locks.skel_up) || (self.locks.cage_up && !locks.cage_up);
+        self.locks = locks;
+        if unlocked {
+            self.sync_from_rest_cage();
+        }
+    }
+
+    /// The editable state now.
+    pub fn editable_state(&self) -> EditableState {
+        EditableState {
+            rest_cage: self.rest_cage.clone(),
+            rest_joints: self.rest_joints().collect(),
+            posed_cage: self.locks.cage_up.then(|| self.posed_cage.clone()),
+            rotations: self.posed_local_rotation.clone(),
+            scales: self.posed_local_scale.clone(),
+            translation_offsets: self.translation_offset.clone(),
+            skinning: self.method,
+            locks: self.locks,
+        }
+    }
+
+    /// Restores a state taken with [`RigSession::editable_state`] (from this rig: the sizes
+    /// must match, every number finite). One all-or-nothing event.
+    pub fn restore_editable_state(&mut self, state: &EditableState) -> Result<(), RigError> {
+        let nc = self.rest_cage.len();
+        let nj = self.skeleton.len();
+        let posed_cage = state.posed_cage.as_deref().unwrap_or(&state.rest_cage);
+        for (what, expected, actual) in [
+            ("rest cage vertices of the state", nc, state.rest_cage.len()),
+            ("current cage vertices of the state", nc, posed_cage.len()),
+            ("rest joints of the state", nj, state.rest_joints.len()),
+        ] {
+            if expected != actual {
+                return Err(RigError::SizeMismatch {
+                    what,
+                    expected,
+                    actual,
+                });
+            }
+        }
+        for (what, points) in [
+            ("rest cage vertex of the state", &state.rest_cage[..]),
+            ("current cage vertex of the state", posed_cage),
+            ("rest joint of the state", &state.rest_joints[..]),
+        ] {
+            if let Some(index) = points.iter().position(|p| !p.is_finite()) {
+                return Err(RigError::NonFinite { what, index });
+            }
+        }
+        if state.skinning != self.method {
+            self.set_skinning(state.skinning)?;
+        }
+        self.save_checkpoint();
+        let result = self.restore_event(state);
+        self.finish_event(result)
+    }
+
+    fn restore_event(&mut self, state: &EditableState) -> Result<(), RigError> {
+        self.store_pose(&LocalPose {
+            rotations: &state.rotations,
+            scales: Some(&state.scales),
+            translation_offsets: &state.translation_offsets,
+            roots_only: false,
+        })?;
+        // Rotations that are already unit are kept bit for bit (normalising again may move
+        // the last bit).
+        for (q, s) in self.posed_local_rotation.iter_mut().zip(&state.rotations) {
+            if (s.length() - 1.0).abs() <= 1e-12 {
+                *q = *s;
+            }
+        }
+        self.locks = state.locks;
+        self.rest_cage.copy_from_slice(&state.rest_cage);
+        self.rest_from_cage_in_full();
+        for (frame, a) in self
+            .rest_world_from_joint
+            .iter_mut()
+            .zip(&state.rest_joints)
+        {
+            frame.translation = *a;
+        }
+        self.pose_and_fit();
+        if let (true, Some(posed)) = (self.locks.cage_up, &state.posed_cage) {
+            self.posed_cage.copy_from_slice(posed);
+        }
+        Ok(())
+    }
+
+    /// Rest frames of the joints (`#J`, world from joint), for callers that need more than
+    /// the positions.
+    pub fn rest_frames(&self) -> &[DAffine3] {
+        &self.rest_world_from_joint
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::demo;
+    use crate::session::{RigParts, SessionOptions};
+
+    fn bar() -> RigSession {
+        let rig = demo::builtin("bar", Some(8)).unwrap();
+        let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+        RigSession::new(parts, SessionOptions::default()).unwrap().0
+    }
+
+    #[test]
+    fn restoring_a_state_gives_back_the_editable_state_exactly() {
+        let mut s = bar();
+        let before = s.editable_state();
+        let posed_before = s.posed_mesh().to_vec();
+        s.rotate_joint(1, DVec3::Z, 0.7).unwrap();
+        s.move_rest_cage(&[0, 3], &[DVec3::new(0.1, -0.2, 0.05)])
+            .unwrap();
+        s.move_posed_cage(&[5], &[DVec3::new(0.0, 0.3, 0.0)])
+            .unwrap();
+        s.set_skinning(SkinningMethod::Dqs).unwrap();
+        let after = s.editable_state();
+        assert_ne!(after, before);
+        s.restore_editable_state(&before).unwrap();
+        assert_eq!(s.editable_state(), before);
+        for (a, b) in s.posed_mesh().iter().zip(&posed_before) {
+            assert!(a.distance(*b) < 1e-12, "{a} vs {b}");
+        }
+        s.restore_editable_state(&after).unwrap();
+        assert_eq!(s.editable_state(), after);
+    }
+
+    #[test]
+    fn skel_up_lock_keeps_the_rest_joints_and_unlocking_resyncs() {
+        let mut s = bar();
+        let joints: Vec<DVec3> = s.rest_joints().collect();
+        s.set_sync_locks(SyncLocks {
+            skel_up: true,
+            cage_up: false,
+        });
+        let all: Vec<usize> = (0..s.rest_cage().len()).collect();
+        s.move_rest_cage(&all, &[DVec3::new(0.5, 0.0, 0.0)])
+            .unwrap();
+        assert_eq!(s.rest_joints().collect::<Vec<_>>(), joints);
+        s.set_sync_locks(SyncLocks::default());
+        for (a, b) in s.rest_joints().zip(&joints) {
+            assert!((a - *b - DVec3::new(0.5, 0.0, 0.0)).length() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn cage_up_lock_keeps_the_current_cage_and_refuses_current_cage_edits() {
+        let mut s = bar();
+        s.set_sync_locks(SyncLocks {
+            skel_up: false,
+            cage_up: true,
+        });
+        let cage = s.posed_cage().to_vec();
+        s.rotate_joint(1, DVec3::Z, 0.5).unwrap();
+        assert_eq!(s.posed_cage(), &cage[..]);
+        let err = s.move_posed_cage(&[0], &[DVec3::X]).unwrap_err();
+        assert!(err.to_string().contains("CageUp is locked"), "{err}");
+        s.set_sync_locks(SyncLocks::default());
+        assert_ne!(s.posed_cage(), &cage[..]);
+    }
+
+    #[test]
+    fn a_state_of_the_wrong_size_is_refused_without_change() {
+        let mut s = bar();
+        let mut state = s.editable_state();
+        state.rest_cage.pop();
+        let err = s.restore_editable_state(&state).unwrap_err();
+        assert!(err.to_string().contains("rest cage vertices"), "{err}");
+    }
+}
