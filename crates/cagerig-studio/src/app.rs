@@ -38,6 +38,8 @@ pub struct StartupOptions {
     pub state_dir: Option<PathBuf>,
     /// Simulate a drag for every frame (benchmarks of the frame time).
     pub drag_benchmark: Option<crate::benchmark_drag::DragBenchmark>,
+    /// Failures of the startup actions (open, script, save), for the binary's exit status.
+    pub failures: Arc<std::sync::Mutex<Vec<String>>>,
 }
 
 /// Which colour map the views show.
@@ -204,13 +206,35 @@ impl StudioApp {
             (Some(path), _) => app.open_session(path),
             (None, source) => app.open(source.clone().unwrap_or_default()),
         }
+        let errors_before = app.error_count();
         if let Some(script) = &options.script {
             app.run_script_file(script);
         }
         if let Some(path) = &options.save_session {
             app.save_session_to(path);
         }
+        let failed: Vec<String> = app
+            .log
+            .iter()
+            .filter(|l| l.level == LogLevel::Error)
+            .skip(errors_before)
+            .map(|l| l.text.clone())
+            .collect();
+        let open_failed = app.doc.is_none()
+            || (options.source.is_some() || options.session.is_some()) && errors_before > 0;
+        if let Ok(mut f) = options.failures.lock() {
+            if open_failed {
+                f.extend(app.log.iter().filter(|l| l.level == LogLevel::Error).map(|l| l.text.clone()));
+            } else {
+                f.extend(failed);
+            }
+        }
         app
+    }
+
+    /// Errors logged so far.
+    pub fn error_count(&self) -> usize {
+        self.log.iter().filter(|l| l.level == LogLevel::Error).count()
     }
 
     pub fn log_info(&mut self, text: impl Into<String>) {
@@ -484,8 +508,11 @@ impl StudioApp {
             .quit_after_frames
             .is_some_and(|n| self.frames >= n);
         let screenshot_pending = self.options.screenshot.is_some() && !self.screenshot_done;
+        let scripted = self.options.screenshot.is_some() || self.options.quit_after_frames.is_some();
+        let failed = self.options.failures.lock().is_ok_and(|f| !f.is_empty());
         let scripted_quit = (self.options.screenshot.is_some() && self.screenshot_done)
-            || (frames_done && !screenshot_pending);
+            || (frames_done && !screenshot_pending)
+            || (scripted && failed);
         if scripted_quit || self.quit_requested {
             self.write_frame_stats();
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);

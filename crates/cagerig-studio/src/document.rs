@@ -119,8 +119,10 @@ pub struct Document {
     history: History<Snapshot>,
     gesture: Option<Gesture>,
     player: Option<AnimationPlayer>,
-    /// Bumped on every change of the rig (views re-upload) .
+    /// Bumped on every change of the rig (the current view re-uploads).
     pub revision: u64,
+    /// Bumped when the rest pose (M, S, C) may have changed (the rest view re-uploads).
+    pub rest_revision: u64,
     /// Bumped on every change worth saving (autosave compares it).
     pub edits: u64,
     /// Milliseconds of the last session event (the sync chain).
@@ -137,6 +139,7 @@ impl Document {
             gesture: None,
             player: None,
             revision: 0,
+            rest_revision: 0,
             edits: 0,
             last_sync_ms: 0.0,
         }
@@ -174,6 +177,13 @@ impl Document {
     }
 
     fn changed(&mut self) {
+        self.revision += 1;
+        self.rest_revision += 1;
+        self.edits += 1;
+    }
+
+    /// A change of the current pose only (S', M', C'): the rest view keeps its buffers.
+    fn pose_changed(&mut self) {
         self.revision += 1;
         self.edits += 1;
     }
@@ -247,7 +257,13 @@ impl Document {
         ) {
             self.last_sync_ms = t.elapsed().as_secs_f64() * 1e3;
         }
-        self.changed();
+        match command {
+            Command::RotateJoint { .. }
+            | Command::SetJointRotation { .. }
+            | Command::ResetPose
+            | Command::SetSkinning(_) => self.pose_changed(),
+            _ => self.changed(),
+        }
         Ok(())
     }
 
@@ -387,6 +403,9 @@ impl Document {
         player.apply(time, &mut self.session)?;
         self.last_sync_ms = t.elapsed().as_secs_f64() * 1e3;
         self.revision += 1;
+        if !self.keys.cage.is_empty() {
+            self.rest_revision += 1;
+        }
         Ok(true)
     }
 }

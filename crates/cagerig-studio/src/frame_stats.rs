@@ -14,10 +14,14 @@ pub struct FrameStats {
     pub sync_ms: f64,
     /// Upload milliseconds of the current frame (added to by every view).
     pub upload_ms: f64,
+    /// Milliseconds recording and submitting GPU work in the current frame.
+    pub render_ms: f64,
     frame_start: Option<Instant>,
     previous_start: Option<Instant>,
     sync: Vec<f64>,
+    edit: Vec<f64>,
     upload: Vec<f64>,
+    render: Vec<f64>,
     ui: Vec<f64>,
     cpu: Vec<f64>,
     interval: Vec<f64>,
@@ -38,9 +42,14 @@ pub struct FrameStatsReport {
     pub sync_ms: Summary,
     /// CPU ms computing normals and uploading vertex buffers.
     pub normals_upload_ms: Summary,
+    /// The CPU part of an edit: sync + normals/upload, per frame (the interactive budget).
+    pub sync_and_upload_ms: Summary,
+    /// CPU ms recording and submitting the views' GPU work (with a software rasteriser such
+    /// as lavapipe this includes drawing the triangles; on a GPU it is small).
+    pub render_submit_ms: Summary,
     /// CPU ms in the rest of the frame (UI layout, picking, painting commands).
     pub ui_ms: Summary,
-    /// Total CPU ms of the frame (sync + normals/upload + UI).
+    /// Total CPU ms of the frame (sync + normals/upload + render submission + UI).
     pub cpu_ms: Summary,
     /// Time between the starts of consecutive frames.
     pub frame_time_ms: Summary,
@@ -73,11 +82,13 @@ impl FrameStats {
         self.previous_start = self.frame_start.replace(now);
         self.sync_ms = 0.0;
         self.upload_ms = 0.0;
+        self.render_ms = 0.0;
     }
 
     /// Ends the frame that took `cpu_ms` of CPU in total.
     pub fn end_frame(&mut self, cpu_ms: f64) {
         self.sync.push(self.sync_ms);
+        self.edit.push(self.sync_ms + self.upload_ms);
         self.upload.push(self.upload_ms);
         self.ui
             .push((cpu_ms - self.sync_ms - self.upload_ms).max(0.0));
@@ -92,6 +103,8 @@ impl FrameStats {
             frames: self.cpu.len(),
             sync_ms: summary(&self.sync),
             normals_upload_ms: summary(&self.upload),
+            sync_and_upload_ms: summary(&self.edit),
+            render_submit_ms: summary(&self.render),
             ui_ms: summary(&self.ui),
             cpu_ms: summary(&self.cpu),
             frame_time_ms: summary(&self.interval),

@@ -129,7 +129,9 @@ fn run(args: Args) -> anyhow::Result<()> {
         frame_stats: args.frame_stats,
         state_dir: None,
         drag_benchmark: args.benchmark_drag,
+        failures: Default::default(),
     };
+    let failures = std::sync::Arc::clone(&options.failures);
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_inner_size(egui::vec2(args.size.0, args.size.1))
@@ -148,7 +150,12 @@ fn run(args: Args) -> anyhow::Result<()> {
             "could not start the window: {e}\n(without a GPU, install a software Vulkan driver: \
              mesa-vulkan-drivers; without a display, run under xvfb-run -a)"
         )
-    })
+    })?;
+    let failures = failures.lock().map(|f| f.clone()).unwrap_or_default();
+    if !failures.is_empty() {
+        bail!("{}", failures.join("\n"));
+    }
+    Ok(())
 }
 
 fn main() -> ExitCode {

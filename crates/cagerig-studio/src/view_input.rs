@@ -252,7 +252,7 @@ fn view_ui(
     if !app.views[view].framed
         && let Some(doc) = &app.doc
     {
-        app.views[view].frame_all(&doc.session, Some(cagerig_render::CameraPreset::Front));
+        app.views[view].frame_all(&doc.session, Some(cagerig_render::CameraPreset::ThreeQuarter));
     }
     if response.hovered() || response.dragged() {
         app.interaction.hovered_view = Some(view);
@@ -273,12 +273,17 @@ fn view_ui(
                 rs,
                 &renderer,
                 &doc.session,
-                doc.revision,
+                if view == CURRENT {
+                    doc.revision
+                } else {
+                    doc.rest_revision
+                },
                 layers,
                 color_by,
                 size,
             );
             app.stats.upload_ms += app.views[view].last_upload_ms;
+            app.stats.render_ms += app.views[view].last_render_ms;
             match result {
                 Ok(t) => Some(t),
                 Err(e) => {

@@ -50,6 +50,9 @@ pub struct View {
     pub last_upload_ms: f64,
     /// Size of the view in points, as last shown.
     pub size_points: egui::Vec2,
+    /// Milliseconds recording and submitting the view's GPU work (with a software driver
+    /// such as lavapipe, rasterisation shows up here), 0 when not re-rendered.
+    pub last_render_ms: f64,
 }
 
 impl View {
@@ -64,6 +67,7 @@ impl View {
             rendered: None,
             last_upload_ms: 0.0,
             size_points: egui::vec2(1.0, 1.0),
+            last_render_ms: 0.0,
         }
     }
 
@@ -166,13 +170,16 @@ impl View {
             size,
             camera: camera_key(&self.camera),
         };
+        self.last_render_ms = 0.0;
         if self.rendered.as_ref() != Some(&key) {
+            let t = Instant::now();
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("cagerig view"),
             });
             renderer.encode(queue, &mut encoder, &gpu.target, &self.camera, &gpu.buffers);
             queue.submit([encoder.finish()]);
             self.rendered = Some(key);
+            self.last_render_ms = t.elapsed().as_secs_f64() * 1e3;
         }
         Ok(gpu.texture)
     }
