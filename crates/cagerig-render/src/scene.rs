@@ -53,16 +53,25 @@ pub struct Scene<'a> {
 impl Scene<'_> {
     /// Axis-aligned bounds `(lo, hi)` of everything drawn; `None` when the scene is empty.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        use rayon::prelude::*;
         let mesh = self.mesh.map(|m| m.positions).unwrap_or(&[]);
         let cage = self.cage.map(|c| c.positions).unwrap_or(&[]);
         let joints = self.skeleton.map(|s| s.joints).unwrap_or(&[]);
-        let mut points = mesh
-            .iter()
-            .chain(cage)
-            .chain(joints)
-            .filter(|p| p.is_finite());
-        let first = *points.next()?;
-        Some(points.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+        let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        let merge = |(lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)| (lo.min(l), hi.max(h));
+        let grow = |(lo, hi): (DVec3, DVec3), p: &DVec3| {
+            if p.is_finite() {
+                (lo.min(*p), hi.max(*p))
+            } else {
+                (lo, hi)
+            }
+        };
+        let from_mesh = mesh
+            .par_chunks(16_384)
+            .map(|chunk| chunk.iter().fold(empty, grow))
+            .reduce(|| empty, merge);
+        let (lo, hi) = cage.iter().chain(joints).fold(from_mesh, grow);
+        (lo.cmple(hi).all()).then_some((lo, hi))
     }
 }
 

@@ -180,9 +180,10 @@ fn check_indices(
     num_vertices: usize,
 ) -> Result<(), RenderError> {
     match triangles
-        .iter()
+        .par_iter()
+        .with_min_len(65_536)
         .enumerate()
-        .find(|(_, t)| t.iter().any(|&i| i as usize >= num_vertices))
+        .find_first(|(_, t)| t.iter().any(|&i| i as usize >= num_vertices))
     {
         Some((t, tri)) => Err(RenderError::Geometry(format!(
             "{what} triangle {t} is {tri:?}: expected vertex indices below {num_vertices}"

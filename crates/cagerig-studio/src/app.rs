@@ -38,12 +38,18 @@ pub struct StartupOptions {
     pub state_dir: Option<PathBuf>,
     /// Simulate a drag for every frame (benchmarks of the frame time).
     pub drag_benchmark: Option<crate::benchmark_drag::DragBenchmark>,
+    /// Cage vertices selected at start (figures of scripted runs).
+    pub select_cage: Vec<usize>,
+    /// Joint selected at start.
+    pub select_joint: Option<usize>,
+    /// Colour map at start.
+    pub color_mode: ColorMode,
     /// Failures of the startup actions (open, script, save), for the binary's exit status.
     pub failures: Arc<std::sync::Mutex<Vec<String>>>,
 }
 
 /// Which colour map the views show.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum ColorMode {
     #[default]
     None,
@@ -206,6 +212,27 @@ impl StudioApp {
             (Some(path), _) => app.open_session(path),
             (None, source) => app.open(source.clone().unwrap_or_default()),
         }
+        if let Some(doc) = &app.doc {
+            let (nc, nj) = (doc.session.rest_cage().len(), doc.session.skeleton().len());
+            if let Some(k) = options.select_cage.iter().find(|&&k| k >= nc) {
+                app.log_error(format!(
+                    "--select-cage: cage vertex {k} does not exist (the cage has {nc} vertices)"
+                ));
+            } else {
+                app.selection.cage = options.select_cage.iter().copied().collect();
+            }
+            match options.select_joint {
+                Some(j) if j >= nj => app.log_error(format!(
+                    "--select-joint: joint {j} does not exist (the rig has {nj} joints)"
+                )),
+                Some(j) => {
+                    app.selection.joint = Some(j);
+                    app.selection.joint_is_active = options.select_cage.is_empty();
+                }
+                None => {}
+            }
+        }
+        app.color_mode = options.color_mode;
         let errors_before = app.error_count();
         if let Some(script) = &options.script {
             app.run_script_file(script);
@@ -224,7 +251,12 @@ impl StudioApp {
             || (options.source.is_some() || options.session.is_some()) && errors_before > 0;
         if let Ok(mut f) = options.failures.lock() {
             if open_failed {
-                f.extend(app.log.iter().filter(|l| l.level == LogLevel::Error).map(|l| l.text.clone()));
+                f.extend(
+                    app.log
+                        .iter()
+                        .filter(|l| l.level == LogLevel::Error)
+                        .map(|l| l.text.clone()),
+                );
             } else {
                 f.extend(failed);
             }
@@ -234,7 +266,10 @@ impl StudioApp {
 
     /// Errors logged so far.
     pub fn error_count(&self) -> usize {
-        self.log.iter().filter(|l| l.level == LogLevel::Error).count()
+        self.log
+            .iter()
+            .filter(|l| l.level == LogLevel::Error)
+            .count()
     }
 
     pub fn log_info(&mut self, text: impl Into<String>) {
@@ -508,7 +543,8 @@ impl StudioApp {
             .quit_after_frames
             .is_some_and(|n| self.frames >= n);
         let screenshot_pending = self.options.screenshot.is_some() && !self.screenshot_done;
-        let scripted = self.options.screenshot.is_some() || self.options.quit_after_frames.is_some();
+        let scripted =
+            self.options.screenshot.is_some() || self.options.quit_after_frames.is_some();
         let failed = self.options.failures.lock().is_ok_and(|f| !f.is_empty());
         let scripted_quit = (self.options.screenshot.is_some() && self.screenshot_done)
             || (frames_done && !screenshot_pending)

@@ -48,6 +48,16 @@ struct Args {
     /// Write per-frame timings (median and max of sync, normals/upload, UI, frame time) as JSON.
     #[arg(long)]
     frame_stats: Option<PathBuf>,
+    /// Select these cage vertices at start (comma-separated indices).
+    #[arg(long, value_delimiter = ',')]
+    select_cage: Vec<usize>,
+    /// Select this joint at start (index).
+    #[arg(long)]
+    select_joint: Option<usize>,
+    /// Colour map at start: weights (Ω of the selected joint), cage-coords (Φ of the first
+    /// selected cage vertex), joint-coords (Ψ of the selected joint).
+    #[arg(long, value_enum, default_value = "none")]
+    color_map: cagerig_studio::app::ColorMode,
     /// Simulate a drag (one event per frame) to measure interactive frame times.
     #[arg(long, value_enum)]
     benchmark_drag: Option<DragBenchmark>,
@@ -130,6 +140,9 @@ fn run(args: Args) -> anyhow::Result<()> {
         state_dir: None,
         drag_benchmark: args.benchmark_drag,
         failures: Default::default(),
+        select_cage: args.select_cage,
+        select_joint: args.select_joint,
+        color_mode: args.color_map,
     };
     let failures = std::sync::Arc::clone(&options.failures);
     let native = eframe::NativeOptions {

@@ -255,8 +255,10 @@ fn tracks_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
         egui::Stroke::new(2.0, egui::Color32::from_rgb(220, 60, 60)),
     );
     // Interaction: click a key to select it, drag it to move it; elsewhere click / drag scrubs.
-    if response.drag_started() {
-        if let Some((track, i)) = hovered_key {
+    if response.drag_started()
+        && let Some((track, i)) = hovered_key
+    {
+        {
             app.timeline.selected = Some((track, i));
             let t = match track {
                 Track::Skeleton => skeleton_times[i],

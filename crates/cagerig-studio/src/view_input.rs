@@ -99,6 +99,27 @@ impl StudioApp {
         }
     }
 
+    /// The joint under `mouse` in view `view` (joints are drawn on top: no occlusion).
+    pub fn pick_joint(&self, view: usize, mouse: DVec2) -> Option<usize> {
+        let doc = self.doc.as_ref()?;
+        if !self.layers.skeleton {
+            return None;
+        }
+        let s = &doc.session;
+        let joints: Vec<DVec3> = if view == CURRENT {
+            s.posed_joints().collect()
+        } else {
+            s.rest_joints().collect()
+        };
+        pick_nearest(
+            &self.views[view].projection(),
+            &joints,
+            mouse,
+            PICK_PIXELS,
+            None,
+        )
+    }
+
     /// Applies a click on `picked` (shift adds / toggles, ctrl removes, else replaces).
     pub fn click_select(&mut self, picked: Option<Picked>, modifiers: egui::Modifiers) {
         let sel = &mut self.selection;
@@ -252,7 +273,11 @@ fn view_ui(
     if !app.views[view].framed
         && let Some(doc) = &app.doc
     {
-        app.views[view].frame_all(&doc.session, Some(cagerig_render::CameraPreset::ThreeQuarter));
+        // A gentle three-quarter view: slightly from the right and above.
+        let v = &mut app.views[view];
+        v.camera.yaw = 20f64.to_radians();
+        v.camera.pitch = 15f64.to_radians();
+        v.frame_all(&doc.session, None);
     }
     if response.hovered() || response.dragged() {
         app.interaction.hovered_view = Some(view);
@@ -359,9 +384,9 @@ fn handle_mouse(
     {
         app.interaction.last_mouse = hover;
     }
-    // Hovered joint name.
+    // Hovered joint name (joints only: cheap, no occlusion test, fine every frame).
     if let Some(m) = hover {
-        match app.pick(view, m) {
+        match app.pick_joint(view, m).map(Picked::Joint) {
             Some(Picked::Joint(j)) if app.interaction.transform.is_none() => {
                 app.interaction.hovered_joint = Some((view, j));
             }

@@ -140,7 +140,11 @@ fn scripted_run_under_xvfb_saves_the_state_of_cagerig_edit_and_a_screenshot() {
         ],
         &dir,
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let a = cagerig_render_pixels(&shot);
     let b = cagerig_render_pixels(&shot2);
     assert_eq!(a.len(), b.len());
@@ -203,13 +207,19 @@ fn without_a_display_it_says_so_and_how_to_run_it() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("no display") && err.contains("xvfb-run"), "{err}");
+    assert!(
+        err.contains("no display") && err.contains("xvfb-run"),
+        "{err}"
+    );
     assert!(!err.contains("panicked"), "{err}");
 }
 
 #[test]
 fn a_bad_size_is_refused_clearly() {
-    let out = Command::new(BIN).args(["--size", "12x9000000"]).output().unwrap();
+    let out = Command::new(BIN)
+        .args(["--size", "12x9000000"])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("WIDTHxHEIGHT"), "{err}");
