@@ -461,6 +461,24 @@ impl StudioApp {
             .is_some_and(|d| d.edits != self.saved_edits)
     }
 
+    /// Writes the recovery file now (true when written).
+    pub fn autosave_now(&mut self) -> bool {
+        let Some(doc) = &self.doc else { return false };
+        let file = SessionFile::new(doc.source.clone(), doc.snapshot(), self.timeline.time);
+        let edits = doc.edits;
+        self.last_autosave = Instant::now();
+        match self.state_dir.write_recovery(&file) {
+            Ok(()) => {
+                self.autosaved_edits = edits;
+                true
+            }
+            Err(e) => {
+                self.log_error(format!("autosave failed: {e}"));
+                false
+            }
+        }
+    }
+
     /// Autosave to the recovery file, at most every two seconds, after edits.
     fn autosave(&mut self) {
         let Some(doc) = &self.doc else { return };
@@ -473,13 +491,7 @@ impl StudioApp {
         {
             return;
         }
-        let file = SessionFile::new(doc.source.clone(), doc.snapshot(), self.timeline.time);
-        let edits = doc.edits;
-        self.last_autosave = Instant::now();
-        match self.state_dir.write_recovery(&file) {
-            Ok(()) => self.autosaved_edits = edits,
-            Err(e) => self.log_error(format!("autosave failed: {e}")),
-        }
+        self.autosave_now();
     }
 
     /// The colour map of the current selection.

@@ -205,6 +205,26 @@ mod tests {
     }
 
     #[test]
+    fn the_fox_opens_from_gltf_with_its_cage_and_animations() {
+        let fox = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/fox");
+        let opened = open_rig(&RigSource::File {
+            path: format!("{fox}/Fox.glb").into(),
+            cage: Some(format!("{fox}/Fox_cage.obj").into()),
+            skin: None,
+        })
+        .unwrap();
+        assert!(opened.session.rest_mesh().len() > 1000);
+        assert!(opened.session.skeleton().len() > 10);
+        assert!(!opened.animations.is_empty());
+        // Without a cage (none in the file) the message says how to give one.
+        let err = match open_rig(&RigSource::file(format!("{fox}/Fox.glb"))) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("opened the Fox without a cage"),
+        };
+        assert!(err.contains("Fox.glb") && err.contains("--cage"), "{err}");
+    }
+
+    #[test]
     fn an_unknown_builtin_is_refused_with_the_names_available() {
         let err = match open_rig(&RigSource::Builtin {
             name: "dragon".into(),

@@ -461,3 +461,40 @@ fn box_selection_picks_only_visible_cage_vertices() {
     let _ = DVec2::ZERO;
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn an_autosave_is_offered_at_the_next_start_and_recovers_the_work() {
+    if skip() {
+        return;
+    }
+    let dir = temp_dir("recovery");
+    let mut h = harness(
+        StartupOptions {
+            source: Some(bar()),
+            ..Default::default()
+        },
+        &dir,
+    );
+    h.state_mut()
+        .run_command(&cagerig_studio::document::Command::MoveRestCage {
+            vertices: vec![0, 1],
+            offsets: vec![DVec3::new(0.0, 0.2, 0.0)],
+        });
+    let edited = snapshot(&h);
+    assert!(h.state_mut().autosave_now());
+    // The editor "crashes": no clean exit. The next start offers the recovery.
+    drop(h);
+    let mut again = harness(
+        StartupOptions {
+            source: Some(bar()),
+            ..Default::default()
+        },
+        &dir,
+    );
+    assert!(again.state().dialogs.recovery.is_some());
+    again.get_by_label("Recover").click();
+    again.run_steps(2);
+    assert_eq!(snapshot(&again), edited);
+    assert!(again.state().dialogs.recovery.is_none());
+    std::fs::remove_dir_all(dir).ok();
+}
