@@ -1,0 +1,94 @@
+//! Read access to a session's structures and operators.
+
+use super::*;
+
+impl RigSession {
+    /// Rest skin M (`#V`).
+    pub fn rest_mesh(&self) -> &[DVec3] {
+        &self.rest_mesh
+    }
+    /// Current skin M' (`#V`).
+    pub fn posed_mesh(&self) -> &[DVec3] {
+        &self.posed_mesh
+    }
+    /// Rest cage C (`#C`).
+    pub fn rest_cage(&self) -> &[DVec3] {
+        &self.rest_cage
+    }
+    /// Current cage C' (`#C`).
+    pub fn posed_cage(&self) -> &[DVec3] {
+        &self.posed_cage
+    }
+    /// The original rest cage C₀ as loaded.
+    pub fn original_rest_cage(&self) -> &[DVec3] {
+        &self.original_rest_cage
+    }
+    pub fn mesh_triangles(&self) -> &[[u32; 3]] {
+        &self.mesh_triangles
+    }
+    pub fn cage_triangles(&self) -> &[[u32; 3]] {
+        &self.cage_triangles
+    }
+    /// The skeleton topology and its rest frames as loaded.
+    pub fn skeleton(&self) -> &Skeleton {
+        &self.skeleton
+    }
+    pub fn skin_weights(&self) -> &SkinWeights {
+        &self.skin_weights
+    }
+    /// Φ.
+    pub fn cage_coords(&self) -> &CageCoords {
+        &self.cage_coords
+    }
+    pub fn skeleton_updater(&self) -> &SkeletonUpdater {
+        &self.skeleton_updater
+    }
+    pub fn cage_updater(&self) -> &CageUpdater {
+        &self.cage_updater
+    }
+    /// Current rest frames of the joints (S).
+    pub fn rest_world_from_joint(&self) -> &[DAffine3] {
+        &self.rest_world_from_joint
+    }
+    /// Current posed frames of the joints (S').
+    pub fn posed_world_from_joint(&self) -> &[DAffine3] {
+        &self.posed_world_from_joint
+    }
+    /// Skinning transforms T_j = posed_from_rest (Eq. 1–3).
+    pub fn posed_from_rest(&self) -> &[DAffine3] {
+        &self.posed_from_rest
+    }
+    /// Rest joint positions (`#J`).
+    pub fn rest_joints(&self) -> impl Iterator<Item = DVec3> + '_ {
+        self.rest_world_from_joint.iter().map(|t| t.translation)
+    }
+    /// Current joint positions (`#J`).
+    pub fn posed_joints(&self) -> impl Iterator<Item = DVec3> + '_ {
+        self.posed_world_from_joint.iter().map(|t| t.translation)
+    }
+    pub fn skinning(&self) -> SkinningMethod {
+        self.method
+    }
+    pub fn fit_source(&self) -> CageFitSource {
+        self.options_fit_source
+    }
+    /// CoR centres (`#V`), if CoR data exists. They follow the cage while CoR skinning is active
+    /// and are refreshed when it next runs otherwise.
+    pub fn cor_centres(&self) -> Option<&[DVec3]> {
+        self.cor.as_ref().map(|c| c.centres.as_slice())
+    }
+    /// Chooses how CageRev factorises Eq. 19 (low-rank by default, see [`ReverserMethod`]).
+    pub fn set_reverser_method(&mut self, method: ReverserMethod) {
+        self.reverser.set_method(method);
+    }
+
+    /// Whether the held CageRev factorisation is the low-rank (Woodbury) one.
+    pub fn reverser_is_low_rank(&self) -> bool {
+        self.reverser.is_low_rank()
+    }
+
+    /// Whether the reverse cage deformer currently holds a factorisation.
+    pub fn reverser_is_factorised(&self) -> bool {
+        self.reverser.is_factorised()
+    }
+}

@@ -1,0 +1,179 @@
+//! Animation samples: a pose and a rest cage (or a blend of two precomputed cage keyframes)
+//! set in one event, then SkelUp, skinning and CageUp.
+
+use super::*;
+
+impl RigSession {
+    /// Animation sample: rest-cage offsets from C₀ (`#C`), local rotations and root motions
+    /// (`#J`); runs SkelUp so that bones follow the cage, then skinning and CageUp.
+    pub fn set_animation_sample(
+        &mut self,
+        rest_cage_offsets: Option<&[DVec3]>,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
+        self.set_animation_sample_local(
+            rest_cage_offsets,
+            &roots_only(local_rotations, root_motion),
+        )
+    }
+
+    /// [`RigSession::set_animation_sample`] with the full pose of [`crate::pose`].
+    pub fn set_animation_sample_local(
+        &mut self,
+        rest_cage_offsets: Option<&[DVec3]>,
+        pose: &LocalPose,
+    ) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_animation_sample_local_event(rest_cage_offsets, pose);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_animation_sample_local`] without the checkpoint.
+    pub(super) fn set_animation_sample_local_event(
+        &mut self,
+        rest_cage_offsets: Option<&[DVec3]>,
+        pose: &LocalPose,
+    ) -> Result<(), RigError> {
+        if let Some(offsets) = rest_cage_offsets {
+            self.check_cage_offsets(offsets)?;
+        }
+        self.store_pose(pose)?;
+        if let Some(offsets) = rest_cage_offsets {
+            for ((c, o), c0) in self
+                .rest_cage
+                .iter_mut()
+                .zip(offsets)
+                .zip(&self.original_rest_cage)
+            {
+                *c = *c0 + *o;
+            }
+            self.rest_from_cage_in_full();
+        }
+        self.sync_from_rest_cage();
+        Ok(())
+    }
+
+    /// Precomputes the rest state of a cage keyframe (offsets from C₀, `#C`).
+    pub fn rest_keyframe(&self, offsets: &[DVec3]) -> Result<RestKeyframe, RigError> {
+        self.check_cage_offsets(offsets)?;
+        let cage: Vec<DVec3> = self
+            .original_rest_cage
+            .iter()
+            .zip(offsets)
+            .map(|(c, o)| *c + *o)
+            .collect();
+        let mut mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
+        self.cage_coords.apply(&cage, &mut mesh);
+        let centres = self.cor.as_ref().map(|cor| {
+            let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
+            cor.centre_coords.apply(&cage, &mut centres);
+            centres
+        });
+        Ok(RestKeyframe {
+            cage,
+            mesh,
+            centres,
+        })
+    }
+
+    /// Animation sample between two precomputed cage keyframes (weight `a` on `hi`): C, M and
+    /// the CoR centres are lerped, then pose, SkelUp, skinning and CageUp as in
+    /// [`RigSession::set_animation_sample`]. No allocation.
+    pub fn set_animation_sample_between(
+        &mut self,
+        lo: &RestKeyframe,
+        hi: &RestKeyframe,
+        a: f64,
+        local_rotations: &[DQuat],
+        root_motion: &[DVec3],
+    ) -> Result<(), RigError> {
+        self.set_animation_sample_between_local(
+            lo,
+            hi,
+            a,
+            &roots_only(local_rotations, root_motion),
+        )
+    }
+
+    /// [`RigSession::set_animation_sample_between`] with the full pose of [`crate::pose`].
+    pub fn set_animation_sample_between_local(
+        &mut self,
+        lo: &RestKeyframe,
+        hi: &RestKeyframe,
+        a: f64,
+        pose: &LocalPose,
+    ) -> Result<(), RigError> {
+        self.save_checkpoint();
+        let result = self.set_animation_sample_between_local_event(lo, hi, a, pose);
+        self.finish_event(result)
+    }
+
+    /// [`RigSession::set_animation_sample_between_local`] without the checkpoint.
+    pub(super) fn set_animation_sample_between_local_event(
+        &mut self,
+        lo: &RestKeyframe,
+        hi: &RestKeyframe,
+        a: f64,
+        pose: &LocalPose,
+    ) -> Result<(), RigError> {
+        let nv = self.rest_mesh.len();
+        let nc = self.rest_cage.len();
+        if lo.mesh.len() != nv || hi.mesh.len() != nv || lo.cage.len() != nc || hi.cage.len() != nc
+        {
+            return Err(RigError::SizeMismatch {
+                what: "rest keyframe vertices",
+                expected: nv,
+                actual: lo.mesh.len().min(hi.mesh.len()),
+            });
+        }
+        if !a.is_finite() {
+            return Err(RigError::Invalid(format!("blend weight {a} is not finite")));
+        }
+        self.store_pose(pose)?;
+        lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
+        lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
+        self.rest_mesh_is_phi_c = true;
+        if let Some(cor) = &mut self.cor {
+            match (&lo.centres, &hi.centres, self.method) {
+                (_, _, m) if m != SkinningMethod::Cor => cor.stale = true,
+                (Some(l), Some(h), _) => {
+                    lerp_into(l, h, a, &mut cor.centres);
+                    cor.stale = false;
+                }
+                _ => cor.stale = true,
+            }
+        }
+        self.sync_from_rest_cage();
+        Ok(())
+    }
+
+    pub(super) fn check_cage_offsets(&self, offsets: &[DVec3]) -> Result<(), RigError> {
+        if offsets.len() != self.rest_cage.len() {
+            return Err(RigError::SizeMismatch {
+                what: "cage animation offsets",
+                expected: self.rest_cage.len(),
+                actual: offsets.len(),
+            });
+        }
+        if let Some(i) = offsets.iter().position(|o| !o.is_finite()) {
+            return Err(RigError::NonFinite {
+                what: "cage animation offset",
+                index: i,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// out = (1 − a)·lo + a·hi, in parallel for big point sets.
+fn lerp_into(lo: &[DVec3], hi: &[DVec3], a: f64, out: &mut [DVec3]) {
+    use rayon::prelude::*;
+    out.par_chunks_mut(8192)
+        .zip(lo.par_chunks(8192).zip(hi.par_chunks(8192)))
+        .for_each(|(o, (l, h))| {
+            for ((o, l), h) in o.iter_mut().zip(l).zip(h) {
+                *o = l.lerp(*h, a);
+            }
+        });
+}

@@ -1,0 +1,172 @@
+//! What a session is assembled from: the rig parts, the options, and the constants and
+//! helpers of that assembly (CoR coordinates Λ, the ΦC = M check).
+
+use super::*;
+
+/// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
+/// the similarity tables of [`crate::skinning::cor_grid`] (seconds, centre error ≈ 1e-4 × bbox
+/// diagonal) instead of the exact O(#V·#F) form.
+pub const GRID_COR_CENTRES_ABOVE: usize = 20_000;
+
+/// Φ reproduces the given rest mesh when max |ΦC − M| ≤ this × the cage's bbox diagonal.
+pub const PHI_C_TOLERANCE: f64 = 1e-9;
+
+/// With [`CoordsPrecision::F32`], ΦC within this × the cage's bbox diagonal of the given rest
+/// mesh differs from it by the rounding of Φ only, and replaces it when the session is built.
+pub const PHI_C_TOLERANCE_F32: f64 = 1e-5;
+
+/// How [`compute_centre_coords`] computes Λ for a mesh of `num_vertices` vertices with the
+/// default (exact) options.
+pub fn centre_coords_method(num_vertices: usize) -> &'static str {
+    if num_vertices > GRID_COR_CENTRES_ABOVE {
+        "similarity tables"
+    } else {
+        "exact"
+    }
+}
+
+/// CoR cage coordinates Λ (`#V × #C`, Eq. 14: centres = Λ·C) from the rest mesh, Ω and Φ, as
+/// a session computes them when none were loaded: with `options`, except that the exact form
+/// is replaced by the similarity tables of [`crate::skinning::cor_grid`] on big meshes (see
+/// [`centre_coords_method`]).
+pub fn compute_centre_coords(
+    rest_positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    skin_weights: &SkinWeights,
+    cage_coords: &CageCoords,
+    options: &CorCentresOptions,
+) -> Result<CageCoords, RigError> {
+    if options.method == CorCentresMethod::Exact && rest_positions.len() > GRID_COR_CENTRES_ABOVE {
+        return compute_cor_cage_coords_grid(
+            rest_positions,
+            triangles,
+            skin_weights,
+            cage_coords,
+            &CorGridOptions {
+                sigma: options.sigma,
+                ..Default::default()
+            },
+            &|_, _| {},
+        );
+    }
+    compute_cor_cage_coords(
+        rest_positions,
+        triangles,
+        skin_weights,
+        cage_coords,
+        options,
+        &|_, _| {},
+    )
+}
+
+/// Which mesh CageUp fits when the skinning method is not LBS (Section 4.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CageFitSource {
+    /// An LBS "ghost" of the fitted rows drives CageUp whatever the skinning method, so the
+    /// loop C' → C → S → S' → C' stays exact for DQS and CoR too (the default).
+    #[default]
+    GhostLbs,
+    /// CageUp fits the displayed mesh; with DQS/CoR the reverse deformer is then approximate.
+    DisplayedMesh,
+}
+
+/// Which mesh rows CageUp and CageRev use.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum FitRows {
+    /// Given rows (e.g. a shipped `.maxvol` file) if any, else computed MaxVol rows.
+    #[default]
+    MaxVol,
+    /// All mesh rows, least squares (the reference tool's GUI behaviour; slow on big meshes).
+    AllRows,
+    /// Explicit rows; interpolation when there are `#C` of them, least squares otherwise.
+    Rows(Vec<usize>),
+}
+
+/// What a session does with given cage coordinates Φ that do not reproduce the rest mesh
+/// (max |ΦC − M| above [`PHI_C_TOLERANCE`] × the cage's bbox diagonal).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GivenCageCoords {
+    /// Recompute Φ (mean value coordinates) and report it: M = ΦC holds from the start, so the
+    /// first cage edit moves only what it touches (the default).
+    #[default]
+    RecomputeIfInexact,
+    /// Keep the given Φ (to compare with the tool that wrote it): M stays as loaded until the
+    /// first cage edit, which sets M = ΦC everywhere (untouched vertices jump by the residual).
+    Keep,
+}
+
+/// max |ΦC − M| over the mesh vertices.
+pub(super) fn phi_c_residual(cage_coords: &CageCoords, cage: &[DVec3], mesh: &[DVec3]) -> f64 {
+    let mut phi_c = vec![DVec3::ZERO; mesh.len()];
+    cage_coords.apply(cage, &mut phi_c);
+    crate::mesh::max_distance(&phi_c, mesh)
+}
+
+/// Options for assembling a session.
+#[derive(Debug, Clone, Default)]
+pub struct SessionOptions {
+    pub localisation: JointLocalisation,
+    pub fit_rows: FitRows,
+    pub fit_source: CageFitSource,
+    pub skinning: SkinningMethod,
+    pub cor_centres: CorCentresOptions,
+    /// Precision of Φ (and Λ) in the per-frame products M = ΦC. With
+    /// [`CoordsPrecision::F32`] the coordinates are rounded once when the session is built,
+    /// everything (MaxVol rows, CageUp, Ψ, CageRev, Λ) is derived from the rounded Φ, and the
+    /// rest mesh becomes ΦC at once (it moves by ~1e-7 of the cage size); the invariants then
+    /// hold to f64 round-off as in the default f64 mode.
+    pub cage_coords_precision: CoordsPrecision,
+    /// Given Φ that does not reproduce M: recomputed (default) or kept.
+    pub given_cage_coords: GivenCageCoords,
+    /// Accept mesh vertices outside the cage (reported as a warning) instead of failing with
+    /// [`RigError::MeshOutsideCage`].
+    pub allow_mesh_outside_cage: bool,
+}
+
+/// Rig inputs: the rest structures and optional precomputed data (computed when absent).
+#[derive(Debug, Clone)]
+pub struct RigParts {
+    /// Rest skin M.
+    pub mesh: TriMesh,
+    /// Rest skeleton S.
+    pub skeleton: Skeleton,
+    /// Ω, `#V × #J`.
+    pub skin_weights: SkinWeights,
+    /// Rest cage C (validated here).
+    pub cage: TriMesh,
+    /// Φ, `#V × #C` (mean value coordinates computed when absent).
+    pub cage_coords: Option<CageCoords>,
+    /// MaxVol rows (computed when absent and needed).
+    pub maxvol_rows: Option<Vec<usize>>,
+    /// CoR centres as combinations of rest vertices, `#V × #V` sparse (computed on first use
+    /// of CoR skinning when absent).
+    pub cor_rows: Option<SparseRows>,
+    /// Ψ, `#J` rows of `#C` (computed when absent).
+    pub joint_coords: Option<Vec<Vec<f64>>>,
+    /// Λ = S·Φ (`#V × #C`, Eq. 14), when already computed; takes precedence over `cor_rows`.
+    pub cor_centre_coords: Option<CageCoords>,
+}
+
+impl RigParts {
+    /// The four structures a rig needs — rest skin M, rest skeleton S, Ω and rest cage C — with
+    /// no precomputed data: the session computes Φ, the MaxVol rows, Ψ and Λ when it needs them.
+    pub fn new(
+        mesh: TriMesh,
+        skeleton: Skeleton,
+        skin_weights: SkinWeights,
+        cage: TriMesh,
+    ) -> Self {
+        Self {
+            mesh,
+            skeleton,
+            skin_weights,
+            cage,
+            cage_coords: None,
+            maxvol_rows: None,
+            cor_rows: None,
+            joint_coords: None,
+            cor_centre_coords: None,
+        }
+    }
+}

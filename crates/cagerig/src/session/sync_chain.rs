@@ -1,0 +1,235 @@
+//! The sync chain behind every event: checks, M = ΦC (in full or incrementally), SkelUp,
+//! forward kinematics, skinning and CageUp, and the lazily built CoR state.
+
+use super::*;
+
+impl RigSession {
+    pub(super) fn check_joint(&self, joint: usize) -> Result<(), RigError> {
+        if joint >= self.skeleton.len() {
+            return Err(RigError::IndexOutOfRange {
+                what: "joint",
+                index: joint,
+                len: self.skeleton.len(),
+            });
+        }
+        Ok(())
+    }
+
+    pub(super) fn check_cage_edit(
+        &self,
+        vertices: &[usize],
+        offsets: &[DVec3],
+    ) -> Result<(), RigError> {
+        if offsets.len() != 1 && offsets.len() != vertices.len() {
+            return Err(RigError::SizeMismatch {
+                what: "cage edit offsets (one, or one per vertex)",
+                expected: vertices.len(),
+                actual: offsets.len(),
+            });
+        }
+        if let Some(&bad) = vertices.iter().find(|&&v| v >= self.rest_cage.len()) {
+            return Err(RigError::IndexOutOfRange {
+                what: "cage vertex",
+                index: bad,
+                len: self.rest_cage.len(),
+            });
+        }
+        if let Some(i) = offsets.iter().position(|o| !o.is_finite()) {
+            return Err(RigError::NonFinite {
+                what: "cage offset",
+                index: i,
+            });
+        }
+        Ok(())
+    }
+
+    pub(super) fn build_cor(&mut self) -> Result<(), RigError> {
+        let given = self.given_centre_coords.take();
+        let centre_coords = match (&self.cor_rows, given) {
+            (_, Some(lambda)) => {
+                if lambda.num_vertices() != self.rest_mesh.len()
+                    || lambda.num_cage_vertices() != self.rest_cage.len()
+                {
+                    return Err(RigError::SizeMismatch {
+                        what: "CoR cage coordinates Λ (#V × #C)",
+                        expected: self.rest_mesh.len() * self.rest_cage.len(),
+                        actual: lambda.num_vertices() * lambda.num_cage_vertices(),
+                    });
+                }
+                lambda
+            }
+            // Loaded rows: Λ = S·Φ (O(nnz(S)·#C); fine for the rows the tool writes, which
+            // address the original vertices, also after subdivision).
+            (Some(rows), None) => rows.compose_dense(&self.cage_coords)?,
+            (None, None) => compute_centre_coords(
+                &self.rest_mesh,
+                &self.mesh_triangles,
+                &self.skin_weights,
+                &self.cage_coords,
+                &self.cor_options,
+            )?,
+        };
+        let mut centre_coords = centre_coords;
+        if self.cage_coords.precision() == CoordsPrecision::F32 {
+            centre_coords.round_to_f32();
+        }
+        let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
+        centre_coords.apply(&self.rest_cage, &mut centres);
+        self.cor = Some(CorState {
+            centre_coords,
+            centres,
+            stale: false,
+            skinning: CorSkinning::new(&self.skin_weights),
+            scratch: CorScratch::new(self.skeleton.len()),
+        });
+        Ok(())
+    }
+
+    /// After C changed everywhere: M = ΦC, and the CoR centres Λ·C (or marked stale when CoR
+    /// skinning is not active).
+    pub(super) fn rest_from_cage_in_full(&mut self) {
+        self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+        self.rest_mesh_is_phi_c = true;
+        if let Some(cor) = &mut self.cor {
+            if self.method == SkinningMethod::Cor {
+                cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+            } else {
+                cor.stale = true;
+            }
+        }
+    }
+
+    /// Applies ΔC on a few rest-cage vertices to C, M and the CoR centres.
+    pub(super) fn apply_rest_cage_delta_sparse(&mut self, vertices: &[usize], deltas: &[DVec3]) {
+        for (&k, d) in vertices.iter().zip(deltas) {
+            self.rest_cage[k] += *d;
+        }
+        if !self.rest_mesh_is_phi_c {
+            self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+            self.rest_mesh_is_phi_c = true;
+        } else {
+            self.cage_coords
+                .apply_delta(vertices, deltas, &mut self.rest_mesh);
+        }
+        if let Some(cor) = &mut self.cor {
+            if self.method == SkinningMethod::Cor && !cor.stale {
+                cor.centre_coords
+                    .apply_delta(vertices, deltas, &mut cor.centres);
+            } else {
+                cor.stale = true;
+            }
+        }
+    }
+
+    /// After C changed: SkelUp (A = ΨC, rest frames re-placed), FK, skinning, CageUp.
+    pub(super) fn sync_from_rest_cage(&mut self) {
+        if !self.locks.skel_up {
+            self.skeleton_updater
+                .apply(&self.rest_cage, &mut self.scratch_joints);
+            for (frame, a) in self
+                .rest_world_from_joint
+                .iter_mut()
+                .zip(&self.scratch_joints)
+            {
+                frame.translation = *a;
+            }
+        }
+        self.pose_and_fit();
+    }
+
+    /// FK of the current pose on the current rest skeleton, skinning, CageUp.
+    pub(super) fn pose_and_fit(&mut self) {
+        // Locals: rest bone offset o_j + offset d_j, current rotation and scale.
+        for j in 0..self.skeleton.len() {
+            let rest_offset = match self.skeleton.parent(j) {
+                Some(p) => self.rest_world_from_joint[p]
+                    .inverse()
+                    .transform_point3(self.rest_world_from_joint[j].translation),
+                None => self.rest_world_from_joint[j].translation,
+            };
+            self.scratch_locals[j] = local_transform(
+                rest_offset + self.translation_offset[j],
+                self.posed_local_rotation[j],
+                self.posed_local_scale[j],
+            );
+        }
+        self.skeleton
+            .forward_kinematics(&self.scratch_locals, &mut self.posed_world_from_joint);
+        Skeleton::skinning_transforms(
+            &self.rest_world_from_joint,
+            &self.posed_world_from_joint,
+            &mut self.posed_from_rest,
+        );
+        self.skin();
+        if !self.locks.cage_up {
+            self.fit_cage();
+        }
+    }
+
+    pub(super) fn skin(&mut self) {
+        match self.method {
+            SkinningMethod::Lbs => {
+                self.lbs
+                    .apply(&self.posed_from_rest, &self.rest_mesh, &mut self.posed_mesh)
+            }
+            SkinningMethod::Dqs => self.dqs.apply(
+                &self.posed_from_rest,
+                &self.rest_mesh,
+                &mut self.dqs_scratch,
+                &mut self.posed_mesh,
+            ),
+            SkinningMethod::Cor => match &mut self.cor {
+                Some(cor) => {
+                    if cor.stale {
+                        cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+                        cor.stale = false;
+                    }
+                    cor.skinning.apply(
+                        &self.posed_from_rest,
+                        &self.rest_mesh,
+                        &cor.centres,
+                        &mut cor.scratch,
+                        &mut self.posed_mesh,
+                    )
+                }
+                None => {
+                    self.lbs
+                        .apply(&self.posed_from_rest, &self.rest_mesh, &mut self.posed_mesh)
+                }
+            },
+        }
+    }
+
+    pub(super) fn fit_cage(&mut self) {
+        let ghost = self.method != SkinningMethod::Lbs
+            && self.options_fit_source == CageFitSource::GhostLbs;
+        if ghost {
+            for (r, &row) in self
+                .scratch_rows_rest
+                .iter_mut()
+                .zip(self.cage_updater.rows())
+            {
+                *r = self.rest_mesh[row];
+            }
+            self.ghost_lbs.apply(
+                &self.posed_from_rest,
+                &self.scratch_rows_rest,
+                &mut self.scratch_rows_posed,
+            );
+            self.cage_updater
+                .apply_rows(&self.scratch_rows_posed, &mut self.posed_cage);
+        } else {
+            self.cage_updater
+                .apply(&self.posed_mesh, &mut self.posed_cage);
+        }
+    }
+}
+
+/// Per-cage-vertex offsets of an edit (`#C`): one offset per listed vertex, or one for all;
+/// a vertex listed twice moves by the sum. `vertices` and `offsets` are checked beforehand.
+pub(super) fn scatter_edit(vertices: &[usize], offsets: &[DVec3], dense: &mut [DVec3]) {
+    dense.iter_mut().for_each(|d| *d = DVec3::ZERO);
+    for (i, &v) in vertices.iter().enumerate() {
+        dense[v] += offsets[if offsets.len() == 1 { 0 } else { i }];
+    }
+}
