@@ -19,6 +19,7 @@
 //! construction; the validator runs anyway and any failure is reported, never returned as a cage.
 
 pub mod bvh;
+pub mod collapse_checks;
 pub mod distance_grid;
 pub mod geometry;
 pub mod marching_tets;

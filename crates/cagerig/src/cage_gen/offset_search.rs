@@ -45,7 +45,24 @@ pub struct GenerationStats {
     pub mesh_pieces: usize,
     /// One line per offset tried.
     pub attempts: Vec<String>,
+    /// Seconds spent per stage, summed over the offsets tried.
+    pub stage_seconds: StageSeconds,
     pub seconds: f64,
+}
+
+/// Seconds per stage of [`generate_cage`] (summed over the offsets tried).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StageSeconds {
+    /// Welding, pieces and the mesh BVH.
+    pub setup: f64,
+    /// Distance sampling and the fill from outside.
+    pub distance_grid: f64,
+    /// Marching tetrahedra and the piece count.
+    pub surface: f64,
+    /// Constrained edge collapses.
+    pub simplify: f64,
+    /// [`validate_cage_geometry`].
+    pub validate: f64,
 }
 
 /// A cage that passed [`validate_cage_geometry`], its report and how it was made.
@@ -88,6 +105,14 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
     let reps = piece_representatives(mesh.num_vertices(), &mesh.triangles, &welded);
     let piece_points: Vec<DVec3> = reps.iter().map(|&v| mesh.positions[v]).collect();
     let bvh = TriangleBvh::new(mesh_primitives(mesh));
+    let mut stage_seconds = StageSeconds::default();
+    let mut stage_start = Instant::now();
+    let mut lap = |stage: &mut f64| {
+        let now = Instant::now();
+        *stage += (now - stage_start).as_secs_f64();
+        stage_start = now;
+    };
+    lap(&mut stage_seconds.setup);
     let area: f64 = (0..mesh.num_triangles())
         .map(|t| {
             let [a, b, c] = mesh.corners(t);
@@ -128,10 +153,12 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
         let grid_points = grid.num_points();
         let field = fill_from_outside(grid, &bvh, bounds, offset);
         let queries = field.exact_queries;
+        lap(&mut stage_seconds.distance_grid);
         let surface = extract_surface(&field);
         drop(field);
         let surface_vertices = surface.positions.len();
         let pieces = count_pieces(&surface.triangles, surface_vertices);
+        lap(&mut stage_seconds.surface);
         let offset_percent = 100.0 * offset / diag;
         if pieces != 1 {
             attempts.push(format!(
@@ -152,6 +179,7 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
             continue;
         }
         let simplified = simplify(surface, stop, constraints);
+        lap(&mut stage_seconds.simplify);
         let reached = simplified.positions.len();
         if !simplified.reached {
             attempts.push(format!(
@@ -168,6 +196,7 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
             triangles: simplified.triangles,
         };
         let report = validate_cage_geometry(&cage, mesh, &requirements);
+        lap(&mut stage_seconds.validate);
         if !report.passed() {
             last_failures = report.failures();
             attempts.push(format!(
@@ -190,6 +219,7 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
             rejected_positions: simplified.rejections,
             mesh_pieces: reps.len(),
             attempts,
+            stage_seconds,
             seconds: start.elapsed().as_secs_f64(),
         };
         return Ok(GeneratedCage {
