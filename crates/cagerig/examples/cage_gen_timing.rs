@@ -44,6 +44,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             g.stats.rejected_positions,
         );
         println!("         stages {:?}", g.stats.stage_seconds);
+        println!(
+            "         offset {:.3} %, spacing {:.3} %, distance min {:.3} % mean {:.3} %, volume ratio {:.3}, attempts {:?}",
+            100.0 * g.stats.offset_fraction,
+            100.0 * g.stats.spacing_fraction,
+            100.0 * g.report.min_distance_fraction,
+            100.0 * g.report.mean_distance_fraction,
+            g.report.volume_ratio,
+            g.stats.attempts
+        );
     }
     Ok(())
 }

@@ -11,6 +11,7 @@ use super::bvh::{Aabb, TriangleBvh};
 use super::distance_grid::{SampleGrid, fill_from_outside};
 use super::marching_tets::extract_surface;
 use super::simplify::{CollapseConstraints, StopAt, simplify};
+use super::surface_clearance::{TIGHT_OFFSET_SPACINGS, check_start_surface, vertex_clearances};
 use super::validate::{
     CageReport, CageRequirements, count_pieces, mesh_primitives, validate_cage_geometry,
 };
@@ -19,8 +20,12 @@ use super::{CageGenError, CageOptions, CageTarget, MIN_VERTICES};
 use crate::mesh::TriMesh;
 
 /// Grid samples of the starting surface per target cage vertex (sets the spacing h):
-/// enough for the quadric order to pick the cage's features, few enough to stay fast.
-pub const SURFACE_SAMPLES_PER_CAGE_VERTEX: f64 = 20.0;
+/// enough for the quadric order to pick the cage's features, few enough to stay fast (the
+/// marching-tetrahedra surface has about ten vertices per sample area h²). With the verified
+/// tight first offset ([`super::surface_clearance`]) 8 gives the Arm a tighter cage than 20 at
+/// the guaranteed offset did (mean distance 1.86 % vs 1.89 % of the diagonal, volume −13 %),
+/// in a third of the collapses.
+pub const SURFACE_SAMPLES_PER_CAGE_VERTEX: f64 = 8.0;
 /// Growth of the offset between attempts.
 pub const OFFSET_GROWTH: f64 = 1.5;
 /// Largest offset tried, × diagonal.
@@ -146,8 +151,10 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
     let mut last_pieces: Option<(usize, f64)> = None;
     let mut last_failures = Vec::new();
     let mut refinements = 0;
-    // Offset ≥ margin + h√3 guarantees the starting surface keeps the margin (marching_tets).
-    let mut offset = margin + spacing * 3f64.sqrt() * 1.01;
+    // Offset ≥ margin + h√3 guarantees the starting surface keeps the margin (marching_tets);
+    // a tighter one is tried first and its surface verified (surface_clearance).
+    let guaranteed = |spacing: f64| margin + spacing * 3f64.sqrt() * 1.01;
+    let mut offset = margin + spacing * TIGHT_OFFSET_SPACINGS;
     while offset <= MAX_OFFSET * diag {
         let grid = SampleGrid::around(bounds, spacing, offset + 2.0 * spacing);
         let grid_points = grid.num_points();
@@ -175,10 +182,23 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
             ));
             spacing *= 0.5;
             refinements += 1;
-            offset = offset.max(margin + spacing * 3f64.sqrt() * 1.01);
+            offset = offset.max(margin + spacing * TIGHT_OFFSET_SPACINGS);
             continue;
         }
-        let simplified = simplify(surface, stop, constraints);
+        let clearances = vertex_clearances(&surface, &bvh);
+        if offset < guaranteed(spacing)
+            && let Err(why) =
+                check_start_surface(&surface, &clearances, &bvh, margin, &piece_points)
+        {
+            attempts.push(format!(
+                "offset {offset_percent:.2} %: starting surface rejected ({why}); trying the offset the grid guarantees"
+            ));
+            offset = guaranteed(spacing);
+            lap(&mut stage_seconds.surface);
+            continue;
+        }
+        lap(&mut stage_seconds.surface);
+        let simplified = simplify(surface, clearances, stop, constraints);
         lap(&mut stage_seconds.simplify);
         let reached = simplified.positions.len();
         if !simplified.reached {

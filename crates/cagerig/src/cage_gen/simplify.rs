@@ -182,9 +182,12 @@ impl Positions {
     }
 }
 
-/// Simplifies `surface` (closed, embedded, enclosing the mesh with the margin) until `stop`.
+/// Simplifies `surface` (closed, embedded, enclosing the mesh with the margin) until `stop`;
+/// `clearances` are its vertices' distances to the mesh (exact below the margin, lower bounds
+/// above; NaN where unknown).
 pub fn simplify(
     surface: Surface,
+    clearances: Vec<f64>,
     stop: StopAt,
     constraints: CollapseConstraints<'_>,
 ) -> Simplified {
@@ -199,7 +202,11 @@ pub fn simplify(
         vertex_faces: vec![Vec::new(); num_vertices],
         vertex_alive: vec![true; num_vertices],
         versions: vec![0; num_vertices],
-        clearance: vec![f64::NAN; num_vertices],
+        clearance: if clearances.len() == num_vertices {
+            clearances
+        } else {
+            vec![f64::NAN; num_vertices]
+        },
         face_alive: vec![true; faces.len()],
         hash: TriangleHash::new(Aabb::EMPTY.expanded(-1.0), 1.0),
         positions,
