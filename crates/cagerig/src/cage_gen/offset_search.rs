@@ -26,6 +26,12 @@ use crate::mesh::TriMesh;
 /// the guaranteed offset did (mean distance 1.86 % vs 1.89 % of the diagonal, volume −13 %),
 /// in a third of the collapses.
 pub const SURFACE_SAMPLES_PER_CAGE_VERTEX: f64 = 8.0;
+/// Extra padding of the sample grid, in spacings, so that the offset surface of a face lying
+/// on the mesh's bounding box (a flat sole, a plate) does not fall on a grid plane: there the
+/// field is clamped to ±[`super::distance_grid::MIN_FIELD`]·h and marching tetrahedra emit
+/// clusters of near-coincident vertices joined by slivers, which block simplification. An
+/// irrational fraction (2 − φ) keeps the coincidence away for every offset.
+pub const GRID_SHIFT_SPACINGS: f64 = 0.381_966_011_250_105;
 /// Growth of the offset between attempts.
 pub const OFFSET_GROWTH: f64 = 1.5;
 /// Largest offset tried, × diagonal.
@@ -156,7 +162,11 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
     let guaranteed = |spacing: f64| margin + spacing * 3f64.sqrt() * 1.01;
     let mut offset = margin + spacing * TIGHT_OFFSET_SPACINGS;
     while offset <= MAX_OFFSET * diag {
-        let grid = SampleGrid::around(bounds, spacing, offset + 2.0 * spacing);
+        let grid = SampleGrid::around(
+            bounds,
+            spacing,
+            offset + (2.0 + GRID_SHIFT_SPACINGS) * spacing,
+        );
         let grid_points = grid.num_points();
         let field = fill_from_outside(grid, &bvh, bounds, offset);
         let queries = field.exact_queries;
