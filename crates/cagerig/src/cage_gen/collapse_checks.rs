@@ -194,7 +194,7 @@ impl State<'_> {
         // New triangles among themselves: they all share the collapsed vertex.
         for i in 0..s.new_ids.len() {
             for j in i + 1..s.new_ids.len() {
-                if !shares_embedded_vertex(s.new_ids[i], s.new_ids[j], &embedded)
+                if !shares_embedded_vertex(s.new_ids[i], s.new_ids[j], embedded)
                     && cage_triangles_conflict(
                         s.new_corners[i],
                         s.new_ids[i],
@@ -231,7 +231,7 @@ impl State<'_> {
             conflict = s.new_ids.iter().zip(&s.new_corners).zip(boxes.iter()).any(
                 |((ids, corners), b)| {
                     b.overlaps(&other_box)
-                        && !shares_embedded_vertex(*ids, other, &embedded)
+                        && !shares_embedded_vertex(*ids, other, embedded)
                         && cage_triangles_conflict(*corners, *ids, other_corners, other, separation)
                 },
             );
