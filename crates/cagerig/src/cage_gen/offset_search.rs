@@ -11,6 +11,7 @@ use super::bvh::{Aabb, TriangleBvh};
 use super::distance_grid::{SampleGrid, fill_from_outside};
 use super::marching_tets::extract_surface;
 use super::simplify::{CollapseConstraints, StopAt, simplify};
+use super::skeleton_guide::CageGuide;
 use super::surface_clearance::{TIGHT_OFFSET_SPACINGS, check_start_surface, vertex_clearances};
 use super::validate::{
     CageReport, CageRequirements, count_pieces, mesh_primitives, validate_cage_geometry,
@@ -86,6 +87,15 @@ pub struct GeneratedCage {
 
 /// Generates a cage for `mesh` (see [`crate::cage_gen`]).
 pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedCage, CageGenError> {
+    generate_guided_cage(mesh, options, &CageGuide::default())
+}
+
+/// [`generate_cage`] with the collapse order guided by `guide` (see [`super::skeleton_guide`]).
+pub fn generate_guided_cage(
+    mesh: &TriMesh,
+    options: &CageOptions,
+    guide: &CageGuide,
+) -> Result<GeneratedCage, CageGenError> {
     let start = Instant::now();
     if let Some(vertex) = mesh.positions.iter().position(|p| !p.is_finite()) {
         return Err(CageGenError::NonFinite { vertex });
@@ -208,7 +218,7 @@ pub fn generate_cage(mesh: &TriMesh, options: &CageOptions) -> Result<GeneratedC
             continue;
         }
         lap(&mut stage_seconds.surface);
-        let simplified = simplify(surface, clearances, stop, constraints);
+        let simplified = simplify(surface, clearances, guide, stop, constraints);
         lap(&mut stage_seconds.simplify);
         let reached = simplified.positions.len();
         if !simplified.reached {

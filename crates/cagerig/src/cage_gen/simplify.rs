@@ -31,6 +31,7 @@ use super::geometry::cage_triangles_conflict;
 use super::geometry::{Triangle, area_normal};
 use super::marching_tets::Surface;
 use super::quadric::Quadric;
+use super::skeleton_guide::{CageGuide, GUIDE_WEIGHT};
 use super::triangle_hash::TriangleHash;
 
 /// Passes over all edges (the first, then retries of edges rejected before their
@@ -188,6 +189,7 @@ impl Positions {
 pub fn simplify(
     surface: Surface,
     clearances: Vec<f64>,
+    guide: &CageGuide,
     stop: StopAt,
     constraints: CollapseConstraints<'_>,
 ) -> Simplified {
@@ -232,6 +234,20 @@ pub fn simplify(
         }
         for &v in tri {
             state.vertex_faces[v as usize].push(f as u32);
+        }
+    }
+    if !guide.planes.is_empty() {
+        // Guide planes (skeleton_guide): band = the mean edge length, weight ∝ mean area.
+        let (mut area, mut edge) = (0.0, 0.0);
+        for tri in &state.faces {
+            let c = tri.map(|v| state.positions[v as usize]);
+            area += 0.5 * area_normal(c).length();
+            edge += c[0].distance(c[1]);
+        }
+        let n = state.faces.len().max(1) as f64;
+        let (area, band) = (area / n, edge / n);
+        for (q, p) in state.quadrics.iter_mut().zip(&state.positions) {
+            *q = *q + guide.quadric_at(*p, band, GUIDE_WEIGHT * area);
         }
     }
     state.rebuild_hash();
