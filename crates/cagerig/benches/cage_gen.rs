@@ -27,7 +27,7 @@ fn cage_generation(c: &mut Criterion) {
     let options = CageOptions::default();
     let mut group = c.benchmark_group("cage_gen");
     group.sample_size(10);
-    group.measurement_time(Duration::from_secs(8));
+    group.measurement_time(Duration::from_secs(15));
     for (name, mesh) in [("arm", &parts.mesh), ("arm_x3", &arm3)] {
         group.bench_function(BenchmarkId::new(name, mesh.num_vertices()), |b| {
             b.iter(|| generate_cage(mesh, &options).expect("a validated cage"))
