@@ -9,7 +9,10 @@ use cagerig::skinning::SkinningMethod;
 
 use crate::commands::{SessionArgs, SkinningArg, start_session};
 use crate::output_dir::StagedDir;
-use crate::rig_source::{RigArgs, load_rig};
+use crate::rig_source::{
+    AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_or_generate_cage, report_generated_cage,
+    write_generated_cage,
+};
 use crate::state_files::write_state;
 
 /// Checks the sample times: finite, each once (the files are named after the time).
@@ -38,6 +41,7 @@ pub fn check_times(times: &[f64]) -> anyhow::Result<()> {
 // arguments so that each can be validated and reported on its own.
 pub fn animate(
     rig: &RigArgs,
+    auto_cage: &AutoCageArgs,
     skeleton_anim: Option<&Path>,
     cage_anim: Option<&Path>,
     animation: Option<&str>,
@@ -54,7 +58,11 @@ pub fn animate(
     check_times(times)?;
     let mut pictures = crate::pictures::PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force)?;
-    let loaded = load_rig(rig, true, true)?;
+    let loaded = load_rig_or_generate_cage(rig, true, true, auto_cage.options())?;
+    if let Some(g) = &loaded.generated_cage {
+        report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
+        write_generated_cage(&mut staged, &g.cage)?;
+    }
     let (skeleton_track, channels, cage_track) =
         crate::interchange::animation_tracks(&loaded, skeleton_anim, animation, cage_anim)?;
     let mut options = session_args.options();

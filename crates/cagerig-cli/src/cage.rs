@@ -15,7 +15,8 @@ use serde::Serialize;
 
 #[derive(Debug, Clone, Args)]
 pub struct CageArgs {
-    /// Mesh (OBJ) to enclose.
+    /// Mesh to enclose: OBJ, or the skinned mesh of a glTF 2.0 (`.glb`/`.gltf`) or FBX file
+    /// (its rest pose).
     #[arg(required_unless_present = "builtin")]
     pub mesh: Option<PathBuf>,
     /// Use the skin of a built-in demo rig instead of a file (bar, bar_irregular, snake).
@@ -59,6 +60,10 @@ pub fn run(args: &CageArgs) -> anyhow::Result<()> {
             let rig = cagerig::demo::builtin(name, None)
                 .with_context(|| format!("building the built-in rig {name:?}"))?;
             (format!("builtin:{name}"), rig.mesh)
+        }
+        (None, Some(path)) if crate::interchange::is_interchange(path) => {
+            let character = crate::interchange::import(path, None)?;
+            (path.display().to_string(), character.mesh)
         }
         (None, Some(path)) => {
             let mesh = read_obj(path).with_context(|| format!("reading {}", path.display()))?;

@@ -10,7 +10,10 @@ use cagerig::skinning::SkinningMethod;
 use crate::commands::{SessionArgs, SkinningArg, start_session};
 use crate::output_dir::StagedDir;
 use crate::pictures::PictureMaker;
-use crate::rig_source::{RigArgs, load_rig};
+use crate::rig_source::{
+    AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_or_generate_cage, report_generated_cage,
+    write_generated_cage,
+};
 use crate::state_files::write_state;
 
 /// The script operations, for `edit --help`.
@@ -36,8 +39,11 @@ pub fn read_script(path: &Path) -> anyhow::Result<EditScript> {
     EditScript::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
+#[allow(clippy::too_many_arguments)]
+// Each option of `edit` stays a separate argument, validated and reported on its own.
 pub fn edit(
     rig: &RigArgs,
+    auto_cage: &AutoCageArgs,
     script_path: &Path,
     out: &Path,
     force: bool,
@@ -48,7 +54,11 @@ pub fn edit(
     let script = read_script(script_path)?;
     let mut pictures = PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force)?;
-    let loaded = load_rig(rig, true, true)?;
+    let loaded = load_rig_or_generate_cage(rig, true, true, auto_cage.options())?;
+    if let Some(g) = &loaded.generated_cage {
+        report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
+        write_generated_cage(&mut staged, &g.cage)?;
+    }
     let mut options = session_args.options();
     options.skinning = skinning
         .map(SkinningMethod::from)

@@ -18,7 +18,8 @@ pub fn is_interchange(path: &Path) -> bool {
     cagerig_formats::format_of(path).is_some()
 }
 
-fn import(path: &Path, skin: Option<&str>) -> anyhow::Result<ImportedCharacter> {
+/// Imports a character (its first skin unless `skin` names one).
+pub fn import(path: &Path, skin: Option<&str>) -> anyhow::Result<ImportedCharacter> {
     let options = ImportOptions {
         skin: skin.map(str::to_owned),
         ..ImportOptions::default()
@@ -31,8 +32,10 @@ pub fn load_interchange(
     path: &Path,
     cage: Option<&Path>,
     skin: Option<&str>,
+    auto_cage: Option<cagerig::cage_gen::CageOptions>,
 ) -> anyhow::Result<LoadedRig> {
     let character = import(path, skin)?;
+    let mut generated_cage = None;
     let mut files = vec![FileUse {
         role: "character".into(),
         path: path.to_path_buf(),
@@ -47,11 +50,26 @@ pub fn load_interchange(
                 .with_context(|| format!("reading the cage {}", c.display()))?
         }
         (None, Some(c)) => c.clone(),
-        (None, None) => bail!(
-            "{}: no cage: give --cage CAGE.obj (in the file's world space), or add a mesh node named \
-             `<name>_cage` (or with extras.cagerig_cage) to the file",
-            path.display()
-        ),
+        (None, None) => match auto_cage {
+            Some(options) => {
+                let generated = cagerig::cage_gen::generate_cage(&character.mesh, &options)
+                    .with_context(|| {
+                        format!(
+                            "{}: no cage in the file, and none could be generated",
+                            path.display()
+                        )
+                    })?;
+                let cage = generated.cage.clone();
+                generated_cage = Some(generated);
+                cage
+            }
+            None => bail!(
+                "{}: no cage: give --cage CAGE.obj (in the file's world space), add a mesh node \
+                 named `<name>_cage` (or with extras.cagerig_cage) to the file, or pass \
+                 --auto-cage to generate one",
+                path.display()
+            ),
+        },
     };
     let ImportedCharacter {
         mesh,
@@ -69,6 +87,7 @@ pub fn load_interchange(
         maxvol_path: None,
         animations,
         allow_outside_cage: false,
+        generated_cage,
     })
 }
 

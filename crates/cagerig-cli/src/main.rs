@@ -69,6 +69,8 @@ enum Command {
     Edit {
         #[command(flatten)]
         rig: RigArgs,
+        #[command(flatten)]
+        auto_cage: rig_source::AutoCageArgs,
         /// The script: {"skinning":..., "steps":[{"op":...}, ...]} (operations: see --help).
         #[arg(long)]
         script: PathBuf,
@@ -92,6 +94,8 @@ enum Command {
     Animate {
         #[command(flatten)]
         rig: RigArgs,
+        #[command(flatten)]
+        auto_cage: rig_source::AutoCageArgs,
         /// Skeleton animation (V1/V2/V3 text format).
         #[arg(long)]
         skeleton_anim: Option<PathBuf>,
@@ -184,15 +188,19 @@ fn main() -> std::process::ExitCode {
         Command::Maxvol { rig, out, json } => commands::maxvol(&rig, &out, json),
         Command::Edit {
             rig,
+            auto_cage,
             script,
             out,
             force,
             render,
             skinning,
             session,
-        } => edit::edit(&rig, &script, &out, force, render, skinning, &session),
+        } => edit::edit(
+            &rig, &auto_cage, &script, &out, force, render, skinning, &session,
+        ),
         Command::Animate {
             rig,
+            auto_cage,
             skeleton_anim,
             cage_anim,
             animation,
@@ -204,6 +212,7 @@ fn main() -> std::process::ExitCode {
             session,
         } => animate::animate(
             &rig,
+            &auto_cage,
             skeleton_anim.as_deref(),
             cage_anim.as_deref(),
             animation.as_deref(),

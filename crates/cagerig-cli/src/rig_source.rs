@@ -5,6 +5,8 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
+use cagerig::cage_gen::{CageOptions, CageTarget, GeneratedCage};
+use cagerig::io::rig_files::{MissingCage, load_rig_files_or_generate};
 use cagerig::session::RigParts;
 use cagerig::{CageCoords, Warning};
 use clap::Args;
@@ -40,6 +42,65 @@ pub struct RigArgs {
     pub allow_outside_cage: bool,
 }
 
+/// `--auto-cage` (for `edit` and `animate`): what to do when the rig has no cage.
+#[derive(Debug, Clone, Args)]
+pub struct AutoCageArgs {
+    /// When the rig has no cage (no `<stem>_cage.obj`, no --cage, no cage node in a glTF/FBX
+    /// file), generate one as `cagerig cage` does with its default options (validated), say
+    /// so, and write it into --out as generated_cage.obj. Without this flag a rig with no cage
+    /// is an error.
+    #[arg(long)]
+    pub auto_cage: bool,
+    /// Target vertex count of the generated cage.
+    #[arg(long, requires = "auto_cage", default_value_t = cagerig::cage_gen::DEFAULT_VERTICES)]
+    pub cage_vertices: usize,
+}
+
+impl AutoCageArgs {
+    /// The generation options, when asked for.
+    pub fn options(&self) -> Option<CageOptions> {
+        self.auto_cage.then(|| CageOptions {
+            target: CageTarget::Vertices(self.cage_vertices),
+            ..CageOptions::default()
+        })
+    }
+}
+
+/// File name of a generated cage in an output folder.
+pub const GENERATED_CAGE_FILE: &str = "generated_cage.obj";
+
+/// Says that the rig's cage was generated (on stderr, beside the other notes), where it will be
+/// written (`written_to`), and how it measures.
+pub fn report_generated_cage(rig: &str, g: &GeneratedCage, written_to: &Path) {
+    eprintln!(
+        "note: {rig} has no cage: generated one with {} vertices, {} triangles (validated: \
+         margin ≥ {:.2} % of the diagonal, least distance {:.3} %, mean {:.3} %) in {:.2} s; \
+         it is written to {}",
+        g.report.cage_vertices,
+        g.report.cage_faces,
+        100.0 * cagerig::cage_gen::DEFAULT_MARGIN,
+        100.0 * g.report.min_distance_fraction,
+        100.0 * g.report.mean_distance_fraction,
+        g.stats.seconds,
+        written_to.display()
+    );
+}
+
+/// Writes a generated cage into a staged output folder as [`GENERATED_CAGE_FILE`].
+pub fn write_generated_cage(
+    staged: &mut crate::output_dir::StagedDir,
+    cage: &cagerig::TriMesh,
+) -> anyhow::Result<()> {
+    staged.write(GENERATED_CAGE_FILE, &|w| {
+        cagerig::io::obj::write_obj_to(
+            w,
+            &cage.positions,
+            &cage.triangles,
+            cagerig::io::text::FloatFormat::RoundTrip,
+        )
+    })
+}
+
 /// A loaded rig and what was used to build it.
 pub struct LoadedRig {
     pub name: String,
@@ -52,11 +113,24 @@ pub struct LoadedRig {
     pub animations: Vec<cagerig_formats::ImportedAnimation>,
     /// `--allow-outside-cage` (passed on to the session).
     pub allow_outside_cage: bool,
+    /// The cage generated because the rig had none (`--auto-cage`).
+    pub generated_cage: Option<GeneratedCage>,
 }
 
 /// Loads the rig. With `compute_coords`, Φ is computed (with a progress bar when `progress` and
 /// stderr is a terminal) if no cage-weights file was found.
 pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow::Result<LoadedRig> {
+    load_rig_or_generate_cage(args, progress, compute_coords, None)
+}
+
+/// [`load_rig`]; when the rig has no cage and `auto_cage` gives options, one is generated
+/// ([`LoadedRig::generated_cage`]) instead of failing.
+pub fn load_rig_or_generate_cage(
+    args: &RigArgs,
+    progress: bool,
+    compute_coords: bool,
+    auto_cage: Option<CageOptions>,
+) -> anyhow::Result<LoadedRig> {
     let mut loaded = match (&args.builtin, &args.mesh) {
         (Some(name), _) => {
             let rig = cagerig::demo::builtin(name, args.resolution)
@@ -69,6 +143,7 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
                 maxvol_path: None,
                 animations: Vec::new(),
                 allow_outside_cage: args.allow_outside_cage,
+                generated_cage: None,
             }
         }
         (None, Some(mesh)) if crate::interchange::is_interchange(mesh) => LoadedRig {
@@ -77,9 +152,15 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
                 mesh,
                 args.cage.as_deref(),
                 args.skin.as_deref(),
+                auto_cage,
             )?
         },
-        (None, Some(mesh)) => load_files(mesh, args.cage.as_deref(), args.allow_outside_cage)?,
+        (None, Some(mesh)) => load_files(
+            mesh,
+            args.cage.as_deref(),
+            args.allow_outside_cage,
+            auto_cage,
+        )?,
         (None, None) => bail!("give a mesh file or --builtin NAME"),
     };
     // The one cage validation, the same for every command (and again in the session).
@@ -105,8 +186,20 @@ fn load_files(
     mesh: &Path,
     cage: Option<&Path>,
     allow_outside_cage: bool,
+    auto_cage: Option<CageOptions>,
 ) -> anyhow::Result<LoadedRig> {
-    let rig = cagerig::io::rig_files::load_rig_files(mesh, cage)?;
+    let missing_cage = auto_cage.map_or(MissingCage::Fail, MissingCage::Generate);
+    let rig = load_rig_files_or_generate(mesh, cage, missing_cage).map_err(|e| {
+        let cage_missing = matches!(
+            &e,
+            cagerig::io::ParseError::Io { message, .. } if message.starts_with("no cage found")
+        );
+        if auto_cage.is_none() && cage_missing {
+            anyhow::anyhow!("{e}; or pass --auto-cage to generate one")
+        } else {
+            e.into()
+        }
+    })?;
     Ok(LoadedRig {
         name: mesh.display().to_string(),
         files: rig
@@ -122,6 +215,7 @@ fn load_files(
         maxvol_path: rig.maxvol_path,
         animations: Vec::new(),
         allow_outside_cage,
+        generated_cage: rig.generated_cage,
     })
 }
 

@@ -1,5 +1,7 @@
 //! End-to-end tests of `cagerig cage`: a validated cage is written only with `--out`, `info`
-//! runs the same validator on it, bad targets fail with a clear reason and write nothing.
+//! runs the same validator on it, bad targets fail with a clear reason and write nothing; every
+//! glTF character in ../shared/data gets a validated cage with the default options; `edit` and
+//! `animate` generate a cage with `--auto-cage` when the rig has none, and say so.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -8,8 +10,21 @@ fn cagerig() -> Command {
     Command::new(env!("CARGO_BIN_EXE_cagerig"))
 }
 
+fn data(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(path)
+}
+
 fn arm() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm/arm.obj")
+    data("arm/arm.obj")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cagerig-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
 }
 
 #[test]
@@ -63,5 +78,155 @@ fn cage_writes_a_validated_cage_that_info_accepts() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("at least 8 vertices"));
     assert!(!bad_path.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The default options on every glTF character of the shared data (the Fox: 1 728 unwelded
+/// vertices; RiggedSimple: a closed cylinder; SimpleSkin: a flat zero-thickness strip): each
+/// gets a cage that passes every check of the validator, coordinates included.
+#[test]
+fn gltf_characters_get_validated_cages_with_default_options() {
+    for file in [
+        "fox/Fox.glb",
+        "gltf/RiggedSimple/RiggedSimple.glb",
+        "gltf/SimpleSkin/SimpleSkin.gltf",
+    ] {
+        let out = cagerig()
+            .arg("cage")
+            .arg(data(file))
+            .arg("--json")
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["passed"], true, "{file}");
+        let checks = v["cage"]["checks"].as_array().unwrap();
+        for name in [
+            "closed_manifold",
+            "outward",
+            "one_piece",
+            "no_self_intersection",
+            "mesh_inside",
+            "margin",
+            "vertex_count",
+            "coordinates",
+        ] {
+            let check = checks.iter().find(|c| c["name"] == name);
+            assert!(
+                check.is_some_and(|c| c["passed"] == true),
+                "{file}: check {name}: {check:?}"
+            );
+        }
+        let vertices = v["cage"]["cage_vertices"].as_u64().unwrap();
+        assert!((90..=110).contains(&vertices), "{file}: {vertices}");
+    }
+}
+
+/// A rig without a cage: `edit` fails and offers --auto-cage; with it, the cage is generated,
+/// the output says so and where it is written, and the script runs on it.
+#[test]
+fn edit_generates_a_cage_with_auto_cage_and_says_so() {
+    let dir = temp_dir("auto-cage-edit");
+    for ext in ["obj", "skt", "skw"] {
+        std::fs::copy(
+            data(&format!("arm/arm.{ext}")),
+            dir.join(format!("arm.{ext}")),
+        )
+        .unwrap();
+    }
+    let script = dir.join("edits.json");
+    std::fs::write(
+        &script,
+        r#"{"steps":[{"op":"rotate_joint","joint":3,"axis":[0,0,1],"degrees":60},
+                     {"op":"move_posed_cage","vertices":[7],"offset":[0.5,0,0]}]}"#,
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    let without = cagerig()
+        .arg("edit")
+        .arg(dir.join("arm.obj"))
+        .arg("--script")
+        .arg(&script)
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    assert!(!without.status.success());
+    let err = String::from_utf8_lossy(&without.stderr);
+    assert!(
+        err.contains("no cage found") && err.contains("--auto-cage"),
+        "{err}"
+    );
+    assert!(!out_dir.exists());
+    let with = cagerig()
+        .arg("edit")
+        .arg(dir.join("arm.obj"))
+        .args(["--auto-cage", "--cage-vertices", "60", "--script"])
+        .arg(&script)
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&with.stderr);
+    assert!(with.status.success(), "{err}");
+    let written = out_dir.join("generated_cage.obj");
+    assert!(
+        err.contains("has no cage: generated one with 60 vertices")
+            && err.contains(&written.display().to_string()),
+        "{err}"
+    );
+    let cage = cagerig::io::read_obj(&written).unwrap();
+    assert_eq!(cage.num_vertices(), 60);
+    let rest = cagerig::io::read_obj(&out_dir.join("step0_cage_rest.obj")).unwrap();
+    assert_eq!(rest.positions, cage.positions);
+    // The grab landed on the generated cage's vertex 7.
+    let posed = cagerig::io::read_obj(&out_dir.join("step2_cage_posed.obj")).unwrap();
+    let before = cagerig::io::read_obj(&out_dir.join("step1_cage_posed.obj")).unwrap();
+    let moved = posed.positions[7] - before.positions[7];
+    assert!(
+        (moved - glam::DVec3::new(0.5, 0.0, 0.0)).length() < 1e-9,
+        "{moved}"
+    );
+    // Nothing was written beside the user's files.
+    assert!(!dir.join("arm_cage.obj").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `animate` on the Fox (no cage in the file): --auto-cage generates one and plays the Walk.
+#[test]
+fn animate_generates_a_cage_for_the_fox_with_auto_cage() {
+    let dir = temp_dir("auto-cage-animate");
+    let out_dir = dir.join("out");
+    let run = |auto: bool| {
+        let mut c = cagerig();
+        c.arg("animate")
+            .arg(data("fox/Fox.glb"))
+            .args(["--animation", "Walk", "--times", "0,0.35", "--out"])
+            .arg(&out_dir);
+        if auto {
+            c.arg("--auto-cage");
+        }
+        c.output().unwrap()
+    };
+    let without = run(false);
+    assert!(!without.status.success());
+    let err = String::from_utf8_lossy(&without.stderr);
+    assert!(
+        err.contains("no cage") && err.contains("--auto-cage"),
+        "{err}"
+    );
+    let with = run(true);
+    let err = String::from_utf8_lossy(&with.stderr);
+    assert!(with.status.success(), "{err}");
+    assert!(
+        err.contains("has no cage: generated one with 100 vertices"),
+        "{err}"
+    );
+    assert!(out_dir.join("generated_cage.obj").exists());
+    assert!(out_dir.join("t0.35_cage_posed.obj").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

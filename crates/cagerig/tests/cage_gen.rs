@@ -266,6 +266,31 @@ fn adversarial_meshes_pass_or_fail_clearly() {
     ));
 }
 
+/// Regression: the offset surface of a face lying on the mesh's bounding box fell on a grid
+/// plane, where marching tetrahedra emit clusters of near-coincident vertices joined by slivers;
+/// simplification then stopped thousands of vertices short of the target (a flat 10-vertex
+/// strip, the shape of the glTF sample SimpleSkin, failed at every offset).
+#[test]
+fn flat_faces_on_the_bounding_box_do_not_block_simplification() {
+    let mut positions = Vec::new();
+    for i in 0..5 {
+        positions.push(DVec3::new(0.0, 0.5 * i as f64, 0.0));
+        positions.push(DVec3::new(1.0, 0.5 * i as f64, 0.0));
+    }
+    let triangles = (0..4u32)
+        .flat_map(|i| {
+            let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+            [[a, b, d], [a, d, c]]
+        })
+        .collect();
+    let strip = TriMesh::new(positions, triangles).unwrap();
+    for vertices in [20, 100] {
+        generate_validated(&strip, &options(vertices), "flat strip");
+    }
+    let slab = TriMesh::cuboid(DVec3::ZERO, DVec3::new(3.0, 1.0, 0.2)).unwrap();
+    generate_validated(&slab, &options(60), "slab");
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 6, .. ProptestConfig::default() })]
     #[test]

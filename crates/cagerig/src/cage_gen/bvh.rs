@@ -58,14 +58,77 @@ impl Aabb {
         let d = (self.min - p).max(p - self.max).max(DVec3::ZERO);
         d.length_squared()
     }
+}
 
-    /// Whether the whole box lies farther than `r` from the plane through `point` with unit
-    /// normal `normal` (then no triangle in the box comes within `r` of a triangle in that plane).
-    fn beyond_plane(&self, point: DVec3, normal: DVec3, r: f64) -> bool {
-        let centre = 0.5 * (self.min + self.max);
-        let half = 0.5 * (self.max - self.min);
-        let radius = half.dot(normal.abs());
-        (centre - point).dot(normal).abs() > radius + r
+/// An upper bound of the distance from any point of `t` to its nearest corner: the
+/// circumradius, or 2/3 of the longest edge (a point Σλᵢpᵢ with λₖ ≥ 1/3 lies within
+/// (1 − λₖ)·longest edge of pₖ), whichever is smaller.
+pub fn covering_radius([a, b, c]: Triangle) -> f64 {
+    let (ab, bc, ca) = (a.distance(b), b.distance(c), c.distance(a));
+    let twice_area = (b - a).cross(c - a).length();
+    let longest = ab.max(bc).max(ca);
+    let circumradius = if twice_area > 0.0 {
+        ab * bc * ca / (2.0 * twice_area)
+    } else {
+        f64::INFINITY
+    };
+    circumradius.min(2.0 / 3.0 * longest)
+}
+
+/// Separating axes of a triangle for box queries: its unit normal and the in-plane normals of
+/// its edges, with the triangle's extent along each. Projections onto a unit axis never
+/// lengthen distances, so a gap along any axis (or between bounding boxes) bounds the
+/// box–triangle distance from below.
+#[derive(Debug, Clone, Copy)]
+struct SeparatingAxes {
+    bounds: Aabb,
+    axes: [DVec3; 4],
+    /// Extent [min, max] of the triangle along each axis.
+    extents: [(f64, f64); 4],
+    /// Number of valid axes (0 for a degenerate triangle).
+    count: usize,
+}
+
+impl SeparatingAxes {
+    fn of_triangle(t: Triangle) -> Self {
+        let mut out = Self {
+            bounds: Aabb::of_triangle(&t),
+            axes: [DVec3::ZERO; 4],
+            extents: [(0.0, 0.0); 4],
+            count: 0,
+        };
+        let Some(normal) = super::geometry::area_normal(t).try_normalize() else {
+            return out;
+        };
+        out.axes[0] = normal;
+        for k in 0..3 {
+            if let Some(m) = normal.cross(t[(k + 1) % 3] - t[k]).try_normalize() {
+                out.axes[1 + k] = m;
+            }
+        }
+        for (axis, extent) in out.axes.iter().zip(&mut out.extents) {
+            let d = t.map(|p| p.dot(*axis));
+            *extent = (d[0].min(d[1]).min(d[2]), d[0].max(d[1]).max(d[2]));
+        }
+        out.count = 4;
+        out
+    }
+
+    /// Whether box `b` is certainly farther than `r` from the triangle.
+    fn box_farther_than(&self, b: &Aabb, r: f64) -> bool {
+        if !b.overlaps(&self.bounds.expanded(r)) {
+            return true;
+        }
+        let centre = 0.5 * (b.min + b.max);
+        let half = 0.5 * (b.max - b.min);
+        self.axes[..self.count]
+            .iter()
+            .zip(&self.extents)
+            .any(|(axis, &(lo, hi))| {
+                let c = centre.dot(*axis);
+                let radius = half.dot(axis.abs());
+                c - radius > hi + r || c + radius < lo - r
+            })
     }
 }
 
@@ -219,9 +282,9 @@ impl TriangleBvh {
     /// Whether some triangle of the tree comes closer than `r` to triangle `t`.
     pub fn any_within(&self, t: Triangle, r: f64) -> bool {
         let mut found = false;
-        let query = Aabb::of_triangle(&t).expanded(r);
+        let axes = SeparatingAxes::of_triangle(t);
         self.visit_near_triangle(t, r, |other| {
-            found = Aabb::of_triangle(&other).overlaps(&query)
+            found = !axes.box_farther_than(&Aabb::of_triangle(&other), r)
                 && !separated_by_a_plane(t, other, r)
                 && triangle_triangle_distance(t, other) < r;
             found
@@ -229,43 +292,37 @@ impl TriangleBvh {
         found
     }
 
-    /// Whether triangle `t` stays at least `r` from every tree triangle. Exact; fast for large
-    /// triangles far from a dense tree: a (sub)triangle whose centroid lies farther than `r` +
-    /// its radius about the centroid is clear (distance is 1-Lipschitz); otherwise it is split
-    /// into four, down to `depth` levels, then tested pair by pair ([`Self::any_within`]).
-    pub fn clear_of(&self, t: Triangle, r: f64, depth: u32) -> bool {
-        let centroid = (t[0] + t[1] + t[2]) / 3.0;
-        let radius = t.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
-        let needed = r + radius;
-        if self.nearest_distance(centroid, needed) >= needed {
+    /// Whether triangle `t` stays at least `r` from every tree triangle, given its corners'
+    /// distances to the tree (exact below `r`; above it any lower bound will do, e.g. the
+    /// result of a [`Self::nearest_distance`] capped at ≥ `r`). Exact:
+    /// * a corner closer than `r` proves it is not clear;
+    /// * every point of the triangle lies within its [`covering_radius`] ρ of a corner, and the
+    ///   distance is 1-Lipschitz, so it is clear when every corner is ≥ `r` + ρ away;
+    /// * otherwise [`Self::any_within`] decides.
+    pub fn clear_of(&self, t: Triangle, corner_distances: [f64; 3], r: f64) -> bool {
+        let nearest_corner = corner_distances.into_iter().fold(f64::INFINITY, f64::min);
+        if nearest_corner < r {
+            return false;
+        }
+        if nearest_corner >= r + covering_radius(t) {
             return true;
         }
-        if depth == 0 {
-            return !self.any_within(t, r);
-        }
-        let [a, b, c] = t;
-        let (ab, bc, ca) = (0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a));
-        [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
-            .into_iter()
-            .all(|sub| self.clear_of(sub, r, depth - 1))
+        !self.any_within(t, r)
     }
 
-    /// Calls `visit` with every tree triangle whose box comes within `r` of `t`'s box and of
-    /// `t`'s plane, until it returns `true`.
+    /// Calls `visit` with every tree triangle whose box may come within `r` of `t` (by the
+    /// separating axes of [`SeparatingAxes`]), until it returns `true`.
     fn visit_near_triangle(&self, t: Triangle, r: f64, mut visit: impl FnMut(Triangle) -> bool) {
         if self.nodes.is_empty() {
             return;
         }
-        let query = Aabb::of_triangle(&t).expanded(r);
-        let normal = super::geometry::area_normal(t).normalize_or_zero();
+        let axes = SeparatingAxes::of_triangle(t);
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 {
             top -= 1;
             let node = self.nodes[stack[top] as usize];
-            if !node.bounds.overlaps(&query)
-                || (normal != DVec3::ZERO && node.bounds.beyond_plane(t[0], normal, r))
-            {
+            if axes.box_farther_than(&node.bounds, r) {
                 continue;
             }
             if node.count > 0 {
@@ -348,6 +405,37 @@ mod tests {
     }
 
     #[test]
+    fn covering_radius_bounds_the_distance_to_the_nearest_corner() {
+        let triangles = [
+            [DVec3::ZERO, DVec3::X, DVec3::Y],
+            [DVec3::ZERO, DVec3::X * 4.0, DVec3::new(2.0, 0.1, 0.0)],
+            [
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(0.5, 3f64.sqrt() / 2.0, 0.0),
+            ],
+            [DVec3::ZERO, DVec3::X, DVec3::X * 2.0],
+        ];
+        for t in triangles {
+            let rho = covering_radius(t);
+            for i in 0..=20 {
+                for j in 0..=20 - i {
+                    let (u, v) = (i as f64 / 20.0, j as f64 / 20.0);
+                    let x = t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v;
+                    let nearest = t
+                        .iter()
+                        .map(|c| c.distance(x))
+                        .fold(f64::INFINITY, f64::min);
+                    assert!(nearest <= rho + 1e-12, "{t:?}: {nearest} > {rho}");
+                }
+            }
+        }
+        // Equilateral: the circumradius, reached at the centre.
+        let rho = covering_radius(triangles[2]);
+        assert!((rho - 1.0 / 3f64.sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
     fn triangle_queries_match_brute_force() {
         let tris = grid_triangles(8);
         let bvh = TriangleBvh::new(tris.clone());
@@ -363,10 +451,12 @@ mod tests {
         assert!((bvh.triangle_distance(probe, 10.0) - brute).abs() < 1e-12);
         assert!(bvh.any_within(probe, brute * 1.01));
         assert!(!bvh.any_within(probe, brute * 0.99));
-        for depth in [0, 2, 4] {
-            assert!(!bvh.clear_of(probe, brute * 1.01, depth));
-            assert!(bvh.clear_of(probe, brute * 0.99, depth));
-        }
+        let corners = probe.map(|p| bvh.nearest_distance(p, f64::INFINITY));
+        assert!(!bvh.clear_of(probe, corners, brute * 1.01));
+        assert!(bvh.clear_of(probe, corners, brute * 0.99));
+        // Lower bounds above r are sound too.
+        let capped = corners.map(|d| d.min(brute * 0.995));
+        assert!(bvh.clear_of(probe, capped, brute * 0.99));
         let mut hits = Vec::new();
         let query = Aabb {
             min: DVec3::new(0.5, 0.5, -1.0),

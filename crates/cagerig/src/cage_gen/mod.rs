@@ -12,26 +12,34 @@
 //! 4. [`simplify`] — collapse edges in quadric-error order down to the target, rejecting every
 //!    collapse that would break manifoldness, flip a triangle, come within `margin` of the mesh
 //!    (mesh BVH), intersect the cage (triangle hash) or sweep over a piece of the mesh;
-//! 5. [`offset_search`] — try increasing offsets, from the tightest the grid allows, and keep
-//!    the first whose cage reaches the target and passes [`validate`].
+//! 5. [`offset_search`] — try increasing offsets, from a tight one whose surface is verified
+//!    exactly ([`surface_clearance`]) or else the tightest the grid guarantees, and keep the
+//!    first whose cage reaches the target and passes [`validate`].
+//!
+//! [`generate_guided_cage`] orders the collapses with a [`skeleton_guide`] (rings of vertices
+//! around articulations); it is not offered by the CLI, since it measured no better (README).
 //!
 //! Every step keeps the invariants, so a cage that reaches the target passes the validator by
 //! construction; the validator runs anyway and any failure is reported, never returned as a cage.
 
 pub mod bvh;
+pub mod collapse_checks;
 pub mod distance_grid;
 pub mod geometry;
 pub mod marching_tets;
 pub mod offset_search;
 pub mod quadric;
 pub mod simplify;
+pub mod skeleton_guide;
+pub mod surface_clearance;
 pub mod triangle_hash;
 pub mod validate;
 pub mod weld;
 
 use thiserror::Error;
 
-pub use offset_search::{GeneratedCage, generate_cage};
+pub use offset_search::{GeneratedCage, generate_cage, generate_guided_cage};
+pub use skeleton_guide::CageGuide;
 pub use validate::{
     CageReport, CageRequirements, Check, check_coordinates, validate_cage_geometry,
 };

@@ -4,11 +4,23 @@
 use glam::{DMat3, DVec3};
 
 /// A symmetric quadric: A (3×3), b (3), c.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Quadric {
     a: DMat3,
     b: DVec3,
     c: f64,
+}
+
+/// The zero quadric (not derived: glam's default matrix is the identity, which would add
+/// |x|² to every vertex's error).
+impl Default for Quadric {
+    fn default() -> Self {
+        Self {
+            a: DMat3::ZERO,
+            b: DVec3::ZERO,
+            c: 0.0,
+        }
+    }
 }
 
 impl Quadric {
@@ -55,6 +67,17 @@ impl std::ops::Add for Quadric {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Regression: the derived default had A = identity, so every vertex's collapse cost
+    /// carried |x|² (the distance to the origin) and the minimiser was pulled towards it.
+    #[test]
+    fn default_is_zero_everywhere() {
+        let zero = Quadric::default();
+        assert_eq!(zero.evaluate(DVec3::new(3.0, -4.0, 12.0)), 0.0);
+        let plane = Quadric::from_plane(DVec3::Z, DVec3::Z * 2.0, 1.0);
+        let x = DVec3::new(5.0, 6.0, 3.0);
+        assert!(((zero + plane).evaluate(x) - 1.0).abs() < 1e-12);
+    }
 
     #[test]
     fn three_planes_meet_at_their_corner() {

@@ -5,16 +5,20 @@
 //! the midpoint and both end points, and is accepted only if afterwards
 //! 1. the surface is still a closed 2-manifold (link condition, more than four vertices);
 //! 2. no surviving triangle flips or degenerates (normal turns by less than 90°);
-//! 3. every new triangle stays at least `margin` from every mesh triangle (mesh BVH);
+//! 3. every new triangle stays at least `margin` from every mesh triangle (mesh BVH, with the
+//!    cage vertices' distances to the mesh cached: [`TriangleBvh::clear_of`]);
 //! 4. no new triangle intersects or comes within `separation` of another cage triangle
-//!    (dynamic triangle hash, adjacency-aware test of [`cage_triangles_conflict`]);
+//!    (dynamic triangle hash; triangles sharing a vertex are cleared together when the star of
+//!    that vertex projects one-to-one, see [`super::collapse_checks`], else pairwise by the
+//!    adjacency-aware test of [`cage_triangles_conflict`]);
 //! 5. no piece of the mesh changed side: the old and new triangles around the edge form a closed
 //!    surface, and the winding number of each mesh piece's representative point about it is 0.
 //!    A mesh piece never touches the cage (3.), so one point decides for the whole piece.
 //!
 //! Given a starting surface that is embedded, encloses the mesh and keeps the margin, every
 //! intermediate surface does too. Edges rejected for every candidate are retried after their
-//! neighbourhood changes, and once more in a final sweep.
+//! neighbourhood changes, and once more in a final sweep. The checks live in
+//! [`super::collapse_checks`].
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -22,9 +26,12 @@ use std::collections::BinaryHeap;
 use glam::DVec3;
 
 use super::bvh::{Aabb, TriangleBvh};
-use super::geometry::{Triangle, area_normal, cage_triangles_conflict, solid_angle};
+#[cfg(doc)]
+use super::geometry::cage_triangles_conflict;
+use super::geometry::{Triangle, area_normal};
 use super::marching_tets::Surface;
 use super::quadric::Quadric;
+use super::skeleton_guide::{CageGuide, GUIDE_WEIGHT};
 use super::triangle_hash::TriangleHash;
 
 /// Passes over all edges (the first, then retries of edges rejected before their
@@ -40,7 +47,7 @@ const MIN_SHAPE_QUALITY: f64 = 0.1;
 const QUALITY_PHASE: usize = 3;
 
 /// 4√3·area / Σ squared edge lengths: 1 for an equilateral triangle, 0 for a degenerate one.
-fn shape_quality(t: Triangle) -> f64 {
+pub(super) fn shape_quality(t: Triangle) -> f64 {
     let sum =
         t[0].distance_squared(t[1]) + t[1].distance_squared(t[2]) + t[2].distance_squared(t[0]);
     if sum <= 0.0 {
@@ -48,9 +55,6 @@ fn shape_quality(t: Triangle) -> f64 {
     }
     2.0 * 3f64.sqrt() * area_normal(t).length() / sum
 }
-
-/// Subdivision depth of the clearance test ([`TriangleBvh::clear_of`]).
-const CLEARANCE_DEPTH: u32 = 4;
 
 /// What must hold after every collapse.
 #[derive(Debug, Clone, Copy)]
@@ -114,24 +118,78 @@ impl Ord for Candidate {
     }
 }
 
-struct State<'a> {
-    positions: Vec<DVec3>,
-    faces: Vec<[u32; 3]>,
-    face_alive: Vec<bool>,
-    vertex_faces: Vec<Vec<u32>>,
+pub(super) struct State<'a> {
+    pub(super) positions: Vec<DVec3>,
+    pub(super) faces: Vec<[u32; 3]>,
+    pub(super) face_alive: Vec<bool>,
+    pub(super) vertex_faces: Vec<Vec<u32>>,
     vertex_alive: Vec<bool>,
+    /// Distance of each cage vertex to the mesh: exact below the margin, a lower bound above
+    /// it; NaN until first needed.
+    pub(super) clearance: Vec<f64>,
     quadrics: Vec<Quadric>,
     versions: Vec<u32>,
-    hash: TriangleHash,
-    constraints: CollapseConstraints<'a>,
+    pub(super) hash: TriangleHash,
+    pub(super) constraints: CollapseConstraints<'a>,
     rejections: usize,
     /// [`MIN_SHAPE_QUALITY`] while many vertices remain, then 0.
-    quality_floor: f64,
+    pub(super) quality_floor: f64,
+    /// Buffers of one collapse attempt, reused.
+    pub(super) scratch: Scratch,
+    /// Boxes of the new triangles (self-intersection check), reused.
+    pub(super) scratch_boxes: Vec<Aabb>,
 }
 
-/// Simplifies `surface` (closed, embedded, enclosing the mesh with the margin) until `stop`.
+/// The star of an edge (a, b) being collapsed, and buffers of its checks.
+#[derive(Debug, Default)]
+pub(super) struct Scratch {
+    /// The two faces containing both a and b (removed).
+    pub(super) shared: Vec<u32>,
+    /// Neighbours of a and of b (sorted), for the link condition.
+    neighbours_a: Vec<u32>,
+    neighbours_b: Vec<u32>,
+    /// Vertices of the link of the edge: neighbours of a or b other than a and b.
+    pub(super) link: Vec<u32>,
+    /// Every face around a or b.
+    pub(super) old_faces: Vec<u32>,
+    /// Faces around a or b that survive (b renamed a).
+    pub(super) kept: Vec<u32>,
+    pub(super) new_ids: Vec<[u32; 3]>,
+    pub(super) old_corners: Vec<Triangle>,
+    pub(super) kept_old: Vec<Triangle>,
+    pub(super) new_corners: Vec<Triangle>,
+    /// Distance of the collapsed vertex at its new position to the mesh (as `clearance`; NaN
+    /// until the margin check needs it).
+    pub(super) new_vertex_clearance: f64,
+    /// Per face: the attempt that last marked it as part of the old star.
+    pub(super) old_face_stamp: Vec<u32>,
+    pub(super) stamp: u32,
+    /// The star of one vertex after the collapse, as (next, previous) corner positions.
+    pub(super) fan: Vec<(DVec3, DVec3)>,
+    /// Vertices (a and the link) whose star after the collapse projects one-to-one.
+    pub(super) embedded_stars: Vec<u32>,
+}
+
+/// Candidate positions of a collapse with their quadric errors, cheapest first.
+#[derive(Debug, Clone, Copy)]
+struct Positions {
+    items: [(f64, DVec3); 4],
+    len: usize,
+}
+
+impl Positions {
+    fn as_slice(&self) -> &[(f64, DVec3)] {
+        &self.items[..self.len]
+    }
+}
+
+/// Simplifies `surface` (closed, embedded, enclosing the mesh with the margin) until `stop`;
+/// `clearances` are its vertices' distances to the mesh (exact below the margin, lower bounds
+/// above; NaN where unknown).
 pub fn simplify(
     surface: Surface,
+    clearances: Vec<f64>,
+    guide: &CageGuide,
     stop: StopAt,
     constraints: CollapseConstraints<'_>,
 ) -> Simplified {
@@ -140,11 +198,17 @@ pub fn simplify(
         triangles: faces,
     } = surface;
     let num_vertices = positions.len();
+    let num_faces = faces.len();
     let mut state = State {
         quadrics: vec![Quadric::default(); num_vertices],
         vertex_faces: vec![Vec::new(); num_vertices],
         vertex_alive: vec![true; num_vertices],
         versions: vec![0; num_vertices],
+        clearance: if clearances.len() == num_vertices {
+            clearances
+        } else {
+            vec![f64::NAN; num_vertices]
+        },
         face_alive: vec![true; faces.len()],
         hash: TriangleHash::new(Aabb::EMPTY.expanded(-1.0), 1.0),
         positions,
@@ -152,6 +216,11 @@ pub fn simplify(
         constraints,
         rejections: 0,
         quality_floor: MIN_SHAPE_QUALITY,
+        scratch: Scratch {
+            old_face_stamp: vec![0; num_faces],
+            ..Scratch::default()
+        },
+        scratch_boxes: Vec::new(),
     };
     for (f, tri) in state.faces.iter().enumerate() {
         let corners = tri.map(|v| state.positions[v as usize]);
@@ -165,6 +234,20 @@ pub fn simplify(
         }
         for &v in tri {
             state.vertex_faces[v as usize].push(f as u32);
+        }
+    }
+    if !guide.planes.is_empty() {
+        // Guide planes (skeleton_guide): band = the mean edge length, weight ∝ mean area.
+        let (mut area, mut edge) = (0.0, 0.0);
+        for tri in &state.faces {
+            let c = tri.map(|v| state.positions[v as usize]);
+            area += 0.5 * area_normal(c).length();
+            edge += c[0].distance(c[1]);
+        }
+        let n = state.faces.len().max(1) as f64;
+        let (area, band) = (area / n, edge / n);
+        for (q, p) in state.quadrics.iter_mut().zip(&state.positions) {
+            *q = *q + guide.quadric_at(*p, band, GUIDE_WEIGHT * area);
         }
     }
     state.rebuild_hash();
@@ -303,7 +386,7 @@ impl State<'_> {
     fn candidate(&self, a: u32, b: u32) -> Candidate {
         let positions = self.candidate_positions(a as usize, b as usize);
         Candidate {
-            cost: positions[0].0,
+            cost: positions.items[0].0,
             a,
             b,
             version_a: self.versions[a as usize],
@@ -313,21 +396,38 @@ impl State<'_> {
 
     /// The quadric minimiser (when well defined and near the edge), the midpoint and both ends,
     /// cheapest first.
-    fn candidate_positions(&self, a: usize, b: usize) -> Vec<(f64, DVec3)> {
+    fn candidate_positions(&self, a: usize, b: usize) -> Positions {
         let q = self.quadrics[a] + self.quadrics[b];
         let (pa, pb) = (self.positions[a], self.positions[b]);
         let mid = 0.5 * (pa + pb);
-        let mut out = Vec::with_capacity(4);
+        let mut out = Positions {
+            items: [(0.0, DVec3::ZERO); 4],
+            len: 0,
+        };
         if let Some(x) = q.minimiser()
             && x.distance(mid) <= 2.0 * pa.distance(pb)
         {
-            out.push((q.evaluate(x), x));
+            out.items[0] = (q.evaluate(x), x);
+            out.len = 1;
         }
         for p in [mid, pa, pb] {
-            out.push((q.evaluate(p), p));
+            out.items[out.len] = (q.evaluate(p), p);
+            out.len += 1;
         }
-        out.sort_by(|x, y| x.0.total_cmp(&y.0));
+        out.items[..out.len].sort_by(|x, y| x.0.total_cmp(&y.0));
         out
+    }
+
+    /// Distance of cage vertex `v` to the mesh (cached).
+    pub(super) fn clearance(&mut self, v: u32) -> f64 {
+        let d = &mut self.clearance[v as usize];
+        if d.is_nan() {
+            *d = self
+                .constraints
+                .mesh
+                .nearest_distance(self.positions[v as usize], f64::INFINITY);
+        }
+        *d
     }
 
     fn corners(&self, tri: [u32; 3]) -> Triangle {
@@ -337,68 +437,24 @@ impl State<'_> {
     /// Tries the candidate positions of edge (a, b) in order; applies the first that keeps
     /// every constraint.
     fn try_collapse(&mut self, a: usize, b: usize) -> bool {
-        let (a32, b32) = (a as u32, b as u32);
-        let star_a = &self.vertex_faces[a];
-        let star_b = &self.vertex_faces[b];
-        let shared: Vec<u32> = star_a
-            .iter()
-            .copied()
-            .filter(|f| star_b.contains(f))
-            .collect();
-        if shared.len() != 2 {
+        if !self.gather_star(a as u32, b as u32) {
             return false;
         }
-        // Link condition: the common neighbours of a and b are exactly the two opposite corners.
-        let neighbours = |star: &[u32], v: u32| -> Vec<u32> {
-            let mut n: Vec<u32> = star
-                .iter()
-                .flat_map(|&f| self.faces[f as usize])
-                .filter(|&x| x != v)
-                .collect();
-            n.sort_unstable();
-            n.dedup();
-            n
-        };
-        let (na, nb) = (neighbours(star_a, a32), neighbours(star_b, b32));
-        let common = na.iter().filter(|x| nb.binary_search(x).is_ok()).count();
-        if common != 2 || na.len() + nb.len() - common - 2 < 3 {
-            return false;
-        }
-        // Old star (all faces around a or b) and the surviving faces with b renamed a.
-        let mut old_faces: Vec<u32> = star_a.clone();
-        old_faces.extend(star_b.iter().filter(|f| !shared.contains(f)));
-        let kept: Vec<u32> = old_faces
-            .iter()
-            .copied()
-            .filter(|f| !shared.contains(f))
-            .collect();
-        let new_ids: Vec<[u32; 3]> = kept
-            .iter()
-            .map(|&f| self.faces[f as usize].map(|v| if v == b32 { a32 } else { v }))
-            .collect();
-        let old_corners: Vec<Triangle> = old_faces
-            .iter()
-            .map(|&f| self.corners(self.faces[f as usize]))
-            .collect();
-        let kept_old: Vec<Triangle> = kept
-            .iter()
-            .map(|&f| self.corners(self.faces[f as usize]))
-            .collect();
-        for (_, p) in self.candidate_positions(a, b) {
-            let new_corners: Vec<Triangle> = new_ids
-                .iter()
-                .map(|tri| {
-                    tri.map(|v| {
-                        if v == a32 {
-                            p
-                        } else {
-                            self.positions[v as usize]
-                        }
-                    })
-                })
-                .collect();
-            if self.acceptable(&old_faces, &old_corners, &kept_old, &new_ids, &new_corners) {
-                self.apply(a, b, p, &shared, &kept);
+        let positions = self.candidate_positions(a, b);
+        for &(_, p) in positions.as_slice() {
+            let clearance = if p == self.positions[a] {
+                self.clearance(a as u32)
+            } else if p == self.positions[b] {
+                self.clearance(b as u32)
+            } else {
+                f64::NAN
+            };
+            self.place_new_vertex(a as u32, p, clearance);
+            if self.acceptable(a as u32, b as u32, p) {
+                let s = std::mem::take(&mut self.scratch);
+                self.apply(a, b, p, &s.shared, &s.kept);
+                self.clearance[a] = s.new_vertex_clearance;
+                self.scratch = s;
                 return true;
             }
             self.rejections += 1;
@@ -406,95 +462,95 @@ impl State<'_> {
         false
     }
 
-    fn acceptable(
-        &mut self,
-        old_faces: &[u32],
-        old_corners: &[Triangle],
-        kept_old: &[Triangle],
-        new_ids: &[[u32; 3]],
-        new_corners: &[Triangle],
-    ) -> bool {
-        let c = self.constraints;
-        // 2. No flip, no degenerate triangle, no sliver worse than the star already had.
-        let worst_old = kept_old
-            .iter()
-            .map(|t| shape_quality(*t))
-            .fold(1.0, f64::min);
-        let min_quality = self.quality_floor.min(worst_old);
-        if new_corners.iter().any(|t| shape_quality(*t) < min_quality) {
+    /// Fills the scratch star of edge (a, b); `false` when the collapse would break
+    /// manifoldness (link condition) or leave a tetrahedron.
+    fn gather_star(&mut self, a: u32, b: u32) -> bool {
+        let s = &mut self.scratch;
+        let (star_a, star_b) = (
+            &self.vertex_faces[a as usize],
+            &self.vertex_faces[b as usize],
+        );
+        s.shared.clear();
+        s.shared
+            .extend(star_a.iter().copied().filter(|f| star_b.contains(f)));
+        if s.shared.len() != 2 {
             return false;
         }
-        for (old, new) in kept_old.iter().zip(new_corners) {
-            let (n_old, n_new) = (area_normal(*old), area_normal(*new));
-            let scale = (new[1] - new[0])
-                .length_squared()
-                .max((new[2] - new[0]).length_squared());
-            if n_new.length() <= 1e-10 * scale || n_new.dot(n_old) <= 0.0 {
-                return false;
-            }
-        }
-        // 3. Margin to the mesh.
-        if new_corners
-            .iter()
-            .any(|t| !c.mesh.clear_of(*t, c.margin, CLEARANCE_DEPTH))
-        {
+        // Link condition: the common neighbours of a and b are exactly the two opposite corners.
+        let faces = &self.faces;
+        let neighbours = |out: &mut Vec<u32>, star: &[u32], v: u32| {
+            out.clear();
+            out.extend(
+                star.iter()
+                    .flat_map(|&f| faces[f as usize])
+                    .filter(|&x| x != v),
+            );
+            out.sort_unstable();
+            out.dedup();
+        };
+        neighbours(&mut s.neighbours_a, star_a, a);
+        neighbours(&mut s.neighbours_b, star_b, b);
+        let (na, nb) = (&s.neighbours_a, &s.neighbours_b);
+        let common = na.iter().filter(|x| nb.binary_search(x).is_ok()).count();
+        if common != 2 || na.len() + nb.len() - common - 2 < 3 {
             return false;
         }
-        // 4. No self-intersection, new vs new and new vs the rest of the cage.
-        for i in 0..new_ids.len() {
-            for j in i + 1..new_ids.len() {
-                if cage_triangles_conflict(
-                    new_corners[i],
-                    new_ids[i],
-                    new_corners[j],
-                    new_ids[j],
-                    c.separation,
-                ) {
-                    return false;
-                }
-            }
+        s.link.clear();
+        s.link
+            .extend(na.iter().chain(nb).filter(|&&x| x != a && x != b));
+        s.link.sort_unstable();
+        s.link.dedup();
+        // Old star (all faces around a or b) and the surviving faces with b renamed a.
+        s.old_faces.clear();
+        s.old_faces.extend(star_a);
+        s.old_faces
+            .extend(star_b.iter().filter(|f| !s.shared.contains(f)));
+        s.kept.clear();
+        s.kept
+            .extend(s.old_faces.iter().filter(|f| !s.shared.contains(f)));
+        s.new_ids.clear();
+        s.new_ids.extend(
+            s.kept
+                .iter()
+                .map(|&f| faces[f as usize].map(|v| if v == b { a } else { v })),
+        );
+        let positions = &self.positions;
+        let corners = |f: &u32| faces[*f as usize].map(|v| positions[v as usize]);
+        s.old_corners.clear();
+        s.old_corners.extend(s.old_faces.iter().map(corners));
+        s.kept_old.clear();
+        s.kept_old.extend(s.kept.iter().map(corners));
+        s.stamp = s.stamp.wrapping_add(1);
+        if s.stamp == 0 {
+            s.old_face_stamp.iter_mut().for_each(|x| *x = 0);
+            s.stamp = 1;
         }
-        for (ids, corners) in new_ids.iter().zip(new_corners) {
-            let query = Aabb::of_triangle(corners).expanded(c.separation);
-            let mut conflict = false;
-            let (faces, face_alive, positions) = (&self.faces, &self.face_alive, &self.positions);
-            self.hash.query(&query, |f| {
-                if conflict || !face_alive[f as usize] || old_faces.contains(&f) {
-                    return;
-                }
-                let other = faces[f as usize];
-                let other_corners = other.map(|v| positions[v as usize]);
-                if Aabb::of_triangle(&other_corners).overlaps(&query)
-                    && cage_triangles_conflict(*corners, *ids, other_corners, other, c.separation)
-                {
-                    conflict = true;
-                }
-            });
-            if conflict {
-                return false;
-            }
+        for &f in &s.old_faces {
+            s.old_face_stamp[f as usize] = s.stamp;
         }
-        // 5. No mesh piece swept across.
-        let region = old_corners
-            .iter()
-            .chain(new_corners)
-            .fold(Aabb::EMPTY, |b, t| b.union(Aabb::of_triangle(t)));
-        for &point in c.piece_points {
-            if region.contains(point) {
-                let swept: f64 = old_corners
-                    .iter()
-                    .map(|t| solid_angle(point, *t))
-                    .sum::<f64>()
-                    - new_corners
-                        .iter()
-                        .map(|t| solid_angle(point, *t))
-                        .sum::<f64>();
-                if swept.abs() > 2.0 * std::f64::consts::PI {
-                    return false;
-                }
-            }
+        // Cache the link vertices' distances to the mesh.
+        for k in 0..self.scratch.link.len() {
+            let v = self.scratch.link[k];
+            self.clearance(v);
         }
         true
+    }
+
+    /// Fills the scratch's new corners for the collapsed vertex `a` at `p`, whose distance to
+    /// the mesh is `clearance` (NaN when not known yet).
+    fn place_new_vertex(&mut self, a: u32, p: DVec3, clearance: f64) {
+        let s = &mut self.scratch;
+        s.new_corners.clear();
+        for tri in &s.new_ids {
+            s.new_corners.push(tri.map(|v| {
+                if v == a {
+                    p
+                } else {
+                    self.positions[v as usize]
+                }
+            }));
+        }
+        s.new_vertex_clearance = clearance;
     }
 
     fn apply(&mut self, a: usize, b: usize, p: DVec3, shared: &[u32], kept: &[u32]) {
@@ -519,7 +575,8 @@ impl State<'_> {
         self.quadrics[a] = self.quadrics[a] + self.quadrics[b];
         self.vertex_alive[b] = false;
         self.vertex_faces[b].clear();
-        self.vertex_faces[a] = kept.to_vec();
+        self.vertex_faces[a].clear();
+        self.vertex_faces[a].extend_from_slice(kept);
         self.versions[a] = self.versions[a].wrapping_add(1);
         for &f in kept {
             self.hash.remove(f);

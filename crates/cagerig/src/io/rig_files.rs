@@ -8,6 +8,7 @@ use super::discovery::discover;
 use super::error::ParseError;
 use super::text::FloatFormat;
 use crate::cage_coords::CageCoords;
+use crate::cage_gen::{CageOptions, GeneratedCage, generate_cage};
 use crate::error::Warning;
 use crate::session::RigParts;
 
@@ -21,12 +22,35 @@ pub struct RigFiles {
     pub warnings: Vec<Warning>,
     /// The shipped MaxVol selection file, if one was found.
     pub maxvol_path: Option<PathBuf>,
+    /// The cage generated because none was found ([`MissingCage::Generate`]), with its
+    /// validation report and figures; `parts.cage` is this cage.
+    pub generated_cage: Option<GeneratedCage>,
+}
+
+/// What [`load_rig_files_or_generate`] does when no cage is found beside the mesh (and none is
+/// given).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MissingCage {
+    /// Fail, naming the files looked for.
+    Fail,
+    /// Generate one ([`generate_cage`]); files that belong to a cage (Φ, MaxVol rows) are then
+    /// not read, since they would describe another cage.
+    Generate(CageOptions),
 }
 
 /// Reads `mesh` (OBJ) and its companions. The skeleton (`.skt`), the skinning weights (`.skw`)
 /// and the cage are required; Φ, MaxVol rows and CoR weights are optional (computed later).
 pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, ParseError> {
-    let found = discover(mesh, cage);
+    load_rig_files_or_generate(mesh, cage, MissingCage::Fail)
+}
+
+/// [`load_rig_files`], with a choice of what happens when the rig has no cage.
+pub fn load_rig_files_or_generate(
+    mesh: &Path,
+    cage: Option<&Path>,
+    missing_cage: MissingCage,
+) -> Result<RigFiles, ParseError> {
+    let mut found = discover(mesh, cage);
     let missing = |what: &str, expected: String| ParseError::Io {
         path: mesh.to_path_buf(),
         kind: std::io::ErrorKind::NotFound,
@@ -54,12 +78,28 @@ pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, Pars
         super::skw::read_skw(&weights_path, mesh_data.num_vertices(), skeleton.len())?;
     files.push(("skin_weights", weights_path));
     warnings.append(&mut mesh_warnings);
-    let cage_path = found
-        .cage
-        .clone()
-        .ok_or_else(|| missing("cage", format!("{stem}_cage.obj or --cage")))?;
-    let cage_data = super::obj::read_obj(&cage_path)?;
-    files.push(("cage", cage_path));
+    let (cage_data, generated_cage) = match (&found.cage, missing_cage) {
+        (Some(cage_path), _) => {
+            let cage_data = super::obj::read_obj(cage_path)?;
+            files.push(("cage", cage_path.clone()));
+            (cage_data, None)
+        }
+        (None, MissingCage::Fail) => {
+            return Err(missing("cage", format!("{stem}_cage.obj or --cage")));
+        }
+        (None, MissingCage::Generate(options)) => {
+            let generated = generate_cage(&mesh_data, &options).map_err(|e| ParseError::Rig {
+                path: mesh.to_path_buf(),
+                source: crate::error::RigError::Invalid(format!(
+                    "no cage found beside the mesh, and none could be generated: {e}"
+                )),
+            })?;
+            // Φ and MaxVol rows found beside the mesh belong to another cage.
+            found.cage_coords = None;
+            found.maxvol = None;
+            (generated.cage.clone(), Some(generated))
+        }
+    };
     let nv = mesh_data.num_vertices();
     let nc = cage_data.num_vertices();
     let cage_coords = match &found.cage_coords {
@@ -120,6 +160,7 @@ pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, Pars
         files,
         warnings,
         maxvol_path: found.maxvol,
+        generated_cage,
     })
 }
 
