@@ -122,6 +122,9 @@ pub struct Dialogs {
     pub help: bool,
     /// A recovery file offered at start.
     pub recovery: Option<PathBuf>,
+    /// File > Open: generate a cage (of `cage_vertices` vertices) when the character has none.
+    pub generate_cage: bool,
+    pub cage_vertices: usize,
 }
 
 /// The editor.
@@ -654,7 +657,17 @@ impl StudioApp {
         if is_session {
             self.open_session(path);
         } else {
-            self.open(RigSource::file(path));
+            let vertices = if self.dialogs.cage_vertices == 0 {
+                100
+            } else {
+                self.dialogs.cage_vertices
+            };
+            self.open(RigSource::File {
+                path: path.to_path_buf(),
+                cage: None,
+                skin: None,
+                auto_cage: self.dialogs.generate_cage.then_some(vertices),
+            });
         }
     }
 

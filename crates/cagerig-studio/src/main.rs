@@ -20,6 +20,12 @@ struct Args {
     /// The cage (OBJ) of the character, instead of the discovered or embedded one.
     #[arg(long, requires = "path")]
     cage: Option<PathBuf>,
+    /// When the character has no cage, generate one (as `cagerig cage`).
+    #[arg(long, requires = "path")]
+    auto_cage: bool,
+    /// Vertex count of a generated cage.
+    #[arg(long, default_value_t = 100, requires = "auto_cage")]
+    cage_vertices: usize,
     /// A built-in demo rig instead of a file (bar, bar_irregular, snake).
     #[arg(long, conflicts_with = "path")]
     builtin: Option<String>,
@@ -117,6 +123,7 @@ fn run(args: Args) -> anyhow::Result<()> {
                 path: p.clone(),
                 cage: args.cage.clone(),
                 skin: None,
+                auto_cage: args.auto_cage.then_some(args.cage_vertices),
             }),
             None,
         ),

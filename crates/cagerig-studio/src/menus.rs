@@ -309,6 +309,20 @@ pub fn dialogs_ui(app: &mut StudioApp, ctx: &egui::Context) {
                 );
                 path_browser_ui(ui, &mut path);
                 ui.horizontal(|ui| {
+                    ui.checkbox(
+                        &mut app.dialogs.generate_cage,
+                        "Generate a cage if the character has none, with",
+                    );
+                    if app.dialogs.cage_vertices == 0 {
+                        app.dialogs.cage_vertices = 100;
+                    }
+                    ui.add(
+                        egui::DragValue::new(&mut app.dialogs.cage_vertices)
+                            .range(8..=5000)
+                            .suffix(" vertices"),
+                    );
+                });
+                ui.horizontal(|ui| {
                     if ui.button("Open").clicked() {
                         app.open_path(Path::new(path.trim()));
                         keep = false;

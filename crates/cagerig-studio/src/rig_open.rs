@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use cagerig::Warning;
+use cagerig::cage_gen::{CageOptions, CageTarget};
+use cagerig::io::rig_files::MissingCage;
 use cagerig::session::{RigParts, RigSession, SessionOptions};
 use cagerig_formats::{ImportOptions, ImportedAnimation};
 use serde::{Deserialize, Serialize};
@@ -24,6 +26,10 @@ pub enum RigSource {
         path: PathBuf,
         cage: Option<PathBuf>,
         skin: Option<String>,
+        /// When no cage is found (beside an OBJ, or in a glTF / FBX file), generate one with
+        /// this many vertices (`cagerig cage`'s method and default margin).
+        #[serde(default)]
+        auto_cage: Option<usize>,
     },
 }
 
@@ -44,6 +50,7 @@ impl RigSource {
             path: path.into(),
             cage: None,
             skin: None,
+            auto_cage: None,
         }
     }
 
@@ -73,11 +80,17 @@ pub enum OpenError {
     #[error(transparent)]
     Import(#[from] cagerig_formats::FormatError),
     #[error(
-        "{path}: no cage: give one with --cage CAGE.obj, or add a mesh node named `<name>_cage` \
-         to the file",
+        "{path}: no cage: give one with --cage CAGE.obj, generate one (--auto-cage, or \
+         \"generate a cage\" in File > Open), or add a mesh node named `<name>_cage` to the file",
         path = path.display()
     )]
     NoCage { path: PathBuf },
+    #[error("{path}: no cage in the file, and none could be generated: {source}", path = path.display())]
+    Generate {
+        path: PathBuf,
+        #[source]
+        source: cagerig::cage_gen::CageGenError,
+    },
     #[error("{name}: assembling the rig: {source}")]
     Rig {
         name: String,
@@ -111,17 +124,36 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
             let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
             (parts, Vec::new(), Vec::new(), Vec::new())
         }
-        RigSource::File { path, cage, skin } if cagerig_formats::format_of(path).is_some() => {
-            import_interchange(path, cage.as_deref(), skin.as_deref())?
+        RigSource::File {
+            path,
+            cage,
+            skin,
+            auto_cage,
+        } if cagerig_formats::format_of(path).is_some() => {
+            import_interchange(path, cage.as_deref(), skin.as_deref(), *auto_cage)?
         }
-        RigSource::File { path, cage, .. } => {
-            let rig = cagerig::io::rig_files::load_rig_files(path, cage.as_deref())?;
+        RigSource::File {
+            path,
+            cage,
+            auto_cage,
+            ..
+        } => {
+            let missing = match auto_cage {
+                Some(n) => MissingCage::Generate(cage_options(*n)),
+                None => MissingCage::Fail,
+            };
+            let rig =
+                cagerig::io::rig_files::load_rig_files_or_generate(path, cage.as_deref(), missing)?;
+            let mut warnings = rig.warnings;
+            if let Some(g) = &rig.generated_cage {
+                warnings.push(generated_note(g));
+            }
             let files = rig
                 .files
                 .into_iter()
                 .map(|(role, p)| (role.to_string(), p))
                 .collect();
-            (rig.parts, rig.warnings, files, Vec::new())
+            (rig.parts, warnings, files, Vec::new())
         }
     };
     let name = source.display_name();
@@ -144,10 +176,30 @@ type Imported = (
     Vec<ImportedAnimation>,
 );
 
+fn cage_options(vertices: usize) -> CageOptions {
+    CageOptions {
+        target: CageTarget::Vertices(vertices),
+        ..CageOptions::default()
+    }
+}
+
+/// The log line of a generated cage.
+fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
+    Warning::Note {
+        message: format!(
+            "no cage was found: generated one with {} vertices (least distance to the mesh {:.2} % \
+         of its diagonal); File > Export writes it as cage_rest.obj",
+            g.cage.num_vertices(),
+            100.0 * g.report.min_distance_fraction
+        ),
+    }
+}
+
 fn import_interchange(
     path: &Path,
     cage: Option<&Path>,
     skin: Option<&str>,
+    auto_cage: Option<usize>,
 ) -> Result<Imported, OpenError> {
     let options = ImportOptions {
         skin: skin.map(str::to_owned),
@@ -155,13 +207,23 @@ fn import_interchange(
     };
     let character = cagerig_formats::import_character(path, &options)?;
     let mut files = vec![("character".to_string(), path.to_path_buf())];
-    let cage_mesh = match (cage, character.cage) {
-        (Some(c), _) => {
+    let mut warnings = character.warnings;
+    let cage_mesh = match (cage, character.cage, auto_cage) {
+        (Some(c), _, _) => {
             files.push(("cage".into(), c.to_path_buf()));
             cagerig::io::obj::read_obj(c)?
         }
-        (None, Some(c)) => c,
-        (None, None) => {
+        (None, Some(c), _) => c,
+        (None, None, Some(n)) => {
+            let generated = cagerig::cage_gen::generate_cage(&character.mesh, &cage_options(n))
+                .map_err(|source| OpenError::Generate {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+            warnings.push(generated_note(&generated));
+            generated.cage
+        }
+        (None, None, None) => {
             return Err(OpenError::NoCage {
                 path: path.to_path_buf(),
             });
@@ -174,7 +236,7 @@ fn import_interchange(
             character.skin_weights,
             cage_mesh,
         ),
-        character.warnings,
+        warnings,
         files,
         character.animations,
     ))
@@ -211,6 +273,7 @@ mod tests {
             path: format!("{fox}/Fox.glb").into(),
             cage: Some(format!("{fox}/Fox_cage.obj").into()),
             skin: None,
+            auto_cage: None,
         })
         .unwrap();
         assert!(opened.session.rest_mesh().len() > 1000);
@@ -222,6 +285,22 @@ mod tests {
             Ok(_) => panic!("opened the Fox without a cage"),
         };
         assert!(err.contains("Fox.glb") && err.contains("--cage"), "{err}");
+        // Or with a generated one.
+        let opened = open_rig(&RigSource::File {
+            path: format!("{fox}/Fox.glb").into(),
+            cage: None,
+            skin: None,
+            auto_cage: Some(80),
+        })
+        .unwrap();
+        let n = opened.session.rest_cage().len();
+        assert!((72..=88).contains(&n), "{n} cage vertices");
+        assert!(
+            opened
+                .warnings
+                .iter()
+                .any(|w| w.to_string().contains("generated"))
+        );
     }
 
     #[test]

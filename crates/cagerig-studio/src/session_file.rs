@@ -179,10 +179,16 @@ impl SessionFile {
 /// File sources with absolute paths, so a session opens from any working directory.
 fn absolute_source(source: RigSource) -> RigSource {
     match source {
-        RigSource::File { path, cage, skin } => RigSource::File {
+        RigSource::File {
+            path,
+            cage,
+            skin,
+            auto_cage,
+        } => RigSource::File {
             path: std::path::absolute(&path).unwrap_or(path),
             cage: cage.map(|c| std::path::absolute(&c).unwrap_or(c)),
             skin,
+            auto_cage,
         },
         builtin => builtin,
     }
