@@ -158,6 +158,8 @@ pub struct StudioApp {
     pub render_error: Option<String>,
     pub quit_requested: bool,
     pub numeric: crate::inspector::NumericEntry,
+    /// Animations of the open glTF / FBX character (File > Load animation).
+    pub animations: Vec<cagerig_formats::ImportedAnimation>,
 }
 
 /// Index of the current-pose view in [`StudioApp::views`].
@@ -201,6 +203,7 @@ impl StudioApp {
             render_error: None,
             quit_requested: false,
             numeric: Default::default(),
+            animations: Vec::new(),
         };
         if app.renderer.is_none() {
             app.log_error(
@@ -317,7 +320,8 @@ impl StudioApp {
                 }
                 if !opened.animations.is_empty() {
                     self.log_info(format!(
-                        "{} animation(s) in the file: {} (use cagerig animate / render --animation)",
+                        "{} animation(s) in the file: {} (File > Load animation puts one on the \
+                         skeleton track)",
                         opened.animations.len(),
                         opened
                             .animations
@@ -331,6 +335,7 @@ impl StudioApp {
                     self.state_dir.add_recent(path);
                 }
                 self.set_document(Document::new(source, opened.session));
+                self.animations = opened.animations;
                 self.session_path = None;
             }
             Err(e) => self.log_error(format!("cannot open: {e}")),
@@ -339,6 +344,7 @@ impl StudioApp {
 
     fn set_document(&mut self, doc: Document) {
         self.doc = Some(doc);
+        self.animations.clear();
         self.selection = Selection::default();
         self.interaction = Interaction::default();
         self.timeline = TimelineState::default();

@@ -365,6 +365,33 @@ impl Keys {
         Ok(self.skeleton.len())
     }
 
+    /// Replaces the skeleton keys with an imported (glTF / FBX) animation's track of local
+    /// transforms, every channel kept (rotation, scale, translation of every joint).
+    pub fn set_skeleton_track(&mut self, track: &SkeletonTrack, session: &RigSession) -> usize {
+        let original = original_local_translations(session);
+        self.skeleton = track
+            .times()
+            .iter()
+            .zip(track.keys())
+            .map(|(&time, locals)| {
+                let mut key = SkeletonKey {
+                    time,
+                    rotations: Vec::with_capacity(locals.len()),
+                    scales: Vec::with_capacity(locals.len()),
+                    translation_offsets: Vec::with_capacity(locals.len()),
+                };
+                for (local, o) in locals.iter().zip(&original) {
+                    let (scale, rotation, translation) = local.to_scale_rotation_translation();
+                    key.rotations.push(rotation);
+                    key.scales.push(scale);
+                    key.translation_offsets.push(translation - *o);
+                }
+                key
+            })
+            .collect();
+        self.skeleton.len()
+    }
+
     /// Replaces the cage keys with a cage animation file (offsets from C₀).
     pub fn import_cage_animation(
         &mut self,

@@ -126,6 +126,16 @@ fn file_menu_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
     {
         app.dialogs.export_dir = Some(format!("{}cagerig-export", cwd_string()));
     }
+    let names: Vec<String> = app.animations.iter().map(|a| a.name.clone()).collect();
+    ui.add_enabled_ui(!names.is_empty(), |ui| {
+        ui.menu_button("Load animation of the character", |ui| {
+            for (i, name) in names.iter().enumerate() {
+                if ui.button(name).clicked() {
+                    app.load_character_animation(i);
+                }
+            }
+        });
+    });
     if ui.button("Import skeleton animation…").clicked() {
         app.dialogs.import_animation = Some((Track::Skeleton, cwd_string()));
     }
@@ -449,6 +459,26 @@ impl StudioApp {
                 dir.display()
             )),
             Err(e) => self.log_error(format!("export: {e}")),
+        }
+    }
+
+    /// Puts animation `index` of the glTF / FBX character on the skeleton track (one undo step).
+    pub fn load_character_animation(&mut self, index: usize) {
+        let Some(animation) = self.animations.get(index) else {
+            return;
+        };
+        let name = animation.name.clone();
+        let Some(doc) = &mut self.doc else { return };
+        let mut snapshot = doc.snapshot();
+        let n = snapshot
+            .keys
+            .set_skeleton_track(&animation.track, &doc.session);
+        match doc.restore_as_step("load animation", &snapshot) {
+            Ok(()) => {
+                self.timeline.time = 0.0;
+                self.log_info(format!("animation {name:?}: {n} skeleton keys"));
+            }
+            Err(e) => self.log_error(format!("animation {name:?}: {e}")),
         }
     }
 

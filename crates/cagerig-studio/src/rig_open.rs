@@ -279,6 +279,31 @@ mod tests {
         assert!(opened.session.rest_mesh().len() > 1000);
         assert!(opened.session.skeleton().len() > 10);
         assert!(!opened.animations.is_empty());
+        // An imported animation plays from the editor's keys as from the file.
+        let mut session = opened.session;
+        let mut keys = crate::keys::Keys::default();
+        let walk = &opened.animations[0];
+        let n = keys.set_skeleton_track(&walk.track, &session);
+        assert_eq!(n, walk.track.num_keyframes());
+        let mut from_keys = keys.player(&session).unwrap().unwrap();
+        let mut from_file = cagerig::playback::AnimationPlayer::with_channels(
+            &session,
+            Some(walk.track.clone()),
+            None,
+            cagerig::playback::PoseChannels::Full,
+        )
+        .unwrap();
+        let t = 0.37 * walk.duration;
+        from_file.apply(t, &mut session).unwrap();
+        let expected = session.posed_mesh().to_vec();
+        from_keys.apply(t, &mut session).unwrap();
+        let diagonal = {
+            let (lo, hi) = cagerig::mesh::bounding_box(&expected);
+            (hi - lo).length()
+        };
+        for (a, b) in session.posed_mesh().iter().zip(&expected) {
+            assert!(a.distance(*b) < 1e-9 * diagonal, "{a} vs {b}");
+        }
         // Without a cage (none in the file) the message says how to give one.
         let err = match open_rig(&RigSource::file(format!("{fox}/Fox.glb"))) {
             Err(e) => e.to_string(),
