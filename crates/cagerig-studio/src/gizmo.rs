@@ -284,11 +284,7 @@ mod tests {
     use cagerig_render::OrbitCamera;
 
     fn view() -> ViewProjection {
-        ViewProjection::new(
-            OrbitCamera::looking_at(DVec3::new(0.0, 0.0, 10.0), DVec3::ZERO),
-            400.0,
-            400.0,
-        )
+        crate::picking::test_view(400.0, 400.0)
     }
 
     #[test]

@@ -307,108 +307,101 @@ fn path_browser_ui(ui: &mut egui::Ui, path: &mut String) {
         });
 }
 
+/// What a path window's buttons asked for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PathAction {
+    None,
+    Act,
+    Cancel,
+}
+
+/// A window with an explanation, a path field with its folder's entries, `extra` widgets, and
+/// an action button and Cancel.
+fn path_window_ui(
+    ctx: &egui::Context,
+    title: &str,
+    note: Option<&str>,
+    path: &mut String,
+    action: &str,
+    extra: impl FnOnce(&mut egui::Ui),
+) -> PathAction {
+    let mut clicked = PathAction::None;
+    egui::Window::new(title).collapsible(false).show(ctx, |ui| {
+        if let Some(note) = note {
+            ui.label(note);
+        }
+        path_browser_ui(ui, path);
+        extra(ui);
+        ui.horizontal(|ui| {
+            if ui.button(action).clicked() {
+                clicked = PathAction::Act;
+            }
+            if ui.button("Cancel").clicked() {
+                clicked = PathAction::Cancel;
+            }
+        });
+    });
+    clicked
+}
+
 /// The dialogs.
 pub fn dialogs_ui(app: &mut StudioApp, ctx: &egui::Context) {
     if let Some(mut path) = app.dialogs.open.take() {
-        let mut keep = true;
-        egui::Window::new("Open")
-            .collapsible(false)
-            .show(ctx, |ui| {
-                ui.label(
-                    "A character (.obj with companions, .glb, .gltf, .fbx) or a session (.cagerig)",
-                );
-                path_browser_ui(ui, &mut path);
+        let dialogs = &mut app.dialogs;
+        let action = path_window_ui(
+            ctx,
+            "Open",
+            Some("A character (.obj with companions, .glb, .gltf, .fbx) or a session (.cagerig)"),
+            &mut path,
+            "Open",
+            |ui| {
                 ui.horizontal(|ui| {
                     ui.checkbox(
-                        &mut app.dialogs.generate_cage,
+                        &mut dialogs.generate_cage,
                         "Generate a cage if the character has none, with",
                     );
-                    if app.dialogs.cage_vertices == 0 {
-                        app.dialogs.cage_vertices = 100;
+                    if dialogs.cage_vertices == 0 {
+                        dialogs.cage_vertices = 100;
                     }
                     ui.add(
-                        egui::DragValue::new(&mut app.dialogs.cage_vertices)
+                        egui::DragValue::new(&mut dialogs.cage_vertices)
                             .range(8..=5000)
                             .suffix(" vertices"),
                     );
                 });
-                ui.horizontal(|ui| {
-                    if ui.button("Open").clicked() {
-                        app.open_path(Path::new(path.trim()));
-                        keep = false;
-                    }
-                    if ui.button("Cancel").clicked() {
-                        keep = false;
-                    }
-                });
-            });
-        if keep {
-            app.dialogs.open = Some(path);
+            },
+        );
+        match action {
+            PathAction::Act => app.open_path(Path::new(path.trim())),
+            PathAction::None => app.dialogs.open = Some(path),
+            PathAction::Cancel => {}
         }
     }
     if let Some(mut path) = app.dialogs.save_as.take() {
-        let mut keep = true;
-        egui::Window::new("Save session as")
-            .collapsible(false)
-            .show(ctx, |ui| {
-                path_browser_ui(ui, &mut path);
-                ui.horizontal(|ui| {
-                    if ui.button("Save").clicked() && app.save_session_to(Path::new(path.trim())) {
-                        keep = false;
-                    }
-                    if ui.button("Cancel").clicked() {
-                        keep = false;
-                    }
-                });
-            });
-        if keep {
+        let action = path_window_ui(ctx, "Save session as", None, &mut path, "Save", |_| {});
+        let saved = action == PathAction::Act && app.save_session_to(Path::new(path.trim()));
+        if action == PathAction::None || (action == PathAction::Act && !saved) {
             app.dialogs.save_as = Some(path);
         }
     }
     if let Some(mut path) = app.dialogs.export_dir.take() {
-        let mut keep = true;
-        egui::Window::new("Export")
-            .collapsible(false)
-            .show(ctx, |ui| {
-                ui.label(
-                    "Folder for mesh_rest.obj, mesh_posed.obj, cage_rest.obj, cage_posed.obj, \
-                 joints.json, the animation files of the keys and rig.glb",
-                );
-                path_browser_ui(ui, &mut path);
-                ui.horizontal(|ui| {
-                    if ui.button("Export").clicked() {
-                        app.export_to(Path::new(path.trim()));
-                        keep = false;
-                    }
-                    if ui.button("Cancel").clicked() {
-                        keep = false;
-                    }
-                });
-            });
-        if keep {
-            app.dialogs.export_dir = Some(path);
+        let note = "Folder for mesh_rest.obj, mesh_posed.obj, cage_rest.obj, cage_posed.obj, \
+                    joints.json, the animation files of the keys and rig.glb";
+        match path_window_ui(ctx, "Export", Some(note), &mut path, "Export", |_| {}) {
+            PathAction::Act => app.export_to(Path::new(path.trim())),
+            PathAction::None => app.dialogs.export_dir = Some(path),
+            PathAction::Cancel => {}
         }
     }
     if let Some((track, mut path)) = app.dialogs.import_animation.take() {
-        let mut keep = true;
         let title = match track {
             Track::Skeleton => "Import skeleton animation",
             Track::Cage => "Import cage animation",
         };
-        egui::Window::new(title).collapsible(false).show(ctx, |ui| {
-            path_browser_ui(ui, &mut path);
-            ui.horizontal(|ui| {
-                if ui.button("Import").clicked() {
-                    app.import_animation(track, Path::new(path.trim()));
-                    keep = false;
-                }
-                if ui.button("Cancel").clicked() {
-                    keep = false;
-                }
-            });
-        });
-        if keep {
-            app.dialogs.import_animation = Some((track, path));
+        match path_window_ui(ctx, title, None, &mut path, "Import", |_| {}) {
+            PathAction::Act => app.import_animation(track, Path::new(path.trim())),
+            PathAction::None => app.dialogs.import_animation = Some((track, path)),
+            PathAction::Cancel => {}
         }
     }
     if let Some(path) = app.dialogs.recovery.clone() {

@@ -160,16 +160,22 @@ pub fn pick_box(
         .collect()
 }
 
+/// The test fixture of the picking and gizmo tests: an eye at z = 10 looking at the origin.
+#[cfg(test)]
+pub(crate) fn test_view(width: f64, height: f64) -> ViewProjection {
+    ViewProjection::new(
+        OrbitCamera::looking_at(DVec3::new(0.0, 0.0, 10.0), DVec3::ZERO),
+        width,
+        height,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn view() -> ViewProjection {
-        ViewProjection::new(
-            OrbitCamera::looking_at(DVec3::new(0.0, 0.0, 10.0), DVec3::ZERO),
-            400.0,
-            300.0,
-        )
+        crate::picking::test_view(400.0, 300.0)
     }
 
     #[test]

@@ -49,6 +49,19 @@ pub enum Picked {
 }
 
 impl StudioApp {
+    /// The skin of `view`'s pose as an occluder of picking (`None` when the skin is hidden).
+    fn skin_occluder(&self, view: usize) -> Option<Occluder<'_>> {
+        let s = &self.doc.as_ref()?.session;
+        self.layers.mesh.then(|| Occluder {
+            positions: if view == CURRENT {
+                s.posed_mesh()
+            } else {
+                s.rest_mesh()
+            },
+            triangles: s.mesh_triangles(),
+        })
+    }
+
     /// The element under `mouse` (view pixels) in view `view`: the nearest on screen of the
     /// visible joints (drawn on top) and the cage vertices not hidden by the skin.
     pub fn pick(&self, view: usize, mouse: DVec2) -> Option<Picked> {
@@ -56,14 +69,7 @@ impl StudioApp {
         let s = &doc.session;
         let projection = self.views[view].projection();
         let current = view == CURRENT;
-        let occluder = self.layers.mesh.then(|| Occluder {
-            positions: if current {
-                s.posed_mesh()
-            } else {
-                s.rest_mesh()
-            },
-            triangles: s.mesh_triangles(),
-        });
+        let occluder = self.skin_occluder(view);
         let joints: Vec<DVec3> = if current {
             s.posed_joints().collect()
         } else {
@@ -165,14 +171,7 @@ impl StudioApp {
         let s = &doc.session;
         let current = view == CURRENT;
         let projection = self.views[view].projection();
-        let occluder = self.layers.mesh.then(|| Occluder {
-            positions: if current {
-                s.posed_mesh()
-            } else {
-                s.rest_mesh()
-            },
-            triangles: s.mesh_triangles(),
-        });
+        let occluder = self.skin_occluder(view);
         let cage = if current {
             s.posed_cage()
         } else {
