@@ -81,15 +81,17 @@ fn cage_writes_a_validated_cage_that_info_accepts() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The default options on every glTF character of the shared data (the Fox: 1 728 unwelded
-/// vertices; RiggedSimple: a closed cylinder; SimpleSkin: a flat zero-thickness strip): each
-/// gets a cage that passes every check of the validator, coordinates included.
+/// The default options on every glTF and FBX character of the shared data (the Fox: 1 728
+/// unwelded vertices; RiggedSimple: a closed cylinder; SimpleSkin: a flat zero-thickness strip;
+/// Blender's FBX sausage): each gets a cage that passes every check of the validator,
+/// coordinates included.
 #[test]
-fn gltf_characters_get_validated_cages_with_default_options() {
+fn gltf_and_fbx_characters_get_validated_cages_with_default_options() {
     for file in [
         "fox/Fox.glb",
         "gltf/RiggedSimple/RiggedSimple.glb",
         "gltf/SimpleSkin/SimpleSkin.gltf",
+        "fbx/blender_279_sausage_7400_binary.fbx",
     ] {
         let out = cagerig()
             .arg("cage")
