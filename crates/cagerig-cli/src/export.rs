@@ -1,4 +1,4 @@
-//! `cagerig export RIG [--script EDITS.json] --out FILE.glb`: the (edited) character as a
+//! `cagerig export RIG [--script EDITS.json] --out FILE.glb|FILE.gltf`: the (edited) character as a
 //! standard rigged glTF binary — the rest mesh and skeleton after cage edits as the bind shape,
 //! Ω as JOINTS_n/WEIGHTS_n, the current pose as the joint nodes' transforms.
 //!
@@ -23,7 +23,8 @@ pub struct ExportArgs {
     /// Edit script replayed before exporting (as for `edit`).
     #[arg(long)]
     pub script: Option<PathBuf>,
-    /// Output `.glb` file (replaced atomically).
+    /// Output: `.glb` (binary glTF) or `.gltf` (JSON, with `<stem>.bin` written beside it);
+    /// replaced atomically.
     #[arg(long)]
     pub out: PathBuf,
     /// Skeleton animation to export (the paper tool's text format).
@@ -44,9 +45,10 @@ pub struct ExportArgs {
 
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or("");
-    if !ext.eq_ignore_ascii_case("glb") {
+    if !(ext.eq_ignore_ascii_case("glb") || ext.eq_ignore_ascii_case("gltf")) {
         bail!(
-            "{}: export writes binary glTF: give an --out path ending in .glb",
+            "{}: export writes glTF 2.0: give an --out path ending in .glb (binary) or .gltf \
+             (JSON with a .bin beside it)",
             args.out.display()
         );
     }
@@ -117,9 +119,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         &name,
     )
     .map_err(|e| anyhow::anyhow!("exporting the animation: {e}"))?;
-    cagerig::io::atomic::write_atomically(&args.out, |w| {
-        cagerig_formats::gltf::export::write_glb(w, &document, &bin)
-    })?;
+    cagerig_formats::gltf::export::write_gltf_or_glb(&args.out, &document, &bin)?;
     println!(
         "{} written: {} samples over {:.3} s in {:.1} ms",
         args.out.display(),

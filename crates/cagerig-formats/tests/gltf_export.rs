@@ -110,6 +110,34 @@ fn edited_fox_exports_validates_and_round_trips() {
     eprintln!("fox round trip: {err:e} of the diagonal");
 }
 
+/// The same character as glTF text: `.gltf` (JSON naming its buffer) + `.bin` beside it,
+/// valid, and reimported to the same structures as the binary file.
+#[test]
+fn text_gltf_export_writes_json_and_bin_that_validate_and_round_trip() {
+    let rig = cagerig::demo::builtin("bar", None).unwrap();
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+    let mut s = RigSession::new(parts, SessionOptions::default()).unwrap().0;
+    s.rotate_joint(1, DVec3::Z, 0.6).unwrap();
+    s.move_rest_cage(&[2], &[DVec3::new(0.0, 0.2, 0.0)])
+        .unwrap();
+    let path = temp_file("bar_text.gltf");
+    cagerig_formats::gltf::export::export_glb(&s, &path, "bar").unwrap();
+    let bin = path.with_file_name("bar_text.bin");
+    assert!(bin.is_file());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(json["buffers"][0]["uri"], "bar_text.bin");
+    assert_eq!(
+        json["buffers"][0]["byteLength"].as_u64().unwrap(),
+        std::fs::metadata(&bin).unwrap().len()
+    );
+    if let Some(report) = validate(&path) {
+        assert_eq!(report["errors"], 0, "{report}");
+        assert_eq!(report["warnings"], 0, "{report}");
+    }
+    check_round_trip(&s, &path);
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 8, ..ProptestConfig::default() })]
     #[test]

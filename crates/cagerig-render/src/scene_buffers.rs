@@ -24,6 +24,8 @@ struct SurfaceBuffers {
     edges: Vec<[u32; 2]>,
     normals: Vec<DVec3>,
     vertex_normals: VertexNormals,
+    /// Staging chunks of the vertex uploads, reused between frames.
+    belt: wgpu::util::StagingBelt,
     packed: Vec<MeshVertex>,
     visible: bool,
 }
@@ -52,6 +54,7 @@ impl SurfaceBuffers {
             edges: Vec::new(),
             normals: Vec::new(),
             vertex_normals: VertexNormals::default(),
+            belt: wgpu::util::StagingBelt::new(device.clone(), 4 << 20),
             packed: Vec::new(),
             visible: false,
         }
@@ -103,7 +106,11 @@ impl SurfaceBuffers {
                     color: colors.map_or([255; 4], |c| c[i]),
                 };
             });
-        created += u32::from(self.vertices.write(device, queue, &self.packed));
+        created +=
+            u32::from(
+                self.vertices
+                    .write_staged(device, queue, &mut self.belt, &self.packed),
+            );
         queue.write_buffer(&self.material, 0, bytemuck::bytes_of(&material));
         self.visible = !triangles.is_empty();
         created

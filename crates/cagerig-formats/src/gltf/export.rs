@@ -267,16 +267,56 @@ pub fn write_glb(out: &mut dyn Write, document: &Value, bin: &[u8]) -> std::io::
     Ok(())
 }
 
-/// Exports the session's current state to `path` (`.glb`), replacing it atomically.
-pub fn export_glb(session: &RigSession, path: &Path, name: &str) -> Result<(), FormatError> {
-    let (document, bin) = session_to_gltf(session, name).map_err(|message| FormatError::Io {
-        path: path.to_path_buf(),
+/// Writes a document and its binary buffer as glTF text: `path` (`.gltf`, pretty JSON) with
+/// `buffers[0].uri` naming `<stem>.bin`, written beside it. Both replace their files
+/// atomically, the `.bin` first, so a reader never sees a `.gltf` naming a missing buffer.
+pub fn write_gltf_files(path: &Path, document: &Value, bin: &[u8]) -> Result<(), FormatError> {
+    let io = |p: &Path, message: String| FormatError::Io {
+        path: p.to_path_buf(),
         message,
-    })?;
-    cagerig::io::atomic::write_atomically(path, |w| write_glb(w, &document, &bin)).map_err(|e| {
+    };
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty())
+        .ok_or_else(|| io(path, "expected a file name ending in .gltf".into()))?;
+    let bin_name = format!("{stem}.bin");
+    let bin_path = path.with_file_name(&bin_name);
+    let mut document = document.clone();
+    let buffer = document
+        .get_mut("buffers")
+        .and_then(|b| b.get_mut(0))
+        .ok_or_else(|| io(path, "the document has no buffer".into()))?;
+    buffer["uri"] = Value::String(bin_name);
+    let text = serde_json::to_vec_pretty(&document).map_err(|e| io(path, e.to_string()))?;
+    cagerig::io::atomic::write_atomically(&bin_path, |w| w.write_all(bin))
+        .map_err(|e| io(&bin_path, e.to_string()))?;
+    cagerig::io::atomic::write_atomically(path, |w| w.write_all(&text))
+        .map_err(|e| io(path, e.to_string()))
+}
+
+/// Writes `document` + `bin` as `.glb` or as `.gltf` + `.bin`, by the extension of `path`.
+pub fn write_gltf_or_glb(path: &Path, document: &Value, bin: &[u8]) -> Result<(), FormatError> {
+    let text = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
+    if text {
+        return write_gltf_files(path, document, bin);
+    }
+    cagerig::io::atomic::write_atomically(path, |w| write_glb(w, document, bin)).map_err(|e| {
         FormatError::Io {
             path: path.to_path_buf(),
             message: e.to_string(),
         }
     })
+}
+
+/// Exports the session's current state to `path` (`.glb`, or `.gltf` + `.bin`), replacing the
+/// files atomically.
+pub fn export_glb(session: &RigSession, path: &Path, name: &str) -> Result<(), FormatError> {
+    let (document, bin) = session_to_gltf(session, name).map_err(|message| FormatError::Io {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    write_gltf_or_glb(path, &document, &bin)
 }
