@@ -14,8 +14,9 @@ use clap::{Args, ValueEnum};
 use glam::DVec3;
 use serde::Serialize;
 
+use crate::output_dir::StagedDir;
 use crate::rig_source::{LoadedRig, RigArgs, load_rig};
-use crate::state_files::StateFiles;
+use crate::state_files::write_state;
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum SkinningArg {
@@ -357,24 +358,21 @@ impl DemoPictures {
         Ok(())
     }
 
-    fn write_all(&self, out: &Path) -> anyhow::Result<()> {
-        for (name, image) in &self.images {
-            let path = out.join(name);
-            image.write_png(&path)?;
-            println!(
-                "picture (rest pose left, current pose right): {}",
-                path.display()
-            );
+    /// Puts the pictures into the staged output; returns the names written.
+    fn write_staged(&self, staged: &mut StagedDir) -> anyhow::Result<Vec<String>> {
+        let mut names = Vec::new();
+        let strip = self
+            .sequence
+            .iter()
+            .map(|s| ("sequence.png".to_string(), s));
+        for (name, image) in self.images.iter().map(|(n, i)| (n.clone(), i)).chain(strip) {
+            let png = image
+                .to_png()
+                .map_err(|e| anyhow::anyhow!("encoding {name}: {e}"))?;
+            staged.write(&name, &|w| w.write_all(&png))?;
+            names.push(name);
         }
-        if let Some(strip) = &self.sequence {
-            let path = out.join("sequence.png");
-            strip.write_png(&path)?;
-            println!(
-                "picture (current pose after each step, left to right): {}",
-                path.display()
-            );
-        }
-        Ok(())
+        Ok(names)
     }
 }
 
@@ -414,9 +412,12 @@ pub fn demo(
     for w in &warnings {
         println!("warning: {w}");
     }
+    // The output folder is complete or absent: files go to a staging folder renamed to `out`
+    // at the end; an earlier demo's output there is replaced (the demo writes only its own
+    // state files and pictures, and a folder holding anything else is refused).
+    let mut staged = StagedDir::create(out, true)?;
     let mut pictures = DemoPictures::new(pictures);
-    let mut files = StateFiles::new();
-    files.add_state("0_loaded", &s)?;
+    write_state(&mut staged, "0_loaded", &s)?;
     pictures.add("0_loaded", &s)?;
     let (lo, hi) = cagerig::mesh::bounding_box(s.rest_cage());
     let centre = (lo + hi) * 0.5;
@@ -431,7 +432,7 @@ pub fn demo(
         s.skeleton().joint(joint).name,
         t.elapsed().as_secs_f64() * 1e3
     );
-    files.add_state("1_bend", &s)?;
+    write_state(&mut staged, "1_bend", &s)?;
     pictures.add("1_bend", &s)?;
 
     // 2. Inflate with the rest cage: push the cage vertices on the far half outwards.
@@ -453,7 +454,7 @@ pub fn demo(
         verts.len(),
         t.elapsed().as_secs_f64() * 1e3
     );
-    files.add_state("2_inflate", &s)?;
+    write_state(&mut staged, "2_inflate", &s)?;
     pictures.add("2_inflate", &s)?;
 
     // 3. Grab the current cage: pull the vertex farthest along +X.
@@ -472,11 +473,19 @@ pub fn demo(
         t.elapsed().as_secs_f64() * 1e3,
         s.posed_cage()[far].distance(target)
     );
-    files.add_state("3_grab", &s)?;
+    write_state(&mut staged, "3_grab", &s)?;
     pictures.add("3_grab", &s)?;
-    let n = files.write_all(out)?;
+    let picture_names = pictures.write_staged(&mut staged)?;
+    let n = staged.finish()?;
     println!("{n} files written to {}", out.display());
-    pictures.write_all(out)?;
+    for name in picture_names {
+        let what = if name == "sequence.png" {
+            "current pose after each step, left to right"
+        } else {
+            "rest pose left, current pose right"
+        };
+        println!("picture ({what}): {}", out.join(name).display());
+    }
     Ok(())
 }
 

@@ -1,11 +1,9 @@
 //! The files written for one rig state: `{prefix}_mesh_rest.obj`, `_mesh_posed.obj`,
 //! `_cage_rest.obj`, `_cage_posed.obj` (round-trip floats) and `_joints.json`. Every writer
-//! refuses non-finite numbers, so no command writes one.
+//! refuses non-finite numbers, so no command writes one. They go into a [`StagedDir`].
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use cagerig::io::obj::write_obj_to;
 use cagerig::io::text::FloatFormat;
 use cagerig::session::RigSession;
@@ -76,45 +74,4 @@ pub fn write_state(sink: &mut dyn StateSink, prefix: &str, s: &RigSession) -> an
     }
     let bytes = serde_json::to_vec_pretty(&joints)?;
     sink.put(&format!("{prefix}_joints.json"), &|w| w.write_all(&bytes))
-}
-
-/// Files of a few states kept in memory and written at the end (`demo`).
-pub struct StateFiles {
-    files: Vec<(PathBuf, Vec<u8>)>,
-}
-
-impl StateSink for StateFiles {
-    fn put(
-        &mut self,
-        name: &str,
-        write: &dyn Fn(&mut dyn Write) -> std::io::Result<()>,
-    ) -> anyhow::Result<()> {
-        let mut bytes = Vec::new();
-        write(&mut bytes).with_context(|| format!("writing {name}"))?;
-        self.files.push((PathBuf::from(name), bytes));
-        Ok(())
-    }
-}
-
-impl StateFiles {
-    pub fn new() -> Self {
-        Self { files: Vec::new() }
-    }
-
-    /// Adds the files of the session's current state (see [`write_state`]).
-    pub fn add_state(&mut self, prefix: &str, s: &RigSession) -> anyhow::Result<()> {
-        write_state(self, prefix, s)
-    }
-
-    /// Writes every file into `dir` (created if needed), each through a temporary file.
-    pub fn write_all(&self, dir: &Path) -> anyhow::Result<usize> {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("creating output directory {}", dir.display()))?;
-        for (name, bytes) in &self.files {
-            let path = dir.join(name);
-            cagerig::io::atomic::write_atomically(&path, |w| w.write_all(bytes))
-                .with_context(|| format!("writing {}", path.display()))?;
-        }
-        Ok(self.files.len())
-    }
 }

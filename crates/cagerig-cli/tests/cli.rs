@@ -219,3 +219,44 @@ fn demo_runs_and_lands_the_grab() {
     assert!(dir.join("d/3_grab_cage_posed.obj").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Regression (issue 11): the demo wrote its files one by one into `--out`; it now stages them
+/// and replaces the folder whole, so a run is complete or absent. Running it again replaces
+/// an earlier demo's output; a folder holding anything else is refused and left as it was.
+#[test]
+fn demo_output_is_staged_rerunnable_and_never_replaces_foreign_files() {
+    let dir = temp_dir("demo-staged");
+    let run = |out: &std::path::Path| {
+        cagerig()
+            .args(["demo", "--no-pictures", "--out"])
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let out = dir.join("d");
+    assert!(run(&out).status.success());
+    let again = run(&out);
+    assert!(
+        again.status.success(),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    assert!(out.join("0_loaded_mesh_rest.obj").is_file());
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(leftovers.len(), 1, "staging folders left: {leftovers:?}");
+    let mine = dir.join("mine");
+    std::fs::create_dir_all(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "keep me").unwrap();
+    let refused = run(&mine);
+    assert!(!refused.status.success());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(err.contains("notes.txt"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(mine.join("notes.txt")).unwrap(),
+        "keep me"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
