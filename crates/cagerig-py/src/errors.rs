@@ -66,3 +66,14 @@ pub fn warn_all(py: Python<'_>, warnings: &[cagerig::Warning]) -> PyResult<()> {
     }
     Ok(())
 }
+
+/// An interchange-format (glTF / FBX) error: a missing file as `FileNotFoundError`, everything
+/// else as [`RigFileError`] (the message names the file and the element).
+pub fn format_error(e: cagerig_formats::FormatError) -> PyErr {
+    match &e {
+        cagerig_formats::FormatError::Io { path, .. } if !path.exists() => {
+            PyFileNotFoundError::new_err(e.to_string())
+        }
+        _ => RigFileError::new_err(e.to_string()),
+    }
+}

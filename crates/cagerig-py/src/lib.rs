@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 mod convert;
 mod errors;
 mod functions;
+mod interchange;
 mod options;
 mod rig;
 mod rig_output;
@@ -35,6 +36,7 @@ fn _cagerig(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(functions::subdivide, m)?)?;
     m.add_function(wrap_pyfunction!(functions::read_obj, m)?)?;
     m.add_function(wrap_pyfunction!(functions::write_obj, m)?)?;
+    m.add_function(wrap_pyfunction!(interchange::generate_cage, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

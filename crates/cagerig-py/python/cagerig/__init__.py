@@ -30,6 +30,7 @@ from ._cagerig import (
     read_obj as read_obj,
     subdivide as subdivide,
     validate_cage as validate_cage,
+    generate_cage as generate_cage,
     write_obj as write_obj,
 )
 from .states import replay_script as replay_script, save_state as save_state
@@ -53,5 +54,6 @@ __all__ = [
     "save_state",
     "subdivide",
     "validate_cage",
+    "generate_cage",
     "write_obj",
 ]

@@ -10,7 +10,7 @@ import numpy.typing as npt
 
 __version__: str
 __all__ = ['RigError', 'RigFileError', 'ScriptError', 'RigWarning', 'Rig', 'EditScript', 'mvc', 'maxvol_rows',
-           'max_entropy_coordinates', 'lbs', 'dqs', 'cor', 'cor_centres', 'validate_cage', 'subdivide',
+           'max_entropy_coordinates', 'lbs', 'dqs', 'cor', 'cor_centres', 'validate_cage', 'generate_cage', 'subdivide',
            'read_obj', 'write_obj', '__version__']
 
 _F64Array = npt.NDArray[np.float64]
@@ -60,6 +60,11 @@ def cor_centres(
 def validate_cage(vertices: _ArrayLike, triangles: _ArrayLike) -> _I64Array:
     """Checks a cage (closed, manifold, oriented); returns its (possibly flipped) triangles."""
 
+def generate_cage(
+    vertices: _ArrayLike, triangles: _ArrayLike, target_vertices: int = 100, margin: Optional[float] = None
+) -> tuple[_F64Array, _I64Array]:
+    """A closed, validated cage around a triangle mesh (cagerig cage's method)."""
+
 @overload
 def subdivide(
     vertices: _ArrayLike, triangles: _ArrayLike, levels: int = 1, weights: None = None
@@ -106,6 +111,7 @@ class Rig:
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
         keep_file_coords: bool = False,
+        auto_cage: Optional[int] = None,
     ) -> Rig: ...
     @staticmethod
     def builtin(
@@ -157,6 +163,7 @@ class Rig:
     # Output.
     def save(self, directory: _PathLike, name: str = "rig") -> None: ...
     def export_obj(self, path: _PathLike, what: _Structure = "posed_mesh") -> None: ...
+    def export_gltf(self, path: _PathLike, name: str = "cagerig") -> None: ...
     # Structures.
     @property
     def rest_mesh(self) -> _F64Array: ...

@@ -1,0 +1,164 @@
+//! glTF / FBX characters and automatic cages from Python: loading a skinned character (with a
+//! generated cage when it has none), exporting a rig as glTF 2.0, and `generate_cage` over
+//! numpy arrays.
+
+use std::path::{Path, PathBuf};
+
+use cagerig::Warning;
+use cagerig::cage_gen::{CageOptions, CageTarget, GeneratedCage, generate_cage as generate};
+use cagerig::mesh::TriMesh;
+use cagerig::session::RigParts;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::convert;
+use crate::errors::{RigError, file_error, format_error, rig_error};
+use crate::rig::Rig;
+
+/// Cage options for `vertices` target vertices and an optional margin (× bbox diagonal).
+pub fn cage_options(vertices: usize, margin: Option<f64>) -> PyResult<CageOptions> {
+    if vertices < 4 {
+        return Err(PyValueError::new_err(format!(
+            "a cage needs at least 4 vertices, asked for {vertices}"
+        )));
+    }
+    let mut options = CageOptions {
+        target: CageTarget::Vertices(vertices),
+        ..CageOptions::default()
+    };
+    if let Some(m) = margin {
+        options.margin = m;
+    }
+    Ok(options)
+}
+
+/// The warning that says a cage was generated.
+pub fn generated_note(g: &GeneratedCage) -> Warning {
+    Warning::Note {
+        message: format!(
+            "no cage was found: generated one with {} vertices (least distance to the mesh {:.2} % \
+             of its diagonal)",
+            g.cage.num_vertices(),
+            100.0 * g.report.min_distance_fraction
+        ),
+    }
+}
+
+/// Rig parts of a glTF / FBX character: its cage is `cage` (OBJ), else a cage node in the file,
+/// else a generated one when `auto_cage` is given.
+pub fn load_character(
+    py: Python<'_>,
+    path: &Path,
+    cage: Option<&Path>,
+    auto_cage: Option<usize>,
+) -> PyResult<(RigParts, Vec<Warning>)> {
+    let character = py
+        .detach(|| {
+            cagerig_formats::import_character(path, &cagerig_formats::ImportOptions::default())
+        })
+        .map_err(format_error)?;
+    let mut warnings = character.warnings;
+    let cage_mesh = match (cage, character.cage, auto_cage) {
+        (Some(c), _, _) => cagerig::io::obj::read_obj(c).map_err(file_error)?,
+        (None, Some(c), _) => c,
+        (None, None, Some(n)) => {
+            let options = cage_options(n, None)?;
+            let mesh = &character.mesh;
+            let generated = py.detach(|| generate(mesh, &options)).map_err(|e| {
+                RigError::new_err(format!(
+                    "{}: no cage in the file, and none could be generated: {e}",
+                    path.display()
+                ))
+            })?;
+            warnings.push(generated_note(&generated));
+            generated.cage
+        }
+        (None, None, None) => {
+            return Err(crate::errors::RigFileError::new_err(format!(
+                "{}: no cage: pass cage=CAGE.obj, or auto_cage=N to generate one with N vertices",
+                path.display()
+            )));
+        }
+    };
+    Ok((
+        RigParts::new(
+            character.mesh,
+            character.skeleton,
+            character.skin_weights,
+            cage_mesh,
+        ),
+        warnings,
+    ))
+}
+
+#[pymethods]
+impl Rig {
+    /// Writes the rig's current state as glTF 2.0: ``.glb`` (binary) or ``.gltf`` (JSON with
+    /// ``<stem>.bin`` beside it), replacing the files atomically. The rest skeleton and skin
+    /// are the bind pose; the current pose is stored in the nodes.
+    ///
+    /// Parameters
+    /// ----------
+    /// path : str or os.PathLike
+    ///     Ending in ``.glb`` or ``.gltf``.
+    /// name : str, default "cagerig"
+    ///     Name of the mesh and the skin in the file.
+    #[pyo3(signature = (path, name = "cagerig"))]
+    fn export_gltf(&self, py: Python<'_>, path: PathBuf, name: &str) -> PyResult<()> {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+        if !(ext.eq_ignore_ascii_case("glb") || ext.eq_ignore_ascii_case("gltf")) {
+            return Err(PyValueError::new_err(format!(
+                "{}: expected a path ending in .glb or .gltf",
+                path.display()
+            )));
+        }
+        let session = self.session();
+        py.detach(|| cagerig_formats::gltf::export::export_glb(session, &path, name))
+            .map_err(format_error)
+    }
+}
+
+/// A closed, validated deformation cage around a triangle mesh (``cagerig cage``'s method:
+/// distance grid, marching tetrahedra, constrained edge collapses, offset search).
+///
+/// Parameters
+/// ----------
+/// vertices : (n, 3) float64 array
+/// triangles : (f, 3) int array
+/// target_vertices : int, default 100
+///     Vertex count of the cage (within ±10 %).
+/// margin : float, optional
+///     Least distance from the mesh to the cage as a fraction of the mesh's bounding-box
+///     diagonal (default 0.005).
+///
+/// Returns
+/// -------
+/// cage_vertices : (c, 3) float64 array
+/// cage_triangles : (g, 3) int64 array
+///     Outward oriented, closed, one piece, without self-intersections, enclosing the mesh.
+///
+/// Raises
+/// ------
+/// RigError
+///     When no valid cage can be made (the message says why and what to change).
+#[pyfunction]
+#[pyo3(signature = (vertices, triangles, target_vertices = 100, margin = None))]
+pub fn generate_cage<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    triangles: &Bound<'py, PyAny>,
+    target_vertices: usize,
+    margin: Option<f64>,
+) -> PyResult<(convert::F64Array2<'py>, convert::I64Array2<'py>)> {
+    let positions = convert::points(vertices, "vertices")?;
+    let tris = convert::triangles(triangles, "triangles", positions.len())?;
+    let mesh = TriMesh::new(positions, tris).map_err(rig_error)?;
+    let options = cage_options(target_vertices, margin)?;
+    let generated = py
+        .detach(|| generate(&mesh, &options))
+        .map_err(|e| RigError::new_err(format!("generate_cage: {e}")))?;
+    Ok((
+        convert::points_to_py(py, &generated.cage.positions)?,
+        convert::triangles_to_py(py, &generated.cage.triangles)?,
+    ))
+}

@@ -1,0 +1,56 @@
+"""glTF / FBX characters and automatic cages from Python."""
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cagerig
+
+DATA = Path(__file__).resolve().parents[4] / "shared" / "data"
+
+
+def test_fox_loads_from_gltf_with_its_cage_and_exports_back(tmp_path):
+    fox = DATA / "fox"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", cagerig.RigWarning)
+        rig = cagerig.Rig.load(fox / "Fox.glb", fox / "Fox_cage.obj")
+    assert rig.rest_mesh.shape[0] > 1000
+    rig.rotate_joint(3, [1.0, 0.0, 0.0], 20.0)
+    for name in ("fox.glb", "fox.gltf"):
+        rig.export_gltf(tmp_path / name)
+    assert (tmp_path / "fox.bin").is_file()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", cagerig.RigWarning)
+        back = cagerig.Rig.load(tmp_path / "fox.gltf", fox / "Fox_cage.obj")
+    assert back.rest_mesh.shape == rig.rest_mesh.shape
+    diagonal = np.linalg.norm(rig.rest_mesh.max(0) - rig.rest_mesh.min(0))
+    assert np.abs(back.rest_mesh - rig.rest_mesh).max() < 1e-5 * diagonal
+
+
+def test_a_character_without_a_cage_fails_clearly_or_gets_a_generated_one():
+    fox = DATA / "fox" / "Fox.glb"
+    with pytest.raises(cagerig.RigFileError, match="auto_cage"):
+        cagerig.Rig.load(fox)
+    with pytest.warns(cagerig.RigWarning, match="generated"):
+        rig = cagerig.Rig.load(fox, auto_cage=80)
+    assert 72 <= rig.rest_cage.shape[0] <= 88
+
+
+def test_generate_cage_encloses_the_mesh_and_validates():
+    v, f = cagerig.read_obj(DATA / "arm" / "arm.obj")
+    cv, cf = cagerig.generate_cage(v, f, target_vertices=60)
+    assert cv.dtype == np.float64 and cf.dtype == np.int64
+    assert 54 <= cv.shape[0] <= 66
+    # A valid, outward cage: validate_cage keeps its triangles as they are.
+    assert np.array_equal(cagerig.validate_cage(cv, cf), cf)
+    # Mean value coordinates reproduce the mesh (it is inside).
+    phi = cagerig.mvc(v, cv, cf)
+    assert np.abs(phi @ cv - v).max() < 1e-9
+
+
+def test_export_gltf_refuses_other_extensions(tmp_path):
+    rig = cagerig.Rig.builtin("bar")
+    with pytest.raises(ValueError, match=r"\.glb or \.gltf"):
+        rig.export_gltf(tmp_path / "x.obj")
