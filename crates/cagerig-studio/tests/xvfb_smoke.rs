@@ -38,7 +38,13 @@ fn have_xvfb() -> bool {
     true
 }
 
+/// `xvfb-run -a` picks a free display number racily: one Xvfb at a time.
+static XVFB: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 fn run_studio(args: &[&str], state: &Path) -> std::process::Output {
+    let _one_at_a_time = XVFB
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let runtime = temp_dir("runtime");
     #[cfg(unix)]
     {
