@@ -25,6 +25,17 @@ impl GrowBuffer {
         }
     }
 
+    /// Makes room for `size` bytes; true when the buffer had to be re-created (capacity grows by
+    /// 1.5× to absorb small growth).
+    fn reserve(&mut self, device: &wgpu::Device, size: u64) -> bool {
+        let recreated = size > self.capacity;
+        if recreated {
+            self.capacity = (size + size / 2).next_multiple_of(256);
+            self.buffer = create(device, self.label, self.usage, self.capacity);
+        }
+        recreated
+    }
+
     /// Writes `data` at offset 0 through the queue. Returns `true` when the buffer had to be
     /// re-created (first use of a larger size; capacity grows by 1.5× to absorb small growth).
     pub fn write<T: Pod>(
@@ -36,11 +47,7 @@ impl GrowBuffer {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         // Buffer writes must be a multiple of 4 bytes.
         let size = (bytes.len() as u64).next_multiple_of(4);
-        let recreated = size > self.capacity;
-        if recreated {
-            self.capacity = (size + size / 2).next_multiple_of(256);
-            self.buffer = create(device, self.label, self.usage, self.capacity);
-        }
+        let recreated = self.reserve(device, size);
         if !bytes.is_empty() {
             if bytes.len().is_multiple_of(4) {
                 queue.write_buffer(&self.buffer, 0, bytes);
@@ -66,11 +73,7 @@ impl GrowBuffer {
     ) -> bool {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let size = (bytes.len() as u64).next_multiple_of(4);
-        let recreated = size > self.capacity;
-        if recreated {
-            self.capacity = (size + size / 2).next_multiple_of(256);
-            self.buffer = create(device, self.label, self.usage, self.capacity);
-        }
+        let recreated = self.reserve(device, size);
         if let Some(size) = wgpu::BufferSize::new(size) {
             // Take back the chunks whose copies the GPU has finished (non-blocking).
             let _ = device.poll(wgpu::PollType::Poll);

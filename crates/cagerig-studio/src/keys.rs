@@ -151,6 +151,14 @@ impl Keys {
         }
     }
 
+    /// Index of the key of `track` at `time` (within [`SAME_TIME`]), if any.
+    pub fn index_at(&self, track: Track, time: f64) -> Option<usize> {
+        (0..self.len(track)).find(|&i| {
+            self.time(track, i)
+                .is_some_and(|t| (t - time).abs() < SAME_TIME)
+        })
+    }
+
     /// Removes a key; false if there is none at `index`.
     pub fn delete(&mut self, track: Track, index: usize) -> bool {
         let len = self.len(track);

@@ -70,11 +70,7 @@ impl StudioApp {
         if self.run_command(&Command::SetKey { track, time })
             && let Some(doc) = &self.doc
         {
-            let index = match track {
-                Track::Skeleton => doc.keys.skeleton.iter().position(|k| k.time == time),
-                Track::Cage => doc.keys.cage.iter().position(|k| k.time == time),
-            };
-            self.timeline.selected = index.map(|i| (track, i));
+            self.timeline.selected = doc.keys.index_at(track, time).map(|i| (track, i));
         }
     }
 
@@ -290,11 +286,7 @@ fn tracks_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
             && app.run_command(&Command::MoveKey { track, index, time })
             && let Some(doc) = &app.doc
         {
-            let new_index = match track {
-                Track::Skeleton => doc.keys.skeleton.iter().position(|k| k.time == time),
-                Track::Cage => doc.keys.cage.iter().position(|k| k.time == time),
-            };
-            app.timeline.selected = new_index.map(|i| (track, i));
+            app.timeline.selected = doc.keys.index_at(track, time).map(|i| (track, i));
         }
     }
 }
