@@ -2,7 +2,10 @@
 //!
 //! Every figure is the median of repeated runs (with min and max) after a warm-up. Per-frame
 //! figures also print the bytes the kernel must move at least (an estimate from the data sizes)
-//! and the bandwidth that implies. All kernels measured here run in f64.
+//! and the bandwidth that implies. Kernels run in f64 unless a row says f32. Every model is
+//! measured twice, with the default thread pool and on one thread; the printed table
+//! (`bench_table`) sets both beside the paper tool's single-threaded figures where the model is
+//! the Arm at a size the tool was measured on.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -41,18 +44,22 @@ pub struct BenchArgs {
     /// Machine-readable output: an array with one object per model.
     #[arg(long)]
     pub json: bool,
+    /// Skip the second pass on one thread (`RAYON_NUM_THREADS=1` like for like with the
+    /// single-threaded paper tool); by default every row is measured both ways.
+    #[arg(long)]
+    pub skip_one_thread: bool,
     /// Multiplies the number of repetitions.
     #[arg(long, default_value_t = 1.0)]
     pub repeat_scale: f64,
 }
 
 #[derive(Debug, Clone, Copy, Serialize)]
-struct Stat {
-    median_ms: f64,
-    min_ms: f64,
-    max_ms: f64,
+pub(crate) struct Stat {
+    pub median_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
-    bytes_moved: Option<u64>,
+    pub bytes_moved: Option<u64>,
 }
 
 impl Stat {
@@ -63,33 +70,42 @@ impl Stat {
 }
 
 #[derive(Debug, Serialize)]
-struct ModelRow {
-    model: String,
-    vertices: usize,
-    joints: usize,
-    cage_vertices: usize,
-    peak_memory_mb: f64,
+pub(crate) struct ModelRow {
+    pub model: String,
+    pub vertices: usize,
+    pub joints: usize,
+    pub cage_vertices: usize,
+    pub peak_memory_mb: f64,
     /// Precision of the session-level figures (the `_f32` kernels are the f32 variants).
-    precision: &'static str,
-    mvc: Stat,
-    maxvol: Stat,
-    skelup_preprocess: Stat,
-    cageup_preprocess: Stat,
-    cor_centres: Stat,
-    cor_centres_method: String,
-    cagerev_refactor: Stat,
-    lbs: Stat,
-    dqs: Stat,
-    cor: Stat,
-    animation_frame: Stat,
-    rest_cage_drag: Stat,
-    grab_after_skeleton_edit: Stat,
+    pub precision: &'static str,
+    pub mvc: Stat,
+    pub maxvol: Stat,
+    pub skelup_preprocess: Stat,
+    pub cageup_preprocess: Stat,
+    pub cor_centres: Stat,
+    pub cor_centres_method: String,
+    pub cagerev_refactor: Stat,
+    pub lbs: Stat,
+    pub dqs: Stat,
+    pub cor: Stat,
+    pub animation_frame: Stat,
+    pub rest_cage_drag: Stat,
+    pub grab_after_skeleton_edit: Stat,
     /// The drag and the grab with Φ stored in f32 (`--coords-precision f32`).
-    rest_cage_drag_f32_coords: Stat,
-    grab_after_skeleton_edit_f32_coords: Stat,
-    lbs_f32: Stat,
-    dqs_f32: Stat,
-    cor_f32: Stat,
+    pub rest_cage_drag_f32_coords: Stat,
+    pub grab_after_skeleton_edit_f32_coords: Stat,
+    pub lbs_f32: Stat,
+    pub dqs_f32: Stat,
+    pub cor_f32: Stat,
+}
+
+/// One model's figures with the default thread pool and, unless skipped, on one thread.
+#[derive(Debug, Serialize)]
+pub(crate) struct ModelReport {
+    #[serde(flatten)]
+    pub row: ModelRow,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub one_thread: Option<ModelRow>,
 }
 
 /// Runs `f` `warmup` times untimed, then `reps` times; returns median/min/max in ms.
@@ -183,12 +199,22 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 parts.mesh.num_vertices()
             );
         }
-        rows.push(bench_model(model, parts, args.repeat_scale)?);
+        let one_thread = if args.skip_one_thread {
+            None
+        } else {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .context("building a one-thread pool")?;
+            Some(pool.install(|| bench_model(model.clone(), parts.clone(), args.repeat_scale))?)
+        };
+        let row = bench_model(model, parts, args.repeat_scale)?;
+        rows.push(ModelReport { row, one_thread });
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
-        print_table(&rows);
+        crate::bench_table::print_table(&rows);
     }
     Ok(())
 }
@@ -523,53 +549,4 @@ fn synthetic_tracks(
         cagerig::animation::SkeletonTrack::new(times, keys)?,
         cagerig::animation::CageTrack::new(cage_times, offsets)?,
     ))
-}
-
-fn print_table(rows: &[ModelRow]) {
-    for r in rows {
-        println!(
-            "\n{}: {} vertices, {} joints, {} cage vertices, peak memory {:.0} MB, kernels in {}",
-            r.model, r.vertices, r.joints, r.cage_vertices, r.peak_memory_mb, r.precision
-        );
-        println!(
-            "  {:<28} {:>11} {:>11} {:>11} {:>12} {:>10}",
-            "operation", "median ms", "min ms", "max ms", "bytes moved", "GB/s"
-        );
-        let line = |name: &str, s: &Stat| {
-            let (bytes, bw) = match s.bytes_moved {
-                Some(b) => (
-                    format!("{:.1} MB", b as f64 / 1e6),
-                    format!("{:.1}", b as f64 / 1e6 / s.median_ms),
-                ),
-                None => (String::new(), String::new()),
-            };
-            println!(
-                "  {:<28} {:>11.3} {:>11.3} {:>11.3} {:>12} {:>10}",
-                name, s.median_ms, s.min_ms, s.max_ms, bytes, bw
-            );
-        };
-        line("MVC Φ (all vertices)", &r.mvc);
-        line("MaxVol selection", &r.maxvol);
-        line("SkelUp preprocess (Ψ)", &r.skelup_preprocess);
-        line("CageUp preprocess", &r.cageup_preprocess);
-        line(
-            &format!("CoR centres ({})", r.cor_centres_method),
-            &r.cor_centres,
-        );
-        line("CageRev refactor", &r.cagerev_refactor);
-        line("LBS skinning", &r.lbs);
-        line("DQS skinning", &r.dqs);
-        line("CoR skinning", &r.cor);
-        line("LBS skinning (f32)", &r.lbs_f32);
-        line("DQS skinning (f32)", &r.dqs_f32);
-        line("CoR skinning (f32)", &r.cor_f32);
-        line("animation frame (LBS)", &r.animation_frame);
-        line("rest-cage drag, 5 v, sync", &r.rest_cage_drag);
-        line("grab after skeleton edit", &r.grab_after_skeleton_edit);
-        line("rest-cage drag (f32 Φ)", &r.rest_cage_drag_f32_coords);
-        line(
-            "grab after skel. edit (f32 Φ)",
-            &r.grab_after_skeleton_edit_f32_coords,
-        );
-    }
 }

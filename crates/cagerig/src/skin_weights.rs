@@ -2,6 +2,10 @@
 
 use crate::error::{RigError, Warning};
 
+/// Most joints a skinning weight matrix may have: the per-frame kernels store joint indices in
+/// 16 bits (like glTF's `JOINTS_0`).
+pub const MAX_JOINTS: usize = 1 << 16;
+
 /// Rows whose sum differs from 1 by more than this are renormalised and reported.
 pub const ROW_SUM_TOLERANCE: f64 = 1e-9;
 
@@ -29,6 +33,13 @@ impl SkinWeights {
         num_joints: usize,
         triplets: impl IntoIterator<Item = (usize, usize, f64)>,
     ) -> Result<(Self, Vec<Warning>), RigError> {
+        if num_joints > MAX_JOINTS {
+            return Err(RigError::IndexOutOfRange {
+                what: "joint count (16-bit joint indices)",
+                index: num_joints,
+                len: MAX_JOINTS + 1,
+            });
+        }
         let mut entries: Vec<(u32, u32, f64)> = Vec::new();
         let mut zeros = 0usize;
         for (vertex, joint, weight) in triplets {

@@ -1,23 +1,27 @@
-//! Compact f32 copy of Ω (`#V × #J`) in **count-sorted chunks**, and the rest-space frame, shared
-//! by the f32 per-frame skinning kernels ([`super::lbs_f32`], [`super::dqs_f32`],
-//! [`super::cor_f32`]).
+//! Ω (`#V × #J`) in **count-sorted chunks**, the layout of every per-frame skinning kernel
+//! ([`super::lbs_f32`], [`super::dqs`], [`super::cor`] and their f32 twins), generic over the
+//! precision of the weights ([`SkinReal`]).
 //!
-//! Vertices are processed in chunks of [`VERTEX_GRAIN_F32`] (one rayon task each). Inside a chunk
-//! they are stably sorted by influence count, so a chunk is a few runs of equal count, each skinned
-//! by a loop with a compile-time influence count (no per-vertex loop-exit misprediction; the
-//! measured gain on the subdivided Arm is ≈ 2×). `local_index` maps a sorted slot back to its
-//! vertex in the chunk; every per-vertex kernel input is stored in sorted order and outputs are
-//! scattered back inside the chunk (an L2-resident 96 KiB window).
+//! Vertices are processed in chunks of [`VERTEX_GRAIN_F32`] (one rayon task each; a mesh of one
+//! chunk is skinned serially on the calling thread, no dispatch). Inside a chunk they are stably
+//! sorted by influence count, so a chunk is a few runs of equal count, each skinned by a loop with
+//! a compile-time influence count (no per-vertex loop-exit misprediction; the measured gain on the
+//! subdivided Arm is ≈ 2×). `local_index` maps a sorted slot back to its vertex in the chunk;
+//! outputs are scattered back inside the chunk (an L2-resident window). A slot's global index is
+//! `chunk · grain + position in the chunk`, so kernels can read per-vertex inputs either stored in
+//! sorted order (by slot) or from the caller's arrays (by vertex).
 //!
-//! Joint indices are u16, weights f32, the pivot (heaviest joint, DQS/CoR sign alignment) u16.
-//! Rest-space points are stored relative to a local origin `o` (the bounding-box centre of the
-//! rest mesh) so f32 coordinates stay small even far from the world origin; joint transforms are
-//! converted to `T_j ∘ translate(o)` (in f64, then rounded) so kernels output world coordinates.
+//! Joint indices are u16, the pivot (heaviest joint, DQS/CoR sign alignment) u16.
+//! The f32 kernels store rest-space points relative to a local origin `o` (the bounding-box
+//! centre of the rest mesh) so f32 coordinates stay small even far from the world origin; joint
+//! transforms are converted to `T_j ∘ translate(o)` (in f64, then rounded) so kernels output
+//! world coordinates.
 
-use glam::{Affine3A, DAffine3, DVec3, Mat3A, Vec3, Vec3A};
+use glam::{DAffine3, DVec3, Vec3A};
 use rayon::prelude::*;
 
 use super::VERTEX_GRAIN_F32;
+use super::precision::SkinReal;
 use crate::{RigError, SkinWeights};
 
 // Sorted slots index vertices within a chunk as u16.
@@ -30,19 +34,18 @@ struct Run {
     len: u32,
 }
 
-/// Per-vertex skinning rule of an f32 kernel, called by [`CountSortedWeights::skin`].
-pub(crate) trait VertexKernel: Sync {
-    /// Per-vertex input stored in sorted order (e.g. the local rest position).
-    type Input: Copy + Send + Sync;
+/// Per-vertex skinning rule of a kernel, called by [`CountSortedWeights::skin`] with the
+/// vertex's sorted `slot` and its index `vertex` (both global).
+pub(crate) trait VertexKernel<S: SkinReal>: Sync {
     /// Position of a vertex with at least one influence (`joints`, `weights` of equal length).
-    fn skin(&self, joints: &[u16], weights: &[f32], pivot: u16, input: Self::Input) -> Vec3A;
+    fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3;
     /// Position of an unweighted vertex (its rest position).
-    fn unweighted(&self, input: Self::Input) -> Vec3A;
+    fn unweighted(&self, slot: usize, vertex: usize) -> S::V3;
 }
 
-/// Ω in f32, count-sorted within chunks, plus the per-vertex pivot joint.
+/// Ω with weights in precision `S`, count-sorted within chunks, plus the per-vertex pivot joint.
 #[derive(Debug, Clone)]
-pub(crate) struct CountSortedWeights {
+pub(crate) struct CountSortedWeights<S> {
     pub num_joints: usize,
     /// Vertex (within its chunk) of each sorted slot, `#V`.
     local_index: Vec<u16>,
@@ -52,44 +55,42 @@ pub(crate) struct CountSortedWeights {
     /// First influence of every chunk in `joints` / `weights`.
     influence_start: Vec<u32>,
     joints: Vec<u16>,
-    weights: Vec<f32>,
+    weights: Vec<S>,
     /// Heaviest joint per sorted slot (0 for unweighted vertices, unused there), `#V`.
     pivot: Vec<u16>,
 }
 
-/// Skins one run of vertices with exactly `K` influences each.
+/// Skins one run of vertices with exactly `K` influences each; `first_slot`/`first_vertex` are
+/// the run's first global slot and its chunk's first vertex.
 #[inline(always)]
-fn skin_run<Kernel: VertexKernel, const K: usize>(
+#[allow(clippy::too_many_arguments)]
+fn skin_run<S: SkinReal, Kernel: VertexKernel<S>, const K: usize>(
     kernel: &Kernel,
     joints: &[u16],
-    weights: &[f32],
+    weights: &[S],
     pivots: &[u16],
-    inputs: &[Kernel::Input],
     local_index: &[u16],
-    out: &mut [Vec3],
+    first_slot: usize,
+    first_vertex: usize,
+    out: &mut [S::Out],
 ) {
-    for ((((js, ws), &pivot), &input), &i) in joints
+    for (slot, (((js, ws), &pivot), &i)) in joints
         .chunks_exact(K)
         .zip(weights.chunks_exact(K))
         .zip(pivots)
-        .zip(inputs)
         .zip(local_index)
+        .enumerate()
     {
-        out[usize::from(i)] = kernel.skin(js, ws, pivot, input).into();
+        let i = usize::from(i);
+        out[i] = S::output(kernel.skin(js, ws, pivot, first_slot + slot, first_vertex + i));
     }
 }
 
-impl CountSortedWeights {
-    /// Errors if `#J` exceeds 65 536 (u16 joint indices).
-    pub fn new(skin_weights: &SkinWeights) -> Result<Self, RigError> {
+impl<S: SkinReal> CountSortedWeights<S> {
+    /// Ω (`#V × #J`; `#J` ≤ [`crate::skin_weights::MAX_JOINTS`], checked by [`SkinWeights`]).
+    pub fn new(skin_weights: &SkinWeights) -> Self {
         let num_joints = skin_weights.num_joints();
-        if num_joints > usize::from(u16::MAX) + 1 {
-            return Err(RigError::IndexOutOfRange {
-                what: "joint count for u16 joint indices",
-                index: num_joints,
-                len: usize::from(u16::MAX) + 1,
-            });
-        }
+        debug_assert!(num_joints <= crate::skin_weights::MAX_JOINTS);
         let num_vertices = skin_weights.num_vertices();
         let mut sorted = Self {
             num_joints,
@@ -119,14 +120,16 @@ impl CountSortedWeights {
                 }
                 sorted.local_index.push((v - first) as u16);
                 sorted.joints.extend(joints.iter().map(|&j| j as u16));
-                sorted.weights.extend(weights.iter().map(|&w| w as f32));
+                sorted
+                    .weights
+                    .extend(weights.iter().map(|&w| S::from_f64(w)));
                 sorted
                     .pivot
                     .push(skin_weights.heaviest(v).unwrap_or(0) as u16);
             }
             sorted.run_start.push(sorted.runs.len() as u32);
         }
-        Ok(sorted)
+        sorted
     }
 
     pub fn num_vertices(&self) -> usize {
@@ -148,73 +151,61 @@ impl CountSortedWeights {
             });
     }
 
-    /// `out[v] = kernel(v)` for every vertex; `inputs` in sorted order (see [`Self::gather`]).
-    pub fn skin<Kernel: VertexKernel>(
-        &self,
-        kernel: &Kernel,
-        inputs: &[Kernel::Input],
-        out: &mut [Vec3],
-    ) {
-        assert_eq!(inputs.len(), self.num_vertices(), "sorted inputs");
+    /// `out[v] = kernel(v)` for every vertex (`#V`). One chunk runs on the calling thread; more
+    /// run as one rayon task per chunk.
+    pub fn skin<Kernel: VertexKernel<S>>(&self, kernel: &Kernel, out: &mut [S::Out]) {
         assert_eq!(out.len(), self.num_vertices(), "out");
+        if out.len() <= VERTEX_GRAIN_F32 {
+            if !out.is_empty() {
+                self.skin_chunk(kernel, 0, out);
+            }
+            return;
+        }
         out.par_chunks_mut(VERTEX_GRAIN_F32)
-            .zip(inputs.par_chunks(VERTEX_GRAIN_F32))
-            .zip(self.local_index.par_chunks(VERTEX_GRAIN_F32))
-            .zip(self.pivot.par_chunks(VERTEX_GRAIN_F32))
             .enumerate()
-            .for_each(|(chunk, (((out, inputs), local_index), pivots))| {
-                self.skin_chunk(kernel, chunk, inputs, local_index, pivots, out)
-            });
+            .for_each(|(chunk, out)| self.skin_chunk(kernel, chunk, out));
     }
 
     /// One chunk of [`Self::skin`], compiled for AVX2 where the CPU has it (wider registers and
-    /// three-operand forms for the glam SSE arithmetic; no fused multiply-add, so the results
+    /// three-operand forms for the glam arithmetic; no fused multiply-add, so the results
     /// are the same on every path).
-    fn skin_chunk<Kernel: VertexKernel>(
+    fn skin_chunk<Kernel: VertexKernel<S>>(
         &self,
         kernel: &Kernel,
         chunk: usize,
-        inputs: &[Kernel::Input],
-        local_index: &[u16],
-        pivots: &[u16],
-        out: &mut [Vec3],
+        out: &mut [S::Out],
     ) {
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe {
-                    self.skin_chunk_avx2(kernel, chunk, inputs, local_index, pivots, out)
-                };
+                return unsafe { self.skin_chunk_avx2(kernel, chunk, out) };
             }
         }
-        self.skin_chunk_generic(kernel, chunk, inputs, local_index, pivots, out)
+        self.skin_chunk_generic(kernel, chunk, out)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn skin_chunk_avx2<Kernel: VertexKernel>(
+    fn skin_chunk_avx2<Kernel: VertexKernel<S>>(
         &self,
         kernel: &Kernel,
         chunk: usize,
-        inputs: &[Kernel::Input],
-        local_index: &[u16],
-        pivots: &[u16],
-        out: &mut [Vec3],
+        out: &mut [S::Out],
     ) {
-        self.skin_chunk_generic(kernel, chunk, inputs, local_index, pivots, out)
+        self.skin_chunk_generic(kernel, chunk, out)
     }
 
     #[inline(always)]
-    fn skin_chunk_generic<Kernel: VertexKernel>(
+    fn skin_chunk_generic<Kernel: VertexKernel<S>>(
         &self,
         kernel: &Kernel,
         chunk: usize,
-        inputs: &[Kernel::Input],
-        local_index: &[u16],
-        pivots: &[u16],
-        out: &mut [Vec3],
+        out: &mut [S::Out],
     ) {
+        let first = chunk * VERTEX_GRAIN_F32;
+        let local_index = &self.local_index[first..first + out.len()];
+        let pivots = &self.pivot[first..first + out.len()];
         let runs = &self.runs[self.run_start[chunk] as usize..self.run_start[chunk + 1] as usize];
         let mut influence = self.influence_start[chunk] as usize;
         let mut slot = 0;
@@ -223,31 +214,33 @@ impl CountSortedWeights {
             let j = &self.joints[influence..influence + k * len];
             let w = &self.weights[influence..influence + k * len];
             let p = &pivots[slot..slot + len];
-            let x = &inputs[slot..slot + len];
             let i = &local_index[slot..slot + len];
+            let s = first + slot;
             match k {
                 0 => {
-                    for (&x, &i) in x.iter().zip(i) {
-                        out[usize::from(i)] = kernel.unweighted(x).into();
+                    for (n, &i) in i.iter().enumerate() {
+                        let i = usize::from(i);
+                        out[i] = S::output(kernel.unweighted(s + n, first + i));
                     }
                 }
-                1 => skin_run::<Kernel, 1>(kernel, j, w, p, x, i, out),
-                2 => skin_run::<Kernel, 2>(kernel, j, w, p, x, i, out),
-                3 => skin_run::<Kernel, 3>(kernel, j, w, p, x, i, out),
-                4 => skin_run::<Kernel, 4>(kernel, j, w, p, x, i, out),
-                5 => skin_run::<Kernel, 5>(kernel, j, w, p, x, i, out),
-                6 => skin_run::<Kernel, 6>(kernel, j, w, p, x, i, out),
-                7 => skin_run::<Kernel, 7>(kernel, j, w, p, x, i, out),
-                8 => skin_run::<Kernel, 8>(kernel, j, w, p, x, i, out),
+                1 => skin_run::<S, Kernel, 1>(kernel, j, w, p, i, s, first, out),
+                2 => skin_run::<S, Kernel, 2>(kernel, j, w, p, i, s, first, out),
+                3 => skin_run::<S, Kernel, 3>(kernel, j, w, p, i, s, first, out),
+                4 => skin_run::<S, Kernel, 4>(kernel, j, w, p, i, s, first, out),
+                5 => skin_run::<S, Kernel, 5>(kernel, j, w, p, i, s, first, out),
+                6 => skin_run::<S, Kernel, 6>(kernel, j, w, p, i, s, first, out),
+                7 => skin_run::<S, Kernel, 7>(kernel, j, w, p, i, s, first, out),
+                8 => skin_run::<S, Kernel, 8>(kernel, j, w, p, i, s, first, out),
                 _ => {
-                    for ((((js, ws), &pivot), &x), &i) in j
+                    for (n, (((js, ws), &pivot), &i)) in j
                         .chunks_exact(k)
                         .zip(w.chunks_exact(k))
                         .zip(p)
-                        .zip(x)
                         .zip(i)
+                        .enumerate()
                     {
-                        out[usize::from(i)] = kernel.skin(js, ws, pivot, x).into();
+                        let i = usize::from(i);
+                        out[i] = S::output(kernel.skin(js, ws, pivot, s + n, first + i));
                     }
                 }
             }
@@ -257,11 +250,51 @@ impl CountSortedWeights {
     }
 }
 
+/// Rest-space points a kernel reads per vertex: the stored sorted f32 copy (by slot, relative to
+/// the local origin) or the caller's f64 array (by vertex, world coordinates).
+pub(crate) trait RestPoints<S: SkinReal>: Sync {
+    /// The point of `slot`/`vertex` in the kernel's space (local for f32, world for f64).
+    fn point(&self, slot: usize, vertex: usize) -> S::V3;
+    /// The same point in world coordinates.
+    fn world(&self, slot: usize, vertex: usize) -> S::V3;
+}
+
+/// The caller's rest positions (`#V`, world, f64), read by vertex.
+pub(crate) struct WorldPoints<'a>(pub &'a [DVec3]);
+
+impl RestPoints<f64> for WorldPoints<'_> {
+    #[inline(always)]
+    fn point(&self, _slot: usize, vertex: usize) -> DVec3 {
+        self.0[vertex]
+    }
+    #[inline(always)]
+    fn world(&self, _slot: usize, vertex: usize) -> DVec3 {
+        self.0[vertex]
+    }
+}
+
+/// Stored local f32 points (`#V`, sorted order, `v − o`) and their origin `o`, read by slot.
+pub(crate) struct LocalPoints<'a> {
+    pub local: &'a [Vec3A],
+    pub origin: Vec3A,
+}
+
+impl RestPoints<f32> for LocalPoints<'_> {
+    #[inline(always)]
+    fn point(&self, slot: usize, _vertex: usize) -> Vec3A {
+        self.local[slot]
+    }
+    #[inline(always)]
+    fn world(&self, slot: usize, _vertex: usize) -> Vec3A {
+        self.local[slot] + self.origin
+    }
+}
+
 /// Count-sorted Ω with the rest mesh M stored beside it, in sorted order, as f32 offsets from a
 /// local origin `o` (the state shared by the f32 LBS and DQS kernels).
 #[derive(Debug, Clone)]
 pub(crate) struct SortedRestMesh {
-    pub weights: CountSortedWeights,
+    pub weights: CountSortedWeights<f32>,
     pub origin: DVec3,
     /// `v − o` per vertex, `#V`, sorted order.
     pub rest_local: Vec<Vec3A>,
@@ -276,7 +309,7 @@ impl SortedRestMesh {
         rest_positions: &[DVec3],
         what: &'static str,
     ) -> Result<Self, RigError> {
-        let weights = CountSortedWeights::new(skin_weights)?;
+        let weights = CountSortedWeights::new(skin_weights);
         let mut mesh = Self {
             rest_local: vec![Vec3A::ZERO; weights.num_vertices()],
             weights,
@@ -285,6 +318,14 @@ impl SortedRestMesh {
         };
         mesh.set_rest_positions(rest_positions)?;
         Ok(mesh)
+    }
+
+    /// The stored points, read by slot.
+    pub fn points(&self) -> LocalPoints<'_> {
+        LocalPoints {
+            local: &self.rest_local,
+            origin: Vec3A::from(self.origin.as_vec3()),
+        }
     }
 
     /// Replaces the stored rest mesh M (`#V`). Parallel, no allocation.
@@ -316,15 +357,43 @@ pub(crate) fn local_origin(points: &[DVec3]) -> DVec3 {
     }
 }
 
-/// `T ∘ translate(o)` rounded to f32: maps local rest coordinates `p − o` to world coordinates.
-pub(crate) fn affine_from_local(transform: &DAffine3, origin: DVec3) -> Affine3A {
-    let m = transform.matrix3;
-    Affine3A {
-        matrix3: Mat3A::from_cols(
-            m.x_axis.as_vec3().into(),
-            m.y_axis.as_vec3().into(),
-            m.z_axis.as_vec3().into(),
-        ),
-        translation: Vec3A::from(transform.transform_point3(origin).as_vec3()),
+/// Columns `[x_axis, y_axis, z_axis, translation]` of `T_j ∘ translate(o)` for every joint
+/// (`#J`, computed in f64, then rounded to `S`): they map local rest coordinates `p − o` to
+/// world coordinates.
+pub(crate) fn columns_from_local<S: SkinReal>(
+    transforms: &[DAffine3],
+    origin: DVec3,
+    columns: &mut [[S::V3; 4]],
+) {
+    assert_eq!(columns.len(), transforms.len(), "joint columns");
+    let to_local = DAffine3::from_translation(origin);
+    for (c, t) in columns.iter_mut().zip(transforms) {
+        *c = S::affine_columns(&(*t * to_local));
+    }
+}
+
+/// The affine maps `T_j` (`#J`) a kernel reads per influence, as columns
+/// `[x_axis, y_axis, z_axis, translation]`.
+pub(crate) trait JointColumns<S: SkinReal>: Sync {
+    fn columns(&self, joint: usize) -> [S::V3; 4];
+}
+
+impl JointColumns<f64> for [DAffine3] {
+    #[inline(always)]
+    fn columns(&self, joint: usize) -> [DVec3; 4] {
+        let a = &self[joint];
+        [
+            a.matrix3.x_axis,
+            a.matrix3.y_axis,
+            a.matrix3.z_axis,
+            a.translation,
+        ]
+    }
+}
+
+impl<S: SkinReal> JointColumns<S> for [[S::V3; 4]] {
+    #[inline(always)]
+    fn columns(&self, joint: usize) -> [S::V3; 4] {
+        self[joint]
     }
 }

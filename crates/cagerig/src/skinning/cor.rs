@@ -14,103 +14,166 @@
 //!
 //! Rotations of non-rigid `T_j^r` are their polar factors ([`super::rigid_rotation`]); `p̃_i`
 //! uses the full affine `T_j`.
+//!
+//! The per-vertex rule is written once over [`SkinReal`]: [`CorSkinning`] is its f64 instance
+//! (the exact path), [`super::CorF32`] its f32 instance (the display path).
 
-use glam::{DAffine3, DMat3, DQuat, DVec3};
-use rayon::prelude::*;
+use glam::{DAffine3, DQuat, DVec3, Vec3A};
 
-use super::VERTEX_GRAIN;
-use super::lbs::{blend_affine_cols, transform_point_cols};
-use super::pivoted_weights::PivotedWeights;
+use super::compact_weights::{CountSortedWeights, JointColumns, VertexKernel};
+use super::dqs::rotate_unnormalised;
+use super::lbs::{blend_columns, transform_point};
+use super::precision::SkinReal;
 use super::rigid_rotation::rotation_quaternion;
 use crate::SkinWeights;
 
-/// Caller-owned per-frame buffer: the `#J` joint rotation quaternions.
+/// Caller-owned per-frame buffer of a CoR kernel of precision `S`: the `#J` transforms as
+/// columns (`T_j ∘ translate(o)` for the f32 kernel) and their rotation quaternions.
 #[derive(Debug, Clone)]
-pub struct CorScratch {
-    joint_rotations: Vec<DQuat>,
+pub struct CorScratch<S: SkinReal = f64> {
+    pub(crate) columns: Vec<[S::V3; 4]>,
+    pub(crate) rotations: Vec<S::Quat>,
 }
 
-impl CorScratch {
+impl<S: SkinReal> CorScratch<S> {
     pub fn new(num_joints: usize) -> Self {
         Self {
-            joint_rotations: vec![DQuat::IDENTITY; num_joints],
+            columns: vec![[S::ZERO_V3; 4]; num_joints],
+            rotations: vec![S::quat(DQuat::IDENTITY); num_joints],
         }
     }
 
-    /// The joint rotations of the last `apply`.
-    pub fn joint_rotations(&self) -> &[DQuat] {
-        &self.joint_rotations
+    /// Fills the columns of `T_j ∘ translate(origin)` and the rotation quaternions of `T_j`
+    /// (`#J`, f64, then rounded to `S`).
+    pub(crate) fn prepare(&mut self, transforms: &[DAffine3], origin: DVec3) {
+        assert_eq!(self.rotations.len(), transforms.len(), "CoR: scratch");
+        super::compact_weights::columns_from_local::<S>(transforms, origin, &mut self.columns);
+        for (q, t) in self.rotations.iter_mut().zip(transforms) {
+            *q = S::quat(rotation_quaternion(t.matrix3));
+        }
     }
 }
 
-/// Precomputed CoR skinning: flat Ω (CSR) and the per-vertex pivot (heaviest) joint.
+/// Precomputed CoR skinning (f64, the exact path): Ω count-sorted with each vertex's pivot.
 #[derive(Debug, Clone)]
 pub struct CorSkinning {
-    csr: PivotedWeights,
+    sorted: CountSortedWeights<f64>,
 }
 
-/// Normalised sign-aligned quaternion blend `Σ_j ω_j s_j r_j / |…|` (DQBlendRot).
+/// CoR image of one vertex: `R(i) (v − p) + (Σ_j ω_j T_j) p` with `R(i)` the normalised
+/// sign-aligned quaternion blend (evaluated unnormalised, one division); `centre` = p in the
+/// kernel's space, `offset` = v − p.
 #[inline(always)]
-pub(crate) fn blend_rotations(
-    joints: &[u32],
-    weights: &[f64],
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn cor_point<S: SkinReal, T: JointColumns<S> + ?Sized>(
+    joints: &[u16],
+    weights: &[S],
     pivot: usize,
-    joint_rotations: &[DQuat],
-) -> DQuat {
-    let pivot_rotation = joint_rotations[pivot];
-    let mut sum = [0.0f64; 4];
+    transforms: &T,
+    rotations: &[S::Quat],
+    centre: S::V3,
+    offset: S::V3,
+) -> S::V3 {
+    let pivot_rotation = rotations[pivot];
+    let mut rotation = S::ZERO_QUAT;
     for (&j, &w) in joints.iter().zip(weights) {
-        let q = joint_rotations[j as usize];
-        let signed = w.copysign(pivot_rotation.dot(q));
-        for (s, x) in sum.iter_mut().zip(q.to_array()) {
-            *s += x * signed;
+        let q = rotations[usize::from(j)];
+        rotation = rotation + q * w.copysign(S::quat_dot(pivot_rotation, q));
+    }
+    let blended = blend_columns(joints, weights, transforms);
+    let (v, w) = S::quat_parts(rotation);
+    let rotated = rotate_unnormalised::<S>(v, w, offset) * (S::length_squared(v) + w * w).recip();
+    rotated + transform_point::<S>(&blended, centre)
+}
+
+/// Per-vertex inputs of the CoR rule: the centre p (kernel space) and the offset v − p.
+pub(crate) trait CentredPoints<S: SkinReal>: Sync {
+    fn centre_and_offset(&self, slot: usize, vertex: usize) -> [S::V3; 2];
+    /// The rest position v in world coordinates.
+    fn world(&self, slot: usize, vertex: usize) -> S::V3;
+}
+
+/// The caller's rest positions and centres (`#V` each, world, f64), read by vertex; a
+/// non-finite centre means "no CoR" (p = v: LBS).
+pub(crate) struct WorldCentredPoints<'a> {
+    pub rest: &'a [DVec3],
+    pub centres: &'a [DVec3],
+}
+
+impl CentredPoints<f64> for WorldCentredPoints<'_> {
+    #[inline(always)]
+    fn centre_and_offset(&self, _slot: usize, vertex: usize) -> [DVec3; 2] {
+        let (v, c) = (self.rest[vertex], self.centres[vertex]);
+        if c.is_finite() {
+            [c, v - c]
+        } else {
+            [v, DVec3::ZERO]
         }
     }
-    let sum = DQuat::from_array(sum);
-    sum * (1.0 / sum.length())
+    #[inline(always)]
+    fn world(&self, _slot: usize, vertex: usize) -> DVec3 {
+        self.rest[vertex]
+    }
+}
+
+/// Stored f32 `[p − o, v − p]` per sorted slot and the origin `o`.
+pub(crate) struct LocalCentredPoints<'a> {
+    pub stored: &'a [[Vec3A; 2]],
+    pub origin: Vec3A,
+}
+
+impl CentredPoints<f32> for LocalCentredPoints<'_> {
+    #[inline(always)]
+    fn centre_and_offset(&self, slot: usize, _vertex: usize) -> [Vec3A; 2] {
+        self.stored[slot]
+    }
+    #[inline(always)]
+    fn world(&self, slot: usize, _vertex: usize) -> Vec3A {
+        let [c, d] = self.stored[slot];
+        c + d + self.origin
+    }
+}
+
+/// The per-vertex CoR rule for a kernel of precision `S`.
+pub(crate) struct CorRule<'a, S: SkinReal, P> {
+    pub scratch: &'a CorScratch<S>,
+    pub points: P,
+}
+
+impl<S: SkinReal, P: CentredPoints<S>> VertexKernel<S> for CorRule<'_, S, P> {
+    #[inline(always)]
+    fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3 {
+        let [centre, offset] = self.points.centre_and_offset(slot, vertex);
+        cor_point::<S, _>(
+            joints,
+            weights,
+            usize::from(pivot),
+            &self.scratch.columns[..],
+            &self.scratch.rotations,
+            centre,
+            offset,
+        )
+    }
+
+    #[inline(always)]
+    fn unweighted(&self, slot: usize, vertex: usize) -> S::V3 {
+        self.points.world(slot, vertex)
+    }
 }
 
 impl CorSkinning {
     pub fn new(weights: &SkinWeights) -> Self {
         Self {
-            csr: PivotedWeights::new(weights),
+            sorted: CountSortedWeights::new(weights),
         }
     }
 
     pub fn num_vertices(&self) -> usize {
-        self.csr.num_vertices()
+        self.sorted.num_vertices()
     }
 
     pub fn num_joints(&self) -> usize {
-        self.csr.num_joints
-    }
-
-    /// Fills `scratch` with the joint rotation quaternions of `transforms` (`#J`, serial).
-    pub fn prepare(&self, transforms: &[DAffine3], scratch: &mut CorScratch) {
-        assert_eq!(transforms.len(), self.csr.num_joints, "CoR: transforms");
-        assert_eq!(
-            scratch.joint_rotations.len(),
-            self.csr.num_joints,
-            "CoR: scratch"
-        );
-        for (q, t) in scratch.joint_rotations.iter_mut().zip(transforms) {
-            *q = rotation_quaternion(t.matrix3);
-        }
-    }
-
-    /// The blended rotation `R(i)` of vertex `v` (needs a prepared `scratch`); identity for an
-    /// unweighted vertex.
-    pub fn blended_rotation(&self, v: usize, scratch: &CorScratch) -> DMat3 {
-        let range = self.csr.row_start[v] as usize..self.csr.row_start[v + 1] as usize;
-        if range.is_empty() {
-            return DMat3::IDENTITY;
-        }
-        DMat3::from_quat(blend_rotations(
-            &self.csr.joints[range.clone()],
-            &self.csr.weights[range],
-            self.csr.pivot[v] as usize,
-            &scratch.joint_rotations,
-        ))
+        self.sorted.num_joints
     }
 
     /// M' = CoR(T, Ω, M, P) (Eq. 6). `transforms`: `#J`; `scratch`: `CorScratch::new(#J)`;
@@ -126,43 +189,18 @@ impl CorSkinning {
         scratch: &mut CorScratch,
         out: &mut [DVec3],
     ) {
-        self.prepare(transforms, scratch);
+        assert_eq!(transforms.len(), self.num_joints(), "CoR: transforms");
         assert_eq!(rest_positions.len(), self.num_vertices(), "CoR: rest");
         assert_eq!(centres.len(), self.num_vertices(), "CoR: centres");
-        assert_eq!(out.len(), self.num_vertices(), "CoR: out");
-        let joint_rotations = &scratch.joint_rotations[..];
-        out.par_chunks_mut(VERTEX_GRAIN)
-            .zip(rest_positions.par_chunks(VERTEX_GRAIN))
-            .zip(centres.par_chunks(VERTEX_GRAIN))
-            .enumerate()
-            .for_each(|(chunk, ((out_chunk, rest_chunk), centre_chunk))| {
-                let first = chunk * VERTEX_GRAIN;
-                let row_start = &self.csr.row_start[first..=first + out_chunk.len()];
-                let pivots = &self.csr.pivot[first..first + out_chunk.len()];
-                for ((((o, &p), &c), bounds), &pivot) in out_chunk
-                    .iter_mut()
-                    .zip(rest_chunk)
-                    .zip(centre_chunk)
-                    .zip(row_start.windows(2))
-                    .zip(pivots)
-                {
-                    let range = bounds[0] as usize..bounds[1] as usize;
-                    if range.is_empty() {
-                        *o = p;
-                        continue;
-                    }
-                    let joints = &self.csr.joints[range.clone()];
-                    let weights = &self.csr.weights[range];
-                    let blended = blend_affine_cols(joints, weights, transforms);
-                    if !c.is_finite() {
-                        *o = transform_point_cols(&blended, p);
-                        continue;
-                    }
-                    let rotation =
-                        blend_rotations(joints, weights, pivot as usize, joint_rotations);
-                    *o = rotation.mul_vec3(p - c) + transform_point_cols(&blended, c);
-                }
-            });
+        scratch.prepare(transforms, DVec3::ZERO);
+        let rule = CorRule {
+            scratch,
+            points: WorldCentredPoints {
+                rest: rest_positions,
+                centres,
+            },
+        };
+        self.sorted.skin(&rule, out);
     }
 }
 

@@ -1,5 +1,5 @@
-//! Optimized centres-of-rotation skinning in f32 for per-frame display (Eq. 6; same rules as
-//! [`super::cor`]): `v'_i = R(i) (v_i − p_i) + Σ_j ω_ij T_j p_i`, with `R(i)` the normalised
+//! Optimized centres-of-rotation skinning in f32 for per-frame display (Eq. 6; the f32 instance
+//! of the rule of [`super::cor`]): `v'_i = R(i) (v_i − p_i) + Σ_j ω_ij T_j p_i`, with `R(i)` the normalised
 //! sign-aligned quaternion blend, evaluated with SSE-width glam `Affine3A`/`Quat`/`Vec3A`.
 //!
 //! The rest mesh M and the centres p_i are **stored** in the kernel, as f32 values of
@@ -9,108 +9,33 @@
 //! the f64 kernel. Accuracy vs [`super::CorSkinning`]: max |f32 − f64| is 2.9e-7 of the bbox
 //! diagonal on the 3× subdivided Arm at step ii (tests assert ≤ 2e-6).
 
-use glam::{Affine3A, DAffine3, DVec3, Quat, Vec3, Vec3A};
+use glam::{DAffine3, DVec3, Vec3, Vec3A};
 
-use super::compact_weights::{CountSortedWeights, VertexKernel, affine_from_local, local_origin};
-use super::dqs_f32::rotate_unnormalised;
-use super::rigid_rotation::rotation_quaternion;
+use super::compact_weights::{CountSortedWeights, local_origin};
+use super::cor::{CorRule, CorScratch, LocalCentredPoints};
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: `T_j ∘ translate(o)` and the rotation quaternions, `#J`, f32.
-#[derive(Debug, Clone)]
-pub struct CorF32Scratch {
-    transforms: Vec<Affine3A>,
-    rotations: Vec<Quat>,
-}
-
-impl CorF32Scratch {
-    pub fn new(num_joints: usize) -> Self {
-        Self {
-            transforms: vec![Affine3A::IDENTITY; num_joints],
-            rotations: vec![Quat::IDENTITY; num_joints],
-        }
-    }
-}
+pub type CorF32Scratch = CorScratch<f32>;
 
 /// Precomputed f32 CoR skinning: compact Ω, pivots, centres `p_i − o` and offsets `v_i − p_i`.
 #[derive(Debug, Clone)]
 pub struct CorF32 {
-    weights: CountSortedWeights,
+    weights: CountSortedWeights<f32>,
     origin: DVec3,
     /// `[p_i − o, v_i − p_i]` (`[v_i − o, 0]` for a vertex without CoR), `#V`, sorted order.
     centres_and_offsets: Vec<[Vec3A; 2]>,
 }
 
-/// Per-frame CoR rule: input = `[p − o, v − p]`.
-struct CorKernel<'a> {
-    transforms: &'a [Affine3A],
-    rotations: &'a [Quat],
-    origin: Vec3A,
-}
-
-impl VertexKernel for CorKernel<'_> {
-    type Input = [Vec3A; 2];
-
-    #[inline(always)]
-    fn skin(&self, joints: &[u16], weights: &[f32], pivot: u16, [c, d]: [Vec3A; 2]) -> Vec3A {
-        skin_point(
-            joints,
-            weights,
-            usize::from(pivot),
-            self.transforms,
-            self.rotations,
-            c,
-            d,
-        )
-    }
-
-    #[inline(always)]
-    fn unweighted(&self, [c, d]: [Vec3A; 2]) -> Vec3A {
-        c + d + self.origin
-    }
-}
-
-/// CoR image of one vertex: `R (v − p) + (Σ ω A) (p − o)`.
-#[inline(always)]
-fn skin_point(
-    joints: &[u16],
-    weights: &[f32],
-    pivot: usize,
-    transforms: &[Affine3A],
-    rotations: &[Quat],
-    centre_local: Vec3A,
-    offset: Vec3A,
-) -> Vec3A {
-    let pivot_rotation = rotations[pivot];
-    let mut x = Vec3A::ZERO;
-    let mut y = Vec3A::ZERO;
-    let mut z = Vec3A::ZERO;
-    let mut t = Vec3A::ZERO;
-    let mut rotation = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
-    for (&j, &w) in joints.iter().zip(weights) {
-        let j = usize::from(j);
-        let a = &transforms[j];
-        x += a.matrix3.x_axis * w;
-        y += a.matrix3.y_axis * w;
-        z += a.matrix3.z_axis * w;
-        t += a.translation * w;
-        let q = rotations[j];
-        rotation += q * w.copysign(pivot_rotation.dot(q));
-    }
-    let (v, w) = (Vec3A::new(rotation.x, rotation.y, rotation.z), rotation.w);
-    let rotated = rotate_unnormalised(v, w, offset) * (1.0 / (v.length_squared() + w * w));
-    rotated + x * centre_local.x + y * centre_local.y + z * centre_local.z + t
-}
-
 impl CorF32 {
     /// Ω (`#V × #J`), rest positions M and centres p_i (both `#V`, rest space). Errors if the
-    /// sizes differ or `#J` > 65 536.
+    /// sizes differ.
     pub fn new(
         skin_weights: &SkinWeights,
         rest_positions: &[DVec3],
         centres: &[DVec3],
     ) -> Result<Self, RigError> {
-        let weights = CountSortedWeights::new(skin_weights)?;
+        let weights = CountSortedWeights::new(skin_weights);
         let mut cor = Self {
             centres_and_offsets: vec![[Vec3A::ZERO; 2]; weights.num_vertices()],
             weights,
@@ -167,43 +92,22 @@ impl CorF32 {
         Ok(())
     }
 
-    /// Fills `scratch` with `T_j ∘ translate(o)` and the rotation quaternions (`#J`, f64 → f32).
-    pub fn prepare(&self, transforms: &[DAffine3], scratch: &mut CorF32Scratch) {
-        assert_eq!(transforms.len(), self.num_joints(), "CoR f32: transforms");
-        assert_eq!(
-            scratch.transforms.len(),
-            self.num_joints(),
-            "CoR f32: scratch"
-        );
-        assert_eq!(
-            scratch.rotations.len(),
-            self.num_joints(),
-            "CoR f32: scratch"
-        );
-        for ((a, q), t) in scratch
-            .transforms
-            .iter_mut()
-            .zip(&mut scratch.rotations)
-            .zip(transforms)
-        {
-            *a = affine_from_local(t, self.origin);
-            *q = rotation_quaternion(t.matrix3).as_quat();
-        }
-    }
-
     /// M' = CoR(T, Ω, M, P) in f32 (Eq. 6). `transforms`: `#J`; `scratch`:
     /// `CorF32Scratch::new(#J)`; `out`: `#V`. Unweighted vertices stay at rest.
     ///
     /// # Panics
     /// If a slice length does not match `#J` / `#V`.
     pub fn apply(&self, transforms: &[DAffine3], scratch: &mut CorF32Scratch, out: &mut [Vec3]) {
-        self.prepare(transforms, scratch);
-        let kernel = CorKernel {
-            transforms: &scratch.transforms,
-            rotations: &scratch.rotations,
-            origin: Vec3A::from(self.origin.as_vec3()),
+        assert_eq!(transforms.len(), self.num_joints(), "CoR f32: transforms");
+        scratch.prepare(transforms, self.origin);
+        let rule = CorRule {
+            scratch,
+            points: LocalCentredPoints {
+                stored: &self.centres_and_offsets,
+                origin: Vec3A::from(self.origin.as_vec3()),
+            },
         };
-        self.weights.skin(&kernel, &self.centres_and_offsets, out);
+        self.weights.skin(&rule, out);
     }
 }
 

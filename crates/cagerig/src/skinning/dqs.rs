@@ -3,17 +3,20 @@
 //! Per joint, `T_j` becomes a unit dual quaternion `q̂_j = r_j + ε d_j` with `d_j = ½ t_j r_j`.
 //! Per vertex, terms are sign-aligned with the **heaviest** influence (antipodality pivot; the
 //! reference tool uses the first listed joint, which can flip the blend when that joint has a tiny
-//! weight), blended with Ω, divided by `|Σ ω r|` and applied as `v' = R v + t`,
-//! `t = 2 (d r*)_xyz`.
+//! weight), blended with Ω, normalised and applied as `v' = R v + t`, `t = 2 (d r*)_xyz`
+//! (evaluated without normalising first, see [`dqs_point`]).
+//!
+//! The per-vertex rule is written once over [`SkinReal`]: [`DualQuaternionSkinning`] is its f64
+//! instance (the exact path), [`super::DqsF32`] its f32 instance (the display path); both run on
+//! the count-sorted layout of [`super::compact_weights`].
 //!
 //! DQS handles rigid transforms only: a `T_j^r` that is not a rotation is replaced by its
 //! rotation polar factor ([`super::rigid_rotation`]); scale/shear are dropped, `T_j^t` kept.
 
 use glam::{DAffine3, DQuat, DVec3};
-use rayon::prelude::*;
 
-use super::VERTEX_GRAIN;
-use super::pivoted_weights::PivotedWeights;
+use super::compact_weights::{CountSortedWeights, RestPoints, VertexKernel, WorldPoints};
+use super::precision::SkinReal;
 use super::rigid_rotation::rotation_quaternion;
 use crate::SkinWeights;
 
@@ -58,91 +61,113 @@ impl DualQuat {
     }
 }
 
-/// Caller-owned per-frame buffer: the `#J` joint dual quaternions.
+/// Caller-owned per-frame buffer of a DQS kernel of precision `S`: the `#J` joint dual
+/// quaternions `[real, dual]` (of `T_j ∘ translate(o)` for the f32 kernel).
 #[derive(Debug, Clone)]
-pub struct DqsScratch {
-    joint_dual_quats: Vec<DualQuat>,
+pub struct DqsScratch<S: SkinReal = f64> {
+    pub(crate) joint_dual_quats: Vec<[S::Quat; 2]>,
 }
 
-impl DqsScratch {
+impl<S: SkinReal> DqsScratch<S> {
     pub fn new(num_joints: usize) -> Self {
         Self {
-            joint_dual_quats: vec![DualQuat::IDENTITY; num_joints],
+            joint_dual_quats: vec![[S::quat(DQuat::IDENTITY), S::ZERO_QUAT]; num_joints],
         }
     }
 
-    /// The joint dual quaternions of the last `apply`.
-    pub fn joint_dual_quats(&self) -> &[DualQuat] {
-        &self.joint_dual_quats
+    /// Fills the joint dual quaternions of `T_j ∘ translate(origin)` (`#J`, built in f64, then
+    /// rounded to `S`; DQS blending commutes with that right factor).
+    pub(crate) fn prepare(&mut self, transforms: &[DAffine3], origin: DVec3) {
+        assert_eq!(
+            self.joint_dual_quats.len(),
+            transforms.len(),
+            "DQS: scratch"
+        );
+        let to_local = DAffine3::from_translation(origin);
+        for (q, t) in self.joint_dual_quats.iter_mut().zip(transforms) {
+            let dq = DualQuat::from_affine(&(*t * to_local));
+            *q = [S::quat(dq.real), S::quat(dq.dual)];
+        }
     }
 }
 
-/// Precomputed DQS: flat Ω (CSR) and the per-vertex pivot joint.
+/// Precomputed DQS (f64, the exact path): Ω count-sorted with each vertex's pivot joint.
 #[derive(Debug, Clone)]
 pub struct DualQuaternionSkinning {
-    csr: PivotedWeights,
+    sorted: CountSortedWeights<f64>,
 }
 
-/// Sign-aligned blend `Σ_j ω_j s_j q̂_j`, `s_j = sign(r_pivot · r_j)`, normalised by `|Σ ω s r|`.
+/// Sign-aligned blend `Σ_j ω_j s_j q̂_j`, `s_j = sign(r_pivot · r_j)`, applied to `p` without
+/// normalising first: with `n = |Σ ω s r|²`, `R p = ((w² − v·v) p + 2 (v·p) v + 2 w v×p) / n`
+/// and `t = 2 (w d_v − d_w v + v × d_v) / n` (one division, no square root; Eq. 4).
 #[inline(always)]
-pub(crate) fn blend_dual_quats(
-    joints: &[u32],
-    weights: &[f64],
+pub(crate) fn dqs_point<S: SkinReal>(
+    joints: &[u16],
+    weights: &[S],
     pivot: usize,
-    joint_dual_quats: &[DualQuat],
-) -> DualQuat {
-    let pivot_real = joint_dual_quats[pivot].real;
-    let mut real = [0.0f64; 4];
-    let mut dual = [0.0f64; 4];
+    joint_dual_quats: &[[S::Quat; 2]],
+    p: S::V3,
+) -> S::V3 {
+    let pivot_real = joint_dual_quats[pivot][0];
+    let mut real = S::ZERO_QUAT;
+    let mut dual = S::ZERO_QUAT;
     for (&j, &w) in joints.iter().zip(weights) {
-        let q = &joint_dual_quats[j as usize];
-        let signed = w.copysign(pivot_real.dot(q.real));
-        for (sum, x) in real.iter_mut().zip(q.real.to_array()) {
-            *sum += x * signed;
-        }
-        for (sum, x) in dual.iter_mut().zip(q.dual.to_array()) {
-            *sum += x * signed;
-        }
+        let [r, d] = joint_dual_quats[usize::from(j)];
+        let signed = w.copysign(S::quat_dot(pivot_real, r));
+        real = real + r * signed;
+        dual = dual + d * signed;
     }
-    let real = DQuat::from_array(real);
-    let inv_norm = 1.0 / real.length();
-    DualQuat {
-        real: real * inv_norm,
-        dual: DQuat::from_array(dual) * inv_norm,
+    let (v, w) = S::quat_parts(real);
+    let (dv, dw) = S::quat_parts(dual);
+    let rotated = rotate_unnormalised::<S>(v, w, p);
+    let translation = (dv * w - v * dw + S::cross(v, dv)) * S::TWO;
+    (rotated + translation) * (S::length_squared(v) + w * w).recip()
+}
+
+/// `|q|² R(q) p` for a quaternion `q = (v, w)` of any non-zero length (R(q) the rotation of
+/// `q / |q|`): `(w² − v·v) p + 2 (v·p) v + 2 w v × p`.
+#[inline(always)]
+pub(crate) fn rotate_unnormalised<S: SkinReal>(v: S::V3, w: S, p: S::V3) -> S::V3 {
+    p * (w * w - S::length_squared(v)) + v * (S::TWO * S::dot(v, p)) + S::cross(v, p) * (S::TWO * w)
+}
+
+/// The per-vertex DQS rule for a kernel of precision `S`.
+pub(crate) struct DqsRule<'a, S: SkinReal, P> {
+    pub joint_dual_quats: &'a [[S::Quat; 2]],
+    pub points: P,
+}
+
+impl<S: SkinReal, P: RestPoints<S>> VertexKernel<S> for DqsRule<'_, S, P> {
+    #[inline(always)]
+    fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3 {
+        dqs_point::<S>(
+            joints,
+            weights,
+            usize::from(pivot),
+            self.joint_dual_quats,
+            self.points.point(slot, vertex),
+        )
+    }
+
+    #[inline(always)]
+    fn unweighted(&self, slot: usize, vertex: usize) -> S::V3 {
+        self.points.world(slot, vertex)
     }
 }
 
 impl DualQuaternionSkinning {
     pub fn new(weights: &SkinWeights) -> Self {
         Self {
-            csr: PivotedWeights::new(weights),
+            sorted: CountSortedWeights::new(weights),
         }
     }
 
     pub fn num_vertices(&self) -> usize {
-        self.csr.num_vertices()
+        self.sorted.num_vertices()
     }
 
     pub fn num_joints(&self) -> usize {
-        self.csr.num_joints
-    }
-
-    /// Heaviest joint of vertex `v` (the antipodality pivot).
-    pub fn pivot(&self, v: usize) -> usize {
-        self.csr.pivot[v] as usize
-    }
-
-    /// Fills `scratch` with the joint dual quaternions of `transforms` (`#J`, serial).
-    pub fn prepare(&self, transforms: &[DAffine3], scratch: &mut DqsScratch) {
-        assert_eq!(transforms.len(), self.csr.num_joints, "DQS: transforms");
-        assert_eq!(
-            scratch.joint_dual_quats.len(),
-            self.csr.num_joints,
-            "DQS: scratch"
-        );
-        for (q, t) in scratch.joint_dual_quats.iter_mut().zip(transforms) {
-            *q = DualQuat::from_affine(t);
-        }
+        self.sorted.num_joints
     }
 
     /// M' = DQS(T, Ω, M) (Eq. 4). `transforms`: `#J`; `scratch`: `DqsScratch::new(#J)`;
@@ -157,37 +182,14 @@ impl DualQuaternionSkinning {
         scratch: &mut DqsScratch,
         out: &mut [DVec3],
     ) {
-        self.prepare(transforms, scratch);
+        assert_eq!(transforms.len(), self.num_joints(), "DQS: transforms");
         assert_eq!(rest_positions.len(), self.num_vertices(), "DQS: rest");
-        assert_eq!(out.len(), self.num_vertices(), "DQS: out");
-        let joint_dual_quats = &scratch.joint_dual_quats[..];
-        out.par_chunks_mut(VERTEX_GRAIN)
-            .zip(rest_positions.par_chunks(VERTEX_GRAIN))
-            .enumerate()
-            .for_each(|(chunk, (out_chunk, rest_chunk))| {
-                let first = chunk * VERTEX_GRAIN;
-                let row_start = &self.csr.row_start[first..=first + out_chunk.len()];
-                let pivots = &self.csr.pivot[first..first + out_chunk.len()];
-                for (((o, &p), bounds), &pivot) in out_chunk
-                    .iter_mut()
-                    .zip(rest_chunk)
-                    .zip(row_start.windows(2))
-                    .zip(pivots)
-                {
-                    let range = bounds[0] as usize..bounds[1] as usize;
-                    *o = if range.is_empty() {
-                        p
-                    } else {
-                        blend_dual_quats(
-                            &self.csr.joints[range.clone()],
-                            &self.csr.weights[range],
-                            pivot as usize,
-                            joint_dual_quats,
-                        )
-                        .transform_point3(p)
-                    };
-                }
-            });
+        scratch.prepare(transforms, DVec3::ZERO);
+        let rule = DqsRule::<f64, _> {
+            joint_dual_quats: &scratch.joint_dual_quats,
+            points: WorldPoints(rest_positions),
+        };
+        self.sorted.skin(&rule, out);
     }
 }
 
@@ -247,17 +249,13 @@ mod tests {
         assert!(out[0].abs_diff_eq(-DVec3::X, 1e-14), "{out:?}");
         // Same rotation stored with opposite quaternion signs is blended as one rotation.
         let q = DQuat::from_rotation_y(PI / 3.0);
-        let mut scratch = DqsScratch::new(2);
-        scratch.joint_dual_quats = vec![
-            DualQuat::from_rotation_translation(q, DVec3::X),
-            DualQuat::from_rotation_translation(-q, DVec3::X),
-        ];
-        let b = blend_dual_quats(&[0, 1], &[0.4, 0.6], 1, &scratch.joint_dual_quats);
-        let expected = DAffine3::from_translation(DVec3::X) * DAffine3::from_quat(q);
+        let dual_quats = [q, -q].map(|q| {
+            let dq = DualQuat::from_rotation_translation(q, DVec3::X);
+            [dq.real, dq.dual]
+        });
         let p = DVec3::new(0.3, -2.0, 1.0);
-        assert!(
-            b.transform_point3(p)
-                .abs_diff_eq(expected.transform_point3(p), 1e-14)
-        );
+        let blended = dqs_point::<f64>(&[0, 1], &[0.4, 0.6], 1, &dual_quats, p);
+        let expected = DAffine3::from_translation(DVec3::X) * DAffine3::from_quat(q);
+        assert!(blended.abs_diff_eq(expected.transform_point3(p), 1e-14));
     }
 }

@@ -1,24 +1,28 @@
 //! Linear blend skinning (Eq. 2–3): `v'_i = (Σ_j ω_ij T_j^r)·v_i + Σ_j ω_ij T_j^t`.
 
 use glam::{DAffine3, DMat3, DVec3};
-use rayon::prelude::*;
 
-use super::VERTEX_GRAIN;
+use super::compact_weights::{
+    CountSortedWeights, JointColumns, RestPoints, VertexKernel, WorldPoints,
+};
+use super::precision::SkinReal;
 use crate::SkinWeights;
 
-/// Precomputed LBS: a flat copy of Ω (`#V × #J`, CSR) streamed by [`LinearBlendSkinning::apply`].
+/// Precomputed LBS: Ω (`#V × #J`) count-sorted for [`LinearBlendSkinning::apply`] and as flat CSR
+/// rows for the per-vertex queries of CageUp/CageRev.
 #[derive(Debug, Clone)]
 pub struct LinearBlendSkinning {
     num_joints: usize,
     row_start: Vec<u32>,
     joints: Vec<u32>,
     weights: Vec<f64>,
+    sorted: CountSortedWeights<f64>,
 }
 
 /// `Σ_j ω_ij T_j` for the influences of one vertex as 12 column-major numbers
 /// (`[x_axis, y_axis, z_axis, translation]`, the layout of [`DAffine3::to_cols_array`]); an affine
 /// map, not rigid in general. A fixed-length accumulation LLVM vectorises; the per-element order
-/// of operations is that of the glam vector code it replaces (bit-identical results).
+/// of operations is that of [`blend_columns`] (bit-identical results).
 #[inline(always)]
 pub(crate) fn blend_affine_cols(
     joints: &[u32],
@@ -36,7 +40,7 @@ pub(crate) fn blend_affine_cols(
 }
 
 /// Applies column-major affine numbers (see [`blend_affine_cols`]) to a point:
-/// `((x p.x + y p.y) + z p.z) + t`, the evaluation order of [`DAffine3::transform_point3`].
+/// `((x p.x + y p.y) + z p.z) + t`, the evaluation order of [`transform_point`].
 #[inline(always)]
 pub(crate) fn transform_point_cols(a: &[f64; 12], p: DVec3) -> DVec3 {
     DVec3::new(
@@ -52,6 +56,61 @@ pub(crate) fn blend_affine(joints: &[u32], weights: &[f64], transforms: &[DAffin
     DAffine3::from_cols_array(&blend_affine_cols(joints, weights, transforms))
 }
 
+/// Columns `[x, y, z, t]` of `Σ_j ω_j T_j` (Eq. 2–3) in precision `S`, accumulated in influence
+/// order.
+#[inline(always)]
+pub(crate) fn blend_columns<S: SkinReal, T: JointColumns<S> + ?Sized>(
+    joints: &[u16],
+    weights: &[S],
+    transforms: &T,
+) -> [S::V3; 4] {
+    let mut blended = [S::ZERO_V3; 4];
+    for (&j, &w) in joints.iter().zip(weights) {
+        let a = transforms.columns(usize::from(j));
+        for (b, x) in blended.iter_mut().zip(a) {
+            *b = *b + x * w;
+        }
+    }
+    blended
+}
+
+/// `((x p.x + y p.y) + z p.z) + t` for affine columns `[x, y, z, t]`.
+#[inline(always)]
+pub(crate) fn transform_point<S: SkinReal>(columns: &[S::V3; 4], p: S::V3) -> S::V3 {
+    let [px, py, pz] = S::components(p);
+    columns[0] * px + columns[1] * py + columns[2] * pz + columns[3]
+}
+
+/// The per-vertex LBS rule (Eq. 2–3) for a kernel of precision `S`.
+pub(crate) struct LbsRule<'a, T: ?Sized, P> {
+    pub transforms: &'a T,
+    pub points: P,
+}
+
+impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>> VertexKernel<S>
+    for LbsRule<'_, T, P>
+{
+    #[inline(always)]
+    fn skin(
+        &self,
+        joints: &[u16],
+        weights: &[S],
+        _pivot: u16,
+        slot: usize,
+        vertex: usize,
+    ) -> S::V3 {
+        transform_point::<S>(
+            &blend_columns(joints, weights, self.transforms),
+            self.points.point(slot, vertex),
+        )
+    }
+
+    #[inline(always)]
+    fn unweighted(&self, slot: usize, vertex: usize) -> S::V3 {
+        self.points.world(slot, vertex)
+    }
+}
+
 impl LinearBlendSkinning {
     pub fn new(weights: &SkinWeights) -> Self {
         let (row_start, joints, w) = weights.csr();
@@ -60,6 +119,7 @@ impl LinearBlendSkinning {
             row_start: row_start.to_vec(),
             joints: joints.to_vec(),
             weights: w.to_vec(),
+            sorted: CountSortedWeights::new(weights),
         }
     }
 
@@ -88,6 +148,7 @@ impl LinearBlendSkinning {
     }
 
     /// M' = LBS(T, Ω, M) (Eq. 2–3). `transforms`: `#J`; `rest_positions`, `out`: `#V`.
+    /// Bit-identical to [`Self::apply_rows`] on every vertex.
     ///
     /// # Panics
     /// If a slice length does not match `#J` / `#V`.
@@ -95,30 +156,11 @@ impl LinearBlendSkinning {
         assert_eq!(transforms.len(), self.num_joints, "LBS: transforms");
         assert_eq!(rest_positions.len(), self.num_vertices(), "LBS: rest");
         assert_eq!(out.len(), self.num_vertices(), "LBS: out");
-        out.par_chunks_mut(VERTEX_GRAIN)
-            .zip(rest_positions.par_chunks(VERTEX_GRAIN))
-            .enumerate()
-            .for_each(|(chunk, (out_chunk, rest_chunk))| {
-                let first = chunk * VERTEX_GRAIN;
-                let row_start = &self.row_start[first..=first + out_chunk.len()];
-                for ((o, &p), bounds) in out_chunk
-                    .iter_mut()
-                    .zip(rest_chunk)
-                    .zip(row_start.windows(2))
-                {
-                    let range = bounds[0] as usize..bounds[1] as usize;
-                    *o = if range.is_empty() {
-                        p
-                    } else {
-                        let blended = blend_affine_cols(
-                            &self.joints[range.clone()],
-                            &self.weights[range],
-                            transforms,
-                        );
-                        transform_point_cols(&blended, p)
-                    };
-                }
-            });
+        let rule = LbsRule {
+            transforms,
+            points: WorldPoints(rest_positions),
+        };
+        self.sorted.skin(&rule, out);
     }
 
     /// LBS of a subset of vertices (e.g. the MaxVol rows of the ghost mesh used by CageUp):

@@ -7,21 +7,22 @@
 //! of the bounding-box diagonal vs [`super::LinearBlendSkinning`] (tests assert ≤ 2e-6); use the f64 kernel where exact
 //! results are needed (conformance, CageRev/CageUp solves).
 
-use glam::{Affine3A, DAffine3, DVec3, Vec3, Vec3A};
+use glam::{DAffine3, DVec3, Vec3, Vec3A};
 
-use super::compact_weights::{SortedRestMesh, VertexKernel, affine_from_local};
+use super::compact_weights::{SortedRestMesh, columns_from_local};
+use super::lbs::LbsRule;
 use crate::{RigError, SkinWeights};
 
-/// Caller-owned per-frame buffer: the `#J` transforms `T_j ∘ translate(o)` in f32.
+/// Caller-owned per-frame buffer: the `#J` transforms `T_j ∘ translate(o)` as f32 columns.
 #[derive(Debug, Clone)]
 pub struct LbsF32Scratch {
-    transforms: Vec<Affine3A>,
+    columns: Vec<[Vec3A; 4]>,
 }
 
 impl LbsF32Scratch {
     pub fn new(num_joints: usize) -> Self {
         Self {
-            transforms: vec![Affine3A::IDENTITY; num_joints],
+            columns: vec![[Vec3A::X, Vec3A::Y, Vec3A::Z, Vec3A::ZERO]; num_joints],
         }
     }
 }
@@ -33,52 +34,8 @@ pub struct LbsF32 {
     mesh: SortedRestMesh,
 }
 
-/// `Σ_j ω_j A_j` for the influences of one vertex (`A_j` local-to-world, f32).
-#[inline(always)]
-pub(crate) fn blend_affine_f32(
-    joints: &[u16],
-    weights: &[f32],
-    transforms: &[Affine3A],
-) -> Affine3A {
-    let mut x = Vec3A::ZERO;
-    let mut y = Vec3A::ZERO;
-    let mut z = Vec3A::ZERO;
-    let mut t = Vec3A::ZERO;
-    for (&j, &w) in joints.iter().zip(weights) {
-        let a = &transforms[usize::from(j)];
-        x += a.matrix3.x_axis * w;
-        y += a.matrix3.y_axis * w;
-        z += a.matrix3.z_axis * w;
-        t += a.translation * w;
-    }
-    Affine3A {
-        matrix3: glam::Mat3A::from_cols(x, y, z),
-        translation: t,
-    }
-}
-
-/// Per-frame LBS rule: input = local rest position `v − o`.
-struct LbsKernel<'a> {
-    transforms: &'a [Affine3A],
-    origin: Vec3A,
-}
-
-impl VertexKernel for LbsKernel<'_> {
-    type Input = Vec3A;
-
-    #[inline(always)]
-    fn skin(&self, joints: &[u16], weights: &[f32], _pivot: u16, rest: Vec3A) -> Vec3A {
-        blend_affine_f32(joints, weights, self.transforms).transform_point3a(rest)
-    }
-
-    #[inline(always)]
-    fn unweighted(&self, rest: Vec3A) -> Vec3A {
-        rest + self.origin
-    }
-}
-
 impl LbsF32 {
-    /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ or `#J` > 65 536.
+    /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
     pub fn new(skin_weights: &SkinWeights, rest_positions: &[DVec3]) -> Result<Self, RigError> {
         Ok(Self {
             mesh: SortedRestMesh::new(
@@ -102,31 +59,19 @@ impl LbsF32 {
         self.mesh.set_rest_positions(rest_positions)
     }
 
-    /// Fills `scratch` with `T_j ∘ translate(o)` in f32 (`#J`, serial).
-    pub fn prepare(&self, transforms: &[DAffine3], scratch: &mut LbsF32Scratch) {
-        assert_eq!(transforms.len(), self.num_joints(), "LBS f32: transforms");
-        assert_eq!(
-            scratch.transforms.len(),
-            self.num_joints(),
-            "LBS f32: scratch"
-        );
-        for (a, t) in scratch.transforms.iter_mut().zip(transforms) {
-            *a = affine_from_local(t, self.mesh.origin);
-        }
-    }
-
     /// M' = LBS(T, Ω, M) in f32 (Eq. 2–3). `transforms`: `#J`; `scratch`:
     /// `LbsF32Scratch::new(#J)`; `out`: `#V`. Unweighted vertices stay at rest.
     ///
     /// # Panics
     /// If a slice length does not match `#J` / `#V`.
     pub fn apply(&self, transforms: &[DAffine3], scratch: &mut LbsF32Scratch, out: &mut [Vec3]) {
-        self.prepare(transforms, scratch);
-        let kernel = LbsKernel {
-            transforms: &scratch.transforms,
-            origin: Vec3A::from(self.mesh.origin.as_vec3()),
+        assert_eq!(transforms.len(), self.num_joints(), "LBS f32: transforms");
+        columns_from_local::<f32>(transforms, self.mesh.origin, &mut scratch.columns);
+        let rule = LbsRule {
+            transforms: &scratch.columns[..],
+            points: self.mesh.points(),
         };
-        self.mesh.weights.skin(&kernel, &self.mesh.rest_local, out);
+        self.mesh.weights.skin(&rule, out);
     }
 }
 

@@ -15,7 +15,7 @@ pub mod dqs;
 pub mod dqs_f32;
 pub mod lbs;
 pub mod lbs_f32;
-pub(crate) mod pivoted_weights;
+pub mod precision;
 pub mod rigid_rotation;
 
 pub use cor::{CorScratch, CorSkinning};
@@ -30,6 +30,7 @@ pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
 pub use dqs_f32::{DqsF32, DqsF32Scratch};
 pub use lbs::LinearBlendSkinning;
 pub use lbs_f32::{LbsF32, LbsF32Scratch};
+pub use precision::SkinReal;
 
 /// The skinning method S→S'→M' of a session.
 #[derive(
@@ -46,8 +47,6 @@ pub enum SkinningMethod {
     Cor,
 }
 
-/// Vertices per rayon task in the per-frame kernels.
-pub(crate) const VERTEX_GRAIN: usize = 8192;
-
-/// Vertices per rayon task in the f32 per-frame kernels.
+/// Vertices per rayon task in the per-frame kernels (a mesh of at most this many vertices is
+/// skinned serially).
 pub(crate) const VERTEX_GRAIN_F32: usize = 8192;
