@@ -20,6 +20,7 @@
 
 use glam::{DAffine3, DQuat, DVec3, Vec3A};
 
+use super::antipodal_signs::AntipodalSigns;
 use super::compact_weights::{CountSortedWeights, JointColumns, VertexKernel};
 use super::dqs::rotate_unnormalised;
 use super::lbs::{blend_columns, transform_point};
@@ -33,6 +34,7 @@ use crate::SkinWeights;
 pub struct CorScratch<S: SkinReal = f64> {
     pub(crate) columns: Vec<[S::V3; 4]>,
     pub(crate) rotations: Vec<S::Quat>,
+    pub(crate) signs: AntipodalSigns<S>,
 }
 
 impl<S: SkinReal> CorScratch<S> {
@@ -40,16 +42,46 @@ impl<S: SkinReal> CorScratch<S> {
         Self {
             columns: vec![[S::ZERO_V3; 4]; num_joints],
             rotations: vec![S::quat(DQuat::IDENTITY); num_joints],
+            signs: AntipodalSigns::new(num_joints),
         }
     }
 
-    /// Fills the columns of `T_j ∘ translate(origin)` and the rotation quaternions of `T_j`
-    /// (`#J`, f64, then rounded to `S`).
-    pub(crate) fn prepare(&mut self, transforms: &[DAffine3], origin: DVec3) {
+    /// Fills the columns of `T_j ∘ translate(origin)`, the rotation quaternions of `T_j`
+    /// (`#J`, f64, then rounded to `S`) and, where `sorted`'s mesh gains from it, the sign
+    /// table; then skins `out` from `points`.
+    pub(crate) fn skin<P: CentredPoints<S>>(
+        &mut self,
+        transforms: &[DAffine3],
+        origin: DVec3,
+        sorted: &CountSortedWeights<S>,
+        points: P,
+        out: &mut [S::Out],
+    ) {
         assert_eq!(self.rotations.len(), transforms.len(), "CoR: scratch");
         super::compact_weights::columns_from_local::<S>(transforms, origin, &mut self.columns);
         for (q, t) in self.rotations.iter_mut().zip(transforms) {
             *q = S::quat(rotation_quaternion(t.matrix3));
+        }
+        let rotations = &self.rotations;
+        if self
+            .signs
+            .fill_if_worth_it(sorted.num_vertices(), |j| rotations[j])
+        {
+            sorted.skin(
+                &CorRule::<S, P, true> {
+                    scratch: self,
+                    points,
+                },
+                out,
+            );
+        } else {
+            sorted.skin(
+                &CorRule::<S, P, false> {
+                    scratch: self,
+                    points,
+                },
+                out,
+            );
         }
     }
 }
@@ -65,10 +97,11 @@ pub struct CorSkinning {
 /// kernel's space, `offset` = v − p.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn cor_point<S: SkinReal, T: JointColumns<S> + ?Sized>(
+pub(crate) fn cor_point<S: SkinReal, T: JointColumns<S> + ?Sized, const TABLE: bool>(
     joints: &[u16],
     weights: &[S],
     pivot: usize,
+    signs: &[S],
     transforms: &T,
     rotations: &[S::Quat],
     centre: S::V3,
@@ -78,7 +111,12 @@ pub(crate) fn cor_point<S: SkinReal, T: JointColumns<S> + ?Sized>(
     let mut rotation = S::ZERO_QUAT;
     for (&j, &w) in joints.iter().zip(weights) {
         let q = rotations[usize::from(j)];
-        rotation = rotation + q * w.copysign(S::quat_dot(pivot_rotation, q));
+        let signed = if TABLE {
+            w * signs[usize::from(j)]
+        } else {
+            w.copysign(S::quat_dot(pivot_rotation, q))
+        };
+        rotation = rotation + q * signed;
     }
     let blended = blend_columns(joints, weights, transforms);
     let (v, w) = S::quat_parts(rotation);
@@ -134,20 +172,28 @@ impl CentredPoints<f32> for LocalCentredPoints<'_> {
     }
 }
 
-/// The per-vertex CoR rule for a kernel of precision `S`.
-pub(crate) struct CorRule<'a, S: SkinReal, P> {
-    pub scratch: &'a CorScratch<S>,
-    pub points: P,
+/// The per-vertex CoR rule for a kernel of precision `S` (`TABLE`: signs looked up).
+struct CorRule<'a, S: SkinReal, P, const TABLE: bool> {
+    scratch: &'a CorScratch<S>,
+    points: P,
 }
 
-impl<S: SkinReal, P: CentredPoints<S>> VertexKernel<S> for CorRule<'_, S, P> {
+impl<S: SkinReal, P: CentredPoints<S>, const TABLE: bool> VertexKernel<S>
+    for CorRule<'_, S, P, TABLE>
+{
     #[inline(always)]
     fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3 {
         let [centre, offset] = self.points.centre_and_offset(slot, vertex);
-        cor_point::<S, _>(
+        let pivot = usize::from(pivot);
+        cor_point::<S, _, TABLE>(
             joints,
             weights,
-            usize::from(pivot),
+            pivot,
+            if TABLE {
+                self.scratch.signs.row(pivot)
+            } else {
+                &[]
+            },
             &self.scratch.columns[..],
             &self.scratch.rotations,
             centre,
@@ -192,15 +238,16 @@ impl CorSkinning {
         assert_eq!(transforms.len(), self.num_joints(), "CoR: transforms");
         assert_eq!(rest_positions.len(), self.num_vertices(), "CoR: rest");
         assert_eq!(centres.len(), self.num_vertices(), "CoR: centres");
-        scratch.prepare(transforms, DVec3::ZERO);
-        let rule = CorRule {
-            scratch,
-            points: WorldCentredPoints {
+        scratch.skin(
+            transforms,
+            DVec3::ZERO,
+            &self.sorted,
+            WorldCentredPoints {
                 rest: rest_positions,
                 centres,
             },
-        };
-        self.sorted.skin(&rule, out);
+            out,
+        );
     }
 }
 

@@ -12,7 +12,7 @@
 use glam::{DAffine3, DVec3, Vec3, Vec3A};
 
 use super::compact_weights::{CountSortedWeights, local_origin};
-use super::cor::{CorRule, CorScratch, LocalCentredPoints};
+use super::cor::{CorScratch, LocalCentredPoints};
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: `T_j ∘ translate(o)` and the rotation quaternions, `#J`, f32.
@@ -99,15 +99,16 @@ impl CorF32 {
     /// If a slice length does not match `#J` / `#V`.
     pub fn apply(&self, transforms: &[DAffine3], scratch: &mut CorF32Scratch, out: &mut [Vec3]) {
         assert_eq!(transforms.len(), self.num_joints(), "CoR f32: transforms");
-        scratch.prepare(transforms, self.origin);
-        let rule = CorRule {
-            scratch,
-            points: LocalCentredPoints {
+        scratch.skin(
+            transforms,
+            self.origin,
+            &self.weights,
+            LocalCentredPoints {
                 stored: &self.centres_and_offsets,
                 origin: Vec3A::from(self.origin.as_vec3()),
             },
-        };
-        self.weights.skin(&rule, out);
+            out,
+        );
     }
 }
 

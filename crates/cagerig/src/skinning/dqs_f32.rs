@@ -11,7 +11,7 @@
 use glam::{DAffine3, DVec3, Vec3};
 
 use super::compact_weights::SortedRestMesh;
-use super::dqs::{DqsRule, DqsScratch};
+use super::dqs::DqsScratch;
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: the `#J` joint dual quaternions of `T_j ∘ translate(o)`, f32.
@@ -55,12 +55,13 @@ impl DqsF32 {
     /// If a slice length does not match `#J` / `#V`.
     pub fn apply(&self, transforms: &[DAffine3], scratch: &mut DqsF32Scratch, out: &mut [Vec3]) {
         assert_eq!(transforms.len(), self.num_joints(), "DQS f32: transforms");
-        scratch.prepare(transforms, self.mesh.origin);
-        let rule = DqsRule::<f32, _> {
-            joint_dual_quats: &scratch.joint_dual_quats,
-            points: self.mesh.points(),
-        };
-        self.mesh.weights.skin(&rule, out);
+        scratch.skin(
+            transforms,
+            self.mesh.origin,
+            &self.mesh.weights,
+            self.mesh.points(),
+            out,
+        );
     }
 }
 

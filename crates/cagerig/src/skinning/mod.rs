@@ -5,6 +5,7 @@
 //! is edited) and writes M' into a caller-owned `#V` buffer without allocating.
 //! Vertices with an empty weight row stay at their rest position under every method.
 
+pub(crate) mod antipodal_signs;
 pub(crate) mod compact_weights;
 pub mod cor;
 pub mod cor_cage_coords;
