@@ -34,11 +34,14 @@ use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 mod accessors;
 mod animation_sample;
 mod checkpoint;
+mod display_path;
 mod editable_state;
 mod parts;
 mod sync_chain;
 use checkpoint::Checkpoint;
 pub use checkpoint::MAX_STATE_MAGNITUDE;
+use display_path::DisplayPath;
+pub use display_path::DisplayPrecision;
 pub use editable_state::{EditableState, SyncLocks};
 use parts::phi_c_residual;
 pub use parts::{
@@ -128,6 +131,10 @@ pub struct RigSession {
     dqs_scratch: DqsScratch,
     /// The small state saved before each event (see [`checkpoint`]).
     checkpoint: Checkpoint,
+    /// The f32 display path, when on (see [`display_path`]).
+    display: Option<Box<DisplayPath>>,
+    /// Incremented whenever M (and with it the CoR centres) changes.
+    rest_revision: u64,
     /// SkelUp / CageUp switched off by the user (see [`SyncLocks`]).
     locks: SyncLocks,
 }
@@ -331,6 +338,8 @@ impl RigSession {
             scratch_rows_posed: vec![DVec3::ZERO; nr],
             checkpoint: Checkpoint::new(nc, nj),
             locks: SyncLocks::default(),
+            display: None,
+            rest_revision: 0,
         };
         session.set_skinning(options.skinning)?;
         session.pose_and_fit();

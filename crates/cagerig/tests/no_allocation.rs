@@ -10,7 +10,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use cagerig::demo;
-use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use glam::DVec3;
 
@@ -79,4 +79,26 @@ fn run_events() {
     s.refactor_reverser().unwrap();
     let n = allocations_during(|| s.move_posed_cage(&[9, 10], &[offset]).unwrap());
     assert_eq!(n, 0, "move_posed_cage allocated {n} times");
+
+    // The f32 display path: kernels are built on first use of each method, then events
+    // allocate nothing either.
+    s.set_display_precision(DisplayPrecision::F32).unwrap();
+    for method in [
+        SkinningMethod::Lbs,
+        SkinningMethod::Dqs,
+        SkinningMethod::Cor,
+    ] {
+        s.set_skinning(method).unwrap();
+        s.move_rest_cage(&[0, 3, 7], &[offset]).unwrap();
+        let n = allocations_during(|| s.rotate_joint(5, DVec3::Y, 0.02).unwrap());
+        assert_eq!(
+            n, 0,
+            "display path: rotate_joint ({method:?}) allocated {n} times"
+        );
+        let n = allocations_during(|| s.move_rest_cage(&[0, 3, 7], &[offset]).unwrap());
+        assert_eq!(
+            n, 0,
+            "display path: move_rest_cage ({method:?}) allocated {n} times"
+        );
+    }
 }

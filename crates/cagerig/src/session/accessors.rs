@@ -7,9 +7,13 @@ impl RigSession {
     pub fn rest_mesh(&self) -> &[DVec3] {
         &self.rest_mesh
     }
-    /// Current skin M' (`#V`).
+    /// Current skin M' (`#V`), exact (on the f32 display path it is skinned in f64 on the
+    /// first call after an event; [`RigSession::display_mesh`] is the drawn one).
     pub fn posed_mesh(&self) -> &[DVec3] {
-        &self.posed_mesh
+        match self.display.as_deref() {
+            Some(display) => self.exact_posed_mesh(display),
+            None => &self.posed_mesh,
+        }
     }
     /// Rest cage C (`#C`).
     pub fn rest_cage(&self) -> &[DVec3] {

@@ -90,6 +90,7 @@ impl RigSession {
     pub(super) fn rest_from_cage_in_full(&mut self) {
         self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
         self.rest_mesh_is_phi_c = true;
+        self.rest_mesh_changed();
         if let Some(cor) = &mut self.cor {
             if self.method == SkinningMethod::Cor {
                 cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
@@ -101,6 +102,7 @@ impl RigSession {
 
     /// Applies ΔC on a few rest-cage vertices to C, M and the CoR centres.
     pub(super) fn apply_rest_cage_delta_sparse(&mut self, vertices: &[usize], deltas: &[DVec3]) {
+        self.rest_mesh_changed();
         for (&k, d) in vertices.iter().zip(deltas) {
             self.rest_cage[k] += *d;
         }
@@ -166,37 +168,60 @@ impl RigSession {
         }
     }
 
+    /// M' from M under the current method: the exact f64 M', or on the display path the f32
+    /// display mesh (see [`super::display_path`]).
     pub(super) fn skin(&mut self) {
-        match self.method {
-            SkinningMethod::Lbs => {
-                self.lbs
-                    .apply(&self.posed_from_rest, &self.rest_mesh, &mut self.posed_mesh)
+        if let Some(cor) = &mut self.cor
+            && self.method == SkinningMethod::Cor
+            && cor.stale
+        {
+            cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
+            cor.stale = false;
+        }
+        if self.display.is_some() {
+            if self.skin_display().is_ok() {
+                return;
             }
-            SkinningMethod::Dqs => self.dqs.apply(
+            // Unreachable: the display kernels are sized like M at construction. Fall back to
+            // the exact path rather than show a stale mesh.
+            self.display = None;
+        }
+        let mut posed_mesh = std::mem::take(&mut self.posed_mesh);
+        let mut dqs_scratch = std::mem::replace(&mut self.dqs_scratch, DqsScratch::new(0));
+        match (&mut self.cor, self.method) {
+            (Some(cor), SkinningMethod::Cor) => {
+                let mut scratch = std::mem::replace(&mut cor.scratch, CorScratch::new(0));
+                self.skin_exact(&mut dqs_scratch, &mut scratch, &mut posed_mesh);
+                if let Some(cor) = &mut self.cor {
+                    cor.scratch = scratch;
+                }
+            }
+            _ => self.skin_exact(&mut dqs_scratch, &mut CorScratch::new(0), &mut posed_mesh),
+        }
+        self.posed_mesh = posed_mesh;
+        self.dqs_scratch = dqs_scratch;
+    }
+
+    /// The exact M' (`#V`, f64) of the current state into `out`.
+    pub(super) fn skin_exact(
+        &self,
+        dqs_scratch: &mut DqsScratch,
+        cor_scratch: &mut CorScratch,
+        out: &mut [DVec3],
+    ) {
+        match (self.method, &self.cor) {
+            (SkinningMethod::Dqs, _) => {
+                self.dqs
+                    .apply(&self.posed_from_rest, &self.rest_mesh, dqs_scratch, out)
+            }
+            (SkinningMethod::Cor, Some(cor)) => cor.skinning.apply(
                 &self.posed_from_rest,
                 &self.rest_mesh,
-                &mut self.dqs_scratch,
-                &mut self.posed_mesh,
+                &cor.centres,
+                cor_scratch,
+                out,
             ),
-            SkinningMethod::Cor => match &mut self.cor {
-                Some(cor) => {
-                    if cor.stale {
-                        cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
-                        cor.stale = false;
-                    }
-                    cor.skinning.apply(
-                        &self.posed_from_rest,
-                        &self.rest_mesh,
-                        &cor.centres,
-                        &mut cor.scratch,
-                        &mut self.posed_mesh,
-                    )
-                }
-                None => {
-                    self.lbs
-                        .apply(&self.posed_from_rest, &self.rest_mesh, &mut self.posed_mesh)
-                }
-            },
+            _ => self.lbs.apply(&self.posed_from_rest, &self.rest_mesh, out),
         }
     }
 
@@ -216,6 +241,10 @@ impl RigSession {
                 &self.scratch_rows_rest,
                 &mut self.scratch_rows_posed,
             );
+            self.cage_updater
+                .apply_rows(&self.scratch_rows_posed, &mut self.posed_cage);
+        } else if self.display.is_some() {
+            self.skin_rows_exact();
             self.cage_updater
                 .apply_rows(&self.scratch_rows_posed, &mut self.posed_cage);
         } else {

@@ -1,0 +1,242 @@
+//! The display path: the current skin M' that is drawn, skinned by the f32 kernels, while the
+//! exact f64 state drives the sync operators.
+//!
+//! With [`DisplayPrecision::F32`] an event skins all of M' with [`LbsF32`] / [`DqsF32`] /
+//! [`CorF32`] into [`RigSession::display_mesh`] (max |f32 − f64| ≤ 2e-6 of the bounding-box
+//! diagonal, asserted by `tests/display_path.rs`; measured 3e-7–5e-7 on the subdivided Arm), and
+//! CageUp reads the MaxVol rows of M' skinned **exactly** in f64 by row kernels of the same rule
+//! (bit-identical to the rows of the full f64 M'): C', C, S and S' are the same bits as on the
+//! exact path. [`RigSession::posed_mesh`] stays exact: in this mode it is skinned in f64 on the
+//! first call after an event (and kept until the next one).
+
+use std::sync::OnceLock;
+
+use glam::{DAffine3, DVec3, Vec3};
+
+use super::RigSession;
+use crate::error::RigError;
+use crate::skin_weights::SkinWeights;
+use crate::skinning::{
+    CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
+    DualQuaternionSkinning, LbsF32, LbsF32Scratch, SkinningMethod,
+};
+
+/// Precision of the displayed current skin M'.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DisplayPrecision {
+    /// M' is skinned in f64 on every event (the default; every output is exact).
+    #[default]
+    Exact,
+    /// M' for display is skinned in f32; sync operators and [`RigSession::posed_mesh`] stay
+    /// exact.
+    F32,
+}
+
+/// An f32 kernel with the rest revision its stored rest mesh (and centres) belongs to.
+#[derive(Debug, Clone)]
+struct Stored<K> {
+    kernel: K,
+    revision: u64,
+}
+
+/// The f32 kernels (built on first use), their scratch, the f64 row kernels of CageUp and the
+/// displayed M'.
+#[derive(Debug, Clone)]
+pub(super) struct DisplayPath {
+    lbs: Option<Stored<LbsF32>>,
+    dqs: Option<Stored<DqsF32>>,
+    cor: Option<Stored<CorF32>>,
+    lbs_scratch: LbsF32Scratch,
+    dqs_scratch: DqsF32Scratch,
+    cor_scratch: CorF32Scratch,
+    /// Ω restricted to the MaxVol rows, for the exact DQS/CoR rows (LBS rows use the
+    /// session's ghost LBS).
+    rows_dqs: DualQuaternionSkinning,
+    rows_cor: CorSkinning,
+    rows_dqs_scratch: DqsScratch,
+    rows_cor_scratch: CorScratch,
+    /// CoR centres of the MaxVol rows, `#rows`.
+    rows_centres: Vec<DVec3>,
+    /// Displayed M' (`#V`, f32).
+    pub positions: Vec<Vec3>,
+    /// The exact M' of the current state, skinned on demand.
+    pub exact: OnceLock<Vec<DVec3>>,
+}
+
+impl DisplayPath {
+    pub fn new(skin_weights: &SkinWeights, rows: &[usize]) -> Self {
+        let nj = skin_weights.num_joints();
+        let row_weights = skin_weights.select_rows(rows);
+        Self {
+            lbs: None,
+            dqs: None,
+            cor: None,
+            lbs_scratch: LbsF32Scratch::new(nj),
+            dqs_scratch: DqsF32Scratch::new(nj),
+            cor_scratch: CorF32Scratch::new(nj),
+            rows_dqs: DualQuaternionSkinning::new(&row_weights),
+            rows_cor: CorSkinning::new(&row_weights),
+            rows_dqs_scratch: DqsScratch::new(nj),
+            rows_cor_scratch: CorScratch::new(nj),
+            rows_centres: vec![DVec3::ZERO; rows.len()],
+            positions: vec![Vec3::ZERO; skin_weights.num_vertices()],
+            exact: OnceLock::new(),
+        }
+    }
+}
+
+/// Brings a stored kernel to `revision`: builds it, or refreshes its rest data.
+fn refresh<K>(
+    slot: &mut Option<Stored<K>>,
+    revision: u64,
+    build: impl FnOnce() -> Result<K, RigError>,
+    update: impl FnOnce(&mut K) -> Result<(), RigError>,
+) -> Result<&K, RigError> {
+    match slot {
+        Some(stored) if stored.revision == revision => {}
+        Some(stored) => {
+            update(&mut stored.kernel)?;
+            stored.revision = revision;
+        }
+        None => {
+            *slot = Some(Stored {
+                kernel: build()?,
+                revision,
+            })
+        }
+    }
+    match slot {
+        Some(stored) => Ok(&stored.kernel),
+        None => unreachable!("the slot was filled above"),
+    }
+}
+
+impl RigSession {
+    /// Switches the precision of the displayed M' (see [`DisplayPrecision`]); the current state
+    /// is re-skinned.
+    pub fn set_display_precision(&mut self, precision: DisplayPrecision) -> Result<(), RigError> {
+        self.display = match precision {
+            DisplayPrecision::Exact => None,
+            DisplayPrecision::F32 => Some(Box::new(DisplayPath::new(
+                &self.skin_weights,
+                self.cage_updater.rows(),
+            ))),
+        };
+        self.skin();
+        if !self.locks.cage_up {
+            self.fit_cage();
+        }
+        Ok(())
+    }
+
+    /// The precision of the displayed M'.
+    pub fn display_precision(&self) -> DisplayPrecision {
+        if self.display.is_some() {
+            DisplayPrecision::F32
+        } else {
+            DisplayPrecision::Exact
+        }
+    }
+
+    /// The displayed current skin M' in f32 (`#V`) under [`DisplayPrecision::F32`]; `None` on
+    /// the exact path (use [`RigSession::posed_mesh`]).
+    pub fn display_mesh(&self) -> Option<&[Vec3]> {
+        self.display.as_deref().map(|d| &d.positions[..])
+    }
+
+    /// Marks the rest mesh M (and the CoR centres) as changed for the display kernels.
+    pub(super) fn rest_mesh_changed(&mut self) {
+        self.rest_revision = self.rest_revision.wrapping_add(1);
+    }
+
+    /// Skins the displayed M' in f32 and forgets the exact M' of the previous state.
+    pub(super) fn skin_display(&mut self) -> Result<(), RigError> {
+        let Some(display) = self.display.as_deref_mut() else {
+            return Ok(());
+        };
+        display.exact = OnceLock::new();
+        let revision = self.rest_revision;
+        let (transforms, rest, weights) =
+            (&self.posed_from_rest, &self.rest_mesh, &self.skin_weights);
+        let centres = self.cor.as_ref().map(|c| &c.centres[..]);
+        match (self.method, centres) {
+            (SkinningMethod::Dqs, _) => {
+                let dqs = refresh(
+                    &mut display.dqs,
+                    revision,
+                    || DqsF32::new(weights, rest),
+                    |k| k.set_rest_positions(rest),
+                )?;
+                dqs.apply(transforms, &mut display.dqs_scratch, &mut display.positions);
+            }
+            (SkinningMethod::Cor, Some(centres)) => {
+                let cor = refresh(
+                    &mut display.cor,
+                    revision,
+                    || CorF32::new(weights, rest, centres),
+                    |k| k.set_rest_positions(rest, centres),
+                )?;
+                cor.apply(transforms, &mut display.cor_scratch, &mut display.positions);
+            }
+            _ => {
+                let lbs = refresh(
+                    &mut display.lbs,
+                    revision,
+                    || LbsF32::new(weights, rest),
+                    |k| k.set_rest_positions(rest),
+                )?;
+                lbs.apply(transforms, &mut display.lbs_scratch, &mut display.positions);
+            }
+        }
+        Ok(())
+    }
+
+    /// The MaxVol rows of M', exact, into `scratch_rows_posed` (display path only; the exact
+    /// path reads them from the full M').
+    pub(super) fn skin_rows_exact(&mut self) {
+        let Some(display) = self.display.as_deref_mut() else {
+            return;
+        };
+        let rows = self.cage_updater.rows();
+        for (r, &row) in self.scratch_rows_rest.iter_mut().zip(rows) {
+            *r = self.rest_mesh[row];
+        }
+        let transforms: &[DAffine3] = &self.posed_from_rest;
+        let centres = self.cor.as_ref().map(|c| &c.centres[..]);
+        match (self.method, centres) {
+            (SkinningMethod::Dqs, _) => display.rows_dqs.apply(
+                transforms,
+                &self.scratch_rows_rest,
+                &mut display.rows_dqs_scratch,
+                &mut self.scratch_rows_posed,
+            ),
+            (SkinningMethod::Cor, Some(centres)) => {
+                for (c, &row) in display.rows_centres.iter_mut().zip(rows) {
+                    *c = centres[row];
+                }
+                display.rows_cor.apply(
+                    transforms,
+                    &self.scratch_rows_rest,
+                    &display.rows_centres,
+                    &mut display.rows_cor_scratch,
+                    &mut self.scratch_rows_posed,
+                );
+            }
+            _ => self.ghost_lbs.apply(
+                transforms,
+                &self.scratch_rows_rest,
+                &mut self.scratch_rows_posed,
+            ),
+        }
+    }
+
+    /// The exact M' of the current state on the display path (skinned in f64 on first use).
+    pub(super) fn exact_posed_mesh<'a>(&'a self, display: &'a DisplayPath) -> &'a [DVec3] {
+        display.exact.get_or_init(|| {
+            let mut out = vec![DVec3::ZERO; self.rest_mesh.len()];
+            let nj = self.skeleton.len();
+            self.skin_exact(&mut DqsScratch::new(nj), &mut CorScratch::new(nj), &mut out);
+            out
+        })
+    }
+}

@@ -1,0 +1,102 @@
+//! The f32 display path (`DisplayPrecision::F32`): the drawn M' is within 2e-6 of the bounding-box
+//! diagonal of the exact one, and everything else — C', C, the joints, and the exact M' the
+//! session still hands out — is bit-identical to a session on the exact path given the same
+//! events, under LBS, DQS and CoR.
+
+use cagerig::demo;
+use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
+use cagerig::skinning::SkinningMethod;
+use glam::DVec3;
+
+fn session() -> RigSession {
+    // 20k vertices: three chunks of the count-sorted kernels.
+    let rig = demo::builtin("snake", Some(20_000)).unwrap();
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+    RigSession::new(parts, SessionOptions::default()).unwrap().0
+}
+
+fn diagonal(points: &[DVec3]) -> f64 {
+    let lo = points.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = points.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    (hi - lo).length()
+}
+
+fn assert_same_state(exact: &RigSession, display: &RigSession, step: &str) {
+    assert_eq!(exact.posed_cage(), display.posed_cage(), "C' after {step}");
+    assert_eq!(exact.rest_cage(), display.rest_cage(), "C after {step}");
+    assert_eq!(exact.rest_mesh(), display.rest_mesh(), "M after {step}");
+    assert_eq!(
+        exact.posed_world_from_joint(),
+        display.posed_world_from_joint(),
+        "S' after {step}"
+    );
+    assert_eq!(
+        exact.posed_mesh(),
+        display.posed_mesh(),
+        "exact M' after {step}"
+    );
+    assert!(exact.display_mesh().is_none());
+    let shown = display.display_mesh().expect("display path is on");
+    let tolerance = 2e-6 * diagonal(exact.posed_mesh());
+    let worst = shown
+        .iter()
+        .zip(exact.posed_mesh())
+        .map(|(a, b)| a.as_dvec3().distance(*b))
+        .fold(0.0, f64::max);
+    assert!(
+        worst <= tolerance,
+        "displayed M' after {step}: max error {worst:e} > {tolerance:e}"
+    );
+}
+
+#[test]
+fn display_path_matches_the_exact_path() {
+    let mut exact = session();
+    let mut display = session();
+    display
+        .set_display_precision(DisplayPrecision::F32)
+        .unwrap();
+    assert_eq!(display.display_precision(), DisplayPrecision::F32);
+    assert_same_state(&exact, &display, "switching the display path on");
+    let offset = DVec3::new(0.02, -0.01, 0.015);
+    for method in [
+        SkinningMethod::Lbs,
+        SkinningMethod::Dqs,
+        SkinningMethod::Cor,
+    ] {
+        for s in [&mut exact, &mut display] {
+            s.set_skinning(method).unwrap();
+        }
+        assert_same_state(&exact, &display, &format!("{method:?}"));
+        for s in [&mut exact, &mut display] {
+            s.rotate_joint(5, DVec3::new(0.3, 1.0, 0.2).normalize(), 0.7)
+                .unwrap();
+        }
+        assert_same_state(
+            &exact,
+            &display,
+            &format!("a joint rotation under {method:?}"),
+        );
+        for s in [&mut exact, &mut display] {
+            s.move_rest_cage(&[0, 3, 7], &[offset]).unwrap();
+        }
+        assert_same_state(
+            &exact,
+            &display,
+            &format!("a rest-cage edit under {method:?}"),
+        );
+        for s in [&mut exact, &mut display] {
+            s.move_posed_cage(&[9, 10], &[offset]).unwrap();
+        }
+        assert_same_state(
+            &exact,
+            &display,
+            &format!("a current-cage grab under {method:?}"),
+        );
+    }
+    display
+        .set_display_precision(DisplayPrecision::Exact)
+        .unwrap();
+    assert!(display.display_mesh().is_none());
+    assert_eq!(exact.posed_mesh(), display.posed_mesh());
+}
