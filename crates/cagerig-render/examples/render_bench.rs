@@ -51,7 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         positions.iter_mut().for_each(|q| *q += shift);
         let scene = Scene {
             mesh: Some(MeshLayer {
-                positions: &positions,
+                positions: cagerig_render::MeshPositions::F64(&positions),
                 triangles,
                 colors: None,
                 flat: false,

@@ -48,6 +48,6 @@ pub use image::RgbaImage;
 pub use offscreen::OffscreenRenderer;
 pub use palette::ColorMap;
 pub use renderer::Renderer;
-pub use scene::{CageLayer, MeshLayer, Scene, SkeletonLayer, Style};
+pub use scene::{CageLayer, MeshLayer, MeshPositions, Scene, SkeletonLayer, Style};
 pub use scene_buffers::SceneBuffers;
 pub use target::RenderTarget;

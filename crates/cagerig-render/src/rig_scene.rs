@@ -6,7 +6,7 @@ use cagerig::session::RigSession;
 use glam::DVec3;
 
 use crate::palette::ColorMap;
-use crate::scene::{CageLayer, MeshLayer, Scene, SkeletonLayer};
+use crate::scene::{CageLayer, MeshLayer, MeshPositions, Scene, SkeletonLayer};
 
 /// Which of the rig's two poses a view shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -152,9 +152,14 @@ impl RigSceneData {
         layers: Layers,
         color_by: ColorBy,
     ) -> Scene<'a> {
-        let (mesh, cage) = match pose {
-            Pose::Rest => (session.rest_mesh(), session.rest_cage()),
-            Pose::Current => (session.posed_mesh(), session.posed_cage()),
+        // The current skin comes from the session's f32 display path when it is on.
+        let (mesh, cage) = match (pose, session.display_mesh()) {
+            (Pose::Rest, _) => (MeshPositions::F64(session.rest_mesh()), session.rest_cage()),
+            (Pose::Current, Some(shown)) => (MeshPositions::F32(shown), session.posed_cage()),
+            (Pose::Current, None) => (
+                MeshPositions::F64(session.posed_mesh()),
+                session.posed_cage(),
+            ),
         };
         self.joints.clear();
         match pose {

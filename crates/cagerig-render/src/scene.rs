@@ -1,13 +1,62 @@
 //! What to draw, as plain slices borrowed from the caller (the rig's data stays where it lives),
 //! and how it looks.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
+
+/// Vertex positions (world, `#V`) of a skin: the exact f64 ones, or f32 ones from a display
+/// path (`cagerig::session::DisplayPrecision::F32`), uploaded without conversion.
+#[derive(Clone, Copy, Debug)]
+pub enum MeshPositions<'a> {
+    F64(&'a [DVec3]),
+    F32(&'a [Vec3]),
+}
+
+impl MeshPositions<'_> {
+    pub fn len(&self) -> usize {
+        match self {
+            Self::F64(p) => p.len(),
+            Self::F32(p) => p.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Position `i` in f64.
+    pub fn get(&self, i: usize) -> DVec3 {
+        match self {
+            Self::F64(p) => p[i],
+            Self::F32(p) => p[i].as_dvec3(),
+        }
+    }
+
+    /// Position `i` in f32 (as uploaded).
+    pub fn get_f32(&self, i: usize) -> Vec3 {
+        match self {
+            Self::F64(p) => p[i].as_vec3(),
+            Self::F32(p) => p[i],
+        }
+    }
+}
+
+impl<'a> From<&'a [DVec3]> for MeshPositions<'a> {
+    fn from(positions: &'a [DVec3]) -> Self {
+        Self::F64(positions)
+    }
+}
+
+impl<'a> From<&'a [Vec3]> for MeshPositions<'a> {
+    fn from(positions: &'a [Vec3]) -> Self {
+        Self::F32(positions)
+    }
+}
 
 /// The character's skin.
 #[derive(Clone, Copy, Debug)]
 pub struct MeshLayer<'a> {
     /// Vertex positions (world), `#V`.
-    pub positions: &'a [DVec3],
+    pub positions: MeshPositions<'a>,
     /// Triangles as vertex indices, `#T × 3`.
     pub triangles: &'a [[u32; 3]],
     /// Per-vertex sRGB colours (`#V`, e.g. a colour map); `None` = the neutral material.
@@ -54,7 +103,6 @@ impl Scene<'_> {
     /// Axis-aligned bounds `(lo, hi)` of everything drawn; `None` when the scene is empty.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
         use rayon::prelude::*;
-        let mesh = self.mesh.map(|m| m.positions).unwrap_or(&[]);
         let cage = self.cage.map(|c| c.positions).unwrap_or(&[]);
         let joints = self.skeleton.map(|s| s.joints).unwrap_or(&[]);
         let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -66,10 +114,22 @@ impl Scene<'_> {
                 (lo, hi)
             }
         };
-        let from_mesh = mesh
-            .par_chunks(16_384)
-            .map(|chunk| chunk.iter().fold(empty, grow))
-            .reduce(|| empty, merge);
+        let from_mesh = match self.mesh.map(|m| m.positions) {
+            None => empty,
+            Some(MeshPositions::F64(mesh)) => mesh
+                .par_chunks(16_384)
+                .map(|chunk| chunk.iter().fold(empty, grow))
+                .reduce(|| empty, merge),
+            Some(MeshPositions::F32(mesh)) => mesh
+                .par_chunks(16_384)
+                .map(|chunk| {
+                    chunk
+                        .iter()
+                        .map(|p| p.as_dvec3())
+                        .fold(empty, |b, p| grow(b, &p))
+                })
+                .reduce(|| empty, merge),
+        };
         let (lo, hi) = cage.iter().chain(joints).fold(from_mesh, grow);
         (lo.cmple(hi).all()).then_some((lo, hi))
     }
@@ -145,7 +205,7 @@ mod tests {
         let joints = [DVec3::new(0.0, 5.0, 0.0)];
         let scene = Scene {
             mesh: Some(MeshLayer {
-                positions: &mesh,
+                positions: MeshPositions::F64(&mesh),
                 triangles: &[],
                 colors: None,
                 flat: false,

@@ -2,7 +2,7 @@
 //! each frame (buffers are re-created only when a layer grows), with normals recomputed from the
 //! current positions.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
@@ -10,7 +10,7 @@ use crate::error::RenderError;
 use crate::gpu_buffer::GrowBuffer;
 use crate::gpu_types::{LineInstance, MaterialUniform, MeshVertex, PointInstance};
 use crate::pipelines::Pipelines;
-use crate::scene::{Scene, Style, unique_edges};
+use crate::scene::{MeshPositions, Scene, Style, unique_edges};
 use crate::vertex_normals::VertexNormals;
 
 /// A shaded triangle layer (the skin or the cage faces).
@@ -22,7 +22,7 @@ struct SurfaceBuffers {
     /// Triangles last uploaded (the index buffer is rewritten only when they change).
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
-    normals: Vec<DVec3>,
+    normals: Vec<Vec3>,
     vertex_normals: VertexNormals,
     /// Staging chunks of the vertex uploads, reused between frames.
     belt: wgpu::util::StagingBelt,
@@ -67,7 +67,7 @@ impl SurfaceBuffers {
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        positions: &[DVec3],
+        positions: MeshPositions<'_>,
         triangles: &[[u32; 3]],
         colors: Option<&[[u8; 4]]>,
         smooth: bool,
@@ -82,7 +82,7 @@ impl SurfaceBuffers {
             self.edges = unique_edges(triangles);
             created += u32::from(self.indices.write(device, queue, triangles));
         }
-        self.normals.resize(positions.len(), DVec3::ZERO);
+        self.normals.resize(positions.len(), Vec3::ZERO);
         if smooth {
             if self.vertex_normals.num_vertices() != positions.len() || topology_changed {
                 self.vertex_normals = VertexNormals::new(positions.len(), triangles);
@@ -90,7 +90,7 @@ impl SurfaceBuffers {
             self.vertex_normals
                 .apply(positions, triangles, &mut self.normals);
         } else {
-            self.normals.iter_mut().for_each(|n| *n = DVec3::ZERO);
+            self.normals.iter_mut().for_each(|n| *n = Vec3::ZERO);
         }
         self.packed
             .resize(positions.len(), bytemuck::Zeroable::zeroed());
@@ -101,8 +101,8 @@ impl SurfaceBuffers {
             .with_min_len(16_384)
             .for_each(|(i, v)| {
                 *v = MeshVertex {
-                    position: positions[i].as_vec3().to_array(),
-                    normal: normals[i].as_vec3().to_array(),
+                    position: positions.get_f32(i).to_array(),
+                    normal: normals[i].to_array(),
                     color: colors.map_or([255; 4], |c| c[i]),
                 };
             });
@@ -281,9 +281,9 @@ impl SceneBuffers {
     ) -> Result<(), RenderError> {
         validate_scene(scene)?;
         let mut created = 0u32;
-        let (positions, triangles) = scene
-            .mesh
-            .map_or((&[][..], &[][..]), |m| (m.positions, m.triangles));
+        let (positions, triangles) = scene.mesh.map_or((MeshPositions::F64(&[]), &[][..]), |m| {
+            (m.positions, m.triangles)
+        });
         let mesh_material = material(
             style.mesh,
             scene.mesh.is_some_and(|m| m.colors.is_some()),
@@ -305,7 +305,7 @@ impl SceneBuffers {
         created += self.cage.update(
             device,
             queue,
-            cage_positions,
+            MeshPositions::F64(cage_positions),
             cage_triangles,
             None,
             false,
@@ -325,8 +325,8 @@ impl SceneBuffers {
         if scene.mesh.is_some_and(|m| m.wireframe) {
             lines.extend(self.mesh.edges.iter().map(|&[a, b]| {
                 line(
-                    positions[a as usize],
-                    positions[b as usize],
+                    positions.get(a as usize),
+                    positions.get(b as usize),
                     style.wireframe,
                     0.8,
                     2e-5,

@@ -6,8 +6,10 @@
 //! The result equals `cagerig::mesh::TriMesh::vertex_normals` up to the order of the sums
 //! (a few ulps), which display does not see.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
+
+use crate::scene::MeshPositions;
 
 /// Triangles per rayon task.
 const GRAIN: usize = 16_384;
@@ -19,8 +21,10 @@ pub struct VertexNormals {
     offsets: Vec<u32>,
     /// Triangles around each vertex (`3 #F`).
     faces: Vec<u32>,
-    /// Area-weighted triangle normals of the current frame (`#F`).
+    /// Area-weighted triangle normals of the current frame (`#F`), for f64 positions.
     face_normals: Vec<DVec3>,
+    /// The same for f32 positions (the display path).
+    face_normals_f32: Vec<Vec3A>,
 }
 
 impl VertexNormals {
@@ -48,7 +52,8 @@ impl VertexNormals {
         Self {
             offsets,
             faces,
-            face_normals: vec![DVec3::ZERO; triangles.len()],
+            face_normals: Vec::new(),
+            face_normals_f32: Vec::new(),
         }
     }
 
@@ -57,36 +62,101 @@ impl VertexNormals {
         self.offsets.len().saturating_sub(1)
     }
 
-    /// Unit vertex normals of `positions` (`#V`) into `out` (`#V`); zero where a vertex has no
-    /// triangle or its triangles are degenerate. `triangles` must be the list given to `new`.
-    pub fn apply(&mut self, positions: &[DVec3], triangles: &[[u32; 3]], out: &mut [DVec3]) {
-        self.face_normals
-            .par_iter_mut()
-            .zip(triangles.par_iter())
-            .with_min_len(GRAIN)
-            .for_each(|(n, &[a, b, c])| {
-                let (pa, pb, pc) = (
-                    positions[a as usize],
-                    positions[b as usize],
-                    positions[c as usize],
-                );
-                *n = (pb - pa).cross(pc - pa);
-            });
-        let faces = &self.faces;
-        let offsets = &self.offsets;
-        let face_normals = &self.face_normals;
-        out.par_iter_mut()
-            .enumerate()
-            .with_min_len(GRAIN)
-            .for_each(|(v, n)| {
-                let (lo, hi) = (offsets[v] as usize, offsets[v + 1] as usize);
-                let sum: DVec3 = faces[lo..hi]
-                    .iter()
-                    .map(|&f| face_normals[f as usize])
-                    .sum();
-                *n = sum.normalize_or_zero();
-            });
+    /// Unit vertex normals of `positions` (`#V`) into `out` (`#V`, f32 for upload); zero where a
+    /// vertex has no triangle or its triangles are degenerate. `triangles` must be the list
+    /// given to `new`. f64 positions are processed in f64, f32 ones in f32.
+    pub fn apply(
+        &mut self,
+        positions: MeshPositions<'_>,
+        triangles: &[[u32; 3]],
+        out: &mut [Vec3],
+    ) {
+        match positions {
+            MeshPositions::F64(p) => {
+                self.face_normals.resize(triangles.len(), DVec3::ZERO);
+                gather(
+                    &self.offsets,
+                    &self.faces,
+                    &mut self.face_normals,
+                    triangles,
+                    |i| p[i],
+                    out,
+                )
+            }
+            MeshPositions::F32(p) => {
+                self.face_normals_f32.resize(triangles.len(), Vec3A::ZERO);
+                gather(
+                    &self.offsets,
+                    &self.faces,
+                    &mut self.face_normals_f32,
+                    triangles,
+                    |i| Vec3A::from(p[i]),
+                    out,
+                )
+            }
+        }
     }
+}
+
+/// Vector arithmetic of [`gather`] in the positions' precision.
+trait NormalVector: Copy + Send + Sync + std::ops::Sub<Output = Self> + std::iter::Sum {
+    fn cross(self, other: Self) -> Self;
+    /// Unit vector (zero for a zero sum), rounded to f32.
+    fn unit_f32(self) -> Vec3;
+}
+
+impl NormalVector for DVec3 {
+    fn cross(self, other: Self) -> Self {
+        DVec3::cross(self, other)
+    }
+    fn unit_f32(self) -> Vec3 {
+        self.normalize_or_zero().as_vec3()
+    }
+}
+
+impl NormalVector for Vec3A {
+    fn cross(self, other: Self) -> Self {
+        Vec3A::cross(self, other)
+    }
+    fn unit_f32(self) -> Vec3 {
+        self.normalize_or_zero().into()
+    }
+}
+
+/// Triangle normals into `face_normals` (`#F`), then per-vertex sums over the CSR adjacency
+/// `offsets`/`faces`, normalised into `out`.
+fn gather<V: NormalVector>(
+    offsets: &[u32],
+    faces: &[u32],
+    face_normals: &mut [V],
+    triangles: &[[u32; 3]],
+    position: impl Fn(usize) -> V + Sync,
+    out: &mut [Vec3],
+) {
+    face_normals
+        .par_iter_mut()
+        .zip(triangles.par_iter())
+        .with_min_len(GRAIN)
+        .for_each(|(n, &[a, b, c])| {
+            let (pa, pb, pc) = (
+                position(a as usize),
+                position(b as usize),
+                position(c as usize),
+            );
+            *n = (pb - pa).cross(pc - pa);
+        });
+    let face_normals = &*face_normals;
+    out.par_iter_mut()
+        .enumerate()
+        .with_min_len(GRAIN)
+        .for_each(|(v, n)| {
+            let (lo, hi) = (offsets[v] as usize, offsets[v + 1] as usize);
+            let sum: V = faces[lo..hi]
+                .iter()
+                .map(|&f| face_normals[f as usize])
+                .sum();
+            *n = sum.unit_f32();
+        });
 }
 
 #[cfg(test)]
@@ -101,11 +171,23 @@ mod tests {
         let mut reference = vec![DVec3::ZERO; cube.positions.len()];
         TriMesh::vertex_normals(&cube.positions, &cube.triangles, &mut reference);
         let mut normals = VertexNormals::new(cube.positions.len(), &cube.triangles);
-        let mut out = vec![DVec3::ZERO; cube.positions.len()];
-        normals.apply(&cube.positions, &cube.triangles, &mut out);
-        for (a, b) in out.iter().zip(&reference) {
-            assert!(a.distance(*b) < 1e-12, "{a} vs {b}");
-            assert!((a.length() - 1.0).abs() < 1e-12);
+        let mut out = vec![Vec3::ZERO; cube.positions.len()];
+        normals.apply(
+            MeshPositions::F64(&cube.positions),
+            &cube.triangles,
+            &mut out,
+        );
+        let mut out32 = vec![Vec3::ZERO; cube.positions.len()];
+        let positions32: Vec<Vec3> = cube.positions.iter().map(|p| p.as_vec3()).collect();
+        normals.apply(
+            MeshPositions::F32(&positions32),
+            &cube.triangles,
+            &mut out32,
+        );
+        for ((a, a32), b) in out.iter().zip(&out32).zip(&reference) {
+            assert!(a.as_dvec3().distance(*b) < 1e-6, "{a} vs {b}");
+            assert!(a32.as_dvec3().distance(*b) < 1e-6, "{a32} vs {b}");
+            assert!((a.length() - 1.0).abs() < 1e-6);
         }
     }
 
@@ -114,9 +196,9 @@ mod tests {
         let positions = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::splat(5.0)];
         let triangles = [[0u32, 1, 2]];
         let mut normals = VertexNormals::new(4, &triangles);
-        let mut out = vec![DVec3::ONE; 4];
-        normals.apply(&positions, &triangles, &mut out);
-        assert_eq!(out[3], DVec3::ZERO);
-        assert!(out[0].distance(DVec3::Z) < 1e-15);
+        let mut out = vec![Vec3::ONE; 4];
+        normals.apply(MeshPositions::F64(&positions), &triangles, &mut out);
+        assert_eq!(out[3], Vec3::ZERO);
+        assert!(out[0].distance(Vec3::Z) < 1e-7);
     }
 }

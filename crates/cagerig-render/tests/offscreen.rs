@@ -6,8 +6,8 @@
 
 use cagerig_render::palette::ColorMap;
 use cagerig_render::{
-    CageLayer, CameraPreset, MeshLayer, OffscreenRenderer, OrbitCamera, RenderError, Scene,
-    SkeletonLayer, Style,
+    CageLayer, CameraPreset, MeshLayer, MeshPositions, OffscreenRenderer, OrbitCamera, RenderError,
+    Scene, SkeletonLayer, Style,
 };
 use glam::DVec3;
 
@@ -28,13 +28,13 @@ fn cuboid(lo: DVec3, hi: DVec3) -> (Vec<DVec3>, Vec<[u32; 3]>) {
 }
 
 fn mesh_scene<'a>(
-    positions: &'a [DVec3],
+    positions: impl Into<MeshPositions<'a>>,
     triangles: &'a [[u32; 3]],
     colors: Option<&'a [[u8; 4]]>,
 ) -> Scene<'a> {
     Scene {
         mesh: Some(MeshLayer {
-            positions,
+            positions: positions.into(),
             triangles,
             colors,
             flat: false,
@@ -55,7 +55,7 @@ fn is_background(c: [u8; 4]) -> bool {
 fn a_box_covers_the_centre_and_leaves_the_corners_to_the_backdrop() {
     let Some(mut r) = renderer() else { return };
     let (positions, triangles) = cuboid(DVec3::splat(-1.0), DVec3::splat(1.0));
-    let scene = mesh_scene(&positions, &triangles, None);
+    let scene = mesh_scene(&positions[..], &triangles, None);
     let (lo, hi) = scene.bounds().unwrap();
     let camera = OrbitCamera::framing(CameraPreset::Front, lo, hi, 320.0 / 240.0);
     let image = r
@@ -98,6 +98,32 @@ fn a_box_covers_the_centre_and_leaves_the_corners_to_the_backdrop() {
 }
 
 #[test]
+fn f32_display_positions_draw_the_same_picture_as_f64() {
+    let Some(mut r) = renderer() else { return };
+    let (positions, triangles) = cuboid(DVec3::new(-1.0, -0.5, -2.0), DVec3::new(1.5, 1.0, 0.5));
+    let positions32: Vec<glam::Vec3> = positions.iter().map(|p| p.as_vec3()).collect();
+    let scene64 = mesh_scene(&positions[..], &triangles, None);
+    let scene32 = mesh_scene(&positions32[..], &triangles, None);
+    assert_eq!(scene64.bounds(), scene32.bounds());
+    let (lo, hi) = scene64.bounds().unwrap();
+    let camera = OrbitCamera::framing(CameraPreset::ThreeQuarter, lo, hi, 1.0);
+    let a = r
+        .render(&scene64, &Style::default(), &camera, 160, 160)
+        .unwrap();
+    let b = r
+        .render(&scene32, &Style::default(), &camera, 160, 160)
+        .unwrap();
+    let worst = a
+        .pixels()
+        .iter()
+        .zip(b.pixels())
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0);
+    assert!(worst <= 1, "largest channel difference {worst}");
+}
+
+#[test]
 fn colour_maps_show_their_colours_at_known_vertices() {
     let Some(mut r) = renderer() else { return };
     // Two boxes side by side: the left coloured with the diverging map's negative end
@@ -111,7 +137,7 @@ fn colour_maps_show_their_colours_at_known_vertices() {
     let colors: Vec<[u8; 4]> = (0..16)
         .map(|i| map.color_u8(if i < 8 { -1.0 } else { 1.0 }))
         .collect();
-    let scene = mesh_scene(&positions, &triangles, Some(&colors));
+    let scene = mesh_scene(&positions[..], &triangles, Some(&colors));
     let (lo, hi) = scene.bounds().unwrap();
     let camera = OrbitCamera::framing(CameraPreset::Front, lo, hi, 2.0);
     let image = r
@@ -153,7 +179,7 @@ fn skeleton_is_drawn_on_top_of_the_skin_and_hidden_cage_parts_are_faint() {
             parents: &parents,
             joint_colors: None,
         }),
-        ..mesh_scene(&positions, &triangles, None)
+        ..mesh_scene(&positions[..], &triangles, None)
     };
     let (lo, hi) = scene.bounds().unwrap();
     let camera = OrbitCamera::framing(CameraPreset::Front, lo, hi, 1.0);
@@ -184,12 +210,12 @@ fn frames_of_the_same_size_update_buffers_in_place() {
     let Some(mut r) = renderer() else { return };
     let (mut positions, triangles) = cuboid(DVec3::splat(-1.0), DVec3::splat(1.0));
     let style = Style::default();
-    r.upload(&mesh_scene(&positions, &triangles, None), &style)
+    r.upload(&mesh_scene(&positions[..], &triangles, None), &style)
         .unwrap();
     let created = r.buffers_created();
     for step in 0..5 {
         positions.iter_mut().for_each(|p| p.x += 0.01 * step as f64);
-        r.upload(&mesh_scene(&positions, &triangles, None), &style)
+        r.upload(&mesh_scene(&positions[..], &triangles, None), &style)
             .unwrap();
     }
     assert_eq!(
@@ -200,7 +226,7 @@ fn frames_of_the_same_size_update_buffers_in_place() {
     // Bad indices are refused before anything is uploaded.
     let bad = [[0, 1, 8]];
     let err = r
-        .upload(&mesh_scene(&positions, &bad, None), &style)
+        .upload(&mesh_scene(&positions[..], &bad, None), &style)
         .unwrap_err();
     assert!(matches!(err, RenderError::Geometry(_)));
     assert!(err.to_string().contains("mesh triangle 0"), "{err}");
@@ -210,7 +236,7 @@ fn frames_of_the_same_size_update_buffers_in_place() {
 fn impossible_sizes_are_refused_with_the_limit() {
     let Some(mut r) = renderer() else { return };
     let (positions, triangles) = cuboid(DVec3::splat(-1.0), DVec3::splat(1.0));
-    let scene = mesh_scene(&positions, &triangles, None);
+    let scene = mesh_scene(&positions[..], &triangles, None);
     let camera = OrbitCamera::default();
     let err = r
         .render(&scene, &Style::default(), &camera, 0, 10)
