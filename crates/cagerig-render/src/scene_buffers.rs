@@ -13,6 +13,9 @@ use crate::pipelines::Pipelines;
 use crate::scene::{MeshPositions, Scene, Style, unique_edges};
 use crate::vertex_normals::VertexNormals;
 
+/// Vertex data from this size up is written through the staging belt.
+const STAGED_BYTES: usize = 256 * 1024;
+
 /// A shaded triangle layer (the skin or the cage faces).
 struct SurfaceBuffers {
     vertices: GrowBuffer,
@@ -106,11 +109,16 @@ impl SurfaceBuffers {
                     color: colors.map_or([255; 4], |c| c[i]),
                 };
             });
-        created +=
-            u32::from(
+        // Large layers (the skin) go through the reused staging belt; small ones (the cage)
+        // through the queue, which costs less than a submission of their own.
+        created += u32::from(
+            if self.packed.len() * size_of::<MeshVertex>() >= STAGED_BYTES {
                 self.vertices
-                    .write_staged(device, queue, &mut self.belt, &self.packed),
-            );
+                    .write_staged(device, queue, &mut self.belt, &self.packed)
+            } else {
+                self.vertices.write(device, queue, &self.packed)
+            },
+        );
         queue.write_buffer(&self.material, 0, bytemuck::bytes_of(&material));
         self.visible = !triangles.is_empty();
         created
@@ -186,11 +194,16 @@ fn check_indices(
     triangles: &[[u32; 3]],
     num_vertices: usize,
 ) -> Result<(), RenderError> {
+    // The largest index first (a vectorised pass over 3 #F numbers, ≈ 0.1 ms at 266k
+    // triangles); the offending triangle is searched only when there is one.
+    let largest = triangles.as_flattened().iter().copied().max();
+    if largest.is_none_or(|i| (i as usize) < num_vertices) {
+        return Ok(());
+    }
     match triangles
-        .par_iter()
-        .with_min_len(65_536)
+        .iter()
         .enumerate()
-        .find_first(|(_, t)| t.iter().any(|&i| i as usize >= num_vertices))
+        .find(|(_, t)| t.iter().any(|&i| i as usize >= num_vertices))
     {
         Some((t, tri)) => Err(RenderError::Geometry(format!(
             "{what} triangle {t} is {tri:?}: expected vertex indices below {num_vertices}"

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use cagerig::Warning;
 use cagerig::cage_gen::{CageOptions, CageTarget};
 use cagerig::io::rig_files::MissingCage;
-use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig_formats::{ImportOptions, ImportedAnimation};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -157,7 +157,15 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
         }
     };
     let name = source.display_name();
-    let (session, mut more) = RigSession::new(parts, SessionOptions::default())
+    let (mut session, mut more) =
+        RigSession::new(parts, SessionOptions::default()).map_err(|e| OpenError::Rig {
+            name: name.clone(),
+            source: e,
+        })?;
+    // The views draw the current skin from the f32 display path (within 2e-6 of the bounding-box
+    // diagonal of the exact one); every sync operator, export and script result stays exact.
+    session
+        .set_display_precision(DisplayPrecision::F32)
         .map_err(|e| OpenError::Rig { name, source: e })?;
     warnings.append(&mut more);
     Ok(OpenedRig {
