@@ -34,11 +34,36 @@ struct Run {
     len: u32,
 }
 
+/// Vertices evaluated together by [`VertexKernel::skin_block`].
+pub(crate) const BLOCK: usize = 8;
+
 /// Per-vertex skinning rule of a kernel, called by [`CountSortedWeights::skin`] with the
 /// vertex's sorted `slot` and its index `vertex` (both global).
 pub(crate) trait VertexKernel<S: SkinReal>: Sync {
     /// Position of a vertex with at least one influence (`joints`, `weights` of equal length).
     fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3;
+    /// Positions of [`BLOCK`] vertices of `K` influences each (`joints`, `weights`: `BLOCK·K`;
+    /// `pivots`: `BLOCK`; sorted slots `slot..slot + BLOCK`), which a kernel may evaluate
+    /// across SIMD lanes; by default one by one with [`Self::skin`].
+    #[inline(always)]
+    fn skin_block<const K: usize>(
+        &self,
+        joints: &[u16],
+        weights: &[S],
+        pivots: &[u16],
+        slot: usize,
+        vertices: &[usize; BLOCK],
+    ) -> [S::V3; BLOCK] {
+        std::array::from_fn(|l| {
+            self.skin(
+                &joints[l * K..(l + 1) * K],
+                &weights[l * K..(l + 1) * K],
+                pivots[l],
+                slot + l,
+                vertices[l],
+            )
+        })
+    }
     /// Position of an unweighted vertex (its rest position).
     fn unweighted(&self, slot: usize, vertex: usize) -> S::V3;
 }
@@ -74,15 +99,33 @@ fn skin_run<S: SkinReal, Kernel: VertexKernel<S>, const K: usize>(
     first_vertex: usize,
     out: &mut [S::Out],
 ) {
-    for (slot, (((js, ws), &pivot), &i)) in joints
+    let blocks = pivots.len() / BLOCK;
+    for b in 0..blocks {
+        let base = b * BLOCK;
+        let index = &local_index[base..base + BLOCK];
+        let vertices: [usize; BLOCK] =
+            std::array::from_fn(|l| first_vertex + usize::from(index[l]));
+        let skinned = kernel.skin_block::<K>(
+            &joints[base * K..(base + BLOCK) * K],
+            &weights[base * K..(base + BLOCK) * K],
+            &pivots[base..base + BLOCK],
+            first_slot + base,
+            &vertices,
+        );
+        for (&i, p) in index.iter().zip(skinned) {
+            out[usize::from(i)] = S::output(p);
+        }
+    }
+    let done = blocks * BLOCK;
+    for (slot, (((js, ws), &pivot), &i)) in joints[done * K..]
         .chunks_exact(K)
-        .zip(weights.chunks_exact(K))
-        .zip(pivots)
-        .zip(local_index)
+        .zip(weights[done * K..].chunks_exact(K))
+        .zip(&pivots[done..])
+        .zip(&local_index[done..])
         .enumerate()
     {
         let i = usize::from(i);
-        out[i] = S::output(kernel.skin(js, ws, pivot, first_slot + slot, first_vertex + i));
+        out[i] = S::output(kernel.skin(js, ws, pivot, first_slot + done + slot, first_vertex + i));
     }
 }
 

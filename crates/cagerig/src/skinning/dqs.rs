@@ -16,7 +16,7 @@
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::antipodal_signs::AntipodalSigns;
-use super::compact_weights::{CountSortedWeights, RestPoints, VertexKernel, WorldPoints};
+use super::compact_weights::{BLOCK, CountSortedWeights, RestPoints, VertexKernel, WorldPoints};
 use super::precision::SkinReal;
 use super::rigid_rotation::rotation_quaternion;
 use crate::SkinWeights;
@@ -189,6 +189,66 @@ impl<S: SkinReal, P: RestPoints<S>, const TABLE: bool> VertexKernel<S>
             self.joint_dual_quats,
             self.points.point(slot, vertex),
         )
+    }
+
+    /// With the sign table: the `BLOCK` blends are accumulated per vertex, then the
+    /// normalisation and the rigid map are evaluated across the block (one SIMD lane per
+    /// vertex), in the order of operations of [`dqs_point`] (bit-identical results).
+    #[inline(always)]
+    fn skin_block<const K: usize>(
+        &self,
+        joints: &[u16],
+        weights: &[S],
+        pivots: &[u16],
+        slot: usize,
+        vertices: &[usize; BLOCK],
+    ) -> [S::V3; BLOCK] {
+        if !TABLE {
+            return std::array::from_fn(|l| {
+                self.skin(
+                    &joints[l * K..(l + 1) * K],
+                    &weights[l * K..(l + 1) * K],
+                    pivots[l],
+                    slot + l,
+                    vertices[l],
+                )
+            });
+        }
+        let mut blend = [[S::ZERO; 8]; BLOCK];
+        for (l, sum) in blend.iter_mut().enumerate() {
+            let signs = self.signs.row(usize::from(pivots[l]));
+            for k in 0..K {
+                let j = usize::from(joints[l * K + k]);
+                let signed = weights[l * K + k] * signs[j];
+                let [r, d] = self.joint_dual_quats[j];
+                let q = S::quat_array(r);
+                let e = S::quat_array(d);
+                for c in 0..4 {
+                    sum[c] = sum[c] + q[c] * signed;
+                    sum[4 + c] = sum[4 + c] + e[c] * signed;
+                }
+            }
+        }
+        let points: [[S; 3]; BLOCK] =
+            std::array::from_fn(|l| S::components(self.points.point(slot + l, vertices[l])));
+        let mut out = [[S::ZERO; 3]; BLOCK];
+        for l in 0..BLOCK {
+            let [x, y, z, w, dx, dy, dz, dw] = blend[l];
+            let [px, py, pz] = points[l];
+            let vv = x * x + y * y + z * z;
+            let a = w * w - vv;
+            let b = S::TWO * (x * px + y * py + z * pz);
+            let c = S::TWO * w;
+            let (cx, cy, cz) = (y * pz - z * py, z * px - x * pz, x * py - y * px);
+            let (ex, ey, ez) = (y * dz - z * dy, z * dx - x * dz, x * dy - y * dx);
+            let inv = (vv + w * w).recip();
+            out[l] = [
+                (px * a + x * b + cx * c + (dx * w - x * dw + ex) * S::TWO) * inv,
+                (py * a + y * b + cy * c + (dy * w - y * dw + ey) * S::TWO) * inv,
+                (pz * a + z * b + cz * c + (dz * w - z * dw + ez) * S::TWO) * inv,
+            ];
+        }
+        std::array::from_fn(|l| S::new_v3(out[l][0], out[l][1], out[l][2]))
     }
 
     #[inline(always)]

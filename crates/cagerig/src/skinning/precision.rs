@@ -40,6 +40,7 @@ pub trait SkinReal:
     /// Stored output point (`Vec3` / `DVec3`).
     type Out: Copy + Send + Sync;
 
+    const ZERO: Self;
     const ONE: Self;
     const TWO: Self;
     const ZERO_V3: Self::V3;
@@ -58,6 +59,9 @@ pub trait SkinReal:
     fn quat_dot(a: Self::Quat, b: Self::Quat) -> Self;
     /// Vector part `(x, y, z)` and scalar part `w`.
     fn quat_parts(q: Self::Quat) -> (Self::V3, Self);
+    /// `[x, y, z, w]`.
+    fn quat_array(q: Self::Quat) -> [Self; 4];
+    fn new_v3(x: Self, y: Self, z: Self) -> Self::V3;
     fn output(v: Self::V3) -> Self::Out;
 
     /// Columns `[x_axis, y_axis, z_axis, translation]` of an affine map, rounded.
@@ -84,6 +88,7 @@ macro_rules! impl_skin_real {
             type Quat = $quat;
             type Out = $out;
 
+            const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
             const TWO: Self = 2.0;
             const ZERO_V3: $v3 = <$v3>::ZERO;
@@ -128,6 +133,14 @@ macro_rules! impl_skin_real {
             #[inline(always)]
             fn quat_parts(q: $quat) -> ($v3, Self) {
                 (<$v3>::new(q.x, q.y, q.z), q.w)
+            }
+            #[inline(always)]
+            fn quat_array(q: $quat) -> [Self; 4] {
+                q.to_array()
+            }
+            #[inline(always)]
+            fn new_v3(x: Self, y: Self, z: Self) -> $v3 {
+                <$v3>::new(x, y, z)
             }
             #[inline(always)]
             fn output(v: $v3) -> $out {
