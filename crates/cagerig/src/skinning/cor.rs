@@ -21,7 +21,7 @@
 use glam::{DAffine3, DQuat, DVec3, Vec3A};
 
 use super::antipodal_signs::AntipodalSigns;
-use super::compact_weights::{CountSortedWeights, JointColumns, VertexKernel};
+use super::compact_weights::{BLOCK, CountSortedWeights, JointColumns, VertexKernel};
 use super::dqs::rotate_unnormalised;
 use super::lbs::{blend_columns, transform_point};
 use super::precision::SkinReal;
@@ -201,6 +201,78 @@ impl<S: SkinReal, P: CentredPoints<S>, const TABLE: bool> VertexKernel<S>
         )
     }
 
+    /// With the sign table: the `BLOCK` blends (affine columns and rotation) are accumulated
+    /// per vertex, then the rotation of the offset and the map of the centre are evaluated
+    /// across the block, in the order of operations of [`cor_point`] (bit-identical results).
+    #[inline(always)]
+    fn skin_block<const K: usize>(
+        &self,
+        joints: &[u16],
+        weights: &[S],
+        pivots: &[u16],
+        slot: usize,
+        vertices: &[usize; BLOCK],
+    ) -> [S::V3; BLOCK] {
+        if !TABLE {
+            return std::array::from_fn(|l| {
+                self.skin(
+                    &joints[l * K..(l + 1) * K],
+                    &weights[l * K..(l + 1) * K],
+                    pivots[l],
+                    slot + l,
+                    vertices[l],
+                )
+            });
+        }
+        // Per vertex: [x_axis, y_axis, z_axis, translation] (12) then the rotation (4).
+        let mut blend = [[S::ZERO; 16]; BLOCK];
+        for (l, sum) in blend.iter_mut().enumerate() {
+            let signs = self.scratch.signs.row(usize::from(pivots[l]));
+            for k in 0..K {
+                let j = usize::from(joints[l * K + k]);
+                let w = weights[l * K + k];
+                let columns = self.scratch.columns[j];
+                for (c, column) in columns.iter().enumerate() {
+                    let [a, b, d] = S::components(*column);
+                    sum[3 * c] = sum[3 * c] + a * w;
+                    sum[3 * c + 1] = sum[3 * c + 1] + b * w;
+                    sum[3 * c + 2] = sum[3 * c + 2] + d * w;
+                }
+                let q = S::quat_array(self.scratch.rotations[j]);
+                let signed = w * signs[j];
+                for c in 0..4 {
+                    sum[12 + c] = sum[12 + c] + q[c] * signed;
+                }
+            }
+        }
+        let inputs: [[S; 6]; BLOCK] = std::array::from_fn(|l| {
+            let [c, d] = self.points.centre_and_offset(slot + l, vertices[l]);
+            let [cx, cy, cz] = S::components(c);
+            let [dx, dy, dz] = S::components(d);
+            [cx, cy, cz, dx, dy, dz]
+        });
+        let mut out = [[S::ZERO; 3]; BLOCK];
+        for l in 0..BLOCK {
+            let m = blend[l];
+            let [cx, cy, cz, px, py, pz] = inputs[l];
+            let [x, y, z, w] = [m[12], m[13], m[14], m[15]];
+            let vv = x * x + y * y + z * z;
+            let a = w * w - vv;
+            let b = S::TWO * (x * px + y * py + z * pz);
+            let c = S::TWO * w;
+            let inv = (vv + w * w).recip();
+            let rotated = [
+                (px * a + x * b + (y * pz - z * py) * c) * inv,
+                (py * a + y * b + (z * px - x * pz) * c) * inv,
+                (pz * a + z * b + (x * py - y * px) * c) * inv,
+            ];
+            for r in 0..3 {
+                out[l][r] = rotated[r] + (m[r] * cx + m[3 + r] * cy + m[6 + r] * cz + m[9 + r]);
+            }
+        }
+        std::array::from_fn(|l| S::new_v3(out[l][0], out[l][1], out[l][2]))
+    }
+
     #[inline(always)]
     fn unweighted(&self, slot: usize, vertex: usize) -> S::V3 {
         self.points.world(slot, vertex)
@@ -297,6 +369,74 @@ mod tests {
         for c in [v, DVec3::NAN] {
             let out = skin(&[vec![0.25, 0.75]], &t, &[v], &[c]);
             assert!(out[0].abs_diff_eq(lbs, 1e-14), "{out:?} vs {lbs}");
+        }
+    }
+
+    #[test]
+    fn sign_table_and_blocks_match_the_plain_per_vertex_rule_bitwise() {
+        // 3 joints, 20 000 vertices (3 chunks, table and blocks used), 1–3 influences, centres
+        // finite or not, joint 2 rotated by ±170° so that signs flip.
+        let num_vertices = 20_000;
+        let rows: Vec<Vec<f64>> = (0..num_vertices)
+            .map(|v| match v % 3 {
+                0 => vec![1.0, 0.0, 0.0],
+                1 => vec![0.25, 0.0, 0.75],
+                _ => vec![0.2, 0.3, 0.5],
+            })
+            .collect();
+        let rest: Vec<DVec3> = (0..num_vertices)
+            .map(|v| DVec3::new(v as f64 * 1e-3, (v % 7) as f64, -((v % 11) as f64)))
+            .collect();
+        let centres: Vec<DVec3> = rest
+            .iter()
+            .enumerate()
+            .map(|(v, &p)| {
+                if v % 5 == 0 {
+                    DVec3::NAN
+                } else {
+                    p * 0.5 + DVec3::X
+                }
+            })
+            .collect();
+        let t = [
+            DAffine3::from_translation(DVec3::Y) * DAffine3::from_rotation_x(0.4),
+            DAffine3::from_rotation_z(170f64.to_radians()),
+            DAffine3::from_scale(DVec3::new(1.0, 1.2, 0.9))
+                * DAffine3::from_rotation_z(-170f64.to_radians()),
+        ];
+        let (w, _) = SkinWeights::from_dense(&rows).unwrap();
+        let out = skin(&rows, &t, &rest, &centres);
+        let columns: Vec<[DVec3; 4]> = t
+            .iter()
+            .map(|a| {
+                [
+                    a.matrix3.x_axis,
+                    a.matrix3.y_axis,
+                    a.matrix3.z_axis,
+                    a.translation,
+                ]
+            })
+            .collect();
+        let rotations: Vec<DQuat> = t.iter().map(|a| rotation_quaternion(a.matrix3)).collect();
+        for (v, &o) in out.iter().enumerate() {
+            let (joints, weights) = w.row(v);
+            let joints: Vec<u16> = joints.iter().map(|&j| j as u16).collect();
+            let [c, d] = WorldCentredPoints {
+                rest: &rest,
+                centres: &centres,
+            }
+            .centre_and_offset(0, v);
+            let expected = cor_point::<f64, _, false>(
+                &joints,
+                weights,
+                w.heaviest(v).unwrap(),
+                &[],
+                &columns[..],
+                &rotations,
+                c,
+                d,
+            );
+            assert_eq!(o, expected, "vertex {v}");
         }
     }
 }
