@@ -37,32 +37,64 @@ struct Run {
 /// Vertices evaluated together by [`VertexKernel::skin_block`].
 pub(crate) const BLOCK: usize = 8;
 
+/// [`BLOCK`] consecutive sorted slots of one run, `K` influences each.
+pub(crate) struct Block<'a, S> {
+    /// `BLOCK · K` joints and weights, vertex by vertex.
+    pub joints: &'a [u16],
+    pub weights: &'a [S],
+    /// `BLOCK` pivot joints.
+    pub pivots: &'a [u16],
+    /// Global slot of the first vertex.
+    pub slot: usize,
+    /// Global index of every vertex.
+    pub vertices: [usize; BLOCK],
+}
+
+impl<S: SkinReal> Block<'_, S> {
+    /// The block skinned vertex by vertex with `kernel.skin`.
+    #[inline(always)]
+    pub fn one_by_one<const K: usize>(
+        &self,
+        kernel: &(impl VertexKernel<S> + ?Sized),
+    ) -> [S::V3; BLOCK] {
+        std::array::from_fn(|l| {
+            kernel.skin(
+                &self.joints[l * K..(l + 1) * K],
+                &self.weights[l * K..(l + 1) * K],
+                self.pivots[l],
+                self.slot + l,
+                self.vertices[l],
+            )
+        })
+    }
+
+    /// Calls `f(lane, pivot, joint, weight)` for every influence, lane by lane.
+    #[inline(always)]
+    pub fn for_each_influence<const K: usize>(&self, mut f: impl FnMut(usize, usize, usize, S)) {
+        for l in 0..BLOCK {
+            let pivot = usize::from(self.pivots[l]);
+            for k in 0..K {
+                f(
+                    l,
+                    pivot,
+                    usize::from(self.joints[l * K + k]),
+                    self.weights[l * K + k],
+                );
+            }
+        }
+    }
+}
+
 /// Per-vertex skinning rule of a kernel, called by [`CountSortedWeights::skin`] with the
 /// vertex's sorted `slot` and its index `vertex` (both global).
 pub(crate) trait VertexKernel<S: SkinReal>: Sync {
     /// Position of a vertex with at least one influence (`joints`, `weights` of equal length).
     fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3;
-    /// Positions of [`BLOCK`] vertices of `K` influences each (`joints`, `weights`: `BLOCK·K`;
-    /// `pivots`: `BLOCK`; sorted slots `slot..slot + BLOCK`), which a kernel may evaluate
+    /// Positions of the vertices of `block` (`K` influences each), which a kernel may evaluate
     /// across SIMD lanes; by default one by one with [`Self::skin`].
     #[inline(always)]
-    fn skin_block<const K: usize>(
-        &self,
-        joints: &[u16],
-        weights: &[S],
-        pivots: &[u16],
-        slot: usize,
-        vertices: &[usize; BLOCK],
-    ) -> [S::V3; BLOCK] {
-        std::array::from_fn(|l| {
-            self.skin(
-                &joints[l * K..(l + 1) * K],
-                &weights[l * K..(l + 1) * K],
-                pivots[l],
-                slot + l,
-                vertices[l],
-            )
-        })
+    fn skin_block<const K: usize>(&self, block: &Block<'_, S>) -> [S::V3; BLOCK] {
+        block.one_by_one::<K>(self)
     }
     /// Position of an unweighted vertex (its rest position).
     fn unweighted(&self, slot: usize, vertex: usize) -> S::V3;
@@ -105,13 +137,13 @@ fn skin_run<S: SkinReal, Kernel: VertexKernel<S>, const K: usize>(
         let index = &local_index[base..base + BLOCK];
         let vertices: [usize; BLOCK] =
             std::array::from_fn(|l| first_vertex + usize::from(index[l]));
-        let skinned = kernel.skin_block::<K>(
-            &joints[base * K..(base + BLOCK) * K],
-            &weights[base * K..(base + BLOCK) * K],
-            &pivots[base..base + BLOCK],
-            first_slot + base,
-            &vertices,
-        );
+        let skinned = kernel.skin_block::<K>(&Block {
+            joints: &joints[base * K..(base + BLOCK) * K],
+            weights: &weights[base * K..(base + BLOCK) * K],
+            pivots: &pivots[base..base + BLOCK],
+            slot: first_slot + base,
+            vertices,
+        });
         for (&i, p) in index.iter().zip(skinned) {
             out[usize::from(i)] = S::output(p);
         }

@@ -21,7 +21,7 @@
 use glam::{DAffine3, DQuat, DVec3, Vec3A};
 
 use super::antipodal_signs::AntipodalSigns;
-use super::compact_weights::{BLOCK, CountSortedWeights, JointColumns, VertexKernel};
+use super::compact_weights::{BLOCK, Block, CountSortedWeights, JointColumns, VertexKernel};
 use super::dqs::rotate_unnormalised;
 use super::lbs::{blend_columns, transform_point};
 use super::precision::SkinReal;
@@ -205,32 +205,17 @@ impl<S: SkinReal, P: CentredPoints<S>, const TABLE: bool> VertexKernel<S>
     /// per vertex, then the rotation of the offset and the map of the centre are evaluated
     /// across the block, in the order of operations of [`cor_point`] (bit-identical results).
     #[inline(always)]
-    fn skin_block<const K: usize>(
-        &self,
-        joints: &[u16],
-        weights: &[S],
-        pivots: &[u16],
-        slot: usize,
-        vertices: &[usize; BLOCK],
-    ) -> [S::V3; BLOCK] {
+    fn skin_block<const K: usize>(&self, block: &Block<'_, S>) -> [S::V3; BLOCK] {
         if !TABLE {
-            return std::array::from_fn(|l| {
-                self.skin(
-                    &joints[l * K..(l + 1) * K],
-                    &weights[l * K..(l + 1) * K],
-                    pivots[l],
-                    slot + l,
-                    vertices[l],
-                )
-            });
+            return block.one_by_one::<K>(self);
         }
         // Per vertex: [x_axis, y_axis, z_axis, translation] (12) then the rotation (4).
         let mut blend = [[S::ZERO; 16]; BLOCK];
         for (l, sum) in blend.iter_mut().enumerate() {
-            let signs = self.scratch.signs.row(usize::from(pivots[l]));
+            let signs = self.scratch.signs.row(usize::from(block.pivots[l]));
             for k in 0..K {
-                let j = usize::from(joints[l * K + k]);
-                let w = weights[l * K + k];
+                let j = usize::from(block.joints[l * K + k]);
+                let w = block.weights[l * K + k];
                 let columns = self.scratch.columns[j];
                 for (c, column) in columns.iter().enumerate() {
                     let [a, b, d] = S::components(*column);
@@ -246,7 +231,9 @@ impl<S: SkinReal, P: CentredPoints<S>, const TABLE: bool> VertexKernel<S>
             }
         }
         let inputs: [[S; 6]; BLOCK] = std::array::from_fn(|l| {
-            let [c, d] = self.points.centre_and_offset(slot + l, vertices[l]);
+            let [c, d] = self
+                .points
+                .centre_and_offset(block.slot + l, block.vertices[l]);
             let [cx, cy, cz] = S::components(c);
             let [dx, dy, dz] = S::components(d);
             [cx, cy, cz, dx, dy, dz]

@@ -16,7 +16,9 @@
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::antipodal_signs::AntipodalSigns;
-use super::compact_weights::{BLOCK, CountSortedWeights, RestPoints, VertexKernel, WorldPoints};
+use super::compact_weights::{
+    BLOCK, Block, CountSortedWeights, RestPoints, VertexKernel, WorldPoints,
+};
 use super::precision::SkinReal;
 use super::rigid_rotation::rotation_quaternion;
 use crate::SkinWeights;
@@ -195,42 +197,24 @@ impl<S: SkinReal, P: RestPoints<S>, const TABLE: bool> VertexKernel<S>
     /// normalisation and the rigid map are evaluated across the block (one SIMD lane per
     /// vertex), in the order of operations of [`dqs_point`] (bit-identical results).
     #[inline(always)]
-    fn skin_block<const K: usize>(
-        &self,
-        joints: &[u16],
-        weights: &[S],
-        pivots: &[u16],
-        slot: usize,
-        vertices: &[usize; BLOCK],
-    ) -> [S::V3; BLOCK] {
+    fn skin_block<const K: usize>(&self, block: &Block<'_, S>) -> [S::V3; BLOCK] {
         if !TABLE {
-            return std::array::from_fn(|l| {
-                self.skin(
-                    &joints[l * K..(l + 1) * K],
-                    &weights[l * K..(l + 1) * K],
-                    pivots[l],
-                    slot + l,
-                    vertices[l],
-                )
-            });
+            return block.one_by_one::<K>(self);
         }
         let mut blend = [[S::ZERO; 8]; BLOCK];
-        for (l, sum) in blend.iter_mut().enumerate() {
-            let signs = self.signs.row(usize::from(pivots[l]));
-            for k in 0..K {
-                let j = usize::from(joints[l * K + k]);
-                let signed = weights[l * K + k] * signs[j];
-                let [r, d] = self.joint_dual_quats[j];
-                let q = S::quat_array(r);
-                let e = S::quat_array(d);
-                for c in 0..4 {
-                    sum[c] = sum[c] + q[c] * signed;
-                    sum[4 + c] = sum[4 + c] + e[c] * signed;
-                }
+        block.for_each_influence::<K>(|l, pivot, j, w| {
+            let signed = w * self.signs.row(pivot)[j];
+            let [r, d] = self.joint_dual_quats[j];
+            let (q, e) = (S::quat_array(r), S::quat_array(d));
+            let sum = &mut blend[l];
+            for c in 0..4 {
+                sum[c] = sum[c] + q[c] * signed;
+                sum[4 + c] = sum[4 + c] + e[c] * signed;
             }
-        }
-        let points: [[S; 3]; BLOCK] =
-            std::array::from_fn(|l| S::components(self.points.point(slot + l, vertices[l])));
+        });
+        let points: [[S; 3]; BLOCK] = std::array::from_fn(|l| {
+            S::components(self.points.point(block.slot + l, block.vertices[l]))
+        });
         let mut out = [[S::ZERO; 3]; BLOCK];
         for l in 0..BLOCK {
             let [x, y, z, w, dx, dy, dz, dw] = blend[l];
