@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use cagerig::session::RigSession;
+use cagerig::session::{DisplayPrecision, RigSession};
 use cagerig::skinning::SkinningMethod;
 use cagerig_render::CameraPreset;
 use cagerig_render::rig_scene::{ColorBy, Layers};
@@ -69,6 +69,11 @@ pub struct RenderArgs {
     /// Skinning method.
     #[arg(long, value_enum)]
     pub skinning: Option<SkinningArg>,
+    /// Draw the current skin from the f32 display path (LBS/DQS/CoR in f32, within 2e-6 of the
+    /// bounding-box diagonal of the exact skin; faster on large characters). Cage, skeleton and
+    /// rest pose are the exact ones either way.
+    #[arg(long)]
+    pub display_f32: bool,
     #[command(flatten)]
     pub session: SessionArgs,
 }
@@ -240,6 +245,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let (mut session, warnings) = start_session(loaded, options)?;
     for w in &warnings {
         eprintln!("warning: {w}");
+    }
+    if args.display_f32 {
+        session.set_display_precision(DisplayPrecision::F32)?;
     }
     let color_by = match &args.color_by {
         Some(text) => parse_color_by(&session, text)?,

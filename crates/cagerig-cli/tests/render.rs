@@ -63,6 +63,50 @@ fn content_pixels(image: &(u32, u32, Vec<u8>), x0: u32, x1: u32) -> usize {
 }
 
 #[test]
+fn the_f32_display_path_draws_the_same_picture() {
+    if !gpu_tests() {
+        return;
+    }
+    let dir = temp_dir("display_f32");
+    let script = dir.join("edits.json");
+    std::fs::write(
+        &script,
+        r#"{"skinning":"dqs","steps":[{"op":"rotate_joint","joint":3,"axis":[1,0,0],"degrees":50},
+            {"op":"move_rest_cage","vertices":[0,2,4],"offset":[0.1,-0.05,0.1]}]}"#,
+    )
+    .unwrap();
+    let mut pictures = Vec::new();
+    for (name, extra) in [("exact.png", None), ("f32.png", Some("--display-f32"))] {
+        let out = dir.join(name);
+        let mut args = vec![
+            "render",
+            "--builtin",
+            "snake",
+            "--script",
+            script.to_str().unwrap(),
+            "--size",
+            "320x240",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        run(&args);
+        pictures.push(decode(&out));
+    }
+    let (a, b) = (&pictures[0].2, &pictures[1].2);
+    assert_eq!(a.len(), b.len());
+    let differing = a
+        .chunks_exact(4)
+        .zip(b.chunks_exact(4))
+        .filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 2))
+        .count();
+    assert!(
+        differing * 1000 <= a.len() / 4,
+        "{differing} pixels differ by more than 2 levels"
+    );
+}
+
+#[test]
 fn both_views_are_drawn_side_by_side_at_the_requested_size() {
     if !gpu_tests() {
         return;
