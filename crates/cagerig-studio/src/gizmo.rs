@@ -58,6 +58,8 @@ pub enum Constraint {
 pub enum Handle {
     Arrow(Axis),
     Ring(Axis),
+    /// The square between the two other arrows: moves (scales) in the plane normal to the axis.
+    Plane(Axis),
 }
 
 /// Intersection of a ray with the plane through `point` with normal `normal`.
@@ -205,6 +207,45 @@ pub fn arrow_segment(view: &ViewProjection, pivot: DVec3, axis: Axis) -> Option<
     ))
 }
 
+/// The two axes spanning the plane normal to `axis`, in cyclic order.
+fn plane_axes(axis: Axis) -> (Axis, Axis) {
+    match axis {
+        Axis::X => (Axis::Y, Axis::Z),
+        Axis::Y => (Axis::Z, Axis::X),
+        Axis::Z => (Axis::X, Axis::Y),
+    }
+}
+
+/// Screen corners of the plane handle normal to `axis` at `pivot`: a square spanning 25–45 %
+/// of the arrows along the two other axes. `None` when it is behind the camera or seen so
+/// edge-on that it cannot be grabbed (under 40 px²).
+pub fn plane_square(view: &ViewProjection, pivot: DVec3, axis: Axis) -> Option<[DVec2; 4]> {
+    let length = ARROW_PIXELS * view.world_per_pixel(pivot);
+    let (u, v) = plane_axes(axis);
+    let (u, v) = (u.vector() * length, v.vector() * length);
+    let corner = |a: f64, b: f64| view.project(pivot + a * u + b * v);
+    let square = [
+        corner(0.25, 0.25)?,
+        corner(0.45, 0.25)?,
+        corner(0.45, 0.45)?,
+        corner(0.25, 0.45)?,
+    ];
+    let area = 0.5
+        * (0..4)
+            .map(|i| square[i].perp_dot(square[(i + 1) % 4]))
+            .sum::<f64>()
+            .abs();
+    (area >= 40.0).then_some(square)
+}
+
+/// Whether `p` lies inside the convex quadrilateral `quad` (either winding).
+fn inside_convex(quad: &[DVec2; 4], p: DVec2) -> bool {
+    let sides: Vec<f64> = (0..4)
+        .map(|i| (quad[(i + 1) % 4] - quad[i]).perp_dot(p - quad[i]))
+        .collect();
+    sides.iter().all(|&s| s >= 0.0) || sides.iter().all(|&s| s <= 0.0)
+}
+
 /// Screen polyline of the ring about `axis` at `pivot` (closed, `n` points).
 pub fn ring_polyline(view: &ViewProjection, pivot: DVec3, axis: Axis, n: usize) -> Vec<DVec2> {
     let radius = RING_PIXELS * view.world_per_pixel(pivot);
@@ -252,6 +293,11 @@ pub fn hit_handle(
     };
     if arrows {
         for axis in Axis::ALL {
+            if plane_square(view, pivot, axis).is_some_and(|q| inside_convex(&q, mouse)) {
+                consider(0.0, Handle::Plane(axis));
+            }
+        }
+        for axis in Axis::ALL {
             // An arrow pointing at the viewer is too short on screen to grab reliably.
             if let Some((a, b)) = arrow_segment(view, pivot, axis)
                 .filter(|(a, b)| a.distance(*b) > 0.3 * ARROW_PIXELS)
@@ -285,6 +331,50 @@ mod tests {
 
     fn view() -> ViewProjection {
         crate::picking::test_view(400.0, 400.0)
+    }
+
+    #[test]
+    fn plane_handles_are_hit_inside_their_square_and_drag_in_their_plane() {
+        // A three-quarter view: all three squares face the camera at an angle.
+        let v = ViewProjection::new(
+            OrbitCamera::looking_at(DVec3::new(6.0, 5.0, 8.0), DVec3::ZERO),
+            400.0,
+            400.0,
+        );
+        let pivot = DVec3::new(0.2, -0.1, 0.3);
+        let mut hits = 0;
+        for axis in Axis::ALL {
+            let Some(square) = plane_square(&v, pivot, axis) else {
+                continue;
+            };
+            hits += 1;
+            let centre = square.iter().copied().sum::<DVec2>() / 4.0;
+            assert_eq!(
+                hit_handle(&v, pivot, centre, true, false),
+                Some(Handle::Plane(axis))
+            );
+            // Without arrows (the rotate tool) there are no plane handles.
+            assert_ne!(
+                hit_handle(&v, pivot, centre, false, false),
+                Some(Handle::Plane(axis))
+            );
+            let d = drag_translation(
+                &v,
+                pivot,
+                Constraint::Plane(axis),
+                centre,
+                centre + DVec2::new(25.0, -10.0),
+            );
+            assert!(d.length() > 1e-6, "{axis:?}: {d}");
+            assert!(d.dot(axis.vector()).abs() < 1e-9, "{axis:?}: {d}");
+        }
+        assert_eq!(
+            hits, 3,
+            "the three-quarter view shows the three plane handles"
+        );
+        // A point outside every square hits no plane.
+        let far = v.project(pivot).unwrap() + DVec2::new(-200.0, 170.0);
+        assert_eq!(hit_handle(&v, pivot, far, true, false), None);
     }
 
     #[test]

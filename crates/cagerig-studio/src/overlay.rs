@@ -184,6 +184,23 @@ fn draw_gizmo(
         }
     }
     if arrows {
+        // Plane handles, coloured by their normal axis (as in Blender).
+        for axis in Axis::ALL {
+            let Some(square) = gizmo::plane_square(projection, pivot, axis) else {
+                continue;
+            };
+            let alpha = if hovered == Some(gizmo::Handle::Plane(axis)) {
+                200
+            } else {
+                110
+            };
+            let [r, g, b, _] = axis_color(axis).to_array();
+            painter.add(egui::Shape::convex_polygon(
+                square.iter().map(|&p| to_screen(p, rect)).collect(),
+                Color32::from_rgba_unmultiplied(r, g, b, alpha),
+                Stroke::new(1.0, axis_color(axis)),
+            ));
+        }
         for axis in Axis::ALL {
             let Some((a, b)) = gizmo::arrow_segment(projection, pivot, axis) else {
                 continue;

@@ -479,6 +479,10 @@ fn start_drag(app: &mut StudioApp, view: usize, origin: DVec2, modifiers: egui::
                 Some((TransformOp::Scale, Constraint::Axis(a)))
             }
             Some(Handle::Arrow(a)) => Some((TransformOp::Grab, Constraint::Axis(a))),
+            Some(Handle::Plane(a)) if app.tool == Tool::Scale => {
+                Some((TransformOp::Scale, Constraint::Plane(a)))
+            }
+            Some(Handle::Plane(a)) => Some((TransformOp::Grab, Constraint::Plane(a))),
             Some(Handle::Ring(a)) => Some((TransformOp::Rotate, Constraint::Axis(a))),
             None => None,
         };

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use cagerig_studio::app::{CURRENT, REST};
 use cagerig_studio::document::Snapshot;
+use cagerig_studio::gizmo;
 use cagerig_studio::keys::Track;
 use cagerig_studio::rig_open::RigSource;
 use cagerig_studio::session_file::SessionFile;
@@ -187,6 +188,35 @@ fn click_selects_a_cage_vertex_and_drag_lands_it_under_the_mouse_then_undo_resto
     h.key_press_modifiers(Modifiers::COMMAND | Modifiers::SHIFT, egui::Key::Z);
     h.run_steps(2);
     assert_ne!(snapshot(&h), before, "redo");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn the_gizmo_plane_handle_moves_the_selection_in_its_plane_only() {
+    if skip() {
+        return;
+    }
+    let (mut h, dir) = open_bar("plane");
+    let (k, p) = front_cage_vertex(&h, CURRENT);
+    let at = screen_of(&h, CURRENT, p);
+    click(&mut h, at, Modifiers::NONE);
+    // A three-quarter view so that the plane normal to Y faces the camera.
+    h.state_mut().views[CURRENT].camera.yaw = 0.6;
+    h.state_mut().views[CURRENT].camera.pitch = 0.5;
+    h.run_steps(2);
+    let (pivot, arrows, _) = h.state().gizmo_pivot(CURRENT).unwrap();
+    assert!(arrows, "the move tool shows arrows and plane handles");
+    let projection = h.state().views[CURRENT].projection();
+    let square = gizmo::plane_square(&projection, pivot, gizmo::Axis::Y).unwrap();
+    let centre = square.iter().copied().sum::<DVec2>() / 4.0;
+    let rect = h.state().interaction.view_rects[CURRENT];
+    let from = Pos2::new(rect.left() + centre.x as f32, rect.top() + centre.y as f32);
+    drag(&mut h, from, from + egui::vec2(30.0, 12.0));
+    let doc = h.state().doc.as_ref().unwrap();
+    assert_eq!(doc.history().undo_len(), 1, "one drag = one undo step");
+    let moved = doc.session.posed_cage()[k] - p;
+    assert!(moved.length() > 1e-3, "C'[{k}] moved by {moved}");
+    assert!(moved.y.abs() < 1e-9, "C'[{k}] left the XZ plane: {moved}");
     std::fs::remove_dir_all(dir).ok();
 }
 
