@@ -125,6 +125,10 @@ pub struct Dialogs {
     /// File > Open: generate a cage (of `cage_vertices` vertices) when the character has none.
     pub generate_cage: bool,
     pub cage_vertices: usize,
+    /// The window was asked to close with unsaved edits: Save / Don't save / Cancel.
+    pub confirm_close: bool,
+    /// Close the window once the Save-as dialog has saved.
+    pub close_after_save: bool,
 }
 
 /// The editor.
@@ -145,6 +149,8 @@ pub struct StudioApp {
     pub session_path: Option<PathBuf>,
     /// `doc.edits` when last saved / autosaved.
     pub saved_edits: u64,
+    /// The user saved or discarded the edits in the close dialog: the window may close.
+    pub close_approved: bool,
     autosaved_edits: u64,
     last_autosave: Instant,
     renderer: Option<Arc<Renderer>>,
@@ -191,6 +197,7 @@ impl StudioApp {
             state_dir,
             session_path: None,
             saved_edits: 0,
+            close_approved: false,
             autosaved_edits: 0,
             last_autosave: Instant::now(),
             renderer,
@@ -605,6 +612,7 @@ impl eframe::App for StudioApp {
         let ctx = ui.ctx().clone();
         self.stats.begin_frame();
         self.handle_dropped_files(&ctx);
+        self.hold_close_with_unsaved_edits(&ctx);
         crate::shortcuts::global_shortcuts(self, &ctx);
         crate::benchmark_drag::step(self);
         self.advance_playback(&ctx);
@@ -635,13 +643,34 @@ impl eframe::App for StudioApp {
     fn on_exit(&mut self) {
         self.write_frame_stats();
         // A clean exit: the recovery file is not needed (unsaved edits were asked about).
-        if !self.unsaved() {
+        if !self.unsaved() || self.close_approved {
             self.state_dir.clear_recovery();
         }
     }
 }
 
 impl StudioApp {
+    /// A request to close the window while edits are unsaved is held back and asked about
+    /// (scripted runs close without asking).
+    fn hold_close_with_unsaved_edits(&mut self, ctx: &egui::Context) {
+        let scripted =
+            self.options.screenshot.is_some() || self.options.quit_after_frames.is_some();
+        if ctx.input(|i| i.viewport().close_requested())
+            && self.unsaved()
+            && !self.close_approved
+            && !scripted
+        {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.dialogs.confirm_close = true;
+        }
+    }
+
+    /// Lets the window close (after the close dialog saved or discarded the edits).
+    pub fn approve_close(&mut self, ctx: &egui::Context) {
+        self.close_approved = true;
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+    }
+
     fn handle_dropped_files(&mut self, ctx: &egui::Context) {
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw

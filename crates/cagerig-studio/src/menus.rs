@@ -382,7 +382,43 @@ pub fn dialogs_ui(app: &mut StudioApp, ctx: &egui::Context) {
         let saved = action == PathAction::Act && app.save_session_to(Path::new(path.trim()));
         if action == PathAction::None || (action == PathAction::Act && !saved) {
             app.dialogs.save_as = Some(path);
+        } else if saved && app.dialogs.close_after_save {
+            app.approve_close(ctx);
+        } else {
+            app.dialogs.close_after_save = false;
         }
+    }
+    if app.dialogs.confirm_close {
+        egui::Window::new("Save changes before closing?")
+            .collapsible(false)
+            .resizable(false)
+            .show(ctx, |ui| {
+                ui.label("The edits since the last save are not in a session file.");
+                ui.horizontal(|ui| {
+                    if ui.button("Save").clicked() {
+                        app.dialogs.confirm_close = false;
+                        match app.session_path.clone() {
+                            Some(path) => {
+                                if app.save_session_to(&path) {
+                                    app.approve_close(ctx);
+                                }
+                            }
+                            None => {
+                                app.dialogs.save_as =
+                                    Some(format!("{}session.cagerig", cwd_string()));
+                                app.dialogs.close_after_save = true;
+                            }
+                        }
+                    }
+                    if ui.button("Don't save").clicked() {
+                        app.dialogs.confirm_close = false;
+                        app.approve_close(ctx);
+                    }
+                    if ui.button("Cancel").clicked() {
+                        app.dialogs.confirm_close = false;
+                    }
+                });
+            });
     }
     if let Some(mut path) = app.dialogs.export_dir.take() {
         let note = "Folder for mesh_rest.obj, mesh_posed.obj, cage_rest.obj, cage_posed.obj, \

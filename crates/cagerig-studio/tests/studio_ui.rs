@@ -220,6 +220,76 @@ fn the_gizmo_plane_handle_moves_the_selection_in_its_plane_only() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// Asks the window to close, as the window manager's close button does.
+fn request_close(h: &mut Harness<'_, StudioApp>) {
+    h.input_mut()
+        .viewports
+        .entry(egui::ViewportId::ROOT)
+        .or_default()
+        .events
+        .push(egui::ViewportEvent::Close);
+    h.step();
+}
+
+fn root_commands(h: &Harness<'_, StudioApp>) -> Vec<egui::ViewportCommand> {
+    h.output()
+        .viewport_output
+        .get(&egui::ViewportId::ROOT)
+        .map(|v| v.commands.clone())
+        .unwrap_or_default()
+}
+
+#[test]
+fn closing_with_unsaved_edits_asks_and_saves_or_discards() {
+    if skip() {
+        return;
+    }
+    let (mut h, dir) = open_bar("close");
+    // Nothing edited: the window closes without asking.
+    request_close(&mut h);
+    assert!(!h.state().dialogs.confirm_close);
+    assert!(!root_commands(&h).contains(&egui::ViewportCommand::CancelClose));
+    // An edit, then a close request: held back and asked about; Cancel keeps working.
+    let (k, p) = front_cage_vertex(&h, CURRENT);
+    let at = screen_of(&h, CURRENT, p);
+    click(&mut h, at, Modifiers::NONE);
+    drag(&mut h, at, at + egui::vec2(20.0, 0.0));
+    assert!(h.state().unsaved());
+    request_close(&mut h);
+    assert!(root_commands(&h).contains(&egui::ViewportCommand::CancelClose));
+    assert!(h.state().dialogs.confirm_close);
+    h.run_steps(2);
+    h.get_by_label("Cancel").click();
+    h.run_steps(2);
+    assert!(!h.state().dialogs.confirm_close && !h.state().close_approved);
+    // Save: with a session path the edits are written there, then the window may close.
+    let path = dir.join("closing.cagerig");
+    h.state_mut().session_path = Some(path.clone());
+    request_close(&mut h);
+    h.run_steps(2);
+    h.get_by_label("Save").click();
+    h.step();
+    assert!(path.exists(), "saved before closing");
+    assert!(!h.state().unsaved() && h.state().close_approved);
+    assert!(root_commands(&h).contains(&egui::ViewportCommand::Close));
+    // Don't save: another edit is discarded on request.
+    h.state_mut().close_approved = false;
+    let at = screen_of(
+        &h,
+        CURRENT,
+        h.state().doc.as_ref().unwrap().session.posed_cage()[k],
+    );
+    drag(&mut h, at, at + egui::vec2(0.0, 15.0));
+    assert!(h.state().unsaved());
+    request_close(&mut h);
+    h.run_steps(2);
+    h.get_by_label("Don't save").click();
+    h.step();
+    assert!(h.state().close_approved && h.state().unsaved());
+    assert!(root_commands(&h).contains(&egui::ViewportCommand::Close));
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn rest_view_drag_moves_the_rest_cage_and_the_bones_follow() {
     if skip() {
