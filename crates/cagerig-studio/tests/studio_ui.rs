@@ -220,6 +220,39 @@ fn the_gizmo_plane_handle_moves_the_selection_in_its_plane_only() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A file dropped on the window, as the windowing integration hands it to egui.
+#[derive(Debug)]
+struct DroppedPath(PathBuf);
+
+impl egui::DroppedFile for DroppedPath {
+    fn path(&self) -> &Path {
+        &self.0
+    }
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+#[test]
+fn a_dropped_character_file_is_opened() {
+    if skip() {
+        return;
+    }
+    let (mut h, dir) = open_bar("drop");
+    let arm = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm/arm.obj");
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(DroppedPath(arm)));
+    h.run_steps(3);
+    let s = &h.state().doc.as_ref().unwrap().session;
+    assert_eq!(
+        (s.rest_mesh().len(), s.skeleton().len(), s.rest_cage().len()),
+        (2089, 25, 58),
+        "the Arm replaced the bar"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
 /// Asks the window to close, as the window manager's close button does.
 fn request_close(h: &mut Harness<'_, StudioApp>) {
     h.input_mut()
