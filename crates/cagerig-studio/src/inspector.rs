@@ -129,7 +129,8 @@ fn selection_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
         ui.label(format!("Joint {j}: {}", joint.name));
         let q = s.posed_local_rotations()[j];
         let (x, y, z) = q.to_euler(EulerRot::XYZ);
-        let mut euler = [x.to_degrees(), y.to_degrees(), z.to_degrees()];
+        // `+ 0.0` shows a negative zero as 0.
+        let mut euler = [x, y, z].map(|a| a.to_degrees() + 0.0);
         let mut changed = false;
         let mut started = false;
         let mut stopped = false;

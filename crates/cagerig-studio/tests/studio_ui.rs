@@ -15,7 +15,7 @@ use cagerig_studio::{StartupOptions, StudioApp};
 use egui::{Event, Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use glam::{DVec2, DVec3};
+use glam::{DQuat, DVec2, DVec3};
 
 fn skip() -> bool {
     std::env::var_os("CAGERIG_SKIP_GPU_TESTS").is_some_and(|v| v == "1")
@@ -217,6 +217,44 @@ fn the_gizmo_plane_handle_moves_the_selection_in_its_plane_only() {
     let moved = doc.session.posed_cage()[k] - p;
     assert!(moved.length() > 1e-3, "C'[{k}] moved by {moved}");
     assert!(moved.y.abs() < 1e-9, "C'[{k}] left the XZ plane: {moved}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn typing_a_joint_rotation_in_the_inspector_sets_it_in_one_undo_step() {
+    if skip() {
+        return;
+    }
+    let (mut h, dir) = open_bar("euler");
+    let s = &h.state().doc.as_ref().unwrap().session;
+    let j = s.skeleton().len() / 2;
+    let joint = s.posed_world_from_joint()[j].translation;
+    let at = screen_of(&h, CURRENT, joint);
+    click(&mut h, at, Modifiers::NONE);
+    assert_eq!(h.state().selection.joint, Some(j));
+    // The three Euler fields (X, Y, Z; unlabelled, shown as 0.0 at rest, never -0.0); type 40
+    // into Z.
+    let fields: Vec<_> = h
+        .get_all_by_role(egui::accesskit::Role::SpinButton)
+        .filter(|n| n.value().as_deref() == Some("0.0"))
+        .collect();
+    assert_eq!(fields.len(), 3, "the joint's Euler X, Y, Z fields");
+    fields[2].click();
+    h.run_steps(2);
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::A);
+    h.event(Event::Text("40".into()));
+    h.step();
+    h.key_press(egui::Key::Enter);
+    h.run_steps(3);
+    let s = &h.state().doc.as_ref().unwrap().session;
+    let expected = DQuat::from_rotation_z(40f64.to_radians());
+    assert!(
+        s.posed_local_rotations()[j].abs_diff_eq(expected, 1e-9)
+            || s.posed_local_rotations()[j].abs_diff_eq(-expected, 1e-9),
+        "{:?}",
+        s.posed_local_rotations()[j]
+    );
+    assert_eq!(h.state().doc.as_ref().unwrap().history().undo_len(), 1);
     std::fs::remove_dir_all(dir).ok();
 }
 
