@@ -162,9 +162,9 @@ fn load_parts(args: &BenchArgs) -> anyhow::Result<(String, RigParts)> {
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let (name, base) = load_parts(args)?;
     for &levels in &args.subdivide {
-        crate::memory_estimate::check_fits(
+        cagerig::memory_estimate::check_fits(
             &format!("bench --subdivide {levels}"),
-            crate::memory_estimate::subdivided_vertices(
+            cagerig::memory_estimate::subdivided_vertices(
                 base.mesh.num_vertices() as u64,
                 base.mesh.num_triangles() as u64,
                 u32::try_from(levels).unwrap_or(u32::MAX),

@@ -390,11 +390,8 @@ pub fn demo(
         skin: None,
         allow_outside_cage: false,
     };
-    let (vertices, cage_vertices) = match builtin {
-        "snake" => (resolution.unwrap_or(8192) as u64, 96),
-        _ => ((resolution.unwrap_or(40) as u64).saturating_mul(24), 24),
-    };
-    crate::memory_estimate::check_fits(
+    let (vertices, cage_vertices) = cagerig::memory_estimate::builtin_size(builtin, resolution);
+    cagerig::memory_estimate::check_fits(
         &format!("demo --builtin {builtin}"),
         vertices,
         cage_vertices,

@@ -9,7 +9,6 @@ mod edit;
 mod errors;
 mod export;
 mod interchange;
-mod memory_estimate;
 mod output_dir;
 mod pictures;
 mod render;

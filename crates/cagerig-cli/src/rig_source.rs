@@ -275,9 +275,9 @@ pub fn subdivide_and_write(
     }
     let p = &loaded.parts;
     let levels_u32 = u32::try_from(levels).unwrap_or(u32::MAX);
-    crate::memory_estimate::check_fits(
+    cagerig::memory_estimate::check_fits(
         &format!("subdivide --levels {levels}"),
-        crate::memory_estimate::subdivided_vertices(
+        cagerig::memory_estimate::subdivided_vertices(
             p.mesh.num_vertices() as u64,
             p.mesh.num_triangles() as u64,
             levels_u32,

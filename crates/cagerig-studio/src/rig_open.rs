@@ -116,11 +116,19 @@ pub struct OpenedRig {
 pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
     let (parts, mut warnings, files, animations) = match source {
         RigSource::Builtin { name, resolution } => {
-            let rig =
-                cagerig::demo::builtin(name, *resolution).map_err(|source| OpenError::Builtin {
-                    name: name.clone(),
-                    source,
-                })?;
+            let builtin_error = |source| OpenError::Builtin {
+                name: name.clone(),
+                source,
+            };
+            let (vertices, cage_vertices) =
+                cagerig::memory_estimate::builtin_size(name, *resolution);
+            cagerig::memory_estimate::check_fits(
+                &format!("resolution {}", resolution.unwrap_or_default()),
+                vertices,
+                cage_vertices,
+            )
+            .map_err(builtin_error)?;
+            let rig = cagerig::demo::builtin(name, *resolution).map_err(builtin_error)?;
             let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
             (parts, Vec::new(), Vec::new(), Vec::new())
         }
@@ -253,6 +261,22 @@ fn import_interchange(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_built_in_rig_too_large_for_memory_is_refused_before_it_is_built() {
+        let source = RigSource::Builtin {
+            name: "snake".into(),
+            resolution: Some(usize::MAX / 4),
+        };
+        let message = match open_rig(&source) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("a snake of 4.6e18 vertices was built"),
+        };
+        assert!(
+            message.contains("GiB") && message.contains("snake"),
+            "{message}"
+        );
+    }
 
     #[test]
     fn the_default_source_is_a_builtin_demo_that_opens() {

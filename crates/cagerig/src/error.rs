@@ -21,6 +21,26 @@ pub fn first_bad_component(v: glam::DVec3) -> Option<f64> {
 /// A structural problem that makes a rig unusable. Every variant names the offending element.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum RigError {
+    #[error(
+        "skinning weights for {joints} joints: at most {max} joints are supported (16-bit joint \
+         indices, as in glTF)"
+    )]
+    TooManyJoints { joints: usize, max: usize },
+    #[error(
+        "{what}: about {vertices} vertices × {cage_vertices} cage vertices would need about \
+         {needed_gib:.1} GiB (cage coordinates Φ alone: {phi_gib:.1} GiB), but {limit_gib:.1} GiB \
+         {limit}; ask for less"
+    )]
+    TooLarge {
+        what: String,
+        vertices: u64,
+        cage_vertices: u64,
+        needed_gib: f64,
+        phi_gib: f64,
+        limit_gib: f64,
+        /// "are available" or "is the limit" (when the available memory is unknown).
+        limit: &'static str,
+    },
     #[error("{what}: index {index} is out of range (there are {len})")]
     IndexOutOfRange {
         what: &'static str,

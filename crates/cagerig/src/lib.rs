@@ -17,6 +17,7 @@ pub mod coords;
 pub mod demo;
 pub mod error;
 pub mod io;
+pub mod memory_estimate;
 pub mod mesh;
 pub mod playback;
 pub mod pose;

@@ -34,10 +34,9 @@ impl SkinWeights {
         triplets: impl IntoIterator<Item = (usize, usize, f64)>,
     ) -> Result<(Self, Vec<Warning>), RigError> {
         if num_joints > MAX_JOINTS {
-            return Err(RigError::IndexOutOfRange {
-                what: "joint count (16-bit joint indices)",
-                index: num_joints,
-                len: MAX_JOINTS + 1,
+            return Err(RigError::TooManyJoints {
+                joints: num_joints,
+                max: MAX_JOINTS,
             });
         }
         let mut entries: Vec<(u32, u32, f64)> = Vec::new();
@@ -304,6 +303,13 @@ mod tests {
         assert!(matches!(
             SkinWeights::from_triplets(1, 1, [(0, 3, 1.0)]),
             Err(RigError::IndexOutOfRange { index: 3, .. })
+        ));
+        assert!(matches!(
+            SkinWeights::from_triplets(1, MAX_JOINTS + 1, [(0, 0, 1.0)]),
+            Err(RigError::TooManyJoints {
+                joints: 65537,
+                max: 65536
+            })
         ));
     }
 }

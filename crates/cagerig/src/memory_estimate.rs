@@ -1,8 +1,8 @@
 //! Refusing requests too large for this machine up front (`subdivide --levels`, `bench
-//! --subdivide`, `demo --resolution`), with the memory they would need, instead of an abort
-//! ("memory allocation failed") seconds later.
+//! --subdivide`, `demo --resolution`, the editor's built-in rigs), with the memory they would
+//! need, instead of an abort ("memory allocation failed") seconds later.
 
-use anyhow::bail;
+use crate::error::RigError;
 
 /// Bytes a session of `vertices` skin vertices and `cage_vertices` cage vertices needs, about:
 /// Φ and the CoR coordinates Λ (`#V × #C` f64 each) plus the transient MaxVol and CoR tables
@@ -27,7 +27,7 @@ fn gib(bytes: u64) -> f64 {
 }
 
 /// Fails when `bytes` exceed the memory available now (`what` names the request).
-pub fn check_fits(what: &str, vertices: u64, cage_vertices: u64) -> anyhow::Result<()> {
+pub fn check_fits(what: &str, vertices: u64, cage_vertices: u64) -> Result<(), RigError> {
     let bytes = session_bytes(vertices, cage_vertices);
     check_bytes_fit(what, vertices, cage_vertices, bytes, available_bytes())
 }
@@ -38,25 +38,34 @@ fn check_bytes_fit(
     cage_vertices: u64,
     bytes: u64,
     available: Option<u64>,
-) -> anyhow::Result<()> {
+) -> Result<(), RigError> {
     // Without /proc/meminfo, still refuse what no machine of today holds (1 TiB).
     let limit = available.unwrap_or(1 << 40);
     if bytes > limit {
-        bail!(
-            "{what}: about {vertices} vertices × {cage_vertices} cage vertices would need about \
-             {:.1} GiB (cage coordinates Φ alone: {:.1} GiB), but {:.1} GiB {}; \
-             ask for less",
-            gib(bytes),
-            gib(vertices.saturating_mul(cage_vertices).saturating_mul(8)),
-            gib(limit),
-            if available.is_some() {
+        return Err(RigError::TooLarge {
+            what: what.to_string(),
+            vertices,
+            cage_vertices,
+            needed_gib: gib(bytes),
+            phi_gib: gib(vertices.saturating_mul(cage_vertices).saturating_mul(8)),
+            limit_gib: gib(limit),
+            limit: if available.is_some() {
                 "are available"
             } else {
                 "is the limit"
             },
-        );
+        });
     }
     Ok(())
+}
+
+/// About how many skin and cage vertices the built-in rig `name` has at `resolution` (see
+/// [`crate::demo::builtin`]).
+pub fn builtin_size(name: &str, resolution: Option<usize>) -> (u64, u64) {
+    match name {
+        "snake" => (resolution.unwrap_or(8192) as u64, 96),
+        _ => ((resolution.unwrap_or(40) as u64).saturating_mul(24), 24),
+    }
 }
 
 /// Vertices after `levels` rounds of midpoint subdivision of a mesh with `vertices` vertices and
