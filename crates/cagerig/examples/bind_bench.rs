@@ -1,0 +1,182 @@
+//! Times the binding (precomputation) of the Arm subdivided N times: Φ (MVC), MaxVol, Ψ
+//! (SkelUp), the CageUp factorisation and, with `--cor`, the CoR centres Λ.
+//! `cargo run --release -p cagerig --example bind_bench -- [N] [--cor] [--reps R]`
+//! (`RAYON_NUM_THREADS=1` for the single-thread figures).
+
+use std::path::Path;
+use std::time::Instant;
+
+use cagerig::coords::maxvol::select_maxvol_rows;
+use cagerig::coords::mvc::compute_cage_coords;
+use cagerig::skinning::CorCentresOptions;
+use cagerig::sync::cage_updater::{CageFitMode, CageUpdater};
+use cagerig::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
+
+/// (median, min) wall-clock milliseconds of `reps` runs, and the last result.
+fn timed<T>(reps: usize, mut f: impl FnMut() -> T) -> ((f64, f64), T) {
+    let mut last = None;
+    let mut times: Vec<f64> = (0..reps.max(1))
+        .map(|_| {
+            let start = Instant::now();
+            last = Some(f());
+            start.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    let result = last.expect("at least one run");
+    ((times[times.len() / 2], times[0]), result)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let levels: usize = args
+        .iter()
+        .find(|a| !a.starts_with("--") && a.parse::<usize>().is_ok())
+        .map_or(Ok(0), |a| a.parse())?;
+    let with_cor = args.iter().any(|a| a == "--cor");
+    let reps: usize = args
+        .iter()
+        .position(|a| a == "--reps")
+        .and_then(|i| args.get(i + 1))
+        .map_or(Ok(if levels >= 3 { 3 } else { 21 }), |a| a.parse())?;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm");
+    let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
+    let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
+    let (weights, _) = cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), 25)?;
+    let cage = cagerig::io::read_obj(&dir.join("arm_cage.obj"))?;
+    let sub = cagerig::subdivide::subdivide_midpoint(&mesh, &weights, levels)?;
+    let (mesh, weights) = (sub.mesh, sub.skin_weights);
+    println!(
+        "Arm N={levels}: {} vertices, {} threads, {reps} runs (median / min ms)",
+        mesh.num_vertices(),
+        rayon::current_num_threads()
+    );
+    let ((mvc_med, mvc_min), phi) =
+        timed(reps, || compute_cage_coords(&cage, &mesh.positions, None));
+    let phi = phi?;
+    println!("  MVC Φ              {mvc_med:9.3} {mvc_min:9.3}");
+    let ((mv_med, mv_min), selection) = timed(reps, || select_maxvol_rows(&phi));
+    let selection = selection?;
+    println!(
+        "  MaxVol             {mv_med:9.3} {mv_min:9.3}   ln|det| {:.6}, {} swaps",
+        selection.log_abs_det, selection.swaps
+    );
+    if args.iter().any(|a| a == "--sweep") {
+        for starts in [1, 2, 3, 4, 6, 8, 12, 16, 32] {
+            let options = cagerig::coords::maxvol::MaxVolOptions {
+                starts,
+                ..Default::default()
+            };
+            let ((med, min), sel) = timed(reps, || {
+                cagerig::coords::maxvol::select_maxvol_rows_with(&phi, &options)
+            });
+            let sel = sel?;
+            println!(
+                "    {starts:2} starts   {med:9.3} {min:9.3}   ln|det| {:.6}, {} swaps",
+                sel.log_abs_det, sel.swaps
+            );
+        }
+    }
+    if args.iter().any(|a| a == "--full-lu") {
+        let rank = phi.num_cage_vertices();
+        let ((med, min), sel) = timed(reps, || {
+            let lu = phi.matrix().full_piv_lu();
+            let (forward, _) = lu.P().arrays();
+            let initial: Vec<usize> = forward[..rank].to_vec();
+            cagerig::coords::maxvol::refine_maxvol_rows(&phi, &initial)
+        });
+        let sel = sel?;
+        println!(
+            "    full LU + refine {med:9.3} {min:9.3}   ln|det| {:.6}, {} swaps",
+            sel.log_abs_det, sel.swaps
+        );
+    }
+    if args.iter().any(|a| a == "--diff") {
+        use faer::linalg::solvers::DenseSolveCore;
+        let one = cagerig::coords::maxvol::select_maxvol_rows_with(
+            &phi,
+            &cagerig::coords::maxvol::MaxVolOptions {
+                starts: 1,
+                ..Default::default()
+            },
+        )?;
+        println!(
+            "one start {:.6}, default {:.6}",
+            one.log_abs_det, selection.log_abs_det
+        );
+        let inverse = phi.select_rows(&one.rows).partial_piv_lu().inverse();
+        let b = phi.matrix() * &inverse;
+        for (j, (&a, &c)) in one.rows.iter().zip(&selection.rows).enumerate() {
+            if !one.rows.contains(&c) {
+                let row: Vec<String> = (0..b.ncols())
+                    .filter(|&k| b[(c, k)].abs() > 0.2)
+                    .map(|k| format!("{k}:{:.3}", b[(c, k)]))
+                    .collect();
+                println!(
+                    "  col {j}: one-start row {a}, best has row {c} (B row: {})",
+                    row.join(" ")
+                );
+            }
+        }
+    }
+    if args.iter().any(|a| a == "--entries") {
+        use faer::linalg::solvers::DenseSolveCore;
+        let inverse = phi.select_rows(&selection.rows).partial_piv_lu().inverse();
+        let b = phi.matrix() * &inverse;
+        for threshold in [0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9] {
+            let mut count = 0;
+            for k in 0..b.ncols() {
+                for i in 0..b.nrows() {
+                    if b[(i, k)].abs() >= threshold && !selection.rows.contains(&i) {
+                        count += 1;
+                    }
+                }
+            }
+            println!("    |B| >= {threshold}: {count} entries off the selection");
+        }
+    }
+    let ((su_med, su_min), skelup) = timed(reps, || {
+        SkeletonUpdater::new(
+            &mesh,
+            &skeleton,
+            &weights,
+            &phi,
+            &cage.positions,
+            JointLocalisation::default(),
+        )
+    });
+    skelup?;
+    println!("  SkelUp Ψ           {su_med:9.3} {su_min:9.3}");
+    let ((cu_med, cu_min), cageup) = timed(reps, || {
+        CageUpdater::new(&phi, selection.rows.clone(), CageFitMode::Interpolate)
+    });
+    cageup?;
+    println!("  CageUp factorise   {cu_med:9.3} {cu_min:9.3}");
+    println!(
+        "  Φ + MaxVol + Ψ     {:9.3} {:9.3}",
+        mvc_med + mv_med + su_med,
+        mvc_min + mv_min + su_min
+    );
+    if with_cor {
+        let ((cor_med, cor_min), lambda) = timed(reps.min(3), || {
+            cagerig::session::compute_centre_coords(
+                &mesh.positions,
+                &mesh.triangles,
+                &weights,
+                &phi,
+                &CorCentresOptions::default(),
+            )
+        });
+        lambda?;
+        println!(
+            "  CoR centres Λ      {cor_med:9.3} {cor_min:9.3}   ({})",
+            cagerig::session::centre_coords_method(mesh.num_vertices())
+        );
+        println!(
+            "  Φ + MaxVol + Ψ + Λ {:9.3} {:9.3}",
+            mvc_med + mv_med + su_med + cor_med,
+            mvc_min + mv_min + su_min + cor_min
+        );
+    }
+    Ok(())
+}
