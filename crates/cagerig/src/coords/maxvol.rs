@@ -254,22 +254,84 @@ fn lu_pivot_rows(
     scale: f64,
 ) -> Result<Vec<usize>, RigError> {
     let rank = matrix.ncols();
-    let lu = match order {
-        Some(order) => {
-            Mat::from_fn(matrix.nrows(), rank, |i, k| matrix[(i, order[k])]).partial_piv_lu()
-        }
-        None => matrix.partial_piv_lu(),
-    };
-    let u = lu.U();
-    for k in 0..rank {
-        if u[(k, k)].abs().partial_cmp(&(1e-12 * scale)) != Some(std::cmp::Ordering::Greater) {
-            return Err(RigError::Singular {
-                what: "cage coordinates Φ (rank deficient: MaxVol needs rank #C)",
-            });
+    let lu = SeqLu::new(match order {
+        Some(order) => Mat::from_fn(matrix.nrows(), rank, |i, k| matrix[(i, order[k])]),
+        None => matrix.clone(),
+    });
+    if lu
+        .diagonal()
+        .any(|d| d.abs().partial_cmp(&(1e-12 * scale)) != Some(std::cmp::Ordering::Greater))
+    {
+        return Err(RigError::Singular {
+            what: "cage coordinates Φ (rank deficient: MaxVol needs rank #C)",
+        });
+    }
+    Ok(lu.forward[..rank].to_vec())
+}
+
+/// Row-pivoted LU factors (faer) of a tall or square matrix, computed and applied sequentially:
+/// faer's global parallelism hands the panels of these `#C`-column factorisations to rayon,
+/// which made the whole Arm selection ~7 % slower with 2 threads than with 1.
+pub(crate) struct SeqLu {
+    /// L (unit lower, below the diagonal) and U (upper) packed, `m × n`.
+    packed: Mat<f64>,
+    /// Row `forward[k]` of the input is row k of L·U.
+    forward: Vec<usize>,
+    inverse: Vec<usize>,
+}
+
+impl SeqLu {
+    pub(crate) fn new(mut packed: Mat<f64>) -> Self {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::linalg::lu::partial_pivoting::factor;
+        let (m, n) = packed.shape();
+        let mut forward = vec![0usize; m];
+        let mut inverse = vec![0usize; m];
+        let scratch =
+            factor::lu_in_place_scratch::<usize, f64>(m, n, faer::Par::Seq, Default::default());
+        let mut buffer = MemBuffer::new(scratch);
+        factor::lu_in_place(
+            packed.as_mut(),
+            &mut forward,
+            &mut inverse,
+            faer::Par::Seq,
+            MemStack::new(&mut buffer),
+            Default::default(),
+        );
+        Self {
+            packed,
+            forward,
+            inverse,
         }
     }
-    let (forward, _) = lu.P().arrays();
-    Ok(forward[..rank].to_vec())
+
+    /// U[k, k] for k < min(m, n).
+    pub(crate) fn diagonal(&self) -> impl Iterator<Item = f64> + '_ {
+        (0..self.packed.nrows().min(self.packed.ncols())).map(|k| self.packed[(k, k)])
+    }
+
+    /// A⁻¹ of a square A (non-finite entries if A is singular).
+    pub(crate) fn inverse(&self) -> Mat<f64> {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::linalg::lu::partial_pivoting::solve;
+        let n = self.packed.nrows();
+        let mut out = Mat::<f64>::identity(n, n);
+        let permutation = faer::perm::PermRef::new_checked(&self.forward, &self.inverse, n);
+        let mut buffer = MemBuffer::new(solve::solve_in_place_scratch::<usize, f64>(
+            n,
+            n,
+            faer::Par::Seq,
+        ));
+        solve::solve_in_place(
+            self.packed.as_ref(),
+            self.packed.as_ref(),
+            permutation,
+            out.as_mut(),
+            faer::Par::Seq,
+            MemStack::new(&mut buffer),
+        );
+        out
+    }
 }
 
 /// Runs the MaxVol single-swap refinement from the given `#C` distinct rows (see module docs).
@@ -281,7 +343,7 @@ pub fn refine_maxvol_rows(
     refine(phi, initial_rows).map(|(selection, _)| selection)
 }
 
-/// ln |det Φ̃| of the `#C × #C` submatrix of the given rows (faer partial-pivot LU); −∞ when it is
+/// ln |det Φ̃| of the `#C × #C` submatrix of the given rows (partial-pivot LU); −∞ when it is
 /// exactly singular. Errors if `rows.len() != #C` or a row is out of range.
 pub fn log_abs_det_of_rows(phi: &CageCoords, rows: &[usize]) -> Result<f64, RigError> {
     let rank = phi.num_cage_vertices();
@@ -299,9 +361,10 @@ pub fn log_abs_det_of_rows(phi: &CageCoords, rows: &[usize]) -> Result<f64, RigE
             len: phi.num_vertices(),
         });
     }
-    let lu = phi.select_rows(rows).partial_piv_lu();
-    let u = lu.U();
-    Ok((0..rank).map(|k| u[(k, k)].abs().ln()).sum())
+    Ok(SeqLu::new(phi.select_rows(rows))
+        .diagonal()
+        .map(|d| d.abs().ln())
+        .sum())
 }
 
 #[cfg(test)]

@@ -3,10 +3,9 @@
 //! skipping rows that bounds from the previous check settle.
 
 use faer::Mat;
-use faer::linalg::solvers::DenseSolveCore;
 use rayon::prelude::*;
 
-use super::maxvol::SWAP_THRESHOLD;
+use super::maxvol::{SWAP_THRESHOLD, SeqLu};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 
@@ -38,8 +37,7 @@ pub(crate) fn dominance_violations(
     max_count: usize,
 ) -> Result<Vec<usize>, RigError> {
     let selected = phi.select_rows(rows);
-    let lu = selected.partial_piv_lu();
-    let inverse = lu.inverse();
+    let inverse = SeqLu::new(selected).inverse();
     if !inverse.col_iter().all(|c| c.iter().all(|v| v.is_finite())) {
         return Err(RigError::Singular {
             what: "MaxVol submatrix",

@@ -11,19 +11,22 @@
 //!   initialisations cost a factorisation and a product each.
 
 use faer::Mat;
-use faer::linalg::solvers::DenseSolveCore;
 use rayon::prelude::*;
 
-use super::maxvol::{MaxVolSelection, SWAP_THRESHOLD, log_abs_det_of_rows};
+use super::maxvol::{MaxVolSelection, SWAP_THRESHOLD, SeqLu, log_abs_det_of_rows};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 
 /// Safety cap on swaps per cage vertex.
 const MAX_SWAPS_PER_COLUMN: usize = 100;
-/// B matrices with fewer entries are refined sequentially.
+/// B matrices with fewer entries are refined sequentially: a swap on the Arm (121k entries)
+/// takes ~50 µs, and waking the rayon workers for each one made it slower (2 threads: 3.3 ms
+/// against 2.4 ms for the whole selection).
 const PARALLEL_ENTRIES: usize = 1 << 20;
-/// Rows per parallel task of the rank-1 update.
+/// Most rows per parallel task of the rank-1 update.
 const ROW_BLOCK: usize = 8192;
+/// Fewest rows per parallel task of the rank-1 update.
+const MIN_ROW_BLOCK: usize = 256;
 /// Pair swaps are searched among rows with |B[i, j]| ≥ this in both columns: a pair swap
 /// that improves on a single-swap maximum (all |B| ≤ 1) needs two rows spread over the same
 /// two columns.
@@ -91,9 +94,9 @@ fn initial_b(phi: &CageCoords, rows: &[usize]) -> Result<(Mat<f64>, SwapScratch)
     }
     let matrix = phi.matrix();
     let (num_rows, rank) = (matrix.nrows(), matrix.ncols());
-    let inverse = phi.select_rows(rows).partial_piv_lu().inverse();
+    let inverse = SeqLu::new(phi.select_rows(rows)).inverse();
     // Small problems run sequentially.
-    let parallel = num_rows * rank >= PARALLEL_ENTRIES;
+    let parallel = num_rows * rank >= PARALLEL_ENTRIES && rayon::current_num_threads() > 1;
     let mut b = Mat::<f64>::zeros(num_rows, rank);
     faer::linalg::matmul::matmul(
         b.as_mut(),
@@ -426,8 +429,14 @@ fn update_and_first_max_abs(
     finish_max_abs(column, lanes, tail, floor)
 }
 
+/// The larger of two (row, column, |value|) entries; on ties the first column, then the first
+/// row — the order of the sequential scan, so that any split into row blocks gives its result.
 fn max_entry(a: (usize, usize, f64), b: (usize, usize, f64)) -> (usize, usize, f64) {
-    if b.2 > a.2 { b } else { a }
+    if b.2 > a.2 || (b.2 == a.2 && (b.1, b.0) < (a.1, a.0)) {
+        b
+    } else {
+        a
+    }
 }
 
 /// `B[:, k] -= pivot_column · pivot_row[k]` for every k, returning the new argmax |B|.
@@ -436,10 +445,15 @@ fn rank_one_update_and_argmax(
     pivot_column: &[f64],
     pivot_row: &[f64],
 ) -> (usize, usize, f64) {
-    b.par_row_chunks_mut(ROW_BLOCK)
+    // One task per thread on B that fits the caches, blocks of ROW_BLOCK rows beyond.
+    let row_block = b
+        .nrows()
+        .div_ceil(rayon::current_num_threads())
+        .clamp(MIN_ROW_BLOCK, ROW_BLOCK);
+    b.par_row_chunks_mut(row_block)
         .enumerate()
         .map(|(block, mut chunk)| {
-            let start = block * ROW_BLOCK;
+            let start = block * row_block;
             let height = chunk.nrows();
             let source = &pivot_column[start..start + height];
             let mut best = (0, 0, -1.0);
@@ -481,6 +495,7 @@ fn rank_one_update_and_argmax_seq(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::linalg::solvers::DenseSolveCore;
 
     fn phi_from_rows(rows: &[[f64; 2]]) -> CageCoords {
         CageCoords::from_matrix(Mat::from_fn(rows.len(), 2, |i, k| rows[i][k])).unwrap()
