@@ -1,7 +1,7 @@
 //! Times the binding (precomputation) of the Arm subdivided N times: Φ (MVC), MaxVol, Ψ
 //! (SkelUp), the CageUp factorisation and, with `--cor`, the CoR centres Λ.
-//! `cargo run --release -p cagerig --example bind_bench -- [N] [--cor] [--reps R]`
-//! (`RAYON_NUM_THREADS=1` for the single-thread figures).
+//! `cargo run --release -p cagerig --example bind_bench -- [N] [--cor] [--reps R] [--sweep]`
+//! (`RAYON_NUM_THREADS=1` for the single-thread figures; `--sweep`: MaxVol with 1–32 starts).
 
 use std::path::Path;
 use std::time::Instant;
@@ -39,9 +39,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .position(|a| a == "--reps")
         .and_then(|i| args.get(i + 1))
         .map_or(Ok(if levels >= 3 { 3 } else { 21 }), |a| a.parse())?;
-    if std::env::var("FAER_SEQ").is_ok() {
-        faer::set_global_parallelism(faer::Par::Seq);
-    }
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm");
     let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
     let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
@@ -78,64 +75,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "    {starts:2} starts   {med:9.3} {min:9.3}   ln|det| {:.6}, {} swaps",
                 sel.log_abs_det, sel.swaps
             );
-        }
-    }
-    if args.iter().any(|a| a == "--full-lu") {
-        let rank = phi.num_cage_vertices();
-        let ((med, min), sel) = timed(reps, || {
-            let lu = phi.matrix().full_piv_lu();
-            let (forward, _) = lu.P().arrays();
-            let initial: Vec<usize> = forward[..rank].to_vec();
-            cagerig::coords::maxvol::refine_maxvol_rows(&phi, &initial)
-        });
-        let sel = sel?;
-        println!(
-            "    full LU + refine {med:9.3} {min:9.3}   ln|det| {:.6}, {} swaps",
-            sel.log_abs_det, sel.swaps
-        );
-    }
-    if args.iter().any(|a| a == "--diff") {
-        use faer::linalg::solvers::DenseSolveCore;
-        let one = cagerig::coords::maxvol::select_maxvol_rows_with(
-            &phi,
-            &cagerig::coords::maxvol::MaxVolOptions {
-                starts: 1,
-                ..Default::default()
-            },
-        )?;
-        println!(
-            "one start {:.6}, default {:.6}",
-            one.log_abs_det, selection.log_abs_det
-        );
-        let inverse = phi.select_rows(&one.rows).partial_piv_lu().inverse();
-        let b = phi.matrix() * &inverse;
-        for (j, (&a, &c)) in one.rows.iter().zip(&selection.rows).enumerate() {
-            if !one.rows.contains(&c) {
-                let row: Vec<String> = (0..b.ncols())
-                    .filter(|&k| b[(c, k)].abs() > 0.2)
-                    .map(|k| format!("{k}:{:.3}", b[(c, k)]))
-                    .collect();
-                println!(
-                    "  col {j}: one-start row {a}, best has row {c} (B row: {})",
-                    row.join(" ")
-                );
-            }
-        }
-    }
-    if args.iter().any(|a| a == "--entries") {
-        use faer::linalg::solvers::DenseSolveCore;
-        let inverse = phi.select_rows(&selection.rows).partial_piv_lu().inverse();
-        let b = phi.matrix() * &inverse;
-        for threshold in [0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9] {
-            let mut count = 0;
-            for k in 0..b.ncols() {
-                for i in 0..b.nrows() {
-                    if b[(i, k)].abs() >= threshold && !selection.rows.contains(&i) {
-                        count += 1;
-                    }
-                }
-            }
-            println!("    |B| >= {threshold}: {count} entries off the selection");
         }
     }
     let ((su_med, su_min), skelup) = timed(reps, || {
