@@ -452,22 +452,11 @@ fn rank_one_update_and_argmax(
         .clamp(MIN_ROW_BLOCK, ROW_BLOCK);
     b.par_row_chunks_mut(row_block)
         .enumerate()
-        .map(|(block, mut chunk)| {
+        .map(|(block, chunk)| {
             let start = block * row_block;
-            let height = chunk.nrows();
-            let source = &pivot_column[start..start + height];
-            let mut best = (0, 0, -1.0);
-            for (k, &factor) in pivot_row.iter().enumerate() {
-                let Some(col) = chunk.as_mut().col_mut(k).try_as_col_major_mut() else {
-                    continue;
-                };
-                if let Some((r, value)) =
-                    update_and_first_max_abs(col.as_slice_mut(), source, factor, best.2)
-                {
-                    best = (start + r, k, value);
-                }
-            }
-            best
+            let source = &pivot_column[start..start + chunk.nrows()];
+            let (r, k, value) = update_block_and_argmax(chunk, source, pivot_row);
+            (start + r, k, value)
         })
         .reduce(|| (0, 0, -1.0), max_entry)
 }
@@ -475,6 +464,17 @@ fn rank_one_update_and_argmax(
 /// Sequential [`rank_one_update_and_argmax`] (a zero `pivot_row` just finds the argmax).
 fn rank_one_update_and_argmax_seq(
     b: &mut Mat<f64>,
+    pivot_column: &[f64],
+    pivot_row: &[f64],
+) -> (usize, usize, f64) {
+    update_block_and_argmax(b.as_mut(), pivot_column, pivot_row)
+}
+
+/// `B[:, k] -= pivot_column · pivot_row[k]` on a block of rows of B (`pivot_column` the same
+/// rows), returning the block's argmax |B| (row within the block; first column, then first row
+/// on ties).
+fn update_block_and_argmax(
+    mut b: faer::MatMut<'_, f64>,
     pivot_column: &[f64],
     pivot_row: &[f64],
 ) -> (usize, usize, f64) {
@@ -552,5 +552,22 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn parallel_and_sequential_updates_agree_including_ties() {
+        // Exact ties (repeated rows) in several row blocks: both pick the first column, then the
+        // first row.
+        let (n, r) = (3 * MIN_ROW_BLOCK + 17, 4);
+        let value = |i: usize, k: usize| (((i % 97) * 31 + k * 7) % 13) as f64 - 6.0;
+        let mut par = Mat::from_fn(n, r, value);
+        let mut seq = par.clone();
+        let pivot_column: Vec<f64> = (0..n).map(|i| ((i % 5) as f64) * 0.25).collect();
+        let pivot_row = vec![0.5, -1.0, 0.0, 2.0];
+        let a = rank_one_update_and_argmax(&mut par, &pivot_column, &pivot_row);
+        let b = rank_one_update_and_argmax_seq(&mut seq, &pivot_column, &pivot_row);
+        assert_eq!(a, b);
+        assert_eq!(par, seq);
+        assert_eq!(argmax_abs(&par), b);
     }
 }
