@@ -426,34 +426,34 @@ pub fn compute_cor_cage_coords_grid(
                 ));
             }
         }
-        tasks.into_par_iter().for_each(|(pair_bins, nodes, out)| {
-            let bins = &bins[pair_bins.clone()];
-            // Kernel (nodes × bins, column-major).
-            let (xs, ys): (Vec<f64>, Vec<f64>) = nodes
-                .iter()
-                .map(|&n| grid.node_position(n as usize))
-                .unzip();
-            let mut kernel_values = vec![0.0f64; nodes.len() * bins.len()];
-            fill_kernel(&mut kernel_values, &xs, &ys, bins, inv_sigma_sq);
-            let kernel =
-                faer::MatRef::from_column_major_slice(&kernel_values, nodes.len(), bins.len());
-            let mut product = Mat::<f64>::zeros(nodes.len(), num_cage);
-            faer::linalg::matmul::matmul(
-                product.as_mut(),
-                Accum::Replace,
-                kernel.as_ref(),
-                bin_coords
-                    .as_ref()
-                    .subrows(pair_bins.start, pair_bins.len()),
-                1.0,
-                Par::Seq,
-            );
-            for (r, row) in out.chunks_mut(num_cage).enumerate() {
-                for (c, o) in row.iter_mut().enumerate() {
-                    *o = product[(r, c)];
-                }
-            }
-        });
+        // Per thread, one kernel buffer reused across tasks (no page faults of fresh 8 MB
+        // allocations); the product is written straight into the row-major tables.
+        tasks.into_par_iter().for_each_init(
+            Vec::<f64>::new,
+            |kernel_values, (pair_bins, nodes, out)| {
+                let bins = &bins[pair_bins.clone()];
+                // Kernel (nodes × bins, column-major).
+                let (xs, ys): (Vec<f64>, Vec<f64>) = nodes
+                    .iter()
+                    .map(|&n| grid.node_position(n as usize))
+                    .unzip();
+                kernel_values.resize(nodes.len() * bins.len(), 0.0);
+                let kernel_values = &mut kernel_values[..nodes.len() * bins.len()];
+                fill_kernel(kernel_values, &xs, &ys, bins, inv_sigma_sq);
+                let kernel =
+                    faer::MatRef::from_column_major_slice(kernel_values, nodes.len(), bins.len());
+                faer::linalg::matmul::matmul(
+                    faer::MatMut::from_row_major_slice_mut(out, nodes.len(), num_cage),
+                    Accum::Replace,
+                    kernel,
+                    bin_coords
+                        .as_ref()
+                        .subrows(pair_bins.start, pair_bins.len()),
+                    1.0,
+                    Par::Seq,
+                );
+            },
+        );
     }
     drop(bin_coords);
 
