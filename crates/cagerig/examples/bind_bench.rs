@@ -65,6 +65,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for starts in [1, 2, 3, 4, 6, 8, 12, 16, 32] {
             let options = cagerig::coords::maxvol::MaxVolOptions {
                 starts,
+                starts_all_rows: starts,
                 ..Default::default()
             };
             let ((med, min), sel) = timed(reps, || {
