@@ -4,7 +4,7 @@
 //!
 //! `cargo run --release -p cagerig --example cor_bench [-- LEVELS [SAMPLES]]`
 //! Environment: MODE = grid (default; [`compute_cor_cage_coords_grid`]) or clustered
-//! ([`compute_cor_cage_coords`]); STEP (grid step, default 1/64), BINS (bin resolution, 128),
+//! ([`compute_cor_cage_coords`]); STEP (grid step, default 1/32 as in `CorGridOptions::default`), BINS (bin resolution, 128),
 //! INTERP (cubic | linear) for the grid; VSTEP, PSTEP, FLOOR, MASSTOL for the clustering.
 
 use std::path::Path;
@@ -110,7 +110,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (lambda, format!("{:?}", options.method))
     } else {
         let options = CorGridOptions {
-            grid_step: env("STEP", 1.0 / 64.0),
+            grid_step: env("STEP", CorGridOptions::default().grid_step),
             bin_resolution: env("BINS", 128.0),
             interpolation: if std::env::var("INTERP").as_deref() == Ok("linear") {
                 GridInterpolation::Bilinear

@@ -220,6 +220,7 @@ fn timing_mvc_and_maxvol() {
                     &phi,
                     &MaxVolOptions {
                         starts,
+                        starts_all_rows: starts,
                         ..Default::default()
                     },
                 )

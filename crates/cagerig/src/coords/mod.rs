@@ -2,6 +2,8 @@
 
 pub(crate) mod local_mvc;
 pub mod maxvol;
+mod maxvol_dominance;
+mod maxvol_swaps;
 pub mod mec;
 pub mod mec_signed;
 pub mod mvc;

@@ -60,15 +60,17 @@ pub struct CorGridOptions {
 }
 
 impl Default for CorGridOptions {
-    /// σ = 0.1, h = 1/64, bins of 1/128, bicubic. Measured on the Arm (release, 2 shared cores):
+    /// σ = 0.1, h = 1/32, bins of 1/128, bicubic. Measured on the Arm (release, 2 shared cores):
     /// N = 0: max centre error 3.9e-4 (mean 2.7e-5) × bbox diagonal over all vertices; N = 3
-    /// (133k vertices): 1.0e-4 (mean 1.0e-5) on 300 sampled vertices, about 3 s. Bins of 1/256:
-    /// 1.1e-4 at N = 0 but about 3× slower at N = 3; bins of 1/64: about 2× faster at 8.3e-4.
-    /// Binning dominates the error; the grid step barely matters.
+    /// (133k vertices): 1.0e-4 (mean 1.1e-5) on 300 sampled vertices. Bins of 1/256: 1.1e-4 at
+    /// N = 0 but about 3× slower at N = 3; bins of 1/64: about 2× faster at 8.3e-4. Binning
+    /// dominates the error; the grid step barely matters down to h = 1/32 (h = 1/64: N = 0 max
+    /// 3.9e-4, mean 2.7e-5; N = 3 max 1.0e-4, mean 1.0e-5, with 2.8× the table nodes and about
+    /// twice the time; h = 1/16: N = 0 max 5.0e-4, mean 4.4e-5).
     fn default() -> Self {
         Self {
             sigma: 0.1,
-            grid_step: 1.0 / 64.0,
+            grid_step: 1.0 / 32.0,
             bin_resolution: 128.0,
             interpolation: GridInterpolation::Bicubic,
         }
@@ -347,24 +349,34 @@ pub fn compute_cor_cage_coords_grid(
         })
         .collect();
 
-    // 3. Σ α a b Φ_t per bin (#bins × #C, column-major), columns in parallel.
+    // 3. Σ α a b Φ_t per bin (#bins × #C, column-major), columns in parallel. Per column, the
+    //    corner sums of Φ per triangle first (in triangle order: cache-friendly), so that each
+    //    entry reads one value instead of three scattered ones; the entries are streamed in a
+    //    compact (triangle, mass) copy.
+    let compact: Vec<(u32, f64)> = entries.iter().map(|e| (e.triangle, e.mass)).collect();
+    drop(entries);
     let mut bin_coords = Mat::<f64>::zeros(num_bins, num_cage);
     bin_coords
         .as_mut()
         .par_col_chunks_mut(1)
         .enumerate()
-        .for_each(|(c, mut column)| {
-            let phi = cage_coords.column(c);
-            for b in 0..num_bins {
-                let mut sum = 0.0;
-                for e in &entries[bin_starts[b]..bin_starts[b + 1]] {
-                    let [i, j, k] = triangles[e.triangle as usize];
-                    sum += e.mass * (phi[i as usize] + phi[j as usize] + phi[k as usize]);
+        .for_each_init(
+            || vec![0.0f64; triangles.len()],
+            |corner_sums, (c, mut column)| {
+                let phi = cage_coords.column(c);
+                for (sum, &[i, j, k]) in corner_sums.iter_mut().zip(triangles) {
+                    *sum = phi[i as usize] + phi[j as usize] + phi[k as usize];
                 }
-                column[(b, 0)] = sum / 3.0;
-            }
-        });
-    drop(entries);
+                for b in 0..num_bins {
+                    let mut sum = 0.0;
+                    for &(t, mass) in &compact[bin_starts[b]..bin_starts[b + 1]] {
+                        sum += mass * corner_sums[t as usize];
+                    }
+                    column[(b, 0)] = sum / 3.0;
+                }
+            },
+        );
+    drop(compact);
 
     // 4. Nodes that some vertex's stencil touches, per pair → table slots.
     let mut slot_of_node = vec![NONE; num_pairs * nodes_per_pair];
@@ -414,34 +426,34 @@ pub fn compute_cor_cage_coords_grid(
                 ));
             }
         }
-        tasks.into_par_iter().for_each(|(pair_bins, nodes, out)| {
-            let bins = &bins[pair_bins.clone()];
-            // Kernel (nodes × bins, column-major).
-            let (xs, ys): (Vec<f64>, Vec<f64>) = nodes
-                .iter()
-                .map(|&n| grid.node_position(n as usize))
-                .unzip();
-            let mut kernel_values = vec![0.0f64; nodes.len() * bins.len()];
-            fill_kernel(&mut kernel_values, &xs, &ys, bins, inv_sigma_sq);
-            let kernel =
-                faer::MatRef::from_column_major_slice(&kernel_values, nodes.len(), bins.len());
-            let mut product = Mat::<f64>::zeros(nodes.len(), num_cage);
-            faer::linalg::matmul::matmul(
-                product.as_mut(),
-                Accum::Replace,
-                kernel.as_ref(),
-                bin_coords
-                    .as_ref()
-                    .subrows(pair_bins.start, pair_bins.len()),
-                1.0,
-                Par::Seq,
-            );
-            for (r, row) in out.chunks_mut(num_cage).enumerate() {
-                for (c, o) in row.iter_mut().enumerate() {
-                    *o = product[(r, c)];
-                }
-            }
-        });
+        // Per thread, one kernel buffer reused across tasks (no page faults of fresh 8 MB
+        // allocations); the product is written straight into the row-major tables.
+        tasks.into_par_iter().for_each_init(
+            Vec::<f64>::new,
+            |kernel_values, (pair_bins, nodes, out)| {
+                let bins = &bins[pair_bins.clone()];
+                // Kernel (nodes × bins, column-major).
+                let (xs, ys): (Vec<f64>, Vec<f64>) = nodes
+                    .iter()
+                    .map(|&n| grid.node_position(n as usize))
+                    .unzip();
+                kernel_values.resize(nodes.len() * bins.len(), 0.0);
+                let kernel_values = &mut kernel_values[..nodes.len() * bins.len()];
+                fill_kernel(kernel_values, &xs, &ys, bins, inv_sigma_sq);
+                let kernel =
+                    faer::MatRef::from_column_major_slice(kernel_values, nodes.len(), bins.len());
+                faer::linalg::matmul::matmul(
+                    faer::MatMut::from_row_major_slice_mut(out, nodes.len(), num_cage),
+                    Accum::Replace,
+                    kernel,
+                    bin_coords
+                        .as_ref()
+                        .subrows(pair_bins.start, pair_bins.len()),
+                    1.0,
+                    Par::Seq,
+                );
+            },
+        );
     }
     drop(bin_coords);
 
