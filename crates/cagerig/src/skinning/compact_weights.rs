@@ -115,6 +115,9 @@ pub(crate) struct CountSortedWeights<S> {
     weights: Vec<S>,
     /// Heaviest joint per sorted slot (0 for unweighted vertices, unused there), `#V`.
     pivot: Vec<u16>,
+    /// The (pivot, joint) pairs of the influences, as `pivot · #J + joint`, sorted, unique
+    /// (for the sign table of [`super::antipodal_signs`]; empty above 256 joints).
+    pub sign_pairs: Vec<u32>,
 }
 
 /// Skins one run of vertices with exactly `K` influences each; `first_slot`/`first_vertex` are
@@ -176,6 +179,7 @@ impl<S: SkinReal> CountSortedWeights<S> {
             joints: Vec::with_capacity(skin_weights.num_entries()),
             weights: Vec::with_capacity(skin_weights.num_entries()),
             pivot: Vec::with_capacity(num_vertices),
+            sign_pairs: Vec::new(),
         };
         for first in (0..num_vertices).step_by(VERTEX_GRAIN_F32) {
             let last = (first + VERTEX_GRAIN_F32).min(num_vertices);
@@ -203,6 +207,19 @@ impl<S: SkinReal> CountSortedWeights<S> {
                     .push(skin_weights.heaviest(v).unwrap_or(0) as u16);
             }
             sorted.run_start.push(sorted.runs.len() as u32);
+        }
+        if num_joints <= super::antipodal_signs::MAX_TABLE_JOINTS {
+            let mut used = vec![false; num_joints * num_joints];
+            for v in 0..num_vertices {
+                if let Some(p) = skin_weights.heaviest(v) {
+                    for &j in skin_weights.row(v).0 {
+                        used[p * num_joints + j as usize] = true;
+                    }
+                }
+            }
+            sorted.sign_pairs = (0..used.len() as u32)
+                .filter(|&i| used[i as usize])
+                .collect();
         }
         sorted
     }

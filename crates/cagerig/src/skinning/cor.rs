@@ -65,7 +65,7 @@ impl<S: SkinReal> CorScratch<S> {
         let rotations = &self.rotations;
         if self
             .signs
-            .fill_if_worth_it(sorted.num_vertices(), |j| rotations[j])
+            .fill_if_worth_it(&sorted.sign_pairs, sorted.num_vertices(), |j| rotations[j])
         {
             sorted.skin(
                 &CorRule::<S, P, true> {

@@ -104,7 +104,9 @@ impl<S: SkinReal> DqsScratch<S> {
         let dual_quats = &self.joint_dual_quats;
         if self
             .signs
-            .fill_if_worth_it(sorted.num_vertices(), |j| dual_quats[j][0])
+            .fill_if_worth_it(&sorted.sign_pairs, sorted.num_vertices(), |j| {
+                dual_quats[j][0]
+            })
         {
             let rule = DqsRule::<S, P, true> {
                 joint_dual_quats: dual_quats,
