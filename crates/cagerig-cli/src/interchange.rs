@@ -187,6 +187,7 @@ pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
         return Ok(());
     }
     println!("file           {} ({})", report.file, s.format);
+    println!("space          {}", s.space.describe());
     println!(
         "mesh           {} vertices, {} triangles, {} primitives",
         s.vertices,
