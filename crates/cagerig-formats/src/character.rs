@@ -1,9 +1,10 @@
 //! The format-independent result of importing a skinned character (glTF or FBX).
 //!
 //! Spaces, stated once: the rest skin M and the rest skeleton S are the bind shape placed in the
-//! file's world space (ancestors of the skeleton composed in), so that at rest M' = M; a posed
-//! mesh at an animation time equals what a viewer of the file shows at that time (LBS). A cage
-//! given for the character must be in that same space.
+//! file's world space (ancestors of the skeleton composed in), in glTF's convention
+//! (right-handed, +Y up, metres: FBX files are converted, see [`SpaceSummary`]), so that at
+//! rest M' = M; a posed mesh at an animation time equals what a viewer of the file shows at
+//! that time (LBS). A cage given for the character must be in that same space.
 //!
 //! Vertex order: skinned primitives in file order (glTF: nodes in index order, then the
 //! primitives of each node's mesh; FBX: mesh nodes in scene order), vertices in accessor order
