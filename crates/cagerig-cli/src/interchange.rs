@@ -64,7 +64,8 @@ pub fn load_interchange(
                 cage
             }
             None => bail!(
-                "{}: no cage: give --cage CAGE.obj (in the file's world space), add a mesh node \
+                "{}: no cage: give --cage CAGE.obj (in the character's space: the file's world space, \
+                 FBX converted to +Y up metres as `cagerig info` states), add a mesh node \
                  named `<name>_cage` (or with extras.cagerig_cage) to the file, or pass \
                  --auto-cage to generate one",
                 path.display()
@@ -187,6 +188,7 @@ pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
         return Ok(());
     }
     println!("file           {} ({})", report.file, s.format);
+    println!("space          {}", s.space.describe());
     println!(
         "mesh           {} vertices, {} triangles, {} primitives",
         s.vertices,

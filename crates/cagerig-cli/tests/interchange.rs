@@ -47,6 +47,14 @@ fn info_lists_the_fox() {
         text.contains("290 vertices") && text.contains("FBX"),
         "{text}"
     );
+    // The file's own axes and unit, and the conversion to right-handed +Y up metres.
+    assert!(
+        text.contains("space          file: right +X, up +Y, front +Z, 1 m per unit")
+            && text.contains("converted to right-handed, +Y up, +Z front, metres"),
+        "{text}"
+    );
+    assert_eq!(v["space"]["file_up"], "+Y");
+    assert_eq!(v["space"]["converted"], false, "glTF is in the convention");
 }
 
 #[test]

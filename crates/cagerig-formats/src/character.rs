@@ -1,9 +1,10 @@
 //! The format-independent result of importing a skinned character (glTF or FBX).
 //!
 //! Spaces, stated once: the rest skin M and the rest skeleton S are the bind shape placed in the
-//! file's world space (ancestors of the skeleton composed in), so that at rest M' = M; a posed
-//! mesh at an animation time equals what a viewer of the file shows at that time (LBS). A cage
-//! given for the character must be in that same space.
+//! file's world space (ancestors of the skeleton composed in), in glTF's convention
+//! (right-handed, +Y up, metres: FBX files are converted, see [`SpaceSummary`]), so that at
+//! rest M' = M; a posed mesh at an animation time equals what a viewer of the file shows at
+//! that time (LBS). A cage given for the character must be in that same space.
 //!
 //! Vertex order: skinned primitives in file order (glTF: nodes in index order, then the
 //! primitives of each node's mesh; FBX: mesh nodes in scene order), vertices in accessor order
@@ -71,6 +72,74 @@ pub struct ImportSummary {
     pub animations: Vec<AnimationSummary>,
     /// Whether a cage was found inside the file.
     pub cage_in_file: bool,
+    /// The file's axes and unit and the conversion to cagerig's space.
+    pub space: SpaceSummary,
+}
+
+/// Axes and unit: the file's own, and how its coordinates were converted. The space every
+/// import ends in is glTF's: right-handed, +Y up, +Z front, 1 unit = 1 metre.
+#[derive(Debug, Clone, Serialize)]
+pub struct SpaceSummary {
+    /// The file's right, up and front axes (`+X`, `-Z`, …).
+    pub file_right: String,
+    pub file_up: String,
+    pub file_front: String,
+    /// Metres per unit of the file.
+    pub file_unit_meters: f64,
+    /// Whether coordinates were converted (false: already in the convention, kept as they are).
+    pub converted: bool,
+    /// `world_from_file`, the conversion applied, as a column-major 4×3 affine (12 numbers:
+    /// three axis columns, then the translation).
+    pub world_from_file: [f64; 12],
+}
+
+impl Default for SpaceSummary {
+    /// glTF's own convention, kept as it is (the specification fixes it).
+    fn default() -> Self {
+        Self {
+            file_right: "+X".into(),
+            file_up: "+Y".into(),
+            file_front: "+Z".into(),
+            file_unit_meters: 1.0,
+            converted: false,
+            world_from_file: DAffine3::IDENTITY.to_cols_array(),
+        }
+    }
+}
+
+impl SpaceSummary {
+    /// One line for `info`: the file's axes and unit and what was done with them.
+    pub fn describe(&self) -> String {
+        // Nine significant digits: 0.0254, not its binary neighbour 0.025400000000000002.
+        let round = |x: f64| format!("{}", format!("{x:.8e}").parse::<f64>().unwrap_or(x));
+        let file = format!(
+            "right {}, up {}, front {}, {} m per unit",
+            self.file_right,
+            self.file_up,
+            self.file_front,
+            round(self.file_unit_meters)
+        );
+        if !self.converted {
+            return format!("{file} (glTF's convention; kept)");
+        }
+        let m = DAffine3::from_cols_array(&self.world_from_file);
+        let scale = m.matrix3.determinant().abs().cbrt();
+        let is_identity = max_abs_diff(&m, &DAffine3::IDENTITY) <= 1e-12;
+        let conversion = if is_identity {
+            "none needed".to_string()
+        } else {
+            let r = m.matrix3 * (1.0 / scale);
+            let col = |v: DVec3| format!("({:.0} {:.0} {:.0})", v.x + 0.0, v.y + 0.0, v.z + 0.0);
+            format!(
+                "scale {} × axes X→{} Y→{} Z→{}",
+                round(scale),
+                col(r.x_axis),
+                col(r.y_axis),
+                col(r.z_axis)
+            )
+        };
+        format!("file: {file}; converted to right-handed, +Y up, +Z front, metres: {conversion}")
+    }
 }
 
 #[derive(Debug, Clone, Serialize)]

@@ -10,8 +10,12 @@
 //!   ufbx (`Σ w node_to_world · geometry_to_bone · v`).
 //! - Animation stacks: FBX curves are cubic, so each stack is sampled at the scene's frame rate
 //!   (keys exact at frame times, slerp/lerp between; `exact = false`).
-//! - Units and axes: kept as in the file (ufbx's defaults: no conversion); `info` states the
-//!   file's up axis and unit, and a cage must be given in the same space.
+//! - Units and axes: converted to glTF's convention — right-handed, +Y up, +Z front, metres —
+//!   by ufbx's load options (`target_axes`, `target_unit_meters`; the conversion is a transform
+//!   of the scene root, `world_from_file`, composed into every world transform: mesh, bind
+//!   frames, animation). A left-handed file is mirrored by it, and its triangle winding is
+//!   reversed so that outward faces stay outward. `info` states the file's own axes and unit
+//!   and the conversion applied; a cage must be given in the converted space.
 
 use std::path::Path;
 
@@ -22,7 +26,7 @@ use glam::{DAffine3, DMat3, DVec3};
 use crate::ImportOptions;
 use crate::character::{
     ImportSummary, ImportedAnimation, ImportedCharacter, PrimitiveSummary, SkinSummary,
-    max_abs_diff, snap_to_similarity,
+    SpaceSummary, max_abs_diff, snap_to_similarity,
 };
 use crate::error::{FormatError, invalid};
 
@@ -53,10 +57,14 @@ pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharac
     })?;
     let opts = ufbx::LoadOpts {
         load_external_files: false,
+        target_axes: ufbx::CoordinateAxes::right_handed_y_up(),
+        target_unit_meters: 1.0,
+        space_conversion: ufbx::SpaceConversion::TransformRoot,
         ..Default::default()
     };
     let scene = ufbx::load_memory(&bytes, opts).map_err(|e| fbx_error(path, &e))?;
     let mut warnings = Vec::new();
+    let space = space_summary(&scene);
 
     // Skinned mesh nodes and their bones.
     let mut bone_ids: Vec<u32> = Vec::new();
@@ -258,6 +266,22 @@ pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharac
             source,
         })?;
     warnings.extend(w);
+    // A left-handed file is mirrored by the conversion: reverse the winding so that outward
+    // faces stay outward in the converted space.
+    let mirrored = DAffine3::from_cols_array(&space.world_from_file)
+        .matrix3
+        .determinant()
+        < 0.0;
+    if mirrored {
+        for t in &mut triangles {
+            t.swap(1, 2);
+        }
+        warnings.push(Warning::Note {
+            message:
+                "left-handed FBX axes: mirrored into right-handed +Y up; triangle winding reversed"
+                    .into(),
+        });
+    }
     let mesh = TriMesh::new(positions, triangles).map_err(|source| FormatError::Rig {
         path: path.to_path_buf(),
         element: "skinned mesh".into(),
@@ -322,12 +346,11 @@ pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharac
             exact: false,
         });
     }
-    warnings.push(Warning::Note {
-        message: format!(
-            "FBX space kept as in the file: up axis {:?}, {} m per unit; animation stacks sampled at {fps} frames/s",
-            scene.settings.axes.up, scene.settings.unit_meters
-        ),
-    });
+    if !scene.anim_stacks.is_empty() {
+        warnings.push(Warning::Note {
+            message: format!("FBX animation stacks sampled at {fps} frames/s"),
+        });
+    }
     let mut character = ImportedCharacter {
         mesh,
         skeleton,
@@ -344,10 +367,38 @@ pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharac
                 joints: nj,
             }],
             chosen_skin: 0,
+            space,
             ..Default::default()
         },
         warnings,
     };
     character.fill_influence_summary();
     Ok(character)
+}
+
+fn axis_name(axis: ufbx::CoordinateAxis) -> &'static str {
+    match axis {
+        ufbx::CoordinateAxis::PositiveX => "+X",
+        ufbx::CoordinateAxis::NegativeX => "-X",
+        ufbx::CoordinateAxis::PositiveY => "+Y",
+        ufbx::CoordinateAxis::NegativeY => "-Y",
+        ufbx::CoordinateAxis::PositiveZ => "+Z",
+        ufbx::CoordinateAxis::NegativeZ => "-Z",
+        ufbx::CoordinateAxis::Unknown => "unknown",
+    }
+}
+
+/// The file's own axes and unit (ufbx keeps them in `settings` after conversion) and the
+/// conversion ufbx applied at the scene root.
+fn space_summary(scene: &ufbx::Scene) -> SpaceSummary {
+    let axes = &scene.settings.axes;
+    let world_from_file = affine(&scene.root_node.node_to_world);
+    SpaceSummary {
+        file_right: axis_name(axes.right).into(),
+        file_up: axis_name(axes.up).into(),
+        file_front: axis_name(axes.front).into(),
+        file_unit_meters: scene.settings.unit_meters,
+        converted: true,
+        world_from_file: world_from_file.to_cols_array(),
+    }
 }

@@ -10,7 +10,7 @@ pub mod gltf;
 
 use std::path::Path;
 
-pub use character::{ImportSummary, ImportedAnimation, ImportedCharacter};
+pub use character::{ImportSummary, ImportedAnimation, ImportedCharacter, SpaceSummary};
 pub use error::FormatError;
 
 /// Import choices.

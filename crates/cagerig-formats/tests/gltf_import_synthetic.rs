@@ -1,0 +1,245 @@
+//! glTF features the shared files do not have, built in the test from SimpleSkin (two joints,
+//! one rotation channel, 12 keys over 5.5 s): STEP and CUBICSPLINE channels, and a file with
+//! two skins. Posed meshes are compared with the independent evaluation of
+//! `common::ReferenceGltf` (the specification's interpolation, then LBS).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use base64::Engine;
+use cagerig_formats::{ImportOptions, ImportedCharacter, import_character};
+use common::{ReferenceGltf, data};
+use glam::{DAffine3, DVec3};
+use serde_json::{Value, json};
+
+fn simple_skin() -> Value {
+    serde_json::from_slice(&std::fs::read(data("gltf/SimpleSkin/SimpleSkin.gltf")).unwrap())
+        .unwrap()
+}
+
+fn write_temp(name: &str, document: &Value) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cagerig-synthetic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, serde_json::to_vec(document).unwrap()).unwrap();
+    path
+}
+
+/// Largest distance over `times` between the imported character posed by its animation 0 and
+/// the reference evaluation of `path` (skin `skin`), as a fraction of the rest bounding-box
+/// diagonal. SimpleSkin is a flat strip (Φ is rank deficient for any cage), so the skeleton is
+/// posed directly: track locals → FK → `T_j = posed · rest⁻¹` → cagerig's LBS of M.
+fn worst_distance(path: &Path, c: &ImportedCharacter, skin: usize, times: &[f64]) -> f64 {
+    let reference = ReferenceGltf::load(path).with_skin(skin);
+    let (lo, hi) = cagerig::mesh::bounding_box(&c.mesh.positions);
+    let diag = (hi - lo).length();
+    let rest_frames = c.skeleton.rest_world_from_joint();
+    let lbs = cagerig::skinning::lbs::LinearBlendSkinning::new(&c.skin_weights);
+    let nj = c.skeleton.len();
+    let mut locals = vec![DAffine3::IDENTITY; nj];
+    let mut world = vec![DAffine3::IDENTITY; nj];
+    let mut transforms = vec![DAffine3::IDENTITY; nj];
+    let mut posed = vec![DVec3::ZERO; c.mesh.num_vertices()];
+    times
+        .iter()
+        .map(|&t| {
+            c.animations[0].track.sample(t, &mut locals);
+            c.skeleton.forward_kinematics(&locals, &mut world);
+            cagerig::Skeleton::skinning_transforms(&rest_frames, &world, &mut transforms);
+            lbs.apply(&transforms, &c.mesh.positions, &mut posed);
+            cagerig::mesh::max_distance(&reference.skin(Some(0), t), &posed) / diag
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The key times of SimpleSkin's channel.
+fn key_times() -> Vec<f64> {
+    let (doc, buffers, _) = gltf::import(data("gltf/SimpleSkin/SimpleSkin.gltf")).unwrap();
+    let channel = doc.animations().next().unwrap().channels().next().unwrap();
+    let reader = channel.reader(|b| Some(&*buffers[b.index()]));
+    reader.read_inputs().unwrap().map(f64::from).collect()
+}
+
+/// Midpoints between keys, and times 1 ms after and before each key.
+fn probe_times(keys: &[f64]) -> Vec<f64> {
+    keys.windows(2)
+        .flat_map(|w| [0.5 * (w[0] + w[1]), w[0] + 1e-3, w[1] - 1e-3])
+        .collect()
+}
+
+#[test]
+fn step_channels_hold_each_key_until_the_next() {
+    let mut j = simple_skin();
+    j["animations"][0]["samplers"][0]["interpolation"] = "STEP".into();
+    let path = write_temp("step.gltf", &j);
+    let c = import_character(&path, &ImportOptions::default()).unwrap();
+    assert!(!c.animations[0].exact, "a STEP channel is marked resampled");
+    let keys = key_times();
+    // At the keys and everywhere between them except the 1 µs ramp before each key.
+    let mut times = keys.clone();
+    times.extend(probe_times(&keys));
+    let err = worst_distance(&path, &c, 0, &times);
+    assert!(err <= 1e-6, "STEP: {err:e} of the diagonal");
+    // The pose really steps: just before a key it is the previous key's.
+    let reference = ReferenceGltf::load(&path);
+    let before = reference.skin(Some(0), keys[2] - 1e-3);
+    let at = reference.skin(Some(0), keys[1]);
+    assert!(cagerig::mesh::max_distance(&before, &at) < 1e-12);
+}
+
+/// SimpleSkin's rotation keys as CUBICSPLINE with non-zero tangents (central differences of
+/// the keys): a second buffer (data URI) holds in-tangent, value, out-tangent per key.
+fn cubic_spline_document() -> Value {
+    let (doc, buffers, _) = gltf::import(data("gltf/SimpleSkin/SimpleSkin.gltf")).unwrap();
+    let channel = doc.animations().next().unwrap().channels().next().unwrap();
+    let reader = channel.reader(|b| Some(&*buffers[b.index()]));
+    let times: Vec<f32> = reader.read_inputs().unwrap().collect();
+    let values: Vec<[f32; 4]> = match reader.read_outputs().unwrap() {
+        gltf::animation::util::ReadOutputs::Rotations(r) => r.into_f32().collect(),
+        _ => panic!("SimpleSkin animates a rotation"),
+    };
+    let n = times.len();
+    let mut floats: Vec<f32> = Vec::with_capacity(n * 12);
+    for k in 0..n {
+        let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
+        let tangent: Vec<f32> = (0..4)
+            .map(|c| (values[b][c] - values[a][c]) / (times[b] - times[a]))
+            .collect();
+        floats.extend(&tangent);
+        floats.extend(values[k]);
+        floats.extend(&tangent);
+    }
+    let bytes: Vec<u8> = floats.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let mut j = simple_skin();
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bytes)
+    );
+    let buffer = j["buffers"].as_array().unwrap().len();
+    j["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"uri": uri, "byteLength": bytes.len()}));
+    let view = j["bufferViews"].as_array().unwrap().len();
+    j["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"buffer": buffer, "byteLength": bytes.len()}));
+    let accessor = j["accessors"].as_array().unwrap().len();
+    j["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"bufferView": view, "componentType": 5126, "count": 3 * n, "type": "VEC4"}));
+    j["animations"][0]["samplers"][0]["output"] = accessor.into();
+    j["animations"][0]["samplers"][0]["interpolation"] = "CUBICSPLINE".into();
+    j
+}
+
+/// Exact at the keys; between them the 60/s resampling (`ImportOptions::resample_fps`) of the
+/// Hermite curve stays within 1e-4 of the diagonal (measured 3.6e-5), and gets smaller at a
+/// higher rate.
+#[test]
+fn cubic_spline_channels_match_at_keys_and_resample_between() {
+    let path = write_temp("cubic.gltf", &cubic_spline_document());
+    let keys = key_times();
+    let probes = probe_times(&keys);
+    let c = import_character(&path, &ImportOptions::default()).unwrap();
+    assert!(!c.animations[0].exact);
+    let at_keys = worst_distance(&path, &c, 0, &keys);
+    let between = worst_distance(&path, &c, 0, &probes);
+    let fine = ImportOptions {
+        resample_fps: 240.0,
+        ..ImportOptions::default()
+    };
+    let c240 = import_character(&path, &fine).unwrap();
+    let between_240 = worst_distance(&path, &c240, 0, &probes);
+    eprintln!(
+        "CUBICSPLINE: {at_keys:.1e} at the keys, {between:.1e} between at 60/s, \
+         {between_240:.1e} at 240/s (of the diagonal)"
+    );
+    assert!(at_keys <= 1e-6, "at the keys: {at_keys:e}");
+    assert!(between <= 1e-4, "between keys at 60/s: {between:e}");
+    assert!(between_240 < between, "{between_240:e} ≥ {between:e}");
+    // The tangents matter: the curve is not the LINEAR one.
+    let mut linear = cubic_spline_document();
+    linear["animations"][0]["samplers"][0] = simple_skin()["animations"][0]["samplers"][0].clone();
+    let linear_path = write_temp("cubic_as_linear.gltf", &linear);
+    let t = probes[0];
+    let curve = ReferenceGltf::load(&path).skin(Some(0), t);
+    let straight = ReferenceGltf::load(&linear_path).skin(Some(0), t);
+    assert!(cagerig::mesh::max_distance(&curve, &straight) > 1e-4);
+}
+
+/// SimpleSkin with a second skin (`"tail"`: the same two joints in the other order, identity
+/// inverse bind matrices) on a second node using the same mesh.
+fn two_skin_document() -> Value {
+    let mut j = simple_skin();
+    j["skins"][0]["name"] = "body".into();
+    j["skins"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "tail", "joints": [2, 1]}));
+    let node = j["nodes"].as_array().unwrap().len();
+    j["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"mesh": 0, "skin": 1, "translation": [3.0, 0.0, 0.0]}));
+    j["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(node.into());
+    j
+}
+
+#[test]
+fn two_skins_pick_by_name_or_index_and_list_the_others() {
+    let path = write_temp("two_skins.gltf", &two_skin_document());
+    // Default: the first skin, with a note listing both.
+    let first = import_character(&path, &ImportOptions::default()).unwrap();
+    assert_eq!(first.summary.chosen_skin, 0);
+    assert_eq!(first.summary.skins.len(), 2);
+    let notes: Vec<String> = first.warnings.iter().map(|w| w.to_string()).collect();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("2 skins") && n.contains("body") && n.contains("tail")),
+        "{notes:?}"
+    );
+    // By name and by index: the second skin, its joints in its own order, no note.
+    for selector in ["tail", "1"] {
+        let options = ImportOptions {
+            skin: Some(selector.into()),
+            ..ImportOptions::default()
+        };
+        let c = import_character(&path, &options).unwrap();
+        assert_eq!(c.summary.chosen_skin, 1, "{selector}");
+        assert_eq!(c.skeleton.len(), 2);
+        assert_eq!(
+            c.skeleton.joint(0).parent,
+            Some(1),
+            "joint 0 is node 2, child of node 1"
+        );
+        assert_eq!(c.mesh.num_vertices(), 10);
+        assert!(!c.warnings.iter().any(|w| w.to_string().contains("2 skins")));
+        // Rest: the mesh placed by its node; posed: what a viewer shows for skin 1.
+        let (lo, _) = cagerig::mesh::bounding_box(&c.mesh.positions);
+        assert!((lo.x - 2.5).abs() < 1e-6, "node translation applied: {lo}");
+        let keys = key_times();
+        let err = worst_distance(&path, &c, 1, &probe_times(&keys));
+        assert!(err <= 1e-6, "skin {selector}: {err:e} of the diagonal");
+    }
+    // A skin that is not there: an error naming the file and listing the skins.
+    let options = ImportOptions {
+        skin: Some("wing".into()),
+        ..ImportOptions::default()
+    };
+    let e = import_character(&path, &options).unwrap_err().to_string();
+    assert!(
+        e.contains("two_skins.gltf")
+            && e.contains("wing")
+            && e.contains("body")
+            && e.contains("tail"),
+        "{e}"
+    );
+}
