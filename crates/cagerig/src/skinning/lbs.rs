@@ -2,21 +2,25 @@
 
 use glam::{DAffine3, DMat3, DVec3};
 
-use super::compact_weights::{
-    CountSortedWeights, JointColumns, RestPoints, VertexKernel, WorldPoints,
-};
+use rayon::prelude::*;
+
+use super::VERTEX_GRAIN_F32;
+use super::compact_weights::{JointColumns, RestPoints, VertexKernel};
 use super::precision::SkinReal;
 use crate::SkinWeights;
 
-/// Precomputed LBS: Ω (`#V × #J`) count-sorted for [`LinearBlendSkinning::apply`] and as flat CSR
-/// rows for the per-vertex queries of CageUp/CageRev.
+/// Precomputed LBS: Ω (`#V × #J`) as flat CSR rows, streamed in vertex order by
+/// [`LinearBlendSkinning::apply`] (LBS is memory-bound: sequential rows beat the count-sorted
+/// layout of the DQS/CoR kernels here, 0.6 against 1.4 ms at 133k vertices) and read per vertex
+/// by CageUp/CageRev.
 #[derive(Debug, Clone)]
 pub struct LinearBlendSkinning {
     num_joints: usize,
     row_start: Vec<u32>,
     joints: Vec<u32>,
     weights: Vec<f64>,
-    sorted: CountSortedWeights<f64>,
+    /// `joints` as u16 (≤ [`crate::skin_weights::MAX_JOINTS`]) for the generic rule.
+    joints16: Vec<u16>,
 }
 
 /// `Σ_j ω_ij T_j` for the influences of one vertex as 12 column-major numbers
@@ -119,7 +123,7 @@ impl LinearBlendSkinning {
             row_start: row_start.to_vec(),
             joints: joints.to_vec(),
             weights: w.to_vec(),
-            sorted: CountSortedWeights::new(weights),
+            joints16: joints.iter().map(|&j| j as u16).collect(),
         }
     }
 
@@ -156,11 +160,31 @@ impl LinearBlendSkinning {
         assert_eq!(transforms.len(), self.num_joints, "LBS: transforms");
         assert_eq!(rest_positions.len(), self.num_vertices(), "LBS: rest");
         assert_eq!(out.len(), self.num_vertices(), "LBS: out");
-        let rule = LbsRule {
-            transforms,
-            points: WorldPoints(rest_positions),
+        let skin_chunk = |chunk: usize, out: &mut [DVec3]| {
+            let first = chunk * VERTEX_GRAIN_F32;
+            let rest = &rest_positions[first..first + out.len()];
+            let row_start = &self.row_start[first..=first + out.len()];
+            for ((o, &p), bounds) in out.iter_mut().zip(rest).zip(row_start.windows(2)) {
+                let range = bounds[0] as usize..bounds[1] as usize;
+                *o = if range.is_empty() {
+                    p
+                } else {
+                    let columns = blend_columns(
+                        &self.joints16[range.clone()],
+                        &self.weights[range],
+                        transforms,
+                    );
+                    transform_point::<f64>(&columns, p)
+                };
+            }
         };
-        self.sorted.skin(&rule, out);
+        if out.len() <= VERTEX_GRAIN_F32 {
+            skin_chunk(0, out);
+        } else {
+            out.par_chunks_mut(VERTEX_GRAIN_F32)
+                .enumerate()
+                .for_each(|(chunk, out)| skin_chunk(chunk, out));
+        }
     }
 
     /// LBS of a subset of vertices (e.g. the MaxVol rows of the ghost mesh used by CageUp):
