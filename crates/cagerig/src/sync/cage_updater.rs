@@ -6,7 +6,6 @@
 //! Per frame, C' = P · M̃' is a small dense product (`#C × #R` by `#R × 3`), with no allocation.
 
 use faer::Mat;
-use faer::linalg::solvers::DenseSolveCore;
 use glam::DVec3;
 
 use crate::cage_coords::CageCoords;
@@ -61,8 +60,10 @@ impl CageUpdater {
                         actual: rows.len(),
                     });
                 }
-                let lu = selected.partial_piv_lu();
-                check_triangular_condition(lu.U().diagonal().column_vector().iter().copied())?;
+                // Sequential: rayon dispatch cost more than this #C × #C factorisation
+                // (Arm: 0.24 ms with 2 threads, 0.06 ms with 1).
+                let lu = crate::coords::maxvol::SeqLu::new(selected);
+                check_triangular_condition(lu.diagonal())?;
                 lu.inverse()
             }
             CageFitMode::LeastSquares => {
