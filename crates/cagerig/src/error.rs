@@ -18,6 +18,24 @@ pub fn first_bad_component(v: glam::DVec3) -> Option<f64> {
     v.to_array().into_iter().find(|&x| !is_input_value(x))
 }
 
+/// A request too large for the memory of this machine (see [`crate::memory_estimate`]).
+#[derive(Debug, Error, Clone, PartialEq)]
+#[error(
+    "{what}: about {vertices} vertices × {cage_vertices} cage vertices would need about \
+     {needed_gib:.1} GiB (cage coordinates Φ alone: {phi_gib:.1} GiB), but {limit_gib:.1} GiB \
+     {limit}; ask for less"
+)]
+pub struct MemoryNeed {
+    pub what: String,
+    pub vertices: u64,
+    pub cage_vertices: u64,
+    pub needed_gib: f64,
+    pub phi_gib: f64,
+    pub limit_gib: f64,
+    /// "are available" or "is the limit" (when the available memory is unknown).
+    pub limit: &'static str,
+}
+
 /// A structural problem that makes a rig unusable. Every variant names the offending element.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum RigError {
@@ -26,21 +44,8 @@ pub enum RigError {
          indices, as in glTF)"
     )]
     TooManyJoints { joints: usize, max: usize },
-    #[error(
-        "{what}: about {vertices} vertices × {cage_vertices} cage vertices would need about \
-         {needed_gib:.1} GiB (cage coordinates Φ alone: {phi_gib:.1} GiB), but {limit_gib:.1} GiB \
-         {limit}; ask for less"
-    )]
-    TooLarge {
-        what: String,
-        vertices: u64,
-        cage_vertices: u64,
-        needed_gib: f64,
-        phi_gib: f64,
-        limit_gib: f64,
-        /// "are available" or "is the limit" (when the available memory is unknown).
-        limit: &'static str,
-    },
+    #[error("{0}")]
+    TooLarge(Box<MemoryNeed>),
     #[error("{what}: index {index} is out of range (there are {len})")]
     IndexOutOfRange {
         what: &'static str,

@@ -2,7 +2,7 @@
 //! --subdivide`, `demo --resolution`, the editor's built-in rigs), with the memory they would
 //! need, instead of an abort ("memory allocation failed") seconds later.
 
-use crate::error::RigError;
+use crate::error::{MemoryNeed, RigError};
 
 /// Bytes a session of `vertices` skin vertices and `cage_vertices` cage vertices needs, about:
 /// Φ and the CoR coordinates Λ (`#V × #C` f64 each) plus the transient MaxVol and CoR tables
@@ -42,7 +42,7 @@ fn check_bytes_fit(
     // Without /proc/meminfo, still refuse what no machine of today holds (1 TiB).
     let limit = available.unwrap_or(1 << 40);
     if bytes > limit {
-        return Err(RigError::TooLarge {
+        return Err(RigError::TooLarge(Box::new(MemoryNeed {
             what: what.to_string(),
             vertices,
             cage_vertices,
@@ -54,7 +54,7 @@ fn check_bytes_fit(
             } else {
                 "is the limit"
             },
-        });
+        })));
     }
     Ok(())
 }
