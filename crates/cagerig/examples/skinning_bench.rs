@@ -1,7 +1,8 @@
 //! Per-frame timings of LBS / DQS / CoR, f64 and f32 kernels, on
 //! (1) a synthetic rig (133 073 vertices × 25 joints, 1–7 random influences per vertex) and
 //! (2) the Arm subdivided 3 times (133 073 vertices, reference step-ii pose).
-//! Run with `cargo run --release -p cagerig --example skinning_bench [repetitions] [kernel filter]`.
+//! Run with `cargo run --release -p cagerig --example skinning_bench [repetitions] [kernel filter]
+//! [Arm subdivision levels, default 3]` (a filter of `-` keeps every kernel).
 
 use std::path::Path;
 use std::time::Instant;
@@ -37,7 +38,7 @@ impl Rng {
 fn time(label: &str, repetitions: usize, mut f: impl FnMut()) {
     if std::env::args()
         .nth(2)
-        .is_some_and(|filter| !label.contains(&filter))
+        .is_some_and(|filter| filter != "-" && !label.contains(&filter))
     {
         return;
     }
@@ -143,13 +144,13 @@ fn synthetic(repetitions: usize) {
     bench(repetitions, &weights, &transforms, &rest, &centres);
 }
 
-fn subdivided_arm(repetitions: usize) {
+fn subdivided_arm(repetitions: usize, levels: usize) {
     let dir = Path::new(ARM);
     let mesh = read_obj(&dir.join("arm.obj")).expect("arm.obj");
     let skeleton = read_skt(&dir.join("arm.skt")).expect("arm.skt");
     let (weights, _) =
         read_skw(&dir.join("arm.skw"), mesh.num_vertices(), skeleton.len()).expect("arm.skw");
-    let sub = subdivide_midpoint(&mesh, &weights, 3).expect("subdivision");
+    let sub = subdivide_midpoint(&mesh, &weights, levels).expect("subdivision");
     // Step ii: joint 3 rotated by 60° about world +X around its own position; FK to descendants.
     let rest_world = skeleton.rest_world_from_joint();
     let mut posed_world = rest_world.clone();
@@ -172,7 +173,7 @@ fn subdivided_arm(repetitions: usize) {
     // CoR centres: the rest positions shifted a little (timing does not depend on their values).
     let rest = sub.mesh.positions;
     let centres: Vec<DVec3> = rest.iter().map(|p| *p + DVec3::splat(0.5)).collect();
-    println!("Arm subdivided 3 times, step ii:");
+    println!("Arm subdivided {levels} times, step ii:");
     bench(repetitions, &sub.skin_weights, &transforms, &rest, &centres);
 }
 
@@ -182,6 +183,12 @@ fn main() {
         .and_then(|a| a.parse().ok())
         .unwrap_or(300usize)
         .max(1);
-    synthetic(repetitions);
-    subdivided_arm(repetitions);
+    let levels = std::env::args()
+        .nth(3)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(3usize);
+    if levels == 3 {
+        synthetic(repetitions);
+    }
+    subdivided_arm(repetitions, levels);
 }

@@ -238,11 +238,14 @@ impl<S: SkinReal, P: CentredPoints<S>, const TABLE: bool> VertexKernel<S>
             let [dx, dy, dz] = S::components(d);
             [cx, cy, cz, dx, dy, dz]
         });
-        let mut out = [[S::ZERO; 3]; BLOCK];
+        // Component-major copies (lane l = vertex l), so the tail is vectorised across lanes.
+        let m: [[S; BLOCK]; 16] = std::array::from_fn(|c| std::array::from_fn(|l| blend[l][c]));
+        let [cx, cy, cz, px, py, pz]: [[S; BLOCK]; 6] =
+            std::array::from_fn(|c| std::array::from_fn(|l| inputs[l][c]));
+        let mut out = [[S::ZERO; BLOCK]; 3];
         for l in 0..BLOCK {
-            let m = blend[l];
-            let [cx, cy, cz, px, py, pz] = inputs[l];
-            let [x, y, z, w] = [m[12], m[13], m[14], m[15]];
+            let (x, y, z, w) = (m[12][l], m[13][l], m[14][l], m[15][l]);
+            let (cx, cy, cz, px, py, pz) = (cx[l], cy[l], cz[l], px[l], py[l], pz[l]);
             let vv = x * x + y * y + z * z;
             let a = w * w - vv;
             let b = S::TWO * (x * px + y * py + z * pz);
@@ -254,10 +257,11 @@ impl<S: SkinReal, P: CentredPoints<S>, const TABLE: bool> VertexKernel<S>
                 (pz * a + z * b + (x * py - y * px) * c) * inv,
             ];
             for r in 0..3 {
-                out[l][r] = rotated[r] + (m[r] * cx + m[3 + r] * cy + m[6 + r] * cz + m[9 + r]);
+                out[r][l] =
+                    rotated[r] + (m[r][l] * cx + m[3 + r][l] * cy + m[6 + r][l] * cz + m[9 + r][l]);
             }
         }
-        std::array::from_fn(|l| S::new_v3(out[l][0], out[l][1], out[l][2]))
+        std::array::from_fn(|l| S::new_v3(out[0][l], out[1][l], out[2][l]))
     }
 
     #[inline(always)]

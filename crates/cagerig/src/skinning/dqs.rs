@@ -214,13 +214,19 @@ impl<S: SkinReal, P: RestPoints<S>, const TABLE: bool> VertexKernel<S>
                 sum[4 + c] = sum[4 + c] + e[c] * signed;
             }
         });
+        // Component-major copies (lane l = vertex l), so the tail is vectorised across lanes.
+        let [x, y, z, w, dx, dy, dz, dw]: [[S; BLOCK]; 8] =
+            std::array::from_fn(|c| std::array::from_fn(|l| blend[l][c]));
         let points: [[S; 3]; BLOCK] = std::array::from_fn(|l| {
             S::components(self.points.point(block.slot + l, block.vertices[l]))
         });
-        let mut out = [[S::ZERO; 3]; BLOCK];
+        let [px, py, pz]: [[S; BLOCK]; 3] =
+            std::array::from_fn(|c| std::array::from_fn(|l| points[l][c]));
+        let mut out = [[S::ZERO; BLOCK]; 3];
         for l in 0..BLOCK {
-            let [x, y, z, w, dx, dy, dz, dw] = blend[l];
-            let [px, py, pz] = points[l];
+            let (x, y, z, w) = (x[l], y[l], z[l], w[l]);
+            let (dx, dy, dz, dw) = (dx[l], dy[l], dz[l], dw[l]);
+            let (px, py, pz) = (px[l], py[l], pz[l]);
             let vv = x * x + y * y + z * z;
             let a = w * w - vv;
             let b = S::TWO * (x * px + y * py + z * pz);
@@ -228,13 +234,11 @@ impl<S: SkinReal, P: RestPoints<S>, const TABLE: bool> VertexKernel<S>
             let (cx, cy, cz) = (y * pz - z * py, z * px - x * pz, x * py - y * px);
             let (ex, ey, ez) = (y * dz - z * dy, z * dx - x * dz, x * dy - y * dx);
             let inv = (vv + w * w).recip();
-            out[l] = [
-                (px * a + x * b + cx * c + (dx * w - x * dw + ex) * S::TWO) * inv,
-                (py * a + y * b + cy * c + (dy * w - y * dw + ey) * S::TWO) * inv,
-                (pz * a + z * b + cz * c + (dz * w - z * dw + ez) * S::TWO) * inv,
-            ];
+            out[0][l] = (px * a + x * b + cx * c + (dx * w - x * dw + ex) * S::TWO) * inv;
+            out[1][l] = (py * a + y * b + cy * c + (dy * w - y * dw + ey) * S::TWO) * inv;
+            out[2][l] = (pz * a + z * b + cz * c + (dz * w - z * dw + ez) * S::TWO) * inv;
         }
-        std::array::from_fn(|l| S::new_v3(out[l][0], out[l][1], out[l][2]))
+        std::array::from_fn(|l| S::new_v3(out[0][l], out[1][l], out[2][l]))
     }
 
     #[inline(always)]
