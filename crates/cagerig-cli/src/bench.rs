@@ -80,6 +80,8 @@ pub(crate) struct ModelRow {
     pub precision: &'static str,
     pub mvc: Stat,
     pub maxvol: Stat,
+    /// ln |det Φ̃| of the selected MaxVol rows (larger is better; shows quality regressions).
+    pub maxvol_log_abs_det: f64,
     pub skelup_preprocess: Stat,
     pub cageup_preprocess: Stat,
     pub cor_centres: Stat,
@@ -260,6 +262,8 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         .context("no timing run")?
         .context("MaxVol selection")?
         .rows;
+    let maxvol_log_abs_det =
+        maxvol::log_abs_det_of_rows(&phi, &rows).context("ln |det| of the MaxVol rows")?;
 
     let mut skelup = None;
     let skelup_stat = time(reps(5, scale, nv), 1, || {
@@ -432,6 +436,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         precision: "f64",
         mvc: mvc_stat,
         maxvol: maxvol_stat,
+        maxvol_log_abs_det,
         skelup_preprocess: skelup_stat,
         cageup_preprocess: cageup_stat,
         cor_centres: cor_centres_stat,

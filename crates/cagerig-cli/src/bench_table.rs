@@ -60,8 +60,15 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
         let single = report.one_thread.as_ref();
         let column = tool_column(r);
         println!(
-            "\n{}: {} vertices, {} joints, {} cage vertices, peak memory {:.0} MB, kernels in {}",
-            r.model, r.vertices, r.joints, r.cage_vertices, r.peak_memory_mb, r.precision
+            "\n{}: {} vertices, {} joints, {} cage vertices, peak memory {:.0} MB, kernels in {}, \
+             MaxVol ln|det| {:.4}",
+            r.model,
+            r.vertices,
+            r.joints,
+            r.cage_vertices,
+            r.peak_memory_mb,
+            r.precision,
+            r.maxvol_log_abs_det
         );
         println!(
             "  {:<30} {:>10} {:>9} {:>9} {:>10} {:>11} {:>7} {:>9} {:>8} {:>8}",

@@ -260,3 +260,40 @@ fn demo_output_is_staged_rerunnable_and_never_replaces_foreign_files() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bench_reports_both_thread_counts_and_the_maxvol_quality() {
+    let out = cagerig()
+        .args([
+            "bench",
+            "--builtin",
+            "bar",
+            "--json",
+            "--repeat-scale",
+            "0.2",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let model = &v[0];
+    let det = model["maxvol_log_abs_det"].as_f64().unwrap();
+    assert!(det.is_finite(), "ln|det| {det}");
+    for row in [model, &model["one_thread"]] {
+        for key in [
+            "lbs",
+            "dqs",
+            "cor",
+            "mvc",
+            "maxvol",
+            "grab_after_skeleton_edit",
+        ] {
+            let ms = row[key]["median_ms"].as_f64().unwrap();
+            assert!(ms.is_finite() && ms > 0.0, "{key}: {ms}");
+        }
+    }
+}
