@@ -116,6 +116,24 @@ fn front_cage_vertex(h: &Harness<'_, StudioApp>, view: usize) -> (usize, DVec3) 
     (k, *p)
 }
 
+/// Clicks the middle joint in the current view: its index and screen position.
+fn click_middle_joint(h: &mut Harness<'_, StudioApp>) -> (usize, Pos2) {
+    let s = &h.state().doc.as_ref().unwrap().session;
+    let j = s.skeleton().len() / 2;
+    let at = screen_of(h, CURRENT, s.posed_world_from_joint()[j].translation);
+    click(h, at, Modifiers::NONE);
+    assert_eq!(h.state().selection.joint, Some(j));
+    (j, at)
+}
+
+/// Clicks the current cage vertex nearest the camera: its index, position and screen position.
+fn click_front_cage_vertex(h: &mut Harness<'_, StudioApp>) -> (usize, DVec3, Pos2) {
+    let (k, p) = front_cage_vertex(h, CURRENT);
+    let at = screen_of(h, CURRENT, p);
+    click(h, at, Modifiers::NONE);
+    (k, p, at)
+}
+
 fn snapshot(h: &Harness<'_, StudioApp>) -> Snapshot {
     h.state().doc.as_ref().unwrap().snapshot()
 }
@@ -164,9 +182,7 @@ fn click_selects_a_cage_vertex_and_drag_lands_it_under_the_mouse_then_undo_resto
     }
     let (mut h, dir) = open_bar("drag");
     let before = snapshot(&h);
-    let (k, p) = front_cage_vertex(&h, CURRENT);
-    let at = screen_of(&h, CURRENT, p);
-    click(&mut h, at, Modifiers::NONE);
+    let (k, _, at) = click_front_cage_vertex(&mut h);
     assert_eq!(
         h.state().selection.cage.iter().copied().collect::<Vec<_>>(),
         [k]
@@ -197,9 +213,7 @@ fn the_gizmo_plane_handle_moves_the_selection_in_its_plane_only() {
         return;
     }
     let (mut h, dir) = open_bar("plane");
-    let (k, p) = front_cage_vertex(&h, CURRENT);
-    let at = screen_of(&h, CURRENT, p);
-    click(&mut h, at, Modifiers::NONE);
+    let (k, p, _) = click_front_cage_vertex(&mut h);
     // A three-quarter view so that the plane normal to Y faces the camera.
     h.state_mut().views[CURRENT].camera.yaw = 0.6;
     h.state_mut().views[CURRENT].camera.pitch = 0.5;
@@ -226,12 +240,7 @@ fn typing_a_joint_rotation_in_the_inspector_sets_it_in_one_undo_step() {
         return;
     }
     let (mut h, dir) = open_bar("euler");
-    let s = &h.state().doc.as_ref().unwrap().session;
-    let j = s.skeleton().len() / 2;
-    let joint = s.posed_world_from_joint()[j].translation;
-    let at = screen_of(&h, CURRENT, joint);
-    click(&mut h, at, Modifiers::NONE);
-    assert_eq!(h.state().selection.joint, Some(j));
+    let (j, _) = click_middle_joint(&mut h);
     // The three Euler fields (X, Y, Z; unlabelled, shown as 0.0 at rest, never -0.0); type 40
     // into Z.
     let fields: Vec<_> = h
@@ -321,9 +330,7 @@ fn closing_with_unsaved_edits_asks_and_saves_or_discards() {
     assert!(!h.state().dialogs.confirm_close);
     assert!(!root_commands(&h).contains(&egui::ViewportCommand::CancelClose));
     // An edit, then a close request: held back and asked about; Cancel keeps working.
-    let (k, p) = front_cage_vertex(&h, CURRENT);
-    let at = screen_of(&h, CURRENT, p);
-    click(&mut h, at, Modifiers::NONE);
+    let (k, _, at) = click_front_cage_vertex(&mut h);
     drag(&mut h, at, at + egui::vec2(20.0, 0.0));
     assert!(h.state().unsaved());
     request_close(&mut h);
@@ -398,12 +405,7 @@ fn keys_select_a_joint_and_rotate_it_by_a_typed_angle() {
         return;
     }
     let (mut h, dir) = open_bar("rotate");
-    let s = &h.state().doc.as_ref().unwrap().session;
-    let j = s.skeleton().len() / 2;
-    let joint = s.posed_world_from_joint()[j].translation;
-    let at = screen_of(&h, CURRENT, joint);
-    click(&mut h, at, Modifiers::NONE);
-    assert_eq!(h.state().selection.joint, Some(j));
+    let (j, at) = click_middle_joint(&mut h);
     // R, Z, 3, 0, Enter: 30° about world Z.
     h.hover_at(at + egui::vec2(50.0, 0.0));
     h.step();
