@@ -78,20 +78,26 @@ fn run_edit(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
     let script = dir.join("edits.json");
     std::fs::write(&script, SCRIPT).unwrap();
     let out = dir.join(name);
-    let status = cagerig()
-        .arg("edit")
-        .arg(arm())
-        .arg("--script")
-        .arg(&script)
-        .arg("--out")
-        .arg(&out)
-        .args(extra)
-        .output()
-        .unwrap();
+    succeed(
+        cagerig()
+            .arg("edit")
+            .arg(arm())
+            .arg("--script")
+            .arg(&script)
+            .arg("--out")
+            .arg(&out)
+            .args(extra),
+    );
+    out
+}
+
+/// Runs `command`, which must succeed (its stderr is shown otherwise).
+fn succeed(command: &mut Command) -> std::process::Output {
+    let out = command.output().unwrap();
     assert!(
-        status.status.success(),
+        out.status.success(),
         "{}",
-        String::from_utf8_lossy(&status.stderr)
+        String::from_utf8_lossy(&out.stderr)
     );
     out
 }
@@ -263,22 +269,14 @@ fn demo_output_is_staged_rerunnable_and_never_replaces_foreign_files() {
 
 #[test]
 fn bench_reports_both_thread_counts_and_the_maxvol_quality() {
-    let out = cagerig()
-        .args([
-            "bench",
-            "--builtin",
-            "bar",
-            "--json",
-            "--repeat-scale",
-            "0.2",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeed(cagerig().args([
+        "bench",
+        "--builtin",
+        "bar",
+        "--json",
+        "--repeat-scale",
+        "0.2",
+    ]));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let model = &v[0];
     let det = model["maxvol_log_abs_det"].as_f64().unwrap();
