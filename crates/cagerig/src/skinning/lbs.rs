@@ -17,47 +17,9 @@ use crate::SkinWeights;
 pub struct LinearBlendSkinning {
     num_joints: usize,
     row_start: Vec<u32>,
-    joints: Vec<u32>,
+    /// Joint indices as u16 (≤ [`crate::skin_weights::MAX_JOINTS`]), as the generic rule takes.
+    joints: Vec<u16>,
     weights: Vec<f64>,
-    /// `joints` as u16 (≤ [`crate::skin_weights::MAX_JOINTS`]) for the generic rule.
-    joints16: Vec<u16>,
-}
-
-/// `Σ_j ω_ij T_j` for the influences of one vertex as 12 column-major numbers
-/// (`[x_axis, y_axis, z_axis, translation]`, the layout of [`DAffine3::to_cols_array`]); an affine
-/// map, not rigid in general. A fixed-length accumulation LLVM vectorises; the per-element order
-/// of operations is that of [`blend_columns`] (bit-identical results).
-#[inline(always)]
-pub(crate) fn blend_affine_cols(
-    joints: &[u32],
-    weights: &[f64],
-    transforms: &[DAffine3],
-) -> [f64; 12] {
-    let mut blended = [0.0f64; 12];
-    for (&j, &w) in joints.iter().zip(weights) {
-        let a = transforms[j as usize].to_cols_array();
-        for (b, x) in blended.iter_mut().zip(a) {
-            *b += w * x;
-        }
-    }
-    blended
-}
-
-/// Applies column-major affine numbers (see [`blend_affine_cols`]) to a point:
-/// `((x p.x + y p.y) + z p.z) + t`, the evaluation order of [`transform_point`].
-#[inline(always)]
-pub(crate) fn transform_point_cols(a: &[f64; 12], p: DVec3) -> DVec3 {
-    DVec3::new(
-        a[0] * p.x + a[3] * p.y + a[6] * p.z + a[9],
-        a[1] * p.x + a[4] * p.y + a[7] * p.z + a[10],
-        a[2] * p.x + a[5] * p.y + a[8] * p.z + a[11],
-    )
-}
-
-/// `Σ_j ω_ij T_j` for the influences of one vertex (an affine map, not rigid in general).
-#[inline(always)]
-pub(crate) fn blend_affine(joints: &[u32], weights: &[f64], transforms: &[DAffine3]) -> DAffine3 {
-    DAffine3::from_cols_array(&blend_affine_cols(joints, weights, transforms))
 }
 
 /// Columns `[x, y, z, t]` of `Σ_j ω_j T_j` (Eq. 2–3) in precision `S`, accumulated in influence
@@ -121,9 +83,8 @@ impl LinearBlendSkinning {
         Self {
             num_joints: weights.num_joints(),
             row_start: row_start.to_vec(),
-            joints: joints.to_vec(),
+            joints: joints.iter().map(|&j| j as u16).collect(),
             weights: w.to_vec(),
-            joints16: joints.iter().map(|&j| j as u16).collect(),
         }
     }
 
@@ -136,7 +97,7 @@ impl LinearBlendSkinning {
     }
 
     #[inline(always)]
-    fn row(&self, v: usize) -> (&[u32], &[f64]) {
+    fn row(&self, v: usize) -> (&[u16], &[f64]) {
         let range = self.row_start[v] as usize..self.row_start[v + 1] as usize;
         (&self.joints[range.clone()], &self.weights[range])
     }
@@ -148,7 +109,7 @@ impl LinearBlendSkinning {
         if joints.is_empty() {
             return rest;
         }
-        transform_point_cols(&blend_affine_cols(joints, weights, transforms), rest)
+        transform_point::<f64>(&blend_columns(joints, weights, transforms), rest)
     }
 
     /// M' = LBS(T, Ω, M) (Eq. 2–3). `transforms`: `#J`; `rest_positions`, `out`: `#V`.
@@ -163,19 +124,8 @@ impl LinearBlendSkinning {
         let skin_chunk = |chunk: usize, out: &mut [DVec3]| {
             let first = chunk * VERTEX_GRAIN_F32;
             let rest = &rest_positions[first..first + out.len()];
-            let row_start = &self.row_start[first..=first + out.len()];
-            for ((o, &p), bounds) in out.iter_mut().zip(rest).zip(row_start.windows(2)) {
-                let range = bounds[0] as usize..bounds[1] as usize;
-                *o = if range.is_empty() {
-                    p
-                } else {
-                    let columns = blend_columns(
-                        &self.joints16[range.clone()],
-                        &self.weights[range],
-                        transforms,
-                    );
-                    transform_point::<f64>(&columns, p)
-                };
+            for (i, (o, &p)) in out.iter_mut().zip(rest).enumerate() {
+                *o = self.skin_vertex(first + i, transforms, p);
             }
         };
         if out.len() <= VERTEX_GRAIN_F32 {
@@ -212,13 +162,14 @@ impl LinearBlendSkinning {
     /// Eq. 15, used by CageRev). Zero for an unweighted vertex.
     pub fn blended_linear_part(&self, v: usize, transforms: &[DAffine3]) -> DMat3 {
         let (joints, weights) = self.row(v);
-        blend_affine(joints, weights, transforms).matrix3
+        let [x, y, z, _] = blend_columns(joints, weights, transforms);
+        DMat3::from_cols(x, y, z)
     }
 
     /// Blended translation `Σ_j ω_ij T_j^t` of vertex `v` (Eq. 3).
     pub fn blended_translation(&self, v: usize, transforms: &[DAffine3]) -> DVec3 {
         let (joints, weights) = self.row(v);
-        blend_affine(joints, weights, transforms).translation
+        blend_columns(joints, weights, transforms)[3]
     }
 }
 
