@@ -92,23 +92,18 @@ fn refresh<K>(
     build: impl FnOnce() -> Result<K, RigError>,
     update: impl FnOnce(&mut K) -> Result<(), RigError>,
 ) -> Result<&K, RigError> {
-    match slot {
-        Some(stored) if stored.revision == revision => {}
-        Some(stored) => {
-            update(&mut stored.kernel)?;
-            stored.revision = revision;
-        }
-        None => {
-            *slot = Some(Stored {
-                kernel: build()?,
-                revision,
-            })
-        }
+    let mut stored = match slot.take() {
+        Some(stored) => stored,
+        None => Stored {
+            kernel: build()?,
+            revision,
+        },
+    };
+    if stored.revision != revision {
+        update(&mut stored.kernel)?;
+        stored.revision = revision;
     }
-    match slot {
-        Some(stored) => Ok(&stored.kernel),
-        None => unreachable!("the slot was filled above"),
-    }
+    Ok(&slot.insert(stored).kernel)
 }
 
 impl RigSession {
