@@ -152,12 +152,20 @@ impl RigSceneData {
         layers: Layers,
         color_by: ColorBy,
     ) -> Scene<'a> {
-        // The current skin comes from the session's f32 display path when it is on.
-        let (mesh, cage) = match (pose, session.display_mesh()) {
-            (Pose::Rest, _) => (MeshPositions::F64(session.rest_mesh()), session.rest_cage()),
-            (Pose::Current, Some(shown)) => (MeshPositions::F32(shown), session.posed_cage()),
-            (Pose::Current, None) => (
-                MeshPositions::F64(session.posed_mesh()),
+        // Both skins come from the session's f32 display path when it is on.
+        let (mesh, cage) = match pose {
+            Pose::Rest => (
+                session.display_rest_mesh().map_or_else(
+                    || MeshPositions::F64(session.rest_mesh()),
+                    MeshPositions::F32,
+                ),
+                session.rest_cage(),
+            ),
+            Pose::Current => (
+                session.display_mesh().map_or_else(
+                    || MeshPositions::F64(session.posed_mesh()),
+                    MeshPositions::F32,
+                ),
                 session.posed_cage(),
             ),
         };

@@ -317,7 +317,7 @@ impl StudioApp {
                 self.log_info(format!(
                     "opened {}: {} vertices, {} joints, {} cage vertices ({:.0} ms)",
                     source.display_name(),
-                    s.rest_mesh().len(),
+                    s.num_vertices(),
                     s.skeleton().len(),
                     s.rest_cage().len(),
                     t.elapsed().as_secs_f64() * 1e3

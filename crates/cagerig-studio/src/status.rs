@@ -17,7 +17,7 @@ pub fn status_bar_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
                         app.stats
                             .last_frame_ms()
                             .map_or_else(|| "–".to_string(), |f| format!("{f:.1} ms")),
-                        s.rest_mesh().len(),
+                        s.num_vertices(),
                         s.skeleton().len(),
                         s.rest_cage().len(),
                         crate::document::method_name(s.skinning()),

@@ -9,17 +9,18 @@
 //! - MaxVol / CageUp gather a few rows once at precomputation time (`select_rows`), where the
 //!   strided access does not matter.
 
+mod column_products;
+mod display_coords;
+
 use faer::Mat;
 use glam::DVec3;
-use rayon::prelude::*;
+
+pub use display_coords::DisplayCageCoords;
 
 use crate::error::RigError;
-
-/// Rows per parallel task in the per-frame products.
-const ROW_BLOCK: usize = 4096;
-
-/// Rows per structure-of-arrays accumulator tile inside a row block (3 × 4 KiB of sums).
-const LANE_BLOCK: usize = 512;
+#[cfg(test)]
+use column_products::{LANE_BLOCK, ROW_BLOCK};
+use column_products::{accumulate_columns, rows_of_columns};
 
 /// How the per-frame products M = ΦC and M += Φ[:, k]·ΔC_k read Φ.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -174,14 +175,30 @@ impl CageCoords {
         );
     }
 
+    /// Rows `rows` of M = Φ·C into `out` (`rows.len()`): the same bits as those rows of
+    /// [`Self::apply`], in O(#rows · #C). The display path keeps the exact M on CageUp's MaxVol
+    /// rows with it.
+    pub fn apply_rows(&self, rows: &[usize], cage: &[DVec3], out: &mut [DVec3]) {
+        debug_assert_eq!(cage.len(), self.num_cage_vertices());
+        let terms = cage.iter().enumerate().map(|(k, c)| (k, *c));
+        match &self.compact {
+            Some(compact) => {
+                let nv = self.num_vertices();
+                rows_of_columns(|k| &compact[k * nv..(k + 1) * nv], terms, rows, out)
+            }
+            None => rows_of_columns(|k| self.column(k), terms, rows, out),
+        }
+    }
+
     /// `out = [out +] Σ Φ[:, k]·d_k` over the given (k, d_k), `out` being `#V`.
     ///
-    /// Each thread takes [`ROW_BLOCK`] rows and splits them into [`LANE_BLOCK`]-row tiles whose
-    /// x, y and z sums live in three small structure-of-arrays accumulators (in L1), so the
-    /// inner loop is vectorised multiply-adds over rows; columns are taken four per pass over the
-    /// sums (a quarter of the accumulator traffic). This runs at the memory bandwidth of reading
-    /// Φ: ≈ 2.7 ms for 133k × 58 in f64 on the project machine, where the point-by-point
-    /// `DVec3` loop took 7.3 ms.
+    /// Each thread takes [`column_products::ROW_BLOCK`] rows and splits them into
+    /// [`column_products::LANE_BLOCK`]-row tiles whose x, y and z sums live in three
+    /// structure-of-arrays accumulators (in L1/L2), so the inner loop is vectorised
+    /// multiply-adds over rows; columns are taken four per pass over the sums (a quarter of the
+    /// accumulator traffic). This runs near the memory bandwidth of reading Φ: ≈ 2.9–3.6 ms for
+    /// 133k × 74 in f64 on the project machine, where the point-by-point `DVec3` loop took
+    /// 7.3 ms at 133k × 58.
     fn accumulate<I>(&self, terms: I, add_to_out: bool, out: &mut [DVec3])
     where
         I: Iterator<Item = (usize, DVec3)> + Clone + Send + Sync,
@@ -205,169 +222,6 @@ impl CageCoords {
                 (s - 1.0).abs()
             })
             .fold(0.0, f64::max)
-    }
-}
-
-/// `out = [out +] Σ column(k)·d_k` over `terms` = (k, d_k); see [`CageCoords::accumulate`].
-fn accumulate_columns<'a, W, I>(
-    column: impl Fn(usize) -> &'a [W] + Send + Sync,
-    terms: I,
-    add_to_out: bool,
-    out: &mut [DVec3],
-) where
-    W: Weight + 'a,
-    I: Iterator<Item = (usize, DVec3)> + Clone + Send + Sync,
-{
-    out.par_chunks_mut(ROW_BLOCK)
-        .enumerate()
-        .for_each(|(block, chunk)| {
-            let block_start = block * ROW_BLOCK;
-            for (tile, tile_out) in chunk.chunks_mut(LANE_BLOCK).enumerate() {
-                let start = block_start + tile * LANE_BLOCK;
-                let len = tile_out.len();
-                let mut sums = TileSums::default();
-                if add_to_out {
-                    sums.load(tile_out);
-                }
-                let mut terms = terms.clone();
-                // Four columns per pass over the sums, then the remainder one by one.
-                loop {
-                    match [terms.next(), terms.next(), terms.next(), terms.next()] {
-                        [Some(a), Some(b), Some(c), Some(d)] => sums.add_four_columns(
-                            [a, b, c, d].map(|(k, _)| &column(k)[start..start + len]),
-                            [a.1, b.1, c.1, d.1],
-                        ),
-                        rest => {
-                            for (k, d) in rest.into_iter().flatten() {
-                                sums.add_column(&column(k)[start..start + len], d);
-                            }
-                            break;
-                        }
-                    }
-                }
-                sums.store(tile_out);
-            }
-        });
-}
-
-/// A stored coordinate: f64, or f32 widened exactly to f64.
-trait Weight: Copy + Send + Sync {
-    fn widen(self) -> f64;
-}
-
-impl Weight for f64 {
-    #[inline(always)]
-    fn widen(self) -> f64 {
-        self
-    }
-}
-
-impl Weight for f32 {
-    #[inline(always)]
-    fn widen(self) -> f64 {
-        f64::from(self)
-    }
-}
-
-/// Structure-of-arrays sums of up to [`LANE_BLOCK`] points.
-struct TileSums {
-    x: [f64; LANE_BLOCK],
-    y: [f64; LANE_BLOCK],
-    z: [f64; LANE_BLOCK],
-}
-
-impl Default for TileSums {
-    fn default() -> Self {
-        Self {
-            x: [0.0; LANE_BLOCK],
-            y: [0.0; LANE_BLOCK],
-            z: [0.0; LANE_BLOCK],
-        }
-    }
-}
-
-impl TileSums {
-    fn load(&mut self, points: &[DVec3]) {
-        for (i, p) in points.iter().enumerate() {
-            (self.x[i], self.y[i], self.z[i]) = (p.x, p.y, p.z);
-        }
-    }
-
-    fn store(&self, points: &mut [DVec3]) {
-        for (i, p) in points.iter_mut().enumerate() {
-            *p = DVec3::new(self.x[i], self.y[i], self.z[i]);
-        }
-    }
-
-    /// `sums[i] += column[i] · d` for the first `column.len()` points.
-    fn add_column<W: Weight>(&mut self, column: &[W], d: DVec3) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe { self.add_column_avx2(column, d) };
-            }
-        }
-        self.add_column_generic(column, d)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn add_column_avx2<W: Weight>(&mut self, column: &[W], d: DVec3) {
-        self.add_column_generic(column, d)
-    }
-
-    /// `sums[i] += Σ_c columns[c][i] · d_c` for four columns of equal length.
-    fn add_four_columns<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe { self.add_four_columns_avx512(columns, d) };
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: as above.
-                return unsafe { self.add_four_columns_avx2(columns, d) };
-            }
-        }
-        self.add_four_columns_generic(columns, d)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    fn add_four_columns_avx512<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
-        self.add_four_columns_generic(columns, d)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn add_four_columns_avx2<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
-        self.add_four_columns_generic(columns, d)
-    }
-
-    #[inline(always)]
-    fn add_four_columns_generic<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
-        let n = columns[0].len().min(LANE_BLOCK);
-        let [c0, c1, c2, c3] = columns.map(|c| &c[..n]);
-        let (x, y, z) = (&mut self.x[..n], &mut self.y[..n], &mut self.z[..n]);
-        for i in 0..n {
-            let (w0, w1, w2, w3) = (c0[i].widen(), c1[i].widen(), c2[i].widen(), c3[i].widen());
-            x[i] += (w0 * d[0].x + w1 * d[1].x) + (w2 * d[2].x + w3 * d[3].x);
-            y[i] += (w0 * d[0].y + w1 * d[1].y) + (w2 * d[2].y + w3 * d[3].y);
-            z[i] += (w0 * d[0].z + w1 * d[1].z) + (w2 * d[2].z + w3 * d[3].z);
-        }
-    }
-
-    #[inline(always)]
-    fn add_column_generic<W: Weight>(&mut self, column: &[W], d: DVec3) {
-        let n = column.len().min(LANE_BLOCK);
-        let (x, y, z) = (&mut self.x[..n], &mut self.y[..n], &mut self.z[..n]);
-        for i in 0..n {
-            let w = column[i].widen();
-            x[i] += w * d.x;
-            y[i] += w * d.y;
-            z[i] += w * d.z;
-        }
     }
 }
 
@@ -459,5 +313,33 @@ mod tests {
             CageCoords::from_rows(&[vec![1.0]], 2),
             Err(RigError::SizeMismatch { .. })
         ));
+    }
+
+    #[test]
+    fn apply_rows_gives_the_bits_of_apply() {
+        // Column counts with and without a remainder after the groups of four.
+        for nc in [3, 4, 7, 9] {
+            let nv = 9000;
+            let matrix = Mat::from_fn(nv, nc, |i, k| {
+                (((i * 7919 + k * 104_729) % 1013) as f64 / 1013.0 - 0.3) * 1.1f64.powi(k as i32)
+            });
+            let mut phi = CageCoords::from_matrix(matrix).unwrap();
+            let cage: Vec<DVec3> = (0..nc)
+                .map(|k| DVec3::new(0.1 * k as f64 + 0.37, 1.3 - k as f64 / 7.0, 2.9))
+                .collect();
+            for round in [false, true] {
+                if round {
+                    phi.round_to_f32();
+                }
+                let mut full = vec![DVec3::ZERO; nv];
+                phi.apply(&cage, &mut full);
+                let rows = [0, 1, 511, 512, 4095, 4096, 8999, 17];
+                let mut picked = vec![DVec3::NAN; rows.len()];
+                phi.apply_rows(&rows, &cage, &mut picked);
+                for (r, &row) in rows.iter().enumerate() {
+                    assert_eq!(picked[r], full[row], "{nc} columns, row {row}, f32 {round}");
+                }
+            }
+        }
     }
 }

@@ -101,6 +101,9 @@ pub struct RigSession {
     /// False while M is still the mesh as loaded and differs from ΦC (e.g. Φ read from a file
     /// with 6 decimals); the first cage edit then sets M = ΦC in full.
     rest_mesh_is_phi_c: bool,
+    /// On the display path after a current-cage event: `rest_mesh` is exact on CageUp's MaxVol
+    /// rows only, and the whole exact M = ΦC is computed on demand.
+    rest_mesh_rows_only: bool,
     rest_cage: Vec<DVec3>,
     rest_mesh: Vec<DVec3>,
     rest_world_from_joint: Vec<DAffine3>,
@@ -317,6 +320,7 @@ impl RigSession {
             method: SkinningMethod::Lbs,
             original_rest_cage: rest_cage.clone(),
             rest_mesh_is_phi_c,
+            rest_mesh_rows_only: false,
             rest_cage,
             rest_mesh: mesh.positions,
             rest_world_from_joint,
@@ -579,7 +583,7 @@ impl RigSession {
             for (c, d) in self.rest_cage.iter_mut().zip(&rest_delta) {
                 *c += *d;
             }
-            self.rest_from_cage_in_full();
+            self.rest_from_cage_for_event();
         }
         self.scratch_cage_a = posed_delta;
         self.scratch_cage_b = rest_delta;

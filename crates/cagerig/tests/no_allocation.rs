@@ -1,6 +1,6 @@
 //! Per-event work must not allocate: a counting global allocator checks the session's
 //! skeleton edits, rest-cage drags, current-cage grabs (with a held factorisation), skinning
-//! switches between already-built methods and cage grabs.
+//! switches between already-built methods and cage grabs, on the exact and the f32 display path.
 //!
 //! The events run inside the rayon pool (as an interactive front end would): called from a
 //! foreign thread, rayon's own injector queue allocates a block every few dozen jobs, which is
@@ -99,6 +99,20 @@ fn run_events() {
         assert_eq!(
             n, 0,
             "display path: move_rest_cage ({method:?}) allocated {n} times"
+        );
+        // Φ̃ is built at the first grab; then a grab (M̃ and the exact MaxVol rows) and the
+        // rest-cage edit after it (the whole exact M first) allocate nothing.
+        s.move_posed_cage(&[4], &[offset]).unwrap();
+        s.refactor_reverser().unwrap();
+        let n = allocations_during(|| s.move_posed_cage(&[9, 10], &[offset]).unwrap());
+        assert_eq!(
+            n, 0,
+            "display path: move_posed_cage ({method:?}) allocated {n} times"
+        );
+        let n = allocations_during(|| s.move_rest_cage(&[1], &[offset]).unwrap());
+        assert_eq!(
+            n, 0,
+            "display path: move_rest_cage after a grab ({method:?}) allocated {n} times"
         );
     }
 }

@@ -3,9 +3,17 @@
 use super::*;
 
 impl RigSession {
-    /// Rest skin M (`#V`).
+    /// Rest skin M (`#V`), exact (on the f32 display path, after a current-cage edit it is
+    /// computed in f64 on the first call; [`RigSession::display_rest_mesh`] is the drawn one).
     pub fn rest_mesh(&self) -> &[DVec3] {
-        &self.rest_mesh
+        match self.display.as_deref() {
+            Some(display) if self.rest_mesh_rows_only => self.exact_rest_mesh(display),
+            _ => &self.rest_mesh,
+        }
+    }
+    /// Number of skin vertices `#V`.
+    pub fn num_vertices(&self) -> usize {
+        self.rest_mesh.len()
     }
     /// Current skin M' (`#V`), exact (on the f32 display path it is skinned in f64 on the
     /// first call after an event; [`RigSession::display_mesh`] is the drawn one).

@@ -134,6 +134,7 @@ impl RigSession {
         lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
         lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
         self.rest_mesh_is_phi_c = true;
+        self.rest_mesh_rows_only = false;
         self.rest_mesh_changed();
         if let Some(cor) = &mut self.cor {
             match (&lo.centres, &hi.centres, self.method) {

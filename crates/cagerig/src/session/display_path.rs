@@ -8,17 +8,26 @@
 //! (bit-identical to the rows of the full f64 M'): C', C, S and S' are the same bits as on the
 //! exact path. [`RigSession::posed_mesh`] stays exact: in this mode it is skinned in f64 on the
 //! first call after an event (and kept until the next one).
+//!
+//! A current-cage edit changes C everywhere, and the exact M = ΦC then reads all of Φ (79 MB at
+//! 133k × 74). On this path it computes instead the drawn rest mesh M̃ = Φ̃·C with Φ rounded to
+//! f32 ([`DisplayCageCoords`], half the bytes) and the exact M on CageUp's MaxVol rows only
+//! ([`CageCoords::apply_rows`], the bits of the full product), which is all the sync operators
+//! read; [`RigSession::rest_mesh`] computes the whole exact M on its first call, and any
+//! rest-cage edit does so before it applies its increment. The f32 kernels then skin M̃.
 
 use std::sync::OnceLock;
 
 use glam::{DAffine3, DVec3, Vec3};
+use rayon::prelude::*;
 
 use super::RigSession;
+use crate::cage_coords::{CageCoords, DisplayCageCoords};
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::{
     CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
-    DualQuaternionSkinning, LbsF32, LbsF32Scratch, SkinningMethod,
+    DualQuaternionSkinning, LbsF32, LbsF32Scratch, RestPoint, SkinningMethod,
 };
 
 /// Precision of the displayed current skin M'.
@@ -61,6 +70,15 @@ pub(super) struct DisplayPath {
     pub positions: Vec<Vec3>,
     /// The exact M' of the current state, skinned on demand.
     pub exact: OnceLock<Vec<DVec3>>,
+    /// Φ̃, Φ rounded to f32 (built at the first current-cage edit; `None` before, or when its
+    /// memory could not be reserved, and then M is computed exactly).
+    coords: Option<DisplayCageCoords>,
+    /// Displayed M (`#V`, f32): Φ̃·C after a current-cage edit, else the exact M rounded.
+    pub rest_positions: Vec<Vec3>,
+    /// The rest revision `rest_positions` belongs to.
+    rest_positions_revision: Option<u64>,
+    /// The exact M while the session keeps it on the MaxVol rows only, computed on demand.
+    pub exact_rest: OnceLock<Vec<DVec3>>,
 }
 
 impl DisplayPath {
@@ -81,6 +99,10 @@ impl DisplayPath {
             rows_centres: vec![DVec3::ZERO; rows.len()],
             positions: vec![Vec3::ZERO; skin_weights.num_vertices()],
             exact: OnceLock::new(),
+            coords: None,
+            rest_positions: vec![Vec3::ZERO; skin_weights.num_vertices()],
+            rest_positions_revision: None,
+            exact_rest: OnceLock::new(),
         }
     }
 }
@@ -110,6 +132,7 @@ impl RigSession {
     /// Switches the precision of the displayed M' (see [`DisplayPrecision`]); the current state
     /// is re-skinned.
     pub fn set_display_precision(&mut self, precision: DisplayPrecision) -> Result<(), RigError> {
+        self.ensure_exact_rest_mesh();
         self.display = match precision {
             DisplayPrecision::Exact => None,
             DisplayPrecision::F32 => Some(Box::new(DisplayPath::new(
@@ -139,6 +162,64 @@ impl RigSession {
         self.display.as_deref().map(|d| &d.positions[..])
     }
 
+    /// The displayed rest skin M in f32 (`#V`) under [`DisplayPrecision::F32`]: Φ̃·C after a
+    /// current-cage edit, else the exact M rounded; `None` on the exact path (use
+    /// [`RigSession::rest_mesh`]).
+    pub fn display_rest_mesh(&self) -> Option<&[Vec3]> {
+        self.display.as_deref().map(|d| &d.rest_positions[..])
+    }
+
+    /// After a current-cage edit changed C everywhere: on the display path M̃ = Φ̃·C for display
+    /// and the exact M on the MaxVol rows (see the module notes), else M = ΦC in full. Then the
+    /// CoR centres.
+    pub(super) fn rest_from_cage_for_event(&mut self) {
+        let Some(display) = self.display.as_deref_mut() else {
+            return self.rest_from_cage_in_full();
+        };
+        if display.coords.is_none() {
+            display.coords = DisplayCageCoords::try_new(&self.cage_coords);
+        }
+        let Some(coords) = &display.coords else {
+            return self.rest_from_cage_in_full();
+        };
+        coords.apply(&self.rest_cage, &mut display.rest_positions);
+        let rows = self.cage_updater.rows();
+        self.cage_coords
+            .apply_rows(rows, &self.rest_cage, &mut self.scratch_rows_rest);
+        for (&row, p) in rows.iter().zip(&self.scratch_rows_rest) {
+            self.rest_mesh[row] = *p;
+        }
+        display.exact_rest = OnceLock::new();
+        self.rest_revision = self.rest_revision.wrapping_add(1);
+        display.rest_positions_revision = Some(self.rest_revision);
+        self.rest_mesh_is_phi_c = true;
+        self.rest_mesh_rows_only = true;
+        self.centres_from_cage_in_full();
+    }
+
+    /// Makes `rest_mesh` the whole exact M again if it was kept on the MaxVol rows only.
+    pub(super) fn ensure_exact_rest_mesh(&mut self) {
+        if !self.rest_mesh_rows_only {
+            return;
+        }
+        match self
+            .display
+            .as_deref_mut()
+            .and_then(|d| d.exact_rest.take())
+        {
+            Some(exact) => self.rest_mesh = exact,
+            None => self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh),
+        }
+        self.rest_mesh_rows_only = false;
+    }
+
+    /// The exact M while it is kept on the MaxVol rows only (computed on first use).
+    pub(super) fn exact_rest_mesh<'a>(&'a self, display: &'a DisplayPath) -> &'a [DVec3] {
+        display
+            .exact_rest
+            .get_or_init(|| full_product(&self.cage_coords, &self.rest_cage))
+    }
+
     /// Marks the rest mesh M (and the CoR centres) as changed for the display kernels.
     pub(super) fn rest_mesh_changed(&mut self) {
         self.rest_revision = self.rest_revision.wrapping_add(1);
@@ -151,39 +232,34 @@ impl RigSession {
         };
         display.exact = OnceLock::new();
         let revision = self.rest_revision;
-        let (transforms, rest, weights) =
-            (&self.posed_from_rest, &self.rest_mesh, &self.skin_weights);
-        let centres = self.cor.as_ref().map(|c| &c.centres[..]);
-        match (self.method, centres) {
-            (SkinningMethod::Dqs, _) => {
-                let dqs = refresh(
-                    &mut display.dqs,
-                    revision,
-                    || DqsF32::new(weights, rest),
-                    |k| k.set_rest_positions(rest),
-                )?;
-                dqs.apply(transforms, &mut display.dqs_scratch, &mut display.positions);
-            }
-            (SkinningMethod::Cor, Some(centres)) => {
-                let cor = refresh(
-                    &mut display.cor,
-                    revision,
-                    || CorF32::new(weights, rest, centres),
-                    |k| k.set_rest_positions(rest, centres),
-                )?;
-                cor.apply(transforms, &mut display.cor_scratch, &mut display.positions);
-            }
-            _ => {
-                let lbs = refresh(
-                    &mut display.lbs,
-                    revision,
-                    || LbsF32::new(weights, rest),
-                    |k| k.set_rest_positions(rest),
-                )?;
-                lbs.apply(transforms, &mut display.lbs_scratch, &mut display.positions);
-            }
+        if display.rest_positions_revision != Some(revision) {
+            // M changed exactly (never while it is kept on the rows only: see
+            // `rest_from_cage_for_event`): round it for display.
+            display
+                .rest_positions
+                .par_iter_mut()
+                .zip(&self.rest_mesh)
+                .with_min_len(1 << 14)
+                .for_each(|(o, p)| *o = p.as_vec3());
+            display.rest_positions_revision = Some(revision);
         }
-        Ok(())
+        // The f32 kernels read the exact M when there is one (their local frame then rounds
+        // differences, not absolute coordinates), else M̃.
+        let rest_display = std::mem::take(&mut display.rest_positions);
+        let skin = SkinF32 {
+            method: self.method,
+            transforms: &self.posed_from_rest,
+            weights: &self.skin_weights,
+            centres: self.cor.as_ref().map(|c| &c.centres[..]),
+            revision,
+        };
+        let result = if self.rest_mesh_rows_only {
+            skin.apply(display, &rest_display)
+        } else {
+            skin.apply(display, &self.rest_mesh)
+        };
+        display.rest_positions = rest_display;
+        result
     }
 
     /// The MaxVol rows of M', exact, into `scratch_rows_posed` (display path only; the exact
@@ -230,8 +306,68 @@ impl RigSession {
         display.exact.get_or_init(|| {
             let mut out = vec![DVec3::ZERO; self.rest_mesh.len()];
             let nj = self.skeleton.len();
-            self.skin_exact(&mut DqsScratch::new(nj), &mut CorScratch::new(nj), &mut out);
+            self.skin_exact(
+                self.rest_mesh(),
+                &mut DqsScratch::new(nj),
+                &mut CorScratch::new(nj),
+                &mut out,
+            );
             out
         })
     }
+}
+
+/// The inputs of one f32 skinning of the displayed M'.
+struct SkinF32<'a> {
+    method: SkinningMethod,
+    transforms: &'a [DAffine3],
+    weights: &'a SkinWeights,
+    /// CoR centres (`#V`), once built.
+    centres: Option<&'a [DVec3]>,
+    /// Rest revision of `rest`.
+    revision: u64,
+}
+
+impl SkinF32<'_> {
+    /// Brings the method's f32 kernel to `rest` (`#V`) and skins into `display.positions`.
+    fn apply<P: RestPoint>(&self, display: &mut DisplayPath, rest: &[P]) -> Result<(), RigError> {
+        let (transforms, weights, revision) = (self.transforms, self.weights, self.revision);
+        match (self.method, self.centres) {
+            (SkinningMethod::Dqs, _) => {
+                let dqs = refresh(
+                    &mut display.dqs,
+                    revision,
+                    || DqsF32::new(weights, rest),
+                    |k| k.set_rest_positions(rest),
+                )?;
+                dqs.apply(transforms, &mut display.dqs_scratch, &mut display.positions);
+            }
+            (SkinningMethod::Cor, Some(centres)) => {
+                let cor = refresh(
+                    &mut display.cor,
+                    revision,
+                    || CorF32::new(weights, rest, centres),
+                    |k| k.set_rest_positions(rest, centres),
+                )?;
+                cor.apply(transforms, &mut display.cor_scratch, &mut display.positions);
+            }
+            _ => {
+                let lbs = refresh(
+                    &mut display.lbs,
+                    revision,
+                    || LbsF32::new(weights, rest),
+                    |k| k.set_rest_positions(rest),
+                )?;
+                lbs.apply(transforms, &mut display.lbs_scratch, &mut display.positions);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// M = Φ·C (`#V`), exact, into a new vector.
+fn full_product(cage_coords: &CageCoords, rest_cage: &[DVec3]) -> Vec<DVec3> {
+    let mut out = vec![DVec3::ZERO; cage_coords.num_vertices()];
+    cage_coords.apply(rest_cage, &mut out);
+    out
 }

@@ -44,6 +44,7 @@ impl RigSession {
     }
 
     pub(super) fn build_cor(&mut self) -> Result<(), RigError> {
+        self.ensure_exact_rest_mesh();
         let given = self.given_centre_coords.take();
         let centre_coords = match (&self.cor_rows, given) {
             (_, Some(lambda)) => {
@@ -90,7 +91,14 @@ impl RigSession {
     pub(super) fn rest_from_cage_in_full(&mut self) {
         self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
         self.rest_mesh_is_phi_c = true;
+        self.rest_mesh_rows_only = false;
         self.rest_mesh_changed();
+        self.centres_from_cage_in_full();
+    }
+
+    /// The CoR centres Λ·C after C changed everywhere (or marked stale when CoR skinning is not
+    /// active).
+    pub(super) fn centres_from_cage_in_full(&mut self) {
         if let Some(cor) = &mut self.cor {
             if self.method == SkinningMethod::Cor {
                 cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
@@ -102,6 +110,7 @@ impl RigSession {
 
     /// Applies ΔC on a few rest-cage vertices to C, M and the CoR centres.
     pub(super) fn apply_rest_cage_delta_sparse(&mut self, vertices: &[usize], deltas: &[DVec3]) {
+        self.ensure_exact_rest_mesh();
         self.rest_mesh_changed();
         for (&k, d) in vertices.iter().zip(deltas) {
             self.rest_cage[k] += *d;
@@ -184,6 +193,7 @@ impl RigSession {
             }
             // Unreachable: the display kernels are sized like M at construction. Fall back to
             // the exact path rather than show a stale mesh.
+            self.ensure_exact_rest_mesh();
             self.display = None;
         }
         let mut posed_mesh = std::mem::take(&mut self.posed_mesh);
@@ -191,20 +201,31 @@ impl RigSession {
         match (&mut self.cor, self.method) {
             (Some(cor), SkinningMethod::Cor) => {
                 let mut scratch = std::mem::replace(&mut cor.scratch, CorScratch::new(0));
-                self.skin_exact(&mut dqs_scratch, &mut scratch, &mut posed_mesh);
+                self.skin_exact(
+                    &self.rest_mesh,
+                    &mut dqs_scratch,
+                    &mut scratch,
+                    &mut posed_mesh,
+                );
                 if let Some(cor) = &mut self.cor {
                     cor.scratch = scratch;
                 }
             }
-            _ => self.skin_exact(&mut dqs_scratch, &mut CorScratch::new(0), &mut posed_mesh),
+            _ => self.skin_exact(
+                &self.rest_mesh,
+                &mut dqs_scratch,
+                &mut CorScratch::new(0),
+                &mut posed_mesh,
+            ),
         }
         self.posed_mesh = posed_mesh;
         self.dqs_scratch = dqs_scratch;
     }
 
-    /// The exact M' (`#V`, f64) of the current state into `out`.
+    /// The exact M' (`#V`, f64) of the current state into `out`, from the exact `rest_mesh` M.
     pub(super) fn skin_exact(
         &self,
+        rest_mesh: &[DVec3],
         dqs_scratch: &mut DqsScratch,
         cor_scratch: &mut CorScratch,
         out: &mut [DVec3],
@@ -212,16 +233,16 @@ impl RigSession {
         match (self.method, &self.cor) {
             (SkinningMethod::Dqs, _) => {
                 self.dqs
-                    .apply(&self.posed_from_rest, &self.rest_mesh, dqs_scratch, out)
+                    .apply(&self.posed_from_rest, rest_mesh, dqs_scratch, out)
             }
             (SkinningMethod::Cor, Some(cor)) => cor.skinning.apply(
                 &self.posed_from_rest,
-                &self.rest_mesh,
+                rest_mesh,
                 &cor.centres,
                 cor_scratch,
                 out,
             ),
-            _ => self.lbs.apply(&self.posed_from_rest, &self.rest_mesh, out),
+            _ => self.lbs.apply(&self.posed_from_rest, rest_mesh, out),
         }
     }
 

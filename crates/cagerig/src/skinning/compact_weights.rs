@@ -21,7 +21,7 @@ use glam::{DAffine3, DVec3, Vec3A};
 use rayon::prelude::*;
 
 use super::VERTEX_GRAIN_F32;
-use super::precision::SkinReal;
+use super::precision::{RestPoint, SkinReal};
 use crate::{RigError, SkinWeights};
 
 // Sorted slots index vertices within a chunk as u16.
@@ -396,9 +396,9 @@ pub(crate) struct SortedRestMesh {
 
 impl SortedRestMesh {
     /// `what` names the kernel in size-mismatch errors.
-    pub fn new(
+    pub fn new<P: RestPoint>(
         skin_weights: &SkinWeights,
-        rest_positions: &[DVec3],
+        rest_positions: &[P],
         what: &'static str,
     ) -> Result<Self, RigError> {
         let weights = CountSortedWeights::new(skin_weights);
@@ -421,7 +421,10 @@ impl SortedRestMesh {
     }
 
     /// Replaces the stored rest mesh M (`#V`). Parallel, no allocation.
-    pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
+    pub fn set_rest_positions<P: RestPoint>(
+        &mut self,
+        rest_positions: &[P],
+    ) -> Result<(), RigError> {
         if rest_positions.len() != self.weights.num_vertices() {
             return Err(RigError::SizeMismatch {
                 what: self.what,
@@ -432,15 +435,18 @@ impl SortedRestMesh {
         self.origin = local_origin(rest_positions);
         let origin = self.origin;
         self.weights.gather(&mut self.rest_local, |v| {
-            Vec3A::from((rest_positions[v] - origin).as_vec3())
+            Vec3A::from((rest_positions[v].to_f64() - origin).as_vec3())
         });
         Ok(())
     }
 }
 
 /// Local origin `o` of a point set: its bounding-box centre (zero when empty or non-finite).
-pub(crate) fn local_origin(points: &[DVec3]) -> DVec3 {
-    let (lo, hi) = crate::mesh::bounding_box(points);
+pub(crate) fn local_origin<P: RestPoint>(points: &[P]) -> DVec3 {
+    let (lo, hi) = points.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p.to_f64()), hi.max(p.to_f64())),
+    );
     let centre = (lo + hi) * 0.5;
     if centre.is_finite() {
         centre

@@ -13,6 +13,7 @@ use glam::{DAffine3, DVec3, Vec3, Vec3A};
 
 use super::compact_weights::{CountSortedWeights, local_origin};
 use super::cor::{CorScratch, LocalCentredPoints};
+use super::precision::RestPoint;
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: `T_j ∘ translate(o)` and the rotation quaternions, `#J`, f32.
@@ -30,9 +31,9 @@ pub struct CorF32 {
 impl CorF32 {
     /// Ω (`#V × #J`), rest positions M and centres p_i (both `#V`, rest space). Errors if the
     /// sizes differ.
-    pub fn new(
+    pub fn new<P: RestPoint>(
         skin_weights: &SkinWeights,
-        rest_positions: &[DVec3],
+        rest_positions: &[P],
         centres: &[DVec3],
     ) -> Result<Self, RigError> {
         let weights = CountSortedWeights::new(skin_weights);
@@ -55,9 +56,9 @@ impl CorF32 {
 
     /// Replaces the stored rest mesh M and centres p_i (both `#V`; after a rest-cage edit).
     /// Parallel, no allocation.
-    pub fn set_rest_positions(
+    pub fn set_rest_positions<P: RestPoint>(
         &mut self,
-        rest_positions: &[DVec3],
+        rest_positions: &[P],
         centres: &[DVec3],
     ) -> Result<(), RigError> {
         for (what, len) in [
@@ -78,7 +79,7 @@ impl CorF32 {
         self.origin = local_origin(rest_positions);
         let origin = self.origin;
         self.weights.gather(&mut self.centres_and_offsets, |i| {
-            let v = rest_positions[i];
+            let v = rest_positions[i].to_f64();
             let c = if centres[i].is_finite() {
                 centres[i]
             } else {

@@ -8,10 +8,11 @@
 //! Accuracy vs [`super::DualQuaternionSkinning`]: max |f32 − f64| is 4.8e-7 of the bbox diagonal
 //! on the 3× subdivided Arm at step ii (tests assert ≤ 2e-6).
 
-use glam::{DAffine3, DVec3, Vec3};
+use glam::{DAffine3, Vec3};
 
 use super::compact_weights::SortedRestMesh;
 use super::dqs::DqsScratch;
+use super::precision::RestPoint;
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: the `#J` joint dual quaternions of `T_j ∘ translate(o)`, f32.
@@ -25,7 +26,10 @@ pub struct DqsF32 {
 
 impl DqsF32 {
     /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
-    pub fn new(skin_weights: &SkinWeights, rest_positions: &[DVec3]) -> Result<Self, RigError> {
+    pub fn new<P: RestPoint>(
+        skin_weights: &SkinWeights,
+        rest_positions: &[P],
+    ) -> Result<Self, RigError> {
         Ok(Self {
             mesh: SortedRestMesh::new(
                 skin_weights,
@@ -44,7 +48,10 @@ impl DqsF32 {
     }
 
     /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
-    pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
+    pub fn set_rest_positions<P: RestPoint>(
+        &mut self,
+        rest_positions: &[P],
+    ) -> Result<(), RigError> {
         self.mesh.set_rest_positions(rest_positions)
     }
 
@@ -68,6 +75,7 @@ impl DqsF32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
     use std::f64::consts::FRAC_PI_2;
 
     fn skin(weights: &[Vec<f64>], transforms: &[DAffine3], rest: &[DVec3]) -> Vec<Vec3> {

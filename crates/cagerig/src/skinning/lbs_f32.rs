@@ -7,10 +7,11 @@
 //! of the bounding-box diagonal vs [`super::LinearBlendSkinning`] (tests assert ≤ 2e-6); use the f64 kernel where exact
 //! results are needed (conformance, CageRev/CageUp solves).
 
-use glam::{DAffine3, DVec3, Vec3, Vec3A};
+use glam::{DAffine3, Vec3, Vec3A};
 
 use super::compact_weights::{SortedRestMesh, columns_from_local};
 use super::lbs::LbsRule;
+use super::precision::RestPoint;
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: the `#J` transforms `T_j ∘ translate(o)` as f32 columns.
@@ -36,7 +37,10 @@ pub struct LbsF32 {
 
 impl LbsF32 {
     /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
-    pub fn new(skin_weights: &SkinWeights, rest_positions: &[DVec3]) -> Result<Self, RigError> {
+    pub fn new<P: RestPoint>(
+        skin_weights: &SkinWeights,
+        rest_positions: &[P],
+    ) -> Result<Self, RigError> {
         Ok(Self {
             mesh: SortedRestMesh::new(
                 skin_weights,
@@ -55,7 +59,10 @@ impl LbsF32 {
     }
 
     /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
-    pub fn set_rest_positions(&mut self, rest_positions: &[DVec3]) -> Result<(), RigError> {
+    pub fn set_rest_positions<P: RestPoint>(
+        &mut self,
+        rest_positions: &[P],
+    ) -> Result<(), RigError> {
         self.mesh.set_rest_positions(rest_positions)
     }
 
@@ -78,6 +85,7 @@ impl LbsF32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
     use std::f64::consts::FRAC_PI_2;
 
     #[test]

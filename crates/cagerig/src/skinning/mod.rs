@@ -31,7 +31,7 @@ pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
 pub use dqs_f32::{DqsF32, DqsF32Scratch};
 pub use lbs::LinearBlendSkinning;
 pub use lbs_f32::{LbsF32, LbsF32Scratch};
-pub use precision::SkinReal;
+pub use precision::{RestPoint, SkinReal};
 
 /// The skinning method S→S'→M' of a session.
 #[derive(

@@ -169,6 +169,26 @@ impl_skin_real!(
     Vec3::from
 );
 
+/// A rest position handed to the f32 kernels: f64 (the exact M), or f32 (the display path's
+/// M̃ = Φ̃·C), read exactly as f64.
+pub trait RestPoint: Copy + Send + Sync {
+    fn to_f64(self) -> glam::DVec3;
+}
+
+impl RestPoint for glam::DVec3 {
+    #[inline(always)]
+    fn to_f64(self) -> glam::DVec3 {
+        self
+    }
+}
+
+impl RestPoint for glam::Vec3 {
+    #[inline(always)]
+    fn to_f64(self) -> glam::DVec3 {
+        self.as_dvec3()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
