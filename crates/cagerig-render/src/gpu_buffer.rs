@@ -61,18 +61,21 @@ impl GrowBuffer {
         recreated
     }
 
-    /// As [`write`](Self::write), through `belt`, whose staging chunks are reused from frame to
-    /// frame: `Queue::write_buffer` allocates fresh staging memory on every call, and the
-    /// kernel zeroing those pages was ≈ 20 % of a 133k-vertex upload. Submits its own copy.
-    pub fn write_staged<T: Pod>(
+    /// Writes `len` elements of `T` at offset 0 through `belt`, whose staging chunks are reused
+    /// from frame to frame (`Queue::write_buffer` allocates fresh staging memory on every call,
+    /// and the kernel zeroing those pages was ≈ 20 % of a 133k-vertex upload). `fill` writes the
+    /// `len · size_of::<T>()` bytes straight into the mapped staging memory (no copy of the
+    /// whole content). Submits its own copy. Returns `true` when the buffer had to be re-created.
+    pub fn write_staged_with<T: Pod>(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         belt: &mut wgpu::util::StagingBelt,
-        data: &[T],
+        len: usize,
+        fill: impl FnOnce(wgpu::WriteOnly<'_, [u8]>),
     ) -> bool {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        let size = (bytes.len() as u64).next_multiple_of(4);
+        let bytes = len * size_of::<T>();
+        let size = (bytes as u64).next_multiple_of(4);
         let recreated = self.reserve(device, size);
         if let Some(size) = wgpu::BufferSize::new(size) {
             // Take back the chunks whose copies the GPU has finished (non-blocking).
@@ -82,19 +85,17 @@ impl GrowBuffer {
             });
             {
                 let mut view = belt.write_buffer(&mut encoder, &self.buffer, 0, size);
-                if bytes.len() as u64 == size.get() {
-                    view.copy_from_slice(bytes);
-                } else {
-                    let mut padded = bytes.to_vec();
-                    padded.resize(size.get() as usize, 0);
-                    view.copy_from_slice(&padded);
+                let mut whole = view.slice(..);
+                if let Some(mut padding) = whole.split_off(bytes..) {
+                    padding.fill(0);
                 }
+                fill(whole);
             }
             belt.finish();
             queue.submit([encoder.finish()]);
             belt.recall();
         }
-        self.len = data.len() as u32;
+        self.len = len as u32;
         recreated
     }
 

@@ -28,8 +28,9 @@ pub struct MaterialUniform {
     pub params: [f32; 4],
 }
 
-/// One vertex of a shaded mesh: position and normal in world space (f32; display only), colour
-/// in 8-bit sRGB.
+/// One vertex of a shaded mesh: position and smooth normal in world space (f32; display only;
+/// the normal is the unnormalised sum of the area-weighted triangle normals, which the vertex
+/// shader normalises), colour in 8-bit sRGB.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct MeshVertex {

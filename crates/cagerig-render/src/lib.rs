@@ -15,6 +15,7 @@
 //! | `scene.rs` | what to draw (borrowed slices) and the style |
 //! | `scene_buffers.rs` | GPU buffers updated in place per frame |
 //! | `vertex_normals.rs` | parallel smooth normals of a deforming mesh |
+//! | `vertex_packing.rs` | one parallel pass packing a layer's vertices into staging memory |
 //! | `pipelines.rs`, `shaders/` | pipeline states and WGSL |
 //! | `renderer.rs` | per-frame uniforms, lights, pass recording |
 //! | `target.rs` | colour + depth targets, readback |
@@ -40,6 +41,7 @@ pub mod scene;
 pub mod scene_buffers;
 pub mod target;
 pub mod vertex_normals;
+pub mod vertex_packing;
 
 pub use camera::{CameraPreset, OrbitCamera};
 pub use error::RenderError;

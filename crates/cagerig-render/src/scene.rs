@@ -103,36 +103,57 @@ impl Scene<'_> {
     /// Axis-aligned bounds `(lo, hi)` of everything drawn; `None` when the scene is empty.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
         use rayon::prelude::*;
-        let cage = self.cage.map(|c| c.positions).unwrap_or(&[]);
-        let joints = self.skeleton.map(|s| s.joints).unwrap_or(&[]);
-        let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        let merge = |(lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)| (lo.min(l), hi.max(h));
-        let grow = |(lo, hi): (DVec3, DVec3), p: &DVec3| {
-            if p.is_finite() {
-                (lo.min(*p), hi.max(*p))
-            } else {
-                (lo, hi)
-            }
-        };
         let from_mesh = match self.mesh.map(|m| m.positions) {
-            None => empty,
+            None => EMPTY_BOUNDS,
             Some(MeshPositions::F64(mesh)) => mesh
                 .par_chunks(16_384)
-                .map(|chunk| chunk.iter().fold(empty, grow))
-                .reduce(|| empty, merge),
+                .map(|chunk| chunk.iter().fold(EMPTY_BOUNDS, |b, p| grow_bounds(b, *p)))
+                .reduce(|| EMPTY_BOUNDS, merge_bounds),
             Some(MeshPositions::F32(mesh)) => mesh
                 .par_chunks(16_384)
                 .map(|chunk| {
                     chunk
                         .iter()
-                        .map(|p| p.as_dvec3())
-                        .fold(empty, |b, p| grow(b, &p))
+                        .fold(EMPTY_BOUNDS, |b, p| grow_bounds(b, p.as_dvec3()))
                 })
-                .reduce(|| empty, merge),
+                .reduce(|| EMPTY_BOUNDS, merge_bounds),
         };
-        let (lo, hi) = cage.iter().chain(joints).fold(from_mesh, grow);
+        self.bounds_with_mesh(from_mesh)
+    }
+
+    /// [`Scene::bounds`] given the bounds of the mesh layer's finite points (measured while
+    /// packing them for upload).
+    pub fn bounds_with_mesh(&self, from_mesh: Bounds) -> Option<(DVec3, DVec3)> {
+        let cage = self.cage.map(|c| c.positions).unwrap_or(&[]);
+        let joints = self.skeleton.map(|s| s.joints).unwrap_or(&[]);
+        let (lo, hi) = cage
+            .iter()
+            .chain(joints)
+            .fold(from_mesh, |b, p| grow_bounds(b, *p));
         (lo.cmple(hi).all()).then_some((lo, hi))
     }
+}
+
+/// Axis-aligned bounds `(lo, hi)`; [`EMPTY_BOUNDS`] (lo > hi) when no point was added.
+pub type Bounds = (DVec3, DVec3);
+
+/// The bounds of no point.
+pub const EMPTY_BOUNDS: Bounds = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+
+/// `bounds` grown by `p` when `p` is finite.
+#[inline]
+pub fn grow_bounds((lo, hi): Bounds, p: DVec3) -> Bounds {
+    if p.is_finite() {
+        (lo.min(p), hi.max(p))
+    } else {
+        (lo, hi)
+    }
+}
+
+/// The union of two bounds.
+#[inline]
+pub fn merge_bounds((lo, hi): Bounds, (l, h): Bounds) -> Bounds {
+    (lo.min(l), hi.max(h))
 }
 
 /// Colours (8-bit sRGB + alpha) and sizes (pixels at 1× scale) of the layers.

@@ -2,16 +2,16 @@
 //! each frame (buffers are re-created only when a layer grows), with normals recomputed from the
 //! current positions.
 
-use glam::{DVec3, Vec3};
-use rayon::prelude::*;
+use glam::DVec3;
 use wgpu::util::DeviceExt;
 
 use crate::error::RenderError;
 use crate::gpu_buffer::GrowBuffer;
 use crate::gpu_types::{LineInstance, MaterialUniform, MeshVertex, PointInstance};
 use crate::pipelines::Pipelines;
-use crate::scene::{MeshPositions, Scene, Style, unique_edges};
+use crate::scene::{Bounds, EMPTY_BOUNDS, MeshPositions, Scene, Style, unique_edges};
 use crate::vertex_normals::VertexNormals;
+use crate::vertex_packing::VertexSource;
 
 /// Vertex data from this size up is written through the staging belt.
 const STAGED_BYTES: usize = 256 * 1024;
@@ -25,7 +25,8 @@ struct SurfaceBuffers {
     /// Triangles last uploaded (the index buffer is rewritten only when they change).
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
-    normals: Vec<Vec3>,
+    /// The vertex count `triangles` were checked against.
+    checked_vertices: usize,
     vertex_normals: VertexNormals,
     /// Staging chunks of the vertex uploads, reused between frames.
     belt: wgpu::util::StagingBelt,
@@ -55,7 +56,7 @@ impl SurfaceBuffers {
             material_bind,
             triangles: Vec::new(),
             edges: Vec::new(),
-            normals: Vec::new(),
+            checked_vertices: usize::MAX,
             vertex_normals: VertexNormals::default(),
             belt: wgpu::util::StagingBelt::new(device.clone(), 4 << 20),
             packed: Vec::new(),
@@ -64,7 +65,8 @@ impl SurfaceBuffers {
     }
 
     /// Uploads positions (and normals, unless `flat`), colours, and the triangles if they
-    /// changed. Returns the number of buffers re-created.
+    /// changed (`topology_changed`, from [`SurfaceBuffers::same_triangles`]). Returns the number
+    /// of buffers re-created and the bounds of the finite positions.
     #[allow(clippy::too_many_arguments)]
     fn update(
         &mut self,
@@ -72,56 +74,61 @@ impl SurfaceBuffers {
         queue: &wgpu::Queue,
         positions: MeshPositions<'_>,
         triangles: &[[u32; 3]],
+        topology_changed: bool,
         colors: Option<&[[u8; 4]]>,
         smooth: bool,
         material: MaterialUniform,
-    ) -> u32 {
+    ) -> (u32, Bounds) {
         let mut created = 0;
-        let mut topology_changed = false;
-        if self.triangles != triangles || self.indices.is_empty() != triangles.is_empty() {
-            topology_changed = true;
+        if topology_changed {
             self.triangles.clear();
             self.triangles.extend_from_slice(triangles);
             self.edges = unique_edges(triangles);
+            self.checked_vertices = positions.len();
             created += u32::from(self.indices.write(device, queue, triangles));
         }
-        self.normals.resize(positions.len(), Vec3::ZERO);
         if smooth {
             if self.vertex_normals.num_vertices() != positions.len() || topology_changed {
                 self.vertex_normals = VertexNormals::new(positions.len(), triangles);
             }
-            self.vertex_normals
-                .apply(positions, triangles, &mut self.normals);
-        } else {
-            self.normals.iter_mut().for_each(|n| *n = Vec3::ZERO);
+            self.vertex_normals.face_normals(positions, triangles);
         }
-        self.packed
-            .resize(positions.len(), bytemuck::Zeroable::zeroed());
-        let normals = &self.normals;
-        self.packed
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(16_384)
-            .for_each(|(i, v)| {
-                *v = MeshVertex {
-                    position: positions.get_f32(i).to_array(),
-                    normal: normals[i].to_array(),
-                    color: colors.map_or([255; 4], |c| c[i]),
-                };
-            });
-        // Large layers (the skin) go through the reused staging belt; small ones (the cage)
-        // through the queue, which costs less than a submission of their own.
-        created += u32::from(
-            if self.packed.len() * size_of::<MeshVertex>() >= STAGED_BYTES {
-                self.vertices
-                    .write_staged(device, queue, &mut self.belt, &self.packed)
-            } else {
-                self.vertices.write(device, queue, &self.packed)
-            },
-        );
+        let source = VertexSource {
+            positions,
+            colors,
+            normals: smooth.then_some(&self.vertex_normals),
+        };
+        // Large layers (the skin) are packed in parallel straight into the reused staging belt;
+        // small ones (the cage) go through the queue, which costs less than a submission of
+        // their own.
+        let n = source.len();
+        let bounds;
+        if n * size_of::<MeshVertex>() >= STAGED_BYTES {
+            let mut measured = EMPTY_BOUNDS;
+            created += u32::from(self.vertices.write_staged_with::<MeshVertex>(
+                device,
+                queue,
+                &mut self.belt,
+                n,
+                |dst| measured = source.pack(dst, 0, n),
+            ));
+            bounds = measured;
+        } else {
+            self.packed.resize(n, bytemuck::Zeroable::zeroed());
+            bounds = source.pack_into(&mut self.packed);
+            created += u32::from(self.vertices.write(device, queue, &self.packed));
+        }
         queue.write_buffer(&self.material, 0, bytemuck::bytes_of(&material));
         self.visible = !triangles.is_empty();
-        created
+        (created, bounds)
+    }
+
+    /// Whether `triangles` are the ones last uploaded (then their indices were checked against
+    /// `num_vertices` already, if that is unchanged too).
+    fn same_triangles(&self, triangles: &[[u32; 3]], num_vertices: usize) -> bool {
+        self.triangles == triangles
+            && self.indices.is_empty() == triangles.is_empty()
+            && self.checked_vertices == num_vertices
     }
 
     fn draw(&self, pass: &mut wgpu::RenderPass<'_>, pipeline: &wgpu::RenderPipeline) {
@@ -223,8 +230,16 @@ fn check_len(what: &str, len: Option<usize>, expected: usize) -> Result<(), Rend
 
 /// Checks a scene's indices and per-element slices before anything is uploaded.
 pub fn validate_scene(scene: &Scene<'_>) -> Result<(), RenderError> {
+    check_scene(scene, true)
+}
+
+/// [`validate_scene`], skipping the mesh's triangle indices unless `mesh_indices` (they were
+/// checked when the same triangles were uploaded for as many vertices).
+fn check_scene(scene: &Scene<'_>, mesh_indices: bool) -> Result<(), RenderError> {
     if let Some(m) = scene.mesh {
-        check_indices("mesh", m.triangles, m.positions.len())?;
+        if mesh_indices {
+            check_indices("mesh", m.triangles, m.positions.len())?;
+        }
         check_len("mesh colours", m.colors.map(<[_]>::len), m.positions.len())?;
     }
     if let Some(c) = scene.cage {
@@ -292,38 +307,48 @@ impl SceneBuffers {
         scene: &Scene<'_>,
         style: &Style,
     ) -> Result<(), RenderError> {
-        validate_scene(scene)?;
-        let mut created = 0u32;
         let (positions, triangles) = scene.mesh.map_or((MeshPositions::F64(&[]), &[][..]), |m| {
             (m.positions, m.triangles)
         });
+        let mesh_topology_changed = !self.mesh.same_triangles(triangles, positions.len());
+        check_scene(scene, mesh_topology_changed)?;
+        let cage_topology_changed = scene
+            .cage
+            .is_none_or(|c| !self.cage.same_triangles(c.triangles, c.positions.len()));
+        let mut created = 0u32;
         let mesh_material = material(
             style.mesh,
             scene.mesh.is_some_and(|m| m.colors.is_some()),
             scene.mesh.is_some_and(|m| m.flat),
             0.25,
         );
-        created += self.mesh.update(
+        let (mesh_created, mesh_bounds) = self.mesh.update(
             device,
             queue,
             positions,
             triangles,
+            mesh_topology_changed,
             scene.mesh.and_then(|m| m.colors),
             !scene.mesh.is_some_and(|m| m.flat),
             mesh_material,
         );
+        created += mesh_created;
         let (cage_positions, cage_triangles) = scene
             .cage
             .map_or((&[][..], &[][..]), |c| (c.positions, c.triangles));
-        created += self.cage.update(
-            device,
-            queue,
-            MeshPositions::F64(cage_positions),
-            cage_triangles,
-            None,
-            false,
-            material(style.cage_faces, false, true, 0.0),
-        );
+        created += self
+            .cage
+            .update(
+                device,
+                queue,
+                MeshPositions::F64(cage_positions),
+                cage_triangles,
+                cage_topology_changed,
+                None,
+                false,
+                material(style.cage_faces, false, true, 0.0),
+            )
+            .0;
 
         let s = style.scale;
         let lines = &mut self.lines;
@@ -413,7 +438,7 @@ impl SceneBuffers {
         }
         created += u32::from(self.joints.write(device, queue, points));
 
-        self.bounds = scene.bounds();
+        self.bounds = scene.bounds_with_mesh(mesh_bounds);
         self.ground = scene.ground;
         self.buffers_created += u64::from(created);
         Ok(())

@@ -1,9 +1,12 @@
 //! Smooth vertex normals of a deforming mesh for display, in parallel: the vertex → triangle
 //! adjacency is built once per topology ([`VertexNormals::new`]), then every frame computes the
-//! area-weighted triangle normals and gathers them per vertex ([`VertexNormals::apply`]), with
-//! no allocation and no write conflicts (each vertex sums its own triangles).
+//! area-weighted triangle normals ([`VertexNormals::face_normals`]) and each vertex sums its own
+//! triangles ([`VertexNormals::vertex_sum`], called by the vertex packing), with no allocation
+//! and no write conflicts. The sum is uploaded unnormalised: the mesh vertex shader normalises
+//! it (a zero sum, at an isolated vertex or among degenerate triangles, stays zero and the
+//! fragment shader falls back to the flat normal).
 //!
-//! The result equals `cagerig::mesh::TriMesh::vertex_normals` up to the order of the sums
+//! The directions equal `cagerig::mesh::TriMesh::vertex_normals` up to the order of the sums
 //! (a few ulps), which display does not see.
 
 use glam::{DVec3, Vec3, Vec3A};
@@ -25,6 +28,16 @@ pub struct VertexNormals {
     face_normals: Vec<DVec3>,
     /// The same for f32 positions (the display path).
     face_normals_f32: Vec<Vec3A>,
+    /// Which of the two the last frame filled.
+    precision: Precision,
+}
+
+/// The precision of the last frame's positions.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+enum Precision {
+    #[default]
+    F64,
+    F32,
 }
 
 impl VertexNormals {
@@ -54,6 +67,7 @@ impl VertexNormals {
             faces,
             face_normals: Vec::new(),
             face_normals_f32: Vec::new(),
+            precision: Precision::F64,
         }
     }
 
@@ -62,77 +76,53 @@ impl VertexNormals {
         self.offsets.len().saturating_sub(1)
     }
 
-    /// Unit vertex normals of `positions` (`#V`) into `out` (`#V`, f32 for upload); zero where a
-    /// vertex has no triangle or its triangles are degenerate. `triangles` must be the list
-    /// given to `new`. f64 positions are processed in f64, f32 ones in f32.
-    pub fn apply(
-        &mut self,
-        positions: MeshPositions<'_>,
-        triangles: &[[u32; 3]],
-        out: &mut [Vec3],
-    ) {
+    /// The area-weighted triangle normals of `positions` (`#V`) for this frame. `triangles`
+    /// must be the list given to `new`. f64 positions are processed in f64, f32 ones in f32.
+    pub fn face_normals(&mut self, positions: MeshPositions<'_>, triangles: &[[u32; 3]]) {
         match positions {
             MeshPositions::F64(p) => {
+                self.precision = Precision::F64;
                 self.face_normals.resize(triangles.len(), DVec3::ZERO);
-                gather(
-                    &self.offsets,
-                    &self.faces,
-                    &mut self.face_normals,
-                    triangles,
-                    |i| p[i],
-                    out,
-                )
+                triangle_normals(&mut self.face_normals, triangles, |i| p[i]);
             }
             MeshPositions::F32(p) => {
+                self.precision = Precision::F32;
                 self.face_normals_f32.resize(triangles.len(), Vec3A::ZERO);
-                gather(
-                    &self.offsets,
-                    &self.faces,
-                    &mut self.face_normals_f32,
-                    triangles,
-                    |i| Vec3A::from(p[i]),
-                    out,
-                )
+                triangle_normals(&mut self.face_normals_f32, triangles, |i| Vec3A::from(p[i]));
             }
+        }
+    }
+
+    /// The sum of the triangle normals around vertex `v` from the last
+    /// [`VertexNormals::face_normals`], unnormalised, rounded to f32 (zero for an isolated
+    /// vertex).
+    #[inline]
+    pub fn vertex_sum(&self, v: usize) -> Vec3 {
+        let (lo, hi) = (self.offsets[v] as usize, self.offsets[v + 1] as usize);
+        let faces = &self.faces[lo..hi];
+        match self.precision {
+            Precision::F64 => faces
+                .iter()
+                .map(|&f| self.face_normals[f as usize])
+                .sum::<DVec3>()
+                .as_vec3(),
+            Precision::F32 => faces
+                .iter()
+                .map(|&f| self.face_normals_f32[f as usize])
+                .sum::<Vec3A>()
+                .into(),
         }
     }
 }
 
-/// Vector arithmetic of [`gather`] in the positions' precision.
-trait NormalVector: Copy + Send + Sync + std::ops::Sub<Output = Self> + std::iter::Sum {
-    fn cross(self, other: Self) -> Self;
-    /// Unit vector (zero for a zero sum), rounded to f32.
-    fn unit_f32(self) -> Vec3;
-}
-
-impl NormalVector for DVec3 {
-    fn cross(self, other: Self) -> Self {
-        DVec3::cross(self, other)
-    }
-    fn unit_f32(self) -> Vec3 {
-        self.normalize_or_zero().as_vec3()
-    }
-}
-
-impl NormalVector for Vec3A {
-    fn cross(self, other: Self) -> Self {
-        Vec3A::cross(self, other)
-    }
-    fn unit_f32(self) -> Vec3 {
-        self.normalize_or_zero().into()
-    }
-}
-
-/// Triangle normals into `face_normals` (`#F`), then per-vertex sums over the CSR adjacency
-/// `offsets`/`faces`, normalised into `out`.
-fn gather<V: NormalVector>(
-    offsets: &[u32],
-    faces: &[u32],
+/// Triangle normals (cross products of two edges, twice the area) into `face_normals` (`#F`).
+fn triangle_normals<V>(
     face_normals: &mut [V],
     triangles: &[[u32; 3]],
     position: impl Fn(usize) -> V + Sync,
-    out: &mut [Vec3],
-) {
+) where
+    V: Copy + Send + std::ops::Sub<Output = V> + Cross,
+{
     face_normals
         .par_iter_mut()
         .zip(triangles.par_iter())
@@ -145,18 +135,23 @@ fn gather<V: NormalVector>(
             );
             *n = (pb - pa).cross(pc - pa);
         });
-    let face_normals = &*face_normals;
-    out.par_iter_mut()
-        .enumerate()
-        .with_min_len(GRAIN)
-        .for_each(|(v, n)| {
-            let (lo, hi) = (offsets[v] as usize, offsets[v + 1] as usize);
-            let sum: V = faces[lo..hi]
-                .iter()
-                .map(|&f| face_normals[f as usize])
-                .sum();
-            *n = sum.unit_f32();
-        });
+}
+
+/// The cross product in the positions' precision.
+trait Cross {
+    fn cross(self, other: Self) -> Self;
+}
+
+impl Cross for DVec3 {
+    fn cross(self, other: Self) -> Self {
+        DVec3::cross(self, other)
+    }
+}
+
+impl Cross for Vec3A {
+    fn cross(self, other: Self) -> Self {
+        Vec3A::cross(self, other)
+    }
 }
 
 #[cfg(test)]
@@ -170,24 +165,18 @@ mod tests {
             TriMesh::cuboid(DVec3::new(-1.0, -2.0, -0.5), DVec3::new(1.0, 2.0, 0.5)).unwrap();
         let mut reference = vec![DVec3::ZERO; cube.positions.len()];
         TriMesh::vertex_normals(&cube.positions, &cube.triangles, &mut reference);
-        let mut normals = VertexNormals::new(cube.positions.len(), &cube.triangles);
-        let mut out = vec![Vec3::ZERO; cube.positions.len()];
-        normals.apply(
-            MeshPositions::F64(&cube.positions),
-            &cube.triangles,
-            &mut out,
-        );
-        let mut out32 = vec![Vec3::ZERO; cube.positions.len()];
+        let n = cube.positions.len();
+        let mut normals = VertexNormals::new(n, &cube.triangles);
+        normals.face_normals(MeshPositions::F64(&cube.positions), &cube.triangles);
+        let out: Vec<Vec3> = (0..n).map(|v| normals.vertex_sum(v)).collect();
         let positions32: Vec<Vec3> = cube.positions.iter().map(|p| p.as_vec3()).collect();
-        normals.apply(
-            MeshPositions::F32(&positions32),
-            &cube.triangles,
-            &mut out32,
-        );
+        normals.face_normals(MeshPositions::F32(&positions32), &cube.triangles);
+        let out32: Vec<Vec3> = (0..n).map(|v| normals.vertex_sum(v)).collect();
         for ((a, a32), b) in out.iter().zip(&out32).zip(&reference) {
+            // The shader's normalisation of the uploaded sums.
+            let (a, a32) = (a.normalize(), a32.normalize());
             assert!(a.as_dvec3().distance(*b) < 1e-6, "{a} vs {b}");
             assert!(a32.as_dvec3().distance(*b) < 1e-6, "{a32} vs {b}");
-            assert!((a.length() - 1.0).abs() < 1e-6);
         }
     }
 
@@ -196,9 +185,8 @@ mod tests {
         let positions = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::splat(5.0)];
         let triangles = [[0u32, 1, 2]];
         let mut normals = VertexNormals::new(4, &triangles);
-        let mut out = vec![Vec3::ONE; 4];
-        normals.apply(MeshPositions::F64(&positions), &triangles, &mut out);
-        assert_eq!(out[3], Vec3::ZERO);
-        assert!(out[0].distance(Vec3::Z) < 1e-7);
+        normals.face_normals(MeshPositions::F64(&positions), &triangles);
+        assert_eq!(normals.vertex_sum(3), Vec3::ZERO);
+        assert!(normals.vertex_sum(0).normalize().distance(Vec3::Z) < 1e-7);
     }
 }

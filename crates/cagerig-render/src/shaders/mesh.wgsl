@@ -11,6 +11,7 @@ struct Material {
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
+    // Smooth normal, not normalised (see `vs_main`).
     @location(1) normal: vec3<f32>,
     // sRGB, 8 bits per channel.
     @location(2) color: vec4<f32>,
@@ -28,7 +29,11 @@ fn vs_main(v: VertexIn) -> VertexOut {
     var out: VertexOut;
     out.clip = frame.clip_from_world * vec4<f32>(v.position, 1.0);
     out.world = v.position;
-    out.normal = v.normal;
+    // The CPU uploads the unnormalised sum of the area-weighted triangle normals: scale it to
+    // its largest component first (no overflow or underflow of the squared length), then to
+    // unit length. A zero sum stays zero (the fragment stage then uses the flat normal).
+    let largest = max(abs(v.normal.x), max(abs(v.normal.y), abs(v.normal.z)));
+    out.normal = select(vec3<f32>(0.0), normalize(v.normal / largest), largest > 0.0);
     out.color = select(material.color.rgb, srgb_to_linear(v.color.rgb), material.params.x > 0.5);
     return out;
 }
