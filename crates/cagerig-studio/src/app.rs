@@ -1,5 +1,5 @@
-//! The studio's application state and its frame: panels around two 3D views, scripted-run
-//! handling (screenshot, frame count, frame statistics) and autosave.
+//! The studio's application state and its frame: panels around two 3D views, and autosave
+//! (opening is in `opening`, scripted runs in `scripted_run`).
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -11,7 +11,8 @@ use cagerig_render::rig_scene::{ColorBy, Layers, Pose};
 
 use crate::document::Document;
 use crate::frame_stats::FrameStats;
-use crate::rig_open::{RigSource, open_rig};
+use crate::opening::{AfterConfirm, OpenRequest, PendingOpen};
+use crate::rig_open::RigSource;
 use crate::session_file::{SessionFile, StateDir, default_state_dir};
 use crate::timeline::TimelineState;
 use crate::view_input::Interaction;
@@ -125,10 +126,11 @@ pub struct Dialogs {
     /// File > Open: generate a cage (of `cage_vertices` vertices) when the character has none.
     pub generate_cage: bool,
     pub cage_vertices: usize,
-    /// The window was asked to close with unsaved edits: Save / Don't save / Cancel.
-    pub confirm_close: bool,
-    /// Close the window once the Save-as dialog has saved.
-    pub close_after_save: bool,
+    /// Unsaved edits would be lost (by closing, or by opening something else): Save / Don't
+    /// save / Cancel, then this.
+    pub confirm: Option<AfterConfirm>,
+    /// What to do once the Save-as dialog has saved (Save chosen without a session path).
+    pub after_save: Option<AfterConfirm>,
 }
 
 /// The editor.
@@ -155,17 +157,19 @@ pub struct StudioApp {
     last_autosave: Instant,
     renderer: Option<Arc<Renderer>>,
     pub stats: FrameStats,
-    options: StartupOptions,
-    frames: u64,
-    screenshot_requested: bool,
-    screenshot_done: bool,
+    pub(crate) options: StartupOptions,
+    pub(crate) frames: u64,
+    pub(crate) screenshot_requested: bool,
+    pub(crate) screenshot_done: bool,
     /// Where the screenshot callback puts the window's pixels.
-    screenshot_slot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
+    pub(crate) screenshot_slot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
     pub render_error: Option<String>,
     pub quit_requested: bool,
     pub numeric: crate::inspector::NumericEntry,
     /// Animations of the open glTF / FBX character (File > Load animation).
     pub animations: Vec<cagerig_formats::ImportedAnimation>,
+    /// A rig loading in the background.
+    pub(crate) pending_open: Option<PendingOpen>,
 }
 
 /// Index of the current-pose view in [`StudioApp::views`].
@@ -211,6 +215,7 @@ impl StudioApp {
             quit_requested: false,
             numeric: Default::default(),
             animations: Vec::new(),
+            pending_open: None,
         };
         if app.renderer.is_none() {
             app.log_error(
@@ -222,8 +227,10 @@ impl StudioApp {
             app.dialogs.recovery = app.state_dir.pending_recovery();
         }
         match (&options.session, &options.source) {
-            (Some(path), _) => app.open_session(path),
-            (None, source) => app.open(source.clone().unwrap_or_default()),
+            (Some(path), _) => app.open_blocking(OpenRequest::Session(path.clone())),
+            (None, source) => {
+                app.open_blocking(OpenRequest::Rig(source.clone().unwrap_or_default()))
+            }
         }
         if let Some(doc) = &app.doc {
             let (nc, nj) = (doc.session.rest_cage().len(), doc.session.skeleton().len());
@@ -308,48 +315,7 @@ impl StudioApp {
         });
     }
 
-    /// Opens a rig, replacing the document (the old one stays if this fails).
-    pub fn open(&mut self, source: RigSource) {
-        let t = Instant::now();
-        match open_rig(&source) {
-            Ok(opened) => {
-                let s = &opened.session;
-                self.log_info(format!(
-                    "opened {}: {} vertices, {} joints, {} cage vertices ({:.0} ms)",
-                    source.display_name(),
-                    s.num_vertices(),
-                    s.skeleton().len(),
-                    s.rest_cage().len(),
-                    t.elapsed().as_secs_f64() * 1e3
-                ));
-                for w in &opened.warnings {
-                    self.log_warning(w.to_string());
-                }
-                if !opened.animations.is_empty() {
-                    self.log_info(format!(
-                        "{} animation(s) in the file: {} (File > Load animation puts one on the \
-                         skeleton track)",
-                        opened.animations.len(),
-                        opened
-                            .animations
-                            .iter()
-                            .map(|a| a.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ));
-                }
-                if let RigSource::File { path, .. } = &source {
-                    self.state_dir.add_recent(path);
-                }
-                self.set_document(Document::new(source, opened.session));
-                self.animations = opened.animations;
-                self.session_path = None;
-            }
-            Err(e) => self.log_error(format!("cannot open: {e}")),
-        }
-    }
-
-    fn set_document(&mut self, doc: Document) {
+    pub(crate) fn set_document(&mut self, doc: Document) {
         self.doc = Some(doc);
         self.animations.clear();
         self.selection = Selection::default();
@@ -360,52 +326,6 @@ impl StudioApp {
         }
         self.saved_edits = 0;
         self.autosaved_edits = 0;
-    }
-
-    /// Opens a `.cagerig` session file.
-    pub fn open_session(&mut self, path: &std::path::Path) {
-        let file = match SessionFile::read(path) {
-            Ok(f) => f,
-            Err(e) => {
-                self.log_error(e.to_string());
-                if self.doc.is_none() {
-                    self.open(RigSource::default());
-                }
-                return;
-            }
-        };
-        let opened = match open_rig(&file.source) {
-            Ok(o) => o,
-            Err(e) => {
-                self.log_error(format!("{}: opening its rig: {e}", path.display()));
-                return;
-            }
-        };
-        let mut doc = Document::new(file.source.clone(), opened.session);
-        if let Err(e) = doc.restore(&file.state) {
-            self.log_error(format!(
-                "{}: the saved state does not fit the rig {}: {e}",
-                path.display(),
-                file.source.display_name()
-            ));
-            return;
-        }
-        let edits = doc.edits;
-        self.set_document(doc);
-        self.saved_edits = edits;
-        self.autosaved_edits = edits;
-        self.timeline.time = file.time;
-        if let Some(cameras) = file.cameras {
-            for (view, key) in self.views.iter_mut().zip(cameras) {
-                if let Some(camera) = crate::viewport::camera_from_key(key) {
-                    view.camera = camera;
-                    view.framed = true;
-                }
-            }
-        }
-        self.session_path = Some(path.to_path_buf());
-        self.state_dir.add_recent(path);
-        self.log_info(format!("opened session {}", path.display()));
     }
 
     /// Saves the session to `path` (atomically).
@@ -437,37 +357,9 @@ impl StudioApp {
         }
     }
 
-    /// Runs an edit script file through the document's command path.
-    pub fn run_script_file(&mut self, path: &std::path::Path) {
-        let text = match std::fs::read_to_string(path) {
-            Ok(t) => t,
-            Err(e) => {
-                self.log_error(format!("{}: cannot read the script: {e}", path.display()));
-                return;
-            }
-        };
-        let script = match cagerig::script::EditScript::parse(&text) {
-            Ok(s) => s,
-            Err(e) => {
-                self.log_error(format!("{}: {e}", path.display()));
-                return;
-            }
-        };
-        let Some(doc) = &mut self.doc else {
-            return;
-        };
-        let t = Instant::now();
-        match doc.run_script(&script) {
-            Ok(()) => {
-                let n = script.steps.len();
-                self.log_info(format!(
-                    "script {}: {n} step(s) applied ({:.1} ms)",
-                    path.display(),
-                    t.elapsed().as_secs_f64() * 1e3
-                ));
-            }
-            Err(e) => self.log_error(format!("{}: {e}", path.display())),
-        }
+    /// The autosave is up to date with the document (e.g. just opened from a session file).
+    pub(crate) fn mark_autosaved(&mut self) {
+        self.autosaved_edits = self.saved_edits;
     }
 
     /// Whether the document has edits not saved in a session file.
@@ -534,67 +426,6 @@ impl StudioApp {
         self.renderer.as_ref()
     }
 
-    /// Per-frame end: scripted screenshot and quit, frame statistics.
-    fn scripted_frame_end(&mut self, ctx: &egui::Context) {
-        self.frames += 1;
-        let screenshot = self
-            .screenshot_slot
-            .lock()
-            .ok()
-            .and_then(|mut slot| slot.take());
-        if let (Some(image), Some(path)) = (screenshot, self.options.screenshot.clone()) {
-            let rgba = cagerig_render::RgbaImage::new(
-                image.size[0] as u32,
-                image.size[1] as u32,
-                image.pixels.iter().flat_map(|c| c.to_array()).collect(),
-            );
-            match rgba.write_png(&path) {
-                Ok(()) => self.log_info(format!("screenshot written to {}", path.display())),
-                Err(e) => self.log_error(format!("{}: {e}", path.display())),
-            }
-            self.screenshot_done = true;
-        }
-        // Three frames first, so that every view has rendered and egui has laid out.
-        if self.options.screenshot.is_some() && !self.screenshot_requested && self.frames >= 3 {
-            let slot = Arc::clone(&self.screenshot_slot);
-            let repaint = ctx.clone();
-            ctx.request_screenshot(move |image| {
-                if let Ok(mut s) = slot.lock() {
-                    *s = Some(image);
-                }
-                repaint.request_repaint();
-            });
-            self.screenshot_requested = true;
-        }
-        let frames_done = self
-            .options
-            .quit_after_frames
-            .is_some_and(|n| self.frames >= n);
-        let screenshot_pending = self.options.screenshot.is_some() && !self.screenshot_done;
-        let scripted =
-            self.options.screenshot.is_some() || self.options.quit_after_frames.is_some();
-        let failed = self.options.failures.lock().is_ok_and(|f| !f.is_empty());
-        let scripted_quit = (self.options.screenshot.is_some() && self.screenshot_done)
-            || (frames_done && !screenshot_pending)
-            || (scripted && failed);
-        if scripted_quit || self.quit_requested {
-            self.write_frame_stats();
-            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-        } else if self.options.quit_after_frames.is_some() || screenshot_pending {
-            ctx.request_repaint();
-        }
-    }
-
-    fn write_frame_stats(&mut self) {
-        if let Some(path) = self.options.frame_stats.clone() {
-            match self.stats.write_json(&path) {
-                Ok(()) => self.log_info(format!("frame statistics written to {}", path.display())),
-                Err(e) => self.log_error(format!("{}: {e}", path.display())),
-            }
-            self.options.frame_stats = None;
-        }
-    }
-
     /// Frames counted so far.
     pub fn frames(&self) -> u64 {
         self.frames
@@ -611,6 +442,7 @@ impl eframe::App for StudioApp {
         let frame_start = Instant::now();
         let ctx = ui.ctx().clone();
         self.stats.begin_frame();
+        self.poll_open(&ctx);
         self.handle_dropped_files(&ctx);
         self.hold_close_with_unsaved_edits(&ctx);
         crate::shortcuts::global_shortcuts(self, &ctx);
@@ -623,6 +455,7 @@ impl eframe::App for StudioApp {
         let render_state = frame.wgpu_render_state().cloned();
         crate::view_input::views_ui(self, ui, render_state.as_ref());
         crate::menus::dialogs_ui(self, &ctx);
+        crate::opening::opening_ui(self, &ctx);
         self.autosave();
         let title = match &self.doc {
             Some(d) => format!(
@@ -661,7 +494,7 @@ impl StudioApp {
             && !scripted
         {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
-            self.dialogs.confirm_close = true;
+            self.dialogs.confirm = Some(AfterConfirm::Close);
         }
     }
 
@@ -681,28 +514,6 @@ impl StudioApp {
         });
         for path in dropped {
             self.open_path(&path);
-        }
-    }
-
-    /// Opens a path by its extension: a session, or a character.
-    pub fn open_path(&mut self, path: &std::path::Path) {
-        let is_session = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("cagerig"));
-        if is_session {
-            self.open_session(path);
-        } else {
-            let vertices = if self.dialogs.cage_vertices == 0 {
-                100
-            } else {
-                self.dialogs.cage_vertices
-            };
-            self.open(RigSource::File {
-                path: path.to_path_buf(),
-                cage: None,
-                skin: None,
-                auto_cage: self.dialogs.generate_cage.then_some(vertices),
-            });
         }
     }
 

@@ -4,11 +4,13 @@
 //! | module | concern |
 //! |---|---|
 //! | `rig_open` | opening a character (built-in demo, OBJ set, glTF, FBX) |
+//! | `opening` | unsaved-edits question, background loading with progress, swapping documents |
 //! | `document` | the rig session, its keys, one command path, gestures, undo / redo |
 //! | `history` | undo / redo stacks of snapshots |
 //! | `keys` | skeleton and cage keyframes, playback, the paper tool's animation files |
 //! | `session_file` | the versioned `.cagerig` session file, autosave and recovery |
-//! | `app` | application state, the frame, scripted runs, autosave |
+//! | `app` | application state, the frame, autosave |
+//! | `scripted_run` | `--script`, `--screenshot`, `--quit-after-frames`, `--frame-stats` |
 //! | `viewport` | a 3D view rendered by `cagerig-render` into its own textures |
 //! | `view_input` | orbit / pan / zoom, picking, box selection, G / R / S keys |
 //! | `picking` | projection, mouse rays, nearest visible point, occlusion |
@@ -34,9 +36,11 @@ pub mod history;
 pub mod inspector;
 pub mod keys;
 pub mod menus;
+pub mod opening;
 pub mod overlay;
 pub mod picking;
 pub mod rig_open;
+pub mod scripted_run;
 pub mod session_file;
 pub mod shortcuts;
 pub mod status;

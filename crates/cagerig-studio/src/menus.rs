@@ -8,6 +8,7 @@ use cagerig_render::CameraPreset;
 use crate::app::{CURRENT, Layout, REST, StudioApp};
 use crate::document::Command;
 use crate::keys::Track;
+use crate::opening::{AfterConfirm, OpenRequest};
 
 /// The shortcuts, for Help ▸ Shortcuts.
 pub const SHORTCUTS: &[(&str, &str)] = &[
@@ -82,6 +83,24 @@ pub fn menu_bar_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
     });
 }
 
+/// The answers to the unsaved-edits question.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Answer {
+    Save,
+    Discard,
+    Cancel,
+}
+
+impl Answer {
+    fn label(self) -> &'static str {
+        match self {
+            Answer::Save => "Save",
+            Answer::Discard => "Don't save",
+            Answer::Cancel => "Cancel",
+        }
+    }
+}
+
 fn cwd_string() -> String {
     std::env::current_dir()
         .map(|d| format!("{}/", d.display()))
@@ -105,10 +124,10 @@ fn file_menu_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
     ui.menu_button("Open built-in demo", |ui| {
         for name in cagerig::demo::builtin_names() {
             if ui.button(*name).clicked() {
-                app.open(crate::rig_open::RigSource::Builtin {
+                app.request_open(OpenRequest::Rig(crate::rig_open::RigSource::Builtin {
                     name: (*name).to_string(),
                     resolution: None,
-                });
+                }));
             }
         }
     });
@@ -382,43 +401,47 @@ pub fn dialogs_ui(app: &mut StudioApp, ctx: &egui::Context) {
         let saved = action == PathAction::Act && app.save_session_to(Path::new(path.trim()));
         if action == PathAction::None || (action == PathAction::Act && !saved) {
             app.dialogs.save_as = Some(path);
-        } else if saved && app.dialogs.close_after_save {
-            app.approve_close(ctx);
-        } else {
-            app.dialogs.close_after_save = false;
+        } else if let (true, Some(after)) = (saved, app.dialogs.after_save.take()) {
+            app.continue_after_confirm(ctx, after);
         }
     }
-    if app.dialogs.confirm_close {
-        egui::Window::new("Save changes before closing?")
+    if let Some(after) = app.dialogs.confirm.take() {
+        let title = match &after {
+            AfterConfirm::Close => "Save changes before closing?".to_string(),
+            AfterConfirm::Open(request) => {
+                format!("Save changes before opening {}?", request.display_name())
+            }
+        };
+        let mut answer = None;
+        egui::Window::new(title)
             .collapsible(false)
             .resizable(false)
             .show(ctx, |ui| {
                 ui.label("The edits since the last save are not in a session file.");
                 ui.horizontal(|ui| {
-                    if ui.button("Save").clicked() {
-                        app.dialogs.confirm_close = false;
-                        match app.session_path.clone() {
-                            Some(path) => {
-                                if app.save_session_to(&path) {
-                                    app.approve_close(ctx);
-                                }
-                            }
-                            None => {
-                                app.dialogs.save_as =
-                                    Some(format!("{}session.cagerig", cwd_string()));
-                                app.dialogs.close_after_save = true;
-                            }
+                    for choice in [Answer::Save, Answer::Discard, Answer::Cancel] {
+                        if ui.button(choice.label()).clicked() {
+                            answer = Some(choice);
                         }
-                    }
-                    if ui.button("Don't save").clicked() {
-                        app.dialogs.confirm_close = false;
-                        app.approve_close(ctx);
-                    }
-                    if ui.button("Cancel").clicked() {
-                        app.dialogs.confirm_close = false;
                     }
                 });
             });
+        match answer {
+            None => app.dialogs.confirm = Some(after),
+            Some(Answer::Save) => match app.session_path.clone() {
+                Some(path) => {
+                    if app.save_session_to(&path) {
+                        app.continue_after_confirm(ctx, after);
+                    }
+                }
+                None => {
+                    app.dialogs.save_as = Some(format!("{}session.cagerig", cwd_string()));
+                    app.dialogs.after_save = Some(after);
+                }
+            },
+            Some(Answer::Discard) => app.continue_after_confirm(ctx, after),
+            Some(Answer::Cancel) => {}
+        }
     }
     if let Some(mut path) = app.dialogs.export_dir.take() {
         let note = "Folder for mesh_rest.obj, mesh_posed.obj, cage_rest.obj, cage_posed.obj, \
@@ -450,8 +473,7 @@ pub fn dialogs_ui(app: &mut StudioApp, ctx: &egui::Context) {
                 ));
                 ui.horizontal(|ui| {
                     if ui.button("Recover").clicked() {
-                        app.open_session(&path);
-                        app.session_path = None;
+                        app.start_open(OpenRequest::Recovery(path.clone()));
                         app.dialogs.recovery = None;
                     }
                     if ui.button("Discard").clicked() {

@@ -69,6 +69,8 @@ impl RigSource {
 /// Why a rig could not be opened; every message names the file.
 #[derive(Debug, Error)]
 pub enum OpenError {
+    #[error("the loading thread stopped before it finished (a bug: please report it)")]
+    Interrupted,
     #[error("built-in rig {name:?}: {source}")]
     Builtin {
         name: String,

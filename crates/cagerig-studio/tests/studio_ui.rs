@@ -9,6 +9,7 @@ use cagerig_studio::app::{CURRENT, REST};
 use cagerig_studio::document::Snapshot;
 use cagerig_studio::gizmo;
 use cagerig_studio::keys::Track;
+use cagerig_studio::opening::{AfterConfirm, OpenRequest};
 use cagerig_studio::rig_open::RigSource;
 use cagerig_studio::session_file::SessionFile;
 use cagerig_studio::{StartupOptions, StudioApp};
@@ -287,17 +288,53 @@ fn a_dropped_character_file_is_opened() {
     }
     let (mut h, dir) = open_bar("drop");
     let arm = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm/arm.obj");
+    // With unsaved edits, dropping a file asks first; Cancel keeps the bar and its edits.
+    let (_, _, at) = click_front_cage_vertex(&mut h);
+    drag(&mut h, at, at + egui::vec2(20.0, 0.0));
+    assert!(h.state().unsaved());
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(DroppedPath(arm.clone())));
+    h.run_steps(2);
+    assert!(matches!(
+        h.state().dialogs.confirm,
+        Some(AfterConfirm::Open(OpenRequest::Rig(_)))
+    ));
+    h.get_by_label("Cancel").click();
+    h.run_steps(2);
+    assert!(h.state().dialogs.confirm.is_none() && !h.state().is_opening());
+    assert!(h.state().unsaved(), "the bar and its edit stay");
+    // Drop again and discard the edits: the Arm loads in the background, then replaces the bar.
     h.input_mut()
         .dropped_files
         .push(std::sync::Arc::new(DroppedPath(arm)));
-    h.run_steps(3);
+    h.run_steps(2);
+    h.get_by_label("Don't save").click();
+    h.step();
+    assert!(h.state().is_opening(), "loading in the background");
+    wait_for_open(&mut h);
     let s = &h.state().doc.as_ref().unwrap().session;
     assert_eq!(
-        (s.rest_mesh().len(), s.skeleton().len(), s.rest_cage().len()),
+        (s.num_vertices(), s.skeleton().len(), s.rest_cage().len()),
         (2089, 25, 58),
         "the Arm replaced the bar"
     );
+    assert!(!h.state().unsaved());
     std::fs::remove_dir_all(dir).ok();
+}
+
+/// Steps the UI until a background load has finished (at most 60 s).
+fn wait_for_open(h: &mut Harness<'_, StudioApp>) {
+    let start = std::time::Instant::now();
+    while h.state().is_opening() {
+        assert!(
+            start.elapsed().as_secs() < 60,
+            "the rig did not load within 60 s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        h.step();
+    }
+    h.run_steps(2);
 }
 
 /// Asks the window to close, as the window manager's close button does.
@@ -327,7 +364,7 @@ fn closing_with_unsaved_edits_asks_and_saves_or_discards() {
     let (mut h, dir) = open_bar("close");
     // Nothing edited: the window closes without asking.
     request_close(&mut h);
-    assert!(!h.state().dialogs.confirm_close);
+    assert!(h.state().dialogs.confirm.is_none());
     assert!(!root_commands(&h).contains(&egui::ViewportCommand::CancelClose));
     // An edit, then a close request: held back and asked about; Cancel keeps working.
     let (k, _, at) = click_front_cage_vertex(&mut h);
@@ -335,11 +372,11 @@ fn closing_with_unsaved_edits_asks_and_saves_or_discards() {
     assert!(h.state().unsaved());
     request_close(&mut h);
     assert!(root_commands(&h).contains(&egui::ViewportCommand::CancelClose));
-    assert!(h.state().dialogs.confirm_close);
+    assert_eq!(h.state().dialogs.confirm, Some(AfterConfirm::Close));
     h.run_steps(2);
     h.get_by_label("Cancel").click();
     h.run_steps(2);
-    assert!(!h.state().dialogs.confirm_close && !h.state().close_approved);
+    assert!(h.state().dialogs.confirm.is_none() && !h.state().close_approved);
     // Save: with a session path the edits are written there, then the window may close.
     let path = dir.join("closing.cagerig");
     h.state_mut().session_path = Some(path.clone());
@@ -667,7 +704,12 @@ fn an_autosave_is_offered_at_the_next_start_and_recovers_the_work() {
     assert!(again.state().dialogs.recovery.is_some());
     again.get_by_label("Recover").click();
     again.run_steps(2);
+    wait_for_open(&mut again);
     assert_eq!(snapshot(&again), edited);
     assert!(again.state().dialogs.recovery.is_none());
+    assert!(
+        again.state().session_path.is_none(),
+        "a recovered session is not saved back over the autosave"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
