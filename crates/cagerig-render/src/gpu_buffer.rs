@@ -61,15 +61,17 @@ impl GrowBuffer {
         recreated
     }
 
-    /// Writes `len` elements of `T` at offset 0 through `belt`, whose staging chunks are reused
-    /// from frame to frame (`Queue::write_buffer` allocates fresh staging memory on every call,
-    /// and the kernel zeroing those pages was ≈ 20 % of a 133k-vertex upload). `fill` writes the
-    /// `len · size_of::<T>()` bytes straight into the mapped staging memory (no copy of the
-    /// whole content). Submits its own copy. Returns `true` when the buffer had to be re-created.
+    /// Records into `encoder` the write of `len` elements of `T` at offset 0 through `belt`,
+    /// whose staging chunks are reused from frame to frame (`Queue::write_buffer` allocates
+    /// fresh staging memory on every call, and the kernel zeroing those pages was ≈ 20 % of a
+    /// 133k-vertex upload). `fill` writes the `len · size_of::<T>()` bytes straight into the
+    /// mapped staging memory (no copy of the whole content). The caller calls `belt.finish()`
+    /// before submitting `encoder`, and `belt.recall()` after. Returns `true` when the buffer had
+    /// to be re-created.
     pub fn write_staged_with<T: Pod>(
         &mut self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
         belt: &mut wgpu::util::StagingBelt,
         len: usize,
         fill: impl FnOnce(wgpu::WriteOnly<'_, [u8]>),
@@ -78,22 +80,12 @@ impl GrowBuffer {
         let size = (bytes as u64).next_multiple_of(4);
         let recreated = self.reserve(device, size);
         if let Some(size) = wgpu::BufferSize::new(size) {
-            // Take back the chunks whose copies the GPU has finished (non-blocking).
-            let _ = device.poll(wgpu::PollType::Poll);
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some(self.label),
-            });
-            {
-                let mut view = belt.write_buffer(&mut encoder, &self.buffer, 0, size);
-                let mut whole = view.slice(..);
-                if let Some(mut padding) = whole.split_off(bytes..) {
-                    padding.fill(0);
-                }
-                fill(whole);
+            let mut view = belt.write_buffer(encoder, &self.buffer, 0, size);
+            let mut whole = view.slice(..);
+            if let Some(mut padding) = whole.split_off(bytes..) {
+                padding.fill(0);
             }
-            belt.finish();
-            queue.submit([encoder.finish()]);
-            belt.recall();
+            fill(whole);
         }
         self.len = len as u32;
         recreated

@@ -72,6 +72,7 @@ impl SurfaceBuffers {
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
         positions: MeshPositions<'_>,
         triangles: &[[u32; 3]],
         topology_changed: bool,
@@ -104,14 +105,19 @@ impl SurfaceBuffers {
         let n = source.len();
         let bounds;
         if n * size_of::<MeshVertex>() >= STAGED_BYTES {
+            // The chunks of the previous update were submitted since (the caller's contract):
+            // take back those the GPU has finished with (non-blocking).
+            self.belt.recall();
+            let _ = device.poll(wgpu::PollType::Poll);
             let mut measured = EMPTY_BOUNDS;
             created += u32::from(self.vertices.write_staged_with::<MeshVertex>(
                 device,
-                queue,
+                encoder,
                 &mut self.belt,
                 n,
                 |dst| measured = source.pack(dst, 0, n),
             ));
+            self.belt.finish();
             bounds = measured;
         } else {
             self.packed.resize(n, bytemuck::Zeroable::zeroed());
@@ -299,11 +305,32 @@ impl SceneBuffers {
         }
     }
 
-    /// Uploads `scene` in place. Checks its indices first (nothing is uploaded on error).
+    /// Uploads `scene` in place and submits the copies. Checks its indices first (nothing is
+    /// uploaded on error).
     pub fn update(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
+        scene: &Scene<'_>,
+        style: &Style,
+    ) -> Result<(), RenderError> {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("scene upload"),
+        });
+        self.update_into(device, queue, &mut encoder, scene, style)?;
+        queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    /// [`SceneBuffers::update`], recording the large copies into `encoder` (e.g. the one that
+    /// then renders the view: one submission per view, and the driver's work is not counted as
+    /// upload). `encoder` must be submitted before the next update. Small layers are written
+    /// through the queue, which orders them before `encoder`'s commands.
+    pub fn update_into(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
         scene: &Scene<'_>,
         style: &Style,
     ) -> Result<(), RenderError> {
@@ -325,6 +352,7 @@ impl SceneBuffers {
         let (mesh_created, mesh_bounds) = self.mesh.update(
             device,
             queue,
+            encoder,
             positions,
             triangles,
             mesh_topology_changed,
@@ -341,6 +369,7 @@ impl SceneBuffers {
             .update(
                 device,
                 queue,
+                encoder,
                 MeshPositions::F64(cage_positions),
                 cage_triangles,
                 cage_topology_changed,

@@ -152,12 +152,19 @@ impl View {
                 "no view target".into(),
             ));
         };
+        // One encoder (and one submission) per view for the upload's copies and the picture:
+        // with a software driver the submission is where the CPU rasterises, which is counted
+        // as rendering, not as upload.
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("cagerig view"),
+        });
         let upload_key = (revision, layers, color_by);
-        if self.uploaded != Some(upload_key) {
+        let uploaded = self.uploaded != Some(upload_key);
+        if uploaded {
             let t = Instant::now();
             let scene = self.scene_data.scene(session, self.pose, layers, color_by);
             gpu.buffers
-                .update(device, queue, &scene, &Style::default())?;
+                .update_into(device, queue, &mut encoder, &scene, &Style::default())?;
             self.last_upload_ms = t.elapsed().as_secs_f64() * 1e3;
             self.uploaded = Some(upload_key);
         } else {
@@ -171,14 +178,14 @@ impl View {
             camera: camera_key(&self.camera),
         };
         self.last_render_ms = 0.0;
-        if self.rendered.as_ref() != Some(&key) {
+        let render = self.rendered.as_ref() != Some(&key);
+        if render || uploaded {
             let t = Instant::now();
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("cagerig view"),
-            });
-            renderer.encode(queue, &mut encoder, &gpu.target, &self.camera, &gpu.buffers);
+            if render {
+                renderer.encode(queue, &mut encoder, &gpu.target, &self.camera, &gpu.buffers);
+                self.rendered = Some(key);
+            }
             queue.submit([encoder.finish()]);
-            self.rendered = Some(key);
             self.last_render_ms = t.elapsed().as_secs_f64() * 1e3;
         }
         Ok(gpu.texture)
