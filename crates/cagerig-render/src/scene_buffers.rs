@@ -319,7 +319,15 @@ impl SceneBuffers {
         });
         self.update_into(device, queue, &mut encoder, scene, style)?;
         queue.submit([encoder.finish()]);
+        self.recall_staging();
         Ok(())
+    }
+
+    /// Takes back the staging memory of the last update once its encoder is submitted (the
+    /// next update does it otherwise).
+    pub fn recall_staging(&mut self) {
+        self.mesh.belt.recall();
+        self.cage.belt.recall();
     }
 
     /// [`SceneBuffers::update`], recording the large copies into `encoder` (e.g. the one that

@@ -186,6 +186,7 @@ impl View {
                 self.rendered = Some(key);
             }
             queue.submit([encoder.finish()]);
+            gpu.buffers.recall_staging();
             self.last_render_ms = t.elapsed().as_secs_f64() * 1e3;
         }
         Ok(gpu.texture)
