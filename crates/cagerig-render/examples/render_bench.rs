@@ -56,6 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 colors: None,
                 flat: false,
                 wireframe: false,
+                topology_id: None,
             }),
             cage: Some(CageLayer {
                 positions: &p.cage.positions,

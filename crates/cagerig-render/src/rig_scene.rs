@@ -202,6 +202,7 @@ impl RigSceneData {
                 colors: (!self.mesh_colors.is_empty()).then_some(&self.mesh_colors[..]),
                 flat: layers.flat,
                 wireframe: layers.wireframe,
+                topology_id: Some(session.topology_id()),
             }),
             cage: layers.cage.then_some(CageLayer {
                 positions: cage,

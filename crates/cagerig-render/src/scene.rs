@@ -65,6 +65,9 @@ pub struct MeshLayer<'a> {
     pub flat: bool,
     /// Draw the triangle edges over the surface.
     pub wireframe: bool,
+    /// When set, equal ids promise identical `triangles` from frame to frame (e.g.
+    /// `RigSession::topology_id`), and the upload skips comparing the lists.
+    pub topology_id: Option<u64>,
 }
 
 /// The deformation cage: translucent faces, edges and vertex handles.
@@ -231,6 +234,7 @@ mod tests {
                 colors: None,
                 flat: false,
                 wireframe: false,
+                topology_id: None,
             }),
             cage: Some(CageLayer {
                 positions: &cage,

@@ -27,6 +27,8 @@ struct SurfaceBuffers {
     edges: Vec<[u32; 2]>,
     /// The vertex count `triangles` were checked against.
     checked_vertices: usize,
+    /// The caller's id of `triangles` (see `MeshLayer::topology_id`).
+    topology_id: Option<u64>,
     vertex_normals: VertexNormals,
     /// Staging chunks of the vertex uploads, reused between frames.
     belt: wgpu::util::StagingBelt,
@@ -57,6 +59,7 @@ impl SurfaceBuffers {
             triangles: Vec::new(),
             edges: Vec::new(),
             checked_vertices: usize::MAX,
+            topology_id: None,
             vertex_normals: VertexNormals::default(),
             belt: wgpu::util::StagingBelt::new(device.clone(), 4 << 20),
             packed: Vec::new(),
@@ -130,10 +133,20 @@ impl SurfaceBuffers {
     }
 
     /// Whether `triangles` are the ones last uploaded (then their indices were checked against
-    /// `num_vertices` already, if that is unchanged too).
-    fn same_triangles(&self, triangles: &[[u32; 3]], num_vertices: usize) -> bool {
-        self.triangles == triangles
-            && self.indices.is_empty() == triangles.is_empty()
+    /// `num_vertices` already, if that is unchanged too); equal `topology_id`s vouch for equal
+    /// lists.
+    fn same_triangles(
+        &self,
+        triangles: &[[u32; 3]],
+        num_vertices: usize,
+        topology_id: Option<u64>,
+    ) -> bool {
+        let same = match (topology_id, self.topology_id) {
+            // The caller promises identical lists for equal ids (no 3 MB comparison a frame).
+            (Some(a), Some(b)) if a == b => self.triangles.len() == triangles.len(),
+            _ => self.triangles == triangles,
+        };
+        same && self.indices.is_empty() == triangles.is_empty()
             && self.checked_vertices == num_vertices
     }
 
@@ -345,11 +358,17 @@ impl SceneBuffers {
         let (positions, triangles) = scene.mesh.map_or((MeshPositions::F64(&[]), &[][..]), |m| {
             (m.positions, m.triangles)
         });
-        let mesh_topology_changed = !self.mesh.same_triangles(triangles, positions.len());
+        let topology_id = scene.mesh.and_then(|m| m.topology_id);
+        let mesh_topology_changed =
+            !self
+                .mesh
+                .same_triangles(triangles, positions.len(), topology_id);
         check_scene(scene, mesh_topology_changed)?;
-        let cage_topology_changed = scene
-            .cage
-            .is_none_or(|c| !self.cage.same_triangles(c.triangles, c.positions.len()));
+        let cage_topology_changed = scene.cage.is_none_or(|c| {
+            !self
+                .cage
+                .same_triangles(c.triangles, c.positions.len(), None)
+        });
         let mut created = 0u32;
         let mesh_material = material(
             style.mesh,
@@ -369,6 +388,7 @@ impl SceneBuffers {
             mesh_material,
         );
         created += mesh_created;
+        self.mesh.topology_id = topology_id;
         let (cage_positions, cage_triangles) = scene
             .cage
             .map_or((&[][..], &[][..]), |c| (c.positions, c.triangles));

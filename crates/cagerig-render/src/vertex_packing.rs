@@ -5,7 +5,9 @@
 use bytemuck::Zeroable;
 
 use crate::gpu_types::MeshVertex;
-use crate::scene::{Bounds, EMPTY_BOUNDS, MeshPositions, grow_bounds, merge_bounds};
+use glam::Vec3;
+
+use crate::scene::{Bounds, EMPTY_BOUNDS, MeshPositions, merge_bounds};
 use crate::vertex_normals::VertexNormals;
 
 /// Vertices packed per local block before one copy into the destination (28 KiB, in L1/L2).
@@ -33,13 +35,13 @@ impl VertexSource<'_> {
         self.len() == 0
     }
 
-    /// Vertex `i` as uploaded: f32 position, unnormalised smooth normal (the vertex shader
-    /// normalises it; zero for flat shading or an isolated vertex), sRGB colour (white when
-    /// none).
-    #[inline]
-    fn vertex(&self, i: usize) -> MeshVertex {
+    /// Vertex `i` at f32 `position` as uploaded: the position, the unnormalised smooth normal
+    /// (the vertex shader normalises it; zero for flat shading or an isolated vertex), the sRGB
+    /// colour (white when none).
+    #[inline(always)]
+    fn vertex_at(&self, i: usize, position: Vec3) -> MeshVertex {
         MeshVertex {
-            position: self.positions.get_f32(i).to_array(),
+            position: position.to_array(),
             normal: self
                 .normals
                 .map_or([0.0; 3], |n| n.vertex_sum(i).to_array()),
@@ -66,22 +68,47 @@ impl VertexSource<'_> {
             );
             return merge_bounds(lo, hi);
         }
-        let mut bounds = EMPTY_BOUNDS;
+        match self.positions {
+            MeshPositions::F64(p) => self.pack_serial(dst, first, count, |i| p[i].as_vec3()),
+            MeshPositions::F32(p) => self.pack_serial(dst, first, count, |i| p[i]),
+        }
+    }
+
+    /// [`VertexSource::pack`] on the calling thread, reading positions through `position`
+    /// (one loop per precision). The bounds are taken of the f32 positions as uploaded.
+    #[inline(always)]
+    fn pack_serial(
+        &self,
+        dst: wgpu::WriteOnly<'_, [u8]>,
+        first: usize,
+        count: usize,
+        position: impl Fn(usize) -> Vec3,
+    ) -> Bounds {
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         let mut rest = dst;
         let mut block = [MeshVertex::zeroed(); BLOCK];
         let mut start = first;
         while start < first + count {
             let n = BLOCK.min(first + count - start);
             for (k, v) in block[..n].iter_mut().enumerate() {
-                *v = self.vertex(start + k);
-                bounds = grow_bounds(bounds, self.positions.get(start + k));
+                let i = start + k;
+                let p = position(i);
+                if p.is_finite() {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+                *v = self.vertex_at(i, p);
             }
             let (mut head, tail) = rest.split_at(n * size_of::<MeshVertex>());
             head.copy_from_slice(bytemuck::cast_slice(&block[..n]));
             rest = tail;
             start += n;
         }
-        bounds
+        if lo.cmple(hi).all() {
+            (lo.as_dvec3(), hi.as_dvec3())
+        } else {
+            EMPTY_BOUNDS
+        }
     }
 }
 
@@ -103,7 +130,7 @@ unsafe impl Send for SendBytes<'_> {}
 
 #[cfg(test)]
 mod tests {
-    use glam::{DVec3, Vec3};
+    use glam::DVec3;
 
     use super::*;
 
@@ -126,7 +153,7 @@ mod tests {
         let mut out = vec![MeshVertex::zeroed(); n];
         let (lo, hi) = source.pack_into(&mut out);
         for (i, v) in out.iter().enumerate() {
-            assert_eq!(*v, source.vertex(i), "vertex {i}");
+            assert_eq!(*v, source.vertex_at(i, positions[i]), "vertex {i}");
         }
         assert_eq!(lo, DVec3::new(0.0, -((n - 1) as f64) * 0.5, 0.0));
         assert_eq!(hi, DVec3::new((n - 1) as f64, 0.0, 6.0));

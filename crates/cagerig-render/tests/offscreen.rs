@@ -39,6 +39,7 @@ fn mesh_scene<'a>(
             colors,
             flat: false,
             wireframe: false,
+            topology_id: None,
         }),
         ..Scene::default()
     }

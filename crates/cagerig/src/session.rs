@@ -77,6 +77,8 @@ pub struct RestKeyframe {
 pub struct RigSession {
     // Static data.
     mesh_triangles: Vec<[u32; 3]>,
+    /// Unique per triangle list (see [`RigSession::topology_id`]).
+    topology_id: u64,
     cage_triangles: Vec<[u32; 3]>,
     skeleton: Skeleton,
     skin_weights: SkinWeights,
@@ -301,6 +303,7 @@ impl RigSession {
             .unzip();
         let mut session = Self {
             mesh_triangles: mesh.triangles.clone(),
+            topology_id: next_topology_id(),
             cage_triangles: cage.triangles.clone(),
             lbs: LinearBlendSkinning::new(&skin_weights),
             dqs: DualQuaternionSkinning::new(&skin_weights),
@@ -610,4 +613,10 @@ fn roots_only<'a>(rotations: &'a [DQuat], root_motion: &'a [DVec3]) -> LocalPose
         translation_offsets: root_motion,
         roots_only: true,
     }
+}
+
+/// A new process-wide unique topology id.
+fn next_topology_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }

@@ -38,6 +38,12 @@ impl RigSession {
     pub fn mesh_triangles(&self) -> &[[u32; 3]] {
         &self.mesh_triangles
     }
+    /// Identifies [`RigSession::mesh_triangles`], which never change during a session's life:
+    /// two sessions (or clones) with the same id have the same triangles, and ids are never
+    /// reused within a process. Lets a renderer skip comparing the triangle lists every frame.
+    pub fn topology_id(&self) -> u64 {
+        self.topology_id
+    }
     pub fn cage_triangles(&self) -> &[[u32; 3]] {
         &self.cage_triangles
     }
@@ -102,5 +108,25 @@ impl RigSession {
     /// Whether the reverse cage deformer currently holds a factorisation.
     pub fn reverser_is_factorised(&self) -> bool {
         self.reverser.is_factorised()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::demo;
+    use crate::session::{RigParts, RigSession, SessionOptions};
+
+    fn bar() -> RigSession {
+        let rig = demo::builtin("bar", Some(8)).unwrap();
+        let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+        RigSession::new(parts, SessionOptions::default()).unwrap().0
+    }
+
+    #[test]
+    fn topology_ids_are_shared_by_clones_and_unique_otherwise() {
+        let (a, b) = (bar(), bar());
+        assert_eq!(a.mesh_triangles(), b.mesh_triangles());
+        assert_ne!(a.topology_id(), b.topology_id(), "a new session, a new id");
+        assert_eq!(a.clone().topology_id(), a.topology_id());
     }
 }
