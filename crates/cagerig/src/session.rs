@@ -38,6 +38,8 @@ mod display_path;
 mod editable_state;
 mod parts;
 mod sync_chain;
+#[cfg(test)]
+mod test_rigs;
 use checkpoint::Checkpoint;
 pub use checkpoint::MAX_STATE_MAGNITUDE;
 use display_path::DisplayPath;

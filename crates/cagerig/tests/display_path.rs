@@ -36,29 +36,24 @@ fn assert_same_state(exact: &RigSession, display: &RigSession, step: &str) {
         display.posed_mesh(),
         "exact M' after {step}"
     );
-    assert!(exact.display_mesh().is_none());
+    assert!(exact.display_mesh().is_none() && exact.display_rest_mesh().is_none());
     let shown = display.display_mesh().expect("display path is on");
-    let tolerance = 2e-6 * diagonal(exact.posed_mesh());
-    let worst = shown
-        .iter()
-        .zip(exact.posed_mesh())
-        .map(|(a, b)| a.as_dvec3().distance(*b))
-        .fold(0.0, f64::max);
-    assert!(
-        worst <= tolerance,
-        "displayed M' after {step}: max error {worst:e} > {tolerance:e}"
-    );
-    assert!(exact.display_rest_mesh().is_none());
+    assert_drawn_close(shown, exact.posed_mesh(), &format!("M' after {step}"));
     let shown = display.display_rest_mesh().expect("display path is on");
-    let tolerance = 2e-6 * diagonal(exact.rest_mesh());
+    assert_drawn_close(shown, exact.rest_mesh(), &format!("M after {step}"));
+}
+
+/// The drawn f32 points are within 2e-6 of the diagonal of the exact ones.
+fn assert_drawn_close(shown: &[glam::Vec3], exact: &[DVec3], what: &str) {
+    let tolerance = 2e-6 * diagonal(exact);
     let worst = shown
         .iter()
-        .zip(exact.rest_mesh())
+        .zip(exact)
         .map(|(a, b)| a.as_dvec3().distance(*b))
         .fold(0.0, f64::max);
     assert!(
         worst <= tolerance,
-        "displayed M after {step}: max error {worst:e} > {tolerance:e}"
+        "displayed {what}: max error {worst:e} > {tolerance:e}"
     );
 }
 

@@ -113,14 +113,7 @@ impl RigSession {
 
 #[cfg(test)]
 mod tests {
-    use crate::demo;
-    use crate::session::{RigParts, RigSession, SessionOptions};
-
-    fn bar() -> RigSession {
-        let rig = demo::builtin("bar", Some(8)).unwrap();
-        let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
-        RigSession::new(parts, SessionOptions::default()).unwrap().0
-    }
+    use crate::session::test_rigs::bar;
 
     #[test]
     fn topology_ids_are_shared_by_clones_and_unique_otherwise() {

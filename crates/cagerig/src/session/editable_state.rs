@@ -175,14 +175,7 @@ impl RigSession {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::demo;
-    use crate::session::{RigParts, SessionOptions};
-
-    fn bar() -> RigSession {
-        let rig = demo::builtin("bar", Some(8)).unwrap();
-        let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
-        RigSession::new(parts, SessionOptions::default()).unwrap().0
-    }
+    use crate::session::test_rigs::bar;
 
     #[test]
     fn restoring_a_state_gives_back_the_editable_state_exactly() {
