@@ -48,7 +48,9 @@ impl RigSession {
             {
                 *c = *c0 + *o;
             }
-            self.rest_from_cage_in_full();
+            // On the display path: M̃ for display and the exact MaxVol rows (see
+            // `display_path`), as for a current-cage grab.
+            self.rest_from_cage_for_event();
         }
         self.sync_from_rest_cage();
         Ok(())
