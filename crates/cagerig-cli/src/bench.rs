@@ -14,7 +14,7 @@ use anyhow::Context;
 use cagerig::cage_coords::CoordsPrecision;
 use cagerig::coords::{maxvol, mvc};
 use cagerig::playback::AnimationPlayer;
-use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::skinning::{
     CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
     DualQuaternionSkinning, LbsF32, LbsF32Scratch, LinearBlendSkinning,
@@ -96,6 +96,10 @@ pub(crate) struct ModelRow {
     /// The drag and the grab with Φ stored in f32 (`--coords-precision f32`).
     pub rest_cage_drag_f32_coords: Stat,
     pub grab_after_skeleton_edit_f32_coords: Stat,
+    /// The drag and the grab on the f32 display path (what the editor runs: M and M' drawn in
+    /// f32, the exact state kept on CageUp's MaxVol rows).
+    pub rest_cage_drag_display: Stat,
+    pub grab_after_skeleton_edit_display: Stat,
     pub lbs_f32: Stat,
     pub dqs_f32: Stat,
     pub cor_f32: Stat,
@@ -396,8 +400,18 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         frame_reps,
         reps(51, scale, nv),
         skin_bytes,
-        8,
+        [8, 8],
     )?;
+    session.set_display_precision(DisplayPrecision::F32)?;
+    let (drag_display_stat, grab_display_stat) = bench_cage_events(
+        &mut session,
+        bend_joint,
+        frame_reps,
+        reps(51, scale, nv),
+        f32_bytes,
+        [8, 4],
+    )?;
+    session.set_display_precision(DisplayPrecision::Exact)?;
 
     // The same cage events with Φ rounded to f32 (`CoordsPrecision::F32`): a second session
     // from the base parts (Φ recomputed, MaxVol rows and Ψ reused), built after the f64 one
@@ -424,7 +438,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         frame_reps,
         reps(51, scale, nv),
         skin_bytes,
-        4,
+        [4, 4],
     )?;
 
     Ok(ModelRow {
@@ -450,6 +464,8 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         grab_after_skeleton_edit: grab_stat,
         rest_cage_drag_f32_coords: drag32_stat,
         grab_after_skeleton_edit_f32_coords: grab32_stat,
+        rest_cage_drag_display: drag_display_stat,
+        grab_after_skeleton_edit_display: grab_display_stat,
         lbs_f32: lbs32_stat,
         dqs_f32: dqs32_stat,
         cor_f32: cor32_stat,
@@ -458,14 +474,15 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
 
 /// A rest-cage drag of the 5 cage vertices nearest `bend_joint` (`drag_reps` events), then
 /// `grab_reps` current-cage grabs each right after a small skeleton edit (refactor + solve +
-/// full chain). `phi_bytes` is the size of one stored coordinate (8 for f64, 4 for f32).
+/// full chain). `phi_bytes` is the size of one coordinate the drag and the grab read (8 for
+/// f64, 4 for f32).
 fn bench_cage_events(
     session: &mut RigSession,
     bend_joint: usize,
     drag_reps: usize,
     grab_reps: usize,
     skin_bytes: u64,
-    phi_bytes: usize,
+    [drag_phi_bytes, grab_phi_bytes]: [usize; 2],
 ) -> anyhow::Result<(Stat, Stat)> {
     let (nv, nc) = (session.rest_mesh().len(), session.rest_cage().len());
     let joint_pos = session.rest_world_from_joint()[bend_joint].translation;
@@ -485,7 +502,7 @@ fn bench_cage_events(
         sign = -sign;
         let _ = session.move_rest_cage(&drag, &[DVec3::new(sign * step, 0.0, 0.0)]);
     })
-    .with_bytes(skin_bytes + (nv * drag.len() * phi_bytes) as u64 + nv as u64 * 48);
+    .with_bytes(skin_bytes + (nv * drag.len() * drag_phi_bytes) as u64 + nv as u64 * 48);
 
     let mut samples = Vec::with_capacity(grab_reps);
     for i in 0..grab_reps + 3 {
@@ -504,7 +521,7 @@ fn bench_cage_events(
         median_ms: samples[samples.len() / 2],
         min_ms: samples[0],
         max_ms: samples[samples.len() - 1],
-        bytes_moved: Some(skin_bytes + (nv * nc * phi_bytes) as u64 + nv as u64 * 48),
+        bytes_moved: Some(skin_bytes + (nv * nc * grab_phi_bytes) as u64 + nv as u64 * 48),
     };
     Ok((drag_stat, grab_stat))
 }

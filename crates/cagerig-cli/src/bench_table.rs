@@ -162,6 +162,16 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
             &|m| m.grab_after_skeleton_edit_f32_coords,
             Some(&TOOL.grab_after_skeleton_edit),
         );
+        line(
+            "rest-cage drag (display)",
+            &|m| m.rest_cage_drag_display,
+            Some(&TOOL.rest_cage_drag),
+        );
+        line(
+            "grab after skel. edit (display)",
+            &|m| m.grab_after_skeleton_edit_display,
+            Some(&TOOL.grab_after_skeleton_edit),
+        );
     }
 }
 

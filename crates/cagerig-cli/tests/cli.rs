@@ -268,7 +268,7 @@ fn demo_output_is_staged_rerunnable_and_never_replaces_foreign_files() {
 }
 
 #[test]
-fn bench_reports_both_thread_counts_and_the_maxvol_quality() {
+fn bench_reports_both_thread_counts_the_display_path_and_the_maxvol_quality() {
     let out = succeed(cagerig().args([
         "bench",
         "--builtin",
@@ -289,6 +289,8 @@ fn bench_reports_both_thread_counts_and_the_maxvol_quality() {
             "mvc",
             "maxvol",
             "grab_after_skeleton_edit",
+            "grab_after_skeleton_edit_display",
+            "rest_cage_drag_display",
         ] {
             let ms = row[key]["median_ms"].as_f64().unwrap();
             assert!(ms.is_finite() && ms > 0.0, "{key}: {ms}");
