@@ -443,10 +443,18 @@ impl SortedRestMesh {
 
 /// Local origin `o` of a point set: its bounding-box centre (zero when empty or non-finite).
 pub(crate) fn local_origin<P: RestPoint>(points: &[P]) -> DVec3 {
-    let (lo, hi) = points.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(p.to_f64()), hi.max(p.to_f64())),
-    );
+    let empty = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let grow = |(lo, hi): (DVec3, DVec3), p: &P| (lo.min(p.to_f64()), hi.max(p.to_f64()));
+    let merge = |(lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)| (lo.min(l), hi.max(h));
+    // In parallel beyond one chunk of vertices (min/max: the same result in any order).
+    let (lo, hi) = if points.len() <= VERTEX_GRAIN_F32 {
+        points.iter().fold(empty, grow)
+    } else {
+        points
+            .par_chunks(VERTEX_GRAIN_F32)
+            .map(|chunk| chunk.iter().fold(empty, grow))
+            .reduce(|| empty, merge)
+    };
     let centre = (lo + hi) * 0.5;
     if centre.is_finite() {
         centre
