@@ -59,6 +59,36 @@ fn check_bytes_fit(
     Ok(())
 }
 
+/// Checks that a dense `rows × cols` f64 matrix (Φ, Λ: `#V × #C`) can be allocated now, by
+/// reserving its bytes and freeing them at once. faer aborts the process when an allocation
+/// fails ("memory allocation failed"); the library calls this first, so that a request beyond
+/// what the system will hand out is a [`RigError::TooLarge`] naming it instead.
+pub fn check_dense_allocation(what: &str, rows: usize, cols: usize) -> Result<(), RigError> {
+    let entries = rows.checked_mul(cols);
+    let reserved = entries
+        .filter(|n| n.checked_mul(8).is_some_and(|b| b <= isize::MAX as usize))
+        .is_some_and(|n| Vec::<f64>::new().try_reserve_exact(n).is_ok());
+    if reserved {
+        return Ok(());
+    }
+    let (vertices, cage_vertices) = (rows as u64, cols as u64);
+    let bytes = vertices.saturating_mul(cage_vertices).saturating_mul(8);
+    let available = available_bytes();
+    Err(RigError::TooLarge(Box::new(MemoryNeed {
+        what: what.to_string(),
+        vertices,
+        cage_vertices,
+        needed_gib: gib(bytes),
+        phi_gib: gib(bytes),
+        limit_gib: gib(available.unwrap_or(0)),
+        limit: if available.is_some() {
+            "are available (the allocation was refused)"
+        } else {
+            "could be reserved (the allocation was refused)"
+        },
+    })))
+}
+
 /// About how many skin and cage vertices the built-in rig `name` has at `resolution` (see
 /// [`crate::demo::builtin`]).
 pub fn builtin_size(name: &str, resolution: Option<usize>) -> (u64, u64) {
@@ -105,5 +135,20 @@ mod tests {
             "{e}"
         );
         assert!(check_bytes_fit("N=3", v3, 58, session_bytes(v3, 58), Some(24 << 30)).is_ok());
+    }
+
+    #[test]
+    fn a_dense_matrix_the_system_refuses_is_an_error_not_an_abort() {
+        assert!(check_dense_allocation("Φ", 133_073, 58).is_ok());
+        // 2^61 entries: the byte count overflows.
+        let e = check_dense_allocation("cage coordinates Φ", 1 << 31, 1 << 30)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cage coordinates Φ") && e.contains("GiB"), "{e}");
+        // 2^56 bytes (64 PiB): representable, but no system reserves it.
+        let e = check_dense_allocation("Λ", 1 << 40, 1 << 13)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("refused"), "{e}");
     }
 }

@@ -104,6 +104,11 @@ pub fn compute_cor_cage_coords(
 
     // Λ_i = the cluster's row, or Φ_i for vertices without a centre (S_ii = 1).
     let vertex_cluster = &problem.vertex_cluster;
+    crate::memory_estimate::check_dense_allocation(
+        "CoR cage coordinates Λ (#V × #C)",
+        num_vertices,
+        num_cage,
+    )?;
     let matrix = Mat::from_fn(num_vertices, num_cage, |i, k| {
         let c = vertex_cluster[i];
         if c != CorCentresFactored::NO_CENTRE && has_centre[c as usize] {

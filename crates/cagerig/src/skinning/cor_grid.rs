@@ -458,6 +458,11 @@ pub fn compute_cor_cage_coords_grid(
     drop(bin_coords);
 
     // 6. Λ_i = Σ_pairs x y interp(G)(x, y) / its sum, vertex blocks in parallel.
+    crate::memory_estimate::check_dense_allocation(
+        "CoR cage coordinates Λ (#V × #C)",
+        num_vertices,
+        num_cage,
+    )?;
     let mut matrix = Mat::<f64>::zeros(num_vertices, num_cage);
     let num_blocks = num_vertices.div_ceil(VERTEX_BLOCK);
     let done = AtomicUsize::new(0);
