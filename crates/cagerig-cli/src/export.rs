@@ -39,6 +39,14 @@ pub struct ExportArgs {
     /// Samples per second of the exported animation (key times are always samples).
     #[arg(long, default_value_t = 30.0)]
     pub fps: f64,
+    /// Between two samples a viewer interpolates the joint nodes (lerp / slerp): samples are
+    /// added where that departs from cagerig's M' by more than this fraction of the rest
+    /// bounding-box diagonal (checked at the midpoint of every interval); 0 turns it off.
+    #[arg(long, default_value_t = 1e-5)]
+    pub max_between: f64,
+    /// The most samples the refinement of `--max-between` may reach.
+    #[arg(long, default_value_t = 100_000)]
+    pub max_samples: usize,
     #[command(flatten)]
     pub session: SessionArgs,
 }
@@ -59,6 +67,12 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         .transpose()?;
     if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 1000.0) {
         bail!("--fps {} must be in (0, 1000]", args.fps);
+    }
+    if !(args.max_between.is_finite() && (0.0..1.0).contains(&args.max_between)) {
+        bail!(
+            "--max-between {} must be a fraction of the diagonal in [0, 1) (0: no refinement)",
+            args.max_between
+        );
     }
     let loaded = load_rig(&args.rig, true, true)?;
     let (skeleton_track, channels, cage_track) = crate::interchange::animation_tracks(
@@ -110,7 +124,38 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         cage_track.clone(),
         channels,
     )?;
-    let times = export_animation::sample_times(player.duration(), args.fps, &keys);
+    let mut times = export_animation::sample_times(player.duration(), args.fps, &keys);
+    let mut refinement = String::new();
+    if args.max_between > 0.0 {
+        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_mesh());
+        let diagonal = (hi - lo).length();
+        // 10 % of the bound left for the f32 rounding of the file (measured against an
+        // independent viewer in `gltf_export_resampling.rs`).
+        let refined = cagerig_formats::gltf::export_resampling::refine_sample_times(
+            &mut session,
+            &mut player,
+            &times,
+            0.9 * args.max_between * diagonal,
+            args.max_samples.max(times.len()),
+        )
+        .map_err(|e| anyhow::anyhow!("refining the samples: {e}"))?;
+        refinement = format!(
+            " ({} added so that a viewer stays within {:.1e} of the diagonal between samples, \
+             {:.1e} at the worst midpoint)",
+            refined.added,
+            args.max_between,
+            refined.largest_checked / diagonal.max(f64::MIN_POSITIVE)
+        );
+        if refined.capped {
+            eprintln!(
+                "warning: --max-samples {} reached: between some samples a viewer departs from \
+                 cagerig by up to {:.1e} of the diagonal (raise --max-samples or --fps)",
+                args.max_samples,
+                refined.largest_checked / diagonal.max(f64::MIN_POSITIVE)
+            );
+        }
+        times = refined.times;
+    }
     let (document, bin) = export_animation::animation_to_gltf(
         &mut session,
         &mut player,
@@ -121,7 +166,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     .map_err(|e| anyhow::anyhow!("exporting the animation: {e}"))?;
     cagerig_formats::gltf::export::write_gltf_or_glb(&args.out, &document, &bin)?;
     println!(
-        "{} written: {} samples over {:.3} s in {:.1} ms",
+        "{} written: {} samples{refinement} over {:.3} s in {:.1} ms",
         args.out.display(),
         times.len(),
         player.duration(),

@@ -109,7 +109,7 @@ fn fox_edit_animate_and_export() {
     assert_eq!(v["vertices"], 1728);
     // The Walk as a standalone animated glTF: reimported, it has one animation of Walk's length.
     let walk = dir.join("walk.glb");
-    run_ok(
+    let said = run_ok(
         cagerig()
             .arg("export")
             .arg(&fox)
@@ -118,6 +118,11 @@ fn fox_edit_animate_and_export() {
             .args(["--animation", "Walk", "--fps", "24"])
             .arg("--out")
             .arg(&walk),
+    );
+    // The samples were checked between them (the refinement is on by default).
+    assert!(
+        said.contains("so that a viewer stays within 1.0e-5 of the diagonal"),
+        "{said}"
     );
     let v: serde_json::Value =
         serde_json::from_str(&run_ok(cagerig().arg("info").arg(&walk).arg("--json"))).unwrap();

@@ -18,7 +18,7 @@
 use cagerig::animation::{CageTrack, bracket};
 use cagerig::playback::AnimationPlayer;
 use cagerig::session::RigSession;
-use glam::{DAffine3, DVec3};
+use glam::{DAffine3, DQuat, DVec3};
 use serde_json::{Value, json};
 
 use super::export::{Builder, f32_bytes, position_accessor, session_to_gltf};
@@ -50,6 +50,29 @@ pub fn sample_times(duration: f64, fps: f64, key_times: &[f64]) -> Vec<f64> {
         }
     }
     out
+}
+
+/// The local (translation, rotation, scale) of every joint node (`#J`) for the session's current
+/// state: node world `G_j = T_j · B_j(0)` with `bind` = `B_j(0)` (`#J`); `world` is scratch
+/// (`#J`).
+pub(crate) fn node_trs(
+    session: &RigSession,
+    bind: &[DAffine3],
+    world: &mut [DAffine3],
+    out: &mut Vec<(DVec3, DQuat, DVec3)>,
+) {
+    for (j, w) in world.iter_mut().enumerate() {
+        *w = session.posed_from_rest()[j] * bind[j];
+    }
+    out.clear();
+    for j in 0..world.len() {
+        let local = match session.skeleton().parent(j) {
+            Some(p) => world[p].inverse() * world[j],
+            None => world[j],
+        };
+        let (s, r, tr) = local.to_scale_rotation_translation();
+        out.push((tr, r.normalize(), s));
+    }
 }
 
 /// Plays `player` at every time of `times` on `session` and writes the glTF document (JSON and
@@ -90,19 +113,13 @@ pub fn animation_to_gltf(
     let mut scales = Vec::with_capacity(nj * times.len());
     let mut weights = Vec::with_capacity(targets.len() * times.len());
     let mut world = vec![DAffine3::IDENTITY; nj];
+    let mut trs = Vec::with_capacity(nj);
     for &t in times {
         player.apply(t, session).map_err(|e| e.to_string())?;
-        for (j, w) in world.iter_mut().enumerate() {
-            *w = session.posed_from_rest()[j] * bind[j];
-        }
-        for j in 0..nj {
-            let local = match session.skeleton().parent(j) {
-                Some(p) => world[p].inverse() * world[j],
-                None => world[j],
-            };
-            let (s, r, tr) = local.to_scale_rotation_translation();
+        node_trs(session, &bind, &mut world, &mut trs);
+        for &(tr, r, s) in &trs {
             translations.push(tr);
-            rotations.push(r.normalize());
+            rotations.push(r);
             scales.push(s);
         }
         if let Some(track) = cage_track {

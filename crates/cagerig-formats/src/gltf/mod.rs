@@ -9,3 +9,4 @@ pub mod scene;
 pub use import::{import_gltf, import_gltf_bytes};
 pub mod export;
 pub mod export_animation;
+pub mod export_resampling;

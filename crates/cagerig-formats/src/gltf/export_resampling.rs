@@ -1,0 +1,179 @@
+//! Adaptive sample times for the hybrid animation export: between two samples a viewer
+//! interpolates the joint nodes' TRS (LINEAR: lerp / slerp), which differs from cagerig's own
+//! interpolation; intervals where the difference is too large get more samples.
+//!
+//! An interval `[t0, t1]` is checked at its midpoint: cagerig's LBS M'(t) against the LBS a
+//! viewer computes there from the TRS interpolated between the samples at `t0` and `t1` (on the
+//! same rest mesh M(t): the morph weights are exact at every time). When the largest vertex
+//! distance exceeds the bound, the midpoint becomes a sample and both halves are checked again.
+
+use std::collections::HashMap;
+
+use cagerig::playback::AnimationPlayer;
+use cagerig::session::RigSession;
+use cagerig::skinning::LinearBlendSkinning;
+use glam::{DAffine3, DQuat, DVec3};
+
+use super::export_animation::node_trs;
+
+/// Node (translation, rotation, scale) per joint at one sample.
+type NodeTrs = Vec<(DVec3, DQuat, DVec3)>;
+
+/// The outcome of [`refine_sample_times`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefinedTimes {
+    /// The sample times (sorted, every input time kept).
+    pub times: Vec<f64>,
+    /// Samples added to the input times.
+    pub added: usize,
+    /// The largest distance measured at the midpoint of an interval of `times` that was not
+    /// split (world units): what a viewer shows there is that far from cagerig's M' at most
+    /// among the checked midpoints.
+    pub largest_checked: f64,
+    /// True when `max_samples` stopped the refinement before every interval met the bound.
+    pub capped: bool,
+}
+
+/// Refines `times` (sorted, e.g. from [`super::export_animation::sample_times`]) until at the
+/// midpoint of every interval a viewer's interpolation of the exported nodes is within
+/// `max_distance` (world units) of cagerig's LBS M', adding at most `max_samples − times.len()`
+/// samples (intervals shorter than 1e-4 s, below glTF's f32 time resolution over minutes, are
+/// not split). The session is put back in the state it was given in: its rest frames are the
+/// bind frames [`super::export_animation::animation_to_gltf`] then writes, which the check
+/// assumes.
+pub fn refine_sample_times(
+    session: &mut RigSession,
+    player: &mut AnimationPlayer,
+    times: &[f64],
+    max_distance: f64,
+    max_samples: usize,
+) -> Result<RefinedTimes, String> {
+    if !(max_distance.is_finite() && max_distance > 0.0) {
+        return Err(format!(
+            "the resampling bound {max_distance} must be positive"
+        ));
+    }
+    // The bind frames of the export are the rest frames when it starts.
+    let bind: Vec<DAffine3> = session.rest_world_from_joint().to_vec();
+    let start = session.editable_state();
+    let mut checker = Checker {
+        lbs: LinearBlendSkinning::new(session.skin_weights()),
+        bind,
+        trs: HashMap::new(),
+        world: Vec::new(),
+        viewer_from_rest: Vec::new(),
+        exact: Vec::new(),
+        viewer: Vec::new(),
+    };
+    let mut out: Vec<f64> = times.to_vec();
+    let mut pending: Vec<(f64, f64)> = times.windows(2).map(|w| (w[0], w[1])).collect();
+    pending.reverse();
+    let (mut largest, mut capped) = (0.0f64, false);
+    while let Some((t0, t1)) = pending.pop() {
+        let mid = 0.5 * (t0 + t1);
+        let distance = checker.distance_at(session, player, t0, t1, mid)?;
+        if distance <= max_distance || t1 - t0 < 1e-4 {
+            largest = largest.max(distance);
+        } else if out.len() >= max_samples {
+            largest = largest.max(distance);
+            capped = true;
+        } else {
+            out.push(mid);
+            // Left half first (a stack: pushed last).
+            pending.push((mid, t1));
+            pending.push((t0, mid));
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    session
+        .restore_editable_state(&start)
+        .map_err(|e| e.to_string())?;
+    Ok(RefinedTimes {
+        added: out.len() - times.len(),
+        times: out,
+        largest_checked: largest,
+        capped,
+    })
+}
+
+/// Scratch and cache of the midpoint checks.
+struct Checker {
+    lbs: LinearBlendSkinning,
+    bind: Vec<DAffine3>,
+    /// Node TRS at the sample times evaluated so far (by the bits of the time).
+    trs: HashMap<u64, NodeTrs>,
+    world: Vec<DAffine3>,
+    viewer_from_rest: Vec<DAffine3>,
+    exact: Vec<DVec3>,
+    viewer: Vec<DVec3>,
+}
+
+impl Checker {
+    /// The node TRS of the export at sample time `t`.
+    fn trs_at(
+        &mut self,
+        session: &mut RigSession,
+        player: &mut AnimationPlayer,
+        t: f64,
+    ) -> Result<NodeTrs, String> {
+        if let Some(trs) = self.trs.get(&t.to_bits()) {
+            return Ok(trs.clone());
+        }
+        player.apply(t, session).map_err(|e| e.to_string())?;
+        self.world.resize(self.bind.len(), DAffine3::IDENTITY);
+        let mut trs = Vec::with_capacity(self.bind.len());
+        node_trs(session, &self.bind, &mut self.world, &mut trs);
+        self.trs.insert(t.to_bits(), trs.clone());
+        Ok(trs)
+    }
+
+    /// Largest vertex distance at `mid` between cagerig's LBS M' and a viewer's, whose nodes
+    /// interpolate the samples at `t0` and `t1`.
+    fn distance_at(
+        &mut self,
+        session: &mut RigSession,
+        player: &mut AnimationPlayer,
+        t0: f64,
+        t1: f64,
+        mid: f64,
+    ) -> Result<f64, String> {
+        let (a, b) = (
+            self.trs_at(session, player, t0)?,
+            self.trs_at(session, player, t1)?,
+        );
+        let s = (mid - t0) / (t1 - t0);
+        player.apply(mid, session).map_err(|e| e.to_string())?;
+        // The viewer's node worlds from the interpolated locals, parents before children.
+        let nj = self.bind.len();
+        self.world.resize(nj, DAffine3::IDENTITY);
+        for &j in session.skeleton().topological_order() {
+            let ((ta, ra, sa), (tb, rb, sb)) = (a[j], b[j]);
+            // The exporter keeps consecutive quaternions in one hemisphere; so does this.
+            let rb = if ra.dot(rb) < 0.0 { -rb } else { rb };
+            let local = DAffine3::from_scale_rotation_translation(
+                sa.lerp(sb, s),
+                ra.slerp(rb, s),
+                ta.lerp(tb, s),
+            );
+            self.world[j] = match session.skeleton().parent(j) {
+                Some(p) => self.world[p] * local,
+                None => local,
+            };
+        }
+        self.viewer_from_rest.clear();
+        self.viewer_from_rest.extend(
+            self.world
+                .iter()
+                .zip(&self.bind)
+                .map(|(w, b)| *w * b.inverse()),
+        );
+        let rest = session.rest_mesh();
+        self.exact.resize(rest.len(), DVec3::ZERO);
+        self.viewer.resize(rest.len(), DVec3::ZERO);
+        self.lbs
+            .apply(session.posed_from_rest(), rest, &mut self.exact);
+        self.lbs
+            .apply(&self.viewer_from_rest, rest, &mut self.viewer);
+        Ok(cagerig::mesh::max_distance(&self.exact, &self.viewer))
+    }
+}
