@@ -37,8 +37,8 @@ pub struct RefinedTimes {
 /// Refines `times` (sorted, e.g. from [`super::export_animation::sample_times`]) until at the
 /// midpoint of every interval a viewer's interpolation of the exported nodes is within
 /// `max_distance` (world units) of cagerig's LBS M', adding at most `max_samples − times.len()`
-/// samples (intervals shorter than 1e-4 s, below glTF's f32 time resolution over minutes, are
-/// not split). The session is put back in the state it was given in: its rest frames are the
+/// samples (intervals shorter than 1e-4 s, or whose midpoint rounds to an end in f32 as glTF
+/// stores times, are not split). The session is put back in the state it was given in: its rest frames are the
 /// bind frames [`super::export_animation::animation_to_gltf`] then writes, which the check
 /// assumes.
 pub fn refine_sample_times(
@@ -72,7 +72,10 @@ pub fn refine_sample_times(
     while let Some((t0, t1)) = pending.pop() {
         let mid = 0.5 * (t0 + t1);
         let distance = checker.distance_at(session, player, t0, t1, mid)?;
-        if distance <= max_distance || t1 - t0 < 1e-4 {
+        // glTF stores times as f32, strictly increasing: a midpoint that rounds onto an end
+        // cannot be a sample.
+        let representable = mid as f32 != t0 as f32 && mid as f32 != t1 as f32;
+        if distance <= max_distance || t1 - t0 < 1e-4 || !representable {
             largest = largest.max(distance);
         } else if out.len() >= max_samples {
             largest = largest.max(distance);
