@@ -244,13 +244,13 @@ pub fn compute_cage_coords(
     }
     let evaluator = MvcEvaluator::new(&cage.positions, &cage.triangles);
     let (num_points, num_cage) = (points.len(), cage.num_vertices());
-    // Φ is 8 · #V · #C bytes (62 MB at N = 3): not zero-filled first; the blocks below write every
-    // entry, so the page faults of first touch are spread over the worker threads.
     crate::memory_estimate::check_dense_allocation(
         "cage coordinates Φ (#V × #C)",
         num_points,
         num_cage,
     )?;
+    // Φ is 8 · #V · #C bytes (62 MB at N = 3): not zero-filled first; the blocks below write every
+    // entry, so the page faults of first touch are spread over the worker threads.
     let mut matrix = Mat::<f64>::with_capacity(num_points, num_cage);
     let storage = SharedColumns {
         base: matrix.as_ptr_mut(),

@@ -190,8 +190,11 @@ impl RigSession {
             self.rest_mesh[row] = *p;
         }
         display.exact_rest = OnceLock::new();
-        self.rest_revision = self.rest_revision.wrapping_add(1);
-        display.rest_positions_revision = Some(self.rest_revision);
+        self.rest_mesh_changed();
+        // M̃ above is the drawn M of this new revision.
+        if let Some(display) = self.display.as_deref_mut() {
+            display.rest_positions_revision = Some(self.rest_revision);
+        }
         self.rest_mesh_is_phi_c = true;
         self.rest_mesh_rows_only = true;
         self.centres_from_cage_in_full();
