@@ -30,14 +30,6 @@ impl MeshPositions<'_> {
             Self::F32(p) => p[i].as_dvec3(),
         }
     }
-
-    /// Position `i` in f32 (as uploaded).
-    pub fn get_f32(&self, i: usize) -> Vec3 {
-        match self {
-            Self::F64(p) => p[i].as_vec3(),
-            Self::F32(p) => p[i],
-        }
-    }
 }
 
 impl<'a> From<&'a [DVec3]> for MeshPositions<'a> {

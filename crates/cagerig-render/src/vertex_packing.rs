@@ -3,10 +3,9 @@
 //! intermediate copy of the whole layer).
 
 use bytemuck::Zeroable;
-
-use crate::gpu_types::MeshVertex;
 use glam::Vec3;
 
+use crate::gpu_types::MeshVertex;
 use crate::scene::{Bounds, EMPTY_BOUNDS, MeshPositions, merge_bounds};
 use crate::vertex_normals::VertexNormals;
 
