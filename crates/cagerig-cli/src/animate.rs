@@ -58,25 +58,27 @@ pub fn animate(
     check_times(times)?;
     let mut pictures = crate::pictures::PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force)?;
-    let loaded = load_rig_or_generate_cage(rig, true, true, auto_cage.options())?;
+    let mut loaded = load_rig_or_generate_cage(rig, true, true, auto_cage.options())?;
     if let Some(g) = &loaded.generated_cage {
         report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
         write_generated_cage(&mut staged, &g.cage)?;
     }
-    let (skeleton_track, channels, cage_track) =
-        crate::interchange::animation_tracks(&loaded, skeleton_anim, animation, cage_anim)?;
+    let tracks =
+        crate::interchange::animation_tracks(&mut loaded, skeleton_anim, animation, cage_anim)?;
     let mut options = session_args.options();
     options.skinning = skinning.map(SkinningMethod::from).unwrap_or_default();
     let (session, warnings) = start_session(loaded, options)?;
     for w in &warnings {
         eprintln!("warning: {w}");
     }
+    let tracks = tracks.resolve(&session)?;
     let mut player = cagerig::playback::AnimationPlayer::with_channels(
         &session,
-        skeleton_track,
-        cage_track,
-        channels,
-    )?;
+        tracks.skeleton,
+        tracks.cage,
+        tracks.channels,
+    )?
+    .holding_rest_skeleton(tracks.hold_rest_skeleton);
     let mut session = session;
     for &t in times {
         let start = Instant::now();

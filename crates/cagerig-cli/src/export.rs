@@ -74,9 +74,9 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             args.max_between
         );
     }
-    let loaded = load_rig(&args.rig, true, true)?;
-    let (skeleton_track, channels, cage_track) = crate::interchange::animation_tracks(
-        &loaded,
+    let mut loaded = load_rig(&args.rig, true, true)?;
+    let tracks = crate::interchange::animation_tracks(
+        &mut loaded,
         args.skeleton_anim.as_deref(),
         args.animation.as_deref(),
         args.cage_anim.as_deref(),
@@ -107,6 +107,12 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 .with_context(|| format!("in {}", path.display()))?;
         }
     }
+    let crate::interchange::ResolvedTracks {
+        skeleton: skeleton_track,
+        channels,
+        cage: cage_track,
+        hold_rest_skeleton,
+    } = tracks.resolve(&session)?;
     if skeleton_track.is_none() && cage_track.is_none() {
         return export(&session, &args.out, &name);
     }
@@ -123,7 +129,8 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         skeleton_track,
         cage_track.clone(),
         channels,
-    )?;
+    )?
+    .holding_rest_skeleton(hold_rest_skeleton);
     let mut times = export_animation::sample_times(player.duration(), args.fps, &keys);
     let mut refinement = String::new();
     if args.max_between > 0.0 {

@@ -6,8 +6,8 @@ use std::path::Path;
 use anyhow::{Context, bail};
 use cagerig::animation::{CageTrack, SkeletonTrack};
 use cagerig::playback::PoseChannels;
-use cagerig::session::RigParts;
-use cagerig_formats::{ImportOptions, ImportedCharacter, import_character};
+use cagerig::session::{RigParts, RigSession};
+use cagerig_formats::{ImportOptions, ImportedCharacter, MorphTargets, import_character};
 use serde::Serialize;
 
 use crate::commands::FileUse;
@@ -77,6 +77,7 @@ pub fn load_interchange(
         skeleton,
         skin_weights,
         animations,
+        morph_targets,
         warnings,
         ..
     } = character;
@@ -87,38 +88,114 @@ pub fn load_interchange(
         warnings,
         maxvol_path: None,
         animations,
+        morph_targets,
         allow_outside_cage: false,
         generated_cage,
     })
 }
 
-/// Every track an animation command (`animate`, `render`, `export`) plays: the skeleton track
-/// of [`skeleton_track`] with its channels, and the cage track of `--cage-anim` (rest-cage
-/// offsets for the rig's cage).
+/// Every track an animation command (`animate`, `render`, `export`) plays, before the session
+/// exists: see [`AnimationTracks::resolve`].
+pub struct AnimationTracks {
+    skeleton: Option<SkeletonTrack>,
+    channels: PoseChannels,
+    cage: Option<CageTrack>,
+    /// The chosen imported animation's morph weights (`#keys × #targets`) with the file's
+    /// targets and default weights: a cage track once the session can solve for it.
+    morph: Option<(Vec<f64>, MorphTargets)>,
+}
+
+/// The tracks of [`AnimationTracks`] for a session.
+pub struct ResolvedTracks {
+    pub skeleton: Option<SkeletonTrack>,
+    pub channels: PoseChannels,
+    pub cage: Option<CageTrack>,
+    /// SkelUp held during playback: the skeleton keys already carry the rest joints' motion
+    /// (a cagerig export with a cage track, see [`cagerig_formats::morph_cage_track`]).
+    pub hold_rest_skeleton: bool,
+}
+
+impl AnimationTracks {
+    /// The cage track of the morph weights, if any, solved on `session`'s rig (with a warning
+    /// when the cage does not reproduce the targets to 1e-5 of the diagonal).
+    pub fn resolve(self, session: &RigSession) -> anyhow::Result<ResolvedTracks> {
+        let Some((weights, morphs)) = self.morph else {
+            return Ok(ResolvedTracks {
+                skeleton: self.skeleton,
+                channels: self.channels,
+                cage: self.cage,
+                hold_rest_skeleton: false,
+            });
+        };
+        let Some(skeleton) = &self.skeleton else {
+            bail!("the animation's morph weights need its skeleton track");
+        };
+        let fit = cagerig_formats::morph_cage_track(session, &morphs, skeleton, &weights)
+            .context("playing the animation's morph weights as a cage track")?;
+        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_mesh());
+        let diagonal = (hi - lo).length();
+        if fit.worst_residual > 1e-5 * diagonal {
+            eprintln!(
+                "warning: morph target {} is not a deformation of the cage: played through the cage, it is off by up to {:.3e} ({:.2e} of the diagonal)",
+                fit.worst_target,
+                fit.worst_residual,
+                fit.worst_residual / diagonal
+            );
+        }
+        eprintln!(
+            "note: the animation's {} morph targets are played as a cage track ({} keys); the joint keys already contain the rest joints' motion, so SkelUp is held during playback",
+            morphs.displacements.len(),
+            fit.track.num_keyframes()
+        );
+        Ok(ResolvedTracks {
+            skeleton: self.skeleton,
+            channels: self.channels,
+            cage: Some(fit.track),
+            hold_rest_skeleton: true,
+        })
+    }
+}
+
+/// Every track an animation command plays: the skeleton track of [`skeleton_track`] with its
+/// channels, and the cage track of `--cage-anim` (rest-cage offsets for the rig's cage) or of the
+/// imported animation's morph weights (taken from `loaded`).
 pub fn animation_tracks(
-    loaded: &LoadedRig,
+    loaded: &mut LoadedRig,
     skeleton_anim: Option<&Path>,
     animation: Option<&str>,
     cage_anim: Option<&Path>,
-) -> anyhow::Result<(Option<SkeletonTrack>, PoseChannels, Option<CageTrack>)> {
-    let (skeleton_track, channels) = skeleton_track(loaded, skeleton_anim, animation)?;
-    let cage_track = match cage_anim {
+) -> anyhow::Result<AnimationTracks> {
+    let (skeleton, channels, morph_weights) = skeleton_track(loaded, skeleton_anim, animation)?;
+    let cage = match cage_anim {
         Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
             p,
             loaded.parts.cage.num_vertices(),
         )?),
         None => None,
     };
-    Ok((skeleton_track, channels, cage_track))
+    let morph = match morph_weights {
+        Some(_) if cage.is_some() => bail!(
+            "the animation animates morph weights (played as a cage track); give no --cage-anim with it"
+        ),
+        Some(weights) => Some((weights, std::mem::take(&mut loaded.morph_targets))),
+        None => None,
+    };
+    Ok(AnimationTracks {
+        skeleton,
+        channels,
+        cage,
+        morph,
+    })
 }
 
 /// The skeleton track `animate` plays: `--animation NAME|INDEX` from the imported file (all
-/// channels), or `--skeleton-anim` in the paper tool's format (rotations and root motion).
+/// channels, and its morph weights when it has some), or `--skeleton-anim` in the paper tool's
+/// format (rotations and root motion).
 pub fn skeleton_track(
     loaded: &LoadedRig,
     skeleton_anim: Option<&Path>,
     animation: Option<&str>,
-) -> anyhow::Result<(Option<SkeletonTrack>, PoseChannels)> {
+) -> anyhow::Result<(Option<SkeletonTrack>, PoseChannels, Option<Vec<f64>>)> {
     match (animation, skeleton_anim) {
         (Some(_), Some(_)) => bail!("give --animation or --skeleton-anim, not both"),
         (Some(sel), None) => {
@@ -132,7 +209,11 @@ pub fn skeleton_track(
                         .and_then(|i| loaded.animations.get(i))
                 });
             match found {
-                Some(a) => Ok((Some(a.track.clone()), PoseChannels::Full)),
+                Some(a) => Ok((
+                    Some(a.track.clone()),
+                    PoseChannels::Full,
+                    a.morph_weights.clone(),
+                )),
                 None => {
                     let names: Vec<String> = loaded
                         .animations
@@ -161,8 +242,9 @@ pub fn skeleton_track(
                 .0,
             ),
             PoseChannels::RotationsAndRootMotion,
+            None,
         )),
-        (None, None) => Ok((None, PoseChannels::RotationsAndRootMotion)),
+        (None, None) => Ok((None, PoseChannels::RotationsAndRootMotion, None)),
     }
 }
 
@@ -234,12 +316,17 @@ pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
     println!("renormalised   {} weight rows", s.renormalised_rows);
     for a in &s.animations {
         println!(
-            "animation      {} {:?}: {:.3} s, {} keys{}",
+            "animation      {} {:?}: {:.3} s, {} keys{}{}",
             a.index,
             a.name,
             a.duration,
             a.keys,
-            if a.exact { "" } else { " (resampled)" }
+            if a.exact { "" } else { " (resampled)" },
+            if a.morph_weights {
+                ", morph weights (played as a cage track)"
+            } else {
+                ""
+            }
         );
     }
     if s.animations.is_empty() {

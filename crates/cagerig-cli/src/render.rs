@@ -229,9 +229,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .as_deref()
         .map(crate::edit::read_script)
         .transpose()?;
-    let loaded = load_rig(&args.rig, true, true)?;
-    let (skeleton_track, channels, cage_track) = crate::interchange::animation_tracks(
-        &loaded,
+    let mut loaded = load_rig(&args.rig, true, true)?;
+    let tracks = crate::interchange::animation_tracks(
+        &mut loaded,
         args.skeleton_anim.as_deref(),
         args.animation.as_deref(),
         args.cage_anim.as_deref(),
@@ -276,12 +276,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.times.is_empty() {
         render_state(&mut maker, &session, args, &args.out, &mut written)?;
     } else {
+        let tracks = tracks.resolve(&session)?;
         let mut player = cagerig::playback::AnimationPlayer::with_channels(
             &session,
-            skeleton_track,
-            cage_track,
-            channels,
-        )?;
+            tracks.skeleton,
+            tracks.cage,
+            tracks.channels,
+        )?
+        .holding_rest_skeleton(tracks.hold_rest_skeleton);
         for &t in &args.times {
             player.apply(t, &mut session)?;
             let path = if args.times.len() == 1 {

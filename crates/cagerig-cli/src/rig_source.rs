@@ -111,6 +111,8 @@ pub struct LoadedRig {
     pub maxvol_path: Option<PathBuf>,
     /// Animations of an imported glTF/FBX character (empty otherwise).
     pub animations: Vec<cagerig_formats::ImportedAnimation>,
+    /// The imported character's morph targets (empty otherwise).
+    pub morph_targets: cagerig_formats::MorphTargets,
     /// `--allow-outside-cage` (passed on to the session).
     pub allow_outside_cage: bool,
     /// The cage generated because the rig had none (`--auto-cage`).
@@ -142,6 +144,7 @@ pub fn load_rig_or_generate_cage(
                 warnings: Vec::new(),
                 maxvol_path: None,
                 animations: Vec::new(),
+                morph_targets: Default::default(),
                 allow_outside_cage: args.allow_outside_cage,
                 generated_cage: None,
             }
@@ -214,6 +217,7 @@ fn load_files(
         warnings: rig.warnings,
         maxvol_path: rig.maxvol_path,
         animations: Vec::new(),
+        morph_targets: Default::default(),
         allow_outside_cage,
         generated_cage: rig.generated_cage,
     })

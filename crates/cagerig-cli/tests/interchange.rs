@@ -171,3 +171,91 @@ fn a_truncated_glb_is_a_clear_error() {
         "{err}"
     );
 }
+
+fn obj_vertices(path: &Path) -> Vec<[f64; 3]> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let c: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            [c[0], c[1], c[2]]
+        })
+        .collect()
+}
+
+/// The hybrid round trip through the CLI: the Arm's skeleton + cage animation exported to glTF,
+/// then `animate EXPORT.glb --animation 0` (the cage comes from the file, the morph weights are
+/// played as a cage track with SkelUp held) gives the posed mesh of `animate` on the original
+/// files to 1e-5 of the diagonal, and `info` says the animation carries morph weights.
+#[test]
+fn a_hybrid_export_animates_like_the_original() {
+    let dir = temp_dir("hybrid");
+    let arm = data("arm");
+    let glb = dir.join("arm_anim.glb");
+    run_ok(
+        cagerig()
+            .arg("export")
+            .arg(arm.join("arm.obj"))
+            .arg("--skeleton-anim")
+            .arg(arm.join("arm_skelAnim.txt"))
+            .arg("--cage-anim")
+            .arg(arm.join("arm_cageAnim.txt"))
+            .arg("--out")
+            .arg(&glb),
+    );
+    let info = run_ok(cagerig().arg("info").arg(&glb));
+    assert!(
+        info.contains("morph weights (played as a cage track)")
+            && info.contains("cage in file   yes"),
+        "{info}"
+    );
+    let times = "0.3,2.25,7.9";
+    let (original, again) = (dir.join("original"), dir.join("again"));
+    run_ok(
+        cagerig()
+            .arg("animate")
+            .arg(arm.join("arm.obj"))
+            .arg("--skeleton-anim")
+            .arg(arm.join("arm_skelAnim.txt"))
+            .arg("--cage-anim")
+            .arg(arm.join("arm_cageAnim.txt"))
+            .args(["--times", times, "--out"])
+            .arg(&original),
+    );
+    let out = cagerig()
+        .arg("animate")
+        .arg(&glb)
+        .args(["--animation", "0", "--times", times, "--out"])
+        .arg(&again)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{said}");
+    assert!(said.contains("SkelUp is held"), "{said}");
+    let rest = obj_vertices(&original.join("t0.3_mesh_rest.obj"));
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in &rest {
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    let diagonal = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
+    for t in times.split(',') {
+        let a = obj_vertices(&original.join(format!("t{t}_mesh_posed.obj")));
+        let b = obj_vertices(&again.join(format!("t{t}_mesh_posed.obj")));
+        assert_eq!(a.len(), b.len());
+        let off = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0f64, f64::max);
+        assert!(
+            off <= 1e-5 * diagonal,
+            "t = {t}: {:e} of the diagonal",
+            off / diagonal
+        );
+    }
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -30,6 +30,8 @@ pub struct ImportedCharacter {
     /// Animations as skeleton tracks of local transforms (play them with
     /// [`cagerig::playback::PoseChannels::Full`]).
     pub animations: Vec<ImportedAnimation>,
+    /// Morph targets of the skinned mesh that the animations animate (empty when none).
+    pub morph_targets: MorphTargets,
     /// Joint locals `parent_from_joint` of the file's own node transforms (`#J`): the pose the
     /// file shows without animation (equal to the rest pose when its nodes are in the bind
     /// pose; an exported cagerig pose otherwise). Play it as a one-key track with
@@ -37,6 +39,23 @@ pub struct ImportedCharacter {
     pub node_pose: Vec<glam::DAffine3>,
     pub summary: ImportSummary,
     pub warnings: Vec<Warning>,
+}
+
+/// Morph targets of the skinned mesh that the animations animate, as world-space displacements.
+/// Empty when no animation has a morph-weight channel on the skinned node, or when more than
+/// one skinned node carries targets (then morph animation is reported as not imported).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MorphTargets {
+    /// `#targets`, each `#V` (zero on primitives without targets).
+    pub displacements: Vec<Vec<DVec3>>,
+    /// The default weights (`#targets`), already applied to the rest skin M.
+    pub default_weights: Vec<f64>,
+}
+
+impl MorphTargets {
+    pub fn is_empty(&self) -> bool {
+        self.displacements.is_empty()
+    }
 }
 
 /// One animation of the file as a skeleton track.
@@ -50,6 +69,11 @@ pub struct ImportedAnimation {
     /// True when sampling the track reproduces the file's channels at every time (LINEAR and
     /// key-aligned channels); false when STEP or CUBICSPLINE channels were resampled.
     pub exact: bool,
+    /// The morph weights of [`ImportedCharacter::morph_targets`] at the track's key times
+    /// (`#keys × #targets`, row-major; lerped between keys like the track), when the animation
+    /// has a morph-weight channel on the skinned node. Play them as a cage track with
+    /// [`crate::morph_cage_track`].
+    pub morph_weights: Option<Vec<f64>>,
 }
 
 /// What `cagerig info` lists about an imported file.
@@ -167,6 +191,8 @@ pub struct AnimationSummary {
     pub duration: f64,
     pub keys: usize,
     pub exact: bool,
+    /// Whether the animation animates morph weights (played as a cage track).
+    pub morph_weights: bool,
 }
 
 impl ImportedCharacter {
@@ -214,6 +240,7 @@ impl ImportedCharacter {
                 duration: a.duration,
                 keys: a.track.num_keyframes(),
                 exact: a.exact,
+                morph_weights: a.morph_weights.is_some(),
             })
             .collect();
     }

@@ -344,6 +344,7 @@ pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharac
             duration: t1,
             track,
             exact: false,
+            morph_weights: None,
         });
     }
     if !scene.anim_stacks.is_empty() {
@@ -357,6 +358,7 @@ pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharac
         skin_weights,
         cage: None,
         animations,
+        morph_targets: Default::default(),
         node_pose,
         summary: ImportSummary {
             format: "FBX".into(),

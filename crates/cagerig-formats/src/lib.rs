@@ -7,11 +7,15 @@ pub mod character;
 pub mod error;
 pub mod fbx;
 pub mod gltf;
+pub mod morph_cage_track;
 
 use std::path::Path;
 
-pub use character::{ImportSummary, ImportedAnimation, ImportedCharacter, SpaceSummary};
+pub use character::{
+    ImportSummary, ImportedAnimation, ImportedCharacter, MorphTargets, SpaceSummary,
+};
 pub use error::FormatError;
+pub use morph_cage_track::{MorphCageTrack, morph_cage_track};
 
 /// Import choices.
 #[derive(Debug, Clone)]

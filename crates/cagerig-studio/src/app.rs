@@ -168,6 +168,8 @@ pub struct StudioApp {
     pub numeric: crate::inspector::NumericEntry,
     /// Animations of the open glTF / FBX character (File > Load animation).
     pub animations: Vec<cagerig_formats::ImportedAnimation>,
+    /// Their morph targets (played as cage keys, see `load_character_animation`).
+    pub morph_targets: cagerig_formats::MorphTargets,
     /// A rig loading in the background.
     pub(crate) pending_open: Option<PendingOpen>,
 }
@@ -215,6 +217,7 @@ impl StudioApp {
             quit_requested: false,
             numeric: Default::default(),
             animations: Vec::new(),
+            morph_targets: Default::default(),
             pending_open: None,
         };
         if app.renderer.is_none() {
@@ -318,6 +321,7 @@ impl StudioApp {
     pub(crate) fn set_document(&mut self, doc: Document) {
         self.doc = Some(doc);
         self.animations.clear();
+        self.morph_targets = Default::default();
         self.selection = Selection::default();
         self.interaction = Interaction::default();
         self.timeline = TimelineState::default();

@@ -45,6 +45,11 @@ pub struct CageKey {
 pub struct Keys {
     pub skeleton: Vec<SkeletonKey>,
     pub cage: Vec<CageKey>,
+    /// Playback holds SkelUp: the skeleton keys already carry the rest joints' motion (a
+    /// cagerig glTF export with a cage track, loaded with its morph weights as cage keys; see
+    /// [`AnimationPlayer::holding_rest_skeleton`]).
+    #[serde(default)]
+    pub hold_rest_skeleton: bool,
 }
 
 #[derive(Debug, Error)]
@@ -340,7 +345,8 @@ impl Keys {
             self.skeleton_track(session)?,
             self.cage_track(session)?,
             PoseChannels::Full,
-        )?;
+        )?
+        .holding_rest_skeleton(self.hold_rest_skeleton);
         Ok(Some(player))
     }
 
@@ -352,6 +358,7 @@ impl Keys {
         session: &RigSession,
     ) -> Result<usize, KeyError> {
         let (track, _version) = cagerig::io::read_skeleton_animation(path, session.skeleton())?;
+        self.hold_rest_skeleton = false;
         let original = original_local_translations(session);
         let skeleton = session.skeleton();
         self.skeleton = track
@@ -373,9 +380,27 @@ impl Keys {
         Ok(self.skeleton.len())
     }
 
+    /// Replaces the cage keys with a cage track (offsets from C₀), e.g. an imported animation's
+    /// morph weights ([`cagerig_formats::morph_cage_track`]).
+    pub fn set_cage_track(&mut self, track: &CageTrack, session: &RigSession) -> usize {
+        let c0 = session.original_rest_cage();
+        self.cage = track
+            .times()
+            .iter()
+            .zip(track.offsets())
+            .map(|(&time, offsets)| CageKey {
+                time,
+                rest_cage: c0.iter().zip(offsets).map(|(c, o)| *c + *o).collect(),
+            })
+            .collect();
+        self.cage.len()
+    }
+
     /// Replaces the skeleton keys with an imported (glTF / FBX) animation's track of local
-    /// transforms, every channel kept (rotation, scale, translation of every joint).
+    /// transforms, every channel kept (rotation, scale, translation of every joint); playback
+    /// no longer holds SkelUp.
     pub fn set_skeleton_track(&mut self, track: &SkeletonTrack, session: &RigSession) -> usize {
+        self.hold_rest_skeleton = false;
         let original = original_local_translations(session);
         self.skeleton = track
             .times()
@@ -407,17 +432,7 @@ impl Keys {
         session: &RigSession,
     ) -> Result<usize, KeyError> {
         let track = cagerig::io::read_cage_animation(path, session.rest_cage().len())?;
-        let c0 = session.original_rest_cage();
-        self.cage = track
-            .times()
-            .iter()
-            .zip(track.offsets())
-            .map(|(&time, offsets)| CageKey {
-                time,
-                rest_cage: c0.iter().zip(offsets).map(|(c, o)| *c + *o).collect(),
-            })
-            .collect();
-        Ok(self.cage.len())
+        Ok(self.set_cage_track(&track, session))
     }
 
     /// Writes the skeleton keys as a skeleton animation file (V3: global frames).

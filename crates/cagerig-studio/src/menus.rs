@@ -524,10 +524,50 @@ impl StudioApp {
         let n = snapshot
             .keys
             .set_skeleton_track(&animation.track, &doc.session);
-        match doc.restore_as_step("load animation", &snapshot) {
+        // Morph weights (a cagerig export with a cage track): cage keys, SkelUp held.
+        let mut cage_note = String::new();
+        let mut warning = None;
+        if let Some(weights) = &animation.morph_weights {
+            match cagerig_formats::morph_cage_track(
+                &doc.session,
+                &self.morph_targets,
+                &animation.track,
+                weights,
+            ) {
+                Ok(fit) => {
+                    let count = snapshot.keys.set_cage_track(&fit.track, &doc.session);
+                    snapshot.keys.hold_rest_skeleton = true;
+                    let (lo, hi) = cagerig::mesh::bounding_box(doc.session.rest_mesh());
+                    let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+                    cage_note = format!(
+                        " and {count} cage keys from its morph weights (SkelUp held during \
+                         playback: the joint keys carry the rest joints' motion)"
+                    );
+                    if fit.worst_residual > 1e-5 * diagonal {
+                        warning = Some(format!(
+                            "animation {name:?}: morph target {} is not a deformation of the \
+                             cage; played through the cage it is off by {:.2e} of the diagonal",
+                            fit.worst_target,
+                            fit.worst_residual / diagonal
+                        ));
+                    }
+                }
+                Err(e) => {
+                    warning = Some(format!(
+                        "animation {name:?}: its morph weights could not be played as cage keys: \
+                         {e}"
+                    ))
+                }
+            }
+        }
+        let restored = doc.restore_as_step("load animation", &snapshot);
+        if let Some(w) = warning {
+            self.log_warning(w);
+        }
+        match restored {
             Ok(()) => {
                 self.timeline.time = 0.0;
-                self.log_info(format!("animation {name:?}: {n} skeleton keys"));
+                self.log_info(format!("animation {name:?}: {n} skeleton keys{cage_note}"));
             }
             Err(e) => self.log_error(format!("animation {name:?}: {e}")),
         }

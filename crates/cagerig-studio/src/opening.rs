@@ -264,6 +264,7 @@ impl StudioApp {
         }
         self.set_document(Document::new(source, opened.session));
         self.animations = opened.animations;
+        self.morph_targets = opened.morph_targets;
         self.session_path = None;
     }
 

@@ -111,12 +111,14 @@ pub struct OpenedRig {
     pub files: Vec<(String, PathBuf)>,
     /// Animations found in a glTF / FBX character.
     pub animations: Vec<ImportedAnimation>,
+    /// The character's morph targets that the animations animate (empty otherwise).
+    pub morph_targets: cagerig_formats::MorphTargets,
 }
 
 /// Loads `source` and assembles the session (Φ, MaxVol rows and Ψ are computed when no file
 /// gives them).
 pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
-    let (parts, mut warnings, files, animations) = match source {
+    let (parts, mut warnings, files, (animations, morph_targets)) = match source {
         RigSource::Builtin { name, resolution } => {
             let builtin_error = |source| OpenError::Builtin {
                 name: name.clone(),
@@ -132,7 +134,7 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
             .map_err(builtin_error)?;
             let rig = cagerig::demo::builtin(name, *resolution).map_err(builtin_error)?;
             let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
-            (parts, Vec::new(), Vec::new(), Vec::new())
+            (parts, Vec::new(), Vec::new(), Default::default())
         }
         RigSource::File {
             path,
@@ -163,7 +165,7 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
                 .into_iter()
                 .map(|(role, p)| (role.to_string(), p))
                 .collect();
-            (rig.parts, warnings, files, Vec::new())
+            (rig.parts, warnings, files, Default::default())
         }
     };
     let name = source.display_name();
@@ -184,6 +186,7 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
         warnings,
         files,
         animations,
+        morph_targets,
     })
 }
 
@@ -191,7 +194,7 @@ type Imported = (
     RigParts,
     Vec<Warning>,
     Vec<(String, PathBuf)>,
-    Vec<ImportedAnimation>,
+    (Vec<ImportedAnimation>, cagerig_formats::MorphTargets),
 );
 
 fn cage_options(vertices: usize) -> CageOptions {
@@ -256,7 +259,7 @@ fn import_interchange(
         ),
         warnings,
         files,
-        character.animations,
+        (character.animations, character.morph_targets),
     ))
 }
 

@@ -713,3 +713,91 @@ fn an_autosave_is_offered_at_the_next_start_and_recovers_the_work() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A cagerig glTF export of the Arm's hybrid animation (skeleton + cage track) opened in the
+/// editor with the cage it carries: File > Load animation puts its joint keys on the skeleton
+/// track and its morph weights on the cage track as cage keys, and playback (SkelUp held: the
+/// joint keys already carry the rest joints' motion) shows cagerig's own result to 1e-5 of the
+/// diagonal.
+#[test]
+fn a_hybrid_export_reopens_with_its_cage_keys_and_plays_as_exported() {
+    use cagerig::playback::{AnimationPlayer, PoseChannels};
+    use cagerig::session::{RigSession, SessionOptions};
+    if skip() {
+        return;
+    }
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm");
+    let files = cagerig::io::rig_files::load_rig_files(&data.join("arm.obj"), None).unwrap();
+    let mut original = RigSession::new(files.parts, SessionOptions::default())
+        .unwrap()
+        .0;
+    let skeleton_track = cagerig::io::skeleton_animation::read_skeleton_animation(
+        &data.join("arm_skelAnim.txt"),
+        original.skeleton(),
+    )
+    .unwrap()
+    .0;
+    let cage_track = cagerig::io::read_cage_animation(
+        &data.join("arm_cageAnim.txt"),
+        original.rest_cage().len(),
+    )
+    .unwrap();
+    let mut player = AnimationPlayer::with_channels(
+        &original,
+        Some(skeleton_track.clone()),
+        Some(cage_track.clone()),
+        PoseChannels::RotationsAndRootMotion,
+    )
+    .unwrap();
+    let keys: Vec<f64> = skeleton_track
+        .times()
+        .iter()
+        .chain(cage_track.times())
+        .copied()
+        .collect();
+    let times =
+        cagerig_formats::gltf::export_animation::sample_times(player.duration(), 30.0, &keys);
+    let (document, bin) = cagerig_formats::gltf::export_animation::animation_to_gltf(
+        &mut original,
+        &mut player,
+        Some(&cage_track),
+        &times,
+        "arm",
+    )
+    .unwrap();
+    let dir = temp_dir("hybrid");
+    let path = dir.join("arm_anim.glb");
+    cagerig_formats::gltf::export::write_gltf_or_glb(&path, &document, &bin).unwrap();
+
+    let mut h = harness(
+        StartupOptions {
+            source: Some(RigSource::file(&path)),
+            ..Default::default()
+        },
+        &dir.join("state"),
+    );
+    assert_eq!(h.state().animations.len(), 1);
+    h.state_mut().load_character_animation(0);
+    h.run_steps(1);
+    let doc_keys = &h.state().doc.as_ref().unwrap().keys;
+    assert_eq!(
+        doc_keys.len(Track::Cage),
+        times.len(),
+        "a cage key per sample"
+    );
+    assert!(doc_keys.hold_rest_skeleton);
+    let (lo, hi) = cagerig::mesh::bounding_box(original.rest_mesh());
+    let diagonal = (hi - lo).length();
+    for t in [0.37, 2.5, 6.1] {
+        player.apply(t, &mut original).unwrap();
+        h.state_mut().scrub_to(t);
+        let shown = &h.state().doc.as_ref().unwrap().session;
+        let off = cagerig::mesh::max_distance(shown.posed_mesh(), original.posed_mesh());
+        assert!(
+            off <= 1e-5 * diagonal,
+            "t = {t}: {:e} of the diagonal",
+            off / diagonal
+        );
+    }
+    std::fs::remove_dir_all(dir).ok();
+}

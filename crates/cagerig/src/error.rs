@@ -21,19 +21,29 @@ pub fn first_bad_component(v: glam::DVec3) -> Option<f64> {
 /// A request too large for the memory of this machine (see [`crate::memory_estimate`]).
 #[derive(Debug, Error, Clone, PartialEq)]
 #[error(
-    "{what}: about {vertices} vertices × {cage_vertices} cage vertices would need about \
-     {needed_gib:.1} GiB (cage coordinates Φ alone: {phi_gib:.1} GiB), but {limit_gib:.1} GiB \
-     {limit}; ask for less"
+    "{what}: about {vertices} {rows} × {cage_vertices} cage vertices would need about \
+     {needed_gib:.1} GiB{}, but {limit_gib:.1} GiB {limit}; ask for less",
+    phi_note(*.phi_gib)
 )]
 pub struct MemoryNeed {
     pub what: String,
+    /// Rows of the request (`vertices` of the mesh, or of a table named by `rows`).
     pub vertices: u64,
+    /// What the rows are: "vertices", or e.g. "grid nodes" for an intermediate table.
+    pub rows: &'static str,
     pub cage_vertices: u64,
     pub needed_gib: f64,
-    pub phi_gib: f64,
+    /// Φ's share of `needed_gib`, when the request is a whole session.
+    pub phi_gib: Option<f64>,
     pub limit_gib: f64,
     /// "are available" or "is the limit" (when the available memory is unknown).
     pub limit: &'static str,
+}
+
+fn phi_note(phi_gib: Option<f64>) -> String {
+    phi_gib.map_or_else(String::new, |g| {
+        format!(" (cage coordinates Φ alone: {g:.1} GiB)")
+    })
 }
 
 /// A structural problem that makes a rig unusable. Every variant names the offending element.

@@ -45,9 +45,12 @@ fn check_bytes_fit(
         return Err(RigError::TooLarge(Box::new(MemoryNeed {
             what: what.to_string(),
             vertices,
+            rows: "vertices",
             cage_vertices,
             needed_gib: gib(bytes),
-            phi_gib: gib(vertices.saturating_mul(cage_vertices).saturating_mul(8)),
+            phi_gib: Some(gib(vertices
+                .saturating_mul(cage_vertices)
+                .saturating_mul(8))),
             limit_gib: gib(limit),
             limit: if available.is_some() {
                 "are available"
@@ -64,12 +67,50 @@ fn check_bytes_fit(
 /// fails ("memory allocation failed"); the library calls this first, so that a request beyond
 /// what the system will hand out is a [`RigError::TooLarge`] naming it instead.
 pub fn check_dense_allocation(what: &str, rows: usize, cols: usize) -> Result<(), RigError> {
-    let entries = rows.checked_mul(cols);
-    let reserved = entries
-        .filter(|n| n.checked_mul(8).is_some_and(|b| b <= isize::MAX as usize))
-        .is_some_and(|n| Vec::<f64>::new().try_reserve_exact(n).is_ok());
-    if reserved {
-        return Ok(());
+    check_table_allocation(what, rows, "vertices", cols)
+}
+
+/// [`check_dense_allocation`] for an intermediate `rows × cols` f64 table whose rows are
+/// `rows_label` (MaxVol's B = ΦΦ̃⁻¹, the CoR similarity tables, …), before an allocation that
+/// is not ours to make fallible (faer's).
+pub fn check_table_allocation(
+    what: &str,
+    rows: usize,
+    rows_label: &'static str,
+    cols: usize,
+) -> Result<(), RigError> {
+    reserved_table(what, rows, rows_label, cols).map(drop)
+}
+
+/// A zeroed `rows × cols` f64 table (row- or column-major is the caller's), allocated
+/// fallibly: a size the system refuses is a [`RigError::TooLarge`] naming `what` and its rows
+/// (`rows_label`), not an abort.
+pub fn zeroed_table(
+    what: &str,
+    rows: usize,
+    rows_label: &'static str,
+    cols: usize,
+) -> Result<Vec<f64>, RigError> {
+    let mut table = reserved_table(what, rows, rows_label, cols)?;
+    table.resize(rows * cols, 0.0);
+    Ok(table)
+}
+
+/// An empty vector with room for `rows × cols` f64, or the error of [`zeroed_table`].
+fn reserved_table(
+    what: &str,
+    rows: usize,
+    rows_label: &'static str,
+    cols: usize,
+) -> Result<Vec<f64>, RigError> {
+    let entries = rows
+        .checked_mul(cols)
+        .filter(|n| n.checked_mul(8).is_some_and(|b| b <= isize::MAX as usize));
+    if let Some(n) = entries {
+        let mut table = Vec::<f64>::new();
+        if table.try_reserve_exact(n).is_ok() {
+            return Ok(table);
+        }
     }
     let (vertices, cage_vertices) = (rows as u64, cols as u64);
     let bytes = vertices.saturating_mul(cage_vertices).saturating_mul(8);
@@ -77,9 +118,10 @@ pub fn check_dense_allocation(what: &str, rows: usize, cols: usize) -> Result<()
     Err(RigError::TooLarge(Box::new(MemoryNeed {
         what: what.to_string(),
         vertices,
+        rows: rows_label,
         cage_vertices,
         needed_gib: gib(bytes),
-        phi_gib: gib(bytes),
+        phi_gib: None,
         limit_gib: gib(available.unwrap_or(0)),
         limit: if available.is_some() {
             "are available (the allocation was refused)"
@@ -150,5 +192,28 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("refused"), "{e}");
+    }
+
+    #[test]
+    fn tables_are_zeroed_or_refused_with_their_rows_named() {
+        let table = zeroed_table("B", 3, "rows", 4).unwrap();
+        assert_eq!(table, vec![0.0; 12]);
+        assert!(zeroed_table("empty", 0, "rows", 4).unwrap().is_empty());
+        let e = zeroed_table("CoR similarity tables", 1 << 40, "grid nodes", 1 << 13)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("CoR similarity tables")
+                && e.contains("grid nodes")
+                && !e.contains("Φ alone"),
+            "{e}"
+        );
+        let e = check_table_allocation("MaxVol B", usize::MAX, "candidate rows", 2)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("MaxVol B") && e.contains("candidate rows"),
+            "{e}"
+        );
     }
 }

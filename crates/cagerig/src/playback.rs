@@ -42,6 +42,8 @@ pub struct AnimationPlayer {
     /// Local translations of the rest skeleton as loaded, `#J` (roots: world translation).
     original_local_translation: Vec<DVec3>,
     channels: PoseChannels,
+    /// SkelUp held while sampling (see [`AnimationPlayer::holding_rest_skeleton`]).
+    hold_rest_skeleton: bool,
     locals: Vec<DAffine3>,
     rotations: Vec<DQuat>,
     scales: Vec<DVec3>,
@@ -111,11 +113,28 @@ impl AnimationPlayer {
             cage_track,
             original_local_translation: locals.iter().map(|l| l.translation).collect(),
             channels,
+            hold_rest_skeleton: false,
             rotations: locals.iter().map(|l| rotation_of(&l.matrix3)).collect(),
             scales: session.rest_local_scales().to_vec(),
             locals,
             translation_offsets: vec![DVec3::ZERO; nj],
         })
+    }
+
+    /// With `hold`, samples do not run SkelUp: the rest joints stay where they are while the
+    /// cage track moves the rest cage. For skeleton keys that already contain the motion SkelUp
+    /// gave the rest joints when they were made — a cagerig glTF export with a cage track, whose
+    /// joint nodes carry `T_j(t)·B_j(0)` — so that the joints do not move twice. The session's
+    /// own SkelUp lock is left as it was (the rest skeleton then stays where playback left it
+    /// until the next rest-cage edit re-runs SkelUp).
+    pub fn holding_rest_skeleton(mut self, hold: bool) -> Self {
+        self.hold_rest_skeleton = hold;
+        self
+    }
+
+    /// Whether samples hold the rest skeleton ([`AnimationPlayer::holding_rest_skeleton`]).
+    pub fn holds_rest_skeleton(&self) -> bool {
+        self.hold_rest_skeleton
     }
 
     /// Last keyframe time over both tracks.
@@ -132,6 +151,18 @@ impl AnimationPlayer {
     /// Samples both tracks at `t` seconds (clamped to each track's range) and runs the full
     /// sync on the session.
     pub fn apply(&mut self, t: f64, session: &mut RigSession) -> Result<(), RigError> {
+        let hold = self.hold_rest_skeleton && !session.sync_locks().skel_up;
+        if hold {
+            session.set_skel_up_lock_quietly(true);
+        }
+        let result = self.apply_sample(t, session);
+        if hold {
+            session.set_skel_up_lock_quietly(false);
+        }
+        result
+    }
+
+    fn apply_sample(&mut self, t: f64, session: &mut RigSession) -> Result<(), RigError> {
         let full = self.channels == PoseChannels::Full;
         if let Some(track) = &self.skeleton_track {
             track.sample(t, &mut self.locals);

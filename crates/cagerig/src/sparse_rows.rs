@@ -118,6 +118,13 @@ impl SparseRows {
         }
         let nrows = self.nrows();
         let num_cage = cage_coords.num_cage_vertices();
+        // The columns, then the matrix: two copies of the result at the peak.
+        crate::memory_estimate::check_table_allocation(
+            "sparse rows × Φ",
+            nrows.saturating_mul(2),
+            "rows",
+            num_cage,
+        )?;
         let columns: Vec<Vec<f64>> = (0..num_cage)
             .into_par_iter()
             .map(|k| {

@@ -107,17 +107,33 @@ impl Channel {
 /// Animations, the nodes' own pose (joint locals) and warnings.
 pub type AnimationImport = (Vec<ImportedAnimation>, Vec<DAffine3>, Vec<Warning>);
 
-/// Every animation of the document as a skeleton track for the skin's joints, and the joint
-/// locals of the nodes' own (unanimated) transforms.
+/// What the animations are read for: the skin's joints and the skinned node with morph targets.
+#[derive(Debug, Clone, Copy)]
+pub struct AnimationTargets<'a> {
+    /// Node of each joint (`#J`).
+    pub joint_nodes: &'a [usize],
+    /// Parent joint of each joint (`#J`).
+    pub joint_parent: &'a [Option<usize>],
+    /// (node, number of targets) of the skinned node whose morph weights are imported.
+    pub morph: Option<(usize, usize)>,
+}
+
+/// Every animation of the document as a skeleton track for the skin's joints (with the morph
+/// weights of `targets.morph` at the track's keys), and the joint locals of the nodes' own
+/// (unanimated) transforms.
 pub fn import_animations(
     document: &gltf::Document,
     buffers: &Buffers,
     tree: &NodeTree,
-    joint_nodes: &[usize],
-    joint_parent: &[Option<usize>],
+    targets: &AnimationTargets,
     options: &ImportOptions,
     path: &Path,
 ) -> Result<AnimationImport, FormatError> {
+    let AnimationTargets {
+        joint_nodes,
+        joint_parent,
+        morph,
+    } = *targets;
     let nn = tree.parent.len();
     // Nodes whose transform moves the skeleton: joints and all their ancestors.
     let mut relevant = vec![false; nn];
@@ -166,19 +182,26 @@ pub fn import_animations(
             .unwrap_or_else(|| format!("animation{}", animation.index()));
         let element = format!("animation {} {name:?}", animation.index());
         let mut channels = Vec::new();
+        let mut weight_channel = None;
         let mut ignored = 0usize;
         for channel in animation.channels() {
             let node = channel.target().node().index();
             let property = channel.target().property();
-            if property == Property::MorphTargetWeights {
+            let morph_targets = match morph {
+                Some((n, count)) if n == node && property == Property::MorphTargetWeights => {
+                    Some(count)
+                }
+                _ => None,
+            };
+            if property == Property::MorphTargetWeights && morph_targets.is_none() {
                 warnings.push(Warning::Note {
                     message: format!(
-                        "{element}: morph-weight channel on node {node} is not imported"
+                        "{element}: morph-weight channel on node {node} is not imported (only the weights of the one skinned node with morph targets are)"
                     ),
                 });
                 continue;
             }
-            if !relevant[node] {
+            if morph_targets.is_none() && !relevant[node] {
                 ignored += 1;
                 continue;
             }
@@ -207,10 +230,14 @@ pub fn import_animations(
                     ),
                 ));
             }
-            let (width, dims) = match property {
-                Property::Rotation => (4, Dimensions::Vec4),
+            let (width, dims) = match (property, morph_targets) {
+                (Property::Rotation, _) => (4, Dimensions::Vec4),
+                (_, Some(count)) => (count, Dimensions::Scalar),
                 _ => (3, Dimensions::Vec3),
             };
+            if width == 0 {
+                continue;
+            }
             let values = buffers.read(&sampler.output(), "animation output", &[dims])?;
             let interpolation = sampler.interpolation();
             let per_key = if interpolation == Interpolation::CubicSpline {
@@ -230,14 +257,19 @@ pub fn import_animations(
                     ),
                 ));
             }
-            channels.push(Channel {
+            let channel = Channel {
                 node,
                 property,
                 interpolation,
                 times,
                 values,
                 width,
-            });
+            };
+            if morph_targets.is_some() {
+                weight_channel = Some(channel);
+            } else {
+                channels.push(channel);
+            }
         }
         if ignored > 0 {
             warnings.push(Warning::Note {
@@ -247,7 +279,7 @@ pub fn import_animations(
         // Key times: union of channel keys, plus STEP ramps and CUBICSPLINE resampling.
         let mut times: Vec<f64> = Vec::new();
         let mut exact = true;
-        for c in &channels {
+        for c in channels.iter().chain(&weight_channel) {
             times.extend(&c.times);
             match c.interpolation {
                 Interpolation::Step => {
@@ -325,6 +357,12 @@ pub fn import_animations(
                 .collect();
             keys.push(key);
         }
+        let morph_weights = weight_channel.as_ref().map(|c| {
+            times
+                .iter()
+                .flat_map(|&t| c.sample(t))
+                .collect::<Vec<f64>>()
+        });
         let duration = *times.last().unwrap_or(&0.0);
         let track =
             SkeletonTrack::new(times, keys).map_err(|e| invalid(path, &element, e.to_string()))?;
@@ -333,6 +371,7 @@ pub fn import_animations(
             duration,
             track,
             exact,
+            morph_weights,
         });
     }
     Ok((animations, node_pose, warnings))

@@ -7,7 +7,8 @@
 //! nodes' TRS. Under LBS a viewer then shows cagerig's M' up to the f32 rounding of the file
 //! (positions, matrices and weights are f32 in glTF). Importing the file back
 //! ([`super::import_gltf`]) gives the same M, S and Ω, and [`crate::ImportedCharacter::node_pose`]
-//! gives back the pose.
+//! gives back the pose. The rest cage C is written too, as a mesh node `<name>_cage` outside the
+//! scene (marked `extras.cagerig_cage`), so that the file reopens in cagerig with its cage.
 
 use std::io::Write;
 use std::path::Path;
@@ -232,6 +233,22 @@ pub fn session_to_gltf(session: &RigSession, name: &str) -> Result<(Value, Vec<u
         }
     }
     nodes.push(json!({"name": name, "mesh": 0, "skin": 0}));
+    // The rest cage C, for cagerig to read back: a mesh node outside the scene (viewers do not
+    // draw it), named `<name>_cage` and marked in `extras`.
+    let cage_positions = position_accessor(&mut b, session.rest_cage(), true);
+    let cage_index_bytes: Vec<u8> = session
+        .cage_triangles()
+        .iter()
+        .flatten()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
+    let cage_indices = b.accessor(
+        &cage_index_bytes,
+        Some(ELEMENT_ARRAY_BUFFER),
+        json!({"componentType": UNSIGNED_INT, "count": 3 * session.cage_triangles().len(), "type": "SCALAR"}),
+    );
+    let cage_name = format!("{name}_cage");
+    nodes.push(json!({"name": cage_name, "mesh": 1, "extras": {"cagerig_cage": true}}));
     let mut roots: Vec<usize> = (0..nj).filter(|&j| skeleton.parent(j).is_none()).collect();
     roots.push(nj);
     let document = json!({
@@ -239,7 +256,10 @@ pub fn session_to_gltf(session: &RigSession, name: &str) -> Result<(Value, Vec<u
         "scene": 0,
         "scenes": [{"nodes": roots}],
         "nodes": nodes,
-        "meshes": [{"name": name, "primitives": [{"attributes": attributes, "indices": indices, "mode": 4}]}],
+        "meshes": [
+            {"name": name, "primitives": [{"attributes": attributes, "indices": indices, "mode": 4}]},
+            {"name": cage_name, "primitives": [{"attributes": {"POSITION": cage_positions}, "indices": cage_indices, "mode": 4}]},
+        ],
         "skins": [{"joints": (0..nj).collect::<Vec<_>>(), "inverseBindMatrices": ibm}],
     });
     Ok(b.finish(document))

@@ -10,6 +10,9 @@
 //!   joints with the cage; that motion is folded into the joint nodes: the node world transform
 //!   written at time t is `G_j(t) = T_j(t) · B_j(0)` with `T_j(t)` cagerig's skinning transform,
 //!   so a viewer's `G_j(t) · IBM_j · M(t) = T_j(t) · M(t)` — cagerig's LBS result.
+//! - Read back by cagerig ([`crate::morph_cage_track`]), the morph weights become a cage track
+//!   again (each target solved for its cage displacement on CageUp's rows) and the joint keys
+//!   are played with SkelUp held, since they already carry the rest joints' motion.
 //! - Exactness: under LBS, exact (to the f32 rounding of glTF) at every sample time; samples are
 //!   the union of the skeleton keys, the cage keys and a grid at `fps`. Between samples a viewer
 //!   slerps/lerps the node TRS, which differs from cagerig's interpolation by the resampling.
@@ -183,9 +186,10 @@ pub fn animation_to_gltf(
         channels
             .push(json!({"sampler": samplers.len(), "target": {"node": nj, "path": "weights"}}));
         samplers.push(json!({"input": input, "output": output, "interpolation": "LINEAR"}));
-        let initial: Vec<f64> = weights[..targets.len()].to_vec();
+        // Default weights 0: without the animation the file shows M₀, the bind shape.
+        let count = targets.len();
         document["meshes"][0]["primitives"][0]["targets"] = Value::Array(targets);
-        document["meshes"][0]["weights"] = json!(initial);
+        document["meshes"][0]["weights"] = json!(vec![0.0; count]);
     }
     document["animations"] = json!([{"name": name, "channels": channels, "samplers": samplers}]);
     Ok(b.finish(document))

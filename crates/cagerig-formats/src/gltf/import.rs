@@ -18,13 +18,13 @@ use glam::{DAffine3, DVec3};
 use gltf::accessor::Dimensions;
 use gltf::mesh::Mode;
 
-use super::animation::import_animations;
+use super::animation::{AnimationTargets, import_animations};
 use super::buffers::Buffers;
 use super::cage::find_cage;
 use super::scene::{NodeTree, affine_from_cols};
 use crate::ImportOptions;
 use crate::character::{
-    ImportSummary, ImportedCharacter, PrimitiveSummary, SkinSummary, max_abs_diff,
+    ImportSummary, ImportedCharacter, MorphTargets, PrimitiveSummary, SkinSummary, max_abs_diff,
     snap_to_similarity,
 };
 use crate::error::{FormatError, invalid};
@@ -222,6 +222,33 @@ pub fn import_gltf_bytes(
         source,
     })?;
 
+    // ----- morph targets animated by a weights channel ------------------------------------------
+    // Kept when exactly one skinned node of this skin has targets and some animation animates
+    // its weights (its default weights are applied to M either way).
+    let has_targets = |node: &gltf::Node| {
+        node.mesh()
+            .is_some_and(|m| m.primitives().any(|p| p.morph_targets().next().is_some()))
+    };
+    let target_nodes: Vec<usize> = document
+        .nodes()
+        .filter(|n| n.skin().map(|s| s.index()) == Some(skin.index()) && has_targets(n))
+        .map(|n| n.index())
+        .collect();
+    let morph_node = match target_nodes[..] {
+        [node] => document
+            .animations()
+            .flat_map(|a| a.channels())
+            .any(|c| {
+                c.target().node().index() == node
+                    && c.target().property() == gltf::animation::Property::MorphTargetWeights
+            })
+            .then_some(node),
+        _ => None,
+    };
+    let mut morph_targets: Vec<Vec<DVec3>> = Vec::new();
+    let mut default_morph_weights: Vec<f64> = Vec::new();
+    let mut primitive_targets: Vec<Vec<DVec3>> = Vec::new();
+
     // ----- skinned primitives, merged ----------------------------------------------------------------
     let mut positions: Vec<DVec3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
@@ -243,6 +270,7 @@ pub fn import_gltf_bytes(
                 primitive.index()
             );
             let base = positions.len();
+            let collect = morph_node == Some(node.index());
             let summary = read_primitive(
                 &primitive,
                 &node,
@@ -254,9 +282,14 @@ pub fn import_gltf_bytes(
                 &mut positions,
                 &mut triangles,
                 &mut triplets,
+                collect.then_some(&mut primitive_targets),
                 &mut warnings,
             )?;
             if let Some((vertices, tris, indexed)) = summary {
+                if collect {
+                    merge_targets(&mut morph_targets, &primitive_targets, base, vertices);
+                    default_morph_weights = default_weights(&node);
+                }
                 primitives.push(PrimitiveSummary {
                     source,
                     first_vertex: base,
@@ -275,6 +308,11 @@ pub fn import_gltf_bytes(
         ));
     }
     let nv = positions.len();
+    for target in &mut morph_targets {
+        target.resize(nv, DVec3::ZERO);
+    }
+    default_morph_weights.resize(morph_targets.len(), 0.0);
+    normalise_f32_rounded_rows(nv, &mut triplets);
     let (skin_weights, weight_warnings) =
         SkinWeights::from_triplets(nv, nj, triplets).map_err(|source| FormatError::Rig {
             path: path.to_path_buf(),
@@ -293,8 +331,11 @@ pub fn import_gltf_bytes(
         document,
         &buffers,
         &tree,
-        &joint_nodes,
-        &joint_parent,
+        &AnimationTargets {
+            joint_nodes: &joint_nodes,
+            joint_parent: &joint_parent,
+            morph: morph_node.map(|node| (node, morph_targets.len())),
+        },
         options,
         path,
     )?;
@@ -306,6 +347,10 @@ pub fn import_gltf_bytes(
         skin_weights,
         cage,
         animations,
+        morph_targets: MorphTargets {
+            displacements: morph_targets,
+            default_weights: default_morph_weights,
+        },
         node_pose,
         summary: ImportSummary {
             format: "glTF".into(),
@@ -391,8 +436,12 @@ fn read_primitive(
     positions: &mut Vec<DVec3>,
     triangles: &mut Vec<[u32; 3]>,
     triplets: &mut Vec<(usize, usize, f64)>,
+    mut targets_out: Option<&mut Vec<Vec<DVec3>>>,
     warnings: &mut Vec<Warning>,
 ) -> Result<Option<(usize, usize, bool)>, FormatError> {
+    if let Some(out) = targets_out.as_deref_mut() {
+        out.clear();
+    }
     let position_accessor = primitive
         .get(&gltf::Semantic::Positions)
         .ok_or_else(|| invalid(path, source, "has no POSITION attribute"))?;
@@ -407,19 +456,19 @@ fn read_primitive(
     else {
         return Ok(None);
     };
-    // Morph targets at their default weights (node weights override mesh weights), before skinning.
+    // Morph targets at their default weights (node weights override mesh weights), before
+    // skinning; all of them kept (world-space displacements) when `targets_out` asks.
     let targets: Vec<_> = primitive.morph_targets().collect();
     if !targets.is_empty() {
-        let weights: Vec<f32> = node
-            .weights()
-            .or_else(|| node.mesh().and_then(|m| m.weights()))
-            .map(<[f32]>::to_vec)
-            .unwrap_or_default();
+        let weights = default_weights(node);
         let mut applied = 0;
         for (k, target) in targets.iter().enumerate() {
-            let w = weights.get(k).copied().unwrap_or(0.0) as f64;
-            if w == 0.0 {
+            let w = weights.get(k).copied().unwrap_or(0.0);
+            if w == 0.0 && targets_out.is_none() {
                 continue;
+            }
+            if let Some(out) = targets_out.as_deref_mut() {
+                out.resize(k + 1, Vec::new());
             }
             if let Some(acc) = target.positions() {
                 let d =
@@ -434,18 +483,39 @@ fn read_primitive(
                         ),
                     ));
                 }
-                for (p, dp) in local.iter_mut().zip(&d) {
-                    *p += *dp * w;
+                if w != 0.0 {
+                    for (p, dp) in local.iter_mut().zip(&d) {
+                        *p += *dp * w;
+                    }
+                    applied += 1;
                 }
-                applied += 1;
+                if let Some(out) = targets_out.as_deref_mut() {
+                    out[k] = d
+                        .iter()
+                        .map(|dp| world_from_bind.transform_vector3(*dp))
+                        .collect();
+                }
+            } else if let Some(out) = targets_out.as_deref_mut() {
+                out[k] = vec![DVec3::ZERO; nv];
             }
         }
-        warnings.push(Warning::Note {
-            message: format!(
-                "{source}: {} morph targets; {applied} with non-zero default weight applied to the bind shape before skinning (morph animation is not imported)",
-                targets.len()
-            ),
-        });
+        if targets_out.is_some() {
+            if applied > 0 {
+                warnings.push(Warning::Note {
+                    message: format!(
+                        "{source}: {applied} of {} morph targets applied at their non-zero default weight to the bind shape; the animations' morph weights are played relative to it",
+                        targets.len()
+                    ),
+                });
+            }
+        } else {
+            warnings.push(Warning::Note {
+                message: format!(
+                    "{source}: {} morph targets; {applied} with non-zero default weight applied to the bind shape before skinning (morph animation is not imported)",
+                    targets.len()
+                ),
+            });
+        }
     }
     // Every JOINTS_n / WEIGHTS_n set.
     let base = positions.len();
@@ -506,6 +576,55 @@ fn read_primitive(
     let ntri = tris.len();
     triangles.extend(tris.iter().map(|t| t.map(|i| i + base as u32)));
     Ok(Some((nv, ntri, indexed)))
+}
+
+/// Weight rows whose sum is 1 up to the f32 rounding of the file (within
+/// [`F32_ROW_SUM_TOLERANCE`]: eight f32 weights round by at most ≈ 5e-7 together) are normalised
+/// here, silently; rows further from 1 are left for [`SkinWeights::from_triplets`] to
+/// renormalise and report, so that the report counts rows that really do not sum to 1.
+fn normalise_f32_rounded_rows(num_vertices: usize, triplets: &mut [(usize, usize, f64)]) {
+    let mut sums = vec![0.0f64; num_vertices];
+    for &(v, _, w) in triplets.iter() {
+        sums[v] += w;
+    }
+    for (v, _, w) in triplets.iter_mut() {
+        let sum = sums[*v];
+        if sum != 1.0 && (sum - 1.0).abs() <= F32_ROW_SUM_TOLERANCE {
+            *w /= sum;
+        }
+    }
+}
+
+/// See [`normalise_f32_rounded_rows`].
+const F32_ROW_SUM_TOLERANCE: f64 = 1e-6;
+
+/// A node's default morph weights: its own `weights`, else its mesh's (empty when neither).
+fn default_weights(node: &gltf::Node) -> Vec<f64> {
+    node.weights()
+        .or_else(|| node.mesh().and_then(|m| m.weights()))
+        .map(|w| w.iter().map(|&x| f64::from(x)).collect())
+        .unwrap_or_default()
+}
+
+/// Appends one primitive's target displacements (`primitive`: per target, `vertices` each) to
+/// the merged targets, whose vertices so far number `base`; targets the primitive lacks get
+/// zeros.
+fn merge_targets(
+    merged: &mut Vec<Vec<DVec3>>,
+    primitive: &[Vec<DVec3>],
+    base: usize,
+    vertices: usize,
+) {
+    if merged.len() < primitive.len() {
+        merged.resize(primitive.len(), Vec::new());
+    }
+    for (k, target) in merged.iter_mut().enumerate() {
+        target.resize(base, DVec3::ZERO);
+        match primitive.get(k) {
+            Some(d) if d.len() == vertices => target.extend_from_slice(d),
+            _ => target.resize(base + vertices, DVec3::ZERO),
+        }
+    }
 }
 
 pub(super) fn to_vec3(v: &[f64]) -> Vec<DVec3> {

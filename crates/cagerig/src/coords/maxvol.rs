@@ -26,6 +26,7 @@ use super::maxvol_dominance::dominance_violations;
 use super::maxvol_swaps::{local_search, refine};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
+use crate::memory_estimate::check_table_allocation;
 
 /// Swap while some |B[i, j]| exceeds this (each swap multiplies |det| by at least this).
 pub const SWAP_THRESHOLD: f64 = 1.0 + 1e-3;
@@ -124,11 +125,12 @@ pub fn select_maxvol_rows_with(
         );
     }
     let (mut candidates, scale) = top_rows_per_column(phi, CANDIDATES_PER_COLUMN);
-    let reduced = CageCoords::from_matrix(phi.select_rows(&candidates))?;
+    let reduced = candidate_rows(phi, &candidates)?;
     // Start 0: LU pivots of the candidates (of all rows if the candidates are rank deficient).
     let first_rows: Vec<usize> = match lu_pivot_rows(reduced.matrix(), None, scale) {
         Ok(local) => local.iter().map(|&r| candidates[r]).collect(),
         Err(_) => {
+            check_table_allocation("MaxVol: LU of all of Φ", num_rows, "vertices", rank)?;
             let rows = lu_pivot_rows(matrix, None, scale)?;
             candidates = merged(&candidates, &rows);
             rows
@@ -140,7 +142,7 @@ pub fn select_maxvol_rows_with(
             .collect()
     };
     // Round 1: the starts on the candidates.
-    let reduced = CageCoords::from_matrix(phi.select_rows(&candidates))?;
+    let reduced = candidate_rows(phi, &candidates)?;
     let local = best_of_starts(
         &reduced,
         &local_rows(&candidates, &first_rows),
@@ -165,7 +167,7 @@ pub fn select_maxvol_rows_with(
             // on the candidates already accepted).
             break;
         }
-        let reduced = CageCoords::from_matrix(phi.select_rows(&candidates))?;
+        let reduced = candidate_rows(phi, &candidates)?;
         let (local, _) = refine(&reduced, &local_rows(&candidates, &best.rows))?;
         best = MaxVolSelection {
             rows: local.rows.iter().map(|&r| candidates[r]).collect(),
@@ -174,6 +176,19 @@ pub fn select_maxvol_rows_with(
         };
     }
     Ok(best)
+}
+
+/// The rows `candidates` of Φ (`#candidates × #C`), allocated only if the system can spare
+/// them and the refinement's B of the same size.
+fn candidate_rows(phi: &CageCoords, candidates: &[usize]) -> Result<CageCoords, RigError> {
+    let rank = phi.num_cage_vertices();
+    check_table_allocation(
+        "MaxVol: candidate rows of Φ and their B = ΦΦ̃⁻¹",
+        2 * candidates.len(),
+        "rows",
+        rank,
+    )?;
+    CageCoords::from_matrix(phi.select_rows(candidates))
 }
 
 /// The best (first on ties) of `starts` local searches on Φ: from `first_rows`, then from the
@@ -186,6 +201,14 @@ fn best_of_starts(
     seed: u64,
 ) -> Result<MaxVolSelection, RigError> {
     let rank = phi.num_cage_vertices();
+    // Each start holds an LU copy and a B of Φ's size.
+    check_table_allocation(
+        "MaxVol: the starts' LU and B tables",
+        phi.num_vertices()
+            .saturating_mul(2 * starts.clamp(1, rayon::current_num_threads())),
+        "rows",
+        rank,
+    )?;
     let mut state = seed;
     let orders: Vec<Vec<usize>> = (1..starts.max(1))
         .map(|_| {

@@ -97,6 +97,7 @@ fn initial_b(phi: &CageCoords, rows: &[usize]) -> Result<(Mat<f64>, SwapScratch)
     let inverse = SeqLu::new(phi.select_rows(rows)).inverse();
     // Small problems run sequentially.
     let parallel = num_rows * rank >= PARALLEL_ENTRIES && rayon::current_num_threads() > 1;
+    crate::memory_estimate::check_table_allocation("MaxVol: B = ΦΦ̃⁻¹", num_rows, "rows", rank)?;
     let mut b = Mat::<f64>::zeros(num_rows, rank);
     faer::linalg::matmul::matmul(
         b.as_mut(),

@@ -84,6 +84,12 @@ impl RigSession {
         }
     }
 
+    /// Sets SkelUp's lock without the sync that unlocking runs: for an animation sample whose
+    /// skeleton keys already contain the rest joints' motion ([`crate::playback`]).
+    pub(crate) fn set_skel_up_lock_quietly(&mut self, locked: bool) {
+        self.locks.skel_up = locked;
+    }
+
     /// The editable state now.
     pub fn editable_state(&self) -> EditableState {
         EditableState {

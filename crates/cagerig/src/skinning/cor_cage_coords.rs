@@ -33,6 +33,7 @@ use super::cor_centres::{
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
+use crate::memory_estimate::zeroed_table;
 
 #[cfg(doc)]
 use super::cor_centres::CorCentresMethod;
@@ -60,7 +61,7 @@ pub fn compute_cor_cage_coords(
 
     // Φ_P = (B·Φ)_P, row-major (#P × #C) for the per-cluster accumulation.
     let patch_coords_columns = problem.patches.points.compose_dense(cage_coords)?;
-    let mut patch_coords = vec![0.0f64; num_patches * num_cage];
+    let mut patch_coords = zeroed_table("CoR patch coordinates", num_patches, "patches", num_cage)?;
     patch_coords
         .par_chunks_mut(num_cage.max(1))
         .enumerate()
@@ -70,7 +71,12 @@ pub fn compute_cor_cage_coords(
 
     // Λ rows of the clusters: Σ_P A_cP Φ_P (#clusters × #C, row-major).
     let num_clusters = problem.clusters.len();
-    let mut cluster_coords = vec![0.0f64; num_clusters * num_cage];
+    let mut cluster_coords = zeroed_table(
+        "CoR cluster coordinates",
+        num_clusters,
+        "clusters",
+        num_cage,
+    )?;
     let mut has_centre = vec![false; num_clusters];
     let done = AtomicUsize::new(0);
     if num_cage > 0 {

@@ -37,6 +37,7 @@ use super::cor_centres::{check_cage_coord_rows, validate_cor_inputs};
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
+use crate::memory_estimate::{check_table_allocation, zeroed_table};
 
 /// How the similarity tables are interpolated at a vertex's (x, y).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -330,10 +331,7 @@ pub fn compute_cor_cage_coords_grid(
     bin_starts.push(entries.len());
     pair_bin_starts.push(num_bins);
     let num_pairs = pair_keys.len();
-    let mut pair_of_key = vec![NONE; num_joints * num_joints];
-    for (p, &key) in pair_keys.iter().enumerate() {
-        pair_of_key[key as usize] = p as u32;
-    }
+    let pair_of_key = PairLookup::new(&pair_keys, num_joints);
 
     // Per bin: (Σ α a b, ā, b̄).
     let bins: Vec<(f64, f64, f64)> = bin_starts
@@ -355,6 +353,7 @@ pub fn compute_cor_cage_coords_grid(
     //    compact (triangle, mass) copy.
     let compact: Vec<(u32, f64)> = entries.iter().map(|e| (e.triangle, e.mass)).collect();
     drop(entries);
+    check_table_allocation("CoR bin coordinates", num_bins, "bins", num_cage)?;
     let mut bin_coords = Mat::<f64>::zeros(num_bins, num_cage);
     bin_coords
         .as_mut()
@@ -384,7 +383,7 @@ pub fn compute_cor_cage_coords_grid(
     for v in 0..num_vertices {
         let (js, ws) = weights.row(v);
         for_each_pair(ws, |a, b| {
-            let pair = pair_of_key[js[a] as usize * num_joints + js[b] as usize];
+            let pair = pair_of_key.get(js[a] as usize * num_joints + js[b] as usize);
             if pair != NONE {
                 let n = grid.stencil(ws[a], ws[b], &mut stencil);
                 for &(node, _) in &stencil[..n] {
@@ -409,7 +408,7 @@ pub fn compute_cor_cage_coords_grid(
     }
 
     // 5. Tables G (#slots × #C, row-major): G_chunk = E·P with E_nb = exp(−(x b̄ − y ā)²/σ²).
-    let mut tables = vec![0.0f64; num_slots * num_cage];
+    let mut tables = zeroed_table("CoR similarity tables", num_slots, "grid nodes", num_cage)?;
     if num_cage > 0 {
         let mut tasks = Vec::new();
         let mut rest_tables: &mut [f64] = &mut tables;
@@ -480,7 +479,7 @@ pub fn compute_cor_cage_coords_grid(
                     numerator.fill(0.0);
                     let mut any = false;
                     for_each_pair(ws, |a, b| {
-                        let pair = pair_of_key[js[a] as usize * num_joints + js[b] as usize];
+                        let pair = pair_of_key.get(js[a] as usize * num_joints + js[b] as usize);
                         if pair == NONE {
                             return;
                         }
@@ -603,10 +602,67 @@ fn triangle_entries(
     entries
 }
 
+/// Joint-pair key (`j_a·#J + j_b`) → pair index ([`NONE`] when no triangle has the pair): a
+/// dense `#J²` table for skeletons of up to [`DENSE_PAIR_JOINTS`] joints (≤ 64 MiB), a binary
+/// search in the sorted keys above (`#J²` u32 would be 16 GiB at 65,536 joints).
+enum PairLookup<'a> {
+    Dense(Vec<u32>),
+    Sorted(&'a [u32]),
+}
+
+/// Largest joint count with a dense [`PairLookup`] table.
+const DENSE_PAIR_JOINTS: usize = 4096;
+
+impl<'a> PairLookup<'a> {
+    /// `sorted_keys`: the pair keys present, ascending and distinct.
+    fn new(sorted_keys: &'a [u32], num_joints: usize) -> Self {
+        if num_joints > DENSE_PAIR_JOINTS {
+            return Self::Sorted(sorted_keys);
+        }
+        let mut table = vec![NONE; num_joints * num_joints];
+        for (p, &key) in sorted_keys.iter().enumerate() {
+            table[key as usize] = p as u32;
+        }
+        Self::Dense(table)
+    }
+
+    fn get(&self, key: usize) -> u32 {
+        match self {
+            Self::Dense(table) => table[key],
+            Self::Sorted(keys) => u32::try_from(key)
+                .ok()
+                .and_then(|k| keys.binary_search(&k).ok())
+                .map_or(NONE, |p| p as u32),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::skinning::cor_centres::weight_similarity;
+
+    #[test]
+    fn pair_lookup_dense_and_sorted_agree() {
+        let keys = [1u32, 5, 6, 15];
+        let dense = PairLookup::new(&keys, 4);
+        assert!(matches!(dense, PairLookup::Dense(_)));
+        let sorted = PairLookup::Sorted(&keys);
+        for key in 0..16 {
+            let expected = keys
+                .iter()
+                .position(|&k| k as usize == key)
+                .map_or(NONE, |p| p as u32);
+            assert_eq!(dense.get(key), expected, "{key}");
+            assert_eq!(sorted.get(key), expected, "{key}");
+        }
+        // Beyond the dense limit no #J² table is allocated.
+        assert!(matches!(
+            PairLookup::new(&keys, 65_536),
+            PairLookup::Sorted(_)
+        ));
+        assert_eq!(PairLookup::new(&keys, 65_536).get(usize::MAX), NONE);
+    }
 
     /// A strip of quads along x in the plane z = 0, weights blending joint 0 → 1 → 2 along x, with
     /// a bump of joint 2 near the middle so that three-joint rows occur.
