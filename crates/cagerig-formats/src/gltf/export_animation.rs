@@ -107,7 +107,7 @@ pub fn animation_to_gltf(
                 .zip(&base)
                 .map(|(m, m0)| *m - *m0)
                 .collect();
-            targets.push(json!({"POSITION": position_accessor(&mut b, &delta, false)}));
+            targets.push(json!({"POSITION": position_accessor(&mut b, &delta, true)}));
         }
     }
     // Node TRS and morph weights at each sample.
