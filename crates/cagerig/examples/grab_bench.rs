@@ -1,6 +1,8 @@
 //! Times a current-cage grab right after a skeleton edit on the Arm subdivided N times, with Φ
-//! in f64 and in f32, next to its two big parts (M = ΦC and LBS):
-//! `cargo run --release -p cagerig --example grab_bench -- [N]`.
+//! in f64 and in f32, next to its two big parts (M = ΦC and LBS), and on the f32 display path
+//! (what the editor runs) next to its product M̃ = Φ̃C:
+//! `cargo run --release -p cagerig --example grab_bench -- [N] [display]` (`display`: only the
+//! display path, e.g. under a profiler).
 
 use std::path::Path;
 use std::time::Instant;
@@ -22,6 +24,7 @@ fn stats(mut samples: Vec<f64>) -> String {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let levels: usize = std::env::args().nth(1).map_or(Ok(3), |a| a.parse())?;
+    let display_only = std::env::args().any(|a| a == "display");
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm");
     let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
     let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
@@ -30,7 +33,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let sub = subdivide_midpoint(&mesh, &weights, levels)?;
     let nv = sub.mesh.num_vertices();
     println!("Arm N={levels}: {nv} vertices");
-    for precision in [CoordsPrecision::F64, CoordsPrecision::F32] {
+    let precisions: &[CoordsPrecision] = if display_only {
+        &[]
+    } else {
+        &[CoordsPrecision::F64, CoordsPrecision::F32]
+    };
+    for &precision in precisions {
         let parts = RigParts::new(
             sub.mesh.clone(),
             skeleton.clone(),
@@ -66,5 +74,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("  M = ΦC alone:             {}", stats(product));
         println!("  LBS alone:                {}", stats(skin));
     }
+    // The display path: M̃ = Φ̃C and the f32 M' for display, exact MaxVol rows.
+    let parts = RigParts::new(sub.mesh, skeleton, sub.skin_weights, cage);
+    let (mut session, _) = RigSession::new(parts, SessionOptions::default())?;
+    session.set_display_precision(cagerig::session::DisplayPrecision::F32)?;
+    let joint = session.skeleton().find("lowerarm01.R").unwrap_or(3);
+    session.rotate_joint(joint, DVec3::X, 60f64.to_radians())?;
+    let display_coords = cagerig::cage_coords::DisplayCageCoords::try_new(session.cage_coords())
+        .ok_or("Φ̃ does not fit")?;
+    let mut m = vec![glam::Vec3::ZERO; nv];
+    let (mut grab, mut product) = (Vec::new(), Vec::new());
+    let reps = if display_only { 400 } else { 60 };
+    for i in 0..reps {
+        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+        session.rotate_joint(joint, DVec3::Y, 0.01 * sign)?;
+        let t = Instant::now();
+        session.move_posed_cage(&[7], &[DVec3::new(0.0, 0.01 * sign, 0.0)])?;
+        grab.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        display_coords.apply(session.rest_cage(), &mut m);
+        product.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    println!("display path (f32 Φ̃ and M' drawn, exact rows):");
+    println!("  grab after skeleton edit: {}", stats(grab));
+    println!("  M̃ = Φ̃C alone:             {}", stats(product));
     Ok(())
 }

@@ -34,6 +34,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::cor_centres::{check_cage_coord_rows, validate_cor_inputs};
+use super::cor_grid_rows::{RowScratch, Tables, fill_rows};
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
@@ -84,7 +85,7 @@ const NODE_CHUNK: usize = 256;
 const KERNEL_ENTRIES: usize = 1 << 20;
 /// Vertices per rayon task in the evaluation.
 const VERTEX_BLOCK: usize = 2048;
-const NONE: u32 = u32::MAX;
+pub(super) const NONE: u32 = u32::MAX;
 
 /// One triangle's contribution to one joint pair's bin.
 struct Entry {
@@ -99,18 +100,18 @@ struct Entry {
 
 /// The tabulation grid: node (p, q) sits at ((p − 1)h, (q − 1)h), p, q ∈ 0..side.
 #[derive(Clone, Copy)]
-struct Grid {
-    step: f64,
+pub(super) struct Grid {
+    pub(super) step: f64,
     /// Cells per unit (1/h, rounded up).
-    cells: usize,
-    side: usize,
-    interpolation: GridInterpolation,
+    pub(super) cells: usize,
+    pub(super) side: usize,
+    pub(super) interpolation: GridInterpolation,
 }
 
 impl Grid {
     /// Stencil of (x, y): up to 16 (node index, weight) pairs, as `count`.
     #[inline]
-    fn stencil(&self, x: f64, y: f64, out: &mut [(usize, f64); 16]) -> usize {
+    pub(super) fn stencil(&self, x: f64, y: f64, out: &mut [(usize, f64); 16]) -> usize {
         let axis = |v: f64| {
             let s = v / self.step;
             let cell = (s.floor().max(0.0) as usize).min(self.cells - 1);
@@ -270,7 +271,7 @@ fn catmull_rom(t: f64) -> [f64; 4] {
 
 /// Calls `f(a, b)` for each pair of positions a < b in a weight row whose weights are positive.
 #[inline]
-fn for_each_pair(weights: &[f64], mut f: impl FnMut(usize, usize)) {
+pub(super) fn for_each_pair(weights: &[f64], mut f: impl FnMut(usize, usize)) {
     for (a, &wa) in weights.iter().enumerate() {
         if wa > 0.0 {
             for (b, &wb) in weights.iter().enumerate().skip(a + 1) {
@@ -466,48 +467,28 @@ pub fn compute_cor_cage_coords_grid(
     let num_blocks = num_vertices.div_ceil(VERTEX_BLOCK);
     let done = AtomicUsize::new(0);
     if num_cage > 0 {
+        let tables = Tables {
+            grid,
+            values: &tables,
+            slot_of_node: &slot_of_node,
+            nodes_per_pair,
+            pair_of_key: &pair_of_key,
+            num_joints,
+            num_cage,
+        };
         matrix
             .as_mut()
             .par_row_chunks_mut(VERTEX_BLOCK)
             .enumerate()
-            .for_each(|(block, mut out)| {
-                let mut numerator = vec![0.0f64; num_cage];
-                let mut stencil = [(0usize, 0.0f64); 16];
-                for r in 0..out.nrows() {
-                    let v = block * VERTEX_BLOCK + r;
-                    let (js, ws) = weights.row(v);
-                    numerator.fill(0.0);
-                    let mut any = false;
-                    for_each_pair(ws, |a, b| {
-                        let pair = pair_of_key.get(js[a] as usize * num_joints + js[b] as usize);
-                        if pair == NONE {
-                            return;
-                        }
-                        any = true;
-                        let (x, y) = (ws[a], ws[b]);
-                        let n = grid.stencil(x, y, &mut stencil);
-                        let slots = &slot_of_node[pair as usize * nodes_per_pair..];
-                        for &(node, w) in &stencil[..n] {
-                            let slot = slots[node] as usize;
-                            let g = &tables[slot * num_cage..][..num_cage];
-                            let w = w * x * y;
-                            for (o, &t) in numerator.iter_mut().zip(g) {
-                                *o += w * t;
-                            }
-                        }
-                    });
-                    let total: f64 = numerator.iter().sum();
-                    if any && total > 0.0 && total.is_finite() {
-                        let inv = 1.0 / total;
-                        for (c, &x) in numerator.iter().enumerate() {
-                            out[(r, c)] = x * inv;
-                        }
-                    } else {
-                        for c in 0..num_cage {
-                            out[(r, c)] = cage_coords.get(v, c);
-                        }
-                    }
-                }
+            .for_each_init(RowScratch::default, |scratch, (block, out)| {
+                fill_rows(
+                    out,
+                    block * VERTEX_BLOCK,
+                    weights,
+                    cage_coords,
+                    &tables,
+                    scratch,
+                );
                 let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress(finished, num_blocks);
             });
@@ -605,7 +586,7 @@ fn triangle_entries(
 /// Joint-pair key (`j_a·#J + j_b`) → pair index ([`NONE`] when no triangle has the pair): a
 /// dense `#J²` table for skeletons of up to [`DENSE_PAIR_JOINTS`] joints (≤ 64 MiB), a binary
 /// search in the sorted keys above (`#J²` u32 would be 16 GiB at 65,536 joints).
-enum PairLookup<'a> {
+pub(super) enum PairLookup<'a> {
     Dense(Vec<u32>),
     Sorted(&'a [u32]),
 }
@@ -615,7 +596,7 @@ const DENSE_PAIR_JOINTS: usize = 4096;
 
 impl<'a> PairLookup<'a> {
     /// `sorted_keys`: the pair keys present, ascending and distinct.
-    fn new(sorted_keys: &'a [u32], num_joints: usize) -> Self {
+    pub(super) fn new(sorted_keys: &'a [u32], num_joints: usize) -> Self {
         if num_joints > DENSE_PAIR_JOINTS {
             return Self::Sorted(sorted_keys);
         }
@@ -626,7 +607,7 @@ impl<'a> PairLookup<'a> {
         Self::Dense(table)
     }
 
-    fn get(&self, key: usize) -> u32 {
+    pub(super) fn get(&self, key: usize) -> u32 {
         match self {
             Self::Dense(table) => table[key],
             Self::Sorted(keys) => u32::try_from(key)
