@@ -67,7 +67,7 @@ pub(super) fn fill_rows(
             }
         });
     }
-    items.sort_unstable_by(|p, q| (p.0, p.1).cmp(&(q.0, q.1)));
+    items.sort_unstable_by_key(|item| (item.0, item.1));
     sums.clear();
     sums.resize(rows * nc, 0.0);
     let mut stencil = [(0usize, 0.0f64); 16];
