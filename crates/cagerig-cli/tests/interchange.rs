@@ -193,17 +193,18 @@ fn a_hybrid_export_animates_like_the_original() {
     let dir = temp_dir("hybrid");
     let arm = data("arm");
     let glb = dir.join("arm_anim.glb");
-    run_ok(
-        cagerig()
-            .arg("export")
+    // The Arm with its skeleton and cage animation files.
+    let arm_tracks = |command: &str| {
+        let mut c = cagerig();
+        c.arg(command)
             .arg(arm.join("arm.obj"))
             .arg("--skeleton-anim")
             .arg(arm.join("arm_skelAnim.txt"))
             .arg("--cage-anim")
-            .arg(arm.join("arm_cageAnim.txt"))
-            .arg("--out")
-            .arg(&glb),
-    );
+            .arg(arm.join("arm_cageAnim.txt"));
+        c
+    };
+    run_ok(arm_tracks("export").arg("--out").arg(&glb));
     let info = run_ok(cagerig().arg("info").arg(&glb));
     assert!(
         info.contains("morph weights (played as a cage track)")
@@ -213,13 +214,7 @@ fn a_hybrid_export_animates_like_the_original() {
     let times = "0.3,2.25,7.9";
     let (original, again) = (dir.join("original"), dir.join("again"));
     run_ok(
-        cagerig()
-            .arg("animate")
-            .arg(arm.join("arm.obj"))
-            .arg("--skeleton-anim")
-            .arg(arm.join("arm_skelAnim.txt"))
-            .arg("--cage-anim")
-            .arg(arm.join("arm_cageAnim.txt"))
+        arm_tracks("animate")
             .args(["--times", times, "--out"])
             .arg(&original),
     );

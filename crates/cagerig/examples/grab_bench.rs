@@ -22,6 +22,19 @@ fn stats(mut samples: Vec<f64>) -> String {
     )
 }
 
+/// A small rotation of `joint` (alternating with `i`), then the timed grab of cage vertex 7 (ms).
+fn grab_after_skeleton_edit(
+    session: &mut RigSession,
+    joint: usize,
+    i: usize,
+) -> Result<f64, cagerig::RigError> {
+    let sign = if i.is_multiple_of(2) { 1.0 } else { -1.0 };
+    session.rotate_joint(joint, DVec3::Y, 0.01 * sign)?;
+    let t = Instant::now();
+    session.move_posed_cage(&[7], &[DVec3::new(0.0, 0.01 * sign, 0.0)])?;
+    Ok(t.elapsed().as_secs_f64() * 1e3)
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let levels: usize = std::env::args().nth(1).map_or(Ok(3), |a| a.parse())?;
     let display_only = std::env::args().any(|a| a == "display");
@@ -57,11 +70,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut out = vec![DVec3::ZERO; nv];
         let lbs = LinearBlendSkinning::new(session.skin_weights());
         for i in 0..60 {
-            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
-            session.rotate_joint(joint, DVec3::Y, 0.01 * sign)?;
-            let t = Instant::now();
-            session.move_posed_cage(&[7], &[DVec3::new(0.0, 0.01 * sign, 0.0)])?;
-            grab.push(t.elapsed().as_secs_f64() * 1e3);
+            grab.push(grab_after_skeleton_edit(&mut session, joint, i)?);
             let t = Instant::now();
             session.cage_coords().apply(session.rest_cage(), &mut m);
             product.push(t.elapsed().as_secs_f64() * 1e3);
@@ -86,11 +95,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut grab, mut product) = (Vec::new(), Vec::new());
     let reps = if display_only { 400 } else { 60 };
     for i in 0..reps {
-        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
-        session.rotate_joint(joint, DVec3::Y, 0.01 * sign)?;
-        let t = Instant::now();
-        session.move_posed_cage(&[7], &[DVec3::new(0.0, 0.01 * sign, 0.0)])?;
-        grab.push(t.elapsed().as_secs_f64() * 1e3);
+        grab.push(grab_after_skeleton_edit(&mut session, joint, i)?);
         let t = Instant::now();
         display_coords.apply(session.rest_cage(), &mut m);
         product.push(t.elapsed().as_secs_f64() * 1e3);

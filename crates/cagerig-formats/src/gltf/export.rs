@@ -99,6 +99,20 @@ pub(crate) fn position_accessor(b: &mut Builder, points: &[DVec3], vertex_target
     )
 }
 
+/// A u32 SCALAR index accessor of `triangles` (an element-array buffer view).
+fn index_accessor(b: &mut Builder, triangles: &[[u32; 3]]) -> usize {
+    let bytes: Vec<u8> = triangles
+        .iter()
+        .flatten()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
+    b.accessor(
+        &bytes,
+        Some(ELEMENT_ARRAY_BUFFER),
+        json!({"componentType": UNSIGNED_INT, "count": 3 * triangles.len(), "type": "SCALAR"}),
+    )
+}
+
 /// TRS of an affine transform as glTF node fields (rotation normalised).
 fn trs(local: &DAffine3) -> Value {
     let (s, r, t) = local.to_scale_rotation_translation();
@@ -138,17 +152,7 @@ pub fn session_to_gltf(session: &RigSession, name: &str) -> Result<(Value, Vec<u
     let weights = session.skin_weights();
     let mut b = Builder::default();
     let positions = position_accessor(&mut b, rest, true);
-    let tris = session.mesh_triangles();
-    let index_bytes: Vec<u8> = tris
-        .iter()
-        .flatten()
-        .flat_map(|i| i.to_le_bytes())
-        .collect();
-    let indices = b.accessor(
-        &index_bytes,
-        Some(ELEMENT_ARRAY_BUFFER),
-        json!({"componentType": UNSIGNED_INT, "count": 3 * tris.len(), "type": "SCALAR"}),
-    );
+    let indices = index_accessor(&mut b, session.mesh_triangles());
     // JOINTS_n / WEIGHTS_n: heaviest influences first, four per set.
     let sets = weights.max_influences().div_ceil(4).max(1);
     let mut joint_sets = vec![Vec::with_capacity(8 * nv); sets];
@@ -236,17 +240,7 @@ pub fn session_to_gltf(session: &RigSession, name: &str) -> Result<(Value, Vec<u
     // The rest cage C, for cagerig to read back: a mesh node outside the scene (viewers do not
     // draw it), named `<name>_cage` and marked in `extras`.
     let cage_positions = position_accessor(&mut b, session.rest_cage(), true);
-    let cage_index_bytes: Vec<u8> = session
-        .cage_triangles()
-        .iter()
-        .flatten()
-        .flat_map(|i| i.to_le_bytes())
-        .collect();
-    let cage_indices = b.accessor(
-        &cage_index_bytes,
-        Some(ELEMENT_ARRAY_BUFFER),
-        json!({"componentType": UNSIGNED_INT, "count": 3 * session.cage_triangles().len(), "type": "SCALAR"}),
-    );
+    let cage_indices = index_accessor(&mut b, session.cage_triangles());
     let cage_name = format!("{name}_cage");
     nodes.push(json!({"name": cage_name, "mesh": 1, "extras": {"cagerig_cage": true}}));
     let mut roots: Vec<usize> = (0..nj).filter(|&j| skeleton.parent(j).is_none()).collect();
