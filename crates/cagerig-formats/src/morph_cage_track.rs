@@ -112,3 +112,104 @@ pub fn morph_cage_track(
         worst_target,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cagerig::session::{RigParts, SessionOptions};
+    use glam::DAffine3;
+
+    fn bar() -> RigSession {
+        let rig = cagerig::demo::builtin("bar", Some(8)).unwrap();
+        let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+        RigSession::new(parts, SessionOptions::default()).unwrap().0
+    }
+
+    /// A track of `times` (rest pose keys) for the session's skeleton.
+    fn still_track(session: &RigSession, times: &[f64]) -> SkeletonTrack {
+        let nj = session.skeleton().len();
+        SkeletonTrack::new(
+            times.to_vec(),
+            vec![vec![DAffine3::IDENTITY; nj]; times.len()],
+        )
+        .unwrap()
+    }
+
+    /// Targets that are cage deformations (ΦΔC) come back as exactly those cage
+    /// displacements, weighted per key and relative to the default weights already in M.
+    #[test]
+    fn cage_deformation_targets_become_their_cage_offsets() {
+        let session = bar();
+        let nc = session.rest_cage().len();
+        let cage_deltas: Vec<Vec<DVec3>> = (0..2)
+            .map(|k| {
+                (0..nc)
+                    .map(|i| {
+                        DVec3::new(
+                            0.01 * (i % 3) as f64,
+                            0.02 * k as f64,
+                            -0.01 * (i % 2) as f64,
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+        let displacements: Vec<Vec<DVec3>> = cage_deltas
+            .iter()
+            .map(|d| {
+                let mut out = vec![DVec3::ZERO; session.num_vertices()];
+                session.cage_coords().apply(d, &mut out);
+                out
+            })
+            .collect();
+        let morphs = MorphTargets {
+            displacements,
+            default_weights: vec![0.25, 0.0],
+        };
+        let skeleton = still_track(&session, &[0.0, 1.0]);
+        // Key 0: weights (0.25, 0) = the defaults → no offset; key 1: (1, 0.5).
+        let weights = [0.25, 0.0, 1.0, 0.5];
+        let fit = morph_cage_track(&session, &morphs, &skeleton, &weights).unwrap();
+        assert!(fit.worst_residual < 1e-12, "{}", fit.worst_residual);
+        assert_eq!(fit.track.times(), &[0.0, 1.0]);
+        let offsets = fit.track.offsets();
+        assert!(offsets[0].iter().all(|o| o.length() < 1e-12));
+        for (i, o) in offsets[1].iter().enumerate() {
+            let expected = cage_deltas[0][i] * 0.75 + cage_deltas[1][i] * 0.5;
+            assert!(
+                o.distance(expected) < 1e-12,
+                "cage vertex {i}: {o} vs {expected}"
+            );
+        }
+    }
+
+    /// A target the cage cannot make (one vertex pushed alone) is reported by its residual, and
+    /// mismatched sizes are errors naming what was expected.
+    #[test]
+    fn other_targets_are_measured_and_sizes_checked() {
+        let session = bar();
+        let nv = session.num_vertices();
+        let mut bump = vec![DVec3::ZERO; nv];
+        bump[nv / 2] = DVec3::new(0.0, 0.5, 0.0);
+        let morphs = MorphTargets {
+            displacements: vec![vec![DVec3::ZERO; nv], bump],
+            default_weights: Vec::new(),
+        };
+        let skeleton = still_track(&session, &[0.0]);
+        let fit = morph_cage_track(&session, &morphs, &skeleton, &[0.0, 1.0]).unwrap();
+        assert_eq!(fit.worst_target, 1);
+        assert!(fit.worst_residual > 0.05, "{}", fit.worst_residual);
+        let e = morph_cage_track(&session, &morphs, &skeleton, &[0.0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("morph weights"), "{e}");
+        let short = MorphTargets {
+            displacements: vec![vec![DVec3::ZERO; nv - 1]],
+            default_weights: Vec::new(),
+        };
+        let e = morph_cage_track(&session, &short, &skeleton, &[0.0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("morph target"), "{e}");
+    }
+}
