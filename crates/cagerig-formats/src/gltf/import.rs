@@ -21,6 +21,7 @@ use gltf::mesh::Mode;
 use super::animation::{AnimationTargets, import_animations};
 use super::buffers::Buffers;
 use super::cage::find_cage;
+use super::morph_targets::{default_weights, merge_targets};
 use super::scene::{NodeTree, affine_from_cols};
 use crate::ImportOptions;
 use crate::character::{
@@ -287,7 +288,13 @@ pub fn import_gltf_bytes(
             )?;
             if let Some((vertices, tris, indexed)) = summary {
                 if collect {
-                    merge_targets(&mut morph_targets, &primitive_targets, base, vertices);
+                    merge_targets(&mut morph_targets, &primitive_targets, base, vertices).map_err(
+                        |e| FormatError::Rig {
+                            path: path.to_path_buf(),
+                            element: source.clone(),
+                            source: e,
+                        },
+                    )?;
                     default_morph_weights = default_weights(&node);
                 }
                 primitives.push(PrimitiveSummary {
@@ -495,8 +502,6 @@ fn read_primitive(
                         .map(|dp| world_from_bind.transform_vector3(*dp))
                         .collect();
                 }
-            } else if let Some(out) = targets_out.as_deref_mut() {
-                out[k] = vec![DVec3::ZERO; nv];
             }
         }
         if targets_out.is_some() {
@@ -597,35 +602,6 @@ fn normalise_f32_rounded_rows(num_vertices: usize, triplets: &mut [(usize, usize
 
 /// See [`normalise_f32_rounded_rows`].
 const F32_ROW_SUM_TOLERANCE: f64 = 1e-6;
-
-/// A node's default morph weights: its own `weights`, else its mesh's (empty when neither).
-fn default_weights(node: &gltf::Node) -> Vec<f64> {
-    node.weights()
-        .or_else(|| node.mesh().and_then(|m| m.weights()))
-        .map(|w| w.iter().map(|&x| f64::from(x)).collect())
-        .unwrap_or_default()
-}
-
-/// Appends one primitive's target displacements (`primitive`: per target, `vertices` each) to
-/// the merged targets, whose vertices so far number `base`; targets the primitive lacks get
-/// zeros.
-fn merge_targets(
-    merged: &mut Vec<Vec<DVec3>>,
-    primitive: &[Vec<DVec3>],
-    base: usize,
-    vertices: usize,
-) {
-    if merged.len() < primitive.len() {
-        merged.resize(primitive.len(), Vec::new());
-    }
-    for (k, target) in merged.iter_mut().enumerate() {
-        target.resize(base, DVec3::ZERO);
-        match primitive.get(k) {
-            Some(d) if d.len() == vertices => target.extend_from_slice(d),
-            _ => target.resize(base + vertices, DVec3::ZERO),
-        }
-    }
-}
 
 pub(super) fn to_vec3(v: &[f64]) -> Vec<DVec3> {
     v.chunks_exact(3)

@@ -4,6 +4,7 @@ pub mod animation;
 pub mod buffers;
 mod cage;
 pub mod import;
+mod morph_targets;
 pub mod scene;
 
 pub use import::{import_gltf, import_gltf_bytes};
