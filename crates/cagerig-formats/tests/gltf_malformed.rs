@@ -58,6 +58,25 @@ fn bad_accessor_indices_are_reported() {
     assert!(e.contains("bad.gltf"), "{e}");
 }
 
+/// Regression (found by the `gltf_import` fuzz target): the `gltf` crate's validation indexed
+/// the accessors with a primitive's POSITION index before checking it and panicked.
+#[test]
+fn a_position_accessor_index_out_of_range_is_an_error_not_a_panic() {
+    for index in [99usize, u32::MAX as usize] {
+        let mut j = simple_skin();
+        j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = index.into();
+        let e = err_of(&serde_json::to_vec(&j).unwrap(), Path::new("bad.gltf"));
+        assert!(
+            e.contains("bad.gltf") && e.contains("POSITION") && e.contains(&index.to_string()),
+            "{e}"
+        );
+    }
+    let mut j = simple_skin();
+    j["accessors"] = serde_json::json!([]);
+    let e = err_of(&serde_json::to_vec(&j).unwrap(), Path::new("empty.gltf"));
+    assert!(e.contains("has 0 accessors"), "{e}");
+}
+
 #[test]
 fn accessor_larger_than_its_bytes_is_refused_before_allocation() {
     // A ~1 kB file claiming 10¹² vertices.

@@ -49,10 +49,7 @@ pub fn import_gltf_bytes(
     path: &Path,
     options: &ImportOptions,
 ) -> Result<ImportedCharacter, FormatError> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| FormatError::Gltf {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
+    let gltf = parse_validated(bytes, path)?;
     let document = &gltf.document;
     let buffers = Buffers::load(document, gltf.blob.as_deref(), path)?;
     let tree = NodeTree::new(document, path)?;
@@ -581,6 +578,38 @@ fn read_primitive(
     let ntri = tris.len();
     triangles.extend(tris.iter().map(|t| t.map(|i| i + base as u32)));
     Ok(Some((nv, ntri, indexed)))
+}
+
+/// Parses and validates glTF/GLB bytes. The `gltf` crate's validation (1.4) indexes the
+/// accessors with each primitive's POSITION index before checking it, and panics on an index
+/// out of range: those indices are checked here first.
+fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, FormatError> {
+    let gltf_error = |message: String| FormatError::Gltf {
+        path: path.to_path_buf(),
+        message,
+    };
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
+    let root = document.into_json();
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&gltf::json::validation::Checked::Valid(
+                    gltf::json::mesh::Semantic::Positions,
+                ))
+                .map(|index| index.value());
+            if let Some(index) = position.filter(|&i| i >= accessors) {
+                return Err(gltf_error(format!(
+                    "meshes[{m}].primitives[{p}].attributes.POSITION names accessor {index}, \
+                     but the file has {accessors} accessors"
+                )));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(root).map_err(|e| gltf_error(e.to_string()))?;
+    Ok(gltf::Gltf { document, blob })
 }
 
 /// Weight rows whose sum is 1 up to the f32 rounding of the file (within
