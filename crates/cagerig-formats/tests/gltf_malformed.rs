@@ -77,6 +77,20 @@ fn a_position_accessor_index_out_of_range_is_an_error_not_a_panic() {
     assert!(e.contains("has 0 accessors"), "{e}");
 }
 
+/// Regression (found by the `gltf_import` fuzz target): animation channel targets are not
+/// validated by the `gltf` crate, whose accessors unwrap them.
+#[test]
+fn bad_animation_channel_targets_are_errors_not_panics() {
+    let mut j = simple_skin();
+    j["animations"][0]["channels"][0]["target"]["path"] = "translationx".into();
+    let e = err_of(&serde_json::to_vec(&j).unwrap(), Path::new("path.gltf"));
+    assert!(e.contains("path.gltf") && e.contains("target.path"), "{e}");
+    let mut j = simple_skin();
+    j["animations"][0]["channels"][0]["target"]["node"] = 1000.into();
+    let e = err_of(&serde_json::to_vec(&j).unwrap(), Path::new("node.gltf"));
+    assert!(e.contains("target.node is 1000"), "{e}");
+}
+
 #[test]
 fn accessor_larger_than_its_bytes_is_refused_before_allocation() {
     // A ~1 kB file claiming 10¹² vertices.

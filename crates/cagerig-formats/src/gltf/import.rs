@@ -582,7 +582,7 @@ fn read_primitive(
 
 /// Parses and validates glTF/GLB bytes. The `gltf` crate's validation (1.4) indexes the
 /// accessors with each primitive's POSITION index before checking it, and panics on an index
-/// out of range: those indices are checked here first.
+/// out of range, and it does not check animation channel targets: both are checked here.
 fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, FormatError> {
     let gltf_error = |message: String| FormatError::Gltf {
         path: path.to_path_buf(),
@@ -604,6 +604,29 @@ fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, FormatError>
                 return Err(gltf_error(format!(
                     "meshes[{m}].primitives[{p}].attributes.POSITION names accessor {index}, \
                      but the file has {accessors} accessors"
+                )));
+            }
+        }
+    }
+    // Nor does it check animation channel targets (node index, path), which the accessors of
+    // the `gltf` crate unwrap.
+    let nodes = root.nodes.len();
+    for (a, animation) in root.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let node = channel.target.node.value();
+            if node >= nodes {
+                return Err(gltf_error(format!(
+                    "animations[{a}].channels[{c}].target.node is {node}, but the file has \
+                     {nodes} nodes"
+                )));
+            }
+            if !matches!(
+                channel.target.path,
+                gltf::json::validation::Checked::Valid(_)
+            ) {
+                return Err(gltf_error(format!(
+                    "animations[{a}].channels[{c}].target.path is not one of translation, \
+                     rotation, scale, weights"
                 )));
             }
         }
