@@ -71,14 +71,7 @@ pub fn animate(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let tracks = tracks.resolve(&session)?;
-    let mut player = cagerig::playback::AnimationPlayer::with_channels(
-        &session,
-        tracks.skeleton,
-        tracks.cage,
-        tracks.channels,
-    )?
-    .holding_rest_skeleton(tracks.hold_rest_skeleton);
+    let mut player = tracks.resolve(&session)?.player(&session)?;
     let mut session = session;
     for &t in times {
         let start = Instant::now();

@@ -107,30 +107,21 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 .with_context(|| format!("in {}", path.display()))?;
         }
     }
-    let crate::interchange::ResolvedTracks {
-        skeleton: skeleton_track,
-        channels,
-        cage: cage_track,
-        hold_rest_skeleton,
-    } = tracks.resolve(&session)?;
-    if skeleton_track.is_none() && cage_track.is_none() {
+    let tracks = tracks.resolve(&session)?;
+    if tracks.skeleton.is_none() && tracks.cage.is_none() {
         return export(&session, &args.out, &name);
     }
     let t = std::time::Instant::now();
-    let mut keys: Vec<f64> = Vec::new();
-    if let Some(s) = &skeleton_track {
-        keys.extend(s.times());
-    }
-    if let Some(c) = &cage_track {
-        keys.extend(c.times());
-    }
-    let mut player = cagerig::playback::AnimationPlayer::with_channels(
-        &session,
-        skeleton_track,
-        cage_track.clone(),
-        channels,
-    )?
-    .holding_rest_skeleton(hold_rest_skeleton);
+    let keys: Vec<f64> = tracks
+        .skeleton
+        .iter()
+        .flat_map(|s| s.times())
+        .chain(tracks.cage.iter().flat_map(|c| c.times()))
+        .copied()
+        .collect();
+    // The cage keys become the morph targets.
+    let cage_track = tracks.cage.clone();
+    let mut player = tracks.player(&session)?;
     let mut times = export_animation::sample_times(player.duration(), args.fps, &keys);
     let mut refinement = String::new();
     if args.max_between > 0.0 {

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use cagerig::animation::{CageTrack, SkeletonTrack};
-use cagerig::playback::PoseChannels;
+use cagerig::playback::{AnimationPlayer, PoseChannels};
 use cagerig::session::{RigParts, RigSession};
 use cagerig_formats::{ImportOptions, ImportedCharacter, MorphTargets, import_character};
 use serde::Serialize;
@@ -115,6 +115,16 @@ pub struct ResolvedTracks {
     pub hold_rest_skeleton: bool,
 }
 
+impl ResolvedTracks {
+    /// The player of these tracks on `session` (SkelUp held when the tracks ask for it).
+    pub fn player(self, session: &RigSession) -> anyhow::Result<AnimationPlayer> {
+        Ok(
+            AnimationPlayer::with_channels(session, self.skeleton, self.cage, self.channels)?
+                .holding_rest_skeleton(self.hold_rest_skeleton),
+        )
+    }
+}
+
 impl AnimationTracks {
     /// The cage track of the morph weights, if any, solved on `session`'s rig (with a warning
     /// when the cage does not reproduce the targets to 1e-5 of the diagonal).
@@ -132,15 +142,8 @@ impl AnimationTracks {
         };
         let fit = cagerig_formats::morph_cage_track(session, &morphs, skeleton, &weights)
             .context("playing the animation's morph weights as a cage track")?;
-        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_mesh());
-        let diagonal = (hi - lo).length();
-        if fit.worst_residual > 1e-5 * diagonal {
-            eprintln!(
-                "warning: morph target {} is not a deformation of the cage: played through the cage, it is off by up to {:.3e} ({:.2e} of the diagonal)",
-                fit.worst_target,
-                fit.worst_residual,
-                fit.worst_residual / diagonal
-            );
+        if let Some(w) = fit.warning() {
+            eprintln!("warning: {w}");
         }
         eprintln!(
             "note: the animation's {} morph targets are played as a cage track ({} keys); the joint keys already contain the rest joints' motion, so SkelUp is held during playback",

@@ -276,14 +276,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.times.is_empty() {
         render_state(&mut maker, &session, args, &args.out, &mut written)?;
     } else {
-        let tracks = tracks.resolve(&session)?;
-        let mut player = cagerig::playback::AnimationPlayer::with_channels(
-            &session,
-            tracks.skeleton,
-            tracks.cage,
-            tracks.channels,
-        )?
-        .holding_rest_skeleton(tracks.hold_rest_skeleton);
+        let mut player = tracks.resolve(&session)?.player(&session)?;
         for &t in &args.times {
             player.apply(t, &mut session)?;
             let path = if args.times.len() == 1 {

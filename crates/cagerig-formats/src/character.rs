@@ -52,12 +52,6 @@ pub struct MorphTargets {
     pub default_weights: Vec<f64>,
 }
 
-impl MorphTargets {
-    pub fn is_empty(&self) -> bool {
-        self.displacements.is_empty()
-    }
-}
-
 /// One animation of the file as a skeleton track.
 #[derive(Debug, Clone)]
 pub struct ImportedAnimation {

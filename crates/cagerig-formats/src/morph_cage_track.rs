@@ -34,6 +34,28 @@ pub struct MorphCageTrack {
     pub worst_residual: f64,
     /// The target of `worst_residual`.
     pub worst_target: usize,
+    /// The rest bounding-box diagonal of the session's M, the scale of `worst_residual`.
+    pub diagonal: f64,
+}
+
+/// A target reproduced through the cage within this fraction of the diagonal is a cage
+/// deformation (a cagerig export's targets come back to ≤ 5e-8: the f32 rounding of the file).
+pub const REPRODUCED_FRACTION: f64 = 1e-5;
+
+impl MorphCageTrack {
+    /// The warning to show when some target is not a deformation of the cage (its cage
+    /// reproduction is off by more than [`REPRODUCED_FRACTION`] of the diagonal), else `None`.
+    pub fn warning(&self) -> Option<String> {
+        (self.worst_residual > REPRODUCED_FRACTION * self.diagonal).then(|| {
+            format!(
+                "morph target {} is not a deformation of the cage: played through the cage, it \
+                 is off by up to {:.3e} ({:.2e} of the diagonal)",
+                self.worst_target,
+                self.worst_residual,
+                self.worst_residual / self.diagonal.max(f64::MIN_POSITIVE)
+            )
+        })
+    }
 }
 
 /// Cage track for `morph_weights` (`#keys × #targets`, row-major, at the keys of `skeleton`)
@@ -83,10 +105,9 @@ pub fn morph_cage_track(
         }
         cage_deltas.push(delta);
     }
-    let offsets: Vec<Vec<DVec3>> = morph_weights
-        .chunks_exact(num_targets.max(1))
-        .take(times.len())
-        .map(|weights| {
+    let offsets: Vec<Vec<DVec3>> = (0..times.len())
+        .map(|key| {
+            let weights = &morph_weights[key * num_targets..][..num_targets];
             let mut offset = vec![DVec3::ZERO; nc];
             for (k, delta) in cage_deltas.iter().enumerate() {
                 let w = weights[k] - default_weights.get(k).copied().unwrap_or(0.0);
@@ -99,17 +120,14 @@ pub fn morph_cage_track(
             offset
         })
         .collect();
-    let offsets = if num_targets == 0 {
-        vec![vec![DVec3::ZERO; nc]; times.len()]
-    } else {
-        offsets
-    };
     let track = CageTrack::new(times.to_vec(), offsets)
         .map_err(|e| RigError::Invalid(format!("cage track from the morph weights: {e}")))?;
+    let (lo, hi) = cagerig::mesh::bounding_box(session.rest_mesh());
     Ok(MorphCageTrack {
         track,
         worst_residual,
         worst_target,
+        diagonal: (hi - lo).length(),
     })
 }
 
@@ -171,6 +189,7 @@ mod tests {
         let weights = [0.25, 0.0, 1.0, 0.5];
         let fit = morph_cage_track(&session, &morphs, &skeleton, &weights).unwrap();
         assert!(fit.worst_residual < 1e-12, "{}", fit.worst_residual);
+        assert_eq!(fit.warning(), None);
         assert_eq!(fit.track.times(), &[0.0, 1.0]);
         let offsets = fit.track.offsets();
         assert!(offsets[0].iter().all(|o| o.length() < 1e-12));
@@ -199,6 +218,8 @@ mod tests {
         let fit = morph_cage_track(&session, &morphs, &skeleton, &[0.0, 1.0]).unwrap();
         assert_eq!(fit.worst_target, 1);
         assert!(fit.worst_residual > 0.05, "{}", fit.worst_residual);
+        let w = fit.warning().expect("a warning");
+        assert!(w.contains("morph target 1 is not a deformation"), "{w}");
         let e = morph_cage_track(&session, &morphs, &skeleton, &[0.0])
             .unwrap_err()
             .to_string();

@@ -537,20 +537,11 @@ impl StudioApp {
                 Ok(fit) => {
                     let count = snapshot.keys.set_cage_track(&fit.track, &doc.session);
                     snapshot.keys.hold_rest_skeleton = true;
-                    let (lo, hi) = cagerig::mesh::bounding_box(doc.session.rest_mesh());
-                    let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
                     cage_note = format!(
                         " and {count} cage keys from its morph weights (SkelUp held during \
                          playback: the joint keys carry the rest joints' motion)"
                     );
-                    if fit.worst_residual > 1e-5 * diagonal {
-                        warning = Some(format!(
-                            "animation {name:?}: morph target {} is not a deformation of the \
-                             cage; played through the cage it is off by {:.2e} of the diagonal",
-                            fit.worst_target,
-                            fit.worst_residual / diagonal
-                        ));
-                    }
+                    warning = fit.warning().map(|w| format!("animation {name:?}: {w}"));
                 }
                 Err(e) => {
                     warning = Some(format!(

@@ -132,11 +132,6 @@ impl AnimationPlayer {
         self
     }
 
-    /// Whether samples hold the rest skeleton ([`AnimationPlayer::holding_rest_skeleton`]).
-    pub fn holds_rest_skeleton(&self) -> bool {
-        self.hold_rest_skeleton
-    }
-
     /// Last keyframe time over both tracks.
     pub fn duration(&self) -> f64 {
         let last = |times: &[f64]| times.last().copied().unwrap_or(0.0);
