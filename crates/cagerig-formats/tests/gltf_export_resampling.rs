@@ -18,7 +18,7 @@ use cagerig::playback::{AnimationPlayer, PoseChannels};
 use cagerig::session::{RigParts, RigSession, SessionOptions};
 use cagerig_formats::gltf::export::write_glb;
 use cagerig_formats::gltf::export_animation::{animation_to_gltf, sample_times};
-use cagerig_formats::gltf::export_resampling::refine_sample_times;
+use cagerig_formats::gltf::export_resampling::{RefinedTimes, refine_sample_times};
 use cagerig_formats::{ImportOptions, import_character, morph_cage_track};
 use common::{ReferenceGltf, data};
 use glam::DVec3;
@@ -76,6 +76,17 @@ impl AnimatedRig {
     fn diagonal(&self) -> f64 {
         let (lo, hi) = cagerig::mesh::bounding_box(self.session.rest_mesh());
         (hi - lo).length()
+    }
+
+    /// The samples `cagerig export` writes by default: the 30/s grid, and that grid refined
+    /// until its own viewer emulation is within 0.9e-5 of the diagonal at every midpoint.
+    fn default_export_samples(&mut self) -> (Vec<f64>, RefinedTimes) {
+        let mut player = self.player();
+        let grid = sample_times(player.duration(), 30.0, &self.key_times());
+        let bound = 0.9e-5 * self.diagonal();
+        let refined =
+            refine_sample_times(&mut self.session, &mut player, &grid, bound, 100_000).unwrap();
+        (grid, refined)
     }
 
     /// Exports at `fps` to `file_name` and measures it; returns the file too.
@@ -215,16 +226,7 @@ fn refined_samples_keep_a_viewer_within_1e_5_between_samples() {
     for (case, _) in RESAMPLING_BOUNDS {
         let mut animated = rig(case);
         let diag = animated.diagonal();
-        let mut player = animated.player();
-        let grid = sample_times(player.duration(), 30.0, &animated.key_times());
-        let refined = refine_sample_times(
-            &mut animated.session,
-            &mut player,
-            &grid,
-            0.9e-5 * diag,
-            100_000,
-        )
-        .unwrap();
+        let (grid, refined) = animated.default_export_samples();
         assert!(!refined.capped, "{case}: {refined:?}");
         assert!(refined.largest_checked <= 0.9e-5 * diag);
         for t in &grid {
@@ -291,16 +293,7 @@ fn hybrid_export_round_trips_with_its_cage_track() {
     for case in ["fox walk + cage keys", "arm skelAnim + cageAnim"] {
         let mut original = rig(case);
         let diag = original.diagonal();
-        let mut player = original.player();
-        let grid = sample_times(player.duration(), 30.0, &original.key_times());
-        let refined = refine_sample_times(
-            &mut original.session,
-            &mut player,
-            &grid,
-            0.9e-5 * diag,
-            100_000,
-        )
-        .unwrap();
+        let (_, refined) = original.default_export_samples();
         let file = format!("{}_round_trip.glb", case.replace([' ', '+'], "_"));
         let (_, path) = original.measure_times(&refined.times, &file);
         let c = import_character(&path, &ImportOptions::default()).unwrap();
