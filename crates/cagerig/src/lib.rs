@@ -21,6 +21,7 @@ pub mod memory_estimate;
 pub mod mesh;
 pub mod playback;
 pub mod pose;
+mod row_blocks;
 pub mod script;
 pub mod session;
 pub mod skeleton;

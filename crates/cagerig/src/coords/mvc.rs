@@ -26,10 +26,11 @@ use faer::Mat;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::mvc_batch::{BatchScratch, RowBlock, evaluate_rows};
+use super::mvc_batch::{BatchScratch, evaluate_rows};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::mesh::TriMesh;
+use crate::row_blocks::SharedColumns;
 
 /// Dimensionless tolerance for the degenerate cases (same value as Ju et al.'s reference code).
 pub(crate) const EPS: f64 = 1e-8;
@@ -252,11 +253,7 @@ pub fn compute_cage_coords(
     // Φ is 8 · #V · #C bytes (62 MB at N = 3): not zero-filled first; the blocks below write every
     // entry, so the page faults of first touch are spread over the worker threads.
     let mut matrix = Mat::<f64>::with_capacity(num_points, num_cage);
-    let storage = SharedColumns {
-        base: matrix.as_ptr_mut(),
-        col_stride: matrix.col_stride().unsigned_abs(),
-        num_cols: num_cage,
-    };
+    let storage = SharedColumns::of_capacity(&mut matrix, num_cage);
     let done = AtomicUsize::new(0);
     let first_non_finite = AtomicUsize::new(usize::MAX);
     (0..num_points.div_ceil(POINT_BLOCK))
@@ -293,32 +290,6 @@ pub fn compute_cage_coords(
             what: "cage coordinate row",
             index,
         }),
-    }
-}
-
-/// The column-major storage of Φ shared by the workers of [`compute_cage_coords`].
-struct SharedColumns {
-    base: *mut f64,
-    col_stride: usize,
-    num_cols: usize,
-}
-
-// SAFETY: workers only write disjoint row blocks (see `compute_cage_coords`).
-unsafe impl Sync for SharedColumns {}
-
-impl SharedColumns {
-    /// # Safety
-    /// Rows `start..start + count` must lie within the allocation and be written by no one else.
-    unsafe fn rows(&self, start: usize, count: usize) -> RowBlock {
-        // SAFETY: forwarded to the caller.
-        unsafe {
-            RowBlock::new(
-                self.base.wrapping_add(start),
-                self.col_stride,
-                count,
-                self.num_cols,
-            )
-        }
     }
 }
 

@@ -23,6 +23,7 @@
 use glam::DVec3;
 
 use super::mvc::{EPS, MvcEvaluator, MvcScratch};
+use crate::row_blocks::RowBlock;
 
 /// Points per batch.
 pub(crate) const LANES: usize = 8;
@@ -304,51 +305,6 @@ impl BatchPlan {
     }
 }
 
-/// Column-major destination for a block of rows of a `#points × #C` matrix whose storage may
-/// still be uninitialised: only ever written, through raw pointers.
-pub(crate) struct RowBlock {
-    /// Entry (0, 0) of the block.
-    base: *mut f64,
-    col_stride: usize,
-    nrows: usize,
-    ncols: usize,
-}
-
-impl RowBlock {
-    /// # Safety
-    /// For every column `k < ncols`, the `nrows` values from `base + k · col_stride` must be
-    /// valid for writes and not accessed through any other pointer while the block lives.
-    pub(crate) unsafe fn new(
-        base: *mut f64,
-        col_stride: usize,
-        nrows: usize,
-        ncols: usize,
-    ) -> Self {
-        Self {
-            base,
-            col_stride,
-            nrows,
-            ncols,
-        }
-    }
-
-    /// Writes `values` into column `col` from row `row` on.
-    #[inline(always)]
-    fn write(&mut self, row: usize, col: usize, values: &[f64]) {
-        assert!(col < self.ncols && row + values.len() <= self.nrows);
-        // SAFETY: in bounds (checked above) of memory the constructor's caller vouched for.
-        unsafe {
-            let target = self.base.add(col * self.col_stride + row);
-            if values.len() == LANES {
-                // Constant length: one vector store instead of a `memmove` call.
-                std::ptr::copy_nonoverlapping(values.as_ptr(), target, LANES);
-            } else {
-                std::ptr::copy_nonoverlapping(values.as_ptr(), target, values.len());
-            }
-        }
-    }
-}
-
 /// Per-thread buffers for [`evaluate_rows`].
 #[derive(Debug, Clone)]
 pub(crate) struct BatchScratch {
@@ -444,7 +400,7 @@ fn evaluate_rows_generic<M: LaneMath>(
     scratch: &mut BatchScratch,
     out: &mut RowBlock,
 ) -> Option<usize> {
-    debug_assert_eq!(out.nrows, points.len());
+    debug_assert_eq!(out.nrows(), points.len());
     let num_cage = evaluator.num_vertices();
     let mut first_non_finite = None;
     for (batch, chunk) in points.chunks(LANES).enumerate() {

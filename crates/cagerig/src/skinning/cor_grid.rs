@@ -34,11 +34,13 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::cor_centres::{check_cage_coord_rows, validate_cor_inputs};
+use super::cor_grid_bins::bin_triangles;
 use super::cor_grid_rows::{RowScratch, Tables, fill_rows};
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
-use crate::memory_estimate::{check_table_allocation, zeroed_table};
+use crate::memory_estimate::zeroed_table;
+use crate::row_blocks::SharedColumns;
 
 /// How the similarity tables are interpolated at a vertex's (x, y).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -86,17 +88,6 @@ const KERNEL_ENTRIES: usize = 1 << 20;
 /// Vertices per rayon task in the evaluation.
 const VERTEX_BLOCK: usize = 2048;
 pub(super) const NONE: u32 = u32::MAX;
-
-/// One triangle's contribution to one joint pair's bin.
-struct Entry {
-    /// `pair_key << 32 | bin_a << 16 | bin_b`, with pair_key = j·#J + k.
-    key: u64,
-    /// α_t a_t b_t.
-    mass: f64,
-    a: f64,
-    b: f64,
-    triangle: u32,
-}
 
 /// The tabulation grid: node (p, q) sits at ((p − 1)h, (q − 1)h), p, q ∈ 0..side.
 #[derive(Clone, Copy)]
@@ -311,72 +302,18 @@ pub fn compute_cor_cage_coords_grid(
     };
     let nodes_per_pair = grid.side * grid.side;
 
-    // 1. Triangle contributions per (joint pair, bin), sorted by key.
-    let entries = triangle_entries(rest_positions, triangles, weights, options.bin_resolution);
-
-    // 2. Bins: ranges of equal keys; pairs: ranges of bins with equal pair keys.
-    let mut bin_starts = Vec::new();
-    let mut pair_keys: Vec<u32> = Vec::new();
-    let mut pair_bin_starts = Vec::new();
-    for (e, entry) in entries.iter().enumerate() {
-        if e == 0 || entry.key != entries[e - 1].key {
-            let pair_key = (entry.key >> 32) as u32;
-            if pair_keys.last() != Some(&pair_key) {
-                pair_keys.push(pair_key);
-                pair_bin_starts.push(bin_starts.len());
-            }
-            bin_starts.push(e);
-        }
-    }
-    let num_bins = bin_starts.len();
-    bin_starts.push(entries.len());
-    pair_bin_starts.push(num_bins);
+    // 1–3. Triangles binned per joint pair, with each bin's Σ α a b Φ_t.
+    let binned = bin_triangles(
+        rest_positions,
+        triangles,
+        weights,
+        cage_coords,
+        options.bin_resolution,
+    )?;
+    let (pair_keys, pair_bin_starts, bins) =
+        (&binned.pair_keys, &binned.pair_bin_starts, &binned.bins);
     let num_pairs = pair_keys.len();
-    let pair_of_key = PairLookup::new(&pair_keys, num_joints);
-
-    // Per bin: (Σ α a b, ā, b̄).
-    let bins: Vec<(f64, f64, f64)> = bin_starts
-        .par_windows(2)
-        .map(|w| {
-            let (mut m, mut ma, mut mb) = (0.0, 0.0, 0.0);
-            for e in &entries[w[0]..w[1]] {
-                m += e.mass;
-                ma += e.mass * e.a;
-                mb += e.mass * e.b;
-            }
-            (m, ma / m, mb / m)
-        })
-        .collect();
-
-    // 3. Σ α a b Φ_t per bin (#bins × #C, column-major), columns in parallel. Per column, the
-    //    corner sums of Φ per triangle first (in triangle order: cache-friendly), so that each
-    //    entry reads one value instead of three scattered ones; the entries are streamed in a
-    //    compact (triangle, mass) copy.
-    let compact: Vec<(u32, f64)> = entries.iter().map(|e| (e.triangle, e.mass)).collect();
-    drop(entries);
-    check_table_allocation("CoR bin coordinates", num_bins, "bins", num_cage)?;
-    let mut bin_coords = Mat::<f64>::zeros(num_bins, num_cage);
-    bin_coords
-        .as_mut()
-        .par_col_chunks_mut(1)
-        .enumerate()
-        .for_each_init(
-            || vec![0.0f64; triangles.len()],
-            |corner_sums, (c, mut column)| {
-                let phi = cage_coords.column(c);
-                for (sum, &[i, j, k]) in corner_sums.iter_mut().zip(triangles) {
-                    *sum = phi[i as usize] + phi[j as usize] + phi[k as usize];
-                }
-                for b in 0..num_bins {
-                    let mut sum = 0.0;
-                    for &(t, mass) in &compact[bin_starts[b]..bin_starts[b + 1]] {
-                        sum += mass * corner_sums[t as usize];
-                    }
-                    column[(b, 0)] = sum / 3.0;
-                }
-            },
-        );
-    drop(compact);
+    let pair_of_key = PairLookup::new(pair_keys, num_joints);
 
     // 4. Nodes that some vertex's stencil touches, per pair → table slots.
     let mut slot_of_node = vec![NONE; num_pairs * nodes_per_pair];
@@ -446,16 +383,13 @@ pub fn compute_cor_cage_coords_grid(
                     faer::MatMut::from_row_major_slice_mut(out, nodes.len(), num_cage),
                     Accum::Replace,
                     kernel,
-                    bin_coords
-                        .as_ref()
-                        .subrows(pair_bins.start, pair_bins.len()),
+                    binned.bin_coords(pair_bins.clone()),
                     1.0,
                     Par::Seq,
                 );
             },
         );
     }
-    drop(bin_coords);
 
     // 6. Λ_i = Σ_pairs x y interp(G)(x, y) / its sum, vertex blocks in parallel.
     crate::memory_estimate::check_dense_allocation(
@@ -463,7 +397,8 @@ pub fn compute_cor_cage_coords_grid(
         num_vertices,
         num_cage,
     )?;
-    let mut matrix = Mat::<f64>::zeros(num_vertices, num_cage);
+    // Not zero-filled first: the blocks below write every entry (see `fill_rows`).
+    let mut matrix = Mat::<f64>::with_capacity(num_vertices, num_cage);
     let num_blocks = num_vertices.div_ceil(VERTEX_BLOCK);
     let done = AtomicUsize::new(0);
     if num_cage > 0 {
@@ -476,23 +411,23 @@ pub fn compute_cor_cage_coords_grid(
             num_joints,
             num_cage,
         };
-        matrix
-            .as_mut()
-            .par_row_chunks_mut(VERTEX_BLOCK)
-            .enumerate()
-            .for_each_init(RowScratch::default, |scratch, (block, out)| {
-                fill_rows(
-                    out,
-                    block * VERTEX_BLOCK,
-                    weights,
-                    cage_coords,
-                    &tables,
-                    scratch,
-                );
+        let storage = SharedColumns::of_capacity(&mut matrix, num_cage);
+        (0..num_blocks)
+            .into_par_iter()
+            .for_each_init(RowScratch::default, |scratch, block| {
+                let first = block * VERTEX_BLOCK;
+                let count = VERTEX_BLOCK.min(num_vertices - first);
+                // SAFETY: the capacity holds `num_vertices` rows of `num_cage` columns; the row
+                // blocks are disjoint and nothing reads the storage before the loop ends.
+                let mut out = unsafe { storage.rows(first, count) };
+                fill_rows(&mut out, first, weights, cage_coords, &tables, scratch);
                 let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress(finished, num_blocks);
             });
     }
+    // SAFETY: the capacity is (num_vertices, num_cage) and `fill_rows` wrote every entry of every
+    // block (no entries when num_cage = 0).
+    unsafe { matrix.set_dims(num_vertices, num_cage) };
     CageCoords::from_matrix(matrix)
 }
 
@@ -518,69 +453,6 @@ fn validate(
         )));
     }
     Ok(())
-}
-
-/// Per triangle of positive area and joint pair j < k with a_t, b_t > 0: its [`Entry`], sorted by
-/// key (pair, then bin).
-fn triangle_entries(
-    rest_positions: &[DVec3],
-    triangles: &[[u32; 3]],
-    weights: &SkinWeights,
-    bin_resolution: f64,
-) -> Vec<Entry> {
-    let num_joints = weights.num_joints() as u64;
-    let mut entries: Vec<Entry> = triangles
-        .par_chunks(4096)
-        .enumerate()
-        .flat_map_iter(|(chunk, tris)| {
-            let mut out = Vec::new();
-            let mut joints: Vec<u32> = Vec::new();
-            let mut row: Vec<f64> = Vec::new();
-            for (t, &[i, j, k]) in tris.iter().enumerate() {
-                let (pi, pj, pk) = (
-                    rest_positions[i as usize],
-                    rest_positions[j as usize],
-                    rest_positions[k as usize],
-                );
-                let area = 0.5 * (pj - pi).cross(pk - pi).length();
-                if area.is_nan() || area <= 0.0 {
-                    continue;
-                }
-                // ω_t: merged corner rows / 3 (ascending joints).
-                joints.clear();
-                row.clear();
-                for v in [i, j, k] {
-                    let (js, ws) = weights.row(v as usize);
-                    for (&jj, &w) in js.iter().zip(ws) {
-                        match joints.binary_search(&jj) {
-                            Ok(p) => row[p] += w / 3.0,
-                            Err(p) => {
-                                joints.insert(p, jj);
-                                row.insert(p, w / 3.0);
-                            }
-                        }
-                    }
-                }
-                let triangle = (chunk * 4096 + t) as u32;
-                for_each_pair(&row, |x, y| {
-                    let (a, b) = (row[x], row[y]);
-                    let pair_key = joints[x] as u64 * num_joints + joints[y] as u64;
-                    let bin = |v: f64| ((v * bin_resolution).round() as u64).min(0xFFFF);
-                    let (bin_a, bin_b) = (bin(a), bin(b));
-                    out.push(Entry {
-                        key: pair_key << 32 | bin_a << 16 | bin_b,
-                        mass: area * a * b,
-                        a,
-                        b,
-                        triangle,
-                    });
-                });
-            }
-            out
-        })
-        .collect();
-    entries.par_sort_unstable_by_key(|e| e.key);
-    entries
 }
 
 /// Joint-pair key (`j_a·#J + j_b`) → pair index ([`NONE`] when no triangle has the pair): a

@@ -9,11 +9,10 @@
 //! (pair index first): deterministic, and equal to a per-vertex evaluation in pair-enumeration
 //! order up to the last bits (the test below).
 
-use faer::MatMut;
-
 use super::cor_grid::{Grid, NONE, PairLookup, for_each_pair};
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
+use crate::row_blocks::RowBlock;
 
 /// The tables and how to find a (pair, node)'s row in them.
 pub(super) struct Tables<'a> {
@@ -37,12 +36,14 @@ pub(super) struct RowScratch {
     sums: Vec<f64>,
     /// Per block row: 1 / Σ of its row, or 0 when the row falls back to Φ.
     scale: Vec<f64>,
+    /// One column of the block's rows of Λ.
+    column: Vec<f64>,
 }
 
-/// Fills `out` (`rows × #C`, the rows of Λ from vertex `first`) from the tables, falling back to
-/// Φ's row where a vertex has no tabulated pair (or a non-positive sum).
+/// Writes every entry of `out` (`rows × #C`, the rows of Λ from vertex `first`) from the
+/// tables, falling back to Φ's row where a vertex has no tabulated pair (or a non-positive sum).
 pub(super) fn fill_rows(
-    mut out: MatMut<'_, f64>,
+    out: &mut RowBlock,
     first: usize,
     weights: &SkinWeights,
     cage_coords: &CageCoords,
@@ -50,7 +51,12 @@ pub(super) fn fill_rows(
     scratch: &mut RowScratch,
 ) {
     let (rows, nc) = (out.nrows(), tables.num_cage);
-    let RowScratch { items, sums, scale } = scratch;
+    let RowScratch {
+        items,
+        sums,
+        scale,
+        column,
+    } = scratch;
     items.clear();
     for r in 0..rows {
         let (js, ws) = weights.row(first + r);
@@ -70,17 +76,7 @@ pub(super) fn fill_rows(
     items.sort_unstable_by_key(|item| (item.0, item.1));
     sums.clear();
     sums.resize(rows * nc, 0.0);
-    let mut stencil = [(0usize, 0.0f64); 16];
-    for &(key, r, x, y) in items.iter() {
-        let pair = (key >> 32) as usize;
-        let n = tables.grid.stencil(x, y, &mut stencil);
-        let slots = &tables.slot_of_node[pair * tables.nodes_per_pair..];
-        let sum = &mut sums[r as usize * nc..][..nc];
-        for &(node, w) in &stencil[..n] {
-            let slot = slots[node] as usize;
-            axpy(sum, w * x * y, &tables.values[slot * nc..][..nc]);
-        }
-    }
+    accumulate(items, tables, sums);
     scale.clear();
     scale.extend(sums.chunks_exact(nc).map(|row| {
         let total: f64 = row.iter().sum();
@@ -92,49 +88,86 @@ pub(super) fn fill_rows(
     }));
     for c in 0..nc {
         let phi = &cage_coords.column(c)[first..first + rows];
-        for (r, o) in out.as_mut().col_mut(c).iter_mut().enumerate() {
-            *o = if scale[r] != 0.0 {
+        column.clear();
+        column.extend((0..rows).map(|r| {
+            if scale[r] != 0.0 {
                 sums[r * nc + c] * scale[r]
             } else {
                 phi[r]
-            };
-        }
+            }
+        }));
+        out.write(0, c, column);
     }
 }
 
-/// `acc += w · row`, vectorised for the CPU at hand.
-fn axpy(acc: &mut [f64], w: f64, row: &[f64]) {
+/// `sums[r] += x y interp(G_pair)(x, y)` for every item (sort key, block row r, x, y) in turn,
+/// vectorised for the CPU at hand (no fused multiply-add: the same bits on every CPU).
+fn accumulate(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the enabled feature (checked just above).
-            return unsafe { axpy_avx512(acc, w, row) };
+            return unsafe { accumulate_avx512(items, tables, sums) };
         }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { axpy_avx2(acc, w, row) };
+            return unsafe { accumulate_avx2(items, tables, sums) };
         }
     }
-    axpy_generic(acc, w, row)
+    accumulate_generic(items, tables, sums)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn axpy_avx512(acc: &mut [f64], w: f64, row: &[f64]) {
-    axpy_generic(acc, w, row)
+fn accumulate_avx512(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums: &mut [f64]) {
+    accumulate_generic(items, tables, sums)
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn axpy_avx2(acc: &mut [f64], w: f64, row: &[f64]) {
-    axpy_generic(acc, w, row)
+#[target_feature(enable = "avx2")]
+fn accumulate_avx2(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums: &mut [f64]) {
+    accumulate_generic(items, tables, sums)
 }
 
+/// Columns per register-held partial sum of [`accumulate_generic`].
+const LANES: usize = 8;
+
 #[inline(always)]
-fn axpy_generic(acc: &mut [f64], w: f64, row: &[f64]) {
-    for (a, &t) in acc.iter_mut().zip(row) {
-        *a += w * t;
+fn accumulate_generic(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums: &mut [f64]) {
+    let nc = tables.num_cage;
+    let mut stencil = [(0usize, 0.0f64); 16];
+    for &(key, r, x, y) in items {
+        let pair = (key >> 32) as usize;
+        let n = tables.grid.stencil(x, y, &mut stencil);
+        let slots = &tables.slot_of_node[pair * tables.nodes_per_pair..];
+        for (node, w) in &mut stencil[..n] {
+            *node = slots[*node] as usize * nc;
+            *w *= x * y;
+        }
+        let stencil = &stencil[..n];
+        let sum = &mut sums[r as usize * nc..][..nc];
+        // The stencil's rows summed LANES columns at a time in registers, then added once.
+        let mut chunks = sum.chunks_exact_mut(LANES);
+        for (c, out) in (&mut chunks).enumerate() {
+            let mut acc = [0.0f64; LANES];
+            for &(start, w) in stencil {
+                let row = &tables.values[start + c * LANES..][..LANES];
+                for q in 0..LANES {
+                    acc[q] += w * row[q];
+                }
+            }
+            for q in 0..LANES {
+                out[q] += acc[q];
+            }
+        }
+        let done = nc - chunks.into_remainder().len();
+        for c in done..nc {
+            let acc: f64 = stencil
+                .iter()
+                .map(|&(start, w)| w * tables.values[start + c])
+                .sum();
+            sums[r as usize * nc + c] += acc;
+        }
     }
 }
 
@@ -155,7 +188,8 @@ mod tests {
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
-        let (num_joints, num_cage, rows) = (4usize, 5usize, 300usize);
+        // 11 cage columns: one register-width chunk of 8 and a tail of 3.
+        let (num_joints, num_cage, rows) = (4usize, 11usize, 300usize);
         // Pairs (0,1), (0,2), (1,2) tabulated; (2,3) is not.
         let pair_keys: Vec<u32> = vec![1, 2, 6];
         let pair_of_key = PairLookup::new(&pair_keys, num_joints);
@@ -199,9 +233,14 @@ mod tests {
                 num_joints,
                 num_cage,
             };
-            let mut out = faer::Mat::<f64>::zeros(rows, num_cage);
+            // NaN-filled: every entry must be written.
+            let mut out = faer::Mat::<f64>::from_fn(rows, num_cage, |_, _| f64::NAN);
+            let col_stride = out.col_stride().unsigned_abs();
+            // SAFETY: `out` holds `rows` rows of `num_cage` columns, `col_stride` apart, and is
+            // not accessed otherwise while the block lives.
+            let mut block = unsafe { RowBlock::new(out.as_ptr_mut(), col_stride, rows, num_cage) };
             fill_rows(
-                out.as_mut(),
+                &mut block,
                 0,
                 &weights,
                 &cage_coords,

@@ -12,6 +12,7 @@ pub mod cor_cage_coords;
 pub mod cor_centres;
 pub mod cor_f32;
 pub mod cor_grid;
+mod cor_grid_bins;
 mod cor_grid_rows;
 pub mod dqs;
 pub mod dqs_f32;

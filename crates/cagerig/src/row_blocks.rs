@@ -1,0 +1,93 @@
+//! Filling a column-major `rows × cols` f64 matrix (a faer `Mat` made with `with_capacity`) by
+//! disjoint row blocks from worker threads, without zero-filling it first: the storage is only
+//! ever written, through raw pointers, so the page faults of first touch are spread over the
+//! workers instead of a serial zero fill (90 ms for Λ at 532k × 58).
+
+use faer::Mat;
+
+/// The storage of a matrix being filled by row blocks.
+pub(crate) struct SharedColumns {
+    base: *mut f64,
+    col_stride: usize,
+    num_cols: usize,
+}
+
+// SAFETY: workers only write disjoint row blocks (the contract of `SharedColumns::rows`).
+unsafe impl Sync for SharedColumns {}
+
+impl SharedColumns {
+    /// The storage of `matrix`, made by `Mat::with_capacity(rows, num_cols)` (its rows are
+    /// `col_stride` apart, at least `rows`).
+    pub(crate) fn of_capacity(matrix: &mut Mat<f64>, num_cols: usize) -> Self {
+        Self {
+            base: matrix.as_ptr_mut(),
+            col_stride: matrix.col_stride().unsigned_abs(),
+            num_cols,
+        }
+    }
+
+    /// # Safety
+    /// Rows `start..start + count` must lie within the capacity and be written by no one else.
+    pub(crate) unsafe fn rows(&self, start: usize, count: usize) -> RowBlock {
+        // SAFETY: forwarded to the caller.
+        unsafe {
+            RowBlock::new(
+                self.base.wrapping_add(start),
+                self.col_stride,
+                count,
+                self.num_cols,
+            )
+        }
+    }
+}
+
+/// Column-major destination for a block of rows of a matrix whose storage may still be
+/// uninitialised: only ever written, through raw pointers.
+pub(crate) struct RowBlock {
+    /// Entry (0, 0) of the block.
+    base: *mut f64,
+    col_stride: usize,
+    nrows: usize,
+    ncols: usize,
+}
+
+/// A write of this many values is one vector store instead of a `memmove` call.
+const SHORT_WRITE: usize = 8;
+
+impl RowBlock {
+    /// # Safety
+    /// For every column `k < ncols`, the `nrows` values from `base + k · col_stride` must be
+    /// valid for writes and not accessed through any other pointer while the block lives.
+    pub(crate) unsafe fn new(
+        base: *mut f64,
+        col_stride: usize,
+        nrows: usize,
+        ncols: usize,
+    ) -> Self {
+        Self {
+            base,
+            col_stride,
+            nrows,
+            ncols,
+        }
+    }
+
+    pub(crate) fn nrows(&self) -> usize {
+        self.nrows
+    }
+
+    /// Writes `values` into column `col` from row `row` on.
+    #[inline(always)]
+    pub(crate) fn write(&mut self, row: usize, col: usize, values: &[f64]) {
+        assert!(col < self.ncols && row + values.len() <= self.nrows);
+        // SAFETY: in bounds (checked above) of memory the constructor's caller vouched for.
+        unsafe {
+            let target = self.base.add(col * self.col_stride + row);
+            if values.len() == SHORT_WRITE {
+                std::ptr::copy_nonoverlapping(values.as_ptr(), target, SHORT_WRITE);
+            } else {
+                std::ptr::copy_nonoverlapping(values.as_ptr(), target, values.len());
+            }
+        }
+    }
+}
