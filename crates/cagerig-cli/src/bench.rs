@@ -76,6 +76,9 @@ pub(crate) struct ModelRow {
     pub joints: usize,
     pub cage_vertices: usize,
     pub peak_memory_mb: f64,
+    /// This machine's memory read bandwidth on the same thread pool (GB/s), measured after the
+    /// models ([`crate::bench_bandwidth`]), to set the rows' implied bandwidth against.
+    pub read_bandwidth_gbs: f64,
     /// Precision of the session-level figures (the `_f32` kernels are the f32 variants).
     pub precision: &'static str,
     pub mvc: Stat,
@@ -216,6 +219,23 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         };
         let row = bench_model(model, parts, args.repeat_scale)?;
         rows.push(ModelReport { row, one_thread });
+    }
+    // After the models, so that its buffer does not count in their peak memory.
+    let bandwidth = crate::bench_bandwidth::read_bandwidth_gbs();
+    let bandwidth_one_thread = if args.skip_one_thread {
+        None
+    } else {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .context("building a one-thread pool")?;
+        Some(pool.install(crate::bench_bandwidth::read_bandwidth_gbs))
+    };
+    for report in &mut rows {
+        report.row.read_bandwidth_gbs = bandwidth;
+        if let (Some(row), Some(gbs)) = (report.one_thread.as_mut(), bandwidth_one_thread) {
+            row.read_bandwidth_gbs = gbs;
+        }
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
@@ -447,6 +467,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         joints: nj,
         cage_vertices: nc,
         peak_memory_mb: peak_memory_mb(),
+        read_bandwidth_gbs: 0.0,
         precision: "f64",
         mvc: mvc_stat,
         maxvol: maxvol_stat,

@@ -1,6 +1,7 @@
 //! The printed report of `cagerig bench`: one table per model, each row with its median, min
 //! and max on the default thread pool, the median on one thread, the bytes the kernel must move
-//! and the bandwidth that implies, and — when the model is the paper's Arm at a size its tool was
+//! and the bandwidth that implies (also as a share of the machine's read bandwidth, measured in
+//! the same run), and — when the model is the paper's Arm at a size its tool was
 //! measured on — the tool's single-threaded median and how many times faster each of ours is.
 
 use crate::bench::{ModelReport, ModelRow, Stat};
@@ -53,6 +54,15 @@ fn ratio(tool_ms: Option<f64>, ours_ms: Option<f64>) -> String {
     }
 }
 
+/// `gbs` as a percentage of the read bandwidth `read_gbs` (empty when that is unknown).
+fn share_of(gbs: f64, read_gbs: f64) -> String {
+    if read_gbs > 0.0 && gbs.is_finite() {
+        format!("{:.0} %", 100.0 * gbs / read_gbs)
+    } else {
+        String::new()
+    }
+}
+
 /// Prints one table per model.
 pub(crate) fn print_table(reports: &[ModelReport]) {
     for report in reports {
@@ -61,17 +71,22 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
         let column = tool_column(r);
         println!(
             "\n{}: {} vertices, {} joints, {} cage vertices, peak memory {:.0} MB, kernels in {}, \
-             MaxVol ln|det| {:.4}",
+             MaxVol ln|det| {:.4}, memory read bandwidth {:.1} GB/s{}",
             r.model,
             r.vertices,
             r.joints,
             r.cage_vertices,
             r.peak_memory_mb,
             r.precision,
-            r.maxvol_log_abs_det
+            r.maxvol_log_abs_det,
+            r.read_bandwidth_gbs,
+            single.map_or(String::new(), |row| format!(
+                " ({:.1} on 1 thread)",
+                row.read_bandwidth_gbs
+            ))
         );
         println!(
-            "  {:<30} {:>10} {:>9} {:>9} {:>10} {:>11} {:>7} {:>9} {:>8} {:>8}",
+            "  {:<30} {:>10} {:>9} {:>9} {:>10} {:>11} {:>7} {:>6} {:>9} {:>8} {:>8}",
             "operation",
             "median ms",
             "min ms",
@@ -79,6 +94,7 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
             "1 thread",
             "bytes moved",
             "GB/s",
+            "% read",
             "tool ms",
             "× tool",
             "× 1 thr"
@@ -87,15 +103,19 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
             let s = pick(r);
             let one = single.map(|row| pick(row).median_ms);
             let tool_ms = tool.zip(column).map(|(t, c)| t[c]);
-            let (bytes, bw) = match s.bytes_moved {
-                Some(b) => (
-                    format!("{:.1} MB", b as f64 / 1e6),
-                    format!("{:.1}", b as f64 / 1e6 / s.median_ms),
-                ),
-                None => (String::new(), String::new()),
+            let (bytes, bw, share) = match s.bytes_moved {
+                Some(b) => {
+                    let gbs = b as f64 / 1e6 / s.median_ms;
+                    (
+                        format!("{:.1} MB", b as f64 / 1e6),
+                        format!("{gbs:.1}"),
+                        share_of(gbs, r.read_bandwidth_gbs),
+                    )
+                }
+                None => (String::new(), String::new(), String::new()),
             };
             println!(
-                "  {:<30} {:>10.3} {:>9.3} {:>9.3} {:>10} {:>11} {:>7} {:>9} {:>8} {:>8}",
+                "  {:<30} {:>10.3} {:>9.3} {:>9.3} {:>10} {:>11} {:>7} {:>6} {:>9} {:>8} {:>8}",
                 name,
                 s.median_ms,
                 s.min_ms,
@@ -103,6 +123,7 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
                 one.map_or(String::new(), |m| format!("{m:.3}")),
                 bytes,
                 bw,
+                share,
                 tool_ms.map_or(String::new(), |t| format!("{t}")),
                 ratio(tool_ms, Some(s.median_ms)),
                 ratio(tool_ms, one),
@@ -195,5 +216,7 @@ mod tests {
         assert_eq!(ratio(None, Some(0.25)), "");
         assert_eq!(ratio(Some(1.0), None), "");
         assert_eq!(TOOL.dqs[0], 0.033);
+        assert_eq!(share_of(36.0, 72.0), "50 %");
+        assert_eq!(share_of(36.0, 0.0), "");
     }
 }

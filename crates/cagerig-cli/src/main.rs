@@ -2,6 +2,7 @@
 
 mod animate;
 mod bench;
+mod bench_bandwidth;
 mod bench_table;
 mod cage;
 mod commands;

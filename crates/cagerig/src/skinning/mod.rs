@@ -14,6 +14,7 @@ pub mod cor_f32;
 pub mod cor_grid;
 mod cor_grid_bins;
 mod cor_grid_rows;
+mod cor_grid_tables;
 pub mod dqs;
 pub mod dqs_f32;
 pub mod lbs;
