@@ -30,6 +30,7 @@ pub mod skinning;
 pub mod sparse_rows;
 pub mod subdivide;
 pub mod sync;
+mod vector_registers;
 
 pub use cage_coords::CageCoords;
 pub use error::{RigError, Warning};

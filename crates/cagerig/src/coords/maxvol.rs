@@ -99,6 +99,17 @@ pub fn select_maxvol_rows_with(
     phi: &CageCoords,
     options: &MaxVolOptions,
 ) -> Result<MaxVolSelection, RigError> {
+    let selection = maxvol_selection(phi, options);
+    // Its faer factorisations and products ran on this thread and on the pool's.
+    crate::vector_registers::clear_upper_halves_everywhere();
+    selection
+}
+
+/// The work of [`select_maxvol_rows_with`].
+fn maxvol_selection(
+    phi: &CageCoords,
+    options: &MaxVolOptions,
+) -> Result<MaxVolSelection, RigError> {
     let matrix = phi.matrix();
     let (num_rows, rank) = (matrix.nrows(), matrix.ncols());
     if rank == 0 {
@@ -339,6 +350,7 @@ impl SeqLu {
             MemStack::new(&mut buffer),
             Default::default(),
         );
+        crate::vector_registers::clear_upper_halves();
         Self {
             packed,
             forward,
@@ -381,7 +393,10 @@ pub fn refine_maxvol_rows(
     phi: &CageCoords,
     initial_rows: &[usize],
 ) -> Result<MaxVolSelection, RigError> {
-    refine(phi, initial_rows).map(|(selection, _)| selection)
+    let refined = refine(phi, initial_rows).map(|(selection, _)| selection);
+    // Its faer products ran on this thread and on the pool's.
+    crate::vector_registers::clear_upper_halves_everywhere();
+    refined
 }
 
 /// ln |det Φ̃| of the `#C × #C` submatrix of the given rows (partial-pivot LU); −∞ when it is

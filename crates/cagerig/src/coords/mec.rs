@@ -327,6 +327,7 @@ fn least_squares_fallback(
                 .sum()
         })
     });
+    crate::vector_registers::clear_upper_halves();
     let Some(pinv) = pseudo_inverse else {
         return finish(
             points,

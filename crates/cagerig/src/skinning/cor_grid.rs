@@ -244,6 +244,8 @@ pub fn compute_cor_cage_coords_grid(
         num_cage,
         options.sigma,
     )?;
+    // Its faer products ran on every thread of the pool.
+    crate::vector_registers::clear_upper_halves_everywhere();
 
     // 6. Λ_i = Σ_pairs x y interp(G)(x, y) / its sum, vertex blocks in parallel.
     crate::memory_estimate::check_dense_allocation(

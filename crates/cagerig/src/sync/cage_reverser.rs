@@ -220,6 +220,14 @@ impl CageReverser {
     /// Builds and factorises the Eq. 19 system for the rotations `T_j^r` of the current pose
     /// (`joint_rotations`, `#J`, the linear parts of posed_from_rest).
     pub fn refactor(&mut self, joint_rotations: &[DMat3]) -> Result<(), RigError> {
+        let factored = self.factorise(joint_rotations);
+        // The factorisations run faer on this thread.
+        crate::vector_registers::clear_upper_halves();
+        factored
+    }
+
+    /// The work of [`Self::refactor`].
+    fn factorise(&mut self, joint_rotations: &[DMat3]) -> Result<(), RigError> {
         let square = self.row_weights.num_vertices() == self.num_cage;
         if self.method == ReverserMethod::Auto
             && square

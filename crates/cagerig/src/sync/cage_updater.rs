@@ -88,6 +88,7 @@ impl CageUpdater {
                 p
             }
         };
+        crate::vector_registers::clear_upper_halves();
         Ok(Self {
             rows,
             mode,
