@@ -211,11 +211,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         let one_thread = if args.skip_one_thread {
             None
         } else {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(1)
-                .build()
-                .context("building a one-thread pool")?;
-            Some(pool.install(|| bench_model(model.clone(), parts.clone(), args.repeat_scale))?)
+            Some(
+                one_thread_pool()?
+                    .install(|| bench_model(model.clone(), parts.clone(), args.repeat_scale))?,
+            )
         };
         let row = bench_model(model, parts, args.repeat_scale)?;
         rows.push(ModelReport { row, one_thread });
@@ -225,11 +224,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let bandwidth_one_thread = if args.skip_one_thread {
         None
     } else {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .context("building a one-thread pool")?;
-        Some(pool.install(crate::bench_bandwidth::read_bandwidth_gbs))
+        Some(one_thread_pool()?.install(crate::bench_bandwidth::read_bandwidth_gbs))
     };
     for report in &mut rows {
         report.row.read_bandwidth_gbs = bandwidth;
@@ -243,6 +238,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         crate::bench_table::print_table(&rows);
     }
     Ok(())
+}
+
+/// The pool of the "1 thread" pass (like for like with the single-threaded paper tool).
+fn one_thread_pool() -> anyhow::Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .context("building a one-thread pool")
 }
 
 fn reps(base: usize, scale: f64, vertices: usize) -> usize {

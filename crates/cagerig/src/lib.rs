@@ -30,6 +30,8 @@ pub mod skinning;
 pub mod sparse_rows;
 pub mod subdivide;
 pub mod sync;
+#[cfg(test)]
+mod test_random;
 mod vector_registers;
 
 pub use cage_coords::CageCoords;

@@ -341,13 +341,7 @@ mod tests {
     /// 5 cage columns (two column blocks and a partial one).
     #[test]
     fn bins_match_a_brute_force_sum() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = crate::test_random::uniform(0x9e37_79b9_7f4a_7c15u64);
         let (side, num_joints, num_cage) = (12usize, 5usize, 5usize);
         let mut positions = Vec::new();
         let mut rows = Vec::new();

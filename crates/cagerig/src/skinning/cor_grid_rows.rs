@@ -181,13 +181,7 @@ mod tests {
     /// pair that has no table (→ Φ's row).
     #[test]
     fn block_evaluation_matches_the_per_vertex_rule() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = crate::test_random::uniform(0x2545_f491_4f6c_dd1du64);
         // 11 cage columns: one register-width chunk of 8 and a tail of 3.
         let (num_joints, num_cage, rows) = (4usize, 11usize, 300usize);
         // Pairs (0,1), (0,2), (1,2) tabulated; (2,3) is not.

@@ -257,13 +257,8 @@ mod tests {
     /// influences and general affine transforms.
     #[test]
     fn apply_and_apply_rows_give_the_same_bits() {
-        let mut state = 0x853c_49e6_748f_ea9bu64;
-        let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut unit = crate::test_random::uniform(0x853c_49e6_748f_ea9bu64);
+        let mut random = move || unit() - 0.5;
         let (nv, nj) = (3 * VERTEX_GRAIN_F32 + 17, 6);
         let mut triplets = Vec::new();
         for v in 0..nv {
