@@ -8,3 +8,4 @@ pub mod mec;
 pub mod mec_signed;
 pub mod mvc;
 mod mvc_batch;
+mod mvc_triangle;
