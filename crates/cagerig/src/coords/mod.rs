@@ -8,4 +8,5 @@ pub mod mec;
 pub mod mec_signed;
 pub mod mvc;
 mod mvc_batch;
+mod mvc_lanes;
 mod mvc_triangle;
