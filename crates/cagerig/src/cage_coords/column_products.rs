@@ -36,16 +36,11 @@ pub(super) fn accumulate_columns<'a, W, P, I>(
                 if add_to_out {
                     sums.load(tile_out);
                 }
+                let columns = |k: usize| &column(k)[start..start + len];
                 for_each_group(terms.clone(), |group| match group {
-                    Group::Eight(g) => sums.add_eight_columns(
-                        g.map(|(k, _)| &column(k)[start..start + len]),
-                        g.map(|(_, d)| d),
-                    ),
-                    Group::Four(g) => sums.add_four_columns(
-                        g.map(|(k, _)| &column(k)[start..start + len]),
-                        g.map(|(_, d)| d),
-                    ),
-                    Group::One((k, d)) => sums.add_column(&column(k)[start..start + len], d),
+                    Group::Eight(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
+                    Group::Four(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
+                    Group::One((k, d)) => sums.add_columns([columns(k)], [d]),
                 });
                 sums.store(tile_out);
             }
@@ -67,14 +62,11 @@ pub(super) fn rows_of_columns<'a, W, I>(
     debug_assert_eq!(rows.len(), out.len());
     for (&row, o) in rows.iter().zip(out.iter_mut()) {
         let mut sum = DVec3::ZERO;
+        let weight = |k: usize| column(k)[row].widen();
         for_each_group(terms.clone(), |group| match group {
-            Group::Eight(g) => {
-                sum += eight_terms(g.map(|(k, _)| column(k)[row].widen()), g.map(|(_, d)| d));
-            }
-            Group::Four(g) => {
-                sum += four_terms(g.map(|(k, _)| column(k)[row].widen()), g.map(|(_, d)| d));
-            }
-            Group::One((k, d)) => sum += column(k)[row].widen() * d,
+            Group::Eight(g) => sum += group_sum(g.map(|(k, _)| weight(k)), g.map(|t| t.1)),
+            Group::Four(g) => sum += group_sum(g.map(|(k, _)| weight(k)), g.map(|t| t.1)),
+            Group::One((k, d)) => sum += group_sum([weight(k)], [d]),
         });
         *o = sum;
     }
@@ -119,17 +111,31 @@ fn for_each_group<I: Iterator<Item = (usize, DVec3)>>(mut terms: I, mut f: impl 
     }
 }
 
-/// `Σ_c w_c d_c` for four columns, summed as a pairwise tree.
+/// `Σ_c w_c d_c` over a group of columns, per coordinate as [`pairwise_sum`] (the order of
+/// operations of [`TileSums::add_columns`]).
 #[inline(always)]
-fn four_terms(w: [f64; 4], d: [DVec3; 4]) -> DVec3 {
-    (w[0] * d[0] + w[1] * d[1]) + (w[2] * d[2] + w[3] * d[3])
+fn group_sum<const N: usize>(w: [f64; N], d: [DVec3; N]) -> DVec3 {
+    let coordinate =
+        |a: fn(DVec3) -> f64| pairwise_sum::<N>(std::array::from_fn(|c| w[c] * a(d[c])));
+    DVec3::new(
+        coordinate(|v| v.x),
+        coordinate(|v| v.y),
+        coordinate(|v| v.z),
+    )
 }
 
-/// `Σ_c w_c d_c` for eight columns, summed as a pairwise tree.
+/// Σ p as a pairwise tree, `((p0 + p1) + (p2 + p3)) + …`; `N` is 1, 2, 4 or 8.
 #[inline(always)]
-fn eight_terms(w: [f64; 8], d: [DVec3; 8]) -> DVec3 {
-    ((w[0] * d[0] + w[1] * d[1]) + (w[2] * d[2] + w[3] * d[3]))
-        + ((w[4] * d[4] + w[5] * d[5]) + (w[6] * d[6] + w[7] * d[7]))
+fn pairwise_sum<const N: usize>(mut p: [f64; N]) -> f64 {
+    const { assert!(N.is_power_of_two()) };
+    let mut n = N;
+    while n > 1 {
+        for i in 0..n / 2 {
+            p[i] = p[2 * i] + p[2 * i + 1];
+        }
+        n /= 2;
+    }
+    p[0]
 }
 
 /// A point of the products' output: f64, or f32 (the display path), rounded once from the f64
@@ -211,130 +217,53 @@ impl TileSums {
         }
     }
 
-    /// `sums[i] += column[i] · d` for the first `column.len()` points.
-    fn add_column<W: Weight>(&mut self, column: &[W], d: DVec3) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe { self.add_column_avx2(column, d) };
-            }
-        }
-        self.add_column_generic(column, d)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn add_column_avx2<W: Weight>(&mut self, column: &[W], d: DVec3) {
-        self.add_column_generic(column, d)
-    }
-
-    /// `sums[i] += Σ_c columns[c][i] · d_c` for four columns of equal length.
-    fn add_four_columns<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
+    /// `sums[i] += Σ_c columns[c][i] · d_c` for a group of columns of equal length (eight per
+    /// pass: the traffic of the sums, not of Φ, bounds the product; four then one at a time for
+    /// the rest).
+    fn add_columns<W: Weight, const N: usize>(&mut self, columns: [&[W]; N], d: [DVec3; N]) {
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx512f") {
                 // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe { self.add_four_columns_avx512(columns, d) };
+                return unsafe { self.add_columns_avx512(columns, d) };
             }
             if std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: as above.
-                return unsafe { self.add_four_columns_avx2(columns, d) };
+                return unsafe { self.add_columns_avx2(columns, d) };
             }
         }
-        self.add_four_columns_generic(columns, d)
+        self.add_columns_generic(columns, d)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn add_four_columns_avx512<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
-        self.add_four_columns_generic(columns, d)
+    fn add_columns_avx512<W: Weight, const N: usize>(&mut self, columns: [&[W]; N], d: [DVec3; N]) {
+        self.add_columns_generic(columns, d)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn add_four_columns_avx2<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
-        self.add_four_columns_generic(columns, d)
+    fn add_columns_avx2<W: Weight, const N: usize>(&mut self, columns: [&[W]; N], d: [DVec3; N]) {
+        self.add_columns_generic(columns, d)
     }
 
-    /// `sums[i] += Σ_c columns[c][i] · d_c` for eight columns of equal length (half the passes
-    /// over the sums of four: the sums' traffic, not Φ's, bounded the four-column product).
-    fn add_eight_columns<W: Weight>(&mut self, columns: [&[W]; 8], d: [DVec3; 8]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe { self.add_eight_columns_avx512(columns, d) };
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: as above.
-                return unsafe { self.add_eight_columns_avx2(columns, d) };
-            }
-        }
-        self.add_eight_columns_generic(columns, d)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    fn add_eight_columns_avx512<W: Weight>(&mut self, columns: [&[W]; 8], d: [DVec3; 8]) {
-        self.add_eight_columns_generic(columns, d)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn add_eight_columns_avx2<W: Weight>(&mut self, columns: [&[W]; 8], d: [DVec3; 8]) {
-        self.add_eight_columns_generic(columns, d)
-    }
-
+    /// The order of operations of [`group_sum`], per coordinate, vectorised over the points.
     #[inline(always)]
-    fn add_eight_columns_generic<W: Weight>(&mut self, columns: [&[W]; 8], d: [DVec3; 8]) {
+    fn add_columns_generic<W: Weight, const N: usize>(
+        &mut self,
+        columns: [&[W]; N],
+        d: [DVec3; N],
+    ) {
         let n = columns[0].len().min(LANE_BLOCK);
         let c = columns.map(|c| &c[..n]);
         let (x, y, z) = (&mut self.x[..n], &mut self.y[..n], &mut self.z[..n]);
         for i in 0..n {
-            let w = [
-                c[0][i].widen(),
-                c[1][i].widen(),
-                c[2][i].widen(),
-                c[3][i].widen(),
-                c[4][i].widen(),
-                c[5][i].widen(),
-                c[6][i].widen(),
-                c[7][i].widen(),
-            ];
-            // The order of operations of `eight_terms`, per coordinate.
-            let tree = |a: fn(DVec3) -> f64| {
-                ((w[0] * a(d[0]) + w[1] * a(d[1])) + (w[2] * a(d[2]) + w[3] * a(d[3])))
-                    + ((w[4] * a(d[4]) + w[5] * a(d[5])) + (w[6] * a(d[6]) + w[7] * a(d[7])))
-            };
-            x[i] += tree(|v| v.x);
-            y[i] += tree(|v| v.y);
-            z[i] += tree(|v| v.z);
-        }
-    }
-
-    #[inline(always)]
-    fn add_four_columns_generic<W: Weight>(&mut self, columns: [&[W]; 4], d: [DVec3; 4]) {
-        let n = columns[0].len().min(LANE_BLOCK);
-        let [c0, c1, c2, c3] = columns.map(|c| &c[..n]);
-        let (x, y, z) = (&mut self.x[..n], &mut self.y[..n], &mut self.z[..n]);
-        for i in 0..n {
-            let (w0, w1, w2, w3) = (c0[i].widen(), c1[i].widen(), c2[i].widen(), c3[i].widen());
-            x[i] += (w0 * d[0].x + w1 * d[1].x) + (w2 * d[2].x + w3 * d[3].x);
-            y[i] += (w0 * d[0].y + w1 * d[1].y) + (w2 * d[2].y + w3 * d[3].y);
-            z[i] += (w0 * d[0].z + w1 * d[1].z) + (w2 * d[2].z + w3 * d[3].z);
-        }
-    }
-
-    #[inline(always)]
-    fn add_column_generic<W: Weight>(&mut self, column: &[W], d: DVec3) {
-        let n = column.len().min(LANE_BLOCK);
-        let (x, y, z) = (&mut self.x[..n], &mut self.y[..n], &mut self.z[..n]);
-        for i in 0..n {
-            let w = column[i].widen();
-            x[i] += w * d.x;
-            y[i] += w * d.y;
-            z[i] += w * d.z;
+            let w: [f64; N] = std::array::from_fn(|q| c[q][i].widen());
+            let coordinate =
+                |a: fn(DVec3) -> f64| pairwise_sum::<N>(std::array::from_fn(|q| w[q] * a(d[q])));
+            x[i] += coordinate(|v| v.x);
+            y[i] += coordinate(|v| v.y);
+            z[i] += coordinate(|v| v.z);
         }
     }
 }
