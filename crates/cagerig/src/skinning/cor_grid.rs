@@ -195,15 +195,15 @@ pub fn compute_cor_cage_coords_grid(
     let nodes_per_pair = grid.side * grid.side;
 
     // 1–3. Triangles binned per joint pair, with each bin's Σ α a b Φ_t.
-    let binned = bin_triangles(
+    let (pair_keys, binned) = bin_triangles(
         rest_positions,
         triangles,
         weights,
         cage_coords,
         options.bin_resolution,
     )?;
-    let num_pairs = binned.pair_keys.len();
-    let pair_of_key = PairLookup::new(&binned.pair_keys, num_joints);
+    let num_pairs = pair_keys.len();
+    let pair_of_key = PairLookup::new(&pair_keys, num_joints);
 
     // 4. Nodes that some vertex's stencil touches, per pair → table slots.
     let mut slot_of_node = vec![NONE; num_pairs * nodes_per_pair];
@@ -235,17 +235,15 @@ pub fn compute_cor_cage_coords_grid(
         pair_nodes.push(nodes);
     }
 
-    // 5. Tables G (#slots × #C, row-major).
+    // 5. Tables G (#slots × #C, row-major); the bins' #bins × #C coordinates go with them.
     let tables = similarity_tables(
         &grid,
         &pair_nodes,
         num_slots,
-        &binned,
+        binned,
         num_cage,
         options.sigma,
     )?;
-    // Its faer products ran on every thread of the pool.
-    crate::vector_registers::clear_upper_halves_everywhere();
 
     // 6. Λ_i = Σ_pairs x y interp(G)(x, y) / its sum, vertex blocks in parallel.
     crate::memory_estimate::check_dense_allocation(

@@ -18,10 +18,9 @@ use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::memory_estimate::{check_table_allocation, zeroed_table};
 
-/// The binned triangles of every joint pair.
+/// The binned triangles of every joint pair (pair p: the p-th key that [`bin_triangles`]
+/// returns beside them).
 pub(super) struct TriangleBins {
-    /// Joint-pair keys `j·#J + k` (j < k) present, ascending (`#pairs`).
-    pub(super) pair_keys: Vec<u32>,
     /// The bins of pair p are `pair_bin_starts[p]..pair_bin_starts[p + 1]` (`#pairs + 1`).
     pub(super) pair_bin_starts: Vec<usize>,
     /// Per bin: (Σ α a b, ā, b̄) (`#bins`).
@@ -60,14 +59,15 @@ struct StreamEntry {
 /// Bins the rest triangles (`rest_positions` M: `#V`, `triangles`: `#F`) of every joint pair of
 /// the skinning weights Ω (`#V × #J`) at `1 / bin_resolution` (≤ 65535 bins per axis) and sums
 /// the cage coordinates Φ (`#V × #C`) of each bin. Triangles of zero or undefined area are left
-/// out.
+/// out. Returns the joint-pair keys `j·#J + k` (j < k) present, ascending (`#pairs`), and
+/// their bins.
 pub(super) fn bin_triangles(
     rest_positions: &[DVec3],
     triangles: &[[u32; 3]],
     weights: &SkinWeights,
     cage_coords: &CageCoords,
     bin_resolution: f64,
-) -> Result<TriangleBins, RigError> {
+) -> Result<(Vec<u32>, TriangleBins), RigError> {
     let TriangleEntries {
         mut keys,
         mut stream,
@@ -146,12 +146,14 @@ pub(super) fn bin_triangles(
                 },
             );
     }
-    Ok(TriangleBins {
+    Ok((
         pair_keys,
-        pair_bin_starts,
-        bins,
-        bin_coords,
-    })
+        TriangleBins {
+            pair_bin_starts,
+            bins,
+            bin_coords,
+        },
+    ))
 }
 
 /// Cage columns per pass over the entries: independent sums per bin (a bin's sum is a chain of
@@ -376,7 +378,7 @@ mod tests {
         let cage_coords = CageCoords::from_rows(&phi_rows, num_cage).unwrap();
         let resolution = 16.0;
 
-        let binned =
+        let (pair_keys, binned) =
             bin_triangles(&positions, &triangles, &weights, &cage_coords, resolution).unwrap();
 
         // (pair key, bin a, bin b) → (Σ m, Σ m a, Σ m b, Σ m Φ_t).
@@ -434,7 +436,7 @@ mod tests {
                 assert_eq!(binned.pair_bin_starts[p], bin, "first bin of pair {p}");
             }
         }
-        let keys: Vec<u64> = binned.pair_keys.iter().map(|&k| u64::from(k)).collect();
+        let keys: Vec<u64> = pair_keys.iter().map(|&k| u64::from(k)).collect();
         assert_eq!(keys, pairs_seen);
         assert_eq!(binned.pair_bin_starts.last(), Some(&binned.num_bins()));
     }

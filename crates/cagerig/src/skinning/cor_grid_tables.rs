@@ -16,12 +16,13 @@ const NODE_CHUNK: usize = 256;
 const KERNEL_ENTRIES: usize = 1 << 20;
 
 /// G (`#slots × #C`, row-major): the rows of pair p's nodes `pair_nodes[p]` in turn
-/// (`num_slots` in all), from the binned triangles, for the kernel width σ = `sigma`.
+/// (`num_slots` in all), from the binned triangles (dropped as soon as the tables are made),
+/// for the kernel width σ = `sigma`.
 pub(super) fn similarity_tables(
     grid: &Grid,
     pair_nodes: &[Vec<u32>],
     num_slots: usize,
-    binned: &TriangleBins,
+    binned: TriangleBins,
     num_cage: usize,
     sigma: f64,
 ) -> Result<Vec<f64>, RigError> {
@@ -71,6 +72,8 @@ pub(super) fn similarity_tables(
             },
         );
     }
+    // The faer products ran on every thread of the pool.
+    crate::vector_registers::clear_upper_halves_everywhere();
     Ok(tables)
 }
 
