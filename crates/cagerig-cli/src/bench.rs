@@ -76,9 +76,6 @@ pub(crate) struct ModelRow {
     pub joints: usize,
     pub cage_vertices: usize,
     pub peak_memory_mb: f64,
-    /// This machine's memory read bandwidth on the same thread pool (GB/s), measured after the
-    /// models ([`crate::bench_bandwidth`]), to set the rows' implied bandwidth against.
-    pub read_bandwidth_gbs: f64,
     /// Precision of the session-level figures (the `_f32` kernels are the f32 variants).
     pub precision: &'static str,
     pub mvc: Stat,
@@ -115,6 +112,12 @@ pub(crate) struct ModelReport {
     pub row: ModelRow,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub one_thread: Option<ModelRow>,
+    /// This machine's memory read bandwidth (GB/s) on the default pool, measured once after the
+    /// models ([`crate::bench_bandwidth`]), to set the rows' implied bandwidth against.
+    pub read_bandwidth_gbs: f64,
+    /// The same on one thread, unless that pass is skipped.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read_bandwidth_gbs_one_thread: Option<f64>,
 }
 
 /// Runs `f` `warmup` times untimed, then `reps` times; returns median/min/max in ms.
@@ -181,7 +184,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             base.cage.num_vertices() as u64,
         )?;
     }
-    let mut rows = Vec::new();
+    let mut measured = Vec::new();
     for &levels in &args.subdivide {
         let parts = if levels == 0 {
             base.clone()
@@ -216,8 +219,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     .install(|| bench_model(model.clone(), parts.clone(), args.repeat_scale))?,
             )
         };
-        let row = bench_model(model, parts, args.repeat_scale)?;
-        rows.push(ModelReport { row, one_thread });
+        measured.push((bench_model(model, parts, args.repeat_scale)?, one_thread));
     }
     // After the models, so that its buffer does not count in their peak memory.
     let bandwidth = crate::bench_bandwidth::read_bandwidth_gbs();
@@ -226,12 +228,15 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     } else {
         Some(one_thread_pool()?.install(crate::bench_bandwidth::read_bandwidth_gbs))
     };
-    for report in &mut rows {
-        report.row.read_bandwidth_gbs = bandwidth;
-        if let (Some(row), Some(gbs)) = (report.one_thread.as_mut(), bandwidth_one_thread) {
-            row.read_bandwidth_gbs = gbs;
-        }
-    }
+    let rows: Vec<ModelReport> = measured
+        .into_iter()
+        .map(|(row, one_thread)| ModelReport {
+            row,
+            one_thread,
+            read_bandwidth_gbs: bandwidth,
+            read_bandwidth_gbs_one_thread: bandwidth_one_thread,
+        })
+        .collect();
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
@@ -470,7 +475,6 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         joints: nj,
         cage_vertices: nc,
         peak_memory_mb: peak_memory_mb(),
-        read_bandwidth_gbs: 0.0,
         precision: "f64",
         mvc: mvc_stat,
         maxvol: maxvol_stat,

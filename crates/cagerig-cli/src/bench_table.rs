@@ -79,11 +79,10 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
             r.peak_memory_mb,
             r.precision,
             r.maxvol_log_abs_det,
-            r.read_bandwidth_gbs,
-            single.map_or(String::new(), |row| format!(
-                " ({:.1} on 1 thread)",
-                row.read_bandwidth_gbs
-            ))
+            report.read_bandwidth_gbs,
+            report
+                .read_bandwidth_gbs_one_thread
+                .map_or(String::new(), |gbs| format!(" ({gbs:.1} on 1 thread)"))
         );
         println!(
             "  {:<30} {:>10} {:>9} {:>9} {:>10} {:>11} {:>7} {:>6} {:>9} {:>8} {:>8}",
@@ -109,7 +108,7 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
                     (
                         format!("{:.1} MB", b as f64 / 1e6),
                         format!("{gbs:.1}"),
-                        share_of(gbs, r.read_bandwidth_gbs),
+                        share_of(gbs, report.read_bandwidth_gbs),
                     )
                 }
                 None => (String::new(), String::new(), String::new()),
