@@ -4,10 +4,10 @@
 //! the same run), and — when the model is the paper's Arm at a size its tool was
 //! measured on — the tool's single-threaded median and how many times faster each of ours is.
 
-use crate::bench::{ModelReport, ModelRow, Stat};
+use crate::commands::bench::{ModelReport, ModelRow, Stat};
 
 /// The paper tool's medians in ms (single thread, -O3 -march=native, this project's machine
-/// kind; `docs/reference-tool.md` §4 beside the checkout) on the Arm (2,089 vertices) and its
+/// kind, as published with the paper tool's timings table) on the Arm (2,089 vertices) and its
 /// 2× / 3× midpoint subdivisions (33,289 / 133,073), per bench row. `None`: the tool has no
 /// such step (it loads MaxVol rows and CoR centres from files).
 struct ToolFigures {

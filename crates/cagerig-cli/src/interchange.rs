@@ -5,12 +5,13 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use cagerig::animation::{CageTrack, SkeletonTrack};
+use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, choose_cage};
 use cagerig::playback::{AnimationPlayer, PoseChannels};
 use cagerig::session::{RigParts, RigSession};
 use cagerig_formats::{ImportOptions, ImportedCharacter, MorphTargets, import_character};
 use serde::Serialize;
 
-use crate::commands::FileUse;
+use crate::rig_source::FileUse;
 use crate::rig_source::LoadedRig;
 
 /// Whether `path` is read by `cagerig-formats` rather than as the paper tool's OBJ file set.
@@ -35,42 +36,43 @@ pub fn load_interchange(
     auto_cage: Option<cagerig::cage_gen::CageOptions>,
 ) -> anyhow::Result<LoadedRig> {
     let character = import(path, skin)?;
-    let mut generated_cage = None;
     let mut files = vec![FileUse {
         role: "character".into(),
         path: path.to_path_buf(),
     }];
-    let cage_mesh = match (cage, &character.cage) {
-        (Some(c), _) => {
-            files.push(FileUse {
-                role: "cage".into(),
-                path: c.to_path_buf(),
-            });
-            cagerig::io::obj::read_obj(c)
-                .with_context(|| format!("reading the cage {}", c.display()))?
+    if let Some(c) = cage {
+        files.push(FileUse {
+            role: "cage".into(),
+            path: c.to_path_buf(),
+        });
+    }
+    let request = CageRequest {
+        given: cage,
+        generate: auto_cage,
+    };
+    let chosen = match choose_cage(path, &character.mesh, character.cage.clone(), &request) {
+        Ok(chosen) => chosen,
+        Err(CageSourceError::Read(e)) => {
+            return Err(anyhow::Error::new(e).context(format!(
+                "reading the cage {}",
+                cage.map(Path::display)
+                    .map(|d| d.to_string())
+                    .unwrap_or_default()
+            )));
         }
-        (None, Some(c)) => c.clone(),
-        (None, None) => match auto_cage {
-            Some(options) => {
-                let generated = cagerig::cage_gen::generate_cage(&character.mesh, &options)
-                    .with_context(|| {
-                        format!(
-                            "{}: no cage in the file, and none could be generated",
-                            path.display()
-                        )
-                    })?;
-                let cage = generated.cage.clone();
-                generated_cage = Some(generated);
-                cage
-            }
-            None => bail!(
-                "{}: no cage: give --cage CAGE.obj (in the character's space: the file's world space, \
-                 FBX converted to +Y up metres as `cagerig info` states), add a mesh node \
-                 named `<name>_cage` (or with extras.cagerig_cage) to the file, or pass \
-                 --auto-cage to generate one",
-                path.display()
-            ),
-        },
+        Err(CageSourceError::Missing { .. }) => bail!(
+            "{}: no cage: give --cage CAGE.obj (in the character's space: the file's world space, \
+             FBX converted to +Y up metres as `cagerig info` states), add a mesh node \
+             named `<name>_cage` (or with extras.cagerig_cage) to the file, or pass \
+             --auto-cage to generate one",
+            path.display()
+        ),
+        Err(e @ CageSourceError::Generate { .. }) => return Err(e.into()),
+    };
+    let cage_mesh = chosen.cage;
+    let generated_cage = match chosen.origin {
+        CageOrigin::Generated(g) => Some(*g),
+        CageOrigin::Given(_) | CageOrigin::Found => None,
     };
     let ImportedCharacter {
         mesh,

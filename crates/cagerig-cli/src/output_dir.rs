@@ -3,9 +3,16 @@
 //! held in memory), and rename it to `--out` only after the whole run succeeded. On an error the
 //! staging folder is removed; after a kill, the next run into the same `--out` removes the
 //! staging folders of processes that no longer exist. An existing non-empty `--out` is refused
-//! unless `--force`, and even then only when it holds nothing but files cagerig writes for a
-//! state (so `--out . --force` cannot delete unrelated files); the old folder is removed only
-//! once the new one is in place.
+//! unless `--force`, and even then only when it is an earlier cagerig output: it holds the
+//! manifest [`MANIFEST_FILE`] and nothing it does not list (so `--out . --force` cannot delete
+//! unrelated files, and a folder of the user's own pictures is never replaced).
+//!
+//! Replacing an earlier output is one atomic step on Linux (`renameat2(RENAME_EXCHANGE)` swaps
+//! the two folders; the old one, now under the staging name, is removed after): a kill at any
+//! moment leaves `--out` holding the complete earlier output or the complete new one. Where the
+//! exchange is not available the old folder is first renamed to `.<name>.partial-<pid>.old`;
+//! a kill between the two renames leaves `--out` absent, and the next run puts that complete
+//! earlier output back before it starts.
 
 use std::ffi::OsString;
 use std::io::Write;
@@ -23,11 +30,17 @@ pub const STATE_FILE_SUFFIXES: [&str; 6] = [
     "_joints.json",
 ];
 
+/// The file in every output folder that lists the files of the output, one per line: what
+/// `--force` may replace.
+pub const MANIFEST_FILE: &str = ".cagerig-output";
+
 /// A folder being filled; see the module documentation.
 pub struct StagedDir {
     target: PathBuf,
     staging: PathBuf,
     files: usize,
+    /// Names of the files written so far (the manifest's lines).
+    names: Vec<String>,
     finished: bool,
 }
 
@@ -38,24 +51,90 @@ fn staging_prefix(target: &Path) -> OsString {
     prefix
 }
 
-/// Removes staging folders of `target` left by processes that no longer run (Linux: /proc).
+/// Whether process `pid` has ended (Linux: /proc; elsewhere nothing is known to have ended).
+fn process_ended(pid: &str) -> bool {
+    pid.parse::<u32>().is_ok()
+        && Path::new("/proc/self").exists()
+        && !Path::new("/proc").join(pid).exists()
+}
+
+/// Cleans up after runs into `target` that were killed: puts back an earlier output moved aside
+/// (`.partial-<pid>.old`) when `target` is absent, then removes the staging folders and
+/// moved-aside outputs of processes that no longer run.
 fn remove_abandoned_staging(parent: &Path, target: &Path) {
     let prefix = staging_prefix(target);
     let prefix = prefix.to_string_lossy();
     let Ok(entries) = std::fs::read_dir(parent) else {
         return;
     };
+    let mut abandoned = Vec::new();
     for entry in entries.flatten() {
         let name = entry.file_name();
         let name = name.to_string_lossy();
-        if let Some(pid) = name.strip_prefix(prefix.as_ref())
-            && pid.parse::<u32>().is_ok()
-            && Path::new("/proc/self").exists()
-            && !Path::new("/proc").join(pid).exists()
-        {
-            let _ = std::fs::remove_dir_all(entry.path());
+        let Some(rest) = name.strip_prefix(prefix.as_ref()) else {
+            continue;
+        };
+        let (pid, moved_aside) = match rest.strip_suffix(".old") {
+            Some(pid) => (pid, true),
+            None => (rest, false),
+        };
+        if process_ended(pid) {
+            abandoned.push((entry.path(), moved_aside));
         }
     }
+    for (path, moved_aside) in abandoned {
+        if moved_aside && !target.exists() && std::fs::rename(&path, target).is_ok() {
+            continue;
+        }
+        let _ = std::fs::remove_dir_all(&path);
+    }
+}
+
+/// Whether `target` (an existing folder with `entries`) is an earlier cagerig output that
+/// `--force` may replace; otherwise the entry that makes it not one.
+fn foreign_entry(target: &Path, entries: &[std::fs::DirEntry]) -> Option<String> {
+    let listed: Option<Vec<String>> = std::fs::read_to_string(target.join(MANIFEST_FILE))
+        .ok()
+        .map(|text| text.lines().map(str::to_owned).collect());
+    entries.iter().find_map(|e| {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let ours = e.path().is_file()
+            && match &listed {
+                Some(listed) => name == MANIFEST_FILE || listed.contains(&name),
+                // An output written before manifests: state files only (pictures alone are
+                // not enough to call a folder ours).
+                None => STATE_FILE_SUFFIXES
+                    .iter()
+                    .filter(|s| **s != ".png")
+                    .any(|s| name.ends_with(s)),
+            };
+        (!ours).then_some(name)
+    })
+}
+
+/// Puts the complete folder `staging` in place of `target`, atomically when the platform
+/// swaps folders; returns the path of the replaced output to remove, if any.
+fn swap_into_place(staging: &Path, target: &Path) -> std::io::Result<Option<PathBuf>> {
+    if !target.exists() {
+        std::fs::rename(staging, target)?;
+        return Ok(None);
+    }
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::fs::{CWD, RenameFlags, renameat_with};
+        if renameat_with(CWD, staging, CWD, target, RenameFlags::EXCHANGE).is_ok() {
+            return Ok(Some(staging.to_path_buf()));
+        }
+    }
+    let mut aside = staging.as_os_str().to_owned();
+    aside.push(".old");
+    let aside = PathBuf::from(aside);
+    std::fs::rename(target, &aside)?;
+    if let Err(e) = std::fs::rename(staging, target) {
+        let _ = std::fs::rename(&aside, target);
+        return Err(e);
+    }
+    Ok(Some(aside))
 }
 
 impl StagedDir {
@@ -88,16 +167,13 @@ impl StagedDir {
                     entries[0].file_name().to_string_lossy()
                 );
             }
-            if let Some(foreign) = entries.iter().find(|e| {
-                let name = e.file_name();
-                let name = name.to_string_lossy();
-                !e.path().is_file() || !STATE_FILE_SUFFIXES.iter().any(|s| name.ends_with(s))
-            }) {
+            if !entries.is_empty()
+                && let Some(foreign) = foreign_entry(target, &entries)
+            {
                 bail!(
-                    "--out {} holds {}, which cagerig did not write: refusing to replace the \
-                     folder even with --force; choose a new folder",
+                    "--out {} holds {foreign}, which this command did not write: refusing to \
+                     replace the folder even with --force; choose a new folder",
                     target.display(),
-                    foreign.file_name().to_string_lossy()
                 );
             }
         }
@@ -121,6 +197,7 @@ impl StagedDir {
             target: target.to_path_buf(),
             staging,
             files: 0,
+            names: Vec::new(),
             finished: false,
         })
     }
@@ -145,36 +222,55 @@ impl StagedDir {
             .and_then(|()| w.flush())
             .with_context(|| format!("writing {} (of --out {})", name, self.target.display()))?;
         self.files += 1;
+        self.names.push(name.to_owned());
         Ok(())
     }
 
-    /// Moves the complete folder into place and returns how many files it holds.
-    pub fn finish(mut self) -> anyhow::Result<usize> {
-        let mut old = None;
-        if self.target.exists() {
-            let mut aside = self.staging.clone().into_os_string();
-            aside.push(".old");
-            let aside = PathBuf::from(aside);
-            std::fs::rename(&self.target, &aside)
-                .with_context(|| format!("moving the old {} aside", self.target.display()))?;
-            old = Some(aside);
-        }
-        if let Err(e) = std::fs::rename(&self.staging, &self.target) {
-            if let Some(aside) = &old {
-                let _ = std::fs::rename(aside, &self.target);
+    /// Lets `write` fill the staging folder itself (for writers that take a folder), then
+    /// records every file it created as part of the output.
+    pub fn write_into(
+        &mut self,
+        write: impl FnOnce(&Path) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()> {
+        write(&self.staging)?;
+        let mut created = Vec::new();
+        for entry in std::fs::read_dir(&self.staging)
+            .with_context(|| format!("reading {}", self.staging.display()))?
+        {
+            let name = entry
+                .with_context(|| format!("reading {}", self.staging.display()))?
+                .file_name()
+                .to_string_lossy()
+                .into_owned();
+            if !self.names.contains(&name) {
+                created.push(name);
             }
-            return Err(e).with_context(|| {
-                format!(
-                    "moving {} into place as {}",
-                    self.staging.display(),
-                    self.target.display()
-                )
-            });
         }
+        created.sort();
+        self.files += created.len();
+        self.names.extend(created);
+        Ok(())
+    }
+
+    /// Moves the complete folder into place (with its manifest) and returns how many files
+    /// it holds, not counting the manifest.
+    pub fn finish(mut self) -> anyhow::Result<usize> {
+        let manifest = self.staging.join(MANIFEST_FILE);
+        let mut text = self.names.join("\n");
+        text.push('\n');
+        std::fs::write(&manifest, text)
+            .with_context(|| format!("writing {}", manifest.display()))?;
+        let replaced = swap_into_place(&self.staging, &self.target).with_context(|| {
+            format!(
+                "moving {} into place as {}",
+                self.staging.display(),
+                self.target.display()
+            )
+        })?;
         self.finished = true;
-        if let Some(aside) = old {
-            std::fs::remove_dir_all(&aside)
-                .with_context(|| format!("removing the replaced output {}", aside.display()))?;
+        if let Some(old) = replaced {
+            std::fs::remove_dir_all(&old)
+                .with_context(|| format!("removing the replaced output {}", old.display()))?;
         }
         Ok(self.files)
     }
@@ -218,7 +314,7 @@ mod tests {
             .unwrap();
         assert!(!out.exists(), "nothing visible before finish");
         assert_eq!(d.finish().unwrap(), 1);
-        assert_eq!(entries(&out), ["step0_joints.json"]);
+        assert_eq!(entries(&out), [MANIFEST_FILE, "step0_joints.json"]);
         assert_eq!(entries(&root), ["out"]);
 
         // A failed run leaves the earlier output untouched and no staging folder.
@@ -242,13 +338,69 @@ mod tests {
         d.write("step5_mesh_rest.obj", &|w| w.write_all(b""))
             .unwrap();
         d.finish().unwrap();
-        assert_eq!(entries(&out), ["step5_mesh_rest.obj"]);
+        assert_eq!(entries(&out), [MANIFEST_FILE, "step5_mesh_rest.obj"]);
         assert_eq!(entries(&root), ["out"]);
 
         // Foreign files are never deleted, even with --force.
         std::fs::write(out.join("notes.txt"), "mine").unwrap();
         let e = StagedDir::create(&out, true).err().unwrap();
         assert!(e.to_string().contains("notes.txt"), "{e}");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// Regression: `--force` replaced a folder holding only the user's PNGs, and refused an
+    /// earlier output holding `generated_cage.obj`.
+    #[test]
+    fn force_replaces_only_what_an_earlier_run_wrote() {
+        let root = scratch("force");
+        let pictures = root.join("pictures");
+        std::fs::create_dir_all(&pictures).unwrap();
+        std::fs::write(pictures.join("holiday.png"), b"mine").unwrap();
+        let e = StagedDir::create(&pictures, true).err().unwrap();
+        assert!(e.to_string().contains("holiday.png"), "{e}");
+        assert!(pictures.join("holiday.png").exists());
+
+        let out = root.join("out");
+        for run in 0..2 {
+            let mut d = StagedDir::create(&out, run > 0).unwrap();
+            d.write("generated_cage.obj", &|w| w.write_all(b"v 0 0 0\n"))
+                .unwrap();
+            d.write("step0.png", &|w| w.write_all(b"png")).unwrap();
+            d.finish().unwrap();
+        }
+        assert_eq!(
+            entries(&out),
+            [MANIFEST_FILE, "generated_cage.obj", "step0.png"]
+        );
+        // A file the user added is not in the manifest: refused.
+        std::fs::write(out.join("notes.png"), b"mine").unwrap();
+        assert!(StagedDir::create(&out, true).is_err());
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// Regression: the moved-aside `.partial-<pid>.old` name never parsed as a PID, so it was
+    /// never removed, and a kill between the two renames lost `--out`.
+    #[test]
+    fn an_earlier_output_moved_aside_by_a_killed_run_is_put_back() {
+        let root = scratch("aside");
+        let out = root.join("out");
+        let aside = root.join(".out.partial-4294967.old");
+        std::fs::create_dir_all(&aside).unwrap();
+        std::fs::write(aside.join("step0_joints.json"), b"[]").unwrap();
+        let stale = root.join(".other.partial-4294968.old");
+        std::fs::create_dir_all(&stale).unwrap();
+        let d = StagedDir::create(&out, true).unwrap();
+        if Path::new("/proc/self").exists() {
+            assert_eq!(entries(&out), ["step0_joints.json"]);
+            assert!(!aside.exists());
+            assert!(stale.exists(), "another target's folder is left alone");
+        }
+        drop(d);
+        // With --out present, a dead run's moved-aside copy is just removed.
+        std::fs::create_dir_all(&aside).unwrap();
+        let d = StagedDir::create(&out, true).unwrap();
+        assert!(!aside.exists() || !Path::new("/proc/self").exists());
+        d.finish().unwrap();
         std::fs::remove_dir_all(&root).unwrap();
     }
 

@@ -5,14 +5,12 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use cagerig::cage_gen::{CageOptions, CageTarget, GeneratedCage};
-use cagerig::io::rig_files::{MissingCage, load_rig_files_or_generate};
+use cagerig::cage_gen::{CageOptions, GeneratedCage};
+use cagerig::rig_files::{MissingCage, load_rig_files_or_generate};
 use cagerig::session::RigParts;
 use cagerig::{CageCoords, Warning};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-
-use crate::commands::FileUse;
 
 /// Rig selection shared by the subcommands.
 #[derive(Debug, Clone, Args)]
@@ -59,11 +57,18 @@ pub struct AutoCageArgs {
 impl AutoCageArgs {
     /// The generation options, when asked for.
     pub fn options(&self) -> Option<CageOptions> {
-        self.auto_cage.then(|| CageOptions {
-            target: CageTarget::Vertices(self.cage_vertices),
-            ..CageOptions::default()
-        })
+        self.auto_cage
+            .then(|| cagerig::cage_source::cage_options_with_vertices(self.cage_vertices))
     }
+}
+
+/// A file a command read, and what for (`info` lists them).
+#[derive(Clone, serde::Serialize)]
+pub struct FileUse {
+    /// What the file is to the rig: `mesh`, `skeleton`, `cage`, `character`, ….
+    pub role: String,
+    /// Where it is.
+    pub path: PathBuf,
 }
 
 /// File name of a generated cage in an output folder.
@@ -253,64 +258,4 @@ pub fn compute_coords_with_progress(
         b.finish_and_clear();
     }
     Ok(phi)
-}
-
-/// `cagerig subdivide`: N levels of midpoint subdivision, written as a rig file set.
-pub fn subdivide_and_write(
-    args: &RigArgs,
-    levels: usize,
-    out: &Path,
-    name: &str,
-) -> anyhow::Result<()> {
-    if name.is_empty()
-        || name.contains(['/', '\\'])
-        || name == "."
-        || name == ".."
-        || name.starts_with('.')
-    {
-        bail!(
-            "--name {name:?}: expected a plain base name for the files written into --out (no \
-             path separator, not starting with a dot)"
-        );
-    }
-    let loaded = load_rig(args, true, false)?;
-    for w in &loaded.warnings {
-        eprintln!("warning: {w}");
-    }
-    let p = &loaded.parts;
-    let levels_u32 = u32::try_from(levels).unwrap_or(u32::MAX);
-    cagerig::memory_estimate::check_fits(
-        &format!("subdivide --levels {levels}"),
-        cagerig::memory_estimate::subdivided_vertices(
-            p.mesh.num_vertices() as u64,
-            p.mesh.num_triangles() as u64,
-            levels_u32,
-        ),
-        p.cage.num_vertices() as u64,
-    )?;
-    let t = std::time::Instant::now();
-    let sub =
-        cagerig::subdivide::subdivide_rig(&p.mesh, &p.skin_weights, p.cor_rows.as_ref(), levels)?;
-    println!(
-        "subdivided {} → {} vertices, {} triangles in {:.1} ms",
-        p.mesh.num_vertices(),
-        sub.mesh.num_vertices(),
-        sub.mesh.num_triangles(),
-        t.elapsed().as_secs_f64() * 1e3
-    );
-    let sub_parts = RigParts {
-        cor_rows: sub.cor_rows,
-        ..RigParts::new(
-            sub.mesh,
-            p.skeleton.clone(),
-            sub.skin_weights,
-            p.cage.clone(),
-        )
-    };
-    let phi = compute_coords_with_progress(&sub_parts, true)?;
-    let rows = cagerig::coords::maxvol::select_maxvol_rows(&phi)?.rows;
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    cagerig::io::rig_files::write_rig_files(out, name, &sub_parts, &phi, &rows)?;
-    println!("rig files written to {} as {name}.*", out.display());
-    Ok(())
 }

@@ -1,6 +1,6 @@
 //! End-to-end tests of `cagerig cage`: a validated cage is written only with `--out`, `info`
 //! runs the same validator on it, bad targets fail with a clear reason and write nothing; every
-//! glTF character in ../shared/data gets a validated cage with the default options; `edit` and
+//! glTF character in data/ gets a validated cage with the default options; `edit` and
 //! `animate` generate a cage with `--auto-cage` when the rig has none, and say so.
 
 use std::path::{Path, PathBuf};
@@ -12,7 +12,7 @@ fn cagerig() -> Command {
 
 fn data(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
+        .join("../../data")
         .join(path)
 }
 

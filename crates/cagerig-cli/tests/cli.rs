@@ -16,7 +16,7 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 fn arm() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm/arm.obj")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm/arm.obj")
 }
 
 const SCRIPT: &str = r#"{"skinning":"lbs","steps":[

@@ -8,8 +8,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn shared_arm() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm")
+fn arm_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm")
 }
 
 /// xorshift64*: deterministic, no dependency.
@@ -90,6 +90,12 @@ fn all_outputs_finite(out: &Path) -> Result<usize, String> {
     let mut n = 0;
     for entry in std::fs::read_dir(out).map_err(|e| e.to_string())? {
         let path = entry.map_err(|e| e.to_string())?.path();
+        if path
+            .file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+        {
+            continue; // the output manifest
+        }
         if path.extension().is_some_and(|e| e == "obj") {
             // The reader refuses NaN, inf and anything beyond 1e12.
             cagerig::io::read_obj(&path).map_err(|e| e.to_string())?;
@@ -134,7 +140,7 @@ fn mutated_arm_files_through_every_command() {
     std::fs::create_dir_all(&rig).unwrap();
     let originals: Vec<String> = files
         .iter()
-        .map(|f| std::fs::read_to_string(shared_arm().join(f)).unwrap())
+        .map(|f| std::fs::read_to_string(arm_dir().join(f)).unwrap())
         .collect();
     let script = root.join("edits.json");
     std::fs::write(

@@ -23,7 +23,7 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 fn arm_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm")
 }
 
 fn run(args: &[&str]) -> Output {
@@ -348,7 +348,7 @@ fn a_gltf_character_renders_at_an_animation_time() {
         return;
     }
     let dir = temp_dir("fox");
-    let fox = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/fox");
+    let fox = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/fox");
     let out = dir.join("fox.png");
     run(&[
         "render",

@@ -9,8 +9,8 @@ fn cagerig() -> Command {
     Command::new(env!("CARGO_BIN_EXE_cagerig"))
 }
 
-fn shared_arm() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm")
+fn arm_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm")
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -24,7 +24,7 @@ fn temp_dir(name: &str) -> PathBuf {
 fn arm_copy(dir: &Path, file: &str, edit: impl FnOnce(String) -> String) -> PathBuf {
     let rig = dir.join("arm");
     std::fs::create_dir_all(&rig).unwrap();
-    for entry in std::fs::read_dir(shared_arm()).unwrap() {
+    for entry in std::fs::read_dir(arm_dir()).unwrap() {
         let entry = entry.unwrap();
         if entry.path().is_file() {
             std::fs::copy(entry.path(), rig.join(entry.file_name())).unwrap();
@@ -258,7 +258,7 @@ fn repeated_script_vertices_are_refused() {
         r#"{"steps":[{"op":"move_rest_cage","vertices":[2,2,2],"offset":[1,0,0]}]}"#,
     );
     let out = dir.join("out");
-    let mesh = shared_arm().join("arm.obj");
+    let mesh = arm_dir().join("arm.obj");
     assert_error(
         &edit(&mesh, &script, &out, &[]),
         &["step 1", "listed 3 times"],
@@ -270,8 +270,8 @@ fn repeated_script_vertices_are_refused() {
 #[test]
 fn animate_times_each_once_and_negative_allowed() {
     let dir = temp_dir("times");
-    let mesh = shared_arm().join("arm.obj");
-    let anim = shared_arm().join("arm_skelAnim.txt");
+    let mesh = arm_dir().join("arm.obj");
+    let anim = arm_dir().join("arm_skelAnim.txt");
     let out = dir.join("out");
     let o = run(
         &["animate", "--times", "1,1.0,1.00"],
@@ -284,7 +284,8 @@ fn animate_times_each_once_and_negative_allowed() {
         &[("", &mesh), ("--skeleton-anim", &anim), ("--out", &out)],
     );
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 10);
+    // Five files per state for two times, and the output manifest.
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 11);
     assert!(out.join("t-5_mesh_posed.obj").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -296,7 +297,7 @@ fn shipped_arm_cage_edit_moves_only_what_it_touches() {
         &dir,
         r#"{"steps":[{"op":"move_rest_cage","vertices":[7],"offset":[0,0.5,0]}]}"#,
     );
-    let mesh = shared_arm().join("arm.obj");
+    let mesh = arm_dir().join("arm.obj");
     let max_jump = |out: &Path| {
         let read = |f: &str| cagerig::io::read_obj(&out.join(f)).unwrap().positions;
         let (a, b) = (read("step0_cage_posed.obj"), read("step1_cage_posed.obj"));
@@ -328,21 +329,21 @@ fn shipped_arm_cage_edit_moves_only_what_it_touches() {
 #[test]
 fn output_is_complete_or_absent_and_never_stale() {
     let dir = temp_dir("stale");
-    let mesh = shared_arm().join("arm.obj");
+    let mesh = arm_dir().join("arm.obj");
     let out = dir.join("out");
     let two = edit_script(
         &dir,
         r#"{"steps":[{"op":"reset_pose"},{"op":"reset_pose"}]}"#,
     );
     assert!(edit(&mesh, &two, &out, &[]).status.success());
-    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 15);
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 16);
     // Non-empty --out: refused without --force, untouched.
     assert_error(&edit(&mesh, &two, &out, &[]), &["--force"]);
     let one = edit_script(&dir, r#"{"steps":[{"op":"reset_pose"}]}"#);
     assert!(edit(&mesh, &one, &out, &["--force"]).status.success());
     assert_eq!(
         std::fs::read_dir(&out).unwrap().count(),
-        10,
+        11,
         "stale step2 files"
     );
     // A run failing at its second step leaves the earlier output and nothing else.
@@ -352,7 +353,7 @@ fn output_is_complete_or_absent_and_never_stale() {
     );
     let o = edit(&mesh, &failing, &out, &["--force"]);
     assert_error(&o, &["step 2"]);
-    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 10);
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 11);
     let names: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -368,7 +369,7 @@ fn output_is_complete_or_absent_and_never_stale() {
 #[test]
 fn subdivide_name_cannot_escape_and_huge_requests_are_refused_up_front() {
     let dir = temp_dir("escape");
-    let mesh = shared_arm().join("arm.obj");
+    let mesh = arm_dir().join("arm.obj");
     let out = dir.join("out");
     let o = run(
         &["subdivide", "--name", "../escaped"],
@@ -438,19 +439,31 @@ fn json_errors_are_json_and_script_errors_print_once() {
 
 #[test]
 fn readme_example_runs_on_the_arm_and_the_bar_and_help_lists_operations() {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/edits.json");
     let readme =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
-    assert!(!readme.contains("(from\n`docs/reference-tool.md`)"));
-    let start = readme.find("```json\n").unwrap() + 8;
-    let end = readme[start..].find("```").unwrap() + start;
+    assert!(
+        readme.contains("examples/edits.json"),
+        "the README names its example script"
+    );
     let dir = temp_dir("readme");
-    let script = edit_script(&dir, &readme[start..end]);
-    let arm = shared_arm().join("arm.obj");
+    let arm = arm_dir().join("arm.obj");
     let o = edit(&arm, &script, &dir.join("arm"), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let o = run(
         &["edit", "--builtin", "bar", "--script"],
         &[("", &script), ("--out", &dir.join("bar"))],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let fox = arm_dir().join("../fox");
+    let o = run(
+        &["edit", "--script"],
+        &[
+            ("", &script),
+            ("", &fox.join("Fox.glb")),
+            ("--cage", &fox.join("Fox_cage.obj")),
+            ("--out", &dir.join("fox")),
+        ],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let help = cagerig().args(["edit", "--help"]).output().unwrap();

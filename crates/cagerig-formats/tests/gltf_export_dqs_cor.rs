@@ -95,7 +95,7 @@ fn fox_gaps(method: SkinningMethod) -> Vec<(String, f64, f64)> {
 
 /// The Arm bent at the elbow (90°), and bent and twisted (forearm 60° about its bone).
 fn arm_gaps(method: SkinningMethod) -> Vec<(String, f64, f64)> {
-    let files = cagerig::io::rig_files::load_rig_files(&data("arm/arm.obj"), None).unwrap();
+    let files = cagerig::rig_files::load_rig_files(&data("arm/arm.obj"), None).unwrap();
     let options = SessionOptions {
         skinning: method,
         ..SessionOptions::default()

@@ -162,7 +162,7 @@ fn fox(with_cage_keys: bool) -> AnimatedRig {
 
 /// The Arm with the paper tool's animation files (its own pose channels).
 fn arm() -> AnimatedRig {
-    let files = cagerig::io::rig_files::load_rig_files(&data("arm/arm.obj"), None).unwrap();
+    let files = cagerig::rig_files::load_rig_files(&data("arm/arm.obj"), None).unwrap();
     let session = RigSession::new(files.parts, SessionOptions::default())
         .unwrap()
         .0;

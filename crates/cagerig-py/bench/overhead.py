@@ -19,7 +19,7 @@ import numpy as np
 
 import cagerig
 
-ARM = Path(__file__).resolve().parents[4] / "shared/data/arm/arm.obj"
+ARM = Path(__file__).resolve().parents[3] / "data/arm/arm.obj"
 
 
 def per_call_python(edit, n):

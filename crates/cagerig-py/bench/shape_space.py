@@ -17,7 +17,7 @@ import distributed
 
 from cagerig import shape_space
 
-ARM = Path(__file__).resolve().parents[4] / "shared/data/arm/arm.obj"
+ARM = Path(__file__).resolve().parents[3] / "data/arm/arm.obj"
 
 
 

@@ -2,7 +2,7 @@
 import sys; from pathlib import Path; import numpy as np; import cagerig  # noqa: E401,E702
 import matplotlib; matplotlib.use("Agg"); import matplotlib.pyplot as plt  # noqa: E401,E702
 
-ARM = Path(__file__).resolve().parents[4] / "shared/data/arm/arm.obj"  # beside the checkout
+ARM = Path(__file__).resolve().parents[3] / "data/arm/arm.obj"  # beside the checkout
 rig = cagerig.Rig.load(sys.argv[1] if len(sys.argv) > 1 else ARM)
 before = rig.posed_mesh, rig.posed_cage
 rig.rotate_joint("lowerarm01.R", [1, 0, 0], -50)                         # bend the elbow (skeleton)

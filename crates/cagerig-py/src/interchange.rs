@@ -5,7 +5,10 @@
 use std::path::{Path, PathBuf};
 
 use cagerig::Warning;
-use cagerig::cage_gen::{CageOptions, CageTarget, GeneratedCage, generate_cage as generate};
+use cagerig::cage_gen::{CageOptions, generate_cage as generate};
+use cagerig::cage_source::{
+    CageOrigin, CageRequest, CageSourceError, choose_cage, generated_cage_note,
+};
 use cagerig::mesh::TriMesh;
 use cagerig::session::RigParts;
 use pyo3::exceptions::PyValueError;
@@ -22,26 +25,11 @@ pub fn cage_options(vertices: usize, margin: Option<f64>) -> PyResult<CageOption
             "a cage needs at least 4 vertices, asked for {vertices}"
         )));
     }
-    let mut options = CageOptions {
-        target: CageTarget::Vertices(vertices),
-        ..CageOptions::default()
-    };
+    let mut options = cagerig::cage_source::cage_options_with_vertices(vertices);
     if let Some(m) = margin {
         options.margin = m;
     }
     Ok(options)
-}
-
-/// The warning that says a cage was generated.
-pub fn generated_note(g: &GeneratedCage) -> Warning {
-    Warning::Note {
-        message: format!(
-            "no cage was found: generated one with {} vertices (least distance to the mesh {:.2} % \
-             of its diagonal)",
-            g.cage.num_vertices(),
-            100.0 * g.report.min_distance_fraction
-        ),
-    }
 }
 
 /// Rig parts of a glTF / FBX character: its cage is `cage` (OBJ), else a cage node in the file,
@@ -58,28 +46,25 @@ pub fn load_character(
         })
         .map_err(format_error)?;
     let mut warnings = character.warnings;
-    let cage_mesh = match (cage, character.cage, auto_cage) {
-        (Some(c), _, _) => cagerig::io::obj::read_obj(c).map_err(file_error)?,
-        (None, Some(c), _) => c,
-        (None, None, Some(n)) => {
-            let options = cage_options(n, None)?;
-            let mesh = &character.mesh;
-            let generated = py.detach(|| generate(mesh, &options)).map_err(|e| {
-                RigError::new_err(format!(
-                    "{}: no cage in the file, and none could be generated: {e}",
-                    path.display()
-                ))
-            })?;
-            warnings.push(generated_note(&generated));
-            generated.cage
-        }
-        (None, None, None) => {
-            return Err(crate::errors::RigFileError::new_err(format!(
+    let request = CageRequest {
+        given: cage,
+        generate: auto_cage.map(|n| cage_options(n, None)).transpose()?,
+    };
+    let (mesh, found) = (&character.mesh, character.cage);
+    let chosen = py
+        .detach(|| choose_cage(path, mesh, found, &request))
+        .map_err(|e| match e {
+            CageSourceError::Read(e) => file_error(e),
+            e @ CageSourceError::Generate { .. } => RigError::new_err(e.to_string()),
+            CageSourceError::Missing { .. } => crate::errors::RigFileError::new_err(format!(
                 "{}: no cage: pass cage=CAGE.obj, or auto_cage=N to generate one with N vertices",
                 path.display()
-            )));
-        }
-    };
+            )),
+        })?;
+    if let CageOrigin::Generated(g) = &chosen.origin {
+        warnings.push(generated_cage_note(g));
+    }
+    let cage_mesh = chosen.cage;
     Ok((
         RigParts::new(
             character.mesh,

@@ -11,22 +11,19 @@ fn unknown(what: &str, value: &str, allowed: &str) -> PyErr {
     PyValueError::new_err(format!("{what} must be {allowed}, got {value:?}"))
 }
 
-/// `"lbs" | "dqs" | "cor"`.
+/// A method name (`"lbs" | "dqs" | "cor"`, any case), read by `SkinningMethod: FromStr`.
 pub fn skinning_method(value: &str) -> PyResult<SkinningMethod> {
-    match value.to_ascii_lowercase().as_str() {
-        "lbs" => Ok(SkinningMethod::Lbs),
-        "dqs" => Ok(SkinningMethod::Dqs),
-        "cor" => Ok(SkinningMethod::Cor),
-        _ => Err(unknown("skinning", value, "'lbs', 'dqs' or 'cor'")),
-    }
-}
-
-pub fn skinning_name(method: SkinningMethod) -> &'static str {
-    match method {
-        SkinningMethod::Lbs => "lbs",
-        SkinningMethod::Dqs => "dqs",
-        SkinningMethod::Cor => "cor",
-    }
+    value.parse().map_err(|_| {
+        let names: Vec<String> = SkinningMethod::ALL
+            .iter()
+            .map(|m| format!("'{}'", m.name()))
+            .collect();
+        let allowed = match names.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => names.concat(),
+        };
+        unknown("skinning", value, &allowed)
+    })
 }
 
 /// `"ghost" | "displayed"`.

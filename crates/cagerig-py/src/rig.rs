@@ -7,9 +7,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use cagerig::io::rig_files::{MissingCage, load_rig_files_or_generate};
 use cagerig::mesh::TriMesh;
 use cagerig::playback::AnimationPlayer;
+use cagerig::rig_files::{MissingCage, load_rig_files_or_generate};
 use cagerig::script::{JointRef, resolve_joint};
 use cagerig::session::{RigParts, RigSession, SessionOptions};
 use cagerig::skeleton::Joint;
@@ -370,7 +370,7 @@ impl Rig {
             self.session.rest_mesh().len(),
             self.session.skeleton().len(),
             self.session.rest_cage().len(),
-            options::skinning_name(self.session.skinning())
+            self.session.skinning().name()
         )
     }
 

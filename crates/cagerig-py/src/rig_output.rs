@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use cagerig::io::rig_files::write_rig_files;
 use cagerig::mesh::TriMesh;
+use cagerig::rig_files::write_rig_files;
 use cagerig::session::RigParts;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

@@ -196,7 +196,7 @@ impl Rig {
     /// The active skinning method: ``"lbs"``, ``"dqs"`` or ``"cor"``.
     #[getter]
     fn skinning(&self) -> &'static str {
-        options::skinning_name(self.session.skinning())
+        self.session.skinning().name()
     }
 
     /// Warnings gathered while loading and building the rig.

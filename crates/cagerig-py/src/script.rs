@@ -1,6 +1,7 @@
 //! `cagerig.EditScript`: the `cagerig edit` JSON scripts (crates/cagerig/src/script.rs), parsed
 //! once, checked against a rig, run step by step or whole.
 
+use cagerig::skinning::SkinningMethod;
 use std::path::PathBuf;
 
 use cagerig::script::EditScript;
@@ -108,7 +109,7 @@ impl EditScriptPy {
     /// The script's starting skinning method, or None.
     #[getter]
     fn skinning(&self) -> Option<&'static str> {
-        self.script.skinning.map(options::skinning_name)
+        self.script.skinning.map(SkinningMethod::name)
     }
 
     /// The steps as parsed JSON objects (a new list of dicts).

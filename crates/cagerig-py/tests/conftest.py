@@ -1,4 +1,4 @@
-"""Shared fixtures: the Arm (from the shared data beside the checkout) and the `cagerig` CLI."""
+"""Shared fixtures: the Arm (from the repository's data/arm) and the `cagerig` CLI."""
 
 import os
 import shutil
@@ -11,7 +11,7 @@ import pytest
 import cagerig
 
 REPO = Path(__file__).resolve().parents[3]
-ARM_DIR = Path(os.environ.get("CAGERIG_ARM_DIR", REPO.parent / "shared" / "data" / "arm"))
+ARM_DIR = Path(os.environ.get("CAGERIG_ARM_DIR", REPO / "data" / "arm"))
 ARM = ARM_DIR / "arm.obj"
 REFERENCE = ARM_DIR / "reference"
 

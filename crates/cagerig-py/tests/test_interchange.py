@@ -8,7 +8,7 @@ import pytest
 
 import cagerig
 
-DATA = Path(__file__).resolve().parents[4] / "shared" / "data"
+DATA = Path(__file__).resolve().parents[3] / "data"
 
 
 def test_fox_loads_from_gltf_with_its_cage_and_exports_back(tmp_path):

@@ -2,7 +2,10 @@
 //! the per-frame upload alone (normals + packing + in-place buffer writes, GPU idle after) and
 //! a whole frame (upload, draw, MSAA resolve, readback), at 1280×720.
 //!
-//! `cargo run --release -p cagerig-render --example render_bench -- [LEVELS] [FRAMES]`
+//! `cargo run --release -p cagerig-render --example render_bench -- [LEVELS] [FRAMES] [PNG]`
+//!
+//! The first frame is written to PNG (default: `render_bench.png` in the system's temporary
+//! folder), and its path printed.
 
 use std::time::Instant;
 
@@ -20,11 +23,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let levels: usize = args.get(1).map_or(Ok(3), |s| s.parse())?;
     let frames: usize = args.get(2).map_or(Ok(20), |s| s.parse())?;
-    let arm = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/arm/arm.obj"
+    let png = args.get(3).map_or_else(
+        || std::env::temp_dir().join("render_bench.png"),
+        std::path::PathBuf::from,
     );
-    let rig = cagerig::io::rig_files::load_rig_files(std::path::Path::new(arm), None)?;
+    let arm = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm/arm.obj");
+    let rig = cagerig::rig_files::load_rig_files(std::path::Path::new(arm), None)?;
     let p = &rig.parts;
     let sub = cagerig::subdivide::subdivide_midpoint(&p.mesh, &p.skin_weights, levels)?;
     let mut positions = sub.mesh.positions.clone();
@@ -82,7 +86,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let image = renderer.draw(&cam, w, h)?;
         let t_draw = t.elapsed().as_secs_f64() * 1e3;
         if k == 0 {
-            image.write_png(std::path::Path::new("render_bench.png"))?;
+            image.write_png(&png)?;
+            println!("first frame: {}", png.display());
         }
         if k >= 2 {
             upload.push(t_upload);

@@ -74,22 +74,13 @@ impl Command {
             Command::RotateJoint { .. } | Command::SetJointRotation { .. } => "rotate joint".into(),
             Command::MoveRestCage { .. } => "move rest cage".into(),
             Command::MovePosedCage { .. } => "move current cage".into(),
-            Command::SetSkinning(m) => format!("skinning {}", method_name(*m)),
+            Command::SetSkinning(m) => format!("skinning {}", m.label()),
             Command::ResetPose => "reset pose".into(),
             Command::SetLocks(_) => "sync locks".into(),
             Command::SetKey { track, .. } => format!("set {track:?} key").to_lowercase(),
             Command::DeleteKey { track, .. } => format!("delete {track:?} key").to_lowercase(),
             Command::MoveKey { track, .. } => format!("move {track:?} key").to_lowercase(),
         }
-    }
-}
-
-/// Short name of a skinning method, as in edit scripts.
-pub fn method_name(method: SkinningMethod) -> &'static str {
-    match method {
-        SkinningMethod::Lbs => "LBS",
-        SkinningMethod::Dqs => "DQS",
-        SkinningMethod::Cor => "CoR",
     }
 }
 

@@ -83,16 +83,8 @@ fn rig_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
     let locks = doc.session.sync_locks();
     ui.horizontal(|ui| {
         ui.label("Skinning");
-        for m in [
-            SkinningMethod::Lbs,
-            SkinningMethod::Dqs,
-            SkinningMethod::Cor,
-        ] {
-            if ui
-                .selectable_label(method == m, crate::document::method_name(m))
-                .clicked()
-                && method != m
-            {
+        for m in SkinningMethod::ALL {
+            if ui.selectable_label(method == m, m.label()).clicked() && method != m {
                 app.run_command(&Command::SetSkinning(m));
             }
         }

@@ -4,8 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use cagerig::Warning;
-use cagerig::cage_gen::{CageOptions, CageTarget};
-use cagerig::io::rig_files::MissingCage;
+use cagerig::cage_source::{
+    CageOrigin, CageRequest, CageSourceError, cage_options_with_vertices, choose_cage,
+};
+use cagerig::rig_files::MissingCage;
 use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig_formats::{ImportOptions, ImportedAnimation};
 use serde::{Deserialize, Serialize};
@@ -151,11 +153,11 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
             ..
         } => {
             let missing = match auto_cage {
-                Some(n) => MissingCage::Generate(cage_options(*n)),
+                Some(n) => MissingCage::Generate(cage_options_with_vertices(*n)),
                 None => MissingCage::Fail,
             };
             let rig =
-                cagerig::io::rig_files::load_rig_files_or_generate(path, cage.as_deref(), missing)?;
+                cagerig::rig_files::load_rig_files_or_generate(path, cage.as_deref(), missing)?;
             let mut warnings = rig.warnings;
             if let Some(g) = &rig.generated_cage {
                 warnings.push(generated_note(g));
@@ -197,22 +199,13 @@ type Imported = (
     (Vec<ImportedAnimation>, cagerig_formats::MorphTargets),
 );
 
-fn cage_options(vertices: usize) -> CageOptions {
-    CageOptions {
-        target: CageTarget::Vertices(vertices),
-        ..CageOptions::default()
-    }
-}
-
-/// The log line of a generated cage.
+/// The log line of a generated cage: the library's note and where File ▸ Export writes it.
 fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
-    Warning::Note {
-        message: format!(
-            "no cage was found: generated one with {} vertices (least distance to the mesh {:.2} % \
-         of its diagonal); File > Export writes it as cage_rest.obj",
-            g.cage.num_vertices(),
-            100.0 * g.report.min_distance_fraction
-        ),
+    match cagerig::cage_source::generated_cage_note(g) {
+        Warning::Note { message } => Warning::Note {
+            message: format!("{message}; File > Export writes it as cage_rest.obj"),
+        },
+        other => other,
     }
 }
 
@@ -229,27 +222,26 @@ fn import_interchange(
     let character = cagerig_formats::import_character(path, &options)?;
     let mut files = vec![("character".to_string(), path.to_path_buf())];
     let mut warnings = character.warnings;
-    let cage_mesh = match (cage, character.cage, auto_cage) {
-        (Some(c), _, _) => {
-            files.push(("cage".into(), c.to_path_buf()));
-            cagerig::io::obj::read_obj(c)?
-        }
-        (None, Some(c), _) => c,
-        (None, None, Some(n)) => {
-            let generated = cagerig::cage_gen::generate_cage(&character.mesh, &cage_options(n))
-                .map_err(|source| OpenError::Generate {
-                    path: path.to_path_buf(),
-                    source,
-                })?;
-            warnings.push(generated_note(&generated));
-            generated.cage
-        }
-        (None, None, None) => {
-            return Err(OpenError::NoCage {
-                path: path.to_path_buf(),
-            });
-        }
+    if let Some(c) = cage {
+        files.push(("cage".into(), c.to_path_buf()));
+    }
+    let request = CageRequest {
+        given: cage,
+        generate: auto_cage.map(cage_options_with_vertices),
     };
+    let chosen =
+        choose_cage(path, &character.mesh, character.cage, &request).map_err(|e| match e {
+            CageSourceError::Read(e) => OpenError::from(e),
+            CageSourceError::Generate { character, source } => OpenError::Generate {
+                path: character,
+                source,
+            },
+            CageSourceError::Missing { character } => OpenError::NoCage { path: character },
+        })?;
+    if let CageOrigin::Generated(g) = &chosen.origin {
+        warnings.push(generated_note(g));
+    }
+    let cage_mesh = chosen.cage;
     Ok((
         RigParts::new(
             character.mesh,
@@ -305,7 +297,7 @@ mod tests {
 
     #[test]
     fn the_fox_opens_from_gltf_with_its_cage_and_animations() {
-        let fox = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/fox");
+        let fox = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/fox");
         let opened = open_rig(&RigSource::File {
             path: format!("{fox}/Fox.glb").into(),
             cage: Some(format!("{fox}/Fox_cage.obj").into()),

@@ -20,7 +20,7 @@ pub fn status_bar_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
                         s.num_vertices(),
                         s.skeleton().len(),
                         s.rest_cage().len(),
-                        crate::document::method_name(s.skinning()),
+                        s.skinning().label(),
                         doc.history().undo_len(),
                         doc.history().redo_len(),
                     ));

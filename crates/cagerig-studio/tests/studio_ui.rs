@@ -287,7 +287,7 @@ fn a_dropped_character_file_is_opened() {
         return;
     }
     let (mut h, dir) = open_bar("drop");
-    let arm = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm/arm.obj");
+    let arm = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm/arm.obj");
     // With unsaved edits, dropping a file asks first; Cancel keeps the bar and its edits.
     let (_, _, at) = click_front_cage_vertex(&mut h);
     drag(&mut h, at, at + egui::vec2(20.0, 0.0));
@@ -726,8 +726,8 @@ fn a_hybrid_export_reopens_with_its_cage_keys_and_plays_as_exported() {
     if skip() {
         return;
     }
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm");
-    let files = cagerig::io::rig_files::load_rig_files(&data.join("arm.obj"), None).unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
+    let files = cagerig::rig_files::load_rig_files(&data.join("arm.obj"), None).unwrap();
     let mut original = RigSession::new(files.parts, SessionOptions::default())
         .unwrap()
         .0;

@@ -8,18 +8,15 @@ use std::path::Path;
 use std::time::Duration;
 
 use cagerig::cage_gen::{CageOptions, generate_cage};
-use cagerig::io::rig_files::load_rig_files;
+use cagerig::rig_files::load_rig_files;
 use cagerig::subdivide::subdivide_midpoint;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
-const ARM: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/arm/arm.obj"
-);
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm/arm.obj");
 
 fn cage_generation(c: &mut Criterion) {
     let parts = load_rig_files(Path::new(ARM), None)
-        .expect("the Arm rig in ../shared/data/arm")
+        .expect("the Arm rig in data/arm in the repository")
         .parts;
     let arm3 = subdivide_midpoint(&parts.mesh, &parts.skin_weights, 3)
         .expect("subdividing the Arm")

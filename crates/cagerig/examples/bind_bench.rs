@@ -39,7 +39,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .position(|a| a == "--reps")
         .and_then(|i| args.get(i + 1))
         .map_or(Ok(if levels >= 3 { 3 } else { 21 }), |a| a.parse())?;
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
     let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
     let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
     let (weights, _) = cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), 25)?;

@@ -7,10 +7,10 @@ use std::path::Path;
 use std::time::Instant;
 
 use cagerig::cage_gen::{CageOptions, generate_cage};
-use cagerig::io::rig_files::load_rig_files;
+use cagerig::rig_files::load_rig_files;
 use cagerig::subdivide::subdivide_midpoint;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repetitions: usize = std::env::args()

@@ -10,12 +10,9 @@ use cagerig::cage_gen::{
     CageGuide, CageOptions, CageTarget, check_coordinates, generate_guided_cage,
 };
 use cagerig::coords::mvc::compute_cage_coords;
-use cagerig::io::rig_files::load_rig_files;
+use cagerig::rig_files::load_rig_files;
 
-const ARM: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/arm/arm.obj"
-);
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm/arm.obj");
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let parts = load_rig_files(Path::new(ARM), None)?.parts;

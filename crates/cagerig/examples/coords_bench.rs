@@ -10,7 +10,7 @@ use cagerig::coords::mvc::compute_cage_coords;
 use cagerig::io::{read_obj, read_skt, read_skw};
 use cagerig::subdivide::subdivide_midpoint;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 const REPETITIONS: usize = 7;
 
 /// CPU time (user + system) of this process in milliseconds (Linux; 0 elsewhere).

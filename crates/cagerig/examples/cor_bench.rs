@@ -23,7 +23,7 @@ use cagerig::subdivide::subdivide_midpoint;
 use glam::DVec3;
 use rayon::prelude::*;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
 /// Peak resident memory so far (MB), from /proc (0 where unavailable).
 fn peak_rss_mb() -> f64 {

@@ -14,7 +14,7 @@ use cagerig::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let levels: usize = std::env::args().nth(1).map_or(Ok(2), |a| a.parse())?;
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
     let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
     let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
     let (weights, _) = cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), 25)?;

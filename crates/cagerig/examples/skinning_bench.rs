@@ -18,7 +18,7 @@ use glam::{DAffine3, DQuat, DVec3, Vec3};
 
 const NUM_VERTICES: usize = 133_073;
 const NUM_JOINTS: usize = 25;
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
 /// Small deterministic generator (xorshift64*).
 struct Rng(u64);

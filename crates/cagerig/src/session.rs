@@ -16,7 +16,9 @@ use crate::cage_enclosure::validate_cage_for_mesh;
 use crate::coords::{maxvol, mvc};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
-use crate::pose::{LocalPose, decompose_rest_local, local_transform, rotation_of};
+use crate::pose::{
+    LocalPose, decompose_rest_local, local_transform, regularise_rest_frames, rotation_of,
+};
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::SkinningMethod;
@@ -184,6 +186,8 @@ impl RigSession {
         }
         let (cage, mut warnings) =
             validate_cage_for_mesh(cage, &mesh.positions, options.allow_mesh_outside_cage)?;
+        let (skeleton, shear_note) = regularise_rest_frames(&skeleton)?;
+        warnings.extend(shear_note);
         let nc = cage.num_vertices();
         let (lo, hi) = cage.bounding_box();
         let phi_c_tolerance = PHI_C_TOLERANCE * (hi - lo).length();

@@ -1,4 +1,4 @@
-//! Conformance with the paper tool's outputs on the Arm (`shared/data/arm/reference`, see its
+//! Conformance with the paper tool's outputs on the Arm (`data/arm/reference`, see its
 //! README.txt): the scripted scenario s0 (load), s2 (skeleton edit), s3 (rest-cage edit),
 //! s4 (current-cage grab), the DQS/CoR variants of step ii and the animation samples, all with
 //! the shipped Φ and MaxVol files and renormalised weights.
@@ -9,16 +9,16 @@
 
 use std::path::{Path, PathBuf};
 
-use cagerig::io::rig_files::load_rig_files;
 use cagerig::mesh::max_distance;
 use cagerig::playback::AnimationPlayer;
+use cagerig::rig_files::load_rig_files;
 use cagerig::session::{CageFitSource, GivenCageCoords, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use cagerig::sync::skeleton_updater::JointLocalisation;
 use glam::DVec3;
 
 fn arm_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm")
 }
 
 fn reference(name: &str) -> PathBuf {

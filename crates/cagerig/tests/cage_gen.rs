@@ -9,14 +9,14 @@ use cagerig::TriMesh;
 use cagerig::cage_gen::{
     CageGenError, CageOptions, CageTarget, GeneratedCage, check_coordinates, generate_cage,
 };
-use cagerig::io::rig_files::load_rig_files;
 use cagerig::mesh::max_distance;
+use cagerig::rig_files::load_rig_files;
 use cagerig::session::{RigSession, SessionOptions};
 use glam::DVec3;
 use proptest::prelude::*;
 
 fn arm_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/arm")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm")
 }
 
 /// Generates and fully validates (geometry and coordinates); panics with the failures.

@@ -14,7 +14,7 @@ use faer::Mat;
 use faer::linalg::solvers::DenseSolveCore;
 use glam::DVec3;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
 fn read(name: &str) -> String {
     std::fs::read_to_string(format!("{ARM}/{name}")).unwrap()

@@ -13,7 +13,7 @@ use cagerig::skinning::{CorGridOptions, compute_cor_cage_coords_grid};
 use cagerig::subdivide::subdivide_midpoint;
 use glam::DVec3;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
 /// Per triangle of positive area: (α_t, v_t, ω_t joints, ω_t weights).
 type TriangleData = (f64, DVec3, Vec<u32>, Vec<f64>);

@@ -7,10 +7,7 @@ use cagerig::io::{self, SkeletonAnimationVersion};
 use glam::{DAffine3, DVec3};
 
 fn arm() -> PathBuf {
-    PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/arm"
-    ))
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm"))
 }
 
 fn file(name: &str) -> PathBuf {

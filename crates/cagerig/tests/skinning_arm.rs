@@ -11,7 +11,7 @@ use cagerig::skinning::{
 use cagerig::sparse_rows::SparseRows;
 use glam::{DAffine3, DMat3, DVec3};
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
 fn read(name: &str) -> String {
     std::fs::read_to_string(format!("{ARM}/{name}")).unwrap()

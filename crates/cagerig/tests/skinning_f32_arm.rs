@@ -13,7 +13,7 @@ use cagerig::skinning::{
 use cagerig::subdivide::subdivide_midpoint;
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
 /// Tolerance on max |f32 − f64| / bbox diagonal (measured: LBS 3.1e-7, DQS 4.8e-7, CoR 2.9e-7).
 const TOLERANCE: f64 = 2e-6;

@@ -7,7 +7,7 @@ use cagerig::subdivide::subdivide_midpoint;
 use cagerig::{SkinWeights, TriMesh};
 use glam::DVec3;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
 /// Minimal OBJ reader: `v x y z` and `f a b c` lines (1-based, `a/b/c` forms allowed).
 fn read_obj(path: &str) -> TriMesh {

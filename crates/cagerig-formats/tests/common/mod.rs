@@ -7,11 +7,7 @@ use cagerig::TriMesh;
 use glam::{DAffine3, DMat4, DQuat, DVec3};
 
 pub fn data(rel: &str) -> PathBuf {
-    PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/"
-    ))
-    .join(rel)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/")).join(rel)
 }
 
 /// An outward-oriented box around `points`, padded by `pad` × its diagonal.

@@ -1,4 +1,6 @@
-//! File formats: OBJ and the paper tool's formats (see `docs/reference-tool.md` §1).
+//! File formats: OBJ and the paper tool's formats (`.skt`, `.skw`, cage weights, CoR weights,
+//! MaxVol rows, skeleton and cage animations). Assembling a whole rig from them is
+//! [`crate::rig_files`], above this module.
 //!
 //! Every reader has a `read_*(path, …)` form and a `parse_*(bytes, source, …)` form (for tests
 //! and in-memory data); every writer has a `write_*(path, …)` form that replaces the file
@@ -15,7 +17,6 @@ pub mod euler;
 mod keyframes;
 pub mod maxvol;
 pub mod obj;
-pub mod rig_files;
 pub mod skeleton_animation;
 pub mod skt;
 pub mod skw;

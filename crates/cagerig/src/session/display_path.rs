@@ -278,6 +278,11 @@ impl RigSession {
         let transforms: &[DAffine3] = &self.posed_from_rest;
         let centres = self.cor.as_ref().map(|c| &c.centres[..]);
         match (self.method, centres) {
+            (SkinningMethod::Lbs, _) | (SkinningMethod::Cor, None) => self.ghost_lbs.apply(
+                transforms,
+                &self.scratch_rows_rest,
+                &mut self.scratch_rows_posed,
+            ),
             (SkinningMethod::Dqs, _) => display.rows_dqs.apply(
                 transforms,
                 &self.scratch_rows_rest,
@@ -296,11 +301,6 @@ impl RigSession {
                     &mut self.scratch_rows_posed,
                 );
             }
-            _ => self.ghost_lbs.apply(
-                transforms,
-                &self.scratch_rows_rest,
-                &mut self.scratch_rows_posed,
-            ),
         }
     }
 
@@ -354,7 +354,7 @@ impl SkinF32<'_> {
                 )?;
                 cor.apply(transforms, &mut display.cor_scratch, &mut display.positions);
             }
-            _ => {
+            (SkinningMethod::Lbs, _) | (SkinningMethod::Cor, None) => {
                 let lbs = refresh(
                     &mut display.lbs,
                     revision,

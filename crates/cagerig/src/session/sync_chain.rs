@@ -211,12 +211,13 @@ impl RigSession {
                     cor.scratch = scratch;
                 }
             }
-            _ => self.skin_exact(
-                &self.rest_mesh,
-                &mut dqs_scratch,
-                &mut CorScratch::new(0),
-                &mut posed_mesh,
-            ),
+            (_, SkinningMethod::Lbs | SkinningMethod::Dqs | SkinningMethod::Cor) => self
+                .skin_exact(
+                    &self.rest_mesh,
+                    &mut dqs_scratch,
+                    &mut CorScratch::new(0),
+                    &mut posed_mesh,
+                ),
         }
         self.posed_mesh = posed_mesh;
         self.dqs_scratch = dqs_scratch;
@@ -230,7 +231,12 @@ impl RigSession {
         cor_scratch: &mut CorScratch,
         out: &mut [DVec3],
     ) {
+        // `set_skinning` builds the CoR state before it selects CoR, so `(Cor, None)` does not
+        // occur; were it to, LBS (the ghost fit's consensus) is the defined result.
         match (self.method, &self.cor) {
+            (SkinningMethod::Lbs, _) | (SkinningMethod::Cor, None) => {
+                self.lbs.apply(&self.posed_from_rest, rest_mesh, out)
+            }
             (SkinningMethod::Dqs, _) => {
                 self.dqs
                     .apply(&self.posed_from_rest, rest_mesh, dqs_scratch, out)
@@ -242,13 +248,11 @@ impl RigSession {
                 cor_scratch,
                 out,
             ),
-            _ => self.lbs.apply(&self.posed_from_rest, rest_mesh, out),
         }
     }
 
     pub(super) fn fit_cage(&mut self) {
-        let ghost = self.method != SkinningMethod::Lbs
-            && self.options_fit_source == CageFitSource::GhostLbs;
+        let ghost = !self.method.is_linear() && self.options_fit_source == CageFitSource::GhostLbs;
         if ghost {
             for (r, &row) in self
                 .scratch_rows_rest

@@ -19,6 +19,7 @@ pub mod dqs;
 pub mod dqs_f32;
 pub mod lbs;
 pub mod lbs_f32;
+mod method;
 pub mod precision;
 pub mod rigid_rotation;
 
@@ -34,22 +35,8 @@ pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
 pub use dqs_f32::{DqsF32, DqsF32Scratch};
 pub use lbs::LinearBlendSkinning;
 pub use lbs_f32::{LbsF32, LbsF32Scratch};
+pub use method::{SkinningMethod, UnknownSkinningMethod};
 pub use precision::{RestPoint, SkinReal};
-
-/// The skinning method S→S'→M' of a session.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize, serde::Deserialize,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum SkinningMethod {
-    /// Linear blend skinning (Eq. 2–3).
-    #[default]
-    Lbs,
-    /// Dual quaternion skinning (Eq. 4).
-    Dqs,
-    /// Optimised centres of rotation (Eq. 5–6).
-    Cor,
-}
 
 /// Vertices per rayon task in the per-frame kernels (a mesh of at most this many vertices is
 /// skinned serially).

@@ -500,7 +500,7 @@ mod tests {
     use crate::coords::mvc::compute_cage_coords;
     use crate::subdivide::subdivide_midpoint;
 
-    const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/arm");
+    const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 
     /// Ψ through the local MVC path and through the reference full-MVC path.
     fn both_paths(

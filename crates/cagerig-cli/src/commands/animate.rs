@@ -1,0 +1,142 @@
+//! `cagerig animate`: samples skeleton and cage animations at given times and writes the
+//! structures at each time.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::bail;
+use cagerig::skinning::SkinningMethod;
+
+use crate::output_dir::StagedDir;
+use crate::rig_source::{
+    AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_or_generate_cage, report_generated_cage,
+    write_generated_cage,
+};
+use crate::session_args::{SessionArgs, skinning_parser, start_session};
+use crate::state_files::write_state;
+
+/// Checks the sample times: finite, each once (the files are named after the time).
+pub fn check_times(times: &[f64]) -> anyhow::Result<()> {
+    for (i, &t) in times.iter().enumerate() {
+        if !cagerig::error::is_input_value(t) {
+            bail!(
+                "--times: value {} is {t}; expected a finite time in seconds of magnitude at most 1e12",
+                i + 1
+            );
+        }
+        if let Some(j) = times[..i].iter().position(|&u| u == t) {
+            bail!(
+                "--times: {t} is given twice (values {} and {}); each sample time names its \
+                 files (t{t}_*), so give each time once",
+                j + 1,
+                i + 1
+            );
+        }
+    }
+    Ok(())
+}
+
+/// `cagerig animate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    pub rig: RigArgs,
+    #[command(flatten)]
+    pub auto_cage: AutoCageArgs,
+    /// Skeleton animation (V1/V2/V3 text format).
+    #[arg(long)]
+    pub skeleton_anim: Option<PathBuf>,
+    /// Cage animation (rest-cage offsets).
+    #[arg(long)]
+    pub cage_anim: Option<PathBuf>,
+    /// glTF/FBX: the file's animation to play, by name or index (all channels).
+    #[arg(long)]
+    pub animation: Option<String>,
+    /// Comma-separated sample times in seconds, each once (negative times allowed).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        required = true,
+        allow_hyphen_values = true
+    )]
+    pub times: Vec<f64>,
+    /// Output folder; it appears complete, only after every sample succeeded.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Replace a non-empty --out that holds an earlier run's output.
+    #[arg(long)]
+    pub force: bool,
+    /// Also write a picture of each state (rest pose left, current pose right) as PNG;
+    /// needs a Vulkan or GL adapter (software ones work).
+    #[arg(long)]
+    pub render: bool,
+    /// Skinning method.
+    #[arg(long, value_parser = skinning_parser())]
+    pub skinning: Option<SkinningMethod>,
+    #[command(flatten)]
+    pub session: SessionArgs,
+}
+
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let (rig, auto_cage, out) = (&args.rig, &args.auto_cage, args.out.as_path());
+    let (skeleton_anim, cage_anim, animation, times) = (
+        args.skeleton_anim.as_deref(),
+        args.cage_anim.as_deref(),
+        args.animation.as_deref(),
+        args.times.as_slice(),
+    );
+    let (force, render, skinning, session_args) =
+        (args.force, args.render, args.skinning, &args.session);
+    if skeleton_anim.is_none() && cage_anim.is_none() && animation.is_none() {
+        bail!("give --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
+    }
+    check_times(times)?;
+    let mut pictures = crate::pictures::PictureMaker::for_steps(render)?;
+    let mut staged = StagedDir::create(out, force)?;
+    let mut loaded = load_rig_or_generate_cage(rig, true, true, auto_cage.options())?;
+    if let Some(g) = &loaded.generated_cage {
+        report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
+        write_generated_cage(&mut staged, &g.cage)?;
+    }
+    let tracks =
+        crate::interchange::animation_tracks(&mut loaded, skeleton_anim, animation, cage_anim)?;
+    let mut options = session_args.options();
+    options.skinning = skinning.unwrap_or_default();
+    let (session, warnings) = start_session(loaded, options)?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut player = tracks.resolve(&session)?.player(&session)?;
+    let mut session = session;
+    for &t in times {
+        let start = Instant::now();
+        player
+            .apply(t, &mut session)
+            .map_err(|e| anyhow::anyhow!("sample t = {t}: {e}"))?;
+        eprintln!(
+            "t = {t}: frame in {:.3} ms",
+            start.elapsed().as_secs_f64() * 1e3
+        );
+        write_state(&mut staged, &format!("t{t}"), &session)?;
+        if let Some(p) = &mut pictures {
+            p.write_staged(&session, &mut staged, &format!("t{t}.png"))?;
+        }
+    }
+    let n = staged.finish()?;
+    println!("{n} files written to {}", out.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn duplicate_and_non_finite_times_are_refused() {
+        assert!(check_times(&[0.75, -5.0, 4.0]).is_ok());
+        let e = check_times(&[1.0, 1.0]).unwrap_err().to_string();
+        assert!(e.contains("twice") && e.contains("values 1 and 2"), "{e}");
+        assert!(check_times(&[f64::NAN]).is_err());
+        assert!(check_times(&[1e300]).is_err());
+    }
+}

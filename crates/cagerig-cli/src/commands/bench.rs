@@ -1,0 +1,601 @@
+//! `cagerig bench`: per-operator timings in the layout of the paper's Table 1 (and more).
+//!
+//! Every figure is the median of repeated runs (with min and max) after a warm-up. Per-frame
+//! figures also print the bytes the kernel must move at least (an estimate from the data sizes)
+//! and the bandwidth that implies. Kernels run in f64 unless a row says f32. Every model is
+//! measured twice, with the default thread pool and on one thread; the printed table
+//! (`bench_table`) sets both beside the paper tool's single-threaded figures where the model is
+//! the Arm at a size the tool was measured on.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use cagerig::cage_coords::CoordsPrecision;
+use cagerig::coords::{maxvol, mvc};
+use cagerig::playback::AnimationPlayer;
+use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
+use cagerig::skinning::{
+    CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
+    DualQuaternionSkinning, LbsF32, LbsF32Scratch, LinearBlendSkinning,
+};
+use cagerig::sync::cage_updater::{CageFitMode, CageUpdater};
+use cagerig::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
+use glam::{DAffine3, DQuat, DVec3};
+use serde::Serialize;
+
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// Character mesh (OBJ) with its companions; default: the built-in rig.
+    pub mesh: Option<PathBuf>,
+    /// Cage (OBJ); default `<stem>_cage.obj` beside the mesh.
+    #[arg(long)]
+    pub cage: Option<PathBuf>,
+    /// Built-in rig when no mesh is given.
+    #[arg(long, default_value = "snake")]
+    pub builtin: String,
+    /// Resolution of the built-in rig.
+    #[arg(long)]
+    pub resolution: Option<usize>,
+    /// Levels of midpoint subdivision; a comma-separated list benches several models.
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub subdivide: Vec<usize>,
+    /// Machine-readable output: an array with one object per model.
+    #[arg(long)]
+    pub json: bool,
+    /// Skip the second pass on one thread (`RAYON_NUM_THREADS=1` like for like with the
+    /// single-threaded paper tool); by default every row is measured both ways.
+    #[arg(long)]
+    pub skip_one_thread: bool,
+    /// Multiplies the number of repetitions.
+    #[arg(long, default_value_t = 1.0)]
+    pub repeat_scale: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize)]
+pub(crate) struct Stat {
+    pub median_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bytes_moved: Option<u64>,
+}
+
+impl Stat {
+    fn with_bytes(mut self, bytes: u64) -> Self {
+        self.bytes_moved = Some(bytes);
+        self
+    }
+}
+
+#[derive(Debug, Serialize)]
+pub(crate) struct ModelRow {
+    pub model: String,
+    pub vertices: usize,
+    pub joints: usize,
+    pub cage_vertices: usize,
+    pub peak_memory_mb: f64,
+    /// Precision of the session-level figures (the `_f32` kernels are the f32 variants).
+    pub precision: &'static str,
+    pub mvc: Stat,
+    pub maxvol: Stat,
+    /// ln |det Φ̃| of the selected MaxVol rows (larger is better; shows quality regressions).
+    pub maxvol_log_abs_det: f64,
+    pub skelup_preprocess: Stat,
+    pub cageup_preprocess: Stat,
+    pub cor_centres: Stat,
+    pub cor_centres_method: String,
+    pub cagerev_refactor: Stat,
+    pub lbs: Stat,
+    pub dqs: Stat,
+    pub cor: Stat,
+    pub animation_frame: Stat,
+    pub rest_cage_drag: Stat,
+    pub grab_after_skeleton_edit: Stat,
+    /// The drag and the grab with Φ stored in f32 (`--coords-precision f32`).
+    pub rest_cage_drag_f32_coords: Stat,
+    pub grab_after_skeleton_edit_f32_coords: Stat,
+    /// The drag and the grab on the f32 display path (what the editor runs: M and M' drawn in
+    /// f32, the exact state kept on CageUp's MaxVol rows).
+    pub rest_cage_drag_display: Stat,
+    pub grab_after_skeleton_edit_display: Stat,
+    pub lbs_f32: Stat,
+    pub dqs_f32: Stat,
+    pub cor_f32: Stat,
+}
+
+/// One model's figures with the default thread pool and, unless skipped, on one thread.
+#[derive(Debug, Serialize)]
+pub(crate) struct ModelReport {
+    #[serde(flatten)]
+    pub row: ModelRow,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub one_thread: Option<ModelRow>,
+    /// This machine's memory read bandwidth (GB/s) on the default pool, measured once after the
+    /// models ([`crate::bench_bandwidth`]), to set the rows' implied bandwidth against.
+    pub read_bandwidth_gbs: f64,
+    /// The same on one thread, unless that pass is skipped.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read_bandwidth_gbs_one_thread: Option<f64>,
+}
+
+/// Runs `f` `warmup` times untimed, then `reps` times; returns median/min/max in ms.
+fn time(reps: usize, warmup: usize, mut f: impl FnMut()) -> Stat {
+    for _ in 0..warmup {
+        f();
+    }
+    let mut samples: Vec<f64> = (0..reps.max(1))
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    Stat {
+        median_ms: samples[samples.len() / 2],
+        min_ms: samples[0],
+        max_ms: samples[samples.len() - 1],
+        bytes_moved: None,
+    }
+}
+
+/// Peak resident memory of this process (VmHWM), in MB; 0 where unknown.
+fn peak_memory_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<f64>().ok())
+        })
+        .map_or(0.0, |kb| kb / 1024.0)
+}
+
+fn load_parts(args: &Args) -> anyhow::Result<(String, RigParts)> {
+    let rig_args = crate::rig_source::RigArgs {
+        mesh: args.mesh.clone(),
+        cage: args.cage.clone(),
+        builtin: args.mesh.is_none().then(|| args.builtin.clone()),
+        resolution: if args.mesh.is_none() {
+            args.resolution
+        } else {
+            None
+        },
+        skin: None,
+        allow_outside_cage: false,
+    };
+    let loaded = crate::rig_source::load_rig(&rig_args, false, false)?;
+    Ok((loaded.name, loaded.parts))
+}
+
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let (name, base) = load_parts(args)?;
+    for &levels in &args.subdivide {
+        cagerig::memory_estimate::check_fits(
+            &format!("bench --subdivide {levels}"),
+            cagerig::memory_estimate::subdivided_vertices(
+                base.mesh.num_vertices() as u64,
+                base.mesh.num_triangles() as u64,
+                u32::try_from(levels).unwrap_or(u32::MAX),
+            ),
+            base.cage.num_vertices() as u64,
+        )?;
+    }
+    let mut measured = Vec::new();
+    for &levels in &args.subdivide {
+        let parts = if levels == 0 {
+            base.clone()
+        } else {
+            // The bench computes Λ itself (as a session does when no CoR rows are loaded), so
+            // the loaded CoR rows are not carried: subdivided, they would only hold memory.
+            let sub =
+                cagerig::subdivide::subdivide_rig(&base.mesh, &base.skin_weights, None, levels)?;
+            RigParts::new(
+                sub.mesh,
+                base.skeleton.clone(),
+                sub.skin_weights,
+                base.cage.clone(),
+            )
+        };
+        let model = if levels == 0 {
+            name.clone()
+        } else {
+            format!("{name} N={levels}")
+        };
+        if !args.json {
+            eprintln!(
+                "benchmarking {model} ({} vertices)…",
+                parts.mesh.num_vertices()
+            );
+        }
+        let one_thread = if args.skip_one_thread {
+            None
+        } else {
+            Some(
+                one_thread_pool()?
+                    .install(|| bench_model(model.clone(), parts.clone(), args.repeat_scale))?,
+            )
+        };
+        measured.push((bench_model(model, parts, args.repeat_scale)?, one_thread));
+    }
+    // After the models, so that its buffer does not count in their peak memory.
+    let bandwidth = crate::bench_bandwidth::read_bandwidth_gbs();
+    let bandwidth_one_thread = if args.skip_one_thread {
+        None
+    } else {
+        Some(one_thread_pool()?.install(crate::bench_bandwidth::read_bandwidth_gbs))
+    };
+    let rows: Vec<ModelReport> = measured
+        .into_iter()
+        .map(|(row, one_thread)| ModelReport {
+            row,
+            one_thread,
+            read_bandwidth_gbs: bandwidth,
+            read_bandwidth_gbs_one_thread: bandwidth_one_thread,
+        })
+        .collect();
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    } else {
+        crate::bench_table::print_table(&rows);
+    }
+    Ok(())
+}
+
+/// The pool of the "1 thread" pass (like for like with the single-threaded paper tool).
+fn one_thread_pool() -> anyhow::Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .context("building a one-thread pool")
+}
+
+fn reps(base: usize, scale: f64, vertices: usize) -> usize {
+    // Fewer repetitions of the heavy steps on big meshes.
+    let factor = if vertices > 50_000 {
+        0.3
+    } else if vertices > 10_000 {
+        0.6
+    } else {
+        1.0
+    };
+    ((base as f64 * scale * factor).round() as usize).max(3)
+}
+
+fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<ModelRow> {
+    // Reset the peak-RSS counter (VmHWM) so the figure is this model's, not the process's.
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+    let nv = parts.mesh.num_vertices();
+    let nj = parts.skeleton.len();
+    let nc = parts.cage.num_vertices();
+    let (cage, _) = cagerig::cage_enclosure::validate_cage_for_mesh(
+        parts.cage.clone(),
+        &parts.mesh.positions,
+        false,
+    )?;
+
+    let mut phi = None;
+    let mvc_stat = time(reps(5, scale, nv), 1, || {
+        drop(phi.take()); // one Φ alive at a time
+        phi = Some(mvc::compute_cage_coords(&cage, &parts.mesh.positions, None));
+    });
+    let phi = phi
+        .context("no timing run")?
+        .context("computing mean value coordinates")?;
+
+    let mut selection = None;
+    let maxvol_stat = time(reps(5, scale, nv), 1, || {
+        selection = Some(maxvol::select_maxvol_rows(&phi));
+    });
+    let rows = selection
+        .context("no timing run")?
+        .context("MaxVol selection")?
+        .rows;
+    let maxvol_log_abs_det =
+        maxvol::log_abs_det_of_rows(&phi, &rows).context("ln |det| of the MaxVol rows")?;
+
+    let mut skelup = None;
+    let skelup_stat = time(reps(5, scale, nv), 1, || {
+        skelup = Some(SkeletonUpdater::new(
+            &parts.mesh,
+            &parts.skeleton,
+            &parts.skin_weights,
+            &phi,
+            &cage.positions,
+            JointLocalisation::default(),
+        ));
+    });
+    let (skelup, _) = skelup
+        .context("no timing run")?
+        .context("skeleton updater")?;
+
+    let cageup_stat = time(reps(21, scale, nv), 2, || {
+        let _ = CageUpdater::new(&phi, rows.clone(), CageFitMode::Interpolate);
+    });
+
+    // CoR centres as the session computes them when none are loaded: Λ (Eq. 14) directly.
+    let mut lambda = None;
+    let cor_centres_stat = time(if nv > 20_000 { 1 } else { 3 }, 0, || {
+        lambda = Some(cagerig::session::compute_centre_coords(
+            &parts.mesh.positions,
+            &parts.mesh.triangles,
+            &parts.skin_weights,
+            &phi,
+            &cagerig::skinning::CorCentresOptions::default(),
+        ));
+    });
+    let lambda = lambda.context("no timing run")?.context("CoR centres")?;
+    let cor_centres_method = cagerig::session::centre_coords_method(nv).to_string();
+
+    // The session, from the precomputed parts (Φ moved in, not copied).
+    let joint_coords: Vec<Vec<f64>> = (0..nj).map(|j| skelup.joint_row(j).to_vec()).collect();
+    let base_parts = RigParts::new(
+        parts.mesh.clone(),
+        parts.skeleton.clone(),
+        parts.skin_weights.clone(),
+        parts.cage.clone(),
+    );
+    let session_parts = RigParts {
+        cage_coords: Some(phi),
+        maxvol_rows: Some(rows.clone()),
+        cor_rows: None,
+        joint_coords: Some(joint_coords.clone()),
+        cor_centre_coords: Some(lambda),
+        ..parts
+    };
+    let (mut session, _) = RigSession::new(session_parts, SessionOptions::default())?;
+    let parts_weights = session.skin_weights().clone();
+    // The pose of the paper tool's per-frame timings: one joint bent by 60° about +X.
+    let bend_joint = session.skeleton().find("lowerarm01.R").unwrap_or(nj / 2);
+    session.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
+
+    let refactor_stat = time(reps(51, scale, nv), 3, || {
+        let _ = session.refactor_reverser();
+    });
+
+    let transforms: Vec<DAffine3> = session.posed_from_rest().to_vec();
+    let rest = session.rest_mesh().to_vec();
+    let mut out = vec![DVec3::ZERO; nv];
+    let frame_reps = reps(200, scale, nv);
+    let nnz = parts_weights.num_entries() as u64;
+    let skin_bytes = nv as u64 * (24 + 24 + 4) + nnz * 12;
+
+    let lbs = LinearBlendSkinning::new(&parts_weights);
+    let lbs_stat =
+        time(frame_reps, 5, || lbs.apply(&transforms, &rest, &mut out)).with_bytes(skin_bytes);
+    let dqs = DualQuaternionSkinning::new(&parts_weights);
+    let mut dqs_scratch = DqsScratch::new(nj);
+    let dqs_stat = time(frame_reps, 5, || {
+        dqs.apply(&transforms, &rest, &mut dqs_scratch, &mut out)
+    })
+    .with_bytes(skin_bytes + nv as u64 * 4);
+    session.set_skinning(cagerig::skinning::SkinningMethod::Cor)?;
+    let centres = session
+        .cor_centres()
+        .map(<[DVec3]>::to_vec)
+        .unwrap_or_default();
+    session.set_skinning(cagerig::skinning::SkinningMethod::Lbs)?;
+    let cor = CorSkinning::new(&parts_weights);
+    let mut cor_scratch = CorScratch::new(nj);
+    let cor_stat = time(frame_reps, 5, || {
+        cor.apply(&transforms, &rest, &centres, &mut cor_scratch, &mut out)
+    })
+    .with_bytes(skin_bytes + nv as u64 * (24 + 4));
+
+    // The f32 per-frame kernels (error vs f64 stated in their tests: ≤ 2e-6 of the bbox diagonal).
+    let mut out32 = vec![glam::Vec3::ZERO; nv];
+    let lbs32 = LbsF32::new(&parts_weights, &rest)?;
+    let mut lbs32_scratch = LbsF32Scratch::new(nj);
+    let f32_bytes = nv as u64 * (12 + 12 + 4) + nnz * 6;
+    let lbs32_stat = time(frame_reps, 5, || {
+        lbs32.apply(&transforms, &mut lbs32_scratch, &mut out32)
+    })
+    .with_bytes(f32_bytes);
+    let dqs32 = DqsF32::new(&parts_weights, &rest)?;
+    let mut dqs32_scratch = DqsF32Scratch::new(nj);
+    let dqs32_stat = time(frame_reps, 5, || {
+        dqs32.apply(&transforms, &mut dqs32_scratch, &mut out32)
+    })
+    .with_bytes(f32_bytes);
+    let cor32 = CorF32::new(&parts_weights, &rest, &centres)?;
+    let mut cor32_scratch = CorF32Scratch::new(nj);
+    let cor32_stat = time(frame_reps, 5, || {
+        cor32.apply(&transforms, &mut cor32_scratch, &mut out32)
+    })
+    .with_bytes(f32_bytes + nv as u64 * 12);
+
+    // Animation frame: skeleton keys (rotations) and cage keys (rest-cage offsets), async.
+    let (skeleton_track, cage_track) = synthetic_tracks(&session)?;
+    let mut player = AnimationPlayer::new(&session, Some(skeleton_track), Some(cage_track))?;
+    let duration = player.duration();
+    let mut frame = 0usize;
+    let anim_stat = time(frame_reps, 5, || {
+        frame += 1;
+        let t = (frame as f64 * 0.037) % duration;
+        let _ = player.apply(t, &mut session);
+    })
+    // Cage keys are cached as ΦC_k: a frame lerps two meshes (2 reads, 1 write) then skins.
+    .with_bytes(skin_bytes + nv as u64 * 72);
+    session.reset_pose();
+    session.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
+
+    let (drag_stat, grab_stat) = bench_cage_events(
+        &mut session,
+        bend_joint,
+        frame_reps,
+        reps(51, scale, nv),
+        skin_bytes,
+        [8, 8],
+    )?;
+    session.set_display_precision(DisplayPrecision::F32)?;
+    let (drag_display_stat, grab_display_stat) = bench_cage_events(
+        &mut session,
+        bend_joint,
+        frame_reps,
+        reps(51, scale, nv),
+        f32_bytes,
+        [8, 4],
+    )?;
+    session.set_display_precision(DisplayPrecision::Exact)?;
+
+    // The same cage events with Φ rounded to f32 (`CoordsPrecision::F32`): a second session
+    // from the base parts (Φ recomputed, MaxVol rows and Ψ reused), built after the f64 one
+    // is dropped so the two never coexist in memory.
+    drop(player);
+    drop(session);
+    let f32_parts = RigParts {
+        cage_coords: None,
+        maxvol_rows: Some(rows),
+        cor_rows: None,
+        joint_coords: Some(joint_coords),
+        cor_centre_coords: None,
+        ..base_parts
+    };
+    let f32_options = SessionOptions {
+        cage_coords_precision: CoordsPrecision::F32,
+        ..SessionOptions::default()
+    };
+    let (mut session32, _) = RigSession::new(f32_parts, f32_options)?;
+    session32.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
+    let (drag32_stat, grab32_stat) = bench_cage_events(
+        &mut session32,
+        bend_joint,
+        frame_reps,
+        reps(51, scale, nv),
+        skin_bytes,
+        [4, 4],
+    )?;
+
+    Ok(ModelRow {
+        model,
+        vertices: nv,
+        joints: nj,
+        cage_vertices: nc,
+        peak_memory_mb: peak_memory_mb(),
+        precision: "f64",
+        mvc: mvc_stat,
+        maxvol: maxvol_stat,
+        maxvol_log_abs_det,
+        skelup_preprocess: skelup_stat,
+        cageup_preprocess: cageup_stat,
+        cor_centres: cor_centres_stat,
+        cor_centres_method,
+        cagerev_refactor: refactor_stat,
+        lbs: lbs_stat,
+        dqs: dqs_stat,
+        cor: cor_stat,
+        animation_frame: anim_stat,
+        rest_cage_drag: drag_stat,
+        grab_after_skeleton_edit: grab_stat,
+        rest_cage_drag_f32_coords: drag32_stat,
+        grab_after_skeleton_edit_f32_coords: grab32_stat,
+        rest_cage_drag_display: drag_display_stat,
+        grab_after_skeleton_edit_display: grab_display_stat,
+        lbs_f32: lbs32_stat,
+        dqs_f32: dqs32_stat,
+        cor_f32: cor32_stat,
+    })
+}
+
+/// A rest-cage drag of the 5 cage vertices nearest `bend_joint` (`drag_reps` events), then
+/// `grab_reps` current-cage grabs each right after a small skeleton edit (refactor + solve +
+/// full chain). `phi_bytes` is the size of one coordinate the drag and the grab read (8 for
+/// f64, 4 for f32).
+fn bench_cage_events(
+    session: &mut RigSession,
+    bend_joint: usize,
+    drag_reps: usize,
+    grab_reps: usize,
+    skin_bytes: u64,
+    [drag_phi_bytes, grab_phi_bytes]: [usize; 2],
+) -> anyhow::Result<(Stat, Stat)> {
+    let (nv, nc) = (session.rest_mesh().len(), session.rest_cage().len());
+    let joint_pos = session.rest_world_from_joint()[bend_joint].translation;
+    let mut by_distance: Vec<usize> = (0..nc).collect();
+    by_distance.sort_by(|&a, &b| {
+        session.rest_cage()[a]
+            .distance(joint_pos)
+            .total_cmp(&session.rest_cage()[b].distance(joint_pos))
+    });
+    let drag: Vec<usize> = by_distance[..5.min(nc)].to_vec();
+    let step = 1e-3 * {
+        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
+        (hi - lo).length()
+    };
+    let mut sign = 1.0;
+    let drag_stat = time(drag_reps, 5, || {
+        sign = -sign;
+        let _ = session.move_rest_cage(&drag, &[DVec3::new(sign * step, 0.0, 0.0)]);
+    })
+    .with_bytes(skin_bytes + (nv * drag.len() * drag_phi_bytes) as u64 + nv as u64 * 48);
+
+    let mut samples = Vec::with_capacity(grab_reps);
+    for i in 0..grab_reps + 3 {
+        let angle = if i % 2 == 0 { 0.01 } else { -0.01 };
+        session.rotate_joint(bend_joint, DVec3::Y, angle)?;
+        let t = Instant::now();
+        session.move_posed_cage(&drag[..1], &[DVec3::new(0.0, sign * step, 0.0)])?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        sign = -sign;
+        if i >= 3 {
+            samples.push(ms);
+        }
+    }
+    samples.sort_by(f64::total_cmp);
+    let grab_stat = Stat {
+        median_ms: samples[samples.len() / 2],
+        min_ms: samples[0],
+        max_ms: samples[samples.len() - 1],
+        bytes_moved: Some(skin_bytes + (nv * nc * grab_phi_bytes) as u64 + nv as u64 * 48),
+    };
+    Ok((drag_stat, grab_stat))
+}
+
+/// A 5-key skeleton track bending every joint a little about alternating axes, and a 3-key
+/// cage track breathing the rest cage, with unrelated key times (asynchronous tracks).
+fn synthetic_tracks(
+    session: &RigSession,
+) -> anyhow::Result<(
+    cagerig::animation::SkeletonTrack,
+    cagerig::animation::CageTrack,
+)> {
+    let skeleton = session.skeleton();
+    let rest = skeleton.rest_world_from_joint();
+    let mut rest_locals = vec![DAffine3::IDENTITY; skeleton.len()];
+    skeleton.locals_from_worlds(&rest, &mut rest_locals);
+    let times = vec![0.0, 3.0, 6.5, 9.0, 10.0];
+    let keys = times
+        .iter()
+        .enumerate()
+        .map(|(k, _)| {
+            rest_locals
+                .iter()
+                .enumerate()
+                .map(|(j, l)| {
+                    let axis = [DVec3::X, DVec3::Y, DVec3::Z][(j + k) % 3];
+                    *l * DAffine3::from_quat(DQuat::from_axis_angle(axis, 0.2 * k as f64))
+                })
+                .collect()
+        })
+        .collect();
+    let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
+    let centre = (lo + hi) * 0.5;
+    let cage_times = vec![0.0, 1.5, 3.0];
+    let offsets = cage_times
+        .iter()
+        .enumerate()
+        .map(|(k, _)| {
+            session
+                .rest_cage()
+                .iter()
+                .map(|c| (*c - centre) * 0.05 * k as f64)
+                .collect()
+        })
+        .collect();
+    Ok((
+        cagerig::animation::SkeletonTrack::new(times, keys)?,
+        cagerig::animation::CageTrack::new(cage_times, offsets)?,
+    ))
+}

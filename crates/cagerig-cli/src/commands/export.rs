@@ -1,0 +1,186 @@
+//! `cagerig export RIG [--script EDITS.json] --out FILE.glb|FILE.gltf`: the (edited) character as a
+//! standard rigged glTF binary — the rest mesh and skeleton after cage edits as the bind shape,
+//! Ω as JOINTS_n/WEIGHTS_n, the current pose as the joint nodes' transforms.
+//!
+//! With `--skeleton-anim A --cage-anim B` or `--animation NAME` (glTF/FBX) `[--fps F]`: the
+//! hybrid animation, sampled at F samples/s plus every key time, as node TRS animation and cage
+//! keys as morph targets (see `cagerig_formats::gltf::export_animation`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use cagerig::session::RigSession;
+use cagerig_formats::gltf::export_animation;
+
+use crate::rig_source::{RigArgs, load_rig};
+use crate::session_args::SessionArgs;
+
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    pub rig: RigArgs,
+    /// Edit script replayed before exporting (as for `edit`).
+    #[arg(long)]
+    pub script: Option<PathBuf>,
+    /// Output: `.glb` (binary glTF) or `.gltf` (JSON, with `<stem>.bin` written beside it);
+    /// replaced atomically.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Skeleton animation to export (the paper tool's text format).
+    #[arg(long)]
+    pub skeleton_anim: Option<PathBuf>,
+    /// Cage animation to export (rest-cage offsets; keys become morph targets).
+    #[arg(long)]
+    pub cage_anim: Option<PathBuf>,
+    /// glTF/FBX: the file's animation to export, by name or index.
+    #[arg(long)]
+    pub animation: Option<String>,
+    /// Samples per second of the exported animation (key times are always samples).
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    /// Between two samples a viewer interpolates the joint nodes (lerp / slerp): samples are
+    /// added where that departs from cagerig's M' by more than this fraction of the rest
+    /// bounding-box diagonal (checked at the midpoint of every interval); 0 turns it off.
+    #[arg(long, default_value_t = 1e-5)]
+    pub max_between: f64,
+    /// The most samples the refinement of `--max-between` may reach.
+    #[arg(long, default_value_t = 100_000)]
+    pub max_samples: usize,
+    #[command(flatten)]
+    pub session: SessionArgs,
+}
+
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !(ext.eq_ignore_ascii_case("glb") || ext.eq_ignore_ascii_case("gltf")) {
+        bail!(
+            "{}: export writes glTF 2.0: give an --out path ending in .glb (binary) or .gltf \
+             (JSON with a .bin beside it)",
+            args.out.display()
+        );
+    }
+    let script = args
+        .script
+        .as_deref()
+        .map(crate::commands::edit::read_script)
+        .transpose()?;
+    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 1000.0) {
+        bail!("--fps {} must be in (0, 1000]", args.fps);
+    }
+    if !(args.max_between.is_finite() && (0.0..1.0).contains(&args.max_between)) {
+        bail!(
+            "--max-between {} must be a fraction of the diagonal in [0, 1) (0: no refinement)",
+            args.max_between
+        );
+    }
+    let mut loaded = load_rig(&args.rig, true, true)?;
+    let tracks = crate::interchange::animation_tracks(
+        &mut loaded,
+        args.skeleton_anim.as_deref(),
+        args.animation.as_deref(),
+        args.cage_anim.as_deref(),
+    )?;
+    let name = loaded
+        .name
+        .rsplit(['/', '\\'])
+        .next()
+        .and_then(|f| f.split('.').next())
+        .unwrap_or("cagerig")
+        .to_string();
+    let mut options = args.session.options();
+    if let Some(s) = script.as_ref().and_then(|s| s.skinning) {
+        options.skinning = s;
+    }
+    let (mut session, warnings) =
+        RigSession::new(loaded.parts, options).context("assembling the rig")?;
+    for w in loaded.warnings.iter().chain(&warnings) {
+        eprintln!("warning: {w}");
+    }
+    if let (Some(script), Some(path)) = (&script, &args.script) {
+        script
+            .validate(&session)
+            .with_context(|| format!("in {}", path.display()))?;
+        for k in 0..script.steps.len() {
+            script
+                .run_step(k, &mut session)
+                .with_context(|| format!("in {}", path.display()))?;
+        }
+    }
+    let tracks = tracks.resolve(&session)?;
+    if tracks.skeleton.is_none() && tracks.cage.is_none() {
+        return export(&session, &args.out, &name);
+    }
+    let t = std::time::Instant::now();
+    let keys: Vec<f64> = tracks
+        .skeleton
+        .iter()
+        .flat_map(|s| s.times())
+        .chain(tracks.cage.iter().flat_map(|c| c.times()))
+        .copied()
+        .collect();
+    // The cage keys become the morph targets.
+    let cage_track = tracks.cage.clone();
+    let mut player = tracks.player(&session)?;
+    let mut times = export_animation::sample_times(player.duration(), args.fps, &keys);
+    let mut refinement = String::new();
+    if args.max_between > 0.0 {
+        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_mesh());
+        let diagonal = (hi - lo).length();
+        // 10 % of the bound left for the f32 rounding of the file (measured against an
+        // independent viewer in `gltf_export_resampling.rs`).
+        let refined = cagerig_formats::gltf::export_resampling::refine_sample_times(
+            &mut session,
+            &mut player,
+            &times,
+            0.9 * args.max_between * diagonal,
+            args.max_samples.max(times.len()),
+        )
+        .map_err(|e| anyhow::anyhow!("refining the samples: {e}"))?;
+        refinement = format!(
+            " ({} added so that a viewer stays within {:.1e} of the diagonal between samples, \
+             {:.1e} at the worst midpoint)",
+            refined.added,
+            args.max_between,
+            refined.largest_checked / diagonal.max(f64::MIN_POSITIVE)
+        );
+        if refined.capped {
+            eprintln!(
+                "warning: --max-samples {} reached: between some samples a viewer departs from \
+                 cagerig by up to {:.1e} of the diagonal (raise --max-samples or --fps)",
+                args.max_samples,
+                refined.largest_checked / diagonal.max(f64::MIN_POSITIVE)
+            );
+        }
+        times = refined.times;
+    }
+    let (document, bin) = export_animation::animation_to_gltf(
+        &mut session,
+        &mut player,
+        cage_track.as_ref(),
+        &times,
+        &name,
+    )
+    .map_err(|e| anyhow::anyhow!("exporting the animation: {e}"))?;
+    cagerig_formats::gltf::export::write_gltf_or_glb(&args.out, &document, &bin)?;
+    println!(
+        "{} written: {} samples{refinement} over {:.3} s in {:.1} ms",
+        args.out.display(),
+        times.len(),
+        player.duration(),
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    Ok(())
+}
+
+fn export(session: &RigSession, out: &Path, name: &str) -> anyhow::Result<()> {
+    let t = std::time::Instant::now();
+    cagerig_formats::gltf::export::export_glb(session, out, name)?;
+    println!(
+        "{} written ({} vertices, {} joints) in {:.1} ms",
+        out.display(),
+        session.rest_mesh().len(),
+        session.skeleton().len(),
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    Ok(())
+}

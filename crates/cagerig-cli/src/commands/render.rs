@@ -1,0 +1,356 @@
+//! `cagerig render`: pictures of a rig, after an edit script or at animation times.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use cagerig::session::{DisplayPrecision, RigSession};
+use cagerig::skinning::SkinningMethod;
+use cagerig_render::CameraPreset;
+use cagerig_render::rig_scene::{ColorBy, Layers};
+use glam::DVec3;
+
+use crate::pictures::{CameraChoice, PictureMaker, PictureOptions, ViewArg};
+use crate::rig_source::{RigArgs, load_rig};
+use crate::session_args::{SessionArgs, start_session};
+
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    pub rig: RigArgs,
+    /// Edit script (the JSON of `cagerig edit`) applied before rendering; the picture shows
+    /// the state after its last step.
+    #[arg(long, conflicts_with_all = ["skeleton_anim", "cage_anim", "animation"])]
+    pub script: Option<PathBuf>,
+    /// Skeleton animation (V1/V2/V3 text format) sampled at `--times`.
+    #[arg(long, requires = "times")]
+    pub skeleton_anim: Option<PathBuf>,
+    /// glTF/FBX: the file's animation (name or index) sampled at `--times`.
+    #[arg(long, requires = "times", conflicts_with = "skeleton_anim")]
+    pub animation: Option<String>,
+    /// Cage animation (rest-cage offsets) sampled at `--times`.
+    #[arg(long, requires = "times")]
+    pub cage_anim: Option<PathBuf>,
+    /// Comma-separated sample times in seconds (one picture each: OUT_t<time>.png when more
+    /// than one).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub times: Vec<f64>,
+    /// Output PNG file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Pose(s) shown: current (M', C', S'), rest (M, C, S), or both side by side (rest left).
+    #[arg(long, value_enum, default_value_t = ViewArg::Current)]
+    pub view: ViewArg,
+    /// Picture size in pixels, WIDTHxHEIGHT (both views together for --view both).
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Camera preset framing everything shown: front, side, top, three-quarter.
+    #[arg(long, default_value = "three-quarter", conflicts_with_all = ["eye", "target"])]
+    pub camera: String,
+    /// Camera position x,y,z (world space; with --target).
+    #[arg(long, requires = "target", allow_negative_numbers = true)]
+    pub eye: Option<String>,
+    /// Point looked at x,y,z (world space; with --eye).
+    #[arg(long, requires = "eye", allow_negative_numbers = true)]
+    pub target: Option<String>,
+    /// Layers drawn, comma-separated from mesh, wireframe, cage, skeleton, flat, ground.
+    #[arg(long, default_value = "mesh,cage,skeleton,ground")]
+    pub show: String,
+    /// Colour map on the skin: joint:NAME|INDEX (skin weights Ω), cage-vertex:K (mean value
+    /// coordinates Φ, diverging), or on the cage handles: psi:NAME|INDEX (joint coordinates Ψ).
+    #[arg(long)]
+    pub color_by: Option<String>,
+    /// Leave out the pose labels.
+    #[arg(long)]
+    pub no_labels: bool,
+    /// Write N pictures around the model (OUT_000.png …) and an animated PNG at OUT.
+    #[arg(long)]
+    pub turntable: Option<u32>,
+    /// Skinning method.
+    #[arg(long, value_parser = crate::session_args::skinning_parser())]
+    pub skinning: Option<SkinningMethod>,
+    /// Draw the current skin from the f32 display path (LBS/DQS/CoR in f32, within 2e-6 of the
+    /// bounding-box diagonal of the exact skin; faster on large characters). Cage, skeleton and
+    /// rest pose are the exact ones either way.
+    #[arg(long)]
+    pub display_f32: bool,
+    #[command(flatten)]
+    pub session: SessionArgs,
+}
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_size(text: &str) -> anyhow::Result<(u32, u32)> {
+    let parse = || -> Option<(u32, u32)> {
+        let (w, h) = text.split_once(['x', 'X'])?;
+        Some((w.trim().parse().ok()?, h.trim().parse().ok()?))
+    };
+    match parse() {
+        Some((w, h)) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => Ok((w, h)),
+        _ => {
+            bail!("--size {text:?}: expected WIDTHxHEIGHT with each side 1 … 16384, e.g. 1280x720")
+        }
+    }
+}
+
+fn parse_point(option: &str, text: &str) -> anyhow::Result<DVec3> {
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow::anyhow!("{option} {text:?}: expected three numbers x,y,z"))?;
+    match values.as_slice() {
+        [x, y, z] if values.iter().all(|v| v.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
+        _ => bail!("{option} {text:?}: expected three finite numbers x,y,z"),
+    }
+}
+
+/// Parses `--show`.
+pub fn parse_layers(text: &str) -> anyhow::Result<Layers> {
+    let mut layers = Layers {
+        mesh: false,
+        wireframe: false,
+        cage: false,
+        skeleton: false,
+        flat: false,
+        ground: false,
+    };
+    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        match name {
+            "mesh" => layers.mesh = true,
+            "wireframe" => layers.wireframe = true,
+            "cage" => layers.cage = true,
+            "skeleton" => layers.skeleton = true,
+            "flat" => layers.flat = true,
+            "ground" => layers.ground = true,
+            other => bail!(
+                "--show: unknown layer {other:?}; expected some of mesh, wireframe, cage, skeleton, flat, ground"
+            ),
+        }
+    }
+    if layers.wireframe || layers.flat {
+        layers.mesh = true;
+    }
+    if !(layers.mesh || layers.cage || layers.skeleton) {
+        bail!(
+            "--show {text:?} draws nothing: give at least one of mesh, wireframe, cage, skeleton"
+        );
+    }
+    Ok(layers)
+}
+
+fn parse_joint(session: &RigSession, text: &str) -> anyhow::Result<usize> {
+    let count = session.skeleton().len();
+    if let Some(j) = session.skeleton().find(text) {
+        return Ok(j);
+    }
+    match text.parse::<usize>() {
+        Ok(j) if j < count => Ok(j),
+        Ok(j) => bail!(
+            "--color-by: joint {j} does not exist (the rig has {count} joints, 0 … {})",
+            count.saturating_sub(1)
+        ),
+        Err(_) => {
+            let names: Vec<&str> = session
+                .skeleton()
+                .joints()
+                .iter()
+                .map(|j| j.name.as_str())
+                .collect();
+            bail!(
+                "--color-by: no joint named {text:?}; the joints are {}",
+                names.join(", ")
+            )
+        }
+    }
+}
+
+/// Parses `--color-by` against the rig.
+pub fn parse_color_by(session: &RigSession, text: &str) -> anyhow::Result<ColorBy> {
+    let Some((kind, value)) = text.split_once(':') else {
+        bail!("--color-by {text:?}: expected joint:NAME, cage-vertex:K or psi:NAME");
+    };
+    let color_by = match kind {
+        "joint" => ColorBy::JointWeights(parse_joint(session, value)?),
+        "psi" => ColorBy::JointCageCoords(parse_joint(session, value)?),
+        "cage-vertex" => ColorBy::CageCoords(value.parse().map_err(|_| {
+            anyhow::anyhow!("--color-by {text:?}: expected a cage vertex index after cage-vertex:")
+        })?),
+        _ => bail!("--color-by {text:?}: expected joint:NAME, cage-vertex:K or psi:NAME"),
+    };
+    color_by
+        .validate(session)
+        .map_err(|e| anyhow::anyhow!("--color-by {text:?}: {e}"))?;
+    Ok(color_by)
+}
+
+/// `OUT` with `suffix` added to its file stem (`out.png` + `_t1` → `out_t1.png`).
+pub fn with_suffix(out: &Path, suffix: &str) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = out
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "png".into());
+    out.with_file_name(format!("{stem}{suffix}.{ext}"))
+}
+
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let size = parse_size(&args.size)?;
+    let layers = parse_layers(&args.show)?;
+    let camera = match (&args.eye, &args.target) {
+        (Some(eye), Some(target)) => CameraChoice::LookAt {
+            eye: parse_point("--eye", eye)?,
+            target: parse_point("--target", target)?,
+        },
+        _ => CameraChoice::Preset(CameraPreset::from_name(&args.camera).ok_or_else(|| {
+            anyhow::anyhow!(
+                "--camera {:?}: expected one of front, side, top, three-quarter",
+                args.camera
+            )
+        })?),
+    };
+    if let Some(t) = args.times.iter().find(|t| !t.is_finite()) {
+        bail!("--times: sample time {t} is not finite");
+    }
+    if args.turntable == Some(0) {
+        bail!("--turntable 0: expected at least one frame");
+    }
+    if !args.times.is_empty()
+        && args.skeleton_anim.is_none()
+        && args.cage_anim.is_none()
+        && args.animation.is_none()
+    {
+        bail!("--times needs --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
+    }
+    let script = args
+        .script
+        .as_deref()
+        .map(crate::commands::edit::read_script)
+        .transpose()?;
+    let mut loaded = load_rig(&args.rig, true, true)?;
+    let tracks = crate::interchange::animation_tracks(
+        &mut loaded,
+        args.skeleton_anim.as_deref(),
+        args.animation.as_deref(),
+        args.cage_anim.as_deref(),
+    )?;
+    let mut options = args.session.options();
+    options.skinning = args
+        .skinning
+        .or(script.as_ref().and_then(|s| s.skinning))
+        .unwrap_or_default();
+    let (mut session, warnings) = start_session(loaded, options)?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    if args.display_f32 {
+        session.set_display_precision(DisplayPrecision::F32)?;
+    }
+    let color_by = match &args.color_by {
+        Some(text) => parse_color_by(&session, text)?,
+        None => ColorBy::None,
+    };
+    if let Some(script) = &script {
+        let path = args.script.as_deref().unwrap_or(Path::new(""));
+        script
+            .validate(&session)
+            .with_context(|| format!("in {}", path.display()))?;
+        for k in 0..script.steps.len() {
+            script
+                .run_step(k, &mut session)
+                .with_context(|| format!("in {}", path.display()))?;
+        }
+    }
+    let mut maker = PictureMaker::new(PictureOptions {
+        view: args.view,
+        size,
+        camera,
+        layers,
+        color_by,
+        labels: !args.no_labels,
+    })?;
+    let mut written = Vec::new();
+    if args.times.is_empty() {
+        render_state(&mut maker, &session, args, &args.out, &mut written)?;
+    } else {
+        let mut player = tracks.resolve(&session)?.player(&session)?;
+        for &t in &args.times {
+            player.apply(t, &mut session)?;
+            let path = if args.times.len() == 1 {
+                args.out.clone()
+            } else {
+                with_suffix(&args.out, &format!("_t{t}"))
+            };
+            render_state(&mut maker, &session, args, &path, &mut written)?;
+        }
+    }
+    eprintln!("rendered on {}", maker.adapter_name());
+    for path in &written {
+        println!("{}", path.display());
+    }
+    Ok(())
+}
+
+/// One picture at `path`, or a turntable (frames + animated PNG at `path`).
+fn render_state(
+    maker: &mut PictureMaker,
+    session: &RigSession,
+    args: &Args,
+    path: &Path,
+    written: &mut Vec<PathBuf>,
+) -> anyhow::Result<()> {
+    let Some(frames) = args.turntable else {
+        maker.write(session, path)?;
+        written.push(path.to_path_buf());
+        return Ok(());
+    };
+    let mut images = Vec::with_capacity(frames as usize);
+    for k in 0..frames {
+        let yaw = std::f64::consts::TAU * k as f64 / frames as f64;
+        let camera = maker.camera(session, yaw);
+        let image = maker.picture(session, &camera)?;
+        let frame_path = with_suffix(path, &format!("_{k:03}"));
+        image.write_png(&frame_path)?;
+        written.push(frame_path);
+        images.push(image);
+    }
+    cagerig_render::image::write_apng(path, &images, 80)?;
+    written.push(path.to_path_buf());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_layers_and_suffixes_parse() {
+        assert_eq!(parse_size("640x480").unwrap(), (640, 480));
+        assert!(parse_size("0x480").is_err());
+        assert!(
+            parse_size("640")
+                .unwrap_err()
+                .to_string()
+                .contains("WIDTHxHEIGHT")
+        );
+        let layers = parse_layers("wireframe,skeleton").unwrap();
+        assert!(layers.mesh && layers.wireframe && layers.skeleton && !layers.cage);
+        assert!(
+            parse_layers("mesh,bogus")
+                .unwrap_err()
+                .to_string()
+                .contains("bogus")
+        );
+        assert!(parse_layers("ground").is_err());
+        assert_eq!(
+            with_suffix(Path::new("a/b.png"), "_t1.5"),
+            Path::new("a/b_t1.5.png")
+        );
+        assert!(parse_point("--eye", "1,2").is_err());
+        assert_eq!(
+            parse_point("--eye", "1,-2,3").unwrap(),
+            DVec3::new(1.0, -2.0, 3.0)
+        );
+    }
+}

@@ -1,0 +1,123 @@
+//! The session options every rig-building subcommand shares (`--fit-rows`, `--skinning`, …),
+//! and starting a session from a loaded rig.
+
+use anyhow::Context;
+use cagerig::Warning;
+use cagerig::cage_coords::CoordsPrecision;
+use cagerig::session::{CageFitSource, FitRows, GivenCageCoords, RigSession, SessionOptions};
+use cagerig::skinning::SkinningMethod;
+use cagerig::sync::skeleton_updater::JointLocalisation;
+use clap::{Args, ValueEnum};
+
+use crate::rig_source::LoadedRig;
+
+/// The `--skinning` value parser: the names of [`SkinningMethod::ALL`] (listed in `--help`), read
+/// through `SkinningMethod: FromStr`, the one parser of method names.
+pub fn skinning_parser() -> impl clap::builder::TypedValueParser<Value = SkinningMethod> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(SkinningMethod::ALL.map(SkinningMethod::name))
+        .try_map(|name| name.parse::<SkinningMethod>())
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, Default)]
+pub enum FitRowsArg {
+    /// MaxVol rows (shipped `.maxvol` if found, else computed): exact square system.
+    #[default]
+    Maxvol,
+    /// All mesh rows, least squares.
+    All,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, Default)]
+pub enum LocalisationArg {
+    /// cagerig's articulation-localised prior (default).
+    #[default]
+    Articulation,
+    /// The paper tool's localisation (s = 0.05, ε = 0.01, signed masses).
+    ReferenceTool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, Default)]
+pub enum FitSourceArg {
+    /// LBS ghost of the fitted rows drives CageUp (exact loop for DQS/CoR).
+    #[default]
+    Ghost,
+    /// CageUp fits the displayed DQS/CoR mesh (approximate reverse deformer).
+    Displayed,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, Default)]
+pub enum PrecisionArg {
+    /// Φ as computed (exact; matches the paper tool's outputs to 1e-9).
+    #[default]
+    F64,
+    /// Φ rounded to f32 once: half the memory traffic per frame, invariants still exact for the
+    /// rounded Φ, rest mesh moved by ~1e-7 of its size.
+    F32,
+}
+
+/// Session options shared by `edit` and `animate`.
+#[derive(Debug, Clone, Args)]
+pub struct SessionArgs {
+    /// Mesh rows used by CageUp/CageRev.
+    #[arg(long, value_enum, default_value_t)]
+    pub fit_rows: FitRowsArg,
+    /// Joint localisation of the skeleton updater.
+    #[arg(long, value_enum, default_value_t)]
+    pub localisation: LocalisationArg,
+    /// What CageUp fits with DQS/CoR.
+    #[arg(long, value_enum, default_value_t)]
+    pub fit_source: FitSourceArg,
+    /// Precision of the cage coordinates Φ in the per-frame products M = ΦC.
+    #[arg(long, value_enum, default_value_t)]
+    pub coords_precision: PrecisionArg,
+    /// Keep a cage-weights file's Φ even when it does not reproduce the mesh (M ≠ ΦC, e.g. the
+    /// tool's 6 decimals): to compare with the tool. By default such a Φ is recomputed, so that
+    /// the first cage edit moves only what it touches.
+    #[arg(long)]
+    pub keep_file_coords: bool,
+}
+
+impl SessionArgs {
+    pub fn options(&self) -> SessionOptions {
+        SessionOptions {
+            localisation: match self.localisation {
+                LocalisationArg::Articulation => JointLocalisation::default(),
+                LocalisationArg::ReferenceTool => JointLocalisation::reference_tool(),
+            },
+            fit_rows: match self.fit_rows {
+                FitRowsArg::Maxvol => FitRows::MaxVol,
+                FitRowsArg::All => FitRows::AllRows,
+            },
+            fit_source: match self.fit_source {
+                FitSourceArg::Ghost => CageFitSource::GhostLbs,
+                FitSourceArg::Displayed => CageFitSource::DisplayedMesh,
+            },
+            cage_coords_precision: match self.coords_precision {
+                PrecisionArg::F64 => CoordsPrecision::F64,
+                PrecisionArg::F32 => CoordsPrecision::F32,
+            },
+            given_cage_coords: if self.keep_file_coords {
+                GivenCageCoords::Keep
+            } else {
+                GivenCageCoords::RecomputeIfInexact
+            },
+            ..SessionOptions::default()
+        }
+    }
+}
+
+pub fn start_session(
+    loaded: LoadedRig,
+    options: SessionOptions,
+) -> anyhow::Result<(RigSession, Vec<Warning>)> {
+    let options = SessionOptions {
+        allow_mesh_outside_cage: loaded.allow_outside_cage,
+        ..options
+    };
+    let (session, mut warnings) =
+        RigSession::new(loaded.parts, options).context("assembling the rig")?;
+    let mut all = loaded.warnings;
+    all.append(&mut warnings);
+    Ok((session, all))
+}

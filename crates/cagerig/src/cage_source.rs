@@ -1,0 +1,187 @@
+//! Where a character's cage C comes from: the one rule every front end (CLI, Python, studio)
+//! applies when it opens a character.
+//!
+//! The rule, in order: the cage OBJ the user gave; else the cage found with the character (a cage
+//! node in a glTF/FBX file, or `<stem>_cage.obj` beside an OBJ); else a generated one
+//! ([`crate::cage_gen::generate_cage`]) when the user asked for one; else an error that the front
+//! end words in its own terms (an option name, a keyword, a checkbox).
+
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+use crate::cage_gen::{CageGenError, CageOptions, CageTarget, GeneratedCage, generate_cage};
+use crate::error::Warning;
+use crate::io::ParseError;
+use crate::mesh::TriMesh;
+
+/// What the user asked for about the cage.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct CageRequest<'a> {
+    /// A cage OBJ given explicitly (`--cage`, `cage=`, the Open dialog).
+    pub given: Option<&'a Path>,
+    /// Generate a cage with these options when none is given or found (`--auto-cage`).
+    pub generate: Option<CageOptions>,
+}
+
+/// Where the chosen cage came from.
+#[derive(Debug, Clone)]
+pub enum CageOrigin {
+    /// The OBJ the user gave.
+    Given(PathBuf),
+    /// The cage that came with the character.
+    Found,
+    /// Generated, with the generator's report.
+    Generated(Box<GeneratedCage>),
+}
+
+/// The cage of a character and where it came from.
+#[derive(Debug, Clone)]
+pub struct ChosenCage {
+    /// The rest cage C (`#C` vertices, closed triangle mesh), in the character's space.
+    pub cage: TriMesh,
+    /// Where it came from.
+    pub origin: CageOrigin,
+}
+
+/// Why no cage could be chosen.
+#[derive(Debug, Error)]
+pub enum CageSourceError {
+    /// The given cage OBJ could not be read.
+    #[error(transparent)]
+    Read(#[from] ParseError),
+    /// No cage was given or found, and generating one was asked for but failed.
+    #[error("{}: no cage in the file, and none could be generated: {source}", character.display())]
+    Generate {
+        /// The character file.
+        character: PathBuf,
+        /// Why generation failed.
+        source: CageGenError,
+    },
+    /// No cage was given or found, and none was to be generated.
+    #[error("{}: no cage was given or found with the character", character.display())]
+    Missing {
+        /// The character file.
+        character: PathBuf,
+    },
+}
+
+/// Applies the cage-source rule (see the module doc) to `character` (the file, for messages),
+/// its skin `mesh` M (`#V`, for generation) and the cage `found` with it.
+pub fn choose_cage(
+    character: &Path,
+    mesh: &TriMesh,
+    found: Option<TriMesh>,
+    request: &CageRequest<'_>,
+) -> Result<ChosenCage, CageSourceError> {
+    if let Some(path) = request.given {
+        return Ok(ChosenCage {
+            cage: crate::io::obj::read_obj(path)?,
+            origin: CageOrigin::Given(path.to_path_buf()),
+        });
+    }
+    if let Some(cage) = found {
+        return Ok(ChosenCage {
+            cage,
+            origin: CageOrigin::Found,
+        });
+    }
+    match &request.generate {
+        Some(options) => {
+            let generated =
+                generate_cage(mesh, options).map_err(|source| CageSourceError::Generate {
+                    character: character.to_path_buf(),
+                    source,
+                })?;
+            Ok(ChosenCage {
+                cage: generated.cage.clone(),
+                origin: CageOrigin::Generated(Box::new(generated)),
+            })
+        }
+        None => Err(CageSourceError::Missing {
+            character: character.to_path_buf(),
+        }),
+    }
+}
+
+/// Default [`CageOptions`] aiming at `vertices` cage vertices (the front ends' `--auto-cage N`).
+pub fn cage_options_with_vertices(vertices: usize) -> CageOptions {
+    CageOptions {
+        target: CageTarget::Vertices(vertices),
+        ..CageOptions::default()
+    }
+}
+
+/// The note that tells the user a cage was generated, with its size and least distance to M.
+pub fn generated_cage_note(generated: &GeneratedCage) -> Warning {
+    Warning::Note {
+        message: format!(
+            "no cage was found: generated one with {} vertices (least distance to the mesh {:.2} % \
+             of its diagonal)",
+            generated.cage.num_vertices(),
+            100.0 * generated.report.min_distance_fraction
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    fn octahedron(scale: f64) -> TriMesh {
+        let p = [
+            DVec3::X,
+            -DVec3::X,
+            DVec3::Y,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ]
+        .map(|v| v * scale)
+        .to_vec();
+        let t = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        TriMesh::new(p, t).unwrap()
+    }
+
+    #[test]
+    fn the_found_cage_wins_over_generation_and_nothing_is_an_error() {
+        let mesh = octahedron(1.0);
+        let found = octahedron(2.0);
+        let request = CageRequest {
+            given: None,
+            generate: Some(cage_options_with_vertices(50)),
+        };
+        let chosen = choose_cage(Path::new("x.glb"), &mesh, Some(found.clone()), &request).unwrap();
+        assert!(matches!(chosen.origin, CageOrigin::Found));
+        assert_eq!(chosen.cage.positions, found.positions);
+        let err =
+            choose_cage(Path::new("x.glb"), &mesh, None, &CageRequest::default()).unwrap_err();
+        assert!(matches!(err, CageSourceError::Missing { .. }), "{err}");
+        assert_eq!(
+            err.to_string(),
+            "x.glb: no cage was given or found with the character"
+        );
+    }
+
+    #[test]
+    fn a_given_cage_that_cannot_be_read_names_its_file() {
+        let mesh = octahedron(1.0);
+        let request = CageRequest {
+            given: Some(Path::new("/nonexistent/cage.obj")),
+            generate: None,
+        };
+        let err =
+            choose_cage(Path::new("x.glb"), &mesh, Some(octahedron(2.0)), &request).unwrap_err();
+        assert!(err.to_string().contains("/nonexistent/cage.obj"), "{err}");
+    }
+}

@@ -1,0 +1,140 @@
+//! The skinning method S→S'→M' as a value: its names, and the one parser of them.
+//!
+//! Every front end (CLI options, edit scripts, Python keywords, the studio) names a method through
+//! [`SkinningMethod::name`] and reads one through [`std::str::FromStr`]; adding a method means a
+//! new variant here and the kernels in [`crate::session`]'s skinning dispatch, and nothing else
+//! (the compiler points at every exhaustive `match`).
+
+use std::fmt;
+use std::str::FromStr;
+
+/// The skinning method S→S'→M' of a session.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub enum SkinningMethod {
+    /// Linear blend skinning (Eq. 2–3).
+    #[default]
+    Lbs,
+    /// Dual quaternion skinning (Eq. 4).
+    Dqs,
+    /// Optimised centres of rotation (Eq. 5–6).
+    Cor,
+}
+
+/// A method name that [`SkinningMethod::from_str`] does not know.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown skinning method {found:?}: expected {}",
+    SkinningMethod::names_text()
+)]
+pub struct UnknownSkinningMethod {
+    /// The name as given.
+    pub found: String,
+}
+
+impl SkinningMethod {
+    /// Every method, in the order front ends list them.
+    pub const ALL: [SkinningMethod; 3] = [Self::Lbs, Self::Dqs, Self::Cor];
+
+    /// The name in scripts, options and files: `"lbs"`, `"dqs"` or `"cor"`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Lbs => "lbs",
+            Self::Dqs => "dqs",
+            Self::Cor => "cor",
+        }
+    }
+
+    /// Whether M' is linear in the skinning transforms (LBS): CageUp then fits the skinned rows
+    /// directly; the other methods fit their ghost LBS (see `CageFitSource`).
+    pub const fn is_linear(self) -> bool {
+        match self {
+            Self::Lbs => true,
+            Self::Dqs | Self::Cor => false,
+        }
+    }
+
+    /// The name for people (menus, status lines): `"LBS"`, `"DQS"` or `"CoR"`.
+    pub const fn label(self) -> &'static str {
+        match self {
+            Self::Lbs => "LBS",
+            Self::Dqs => "DQS",
+            Self::Cor => "CoR",
+        }
+    }
+
+    /// The accepted names as a sentence: `"lbs, dqs or cor"`.
+    pub fn names_text() -> String {
+        let names: Vec<&str> = Self::ALL.iter().map(|m| m.name()).collect();
+        match names.split_last() {
+            Some((last, [])) => (*last).to_string(),
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
+        }
+    }
+}
+
+impl FromStr for SkinningMethod {
+    type Err = UnknownSkinningMethod;
+
+    /// The method of [`SkinningMethod::name`], ignoring ASCII case (`"CoR"` is CoR).
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(text))
+            .ok_or_else(|| UnknownSkinningMethod {
+                found: text.to_string(),
+            })
+    }
+}
+
+impl fmt::Display for SkinningMethod {
+    /// Writes [`SkinningMethod::name`].
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl serde::Serialize for SkinningMethod {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for SkinningMethod {
+    /// Reads a name through [`FromStr`], the one parser of method names.
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(deserializer)?;
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_name_parses_back_to_its_method() {
+        for m in SkinningMethod::ALL {
+            assert_eq!(m.name().parse::<SkinningMethod>(), Ok(m));
+            assert_eq!(m.label().parse::<SkinningMethod>(), Ok(m));
+            assert_eq!(m.to_string(), m.name());
+            let json = serde_json::to_string(&m).unwrap();
+            assert_eq!(json, format!("\"{}\"", m.name()));
+            assert_eq!(serde_json::from_str::<SkinningMethod>(&json).unwrap(), m);
+        }
+    }
+
+    #[test]
+    fn unknown_names_list_the_accepted_ones() {
+        let err = "quaternions".parse::<SkinningMethod>().unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "unknown skinning method \"quaternions\": expected lbs, dqs or cor"
+        );
+        let err = serde_json::from_str::<SkinningMethod>("\"lbx\"").unwrap_err();
+        assert!(
+            err.to_string().contains("expected lbs, dqs or cor"),
+            "{err}"
+        );
+    }
+}
