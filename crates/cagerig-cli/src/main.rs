@@ -90,7 +90,20 @@ impl Command {
     }
 }
 
+/// A closed pipe on stdout (`cagerig bench | head`) ends the process quietly, as for other
+/// command-line tools, instead of a panic in `println!` (Rust ignores SIGPIPE by default).
+#[cfg(unix)]
+fn quiet_on_closed_pipe() {
+    // SAFETY: `signal` has no memory-safety preconditions; it runs first in `main`, before any
+    // thread exists, and SIG_DFL installs no handler code.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> std::process::ExitCode {
+    #[cfg(unix)]
+    quiet_on_closed_pipe();
     let cli = Cli::parse();
     let json = cli.command.json();
     errors::exit(cli.command.run(), json)

@@ -12,14 +12,20 @@ use cagerig::{CageCoords, Warning};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// Rig selection shared by the subcommands.
+/// Rig selection shared by the subcommands: a MESH file or `--builtin NAME`, exactly one.
 #[derive(Debug, Clone, Args)]
+#[group(skip)]
+#[command(group(
+    clap::ArgGroup::new("rig_source")
+        .required(true)
+        .multiple(false)
+        .args(["mesh", "builtin"])
+))]
 pub struct RigArgs {
     /// Character mesh (OBJ), or a skinned character in glTF 2.0 (`.glb`/`.gltf`) or FBX (`.fbx`).
     /// OBJ companions are discovered beside it: `<stem>.skt`, `<stem>.skw`,
     /// `<stem>_corWeights.txt`, `<stem>_cage.obj`; beside the cage `<cage>_cageWeights.txt`,
     /// `<cage>.maxvol` (or `<stem>_maxvol.txt`).
-    #[arg(required_unless_present = "builtin")]
     pub mesh: Option<PathBuf>,
     /// Cage (OBJ); default `<stem>_cage.obj` beside the mesh (glTF/FBX: a cage node in the file).
     #[arg(long)]
@@ -28,7 +34,7 @@ pub struct RigArgs {
     #[arg(long)]
     pub skin: Option<String>,
     /// Use a built-in demo rig instead of files (bar, bar_irregular, snake).
-    #[arg(long, conflicts_with = "mesh")]
+    #[arg(long)]
     pub builtin: Option<String>,
     /// Mesh resolution parameter of the built-in rig (bar: ring intervals, default 40; snake:
     /// about the vertex count, default 8192).
@@ -40,7 +46,7 @@ pub struct RigArgs {
     pub allow_outside_cage: bool,
 }
 
-/// `--auto-cage` (for `edit` and `animate`): what to do when the rig has no cage.
+/// `--auto-cage` (every command that builds a rig): what to do when the rig has no cage.
 #[derive(Debug, Clone, Args)]
 pub struct AutoCageArgs {
     /// When the rig has no cage (no `<stem>_cage.obj`, no --cage, no cage node in a glTF/FBX
@@ -89,6 +95,18 @@ pub fn report_generated_cage(rig: &str, g: &GeneratedCage, written_to: &Path) {
         g.stats.seconds,
         written_to.display()
     );
+}
+
+/// Says on stderr that the rig's cage was generated (commands whose output has no place for
+/// the cage file: `render`, `export`).
+pub fn note_generated_cage(loaded: &LoadedRig) {
+    if let Some(g) = &loaded.generated_cage {
+        eprintln!(
+            "note: {}: {}",
+            loaded.name,
+            cagerig::cage_source::generated_cage_note(g)
+        );
+    }
 }
 
 /// Writes a generated cage into a staged output folder as [`GENERATED_CAGE_FILE`].
@@ -140,6 +158,16 @@ pub fn load_rig_or_generate_cage(
 ) -> anyhow::Result<LoadedRig> {
     let mut loaded = match (&args.builtin, &args.mesh) {
         (Some(name), _) => {
+            let (vertices, cage_vertices) =
+                cagerig::memory_estimate::builtin_size(name, args.resolution);
+            cagerig::memory_estimate::check_fits(
+                &format!(
+                    "--builtin {name} --resolution {}",
+                    args.resolution.unwrap_or_default()
+                ),
+                vertices,
+                cage_vertices,
+            )?;
             let rig = cagerig::demo::builtin(name, args.resolution)
                 .with_context(|| format!("building the built-in rig {name:?}"))?;
             LoadedRig {

@@ -3,6 +3,8 @@
 //! glTF character in data/ gets a validated cage with the default options; `edit` and
 //! `animate` generate a cage with `--auto-cage` when the rig has none, and say so.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

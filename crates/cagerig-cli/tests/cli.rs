@@ -1,6 +1,8 @@
 //! End-to-end tests of the `cagerig` binary: outputs reload bit-exactly, bad scripts fail with a
 //! clear error naming the step and write nothing.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

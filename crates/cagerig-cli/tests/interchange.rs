@@ -1,5 +1,7 @@
 //! The CLI on glTF/FBX characters: info, edit, animate --animation, export, and clear errors.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -5,6 +5,8 @@
 //! error must be one `error:` line, and a success must have written complete, finite output;
 //! a failure must have written nothing. Deterministic (fixed seed), a few hundred runs.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -4,6 +4,8 @@
 //! The picture tests need a Vulkan or GL adapter (software ones are fine); set
 //! `CAGERIG_SKIP_GPU_TESTS=1` to skip them on a machine without one.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

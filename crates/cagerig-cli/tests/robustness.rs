@@ -2,6 +2,8 @@
 //! line or element, expected, found), never exit 0 with a non-finite number, stale or partial
 //! output.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -478,4 +480,39 @@ fn readme_example_runs_on_the_arm_and_the_bar_and_help_lists_operations() {
         assert!(help.contains(op), "{op} missing from edit --help");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Regression: `cagerig … | head` panicked with "failed printing to stdout: Broken pipe".
+#[test]
+fn a_closed_stdout_pipe_ends_quietly() {
+    for _ in 0..3 {
+        let mut child = cagerig()
+            .args(["info", "--builtin", "bar"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // the reader goes away before anything is printed
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !err.contains("panicked") && !err.contains("Broken pipe"),
+            "{err}"
+        );
+        assert_ne!(o.status.code(), Some(101), "{err}");
+    }
+}
+
+/// The usage line says a rig source is required: MESH or --builtin, not an optional MESH.
+#[test]
+fn usage_names_mesh_or_builtin_as_required() {
+    let o = cagerig().args(["info"]).output().unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("<MESH|--builtin <BUILTIN>>"), "{err}");
+    let both = cagerig()
+        .args(["info", "x.obj", "--builtin", "bar"])
+        .output()
+        .unwrap();
+    assert!(!both.status.success());
 }

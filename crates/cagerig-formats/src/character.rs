@@ -37,7 +37,9 @@ pub struct ImportedCharacter {
     /// pose; an exported cagerig pose otherwise). Play it as a one-key track with
     /// [`cagerig::playback::PoseChannels::Full`].
     pub node_pose: Vec<glam::DAffine3>,
+    /// What `cagerig info` lists about the file.
     pub summary: ImportSummary,
+    /// Validation and import warnings (weights renormalised, parts not imported, …).
     pub warnings: Vec<Warning>,
 }
 
@@ -55,6 +57,7 @@ pub struct MorphTargets {
 /// One animation of the file as a skeleton track.
 #[derive(Debug, Clone)]
 pub struct ImportedAnimation {
+    /// Name in the file (glTF: `animation<index>` when unnamed).
     pub name: String,
     /// Last key time in seconds.
     pub duration: f64,
@@ -75,18 +78,25 @@ pub struct ImportedAnimation {
 pub struct ImportSummary {
     /// "glTF" or "FBX".
     pub format: String,
+    /// Vertices `#V` of the rest skin M.
     pub vertices: usize,
+    /// Triangles of M.
     pub triangles: usize,
+    /// The skinned primitives merged into M, in vertex order.
     pub primitives: Vec<PrimitiveSummary>,
+    /// Joints `#J` of the imported skeleton S.
     pub joints: usize,
+    /// Every skin in the file.
     pub skins: Vec<SkinSummary>,
     /// Index into `skins` of the skin that was imported.
     pub chosen_skin: usize,
+    /// Largest number of non-zero weights of a vertex (row of Ω).
     pub max_influences: usize,
     /// `influences_histogram[k]` = number of vertices with k non-zero weights.
     pub influences_histogram: Vec<usize>,
     /// Weight rows that did not sum to 1 and were renormalised.
     pub renormalised_rows: usize,
+    /// The imported animations, in order.
     pub animations: Vec<AnimationSummary>,
     /// Whether a cage was found inside the file.
     pub cage_in_file: bool,
@@ -100,7 +110,9 @@ pub struct ImportSummary {
 pub struct SpaceSummary {
     /// The file's right, up and front axes (`+X`, `-Z`, …).
     pub file_right: String,
+    /// The file's up axis.
     pub file_up: String,
+    /// The file's front axis.
     pub file_front: String,
     /// Metres per unit of the file.
     pub file_unit_meters: f64,
@@ -160,30 +172,44 @@ impl SpaceSummary {
     }
 }
 
+/// One skinned primitive (glTF) or mesh node (FBX) merged into M.
 #[derive(Debug, Clone, Serialize)]
 pub struct PrimitiveSummary {
     /// Where it comes from, e.g. `node 1 "fox", mesh 0 primitive 0`.
     pub source: String,
     /// First vertex of this primitive in M.
     pub first_vertex: usize,
+    /// Number of its vertices.
     pub vertices: usize,
+    /// Number of its triangles.
     pub triangles: usize,
+    /// Whether its triangles come from an index buffer (always true for FBX).
     pub indexed: bool,
 }
 
+/// One skin of the file.
 #[derive(Debug, Clone, Serialize)]
 pub struct SkinSummary {
+    /// Its index in the file.
     pub index: usize,
+    /// Its name, if it has one.
     pub name: Option<String>,
+    /// Number of its joints.
     pub joints: usize,
 }
 
+/// One imported animation.
 #[derive(Debug, Clone, Serialize)]
 pub struct AnimationSummary {
+    /// Its index in [`ImportedCharacter::animations`].
     pub index: usize,
+    /// Its name.
     pub name: String,
+    /// Last key time in seconds.
     pub duration: f64,
+    /// Number of keyframes of its track.
     pub keys: usize,
+    /// Whether the track reproduces the file exactly (see [`ImportedAnimation::exact`]).
     pub exact: bool,
     /// Whether the animation animates morph weights (played as a cage track).
     pub morph_weights: bool,

@@ -6,27 +6,54 @@ use std::path::PathBuf;
 use cagerig::RigError;
 use thiserror::Error;
 
+/// An interchange file (glTF, FBX) could not be read or written as a rig.
 #[derive(Debug, Error)]
 pub enum FormatError {
+    /// The file could not be opened, read or written, or its extension is not supported.
     #[error("{path}: {message}", path = path.display())]
-    Io { path: PathBuf, message: String },
-    #[error("{path}: not a valid glTF 2.0 file: {message}", path = path.display())]
-    Gltf { path: PathBuf, message: String },
-    #[error("{path}: {element}: {message}", path = path.display())]
-    Invalid {
+    Io {
+        /// The file.
         path: PathBuf,
-        element: String,
+        /// What failed.
         message: String,
     },
+    /// The file is not valid glTF 2.0.
+    #[error("{path}: not a valid glTF 2.0 file: {message}", path = path.display())]
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// The glTF parser's message.
+        message: String,
+    },
+    /// An element of the file is inconsistent or cannot be imported.
+    #[error("{path}: {element}: {message}", path = path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// The element (e.g. `node 3`, `skins`, an accessor).
+        element: String,
+        /// What was expected and what was found.
+        message: String,
+    },
+    /// Data read from the file failed rig validation.
     #[error("{path}: {element}: {source}", path = path.display())]
     Rig {
+        /// The file.
         path: PathBuf,
+        /// The element the data came from (e.g. "skeleton", "skinned mesh").
         element: String,
+        /// The validation error.
         #[source]
         source: RigError,
     },
+    /// The FBX reader rejected the file.
     #[error("{path}: FBX: {message}", path = path.display())]
-    Fbx { path: PathBuf, message: String },
+    Fbx {
+        /// The file.
+        path: PathBuf,
+        /// The FBX reader's error type and description.
+        message: String,
+    },
 }
 
 /// Shorthand for [`FormatError::Invalid`].

@@ -50,11 +50,20 @@ fn fbx_error(path: &Path, e: &ufbx::Error) -> FormatError {
 
 /// Reads an FBX file (binary or ASCII).
 pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharacter, FormatError> {
-    let _ = options;
     let bytes = std::fs::read(path).map_err(|e| FormatError::Io {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
+    import_fbx_bytes(&bytes, path, options)
+}
+
+/// [`import_fbx`] on the bytes of a file (`path` names it in messages; nothing else is read).
+pub fn import_fbx_bytes(
+    bytes: &[u8],
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<ImportedCharacter, FormatError> {
+    let _ = options;
     let opts = ufbx::LoadOpts {
         load_external_files: false,
         target_axes: ufbx::CoordinateAxes::right_handed_y_up(),
@@ -62,7 +71,7 @@ pub fn import_fbx(path: &Path, options: &ImportOptions) -> Result<ImportedCharac
         space_conversion: ufbx::SpaceConversion::TransformRoot,
         ..Default::default()
     };
-    let scene = ufbx::load_memory(&bytes, opts).map_err(|e| fbx_error(path, &e))?;
+    let scene = ufbx::load_memory(bytes, opts).map_err(|e| fbx_error(path, &e))?;
     let mut warnings = Vec::new();
     let space = space_summary(&scene);
 

@@ -3,6 +3,8 @@
 //! tracks — in the file's world space (see [`character`] for spaces and vertex order). The
 //! numerical core (`cagerig`) depends on none of this.
 
+#![warn(missing_docs)]
+
 pub mod character;
 pub mod error;
 pub mod fbx;

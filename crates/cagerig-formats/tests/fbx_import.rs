@@ -1,6 +1,8 @@
 //! FBX import against the reference meshes of ufbx's own test suite (Blender 2.79 sausage: the
 //! skin at given takes and times).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 mod common;
 
 use cagerig::playback::{AnimationPlayer, PoseChannels};

@@ -2,6 +2,8 @@
 //! reimport round trip: the reimported rest mesh, rest joints and the pose stored in the nodes
 //! give cagerig's own M and M' to ≤ 1e-5 of the bounding-box diagonal (the file is f32).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 mod common;
 
 use std::path::{Path, PathBuf};
@@ -122,11 +124,28 @@ fn text_gltf_export_writes_json_and_bin_that_validate_and_round_trip() {
         .unwrap();
     let path = temp_file("bar_text.gltf");
     cagerig_formats::gltf::export::export_glb(&s, &path, "bar").unwrap();
-    let bin = path.with_file_name("bar_text.bin");
-    assert!(bin.is_file());
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    assert_eq!(json["buffers"][0]["uri"], "bar_text.bin");
+    let uri = json["buffers"][0]["uri"].as_str().unwrap().to_owned();
+    assert!(
+        uri.starts_with("bar_text-") && uri.ends_with(".bin") && uri.len() == 29,
+        "{uri}"
+    );
+    let bin = path.with_file_name(&uri);
+    assert!(bin.is_file());
+    // Exporting a changed state replaces the buffer file: the earlier one is removed, and the
+    // .gltf refers to the new one.
+    let rig = cagerig::demo::builtin("bar", None).unwrap();
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+    let mut changed = RigSession::new(parts, SessionOptions::default()).unwrap().0;
+    changed.rotate_joint(1, DVec3::Z, 0.1).unwrap();
+    cagerig_formats::gltf::export::export_glb(&changed, &path, "bar").unwrap();
+    let again: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let new_uri = again["buffers"][0]["uri"].as_str().unwrap().to_owned();
+    assert_ne!(new_uri, uri);
+    assert!(!bin.exists() && path.with_file_name(&new_uri).is_file());
+    cagerig_formats::gltf::export::export_glb(&s, &path, "bar").unwrap();
     assert_eq!(
         json["buffers"][0]["byteLength"].as_u64().unwrap(),
         std::fs::metadata(&bin).unwrap().len()

@@ -9,6 +9,8 @@
 //! the rest bounding-box diagonal at the start. `RESAMPLING_BOUNDS` are the README's figures
 //! for the default 30 samples/s.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 mod common;
 
 use std::path::PathBuf;

@@ -3,6 +3,8 @@
 //! two skins. Posed meshes are compared with the independent evaluation of
 //! `common::ReferenceGltf` (the specification's interpolation, then LBS).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 mod common;
 
 use std::path::{Path, PathBuf};

@@ -1,6 +1,8 @@
 //! Malformed and hostile glTF files give clear errors naming the file and the element, never a
 //! panic nor a huge allocation.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 mod common;
 
 use std::path::{Path, PathBuf};

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use cagerig::coords::mvc as mvc_coords;
 use cagerig::coords::{maxvol, mec, mec_signed};
+use cagerig::cor_centres::{CorCentresOptions, compute_cor_centres};
 use cagerig::mesh::TriMesh;
-use cagerig::skinning::cor_centres::{CorCentresOptions, compute_cor_centres};
 use cagerig::skinning::{
     CorScratch, CorSkinning, DqsScratch, DualQuaternionSkinning, LinearBlendSkinning,
 };

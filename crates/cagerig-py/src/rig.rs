@@ -210,7 +210,7 @@ impl Rig {
                 .map_err(file_error)?;
             let mut warnings = files.warnings;
             if let Some(g) = &files.generated_cage {
-                warnings.push(crate::interchange::generated_note(g));
+                warnings.push(cagerig::cage_source::generated_cage_note(g));
             }
             (files.parts, warnings)
         };

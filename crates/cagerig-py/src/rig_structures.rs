@@ -8,7 +8,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyList;
 
 use crate::convert;
-use crate::options;
 use crate::rig::{Rig, rest_joints};
 
 #[pymethods]

@@ -10,7 +10,6 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::errors::{rig_error, script_error};
-use crate::options;
 use crate::rig::Rig;
 
 /// An edit script in the ``cagerig edit`` format::

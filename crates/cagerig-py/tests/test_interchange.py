@@ -1,5 +1,6 @@
 """glTF / FBX characters and automatic cages from Python."""
 
+import json
 import warnings
 from pathlib import Path
 
@@ -20,7 +21,10 @@ def test_fox_loads_from_gltf_with_its_cage_and_exports_back(tmp_path):
     rig.rotate_joint(3, [1.0, 0.0, 0.0], 20.0)
     for name in ("fox.glb", "fox.gltf"):
         rig.export_gltf(tmp_path / name)
-    assert (tmp_path / "fox.bin").is_file()
+    uri = json.loads((tmp_path / "fox.gltf").read_text())["buffers"][0]["uri"]
+    assert uri.startswith("fox-") and uri.endswith(".bin")
+    assert (tmp_path / uri).is_file()
+    assert len(list(tmp_path.glob("fox-*.bin"))) == 1
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", cagerig.RigWarning)
         back = cagerig.Rig.load(tmp_path / "fox.gltf", fox / "Fox_cage.obj")

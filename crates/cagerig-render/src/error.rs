@@ -13,16 +13,31 @@ pub enum RenderError {
     /// No adapter on any enabled backend.
     #[error("no graphics adapter found on backends {backends} ({reason}); {hint}")]
     NoAdapter {
+        /// The backends tried (e.g. `VULKAN | GL`).
         backends: String,
+        /// wgpu's reason.
         reason: String,
+        /// What to install ([`ADAPTER_HINT`]).
         hint: &'static str,
     },
     /// The adapter refused to create a device.
     #[error("the graphics adapter {adapter:?} could not create a device: {reason}")]
-    Device { adapter: String, reason: String },
+    Device {
+        /// Name and backend of the adapter.
+        adapter: String,
+        /// wgpu's reason.
+        reason: String,
+    },
     /// A requested image size is zero or beyond the adapter's texture limit.
     #[error("image size {width}×{height} is not supported: expected 1 … {max} pixels per side")]
-    ImageSize { width: u32, height: u32, max: u32 },
+    ImageSize {
+        /// Requested width in pixels.
+        width: u32,
+        /// Requested height in pixels.
+        height: u32,
+        /// The adapter's largest texture side in pixels.
+        max: u32,
+    },
     /// Geometry handed to the renderer is inconsistent (the message names the element).
     #[error("{0}")]
     Geometry(String),
@@ -34,5 +49,10 @@ pub enum RenderError {
     Readback(String),
     /// Writing an image file failed.
     #[error("writing {path}: {reason}")]
-    Write { path: PathBuf, reason: String },
+    Write {
+        /// The image file.
+        path: PathBuf,
+        /// Why it could not be written.
+        reason: String,
+    },
 }

@@ -5,7 +5,9 @@ use crate::error::{ADAPTER_HINT, RenderError};
 
 /// Device, queue and a description of the adapter they run on.
 pub struct GpuContext {
+    /// The logical device.
     pub device: wgpu::Device,
+    /// Its command queue.
     pub queue: wgpu::Queue,
     /// Adapter name and backend, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`.
     pub adapter_name: String,

@@ -6,11 +6,15 @@ use bytemuck::{Pod, Zeroable};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct FrameUniform {
+    /// Clip-from-world matrix (projection · view), column-major.
     pub clip_from_world: [[f32; 4]; 4],
+    /// Camera position (world, w = 1).
     pub eye: [f32; 4],
     /// Width, height, 1/width, 1/height (pixels).
     pub viewport: [f32; 4],
+    /// Unit direction towards the key light (world, w = 0).
     pub key_light: [f32; 4],
+    /// Unit direction towards the fill light (world, w = 0).
     pub fill_light: [f32; 4],
     /// Height (world y), half extent, grid cell size, shadow strength (0 = no ground).
     pub ground: [f32; 4],
@@ -34,8 +38,11 @@ pub struct MaterialUniform {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct MeshVertex {
+    /// Position (world).
     pub position: [f32; 3],
+    /// Unnormalised smooth normal (world; zero for flat shading).
     pub normal: [f32; 3],
+    /// sRGB colour and alpha, 8 bits each.
     pub color: [u8; 4],
 }
 
@@ -43,7 +50,9 @@ pub struct MeshVertex {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct LineInstance {
+    /// First end point (world).
     pub a: [f32; 3],
+    /// Second end point (world).
     pub b: [f32; 3],
     /// sRGB colour and alpha, 8 bits each.
     pub color: [u8; 4],
@@ -55,6 +64,7 @@ pub struct LineInstance {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PointInstance {
+    /// Centre of the disc (world).
     pub centre: [f32; 3],
     /// Radius in pixels, depth bias towards the eye (NDC).
     pub style: [f32; 2],

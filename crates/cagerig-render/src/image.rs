@@ -23,14 +23,17 @@ impl RgbaImage {
         }
     }
 
+    /// Width in pixels.
     pub fn width(&self) -> u32 {
         self.width
     }
 
+    /// Height in pixels.
     pub fn height(&self) -> u32 {
         self.height
     }
 
+    /// The RGBA bytes, rows top to bottom (`width × height × 4`).
     pub fn pixels(&self) -> &[u8] {
         &self.pixels
     }

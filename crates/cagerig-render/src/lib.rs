@@ -25,6 +25,8 @@
 //!
 //! Positions are converted to f32 for display only; the rig's exact state stays f64.
 
+#![warn(missing_docs)]
+
 pub mod annotate;
 pub mod camera;
 pub mod error;

@@ -10,9 +10,17 @@
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ColorMap {
     /// `value` in `[lo, hi]` → dark blue … yellow (values outside are clamped).
-    Sequential { lo: f64, hi: f64 },
+    Sequential {
+        /// Value mapped to the first colour.
+        lo: f64,
+        /// Value mapped to the last colour.
+        hi: f64,
+    },
     /// `value` in `[−limit, limit]` → blue … white (0) … red (clamped outside).
-    Diverging { limit: f64 },
+    Diverging {
+        /// Magnitude mapped to the end colours (0 is white).
+        limit: f64,
+    },
 }
 
 const SEQUENTIAL: [[f64; 3]; 6] = [

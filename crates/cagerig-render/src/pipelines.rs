@@ -29,15 +29,25 @@ enum Depth {
 
 /// Every pipeline, built once per device.
 pub struct Pipelines {
+    /// Bind group layout of the per-frame uniforms ([`crate::gpu_types::FrameUniform`]).
     pub frame_layout: wgpu::BindGroupLayout,
+    /// Bind group layout of a mesh material ([`crate::gpu_types::MaterialUniform`]).
     pub material_layout: wgpu::BindGroupLayout,
+    /// Background gradient (depth ignored).
     pub gradient: wgpu::RenderPipeline,
+    /// Ground grid with contact shadow (depth tested, blended).
     pub ground: wgpu::RenderPipeline,
+    /// Shaded opaque meshes (depth written).
     pub mesh_opaque: wgpu::RenderPipeline,
+    /// Shaded translucent meshes, e.g. cage faces (depth tested, blended).
     pub mesh_translucent: wgpu::RenderPipeline,
+    /// Thick lines hidden by surfaces (depth tested).
     pub lines_tested: wgpu::RenderPipeline,
+    /// Thick lines drawn over everything (depth ignored).
     pub lines_on_top: wgpu::RenderPipeline,
+    /// Discs hidden by surfaces (depth tested).
     pub points_tested: wgpu::RenderPipeline,
+    /// Discs drawn over everything (depth ignored).
     pub points_on_top: wgpu::RenderPipeline,
 }
 
@@ -123,6 +133,7 @@ fn pipeline(device: &wgpu::Device, spec: PipelineSpec<'_>) -> wgpu::RenderPipeli
 }
 
 impl Pipelines {
+    /// Compiles the shaders and builds every pipeline for `device`.
     pub fn new(device: &wgpu::Device) -> Self {
         let frame_layout = uniform_layout(device, "frame");
         let material_layout = uniform_layout(device, "material");

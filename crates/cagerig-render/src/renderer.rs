@@ -79,12 +79,14 @@ pub fn frame_uniform(
 }
 
 impl Renderer {
+    /// Builds the pipelines for `device`.
     pub fn new(device: &wgpu::Device) -> Self {
         Self {
             pipelines: Pipelines::new(device),
         }
     }
 
+    /// The pipelines (to create [`crate::scene_buffers::SceneBuffers`]).
     pub fn pipelines(&self) -> &Pipelines {
         &self.pipelines
     }

@@ -20,6 +20,7 @@ pub enum Pose {
 /// A per-vertex scalar shown as colours.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ColorBy {
+    /// No colour map.
     #[default]
     None,
     /// Skin weights Ω[:, j] of joint `j` on the skin (sequential map, [0, 1]).
@@ -34,11 +35,17 @@ pub enum ColorBy {
 /// Which layers to draw.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Layers {
+    /// The skin (M or M').
     pub mesh: bool,
+    /// Skin triangle edges over the surface.
     pub wireframe: bool,
+    /// The cage (C or C'): faces, edges and handles.
     pub cage: bool,
+    /// The skeleton (S or S'): bones and joints.
     pub skeleton: bool,
+    /// Faceted shading of the skin instead of smooth.
     pub flat: bool,
+    /// The ground grid with a contact shadow.
     pub ground: bool,
 }
 
@@ -68,10 +75,22 @@ pub struct RigSceneData {
 /// Why a colour map cannot be shown.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ColorByError {
+    /// The joint index is out of range.
     #[error("joint {index} does not exist: the rig has {count} joints")]
-    Joint { index: usize, count: usize },
+    Joint {
+        /// The joint index asked for.
+        index: usize,
+        /// Number of joints `#J`.
+        count: usize,
+    },
+    /// The cage vertex index is out of range.
     #[error("cage vertex {index} does not exist: the cage has {count} vertices")]
-    CageVertex { index: usize, count: usize },
+    CageVertex {
+        /// The cage vertex index asked for.
+        index: usize,
+        /// Number of cage vertices `#C`.
+        count: usize,
+    },
 }
 
 impl ColorBy {
@@ -115,6 +134,7 @@ impl ColorBy {
 }
 
 impl RigSceneData {
+    /// Empty scratch data.
     pub fn new() -> Self {
         Self::default()
     }

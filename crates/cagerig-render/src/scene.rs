@@ -7,11 +7,14 @@ use glam::{DVec3, Vec3};
 /// path (`cagerig::session::DisplayPrecision::F32`), uploaded without conversion.
 #[derive(Clone, Copy, Debug)]
 pub enum MeshPositions<'a> {
+    /// Exact f64 positions.
     F64(&'a [DVec3]),
+    /// f32 positions of a display path.
     F32(&'a [Vec3]),
 }
 
 impl MeshPositions<'_> {
+    /// Number of vertices `#V`.
     pub fn len(&self) -> usize {
         match self {
             Self::F64(p) => p.len(),
@@ -19,6 +22,7 @@ impl MeshPositions<'_> {
         }
     }
 
+    /// Whether there are no vertices.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -87,8 +91,11 @@ pub struct SkeletonLayer<'a> {
 /// One view's content.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Scene<'a> {
+    /// The skin, if drawn.
     pub mesh: Option<MeshLayer<'a>>,
+    /// The cage, if drawn.
     pub cage: Option<CageLayer<'a>>,
+    /// The skeleton, if drawn.
     pub skeleton: Option<SkeletonLayer<'a>>,
     /// Draw a ground grid with a contact shadow below the content.
     pub ground: bool,
@@ -156,17 +163,27 @@ pub fn merge_bounds((lo, hi): Bounds, (l, h): Bounds) -> Bounds {
 pub struct Style {
     /// Neutral clay material of the skin.
     pub mesh: [u8; 4],
+    /// Skin triangle edges.
     pub wireframe: [u8; 4],
+    /// Translucent cage faces.
     pub cage_faces: [u8; 4],
+    /// Cage edges.
     pub cage_edges: [u8; 4],
+    /// Cage vertex handles (when no per-handle colour is given).
     pub cage_handles: [u8; 4],
     /// Opacity (0–255) of cage edges and handles hidden behind the skin.
     pub hidden_alpha: u8,
+    /// Bones.
     pub bones: [u8; 4],
+    /// Joint discs (when no per-joint colour is given).
     pub joints: [u8; 4],
+    /// Width of cage edges, in pixels.
     pub line_width: f32,
+    /// Width of bones, in pixels.
     pub bone_width: f32,
+    /// Radius of cage handles, in pixels.
     pub handle_radius: f32,
+    /// Radius of joint discs, in pixels.
     pub joint_radius: f32,
     /// Multiplies every width and radius (e.g. 2 for a picture at twice the size).
     pub scale: f32,

@@ -298,6 +298,7 @@ fn check_scene(scene: &Scene<'_>, mesh_indices: bool) -> Result<(), RenderError>
 }
 
 impl SceneBuffers {
+    /// Empty buffers on `device` for scenes drawn with `pipelines`.
     pub fn new(device: &wgpu::Device, pipelines: &Pipelines) -> Self {
         let instances = |label| GrowBuffer::new(device, label, wgpu::BufferUsages::VERTEX);
         Self {

@@ -114,6 +114,7 @@ impl RenderTarget {
         })
     }
 
+    /// `(width, height)` in pixels.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
     }

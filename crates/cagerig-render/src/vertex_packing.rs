@@ -19,8 +19,11 @@ const GRAIN: usize = 16_384;
 /// the vertex normals of this frame (face normals already computed), or none for flat shading.
 #[derive(Clone, Copy)]
 pub struct VertexSource<'a> {
+    /// Vertex positions (world), `#V`.
     pub positions: MeshPositions<'a>,
+    /// Per-vertex sRGB colours (`#V`); `None` = white.
     pub colors: Option<&'a [[u8; 4]]>,
+    /// Vertex normals of this frame; `None` for flat shading.
     pub normals: Option<&'a VertexNormals>,
 }
 
@@ -30,6 +33,7 @@ impl VertexSource<'_> {
         self.positions.len()
     }
 
+    /// Whether there are no vertices.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

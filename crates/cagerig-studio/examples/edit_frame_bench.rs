@@ -6,6 +6,8 @@
 //!
 //! `cargo run --release -p cagerig-studio --example edit_frame_bench -- [RESOLUTION] [EVENTS]`
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::time::Instant;
 
 use cagerig_render::rig_scene::{ColorBy, Layers, Pose, RigSceneData};

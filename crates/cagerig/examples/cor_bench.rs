@@ -7,14 +7,16 @@
 //! ([`compute_cor_cage_coords`]); STEP (grid step, default 1/32 as in `CorGridOptions::default`), BINS (bin resolution, 128),
 //! INTERP (cubic | linear) for the grid; VSTEP, PSTEP, FLOOR, MASSTOL for the clustering.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::Path;
 use std::time::Instant;
 
 use cagerig::SkinWeights;
 use cagerig::coords::mvc::compute_cage_coords;
+use cagerig::cor_centres::weight_similarity;
 use cagerig::io::{read_obj, read_skt, read_skw};
 use cagerig::mesh::bounding_box;
-use cagerig::skinning::cor_centres::weight_similarity;
 use cagerig::skinning::{
     CorCentresMethod, CorCentresOptions, CorGridOptions, GridInterpolation,
     compute_cor_cage_coords, compute_cor_cage_coords_grid,

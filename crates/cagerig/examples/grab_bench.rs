@@ -4,6 +4,8 @@
 //! `cargo run --release -p cagerig --example grab_bench -- [N] [display]` (`display`: only the
 //! display path, e.g. under a profiler).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::Path;
 use std::time::Instant;
 

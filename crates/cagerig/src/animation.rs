@@ -16,43 +16,79 @@ pub const SINGULAR_DETERMINANT: f64 = 1e-12;
 /// A track whose keyframes are inconsistent.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum AnimationError {
+    /// The track has no keyframes.
     #[error("the track has no keyframes")]
     Empty,
+    /// The number of keyframe times and of keyframes differ.
     #[error("{times} keyframe times but {keyframes} keyframes")]
-    LengthMismatch { times: usize, keyframes: usize },
+    LengthMismatch {
+        /// Number of keyframe times.
+        times: usize,
+        /// Number of keyframes.
+        keyframes: usize,
+    },
+    /// A keyframe time is NaN or infinite.
     #[error("keyframe {keyframe} has time {time}: times must be finite")]
-    NonFiniteTime { keyframe: usize, time: f64 },
+    NonFiniteTime {
+        /// The 0-based keyframe index.
+        keyframe: usize,
+        /// Its time, in seconds.
+        time: f64,
+    },
+    /// A keyframe time is not strictly after the previous one.
     #[error(
         "keyframe {keyframe} has time {time}, not after the previous keyframe's {previous}: times must increase strictly"
     )]
     TimeNotIncreasing {
+        /// The 0-based keyframe index.
         keyframe: usize,
+        /// Its time, in seconds.
         time: f64,
+        /// The previous keyframe's time, in seconds.
         previous: f64,
     },
+    /// A keyframe has a different number of joints or cage vertices than the first.
     #[error("keyframe {keyframe} has {actual} {what} but the track has {expected}")]
     KeyframeSize {
+        /// The 0-based keyframe index.
         keyframe: usize,
+        /// What was counted ("joints" or "cage vertices").
         what: &'static str,
+        /// The count of the first keyframe (`#J` or `#C`).
         expected: usize,
+        /// The count of this keyframe.
         actual: usize,
     },
+    /// A joint transform or cage offset of a keyframe is NaN or infinite.
     #[error("keyframe {keyframe}: {what} {index} is not finite")]
     NonFinite {
+        /// The 0-based keyframe index.
         keyframe: usize,
+        /// What is not finite ("joint transform" or "cage vertex offset").
         what: &'static str,
+        /// The joint or cage vertex index.
         index: usize,
     },
+    /// A joint transform of a keyframe has |det| ≤ [`SINGULAR_DETERMINANT`] and cannot be
+    /// decomposed into scale, rotation and translation.
     #[error("keyframe {keyframe}: the transform of joint {joint} is singular")]
-    SingularTransform { keyframe: usize, joint: usize },
+    SingularTransform {
+        /// The 0-based keyframe index.
+        keyframe: usize,
+        /// The joint index.
+        joint: usize,
+    },
 }
 
 /// Where time `t` falls: blend `keys[lo]` and `keys[hi]` with weight `a` on `hi`
 /// (`lo == hi` means "copy that keyframe").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Bracket {
+    /// Index of the keyframe at or before `t`.
     pub lo: usize,
+    /// Index of the keyframe after `t` (equal to `lo` when copying one keyframe).
     pub hi: usize,
+    /// Blend weight of `keys[hi]`, in `[0, 1)`.
     pub a: f64,
 }
 
@@ -183,10 +219,12 @@ impl SkeletonTrack {
         &self.keys
     }
 
+    /// Number of keyframes (at least 1).
     pub fn num_keyframes(&self) -> usize {
         self.times.len()
     }
 
+    /// Number of joints `#J` in every keyframe.
     pub fn num_joints(&self) -> usize {
         self.keys[0].len()
     }
@@ -245,6 +283,7 @@ impl CageTrack {
         Ok(Self { times, offsets })
     }
 
+    /// Keyframe times in seconds (strictly ascending).
     pub fn times(&self) -> &[f64] {
         &self.times
     }
@@ -254,10 +293,12 @@ impl CageTrack {
         &self.offsets
     }
 
+    /// Number of keyframes (at least 1).
     pub fn num_keyframes(&self) -> usize {
         self.times.len()
     }
 
+    /// Number of cage vertices `#C` in every keyframe.
     pub fn num_cage_vertices(&self) -> usize {
         self.offsets[0].len()
     }

@@ -92,14 +92,17 @@ impl CageCoords {
         }))
     }
 
+    /// Number of mesh vertices `#V` (rows of Φ).
     pub fn num_vertices(&self) -> usize {
         self.matrix.nrows()
     }
 
+    /// Number of cage vertices `#C` (columns of Φ).
     pub fn num_cage_vertices(&self) -> usize {
         self.matrix.ncols()
     }
 
+    /// Φ as a dense `#V × #C` matrix.
     pub fn matrix(&self) -> &Mat<f64> {
         &self.matrix
     }

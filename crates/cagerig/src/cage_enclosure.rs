@@ -24,6 +24,7 @@ pub struct OutsideVertices {
     pub count: usize,
     /// The vertex farthest from the cage surface, and that distance (mesh units).
     pub worst_vertex: usize,
+    /// Distance of `worst_vertex` to the cage surface (mesh units).
     pub worst_distance: f64,
 }
 

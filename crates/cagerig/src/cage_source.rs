@@ -75,8 +75,22 @@ pub fn choose_cage(
     request: &CageRequest<'_>,
 ) -> Result<ChosenCage, CageSourceError> {
     if let Some(path) = request.given {
+        let cage = crate::io::obj::read_obj(path)?;
+        if cage.num_vertices() == 0 || cage.num_triangles() == 0 {
+            // Named here, before any file that belongs to the cage (Φ, MaxVol rows) is read
+            // against it and blamed instead.
+            return Err(CageSourceError::Read(ParseError::Rig {
+                path: path.to_path_buf(),
+                source: crate::error::RigError::Invalid(format!(
+                    "the cage is empty ({} vertices, {} triangles): expected a closed triangle \
+                     mesh around the character",
+                    cage.num_vertices(),
+                    cage.num_triangles()
+                )),
+            }));
+        }
         return Ok(ChosenCage {
-            cage: crate::io::obj::read_obj(path)?,
+            cage,
             origin: CageOrigin::Given(path.to_path_buf()),
         });
     }
@@ -88,8 +102,9 @@ pub fn choose_cage(
     }
     match &request.generate {
         Some(options) => {
+            let options = fit_cage_to_rig(options, mesh);
             let generated =
-                generate_cage(mesh, options).map_err(|source| CageSourceError::Generate {
+                generate_cage(mesh, &options).map_err(|source| CageSourceError::Generate {
                     character: character.to_path_buf(),
                     source,
                 })?;
@@ -101,6 +116,22 @@ pub fn choose_cage(
         None => Err(CageSourceError::Missing {
             character: character.to_path_buf(),
         }),
+    }
+}
+
+/// `options` with the target lowered to what a rig on `mesh` can use: CageUp and CageRev fit
+/// the cage on #C MaxVol rows of the mesh, so the cage needs fewer vertices than the mesh; a
+/// target above half the mesh's vertex count (at least [`crate::cage_gen::MIN_VERTICES`]) is
+/// lowered to it. So `--auto-cage` on a 24-vertex mesh gets a 12-vertex cage, where the default
+/// 100 could not be fitted.
+pub fn fit_cage_to_rig(options: &CageOptions, mesh: &TriMesh) -> CageOptions {
+    let limit = (mesh.num_vertices() / 2).max(crate::cage_gen::MIN_VERTICES);
+    if options.target.vertices() <= limit {
+        return *options;
+    }
+    CageOptions {
+        target: CageTarget::Vertices(limit),
+        ..*options
     }
 }
 
@@ -171,6 +202,27 @@ mod tests {
             err.to_string(),
             "x.glb: no cage was given or found with the character"
         );
+    }
+
+    /// Regression: an empty cage file was blamed on the cage-weights file read after it.
+    #[test]
+    fn an_empty_cage_file_is_named() {
+        let dir = std::env::temp_dir().join(format!("cagerig-empty-cage-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("empty_cage.obj");
+        std::fs::write(&path, "# nothing\n").unwrap();
+        let request = CageRequest {
+            given: Some(&path),
+            generate: None,
+        };
+        let err = choose_cage(Path::new("x.obj"), &octahedron(1.0), None, &request)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("empty_cage.obj") && err.contains("empty"),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

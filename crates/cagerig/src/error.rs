@@ -13,6 +13,42 @@ pub fn is_input_value(x: f64) -> bool {
     x.is_finite() && x.abs() <= MAX_INPUT_MAGNITUDE
 }
 
+/// `x` as a person reads it in a message: plain digits between 1e-4 and 1e15 in magnitude,
+/// scientific notation outside (`1e308`, not 309 digits), `NaN`/`inf` as such.
+pub fn number_text(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (x.is_finite() && (1e-4..1e15).contains(&a)) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// A vector as `[x, y, z]` with each component by [`number_text`].
+pub fn vector_text(v: glam::DVec3) -> String {
+    format!(
+        "[{}, {}, {}]",
+        number_text(v.x),
+        number_text(v.y),
+        number_text(v.z)
+    )
+}
+
+/// A serde error message in a script's terms: Rust type names (`usize`, `f64`, `u32`) become
+/// what the value means to a person.
+pub fn plain_serde_message(message: &str) -> String {
+    message
+        .replace("expected usize", "expected an index (a whole number ≥ 0)")
+        .replace("expected u32", "expected an index (a whole number ≥ 0)")
+        .replace("expected u64", "expected a whole number ≥ 0")
+        .replace("expected f64", "expected a number")
+        .replace("expected f32", "expected a number")
+        .replace(
+            "expected an array of length 3",
+            "expected three numbers [x, y, z]",
+        )
+}
+
 /// The first component of `v` that is not an input value ([`is_input_value`]).
 pub fn first_bad_component(v: glam::DVec3) -> Option<f64> {
     v.to_array().into_iter().find(|&x| !is_input_value(x))
@@ -26,15 +62,20 @@ pub fn first_bad_component(v: glam::DVec3) -> Option<f64> {
     phi_note(*.phi_gib)
 )]
 pub struct MemoryNeed {
+    /// What was requested (e.g. "CoR similarity tables"), shown first in the message.
     pub what: String,
     /// Rows of the request (`vertices` of the mesh, or of a table named by `rows`).
     pub vertices: u64,
     /// What the rows are: "vertices", or e.g. "grid nodes" for an intermediate table.
     pub rows: &'static str,
+    /// Cage vertices `#C` of the request (the columns of Φ or of the table).
     pub cage_vertices: u64,
+    /// Estimated memory the request needs, in GiB.
     pub needed_gib: f64,
     /// Φ's share of `needed_gib`, when the request is a whole session.
     pub phi_gib: Option<f64>,
+    /// Memory available now, in GiB; when unknown, the fixed limit (0 after a refused
+    /// allocation).
     pub limit_gib: f64,
     /// "are available" or "is the limit" (when the available memory is unknown).
     pub limit: &'static str,
@@ -49,98 +90,187 @@ fn phi_note(phi_gib: Option<f64>) -> String {
 /// A structural problem that makes a rig unusable. Every variant names the offending element.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum RigError {
+    /// Ω has more joint columns than a 16-bit joint index can address.
     #[error(
         "skinning weights for {joints} joints: at most {max} joints are supported (16-bit joint \
          indices, as in glTF)"
     )]
-    TooManyJoints { joints: usize, max: usize },
+    TooManyJoints {
+        /// Joints `#J` of the skinning weights.
+        joints: usize,
+        /// Largest number of joints supported.
+        max: usize,
+    },
+    /// The request would not fit in the memory of this machine.
     #[error("{0}")]
     TooLarge(Box<MemoryNeed>),
+    /// An index (vertex, joint, triangle corner…) points past the end of what it indexes.
     #[error("{what}: index {index} is out of range (there are {len})")]
     IndexOutOfRange {
+        /// What the index refers to (e.g. "triangle vertex", "skinning weight joint").
         what: &'static str,
+        /// The out-of-range index.
         index: usize,
+        /// Number of elements it may index (valid indices are `0..len`).
         len: usize,
     },
+    /// A position or transform has a NaN or infinite component.
     #[error("{what} {index} has a non-finite coordinate")]
-    NonFinite { what: &'static str, index: usize },
+    NonFinite {
+        /// What the element is (e.g. "vertex", "joint rest transform").
+        what: &'static str,
+        /// The index of the element.
+        index: usize,
+    },
+    /// A number is non-finite or exceeds [`MAX_INPUT_MAGNITUDE`] in magnitude.
     #[error(
         "{what} {index} has the value {value}: expected a finite number of magnitude at most 1e12"
     )]
     ValueOutOfBounds {
+        /// What the element is (e.g. "vertex", "joint position", "cage coordinate row").
         what: &'static str,
+        /// The index of the element.
         index: usize,
+        /// The offending value.
         value: f64,
     },
+    /// A joint names a parent index that is not a joint of the skeleton.
     #[error("joint {joint} ({name}) has unknown parent {parent}")]
     UnknownParent {
+        /// The joint index.
         joint: usize,
+        /// The joint name.
         name: String,
+        /// The parent index it names.
         parent: usize,
     },
+    /// The parent links of the skeleton form a cycle instead of a tree.
     #[error("joint {joint} ({name}) is its own ancestor: the hierarchy has a cycle")]
-    Cycle { joint: usize, name: String },
+    Cycle {
+        /// The index of a joint on the cycle.
+        joint: usize,
+        /// The joint name.
+        name: String,
+    },
+    /// Two joints share a name (names must be unique to be addressed).
     #[error("joints {first} and {second} share the name {name:?}")]
     DuplicateJointName {
+        /// The shared name.
         name: String,
+        /// The index of the first joint with that name.
         first: usize,
+        /// The index of the second joint with that name.
         second: usize,
     },
+    /// An Ω entry is non-finite, negative or larger than [`MAX_INPUT_MAGNITUDE`].
     #[error(
         "skinning weight of vertex {vertex} for joint {joint} is {weight}: weights must be finite, non-negative and at most 1e12"
     )]
     InvalidWeight {
+        /// The vertex index (row of Ω).
         vertex: usize,
+        /// The joint index (column of Ω).
         joint: usize,
+        /// The offending weight.
         weight: f64,
     },
+    /// Two sizes that must agree (e.g. rows of Φ and vertices of M) differ.
     #[error("{what}: expected {expected} but got {actual}")]
     SizeMismatch {
+        /// What was counted (e.g. "skinning weight rows (mesh vertices)").
         what: &'static str,
+        /// The size it must have.
         expected: usize,
+        /// The size it has.
         actual: usize,
     },
+    /// A cage edge has a single adjacent triangle: the cage is not closed.
     #[error("cage edge ({a}, {b}) is on an open boundary: it belongs to triangle {triangle} only")]
-    CageOpenBoundary { a: u32, b: u32, triangle: usize },
+    CageOpenBoundary {
+        /// First cage vertex index of the edge.
+        a: u32,
+        /// Second cage vertex index of the edge.
+        b: u32,
+        /// The only triangle on the edge.
+        triangle: usize,
+    },
+    /// A cage edge is shared by more than two triangles.
     #[error("cage edge ({a}, {b}) is non-manifold: it is shared by {count} triangles")]
-    CageNonManifoldEdge { a: u32, b: u32, count: usize },
+    CageNonManifoldEdge {
+        /// First cage vertex index of the edge.
+        a: u32,
+        /// Second cage vertex index of the edge.
+        b: u32,
+        /// Number of triangles sharing the edge.
+        count: usize,
+    },
+    /// Two cage triangles traverse their shared edge in the same direction.
     #[error(
         "cage triangles {first} and {second} have inconsistent orientation across edge ({a}, {b})"
     )]
     CageInconsistentOrientation {
+        /// First cage vertex index of the edge.
         a: u32,
+        /// Second cage vertex index of the edge.
         b: u32,
+        /// The first triangle on the edge.
         first: usize,
+        /// The second triangle on the edge, oriented against the first.
         second: usize,
     },
+    /// A cage triangle has (near-)zero area relative to the cage's bounding box.
     #[error("cage triangle {triangle} is degenerate (area {area:e})")]
-    CageDegenerateTriangle { triangle: usize, area: f64 },
+    CageDegenerateTriangle {
+        /// The triangle index.
+        triangle: usize,
+        /// Its area, in squared model units.
+        area: f64,
+    },
+    /// A cage triangle uses the same vertex at two corners.
     #[error("cage triangle {triangle} repeats a vertex")]
-    CageRepeatedVertex { triangle: usize },
+    CageRepeatedVertex {
+        /// The triangle index.
+        triangle: usize,
+    },
+    /// Vertices of the rest mesh M lie outside the rest cage C.
     #[error(
         "{count} of {total} mesh vertices are outside the cage (farthest: vertex {worst_vertex}, \
          {worst_distance:.3e} from the cage surface); expected the cage to enclose the mesh \
          (accept it explicitly to let mean value coordinates extrapolate)"
     )]
     MeshOutsideCage {
+        /// Number of mesh vertices outside the cage.
         count: usize,
+        /// Number of mesh vertices `#V`.
         total: usize,
+        /// The vertex index farthest outside the cage.
         worst_vertex: usize,
+        /// Its distance to the cage surface, in model units.
         worst_distance: f64,
     },
+    /// The cage has no triangles.
     #[error("the cage has no triangles")]
     EmptyCage,
+    /// An edit would have produced a non-finite or out-of-bounds state; it was rolled back.
     #[error(
         "the event was refused and the rig left as it was: it would have moved {what} {index} to \
          {value:?}, which is not a finite position of magnitude at most 1e15"
     )]
     EventRefused {
+        /// What would have moved (e.g. "current cage vertex", "rest joint").
         what: &'static str,
+        /// The index of that element.
         index: usize,
+        /// The position it would have moved to (world space).
         value: [f64; 3],
     },
+    /// A matrix could not be factorised (singular or too ill-conditioned).
     #[error("{what} is singular or too ill-conditioned to factorise")]
-    Singular { what: &'static str },
+    Singular {
+        /// What could not be factorised (e.g. "MaxVol submatrix" of Φ).
+        what: &'static str,
+    },
+    /// Any other invalid input, described by the message.
     #[error("{0}")]
     Invalid(String),
 }
@@ -150,23 +280,48 @@ pub enum RigError {
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Warning {
     /// Rows of Ω that did not sum to 1 and were rescaled.
-    WeightsRenormalised { rows: usize, worst_sum: f64 },
+    WeightsRenormalised {
+        /// Number of rows rescaled.
+        rows: usize,
+        /// The row sum farthest from 1 before rescaling.
+        worst_sum: f64,
+    },
     /// Vertices with no skinning influence at all (they stay at rest under skinning).
-    UnweightedVertices { count: usize, first: usize },
+    UnweightedVertices {
+        /// Number of vertices with an all-zero row of Ω.
+        count: usize,
+        /// The first such vertex index.
+        first: usize,
+    },
     /// Several weight entries for the same (vertex, joint) pair; they were summed.
-    DuplicateWeightEntries { count: usize },
+    DuplicateWeightEntries {
+        /// Number of duplicate entries summed.
+        count: usize,
+    },
     /// Zero weights listed explicitly; they were dropped.
-    ZeroWeightEntries { count: usize },
+    ZeroWeightEntries {
+        /// Number of zero entries dropped.
+        count: usize,
+    },
     /// The cage had inward-facing triangles (negative volume); all triangles were flipped.
-    CageOrientationFlipped { signed_volume: f64 },
+    CageOrientationFlipped {
+        /// Signed volume of the cage as given (negative).
+        signed_volume: f64,
+    },
     /// Max-entropy projection of a joint fell back to least squares (see `coords::mec`).
     MecFallback {
+        /// The joint index.
         joint: usize,
+        /// The joint name.
         name: String,
+        /// Why the max-entropy projection failed.
         reason: String,
     },
     /// Anything else worth telling the user.
-    Note { message: String },
+    Note {
+        /// The message shown to the user.
+        message: String,
+    },
 }
 
 impl std::fmt::Display for Warning {
@@ -203,5 +358,27 @@ impl std::fmt::Display for Warning {
             ),
             Warning::Note { message } => f.write_str(message),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_read_as_people_write_them() {
+        assert_eq!(number_text(1e308), "1e308");
+        assert_eq!(number_text(-2.5), "-2.5");
+        assert_eq!(number_text(0.0), "0");
+        assert_eq!(number_text(1e-9), "1e-9");
+        assert_eq!(number_text(f64::INFINITY), "inf");
+        assert_eq!(
+            vector_text(glam::DVec3::new(1e300, 0.5, 0.0)),
+            "[1e300, 0.5, 0]"
+        );
+        assert_eq!(
+            plain_serde_message("invalid type: floating point `1.5`, expected usize"),
+            "invalid type: floating point `1.5`, expected an index (a whole number ≥ 0)"
+        );
     }
 }

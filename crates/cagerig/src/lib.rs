@@ -8,6 +8,8 @@
 //! The numerical modules depend on no file format; [`io`] reads and writes OBJ and the paper
 //! tool's formats, [`script`] replays JSON edit scripts.
 
+#![warn(missing_docs)]
+
 pub mod animation;
 pub mod cage;
 pub mod cage_coords;
@@ -15,6 +17,7 @@ pub mod cage_enclosure;
 pub mod cage_gen;
 pub mod cage_source;
 pub mod coords;
+pub mod cor_centres;
 pub mod demo;
 pub mod error;
 pub mod io;

@@ -71,10 +71,12 @@ impl TriMesh {
         Self::new(positions, triangles)
     }
 
+    /// Number of vertices.
     pub fn num_vertices(&self) -> usize {
         self.positions.len()
     }
 
+    /// Number of triangles.
     pub fn num_triangles(&self) -> usize {
         self.triangles.len()
     }

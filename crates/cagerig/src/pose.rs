@@ -133,7 +133,9 @@ pub fn regularise_rest_frames(
     let regularised = Skeleton::new(joints)?;
     let warning = Warning::Note {
         message: format!(
-            "{replaced} joint rest frame(s) were sheared within float32 noise and were replaced by              the nearest rotation-scale frames (joint positions kept); the worst is joint              {joint} \"{}\" (|L − R·S| = {residual:.1e}, {relative:.1e} of the frame's size)",
+            "{replaced} joint rest frame(s) were sheared within float32 noise and were replaced by the nearest \
+             rotation-scale frames (joint positions kept); the worst is joint {joint} \
+              \"{}\" (|L − R·S| = {residual:.1e}, {relative:.1e} of the frame's size)",
             skeleton.joint(joint).name
         ),
     };

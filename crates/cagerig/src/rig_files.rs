@@ -16,6 +16,7 @@ use crate::session::RigParts;
 /// A rig read from files.
 #[derive(Debug, Clone)]
 pub struct RigFiles {
+    /// The validated rest structures (M, S, Ω, C) and the precomputed data read.
     pub parts: RigParts,
     /// `(role, path)` of every file that was read.
     pub files: Vec<(&'static str, PathBuf)>,

@@ -22,7 +22,9 @@ use crate::skinning::SkinningMethod;
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(try_from = "serde_json::Value")]
 pub enum JointRef {
+    /// The joint index in S.
     Index(usize),
+    /// The joint name.
     Name(String),
 }
 
@@ -51,24 +53,83 @@ impl TryFrom<serde_json::Value> for JointRef {
 pub enum EditStep {
     /// Rotate a joint about a world axis through its current position (S' edit).
     RotateJoint {
+        /// The joint to rotate.
         joint: JointRef,
+        /// Rotation axis in world space (any non-zero length).
         axis: [f64; 3],
+        /// Rotation angle in degrees, right-handed about `axis`.
         degrees: f64,
     },
     /// Translate rest-cage vertices (C edit).
     MoveRestCage {
+        /// Rest-cage vertex indices (into `#C`), each listed once.
         vertices: Vec<usize>,
+        /// Translation applied to every listed vertex (world space).
         offset: [f64; 3],
     },
     /// Translate current-cage vertices (C' edit).
     MovePosedCage {
+        /// Current-cage vertex indices (into `#C`), each listed once.
         vertices: Vec<usize>,
+        /// Translation applied to every listed vertex (world space).
         offset: [f64; 3],
     },
     /// Switch the skinning method.
-    SetSkinning { method: SkinningMethod },
+    SetSkinning {
+        /// The skinning method to switch to.
+        method: SkinningMethod,
+    },
     /// Back to the rest pose.
     ResetPose {},
+}
+
+impl std::fmt::Display for JointRef {
+    /// As written in a script: an index, or a quoted name.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            JointRef::Index(j) => write!(f, "{j}"),
+            JointRef::Name(name) => write!(f, "{}", serde_json::Value::String(name.clone())),
+        }
+    }
+}
+
+impl std::fmt::Display for EditStep {
+    /// The step in the script's own terms (its JSON object), for logs:
+    /// `{"op":"rotate_joint","joint":3,"axis":[0,0,1],"degrees":-10}`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let vector = |v: &[f64; 3]| format!("[{},{},{}]", v[0], v[1], v[2]);
+        let list = |v: &[usize]| {
+            let items: Vec<String> = v.iter().map(usize::to_string).collect();
+            format!("[{}]", items.join(","))
+        };
+        match self {
+            EditStep::RotateJoint {
+                joint,
+                axis,
+                degrees,
+            } => write!(
+                f,
+                r#"{{"op":"rotate_joint","joint":{joint},"axis":{},"degrees":{degrees}}}"#,
+                vector(axis)
+            ),
+            EditStep::MoveRestCage { vertices, offset } => write!(
+                f,
+                r#"{{"op":"move_rest_cage","vertices":{},"offset":{}}}"#,
+                list(vertices),
+                vector(offset)
+            ),
+            EditStep::MovePosedCage { vertices, offset } => write!(
+                f,
+                r#"{{"op":"move_posed_cage","vertices":{},"offset":{}}}"#,
+                list(vertices),
+                vector(offset)
+            ),
+            EditStep::SetSkinning { method } => {
+                write!(f, r#"{{"op":"set_skinning","method":"{method}"}}"#)
+            }
+            EditStep::ResetPose {} => write!(f, r#"{{"op":"reset_pose"}}"#),
+        }
+    }
 }
 
 /// A parsed script.
@@ -76,21 +137,33 @@ pub enum EditStep {
 pub struct EditScript {
     /// Skinning method to start with (the rig's default when absent).
     pub skinning: Option<SkinningMethod>,
+    /// The steps, in the order they run.
     pub steps: Vec<EditStep>,
 }
 
 /// Problems with a script; step numbers are 1-based like the output files.
 #[derive(Debug, Error)]
 pub enum ScriptError {
+    /// The text is not valid JSON (the parser's message).
     #[error("the script is not valid JSON: {0}")]
     Json(String),
+    /// The JSON is not an object with a "steps" array (the detail in parentheses, or empty).
     #[error("the script must be an object with a \"steps\" array{0}")]
     Shape(String),
+    /// A step is malformed or does not fit the rig.
     #[error("step {step}: {message}")]
-    Step { step: usize, message: String },
+    Step {
+        /// The 1-based step number.
+        step: usize,
+        /// What is wrong with the step.
+        message: String,
+    },
+    /// The session refused a step.
     #[error("step {step}: {source}")]
     Rig {
+        /// The 1-based step number.
         step: usize,
+        /// The session's error.
         #[source]
         source: RigError,
     },
@@ -99,6 +172,8 @@ pub enum ScriptError {
 impl EditScript {
     /// Parses a script, naming the first bad step.
     pub fn parse(text: &str) -> Result<Self, ScriptError> {
+        // A UTF-8 byte-order mark (some Windows editors write one) is not part of the JSON.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let value: serde_json::Value =
             serde_json::from_str(text).map_err(|e| ScriptError::Json(e.to_string()))?;
         let obj = value
@@ -123,7 +198,7 @@ impl EditScript {
             .map(|(i, v)| {
                 EditStep::deserialize(v).map_err(|e| ScriptError::Step {
                     step: i + 1,
-                    message: e.to_string(),
+                    message: crate::error::plain_serde_message(&e.to_string()),
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -149,13 +224,15 @@ impl EditScript {
                     if first_bad_component(axis).is_some() || axis.length_squared() == 0.0 {
                         return Err(fail(format!(
                             "\"axis\": expected a non-zero direction of finite numbers of \
-                             magnitude at most 1e12, found {axis}"
+                             magnitude at most 1e12, found {}",
+                            crate::error::vector_text(axis)
                         )));
                     }
                     if !is_input_value(*degrees) {
                         return Err(fail(format!(
                             "\"degrees\": expected a finite angle of magnitude at most 1e12, \
-                             found {degrees}"
+                             found {}",
+                            crate::error::number_text(*degrees)
                         )));
                     }
                 }
@@ -186,7 +263,8 @@ impl EditScript {
                     if first_bad_component(offset).is_some() {
                         return Err(fail(format!(
                             "\"offset\": expected finite numbers of magnitude at most 1e12, \
-                             found {offset}"
+                             found {}",
+                            crate::error::vector_text(offset)
                         )));
                     }
                 }
@@ -283,6 +361,27 @@ mod tests {
                 axis: [0.0, 0.0, 1.0],
                 degrees: -10.0
             }
+        );
+        // A byte-order mark is accepted; Rust type names never reach the user.
+        let with_bom = format!("\u{feff}{}", r#"{"steps":[{"op":"reset_pose"}]}"#);
+        assert_eq!(EditScript::parse(&with_bom).unwrap().steps.len(), 1);
+        let err = EditScript::parse(
+            r#"{"steps":[{"op":"move_rest_cage","vertices":[1.5],"offset":[0,0,0]}]}"#,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("an index (a whole number ≥ 0)") && !err.contains("usize"),
+            "{err}"
+        );
+        // Steps print in the script's own terms, and parse back to themselves.
+        for step in &s.steps {
+            let text = format!(r#"{{"steps":[{step}]}}"#);
+            assert_eq!(&EditScript::parse(&text).unwrap().steps[0], step, "{text}");
+        }
+        assert_eq!(
+            s.steps[4].to_string(),
+            r#"{"op":"rotate_joint","joint":3,"axis":[0,0,1],"degrees":-10}"#
         );
         let err =
             EditScript::parse(r#"{"steps":[{"op":"reset_pose"},{"op":"explode","vertices":[1]}]}"#)

@@ -88,22 +88,27 @@ impl Skeleton {
         Ok(Self { joints, order })
     }
 
+    /// Number of joints `#J`.
     pub fn len(&self) -> usize {
         self.joints.len()
     }
 
+    /// Whether the skeleton has no joint.
     pub fn is_empty(&self) -> bool {
         self.joints.is_empty()
     }
 
+    /// The joints, by index (`#J`).
     pub fn joints(&self) -> &[Joint] {
         &self.joints
     }
 
+    /// Joint `j`. Panics if `j` is out of range.
     pub fn joint(&self, j: usize) -> &Joint {
         &self.joints[j]
     }
 
+    /// Parent index of joint `j`, `None` for a root. Panics if `j` is out of range.
     pub fn parent(&self, j: usize) -> Option<usize> {
         self.joints[j].parent
     }

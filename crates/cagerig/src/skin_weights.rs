@@ -158,10 +158,12 @@ impl SkinWeights {
         )
     }
 
+    /// Number of mesh vertices `#V` (rows of Ω).
     pub fn num_vertices(&self) -> usize {
         self.row_start.len() - 1
     }
 
+    /// Number of joints `#J` (columns of Ω).
     pub fn num_joints(&self) -> usize {
         self.num_joints
     }

@@ -145,10 +145,12 @@ impl SparseRows {
         }))
     }
 
+    /// Number of rows.
     pub fn nrows(&self) -> usize {
         self.row_start.len() - 1
     }
 
+    /// Number of columns.
     pub fn ncols(&self) -> usize {
         self.ncols
     }

@@ -312,7 +312,9 @@ mod tests {
 /// A subdivided rig: skin, Ω and (when given) the CoR rows, carried along by [`midpoint_rows`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SubdividedRig {
+    /// The subdivided skin M (`#V'` vertices).
     pub mesh: TriMesh,
+    /// Ω carried to the new vertices (`#V' × #J`).
     pub skin_weights: SkinWeights,
     /// CoR rows S (`#V' × #V`: new rows averaged, columns still address the original vertices).
     pub cor_rows: Option<crate::sparse_rows::SparseRows>,

@@ -1,6 +1,8 @@
 //! Coordinate kernels on the paper's Arm example: MVC vs the shipped cage weights, MaxVol vs the
 //! shipped selection, max-entropy joint coordinates (including the joint the reference fails on).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::time::Instant;
 
 use cagerig::coords::maxvol::{
@@ -14,35 +16,8 @@ use faer::Mat;
 use faer::linalg::solvers::DenseSolveCore;
 use glam::DVec3;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
-
-fn read(name: &str) -> String {
-    std::fs::read_to_string(format!("{ARM}/{name}")).unwrap()
-}
-
-/// Minimal OBJ reader: `v x y z` and `f a b c` (1-based, optional `/...` suffixes).
-fn load_obj(name: &str) -> TriMesh {
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for line in read(name).lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let v: Vec<f64> = it.take(3).map(|s| s.parse().unwrap()).collect();
-                positions.push(DVec3::new(v[0], v[1], v[2]));
-            }
-            Some("f") => {
-                let f: Vec<u32> = it
-                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                assert_eq!(f.len(), 3);
-                triangles.push([f[0], f[1], f[2]]);
-            }
-            _ => {}
-        }
-    }
-    TriMesh::new(positions, triangles).unwrap()
-}
+mod support;
+use support::{ARM, mesh as load_obj, read};
 
 /// `<column> <row> <weight>` triplets into a dense `rows × cols` matrix.
 fn load_triplets(name: &str, rows: usize, cols: usize) -> Mat<f64> {

@@ -1,14 +1,16 @@
 //! CoR centres in cage coordinates from the similarity tables (`cor_grid`) against the exact
 //! Eq. 5 centres on the Arm: every vertex at N = 0, a sample at N = 2 midpoint subdivisions.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use cagerig::SkinWeights;
 use cagerig::coords::mvc::compute_cage_coords;
+use cagerig::cor_centres::weight_similarity;
 use cagerig::io::{read_obj, read_skt, read_skw};
 use cagerig::mesh::bounding_box;
-use cagerig::skinning::cor_centres::weight_similarity;
 use cagerig::skinning::{CorGridOptions, compute_cor_cage_coords_grid};
 use cagerig::subdivide::subdivide_midpoint;
 use glam::DVec3;

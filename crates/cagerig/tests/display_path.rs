@@ -4,6 +4,8 @@
 //! events, under LBS, DQS and CoR. The drawn rest mesh M (Φ̃·C after a current-cage edit, with
 //! Φ rounded to f32) is within 2e-6 of the diagonal of the exact M.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use cagerig::demo;
 use cagerig::pose::LocalPose;
 use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};

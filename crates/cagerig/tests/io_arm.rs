@@ -1,5 +1,7 @@
 //! The Arm example of the paper tool, read through every reader.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::{Path, PathBuf};
 
 use cagerig::Warning;

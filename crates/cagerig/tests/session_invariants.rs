@@ -2,6 +2,8 @@
 //! identity pose gives the rest mesh, the loop C' → C → S → S' → C' is exact under LBS (and with
 //! the ghost fit for DQS/CoR), M = ΦC and A = ΨC hold after any number of events (no drift).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use cagerig::cage_coords::CoordsPrecision;
 use cagerig::demo;
 use cagerig::mesh::max_distance;

@@ -1,5 +1,7 @@
 //! Skinning kernels and CoR centres on the Arm rig against the reference tool's outputs.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::time::Instant;
 
 use cagerig::SkinWeights;
@@ -9,41 +11,10 @@ use cagerig::skinning::{
     DualQuaternionSkinning, LinearBlendSkinning, compute_cor_centres, compute_cor_centres_factored,
 };
 use cagerig::sparse_rows::SparseRows;
-use glam::{DAffine3, DMat3, DVec3};
+use glam::DVec3;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
-
-fn read(name: &str) -> String {
-    std::fs::read_to_string(format!("{ARM}/{name}")).unwrap()
-}
-
-fn numbers(line: &str) -> Vec<f64> {
-    line.split_whitespace()
-        .map(|x| x.parse().unwrap())
-        .collect()
-}
-
-fn obj(name: &str) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-    let mut p = Vec::new();
-    let mut t = Vec::new();
-    for line in read(name).lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let v: Vec<f64> = it.map(|x| x.parse().unwrap()).collect();
-                p.push(DVec3::new(v[0], v[1], v[2]));
-            }
-            Some("f") => {
-                let f: Vec<u32> = it
-                    .map(|x| x.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                t.push([f[0], f[1], f[2]]);
-            }
-            _ => {}
-        }
-    }
-    (p, t)
-}
+mod support;
+use support::{numbers, obj, read, step2_transforms};
 
 fn weights(num_vertices: usize) -> SkinWeights {
     let text = read("arm.skw");
@@ -57,25 +28,6 @@ fn weights(num_vertices: usize) -> SkinWeights {
     SkinWeights::from_triplets(num_vertices, 25, triplets)
         .unwrap()
         .0
-}
-
-/// Skinning transforms T_j of reference step ii (the third 3×4 row-major matrix per joint).
-fn step2_transforms() -> Vec<DAffine3> {
-    read("reference/s2_transforms.txt")
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| {
-            let n = &numbers(l)[25..37];
-            DAffine3 {
-                matrix3: DMat3::from_cols(
-                    DVec3::new(n[0], n[4], n[8]),
-                    DVec3::new(n[1], n[5], n[9]),
-                    DVec3::new(n[2], n[6], n[10]),
-                ),
-                translation: DVec3::new(n[3], n[7], n[11]),
-            }
-        })
-        .collect()
 }
 
 fn reference_cor_matrix(num_vertices: usize) -> SparseRows {

@@ -2,6 +2,8 @@
 //! vertices) at reference step ii (joint 3 rotated by 60° about +X): max |f32 − f64| relative to
 //! the bounding-box diagonal of the rest mesh.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::path::Path;
 
 use cagerig::io::{read_cor_weights, read_obj, read_skt, read_skw};
@@ -11,9 +13,10 @@ use cagerig::skinning::{
     DualQuaternionSkinning, LbsF32, LbsF32Scratch, LinearBlendSkinning,
 };
 use cagerig::subdivide::subdivide_midpoint;
-use glam::{DAffine3, DMat3, DVec3, Vec3};
+use glam::{DAffine3, DVec3, Vec3};
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
+mod support;
+use support::{ARM, step2_transforms};
 
 /// Tolerance on max |f32 − f64| / bbox diagonal (measured: LBS 3.1e-7, DQS 4.8e-7, CoR 2.9e-7).
 const TOLERANCE: f64 = 2e-6;
@@ -23,27 +26,6 @@ struct Rig {
     weights: cagerig::SkinWeights,
     centres: Vec<DVec3>,
     transforms: Vec<DAffine3>,
-}
-
-/// Skinning transforms of step ii (third 3×4 row-major matrix per joint).
-fn step2_transforms() -> Vec<DAffine3> {
-    std::fs::read_to_string(format!("{ARM}/reference/s2_transforms.txt"))
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| {
-            let n: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
-            let n = &n[25..37];
-            DAffine3 {
-                matrix3: DMat3::from_cols(
-                    DVec3::new(n[0], n[4], n[8]),
-                    DVec3::new(n[1], n[5], n[9]),
-                    DVec3::new(n[2], n[6], n[10]),
-                ),
-                translation: DVec3::new(n[3], n[7], n[11]),
-            }
-        })
-        .collect()
 }
 
 /// The Arm subdivided 3 times; CoR centres = S·M on the original vertices (NaN = no CoR where S

@@ -2,49 +2,21 @@
 //! kernels within f32 tolerance, and agreement with the f64 kernels. Coordinates and translations
 //! are in [-10, 10]; the tolerance 1e-4 is ≈ 2e-6 of the scale (f32 ε ≈ 6e-8).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use cagerig::SkinWeights;
 use cagerig::skinning::{
     CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
     DualQuaternionSkinning, LbsF32, LbsF32Scratch, LinearBlendSkinning,
 };
-use glam::{DAffine3, DQuat, DVec3, Vec3};
+use glam::{DAffine3, DVec3, Vec3};
 use proptest::prelude::*;
+
+mod support;
+use support::{point, rigid, skin_weights, weight_rows};
 
 const NUM_JOINTS: usize = 6;
 const TOLERANCE: f64 = 1e-4;
-
-fn point() -> impl Strategy<Value = DVec3> {
-    (-10.0..10.0f64, -10.0..10.0f64, -10.0..10.0f64).prop_map(|(x, y, z)| DVec3::new(x, y, z))
-}
-
-fn rigid() -> impl Strategy<Value = DAffine3> {
-    (
-        (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
-        point(),
-    )
-        .prop_filter_map("degenerate quaternion", |((x, y, z, w), t)| {
-            let q = DQuat::from_xyzw(x, y, z, w);
-            (q.length() > 0.1).then(|| DAffine3::from_rotation_translation(q.normalize(), t))
-        })
-}
-
-fn weight_rows(n: usize) -> impl Strategy<Value = Vec<Vec<(usize, f64)>>> {
-    proptest::collection::vec(
-        proptest::collection::btree_map(0..NUM_JOINTS, 0.01..1.0f64, 1..=NUM_JOINTS)
-            .prop_map(|m| m.into_iter().collect::<Vec<_>>()),
-        n,
-    )
-}
-
-fn skin_weights(rows: &[Vec<(usize, f64)>]) -> SkinWeights {
-    let triplets = rows
-        .iter()
-        .enumerate()
-        .flat_map(|(v, r)| r.iter().map(move |&(j, w)| (v, j, w)));
-    SkinWeights::from_triplets(rows.len(), NUM_JOINTS, triplets.collect::<Vec<_>>())
-        .unwrap()
-        .0
-}
 
 /// f32 LBS, DQS and CoR of the same input, widened to f64.
 fn skin_all_f32(
@@ -74,12 +46,12 @@ proptest! {
     #[test]
     fn identity_transforms_give_the_rest_mesh(
         (rows, rest, centres) in (1..40usize).prop_flat_map(|n| (
-            weight_rows(n),
+            weight_rows(n, NUM_JOINTS),
             proptest::collection::vec(point(), n),
             proptest::collection::vec(point(), n),
         ))
     ) {
-        let w = skin_weights(&rows);
+        let w = skin_weights(&rows, NUM_JOINTS);
         let t = vec![DAffine3::IDENTITY; NUM_JOINTS];
         for (method, out) in skin_all_f32(&w, &t, &rest, &centres).iter().enumerate() {
             for (a, b) in out.iter().zip(&rest) {
@@ -96,7 +68,7 @@ proptest! {
         centre in point(),
     ) {
         let rows: Vec<Vec<(usize, f64)>> = rest.iter().map(|_| vec![(joint, 1.0)]).collect();
-        let w = skin_weights(&rows);
+        let w = skin_weights(&rows, NUM_JOINTS);
         let centres = vec![centre; rest.len()];
         let [lbs, dqs, cor] = skin_all_f32(&w, &transforms, &rest, &centres);
         for i in 0..rest.len() {
@@ -110,13 +82,13 @@ proptest! {
     #[test]
     fn common_rigid_transform_moves_the_mesh_rigidly(
         (rows, rest, centres) in (1..40usize).prop_flat_map(|n| (
-            weight_rows(n),
+            weight_rows(n, NUM_JOINTS),
             proptest::collection::vec(point(), n),
             proptest::collection::vec(point(), n),
         )),
         transform in rigid(),
     ) {
-        let w = skin_weights(&rows);
+        let w = skin_weights(&rows, NUM_JOINTS);
         let t = vec![transform; NUM_JOINTS];
         for (method, out) in skin_all_f32(&w, &t, &rest, &centres).iter().enumerate() {
             for (a, b) in out.iter().zip(&rest) {
@@ -130,13 +102,13 @@ proptest! {
     #[test]
     fn f32_kernels_match_f64_kernels(
         (rows, rest, centres) in (1..40usize).prop_flat_map(|n| (
-            weight_rows(n),
+            weight_rows(n, NUM_JOINTS),
             proptest::collection::vec(point(), n),
             proptest::collection::vec(point(), n),
         )),
         transforms in proptest::collection::vec(rigid(), NUM_JOINTS),
     ) {
-        let w = skin_weights(&rows);
+        let w = skin_weights(&rows, NUM_JOINTS);
         let n = rest.len();
         let mut lbs = vec![DVec3::ZERO; n];
         LinearBlendSkinning::new(&w).apply(&transforms, &rest, &mut lbs);

@@ -1,47 +1,18 @@
 //! Property tests shared by the three skinning kernels (LBS, DQS, CoR).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use cagerig::SkinWeights;
 use cagerig::skinning::{
     CorScratch, CorSkinning, DqsScratch, DualQuaternionSkinning, LinearBlendSkinning,
 };
-use glam::{DAffine3, DQuat, DVec3};
+use glam::{DAffine3, DVec3};
 use proptest::prelude::*;
 
+mod support;
+use support::{point, rigid, skin_weights, weight_rows};
+
 const NUM_JOINTS: usize = 6;
-
-fn point() -> impl Strategy<Value = DVec3> {
-    (-10.0..10.0f64, -10.0..10.0f64, -10.0..10.0f64).prop_map(|(x, y, z)| DVec3::new(x, y, z))
-}
-
-fn rigid() -> impl Strategy<Value = DAffine3> {
-    (
-        (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
-        point(),
-    )
-        .prop_filter_map("degenerate quaternion", |((x, y, z, w), t)| {
-            let q = DQuat::from_xyzw(x, y, z, w);
-            (q.length() > 0.1).then(|| DAffine3::from_rotation_translation(q.normalize(), t))
-        })
-}
-
-/// Rows of 1..=NUM_JOINTS influences (as triplets) for `n` vertices.
-fn weight_rows(n: usize) -> impl Strategy<Value = Vec<Vec<(usize, f64)>>> {
-    proptest::collection::vec(
-        proptest::collection::btree_map(0..NUM_JOINTS, 0.01..1.0f64, 1..=NUM_JOINTS)
-            .prop_map(|m| m.into_iter().collect::<Vec<_>>()),
-        n,
-    )
-}
-
-fn skin_weights(rows: &[Vec<(usize, f64)>]) -> SkinWeights {
-    let triplets = rows
-        .iter()
-        .enumerate()
-        .flat_map(|(v, r)| r.iter().map(move |&(j, w)| (v, j, w)));
-    SkinWeights::from_triplets(rows.len(), NUM_JOINTS, triplets.collect::<Vec<_>>())
-        .unwrap()
-        .0
-}
 
 /// LBS, DQS and CoR of the same input.
 fn skin_all(w: &SkinWeights, t: &[DAffine3], rest: &[DVec3], centres: &[DVec3]) -> [Vec<DVec3>; 3] {
@@ -59,12 +30,12 @@ proptest! {
     #[test]
     fn identity_transforms_give_the_rest_mesh(
         (rows, rest, centres) in (1..40usize).prop_flat_map(|n| (
-            weight_rows(n),
+            weight_rows(n, NUM_JOINTS),
             proptest::collection::vec(point(), n),
             proptest::collection::vec(point(), n),
         ))
     ) {
-        let w = skin_weights(&rows);
+        let w = skin_weights(&rows, NUM_JOINTS);
         let t = vec![DAffine3::IDENTITY; NUM_JOINTS];
         for (method, out) in skin_all(&w, &t, &rest, &centres).iter().enumerate() {
             for (a, b) in out.iter().zip(&rest) {
@@ -81,7 +52,7 @@ proptest! {
         centre in point(),
     ) {
         let rows: Vec<Vec<(usize, f64)>> = rest.iter().map(|_| vec![(joint, 1.0)]).collect();
-        let w = skin_weights(&rows);
+        let w = skin_weights(&rows, NUM_JOINTS);
         let centres = vec![centre; rest.len()];
         let [lbs, dqs, cor] = skin_all(&w, &transforms, &rest, &centres);
         for i in 0..rest.len() {
@@ -95,13 +66,13 @@ proptest! {
     #[test]
     fn common_rigid_transform_moves_the_mesh_rigidly(
         (rows, rest, centres) in (1..40usize).prop_flat_map(|n| (
-            weight_rows(n),
+            weight_rows(n, NUM_JOINTS),
             proptest::collection::vec(point(), n),
             proptest::collection::vec(point(), n),
         )),
         transform in rigid(),
     ) {
-        let w = skin_weights(&rows);
+        let w = skin_weights(&rows, NUM_JOINTS);
         let t = vec![transform; NUM_JOINTS];
         for (method, out) in skin_all(&w, &t, &rest, &centres).iter().enumerate() {
             for (a, b) in out.iter().zip(&rest) {

@@ -1,38 +1,15 @@
 //! Midpoint subdivision of the Arm rig: 2089 → 33 289 (2 levels) → 133 073 (3 levels) vertices,
 //! the sizes of the reference tool's "sub1"/"sub2" benchmarks.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
 use std::collections::HashSet;
 
 use cagerig::subdivide::subdivide_midpoint;
 use cagerig::{SkinWeights, TriMesh};
-use glam::DVec3;
 
-const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
-
-/// Minimal OBJ reader: `v x y z` and `f a b c` lines (1-based, `a/b/c` forms allowed).
-fn read_obj(path: &str) -> TriMesh {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for line in text.lines() {
-        let mut parts = line.split_whitespace();
-        match parts.next() {
-            Some("v") => {
-                let c: Vec<f64> = parts.take(3).map(|s| s.parse().unwrap()).collect();
-                positions.push(DVec3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let idx: Vec<u32> = parts
-                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                assert_eq!(idx.len(), 3, "non-triangle face");
-                triangles.push([idx[0], idx[1], idx[2]]);
-            }
-            _ => {}
-        }
-    }
-    TriMesh::new(positions, triangles).unwrap()
-}
+mod support;
+use support::ARM;
 
 /// `<joint> <meshVertex> <weight>` lines.
 fn read_skw(path: &str, num_vertices: usize) -> SkinWeights {
@@ -68,7 +45,7 @@ fn euler_characteristic(mesh: &TriMesh) -> i64 {
 
 #[test]
 fn arm_subdivision_counts_weights_and_topology() {
-    let mesh = read_obj(&format!("{ARM}/arm.obj"));
+    let mesh = support::mesh("arm.obj");
     assert_eq!((mesh.num_vertices(), mesh.num_triangles()), (2089, 4156));
     let weights = read_skw(&format!("{ARM}/arm.skw"), mesh.num_vertices());
     assert_eq!(weights.num_joints(), 25);

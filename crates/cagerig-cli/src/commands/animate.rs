@@ -20,8 +20,9 @@ pub fn check_times(times: &[f64]) -> anyhow::Result<()> {
     for (i, &t) in times.iter().enumerate() {
         if !cagerig::error::is_input_value(t) {
             bail!(
-                "--times: value {} is {t}; expected a finite time in seconds of magnitude at most 1e12",
-                i + 1
+                "--times: value {} is {}; expected a finite time in seconds of magnitude at most 1e12",
+                i + 1,
+                cagerig::error::number_text(t)
             );
         }
         if let Some(j) = times[..i].iter().position(|&u| u == t) {

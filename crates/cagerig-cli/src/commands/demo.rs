@@ -110,12 +110,6 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         skin: None,
         allow_outside_cage: false,
     };
-    let (vertices, cage_vertices) = cagerig::memory_estimate::builtin_size(builtin, resolution);
-    cagerig::memory_estimate::check_fits(
-        &format!("demo --builtin {builtin}"),
-        vertices,
-        cage_vertices,
-    )?;
     let t = Instant::now();
     let loaded = load_rig(&args, true, true)?;
     let (mut s, warnings) = start_session(loaded, SessionOptions::default())?;

@@ -102,7 +102,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .run_step(k, &mut session)
             .map_err(|e| anyhow::anyhow!("{}: {e}", script_path.display()))?;
         eprintln!(
-            "step {}: {:?} ({:.3} ms)",
+            "step {}: {} ({:.3} ms)",
             k + 1,
             script.steps[k],
             t.elapsed().as_secs_f64() * 1e3

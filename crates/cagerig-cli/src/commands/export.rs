@@ -12,18 +12,20 @@ use anyhow::{Context, bail};
 use cagerig::session::RigSession;
 use cagerig_formats::gltf::export_animation;
 
-use crate::rig_source::{RigArgs, load_rig};
+use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_or_generate_cage, note_generated_cage};
 use crate::session_args::SessionArgs;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
     pub rig: RigArgs,
+    #[command(flatten)]
+    pub auto_cage: AutoCageArgs,
     /// Edit script replayed before exporting (as for `edit`).
     #[arg(long)]
     pub script: Option<PathBuf>,
-    /// Output: `.glb` (binary glTF) or `.gltf` (JSON, with `<stem>.bin` written beside it);
-    /// replaced atomically.
+    /// Output: `.glb` (binary glTF) or `.gltf` (JSON, with its buffer `<stem>-<hash>.bin`
+    /// written beside it); replaced atomically.
     #[arg(long)]
     pub out: PathBuf,
     /// Skeleton animation to export (the paper tool's text format).
@@ -73,7 +75,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.max_between
         );
     }
-    let mut loaded = load_rig(&args.rig, true, true)?;
+    let mut loaded = load_rig_or_generate_cage(&args.rig, true, true, args.auto_cage.options())?;
+    note_generated_cage(&loaded);
     let tracks = crate::interchange::animation_tracks(
         &mut loaded,
         args.skeleton_anim.as_deref(),

@@ -10,13 +10,15 @@ use cagerig_render::rig_scene::{ColorBy, Layers};
 use glam::DVec3;
 
 use crate::pictures::{CameraChoice, PictureMaker, PictureOptions, ViewArg};
-use crate::rig_source::{RigArgs, load_rig};
+use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_or_generate_cage, note_generated_cage};
 use crate::session_args::{SessionArgs, start_session};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
     pub rig: RigArgs,
+    #[command(flatten)]
+    pub auto_cage: AutoCageArgs,
     /// Edit script (the JSON of `cagerig edit`) applied before rendering; the picture shows
     /// the state after its last step.
     #[arg(long, conflicts_with_all = ["skeleton_anim", "cage_anim", "animation"])]
@@ -228,7 +230,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .as_deref()
         .map(crate::commands::edit::read_script)
         .transpose()?;
-    let mut loaded = load_rig(&args.rig, true, true)?;
+    let mut loaded = load_rig_or_generate_cage(&args.rig, true, true, args.auto_cage.options())?;
+    note_generated_cage(&loaded);
     let tracks = crate::interchange::animation_tracks(
         &mut loaded,
         args.skeleton_anim.as_deref(),

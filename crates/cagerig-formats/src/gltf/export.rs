@@ -281,9 +281,12 @@ pub fn write_glb(out: &mut dyn Write, document: &Value, bin: &[u8]) -> std::io::
     Ok(())
 }
 
-/// Writes a document and its binary buffer as glTF text: `path` (`.gltf`, pretty JSON) with
-/// `buffers[0].uri` naming `<stem>.bin`, written beside it. Both replace their files
-/// atomically, the `.bin` first, so a reader never sees a `.gltf` naming a missing buffer.
+/// Writes `document` as `path` (`.gltf`, JSON) with its buffer in `<stem>-<hash>.bin` beside it
+/// (`<hash>`: 16 hex digits of the buffer's FNV-1a hash), so that replacing an earlier export is
+/// atomic: the new `.bin` is written first under its own name, then the `.gltf` that refers to
+/// it replaces the old one in one rename (the commit point), then the earlier exports' `.bin`
+/// files of this stem are removed. A kill at any moment leaves a `.gltf` whose buffer is
+/// complete, old or new.
 pub fn write_gltf_files(path: &Path, document: &Value, bin: &[u8]) -> Result<(), FormatError> {
     let io = |p: &Path, message: String| FormatError::Io {
         path: p.to_path_buf(),
@@ -294,19 +297,57 @@ pub fn write_gltf_files(path: &Path, document: &Value, bin: &[u8]) -> Result<(),
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
         .ok_or_else(|| io(path, "expected a file name ending in .gltf".into()))?;
-    let bin_name = format!("{stem}.bin");
+    let bin_name = format!("{stem}-{:016x}.bin", fnv1a(bin));
     let bin_path = path.with_file_name(&bin_name);
     let mut document = document.clone();
     let buffer = document
         .get_mut("buffers")
         .and_then(|b| b.get_mut(0))
         .ok_or_else(|| io(path, "the document has no buffer".into()))?;
-    buffer["uri"] = Value::String(bin_name);
+    buffer["uri"] = Value::String(bin_name.clone());
     let text = serde_json::to_vec_pretty(&document).map_err(|e| io(path, e.to_string()))?;
     cagerig::io::atomic::write_atomically(&bin_path, |w| w.write_all(bin))
         .map_err(|e| io(&bin_path, e.to_string()))?;
     cagerig::io::atomic::write_atomically(path, |w| w.write_all(&text))
-        .map_err(|e| io(path, e.to_string()))
+        .map_err(|e| io(path, e.to_string()))?;
+    remove_earlier_buffers(path, &stem, &bin_name);
+    Ok(())
+}
+
+/// 64-bit FNV-1a of `bytes` (names an export's buffer file by its content).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// Removes `<stem>-<16 hex digits>.bin` files beside `path` other than `keep`: buffers of
+/// earlier exports to the same `.gltf`, no longer referred to. Other files are never touched.
+fn remove_earlier_buffers(path: &Path, stem: &str, keep: &str) {
+    let Some(dir) = path.parent().map(|d| {
+        if d.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            d
+        }
+    }) else {
+        return;
+    };
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        let ours = name
+            .strip_prefix(stem)
+            .and_then(|rest| rest.strip_prefix('-'))
+            .and_then(|rest| rest.strip_suffix(".bin"))
+            .is_some_and(|hash| hash.len() == 16 && hash.bytes().all(|b| b.is_ascii_hexdigit()));
+        if ours && name != keep {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }
 
 /// Writes `document` + `bin` as `.glb` or as `.gltf` + `.bin`, by the extension of `path`.

@@ -11,14 +11,19 @@ use crate::error::{FormatError, invalid};
 pub enum NodeLocal {
     /// `matrix` (may not be animated).
     Matrix(DAffine3),
+    /// `translation`, `rotation`, `scale` (each may be animated).
     Trs {
+        /// Translation T.
         translation: DVec3,
+        /// Rotation R (unit quaternion).
         rotation: DQuat,
+        /// Scale S (per axis).
         scale: DVec3,
     },
 }
 
 impl NodeLocal {
+    /// The local transform as an affine map (T · R · S for TRS).
     pub fn affine(&self) -> DAffine3 {
         match *self {
             NodeLocal::Matrix(m) => m,
@@ -34,7 +39,9 @@ impl NodeLocal {
 /// Parents, rest locals and a parents-first order of every node.
 #[derive(Debug, Clone)]
 pub struct NodeTree {
+    /// Parent node index of every node, `None` for a root.
     pub parent: Vec<Option<usize>>,
+    /// Local transform of every node as written in the file.
     pub rest_local: Vec<NodeLocal>,
     /// Every node, parents before children.
     pub order: Vec<usize>,
@@ -57,6 +64,8 @@ pub fn affine_from_cols(m: [f64; 16], path: &Path, element: &str) -> Result<DAff
 }
 
 impl NodeTree {
+    /// Reads the node hierarchy of `document`. Fails (naming `path` and the node) on a node with
+    /// two parents, a cycle, or a non-finite or projective transform.
     pub fn new(document: &gltf::Document, path: &Path) -> Result<Self, FormatError> {
         let n = document.nodes().len();
         let mut parent = vec![None; n];

@@ -34,10 +34,12 @@ impl DisplayCageCoords {
         })
     }
 
+    /// Number of mesh vertices `#V` (rows of Φ̃).
     pub fn num_vertices(&self) -> usize {
         self.num_vertices
     }
 
+    /// Number of cage vertices `#C` (columns of Φ̃).
     pub fn num_cage_vertices(&self) -> usize {
         self.columns
             .len()

@@ -14,16 +14,20 @@ const LEAF_SIZE: usize = 4;
 /// An axis-aligned box.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aabb {
+    /// Least corner (componentwise minimum).
     pub min: DVec3,
+    /// Greatest corner (componentwise maximum).
     pub max: DVec3,
 }
 
 impl Aabb {
+    /// The empty box (min = +∞, max = −∞): the identity of [`Aabb::union`].
     pub const EMPTY: Self = Self {
         min: DVec3::splat(f64::INFINITY),
         max: DVec3::splat(f64::NEG_INFINITY),
     };
 
+    /// The bounding box of triangle `t`.
     pub fn of_triangle(t: &Triangle) -> Self {
         Self {
             min: t[0].min(t[1]).min(t[2]),
@@ -31,6 +35,7 @@ impl Aabb {
         }
     }
 
+    /// The smallest box containing both boxes.
     pub fn union(self, other: Self) -> Self {
         Self {
             min: self.min.min(other.min),
@@ -38,6 +43,7 @@ impl Aabb {
         }
     }
 
+    /// The box grown by `r` on every side.
     pub fn expanded(self, r: f64) -> Self {
         Self {
             min: self.min - DVec3::splat(r),
@@ -45,10 +51,12 @@ impl Aabb {
         }
     }
 
+    /// Whether the two boxes intersect (touching counts).
     pub fn overlaps(&self, other: &Self) -> bool {
         self.min.cmple(other.max).all() && other.min.cmple(self.max).all()
     }
 
+    /// Whether `p` lies in the box (boundary included).
     pub fn contains(&self, p: DVec3) -> bool {
         self.min.cmple(p).all() && p.cmple(self.max).all()
     }
@@ -217,6 +225,7 @@ impl TriangleBvh {
         }
     }
 
+    /// Whether the hierarchy holds no triangle.
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
     }

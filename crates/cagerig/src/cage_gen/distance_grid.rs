@@ -50,20 +50,24 @@ impl SampleGrid {
         }
     }
 
+    /// Number of grid points (product of `dims`).
     pub fn num_points(&self) -> usize {
         self.dims[0] * self.dims[1] * self.dims[2]
     }
 
+    /// Linear index of the point at integer coordinates `[x, y, z]` (x fastest).
     pub fn index(&self, [x, y, z]: [usize; 3]) -> usize {
         x + self.dims[0] * (y + self.dims[1] * z)
     }
 
+    /// Integer coordinates `[x, y, z]` of the point of linear index `i`.
     pub fn coords(&self, i: usize) -> [usize; 3] {
         let x = i % self.dims[0];
         let y = (i / self.dims[0]) % self.dims[1];
         [x, y, i / (self.dims[0] * self.dims[1])]
     }
 
+    /// Position of the point at integer coordinates `[x, y, z]`.
     pub fn position(&self, [x, y, z]: [usize; 3]) -> DVec3 {
         self.origin + DVec3::new(x as f64, y as f64, z as f64) * self.spacing
     }
@@ -73,6 +77,7 @@ impl SampleGrid {
 /// offset from the mesh), < 0 in the solid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OutsideField {
+    /// The sample grid.
     pub grid: SampleGrid,
     /// One value per grid point.
     pub values: Vec<f64>,

@@ -22,7 +22,9 @@ use super::distance_grid::OutsideField;
 /// Surface of [`extract_surface`]: positions and outward triangles.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Surface {
+    /// Surface vertex positions.
     pub positions: Vec<DVec3>,
+    /// Triangles (indices into `positions`), facing outside.
     pub triangles: Vec<[u32; 3]>,
 }
 

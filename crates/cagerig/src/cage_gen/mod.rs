@@ -54,7 +54,9 @@ pub const MIN_VERTICES: usize = 8;
 /// Size of the cage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CageTarget {
+    /// About this many cage vertices.
     Vertices(usize),
+    /// About this many cage triangles (converted with F = 2V − 4).
     Faces(usize),
 }
 
@@ -71,6 +73,7 @@ impl CageTarget {
 /// Options of [`generate_cage`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CageOptions {
+    /// Size of the cage to reach.
     pub target: CageTarget,
     /// Least distance from the mesh to the cage, × bbox diagonal of the mesh. The default
     /// 0.5 % keeps every mesh vertex well away from the cage surface, where mean value
@@ -92,28 +95,58 @@ impl Default for CageOptions {
 /// Why no cage was produced.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum CageGenError {
+    /// The mesh has no triangles.
     #[error("the mesh has no triangles")]
     NoTriangles,
+    /// All vertices of the mesh coincide.
     #[error("the mesh has no extent: all its vertices coincide")]
     NoExtent,
+    /// A mesh vertex has a NaN or infinite coordinate.
     #[error("mesh vertex {vertex} has a non-finite coordinate")]
-    NonFinite { vertex: usize },
+    NonFinite {
+        /// The vertex index.
+        vertex: usize,
+    },
+    /// The target is below [`MIN_VERTICES`].
     #[error("a cage needs at least {minimum} vertices (asked for {requested})")]
-    TargetTooSmall { requested: usize, minimum: usize },
+    TargetTooSmall {
+        /// The target vertex count asked for.
+        requested: usize,
+        /// The fewest vertices allowed ([`MIN_VERTICES`]).
+        minimum: usize,
+    },
+    /// The margin is not finite or not in `[0, 0.1)`.
     #[error("the margin must be a finite fraction of the diagonal in [0, 0.1); got {margin}")]
-    InvalidMargin { margin: f64 },
+    InvalidMargin {
+        /// The margin asked for, × bbox diagonal of the mesh.
+        margin: f64,
+    },
+    /// The filled solid stayed in several pieces at every offset tried.
     #[error(
         "the mesh's parts lie too far apart for one connected cage: {pieces} separate pieces remain at the largest offset tried ({offset_percent:.1} % of the diagonal); make a cage per part"
     )]
-    SeparatePieces { pieces: usize, offset_percent: f64 },
+    SeparatePieces {
+        /// Number of separate surface pieces at the last offset tried.
+        pieces: usize,
+        /// That offset, in % of the bbox diagonal of the mesh.
+        offset_percent: f64,
+    },
+    /// Simplification stopped above the target at every offset tried.
     #[error(
         "could not simplify to {target} vertices without crossing the mesh or the cage itself: the best attempt stopped at {reached} vertices (offset {offset_percent:.2} % of the diagonal); ask for about {reached} vertices or a smaller margin"
     )]
     TargetNotReached {
+        /// The target vertex count.
         target: usize,
+        /// The fewest vertices any attempt reached.
         reached: usize,
+        /// The offset of that attempt, in % of the bbox diagonal of the mesh.
         offset_percent: f64,
     },
+    /// Every cage that reached the target failed [`validate`].
     #[error("the generated cage failed validation at every offset; last failures: {failures:?}")]
-    ValidationFailed { failures: Vec<String> },
+    ValidationFailed {
+        /// The failed checks of the last attempt, one message each.
+        failures: Vec<String>,
+    },
 }

@@ -47,11 +47,15 @@ pub struct GenerationStats {
     pub offset_fraction: f64,
     /// Grid spacing h, × diagonal.
     pub spacing_fraction: f64,
+    /// Points of the sample grid of the accepted attempt.
     pub grid_points: usize,
+    /// Exact nearest-triangle queries of the accepted attempt.
     pub exact_distance_queries: usize,
     /// Vertices of the marching-tetrahedra surface before simplification.
     pub surface_vertices: usize,
+    /// Edge collapses of the simplification.
     pub collapses: usize,
+    /// Candidate collapse positions rejected by the geometric constraints.
     pub rejected_positions: usize,
     /// Connected pieces of the (welded) mesh.
     pub mesh_pieces: usize,
@@ -59,6 +63,7 @@ pub struct GenerationStats {
     pub attempts: Vec<String>,
     /// Seconds spent per stage, summed over the offsets tried.
     pub stage_seconds: StageSeconds,
+    /// Total wall-clock seconds of the generation.
     pub seconds: f64,
 }
 
@@ -80,8 +85,11 @@ pub struct StageSeconds {
 /// A cage that passed [`validate_cage_geometry`], its report and how it was made.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GeneratedCage {
+    /// The cage C.
     pub cage: TriMesh,
+    /// Its validation report.
     pub report: CageReport,
+    /// Figures of the generation.
     pub stats: GenerationStats,
 }
 

@@ -72,17 +72,22 @@ pub struct CollapseConstraints<'a> {
 /// When to stop collapsing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StopAt {
+    /// Stop at this many vertices.
     Vertices(usize),
+    /// Stop at this many triangles.
     Faces(usize),
 }
 
 /// Result of [`simplify`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Simplified {
+    /// Vertex positions of the simplified surface.
     pub positions: Vec<DVec3>,
+    /// Its triangles (indices into `positions`), oriented outward.
     pub triangles: Vec<[u32; 3]>,
     /// Whether the stopping count was reached.
     pub reached: bool,
+    /// Edge collapses applied.
     pub collapses: usize,
     /// Candidate positions rejected by the geometric constraints.
     pub rejections: usize,

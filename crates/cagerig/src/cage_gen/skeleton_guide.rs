@@ -31,6 +31,7 @@ pub struct GuidePlane {
 /// The planes of a skeleton's articulations.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CageGuide {
+    /// One plane per articulation (empty: no guidance).
     pub planes: Vec<GuidePlane>,
 }
 

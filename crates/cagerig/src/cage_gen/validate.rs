@@ -46,21 +46,28 @@ pub struct CageRequirements {
 /// One named check.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Check {
+    /// Name of the check (e.g. `closed_manifold`, see the module docs).
     pub name: &'static str,
+    /// Whether the cage passed it.
     pub passed: bool,
+    /// What was measured or found (the first offender when it failed).
     pub detail: String,
 }
 
 /// Results of [`validate_cage_geometry`] (and [`check_coordinates`] when run).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CageReport {
+    /// Every check run, in order.
     pub checks: Vec<Check>,
+    /// Vertices `#C` of the cage.
     pub cage_vertices: usize,
+    /// Triangles of the cage.
     pub cage_faces: usize,
     /// Bounding-box diagonal of the mesh (the unit of the fractions below).
     pub mesh_diagonal: f64,
     /// Least / mean distance of the mesh vertices to the cage, × 1/diagonal.
     pub min_distance_fraction: f64,
+    /// Mean distance of the mesh vertices to the cage, × 1/diagonal.
     pub mean_distance_fraction: f64,
     /// Least distance between a mesh triangle and a cage triangle, × 1/diagonal.
     pub min_triangle_distance_fraction: f64,
@@ -73,6 +80,7 @@ pub struct CageReport {
 }
 
 impl CageReport {
+    /// Whether every check passed.
     pub fn passed(&self) -> bool {
         self.checks.iter().all(|c| c.passed)
     }

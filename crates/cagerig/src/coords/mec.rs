@@ -39,6 +39,7 @@ pub enum MecMethod {
 /// Outcome of [`max_entropy_coordinates`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct MecReport {
+    /// Which method produced the coordinates.
     pub method: MecMethod,
     /// Newton iterations performed (also when the method then fell back).
     pub iterations: usize,

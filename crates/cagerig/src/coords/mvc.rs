@@ -142,6 +142,7 @@ impl<'a> MvcEvaluator<'a> {
         }
     }
 
+    /// Number of vertices of the cage mesh (`#C`: the length of a coordinate row).
     pub fn num_vertices(&self) -> usize {
         self.positions.len()
     }

@@ -25,6 +25,7 @@ use crate::skin_weights::SkinWeights;
 /// cage C (`#C` vertices). Mean value coordinates Φ are not included (compute them from M and C).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DemoRig {
+    /// Name of the demo rig (one of [`builtin_names`]).
     pub name: String,
     /// Rest skin M.
     pub mesh: TriMesh,
@@ -43,6 +44,17 @@ pub fn builtin_names() -> &'static [&'static str] {
 
 /// Builds the demo rig `name` (see the module table for what `resolution` means; `None` = default).
 pub fn builtin(name: &str, resolution: Option<usize>) -> Result<DemoRig, RigError> {
+    // The one memory check of every front end (CLI, studio, Python) before a built-in rig at a
+    // user-given resolution is built: a request the machine cannot hold is refused up front,
+    // with what it would need.
+    if builtin_names().contains(&name) {
+        let (vertices, cage_vertices) = crate::memory_estimate::builtin_size(name, resolution);
+        let what = match resolution {
+            Some(r) => format!("the built-in rig {name:?} at resolution {r}"),
+            None => format!("the built-in rig {name:?}"),
+        };
+        crate::memory_estimate::check_fits(&what, vertices, cage_vertices)?;
+    }
     let mut rig = match name {
         "bar" => bar::bar(resolution)?,
         "bar_irregular" => bar::bar_irregular(resolution)?,

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 /// The companion files that exist (each `None` when no candidate name exists).
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct DiscoveredFiles {
+    /// The mesh file given (its stem names the companion files).
     pub mesh: PathBuf,
     /// The cage given, or `<stem>_cage.obj` beside the mesh if it exists.
     pub cage: Option<PathBuf>,

@@ -14,50 +14,82 @@ pub enum ParseError {
     /// The operating system refused to open, read or write the file.
     #[error("{}: {message}", path.display())]
     Io {
+        /// The file.
         path: PathBuf,
+        /// The kind of the I/O error.
         kind: std::io::ErrorKind,
+        /// The operating system's message.
         message: String,
     },
     /// A line that does not follow the format.
     #[error("{}:{line}: expected {expected}, found {found:?}", path.display())]
     Malformed {
+        /// The file.
         path: PathBuf,
+        /// The 1-based line of the file.
         line: usize,
+        /// What the format expects there (e.g. "a number").
         expected: String,
+        /// The text found instead.
         found: String,
     },
     /// A line that is not valid UTF-8.
     #[error("{}:{line}: the line is not valid UTF-8", path.display())]
-    InvalidUtf8 { path: PathBuf, line: usize },
+    InvalidUtf8 {
+        /// The file.
+        path: PathBuf,
+        /// The 1-based line of the file.
+        line: usize,
+    },
     /// An index on a line refers to an element that does not exist.
     #[error("{}:{line}: {what} index {index} is out of range (there are {len})", path.display())]
     IndexOutOfRange {
+        /// The file.
         path: PathBuf,
+        /// The 1-based line of the file.
         line: usize,
+        /// What the index refers to (e.g. "father joint", "cage vertex").
         what: &'static str,
+        /// The index as written in the file (may be negative).
         index: i64,
+        /// Number of elements it may index (valid indices are `0..len`).
         len: usize,
     },
     /// The line is well formed but its content is inconsistent with the rest of the file
     /// (duplicate entry, wrong count, keyframe order, …).
     #[error("{}:{line}: {message}", path.display())]
     Invalid {
+        /// The file.
         path: PathBuf,
+        /// The 1-based line of the file.
         line: usize,
+        /// What is inconsistent.
         message: String,
     },
     /// The parsed data failed rig validation (e.g. a cycle in the skeleton).
     #[error("{}: {source}", path.display())]
-    Rig { path: PathBuf, source: RigError },
+    Rig {
+        /// The file.
+        path: PathBuf,
+        /// The validation error.
+        source: RigError,
+    },
     /// The parsed keyframes failed animation validation.
     #[error("{}: {source}", path.display())]
     Animation {
+        /// The file.
         path: PathBuf,
+        /// The validation error.
         source: AnimationError,
     },
     /// The data cannot be expressed in the format (e.g. a sheared joint frame in a `.skt`).
     #[error("{}: cannot be written in this format: {message}", path.display())]
-    Unrepresentable { path: PathBuf, message: String },
+    Unrepresentable {
+        /// The file.
+        path: PathBuf,
+        /// What cannot be written, and why.
+        message: String,
+    },
 }
 
 impl ParseError {

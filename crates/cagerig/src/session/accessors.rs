@@ -35,6 +35,7 @@ impl RigSession {
     pub fn original_rest_cage(&self) -> &[DVec3] {
         &self.original_rest_cage
     }
+    /// Triangles of the skin, shared by M and M' (indices into `#V`).
     pub fn mesh_triangles(&self) -> &[[u32; 3]] {
         &self.mesh_triangles
     }
@@ -44,6 +45,7 @@ impl RigSession {
     pub fn topology_id(&self) -> u64 {
         self.topology_id
     }
+    /// Triangles of the cage, shared by C and C' (indices into `#C`).
     pub fn cage_triangles(&self) -> &[[u32; 3]] {
         &self.cage_triangles
     }
@@ -51,6 +53,7 @@ impl RigSession {
     pub fn skeleton(&self) -> &Skeleton {
         &self.skeleton
     }
+    /// Skinning weights Ω (`#V × #J`).
     pub fn skin_weights(&self) -> &SkinWeights {
         &self.skin_weights
     }
@@ -58,9 +61,11 @@ impl RigSession {
     pub fn cage_coords(&self) -> &CageCoords {
         &self.cage_coords
     }
+    /// The SkelUp operator: Ψ (`#J × #C`) with A = ΨC.
     pub fn skeleton_updater(&self) -> &SkeletonUpdater {
         &self.skeleton_updater
     }
+    /// The CageUp operator: C' fitted to the selected rows of M'.
     pub fn cage_updater(&self) -> &CageUpdater {
         &self.cage_updater
     }
@@ -84,9 +89,11 @@ impl RigSession {
     pub fn posed_joints(&self) -> impl Iterator<Item = DVec3> + '_ {
         self.posed_world_from_joint.iter().map(|t| t.translation)
     }
+    /// The current skinning method.
     pub fn skinning(&self) -> SkinningMethod {
         self.method
     }
+    /// Which mesh CageUp fits when the skinning method is not LBS.
     pub fn fit_source(&self) -> CageFitSource {
         self.options_fit_source
     }

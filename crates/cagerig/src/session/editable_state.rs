@@ -48,7 +48,9 @@ pub struct EditableState {
     pub scales: Vec<DVec3>,
     /// d_j, current local translation minus the rest bone offset (`#J`).
     pub translation_offsets: Vec<DVec3>,
+    /// The skinning method.
     pub skinning: SkinningMethod,
+    /// The SkelUp / CageUp locks.
     pub locks: SyncLocks,
 }
 

@@ -4,7 +4,7 @@
 use super::*;
 
 /// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
-/// the similarity tables of [`crate::skinning::cor_grid`] (seconds, centre error ≈ 1e-4 × bbox
+/// the similarity tables of [`crate::cor_centres::grid`] (seconds, centre error ≈ 1e-4 × bbox
 /// diagonal) instead of the exact O(#V·#F) form.
 pub const GRID_COR_CENTRES_ABOVE: usize = 20_000;
 
@@ -27,7 +27,7 @@ pub fn centre_coords_method(num_vertices: usize) -> &'static str {
 
 /// CoR cage coordinates Λ (`#V × #C`, Eq. 14: centres = Λ·C) from the rest mesh, Ω and Φ, as
 /// a session computes them when none were loaded: with `options`, except that the exact form
-/// is replaced by the similarity tables of [`crate::skinning::cor_grid`] on big meshes (see
+/// is replaced by the similarity tables of [`crate::cor_centres::grid`] on big meshes (see
 /// [`centre_coords_method`]).
 pub fn compute_centre_coords(
     rest_positions: &[DVec3],
@@ -106,10 +106,15 @@ pub(super) fn phi_c_residual(cage_coords: &CageCoords, cage: &[DVec3], mesh: &[D
 /// Options for assembling a session.
 #[derive(Debug, Clone, Default)]
 pub struct SessionOptions {
+    /// How SkelUp builds the joint localisation L of Eq. 9 from Ω.
     pub localisation: JointLocalisation,
+    /// Which mesh rows CageUp and CageRev use.
     pub fit_rows: FitRows,
+    /// Which mesh CageUp fits when the skinning method is not LBS.
     pub fit_source: CageFitSource,
+    /// Skinning method to start with.
     pub skinning: SkinningMethod,
+    /// How the CoR centres p_i are computed (for CoR skinning).
     pub cor_centres: CorCentresOptions,
     /// Precision of Φ (and Λ) in the per-frame products M = ΦC. With
     /// [`CoordsPrecision::F32`] the coordinates are rounded once when the session is built,

@@ -38,6 +38,7 @@ pub struct CorScratch<S: SkinReal = f64> {
 }
 
 impl<S: SkinReal> CorScratch<S> {
+    /// A buffer for `num_joints` (`#J`) joints, filled by each frame's skinning.
     pub fn new(num_joints: usize) -> Self {
         Self {
             columns: vec![[S::ZERO_V3; 4]; num_joints],
@@ -271,16 +272,19 @@ impl<S: SkinReal, P: CentredPoints<S>, const TABLE: bool> VertexKernel<S>
 }
 
 impl CorSkinning {
+    /// Precomputes the kernel from Ω (`#V × #J`).
     pub fn new(weights: &SkinWeights) -> Self {
         Self {
             sorted: CountSortedWeights::new(weights),
         }
     }
 
+    /// Number of mesh vertices `#V`.
     pub fn num_vertices(&self) -> usize {
         self.sorted.num_vertices()
     }
 
+    /// Number of joints `#J`.
     pub fn num_joints(&self) -> usize {
         self.sorted.num_joints
     }

@@ -46,10 +46,12 @@ impl CorF32 {
         Ok(cor)
     }
 
+    /// Number of mesh vertices `#V`.
     pub fn num_vertices(&self) -> usize {
         self.weights.num_vertices()
     }
 
+    /// Number of joints `#J`.
     pub fn num_joints(&self) -> usize {
         self.weights.num_joints
     }

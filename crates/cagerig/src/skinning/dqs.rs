@@ -26,11 +26,14 @@ use crate::SkinWeights;
 /// A dual quaternion `real + ε dual`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DualQuat {
+    /// Real part: the rotation (unit for a rigid transform).
     pub real: DQuat,
+    /// Dual part: ½ (translation, 0) · real for a rigid transform.
     pub dual: DQuat,
 }
 
 impl DualQuat {
+    /// The identity transform (`1 + ε 0`).
     pub const IDENTITY: Self = Self {
         real: DQuat::IDENTITY,
         dual: DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0),
@@ -73,6 +76,7 @@ pub struct DqsScratch<S: SkinReal = f64> {
 }
 
 impl<S: SkinReal> DqsScratch<S> {
+    /// A buffer for `num_joints` (`#J`) joints, initialised to identities.
     pub fn new(num_joints: usize) -> Self {
         Self {
             joint_dual_quats: vec![[S::quat(DQuat::IDENTITY), S::ZERO_QUAT]; num_joints],
@@ -248,16 +252,19 @@ impl<S: SkinReal, P: RestPoints<S>, const TABLE: bool> VertexKernel<S>
 }
 
 impl DualQuaternionSkinning {
+    /// Precomputes the kernel from Ω (`#V × #J`).
     pub fn new(weights: &SkinWeights) -> Self {
         Self {
             sorted: CountSortedWeights::new(weights),
         }
     }
 
+    /// Number of mesh vertices `#V`.
     pub fn num_vertices(&self) -> usize {
         self.sorted.num_vertices()
     }
 
+    /// Number of joints `#J`.
     pub fn num_joints(&self) -> usize {
         self.sorted.num_joints
     }

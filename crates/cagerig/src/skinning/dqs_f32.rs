@@ -39,10 +39,12 @@ impl DqsF32 {
         })
     }
 
+    /// Number of mesh vertices `#V`.
     pub fn num_vertices(&self) -> usize {
         self.mesh.weights.num_vertices()
     }
 
+    /// Number of joints `#J`.
     pub fn num_joints(&self) -> usize {
         self.mesh.weights.num_joints
     }

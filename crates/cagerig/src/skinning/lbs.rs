@@ -78,6 +78,7 @@ impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>> VertexKernel<S>
 }
 
 impl LinearBlendSkinning {
+    /// Precomputes the kernel from Ω (`#V × #J`).
     pub fn new(weights: &SkinWeights) -> Self {
         let (row_start, joints, w) = weights.csr();
         Self {
@@ -88,10 +89,12 @@ impl LinearBlendSkinning {
         }
     }
 
+    /// Number of mesh vertices `#V`.
     pub fn num_vertices(&self) -> usize {
         self.row_start.len() - 1
     }
 
+    /// Number of joints `#J`.
     pub fn num_joints(&self) -> usize {
         self.num_joints
     }

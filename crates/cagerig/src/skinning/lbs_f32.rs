@@ -21,6 +21,7 @@ pub struct LbsF32Scratch {
 }
 
 impl LbsF32Scratch {
+    /// A buffer for `num_joints` (`#J`) joints, initialised to identities.
     pub fn new(num_joints: usize) -> Self {
         Self {
             columns: vec![[Vec3A::X, Vec3A::Y, Vec3A::Z, Vec3A::ZERO]; num_joints],
@@ -50,10 +51,12 @@ impl LbsF32 {
         })
     }
 
+    /// Number of mesh vertices `#V`.
     pub fn num_vertices(&self) -> usize {
         self.mesh.weights.num_vertices()
     }
 
+    /// Number of joints `#J`.
     pub fn num_joints(&self) -> usize {
         self.mesh.weights.num_joints
     }

@@ -8,13 +8,7 @@
 pub(crate) mod antipodal_signs;
 pub(crate) mod compact_weights;
 pub mod cor;
-pub mod cor_cage_coords;
-pub mod cor_centres;
 pub mod cor_f32;
-pub mod cor_grid;
-mod cor_grid_bins;
-mod cor_grid_rows;
-mod cor_grid_tables;
 pub mod dqs;
 pub mod dqs_f32;
 pub mod lbs;
@@ -24,13 +18,14 @@ pub mod precision;
 pub mod rigid_rotation;
 
 pub use cor::{CorScratch, CorSkinning};
-pub use cor_cage_coords::compute_cor_cage_coords;
-pub use cor_centres::{
-    CorCentresFactored, CorCentresMethod, CorCentresOptions, compute_cor_centres,
+// The CoR-centre precomputation lives beside this module, in `crate::cor_centres`; its
+// types are re-exported here for the callers of the skinning kernels.
+pub use crate::cor_centres::{
+    CorCentresFactored, CorCentresMethod, CorCentresOptions, CorGridOptions, GridInterpolation,
+    compute_cor_cage_coords, compute_cor_cage_coords_grid, compute_cor_centres,
     compute_cor_centres_factored,
 };
 pub use cor_f32::{CorF32, CorF32Scratch};
-pub use cor_grid::{CorGridOptions, GridInterpolation, compute_cor_cage_coords_grid};
 pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
 pub use dqs_f32::{DqsF32, DqsF32Scratch};
 pub use lbs::LinearBlendSkinning;

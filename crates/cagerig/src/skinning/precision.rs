@@ -40,28 +40,42 @@ pub trait SkinReal:
     /// Stored output point (`Vec3` / `DVec3`).
     type Out: Copy + Send + Sync;
 
+    /// `0`.
     const ZERO: Self;
+    /// `1`.
     const ONE: Self;
+    /// `2`.
     const TWO: Self;
+    /// The zero vector.
     const ZERO_V3: Self::V3;
+    /// The zero quaternion `(0, 0, 0, 0)` (an accumulator, not a rotation).
     const ZERO_QUAT: Self::Quat;
 
     /// `x` rounded to this precision.
     fn from_f64(x: f64) -> Self;
+    /// `1 / self`.
     fn recip(self) -> Self;
     /// `|self|` with the sign of `sign`.
     fn copysign(self, sign: Self) -> Self;
+    /// `v` rounded to this precision.
     fn vec3(v: DVec3) -> Self::V3;
+    /// `q` rounded to this precision.
     fn quat(q: DQuat) -> Self::Quat;
+    /// Dot product `a · b`.
     fn dot(a: Self::V3, b: Self::V3) -> Self;
+    /// Cross product `a × b`.
     fn cross(a: Self::V3, b: Self::V3) -> Self::V3;
+    /// `[x, y, z]`.
     fn components(v: Self::V3) -> [Self; 3];
+    /// Four-component dot product of two quaternions.
     fn quat_dot(a: Self::Quat, b: Self::Quat) -> Self;
     /// Vector part `(x, y, z)` and scalar part `w`.
     fn quat_parts(q: Self::Quat) -> (Self::V3, Self);
     /// `[x, y, z, w]`.
     fn quat_array(q: Self::Quat) -> [Self; 4];
+    /// The vector `(x, y, z)`.
     fn new_v3(x: Self, y: Self, z: Self) -> Self::V3;
+    /// `v` as a stored output point (`Vec3` / `DVec3`).
     fn output(v: Self::V3) -> Self::Out;
 
     /// Columns `[x_axis, y_axis, z_axis, translation]` of an affine map, rounded.
@@ -172,6 +186,7 @@ impl_skin_real!(
 /// A rest position handed to the f32 kernels: f64 (the exact M), or f32 (the display path's
 /// M̃ = Φ̃·C), read exactly as f64.
 pub trait RestPoint: Copy + Send + Sync {
+    /// The point as f64 (exact: f32 widens without rounding).
     fn to_f64(self) -> glam::DVec3;
 }
 

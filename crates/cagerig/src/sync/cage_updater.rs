@@ -101,6 +101,7 @@ impl CageUpdater {
         &self.rows
     }
 
+    /// How C' is fitted: interpolation of `#C` rows or least squares.
     pub fn mode(&self) -> CageFitMode {
         self.mode
     }

@@ -31,11 +31,19 @@ pub enum JointLocalisation {
     /// `max(0, ω_ij^s + (1 − ω_ij)^s − 1)`. A joint with no blend region falls back to the
     /// unlocalised prior `L ≡ 1`. Cage masses are clamped to a small positive floor so that the
     /// max-entropy problem is well posed.
-    Articulation { exponent: f64 },
+    Articulation {
+        /// Exponent s of Eq. 9 (default 0.1).
+        exponent: f64,
+    },
     /// The paper tool's choice: `L_ji = max(ε, −1 + max(ε, ω_ij)^s + max(ε, ω_if)^s)` with
     /// s = 0.05, ε = 0.01 (roots: own weight only, so `L ≡ ε`), signed masses. Kept to compare
     /// with the tool's outputs.
-    ReferenceTool { exponent: f64, epsilon: f64 },
+    ReferenceTool {
+        /// Exponent s of Eq. 9 (the tool: 0.05).
+        exponent: f64,
+        /// Floor ε of the weights and of L (the tool: 0.01).
+        epsilon: f64,
+    },
 }
 
 impl Default for JointLocalisation {
@@ -63,6 +71,7 @@ pub const MASS_FLOOR_RATIO: f64 = 1e-8;
 /// How the coordinates of one joint were obtained.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct JointCoordsReport {
+    /// The joint index.
     pub joint: usize,
     /// True when the localised prior was empty and the unlocalised MVC prior was used.
     pub unlocalised: bool,
@@ -212,6 +221,7 @@ impl SkeletonUpdater {
         })
     }
 
+    /// Number of joints `#J` (rows of Ψ).
     pub fn num_joints(&self) -> usize {
         self.joint_coords.len() / self.num_cage_vertices.max(1)
     }

@@ -1,4 +1,4 @@
-//! Step 6 of the CoR grid ([`super::cor_grid`]): the rows of Λ from the similarity tables G,
+//! Step 6 of the CoR grid ([`super::grid`]): the rows of Λ from the similarity tables G,
 //! `Λ_i = Σ_pairs x y interp(G)(x, y) / its sum` (`x, y` the vertex's weights of the pair).
 //!
 //! The tables (`#slots × #C`, row-major) are far larger than the caches at fine meshes (11.6 MB
@@ -9,7 +9,7 @@
 //! (pair index first): deterministic, and equal to a per-vertex evaluation in pair-enumeration
 //! order up to the last bits (the test below).
 
-use super::cor_grid::{Grid, NONE, PairLookup, for_each_pair};
+use super::grid::{Grid, NONE, PairLookup, for_each_pair};
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::row_blocks::RowBlock;
@@ -173,7 +173,7 @@ fn accumulate_generic(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums:
 
 #[cfg(test)]
 mod tests {
-    use super::super::cor_grid::GridInterpolation;
+    use super::super::grid::GridInterpolation;
     use super::*;
 
     /// Against the plain per-vertex evaluation (pairs in enumeration order, stencil nodes in

@@ -1,4 +1,4 @@
-//! Steps 1–3 of the CoR grid ([`super::cor_grid`]): the rest triangles of every joint pair (j, k)
+//! Steps 1–3 of the CoR grid ([`super::grid`]): the rest triangles of every joint pair (j, k)
 //! aggregated into bins of their weights (a_t, b_t) = (ω_tj, ω_tk), each bin keeping
 //! Σ α_t a_t b_t, the α a b-weighted mean (ā, b̄) and the bin coordinates Σ α_t a_t b_t Φ_t
 //! (Φ_t = mean of the corner rows of Φ).
@@ -12,7 +12,7 @@ use faer::MatRef;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::cor_grid::for_each_pair;
+use super::grid::for_each_pair;
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;

@@ -1,7 +1,7 @@
 //! Cage coordinates of the centres of rotation, Λ = S·Φ (`#V × #C`, Eq. 14), computed without
 //! forming S, so that the CoR centres follow rest-cage edits as CoRs = Λ·C.
 //!
-//! With the factored CoR matrix S = A·B of [`super::cor_centres`] (A: vertex clusters × triangle
+//! With the factored CoR matrix S = A·B of [`super::exact`] (A: vertex clusters × triangle
 //! patches, similarity- and area-weighted; B: patches × vertices, the area-weighted mean of the
 //! patch's triangle centroids), Λ = A·(B·Φ):
 //!
@@ -26,7 +26,7 @@ use faer::Mat;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::cor_centres::{
+use super::exact::{
     CorCentresFactored, CorCentresOptions, CorProblem, RowScratch, centre_row,
     check_cage_coord_rows,
 };
@@ -36,12 +36,12 @@ use crate::error::RigError;
 use crate::memory_estimate::zeroed_table;
 
 #[cfg(doc)]
-use super::cor_centres::CorCentresMethod;
+use super::exact::CorCentresMethod;
 
 /// Λ = S·Φ (`#V × #C`, Eq. 14) for the rest mesh (`rest_positions` M: `#V`, `triangles`: `#F`),
 /// skinning weights Ω (`#V × #J`) and cage coordinates Φ (`#V × #C`) of the same vertices; the CoR
 /// centres are then Λ·C for the rest cage C. `options` as for
-/// [`super::cor_centres::compute_cor_centres_factored`] (use [`CorCentresMethod::Clustered`] on
+/// [`super::exact::compute_cor_centres_factored`] (use [`CorCentresMethod::Clustered`] on
 /// large meshes).
 ///
 /// `progress(done, total)` is called from worker threads as vertex clusters complete.
@@ -129,7 +129,7 @@ pub fn compute_cor_cage_coords(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::skinning::cor_centres::{CorCentresMethod, compute_cor_centres};
+    use crate::cor_centres::exact::{CorCentresMethod, compute_cor_centres};
 
     /// A strip of quads along x in the plane z = 0, weights blending joint 0 → 1 → 2 along x.
     fn strip(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>, SkinWeights) {

@@ -1,6 +1,6 @@
 //! Cage coordinates of the centres of rotation, Λ (`#V × #C`, Eq. 5 and 14), from per-joint-pair
 //! similarity tables on a grid over the weight simplex: O(#F + #pairs·nodes·bins·#C + #V·#C),
-//! i.e. seconds where the clustered form of [`super::cor_cage_coords`] takes minutes.
+//! i.e. seconds where the clustered form of [`super::cage_coords`] takes minutes.
 //!
 //! Eq. 5 over rest triangles t (area α_t, weights ω_t = mean of the corner rows, coordinate row
 //! Φ_t = mean of the corner rows of Φ, so that the centroid is v_t = Φ_t·C):
@@ -25,7 +25,7 @@
 //! The denominator is the sum of the numerator's #C entries (rows of Φ sum to 1), so the rows of Λ
 //! sum to 1 up to rounding whatever the interpolation error. Vertices without a centre (fewer
 //! than two positive weights, no joint pair shared with any triangle, or a non-positive
-//! interpolated total) keep Λ_i = Φ_i (S_ii = 1, as in [`super::cor_centres`]).
+//! interpolated total) keep Λ_i = Φ_i (S_ii = 1, as in [`super::exact`]).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -33,10 +33,10 @@ use faer::Mat;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::cor_centres::{check_cage_coord_rows, validate_cor_inputs};
-use super::cor_grid_bins::bin_triangles;
-use super::cor_grid_rows::{RowScratch, Tables, fill_rows};
-use super::cor_grid_tables::similarity_tables;
+use super::exact::{check_cage_coord_rows, validate_cor_inputs};
+use super::grid_bins::bin_triangles;
+use super::grid_rows::{RowScratch, Tables, fill_rows};
+use super::grid_tables::similarity_tables;
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
@@ -60,6 +60,7 @@ pub struct CorGridOptions {
     pub grid_step: f64,
     /// Triangle weight pairs (a_t, b_t) are binned at `1 / bin_resolution` (≥ 1).
     pub bin_resolution: f64,
+    /// How the tables are interpolated at a vertex.
     pub interpolation: GridInterpolation,
 }
 
@@ -347,7 +348,7 @@ impl<'a> PairLookup<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::skinning::cor_centres::weight_similarity;
+    use crate::cor_centres::exact::weight_similarity;
 
     #[test]
     fn pair_lookup_dense_and_sorted_agree() {

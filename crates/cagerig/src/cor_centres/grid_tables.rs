@@ -1,12 +1,12 @@
-//! Step 5 of the CoR grid ([`super::cor_grid`]): the similarity tables
+//! Step 5 of the CoR grid ([`super::grid`]): the similarity tables
 //! `G_jk(x, y) = Σ_bins exp(−(x b̄ − y ā)²/σ²) Σ α a b Φ_t` at the grid nodes that some vertex's
 //! stencil touches, one dense product (nodes × bins)·(bins × #C) per chunk of a pair's nodes.
 
 use faer::{Accum, Par};
 use rayon::prelude::*;
 
-use super::cor_grid::Grid;
-use super::cor_grid_bins::TriangleBins;
+use super::grid::Grid;
+use super::grid_bins::TriangleBins;
 use crate::error::RigError;
 use crate::memory_estimate::zeroed_table;
 
