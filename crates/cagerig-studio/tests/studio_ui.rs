@@ -3,6 +3,10 @@
 //! G/R/S keys with typed values, numeric entry, undo / redo, keys and playback, session files
 //! and the skinning switch. `CAGERIG_SKIP_GPU_TESTS=1` skips them where no wgpu adapter exists.
 
+// The helpers below are test code too; clippy's `allow-unwrap-in-tests` covers only `#[test]`
+// functions and `#[cfg(test)]` modules.
+#![allow(clippy::unwrap_used)]
+
 use std::path::{Path, PathBuf};
 
 use cagerig_studio::document::Snapshot;

@@ -6,6 +6,10 @@
 //! Needs `xvfb-run` (package `xvfb`) and a Vulkan driver (`mesa-vulkan-drivers`); where they
 //! are missing the test is skipped with a note, except under `CI=true`, where it fails.
 
+// The helpers below are test code too; clippy's `allow-unwrap-in-tests` covers only `#[test]`
+// functions and `#[cfg(test)]` modules.
+#![allow(clippy::unwrap_used)]
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
