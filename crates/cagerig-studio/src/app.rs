@@ -1,183 +1,53 @@
-//! The studio's application state and its frame: panels around two 3D views, and autosave
-//! (opening is in `opening`, scripted runs in `scripted_run`).
+//! The studio: the owner of its parts — the document with its files ([`Project`]), the views
+//! ([`ViewState`]), interaction ([`Tools`]), the timeline, the dialogs and the diagnostics —
+//! and its frame, which hands each panel the parts it uses and carries out the [`Action`]s
+//! the menus, dialogs and shortcuts return. Opening documents is in `open_document`.
 
-use std::collections::BTreeSet;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use cagerig_render::Renderer;
-use cagerig_render::rig_scene::{ColorBy, Layers, Pose};
+use cagerig_render::{CameraPreset, Renderer};
+use glam::DVec3;
 
-use crate::document::Document;
-use crate::frame_stats::FrameStats;
-use crate::opening::{AfterConfirm, OpenRequest, PendingOpen};
-use crate::rig_open::RigSource;
-use crate::session_file::{SessionFile, StateDir, default_state_dir};
-use crate::timeline::TimelineState;
-use crate::view_input::Interaction;
-use crate::viewport::View;
-
-/// How the studio starts (the command line, or a test).
-#[derive(Debug, Clone, Default)]
-pub struct StartupOptions {
-    /// What to open (`None`: the built-in demo, unless `session` is given).
-    pub source: Option<RigSource>,
-    /// A `.cagerig` session to open.
-    pub session: Option<PathBuf>,
-    /// An edit script (`cagerig edit`'s JSON) applied through the editor before the first frame.
-    pub script: Option<PathBuf>,
-    /// Save the session here after the script.
-    pub save_session: Option<PathBuf>,
-    /// Write a screenshot of the window here, then quit.
-    pub screenshot: Option<PathBuf>,
-    /// Quit after this many frames.
-    pub quit_after_frames: Option<u64>,
-    /// Write per-frame timings here when quitting.
-    pub frame_stats: Option<PathBuf>,
-    /// State directory (recovery file, recent files); `None`: the default.
-    pub state_dir: Option<PathBuf>,
-    /// Simulate a drag for every frame (benchmarks of the frame time).
-    pub drag_benchmark: Option<crate::benchmark_drag::DragBenchmark>,
-    /// Cage vertices selected at start (figures of scripted runs).
-    pub select_cage: Vec<usize>,
-    /// Joint selected at start.
-    pub select_joint: Option<usize>,
-    /// Colour map at start.
-    pub color_mode: ColorMode,
-    /// Failures of the startup actions (open, script, save), for the binary's exit status.
-    pub failures: Arc<std::sync::Mutex<Vec<String>>>,
-}
-
-/// Which colour map the views show.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
-pub enum ColorMode {
-    #[default]
-    None,
-    /// Ω of the selected joint.
-    Weights,
-    /// Φ of the selected cage vertex.
-    CageCoords,
-    /// Ψ of the selected joint.
-    JointCoords,
-}
-
-/// Selected cage vertices and joint (the same indices in both poses).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Selection {
-    pub cage: BTreeSet<usize>,
-    pub joint: Option<usize>,
-    /// Whether the gizmo and the keys act on the joint (last clicked) rather than the cage.
-    pub joint_is_active: bool,
-}
-
-impl Selection {
-    pub fn is_empty(&self) -> bool {
-        self.cage.is_empty() && self.joint.is_none()
-    }
-
-    /// Whether transforms act on the selected joint.
-    pub fn joint_active(&self) -> bool {
-        self.joint.is_some() && (self.joint_is_active || self.cage.is_empty())
-    }
-}
-
-/// How the two views share the window.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Layout {
-    Split,
-    CurrentOnly,
-    RestOnly,
-}
-
-/// The active transform tool of the gizmo.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Tool {
-    Move,
-    Rotate,
-    Scale,
-}
-
-/// A line of the log panel.
-#[derive(Debug, Clone)]
-pub struct LogLine {
-    pub level: LogLevel,
-    pub text: String,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LogLevel {
-    Info,
-    Warning,
-    Error,
-}
-
-/// Text fields of the dialogs.
-#[derive(Debug, Clone, Default)]
-pub struct Dialogs {
-    pub open: Option<String>,
-    pub save_as: Option<String>,
-    pub export_dir: Option<String>,
-    pub import_animation: Option<(crate::keys::Track, String)>,
-    pub export_animation: Option<String>,
-    pub help: bool,
-    /// A recovery file offered at start.
-    pub recovery: Option<PathBuf>,
-    /// File > Open: generate a cage (of `cage_vertices` vertices) when the character has none.
-    pub generate_cage: bool,
-    pub cage_vertices: usize,
-    /// Unsaved edits would be lost (by closing, or by opening something else): Save / Don't
-    /// save / Cancel, then this.
-    pub confirm: Option<AfterConfirm>,
-    /// What to do once the Save-as dialog has saved (Save chosen without a session path).
-    pub after_save: Option<AfterConfirm>,
-}
+use crate::action::Action;
+use crate::diagnostics::Diagnostics;
+use crate::dialogs::{Dialogs, dialogs_ui};
+use crate::doc_commands::run_command;
+use crate::document::Command;
+use crate::inspector::inspector_ui;
+use crate::menus::menu_bar_ui;
+use crate::opening::{AfterConfirm, OpenRequest, PendingOpen, opening_ui};
+use crate::project::Project;
+use crate::scripted_run::{ScriptedRun, run_script_file};
+use crate::session_file::{StateDir, default_state_dir};
+use crate::startup::StartupOptions;
+use crate::status::status_bar_ui;
+use crate::timeline::{TimelineState, timeline_ui};
+use crate::tools::Tools;
+use crate::view_keys::view_keys;
+use crate::view_state::ViewState;
+use crate::views::{Gpu, views_ui};
 
 /// The editor.
 pub struct StudioApp {
-    pub doc: Option<Document>,
-    pub views: [View; 2],
-    pub layout: Layout,
-    pub layers: Layers,
-    pub color_mode: ColorMode,
-    pub selection: Selection,
-    pub tool: Tool,
-    pub interaction: Interaction,
+    /// The document (rig session, keys, history) and its files.
+    pub project: Project,
+    /// The views: cameras, layout, layers, colour map.
+    pub view: ViewState,
+    /// Selection, tool, mouse state, numeric entry.
+    pub tools: Tools,
+    /// Playhead, playback, key selection.
     pub timeline: TimelineState,
-    pub log: Vec<LogLine>,
     pub dialogs: Dialogs,
-    pub state_dir: StateDir,
-    /// Where the session was last saved or opened from.
-    pub session_path: Option<PathBuf>,
-    /// `doc.edits` when last saved / autosaved.
-    pub saved_edits: u64,
-    /// The user saved or discarded the edits in the close dialog: the window may close.
-    pub close_approved: bool,
-    autosaved_edits: u64,
-    last_autosave: Instant,
+    /// The log and the frame timings.
+    pub diagnostics: Diagnostics,
     renderer: Option<Arc<Renderer>>,
-    pub stats: FrameStats,
-    pub(crate) options: StartupOptions,
-    pub(crate) frames: u64,
-    pub(crate) screenshot_requested: bool,
-    pub(crate) screenshot_done: bool,
-    /// Where the screenshot callback puts the window's pixels.
-    pub(crate) screenshot_slot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
-    pub render_error: Option<String>,
-    pub quit_requested: bool,
-    pub numeric: crate::inspector::NumericEntry,
-    /// Animations of the open glTF / FBX character (File > Load animation).
-    pub animations: Vec<cagerig_formats::ImportedAnimation>,
-    /// Their morph targets (played as cage keys, see `load_character_animation`).
-    pub morph_targets: cagerig_formats::MorphTargets,
+    pub(crate) run: ScriptedRun,
+    quit_requested: bool,
     /// A rig loading in the background.
     pub(crate) pending_open: Option<PendingOpen>,
 }
-
-/// Index of the current-pose view in [`StudioApp::views`].
-pub const CURRENT: usize = 0;
-/// Index of the rest-pose view.
-pub const REST: usize = 1;
 
 impl StudioApp {
     /// Builds the app: opens the rig or session, runs the script, saves the session if asked.
@@ -189,45 +59,25 @@ impl StudioApp {
             .map(|rs| Arc::new(Renderer::new(&rs.device)));
         let state_dir = StateDir::new(options.state_dir.clone().unwrap_or_else(default_state_dir));
         let mut app = Self {
-            doc: None,
-            views: [View::new(Pose::Current), View::new(Pose::Rest)],
-            layout: Layout::Split,
-            layers: Layers::default(),
-            color_mode: ColorMode::None,
-            selection: Selection::default(),
-            tool: Tool::Move,
-            interaction: Interaction::default(),
+            project: Project::new(state_dir),
+            view: ViewState::default(),
+            tools: Tools::default(),
             timeline: TimelineState::default(),
-            log: Vec::new(),
             dialogs: Dialogs::default(),
-            state_dir,
-            session_path: None,
-            saved_edits: 0,
-            close_approved: false,
-            autosaved_edits: 0,
-            last_autosave: Instant::now(),
+            diagnostics: Diagnostics::default(),
             renderer,
-            stats: FrameStats::default(),
-            options: options.clone(),
-            frames: 0,
-            screenshot_requested: false,
-            screenshot_done: false,
-            screenshot_slot: Arc::default(),
-            render_error: None,
+            run: ScriptedRun::new(options.clone()),
             quit_requested: false,
-            numeric: Default::default(),
-            animations: Vec::new(),
-            morph_targets: Default::default(),
             pending_open: None,
         };
         if app.renderer.is_none() {
-            app.log_error(
-                "no wgpu device: the 3D views cannot be drawn (start with a wgpu renderer)",
-            );
+            app.diagnostics
+                .log
+                .error("no wgpu device: the 3D views cannot be drawn (start with a wgpu renderer)");
         }
         let scripted = options.script.is_some() || options.screenshot.is_some();
         if !scripted && options.session.is_none() {
-            app.dialogs.recovery = app.state_dir.pending_recovery();
+            app.dialogs.recovery = app.project.state_dir.pending_recovery();
         }
         match (&options.session, &options.source) {
             (Some(path), _) => app.open_blocking(OpenRequest::Session(path.clone())),
@@ -235,51 +85,22 @@ impl StudioApp {
                 app.open_blocking(OpenRequest::Rig(source.clone().unwrap_or_default()))
             }
         }
-        if let Some(doc) = &app.doc {
-            let (nc, nj) = (doc.session.rest_cage().len(), doc.session.skeleton().len());
-            if let Some(k) = options.select_cage.iter().find(|&&k| k >= nc) {
-                app.log_error(format!(
-                    "--select-cage: cage vertex {k} does not exist (the cage has {nc} vertices)"
-                ));
-            } else {
-                app.selection.cage = options.select_cage.iter().copied().collect();
-            }
-            match options.select_joint {
-                Some(j) if j >= nj => app.log_error(format!(
-                    "--select-joint: joint {j} does not exist (the rig has {nj} joints)"
-                )),
-                Some(j) => {
-                    app.selection.joint = Some(j);
-                    app.selection.joint_is_active = options.select_cage.is_empty();
-                }
-                None => {}
-            }
-        }
-        app.color_mode = options.color_mode;
-        let errors_before = app.error_count();
+        app.select_at_start(&options);
+        app.view.color_mode = options.color_mode;
+        let errors_before = app.diagnostics.log.error_count();
         if let Some(script) = &options.script {
-            app.run_script_file(script);
+            run_script_file(app.project.doc.as_mut(), script, &mut app.diagnostics.log);
         }
         if let Some(path) = &options.save_session {
             app.save_session_to(path);
         }
-        let failed: Vec<String> = app
-            .log
-            .iter()
-            .filter(|l| l.level == LogLevel::Error)
-            .skip(errors_before)
-            .map(|l| l.text.clone())
-            .collect();
-        let open_failed = app.doc.is_none()
+        let errors = app.diagnostics.log.errors();
+        let failed: Vec<String> = errors.skip(errors_before).map(str::to_owned).collect();
+        let open_failed = app.project.doc.is_none()
             || (options.source.is_some() || options.session.is_some()) && errors_before > 0;
         if let Ok(mut f) = options.failures.lock() {
             if open_failed {
-                f.extend(
-                    app.log
-                        .iter()
-                        .filter(|l| l.level == LogLevel::Error)
-                        .map(|l| l.text.clone()),
-                );
+                f.extend(app.diagnostics.log.errors().map(str::to_owned));
             } else {
                 f.extend(failed);
             }
@@ -287,143 +108,188 @@ impl StudioApp {
         app
     }
 
-    /// Errors logged so far.
-    pub fn error_count(&self) -> usize {
-        self.log
-            .iter()
-            .filter(|l| l.level == LogLevel::Error)
-            .count()
-    }
-
-    pub fn log_info(&mut self, text: impl Into<String>) {
-        self.log.push(LogLine {
-            level: LogLevel::Info,
-            text: text.into(),
-        });
-    }
-
-    pub fn log_warning(&mut self, text: impl Into<String>) {
-        self.log.push(LogLine {
-            level: LogLevel::Warning,
-            text: text.into(),
-        });
-    }
-
-    pub fn log_error(&mut self, text: impl Into<String>) {
-        let text = text.into();
-        eprintln!("cagerig-studio: {text}");
-        self.log.push(LogLine {
-            level: LogLevel::Error,
-            text,
-        });
-    }
-
-    pub(crate) fn set_document(&mut self, doc: Document) {
-        self.doc = Some(doc);
-        self.animations.clear();
-        self.morph_targets = Default::default();
-        self.selection = Selection::default();
-        self.interaction = Interaction::default();
-        self.timeline = TimelineState::default();
-        for v in &mut self.views {
-            v.framed = false;
+    /// `--select-cage` and `--select-joint` (an index that does not exist is an error).
+    fn select_at_start(&mut self, options: &StartupOptions) {
+        let Some(doc) = &self.project.doc else { return };
+        let log = &mut self.diagnostics.log;
+        let selection = &mut self.tools.selection;
+        let (nc, nj) = (doc.session.rest_cage().len(), doc.session.skeleton().len());
+        if let Some(k) = options.select_cage.iter().find(|&&k| k >= nc) {
+            log.error(format!(
+                "--select-cage: cage vertex {k} does not exist (the cage has {nc} vertices)"
+            ));
+        } else {
+            selection.cage = options.select_cage.iter().copied().collect();
         }
-        self.saved_edits = 0;
-        self.autosaved_edits = 0;
+        match options.select_joint {
+            Some(j) if j >= nj => log.error(format!(
+                "--select-joint: joint {j} does not exist (the rig has {nj} joints)"
+            )),
+            Some(j) => {
+                selection.joint = Some(j);
+                selection.joint_is_active = options.select_cage.is_empty();
+            }
+            None => {}
+        }
     }
 
-    /// Saves the session to `path` (atomically).
-    pub fn save_session_to(&mut self, path: &std::path::Path) -> bool {
-        let Some(doc) = &self.doc else {
-            self.log_error("nothing to save: no rig is open");
+    /// Carries out `action` (asked for by a menu, a dialog or a shortcut).
+    pub fn apply(&mut self, action: Action, ctx: &egui::Context) {
+        match action {
+            Action::OpenPath(path) => self.open_path(&path),
+            Action::RequestOpen(request) => self.request_open(request),
+            Action::StartOpen(request) => self.start_open(request),
+            Action::Save => self.save(),
+            Action::SaveAs(typed) => {
+                if !self.save_session_to(Path::new(typed.trim())) {
+                    self.dialogs.save_as = Some(typed);
+                } else if let Some(after) = self.dialogs.after_save.take() {
+                    self.continue_after_confirm(ctx, after);
+                }
+            }
+            Action::SaveThenContinue(after) => self.save_then_continue(ctx, after),
+            Action::Continue(after) => self.continue_after_confirm(ctx, after),
+            Action::DiscardRecovery => self.project.state_dir.clear_recovery(),
+            Action::Export(dir) => self.project.export_to(&dir, &mut self.diagnostics.log),
+            Action::ImportAnimation(track, path) => {
+                let log = &mut self.diagnostics.log;
+                self.project.import_animation(track, &path, log);
+            }
+            Action::LoadCharacterAnimation(index) => self.load_character_animation(index),
+            Action::Quit => self.quit_requested = true,
+            Action::Undo => self.undo(),
+            Action::Redo => self.redo(),
+            Action::SelectAll => self.select_all(),
+            Action::SelectNone => self.tools.selection = Default::default(),
+            Action::Run(command) => {
+                self.run_command(&command);
+            }
+            Action::FrameViews(preset) => self.frame_views(preset),
+            Action::SetKey(track) => {
+                let doc = self.project.doc.as_mut();
+                self.timeline.set_key(track, doc, &mut self.diagnostics);
+            }
+            Action::DeleteSelectedKey => {
+                let doc = self.project.doc.as_mut();
+                self.timeline
+                    .delete_selected_key(doc, &mut self.diagnostics);
+            }
+            Action::TogglePlay => {
+                let doc = self.project.doc.as_ref();
+                self.timeline.toggle_play(doc, &mut self.diagnostics);
+            }
+            Action::SetTool(tool) => self.tools.tool = tool,
+        }
+    }
+
+    fn apply_all(&mut self, actions: Vec<Action>, ctx: &egui::Context) {
+        for action in actions {
+            self.apply(action, ctx);
+        }
+    }
+
+    /// Runs a command as one undo step, logging a failure.
+    pub fn run_command(&mut self, command: &Command) -> bool {
+        let Some(doc) = &mut self.project.doc else {
             return false;
         };
-        let mut file = SessionFile::new(doc.source.clone(), doc.snapshot(), self.timeline.time);
-        if self.views.iter().all(|v| v.framed) {
-            file.cameras = Some([
-                crate::viewport::camera_key(&self.views[CURRENT].camera),
-                crate::viewport::camera_key(&self.views[REST].camera),
-            ]);
+        run_command(doc, command, &mut self.diagnostics)
+    }
+
+    /// Undo (a transform in progress is cancelled first).
+    pub fn undo(&mut self) {
+        let log = &mut self.diagnostics.log;
+        self.tools.cancel_transform(self.project.doc.as_mut(), log);
+        self.project.undo(log);
+    }
+
+    /// Redo (a transform in progress is cancelled first).
+    pub fn redo(&mut self) {
+        let log = &mut self.diagnostics.log;
+        self.tools.cancel_transform(self.project.doc.as_mut(), log);
+        self.project.redo(log);
+    }
+
+    /// Selects every cage vertex.
+    pub fn select_all(&mut self) {
+        if let Some(doc) = &self.project.doc {
+            let cage_len = doc.session.rest_cage().len();
+            self.tools.selection.select_all_cage(cage_len);
         }
-        let edits = doc.edits;
-        match file.write(path) {
-            Ok(()) => {
-                self.saved_edits = edits;
-                self.session_path = Some(path.to_path_buf());
-                self.state_dir.add_recent(path);
-                self.log_info(format!("saved session {}", path.display()));
-                true
+    }
+
+    /// Frames the rig in both views, from `preset` (or the current angles).
+    pub fn frame_views(&mut self, preset: Option<CameraPreset>) {
+        if let Some(doc) = &self.project.doc {
+            self.view.frame_views(&doc.session, preset);
+        }
+    }
+
+    /// Moves the playhead and samples the keys there.
+    pub fn scrub_to(&mut self, time: f64) {
+        let doc = self.project.doc.as_mut();
+        self.timeline.scrub_to(time, doc, &mut self.diagnostics);
+    }
+
+    /// Puts animation `index` of the glTF / FBX character on the skeleton track (one undo
+    /// step), the playhead at 0.
+    pub fn load_character_animation(&mut self, index: usize) {
+        if self
+            .project
+            .load_character_animation(index, &mut self.diagnostics.log)
+        {
+            self.timeline.time = 0.0;
+        }
+    }
+
+    /// Saves to the session's file, or asks for one.
+    pub fn save(&mut self) {
+        match self.project.session_path.clone() {
+            Some(p) => {
+                self.save_session_to(&p);
             }
-            Err(e) => {
-                self.log_error(e.to_string());
-                false
+            None => self.dialogs.ask_save_as(),
+        }
+    }
+
+    /// The unsaved-edits question was answered Save: saves to the session's file and goes on,
+    /// or asks for a file and goes on once saved there.
+    fn save_then_continue(&mut self, ctx: &egui::Context, after: AfterConfirm) {
+        match self.project.session_path.clone() {
+            Some(path) => {
+                if self.save_session_to(&path) {
+                    self.continue_after_confirm(ctx, after);
+                }
+            }
+            None => {
+                self.dialogs.ask_save_as();
+                self.dialogs.after_save = Some(after);
             }
         }
     }
 
-    /// The autosave is up to date with the document (e.g. just opened from a session file).
-    pub(crate) fn mark_autosaved(&mut self) {
-        self.autosaved_edits = self.saved_edits;
-    }
-
-    /// Whether the document has edits not saved in a session file.
-    pub fn unsaved(&self) -> bool {
-        self.doc
-            .as_ref()
-            .is_some_and(|d| d.edits != self.saved_edits)
+    /// Saves the session to `path` (atomically), with the playhead and the cameras.
+    pub fn save_session_to(&mut self, path: &Path) -> bool {
+        let cameras = self.view.camera_keys();
+        let log = &mut self.diagnostics.log;
+        self.project.save_to(path, self.timeline.time, cameras, log)
     }
 
     /// Writes the recovery file now (true when written).
     pub fn autosave_now(&mut self) -> bool {
-        let Some(doc) = &self.doc else { return false };
-        let file = SessionFile::new(doc.source.clone(), doc.snapshot(), self.timeline.time);
-        let edits = doc.edits;
-        self.last_autosave = Instant::now();
-        match self.state_dir.write_recovery(&file) {
-            Ok(()) => {
-                self.autosaved_edits = edits;
-                true
-            }
-            Err(e) => {
-                self.log_error(format!("autosave failed: {e}"));
-                false
-            }
-        }
+        let log = &mut self.diagnostics.log;
+        self.project.autosave_now(self.timeline.time, log)
     }
 
-    /// Autosave to the recovery file, at most every two seconds, after edits.
-    fn autosave(&mut self) {
-        let Some(doc) = &self.doc else { return };
-        if self.options.screenshot.is_some() || self.options.script.is_some() {
-            return;
-        }
-        if doc.edits == self.autosaved_edits
-            || doc.in_gesture()
-            || self.last_autosave.elapsed() < Duration::from_secs(2)
-        {
-            return;
-        }
-        self.autosave_now();
+    /// Whether the document has edits not saved in a session file.
+    pub fn unsaved(&self) -> bool {
+        self.project.unsaved()
     }
 
-    /// The colour map of the current selection.
-    pub fn color_by(&self) -> ColorBy {
-        match self.color_mode {
-            ColorMode::None => ColorBy::None,
-            ColorMode::Weights => self
-                .selection
-                .joint
-                .map_or(ColorBy::None, ColorBy::JointWeights),
-            ColorMode::JointCoords => self
-                .selection
-                .joint
-                .map_or(ColorBy::None, ColorBy::JointCageCoords),
-            ColorMode::CageCoords => self
-                .selection
-                .cage
-                .first()
-                .map_or(ColorBy::None, |&k| ColorBy::CageCoords(k)),
-        }
+    /// Where the gizmo of the active selection sits in `view`, and which handles it shows.
+    pub fn gizmo_pivot(&self, view: usize) -> Option<(DVec3, bool, bool)> {
+        let doc = self.project.doc.as_ref()?;
+        self.tools.gizmo_pivot(&doc.session, view)
     }
 
     pub fn renderer(&self) -> Option<&Arc<Renderer>> {
@@ -432,12 +298,18 @@ impl StudioApp {
 
     /// Frames counted so far.
     pub fn frames(&self) -> u64 {
-        self.frames
+        self.run.frames()
     }
 
-    /// The startup options (for the drag benchmark).
+    /// The startup options.
     pub fn startup_options(&self) -> &StartupOptions {
-        &self.options
+        self.run.options()
+    }
+
+    /// Lets the window close (after the close dialog saved or discarded the edits).
+    pub fn approve_close(&mut self, ctx: &egui::Context) {
+        self.dialogs.close_approved = true;
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
     }
 }
 
@@ -445,67 +317,115 @@ impl eframe::App for StudioApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let frame_start = Instant::now();
         let ctx = ui.ctx().clone();
-        self.stats.begin_frame();
+        self.diagnostics.stats.begin_frame();
         self.poll_open(&ctx);
         self.handle_dropped_files(&ctx);
         self.hold_close_with_unsaved_edits(&ctx);
-        crate::shortcuts::global_shortcuts(self, &ctx);
-        crate::benchmark_drag::step(self);
-        self.advance_playback(&ctx);
-        crate::menus::menu_bar_ui(self, ui);
-        crate::status::status_bar_ui(self, ui);
-        crate::timeline::timeline_ui(self, ui);
-        crate::inspector::inspector_ui(self, ui);
+        self.shortcuts(&ctx);
+        crate::benchmark_drag::step(
+            self.run.options().drag_benchmark,
+            self.run.frames(),
+            self.project.doc.as_mut(),
+            &mut self.diagnostics,
+        );
+        let doc = self.project.doc.as_mut();
+        self.timeline.advance(&ctx, doc, &mut self.diagnostics);
+        let actions = menu_bar_ui(ui, &self.project, &mut self.view.layout, &mut self.dialogs);
+        self.apply_all(actions, &ctx);
+        let doc = self.project.doc.as_ref();
+        let help = &mut self.dialogs.help;
+        status_bar_ui(ui, doc, &self.tools.selection, &self.diagnostics, help);
+        let doc = self.project.doc.as_mut();
+        timeline_ui(ui, doc, &mut self.timeline, &mut self.diagnostics);
+        let (doc, view, tools) = (self.project.doc.as_mut(), &mut self.view, &mut self.tools);
+        inspector_ui(ui, doc, view, tools, &mut self.diagnostics);
         let render_state = frame.wgpu_render_state().cloned();
-        crate::view_input::views_ui(self, ui, render_state.as_ref());
-        crate::menus::dialogs_ui(self, &ctx);
-        crate::opening::opening_ui(self, &ctx);
-        self.autosave();
-        let title = match &self.doc {
-            Some(d) => format!(
-                "cagerig studio — {}{}",
-                self.session_path
-                    .as_ref()
-                    .map_or_else(|| d.source.display_name(), |p| p.display().to_string()),
-                if self.unsaved() { " •" } else { "" }
-            ),
-            None => "cagerig studio".into(),
+        let gpu = match (&render_state, &self.renderer) {
+            (Some(render_state), Some(renderer)) => Some(Gpu {
+                render_state,
+                renderer,
+            }),
+            _ => None,
         };
-        ctx.send_viewport_cmd(egui::ViewportCommand::Title(title));
-        self.stats
+        let (doc, view, tools) = (self.project.doc.as_mut(), &mut self.view, &mut self.tools);
+        views_ui(ui, gpu, doc, view, tools, &mut self.diagnostics);
+        let actions = dialogs_ui(&ctx, &mut self.dialogs);
+        self.apply_all(actions, &ctx);
+        if let Some(pending) = &self.pending_open
+            && opening_ui(&ctx, pending)
+        {
+            self.cancel_open();
+        }
+        self.autosave();
+        ctx.send_viewport_cmd(egui::ViewportCommand::Title(self.title()));
+        self.diagnostics
+            .stats
             .end_frame(frame_start.elapsed().as_secs_f64() * 1e3);
-        self.scripted_frame_end(&ctx);
+        self.run
+            .frame_end(&ctx, &mut self.diagnostics, self.quit_requested);
     }
 
     fn on_exit(&mut self) {
-        self.write_frame_stats();
+        self.run.write_frame_stats(&mut self.diagnostics);
         // A clean exit: the recovery file is not needed (unsaved edits were asked about).
-        if !self.unsaved() || self.close_approved {
-            self.state_dir.clear_recovery();
+        if !self.unsaved() || self.dialogs.close_approved {
+            self.project.state_dir.clear_recovery();
         }
     }
 }
 
 impl StudioApp {
+    /// The window's shortcuts, then the keys of the view under the mouse (none while a text
+    /// field has the focus).
+    fn shortcuts(&mut self, ctx: &egui::Context) {
+        if ctx.memory(|m| m.focused().is_some()) {
+            return;
+        }
+        let actions = crate::shortcuts::document_shortcuts(ctx, &mut self.dialogs);
+        self.apply_all(actions, ctx);
+        if self.tools.interaction.transform.is_none() {
+            let actions = crate::shortcuts::editing_shortcuts(ctx);
+            self.apply_all(actions, ctx);
+        }
+        let (doc, view, tools) = (self.project.doc.as_mut(), &mut self.view, &mut self.tools);
+        view_keys(ctx, doc, view, tools, &mut self.diagnostics);
+    }
+
+    /// The window title: the session's file (or the character), • with unsaved edits.
+    fn title(&self) -> String {
+        match &self.project.doc {
+            Some(d) => format!(
+                "cagerig studio — {}{}",
+                self.project
+                    .session_path
+                    .as_ref()
+                    .map_or_else(|| d.source.display_name(), |p| p.display().to_string()),
+                if self.unsaved() { " •" } else { "" }
+            ),
+            None => "cagerig studio".into(),
+        }
+    }
+
+    /// Autosave to the recovery file, at most every two seconds, after edits (not in
+    /// `--screenshot` or `--script` runs).
+    fn autosave(&mut self) {
+        if self.run.autosaves() {
+            let log = &mut self.diagnostics.log;
+            self.project.autosave(self.timeline.time, log);
+        }
+    }
+
     /// A request to close the window while edits are unsaved is held back and asked about
     /// (scripted runs close without asking).
     fn hold_close_with_unsaved_edits(&mut self, ctx: &egui::Context) {
-        let scripted =
-            self.options.screenshot.is_some() || self.options.quit_after_frames.is_some();
         if ctx.input(|i| i.viewport().close_requested())
             && self.unsaved()
-            && !self.close_approved
-            && !scripted
+            && !self.dialogs.close_approved
+            && !self.run.ends_by_itself()
         {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
             self.dialogs.confirm = Some(AfterConfirm::Close);
         }
-    }
-
-    /// Lets the window close (after the close dialog saved or discarded the edits).
-    pub fn approve_close(&mut self, ctx: &egui::Context) {
-        self.close_approved = true;
-        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
     }
 
     fn handle_dropped_files(&mut self, ctx: &egui::Context) {
@@ -519,32 +439,5 @@ impl StudioApp {
         for path in dropped {
             self.open_path(&path);
         }
-    }
-
-    fn advance_playback(&mut self, ctx: &egui::Context) {
-        if !self.timeline.playing {
-            return;
-        }
-        let dt = f64::from(ctx.input(|i| i.stable_dt)).min(0.1);
-        let Some(doc) = &mut self.doc else { return };
-        let duration = doc.keys.duration();
-        let mut t = self.timeline.time + dt * self.timeline.speed;
-        if t > duration {
-            if self.timeline.looping && duration > 0.0 {
-                t = t.rem_euclid(duration);
-            } else {
-                t = duration;
-                self.timeline.playing = false;
-            }
-        }
-        self.timeline.time = t;
-        match doc.sample(t) {
-            Ok(_) => self.stats.sync_ms = doc.last_sync_ms,
-            Err(e) => {
-                self.timeline.playing = false;
-                self.log_error(format!("playback: {e}"));
-            }
-        }
-        ctx.request_repaint();
     }
 }

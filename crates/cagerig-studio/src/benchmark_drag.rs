@@ -4,8 +4,8 @@
 
 use glam::DVec3;
 
-use crate::app::StudioApp;
-use crate::document::Command;
+use crate::diagnostics::Diagnostics;
+use crate::document::{Command, Document};
 
 /// Which drag to simulate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -18,13 +18,18 @@ pub enum DragBenchmark {
     Joint,
 }
 
-/// One event of the simulated drag (called once per frame).
-pub fn step(app: &mut StudioApp) {
-    let Some(kind) = app.startup_options().drag_benchmark else {
+/// One event of the simulated drag `kind` in frame `frame` (called once per frame).
+pub fn step(
+    kind: Option<DragBenchmark>,
+    frame: u64,
+    doc: Option<&mut Document>,
+    diag: &mut Diagnostics,
+) {
+    let Some(kind) = kind else {
         return;
     };
-    let frame = app.frames() as f64;
-    let Some(doc) = &mut app.doc else { return };
+    let frame = frame as f64;
+    let Some(doc) = doc else { return };
     let (lo, hi) = cagerig::mesh::bounding_box(doc.session.rest_cage());
     let size = (hi - lo).length();
     doc.begin_gesture("benchmark drag");
@@ -49,7 +54,7 @@ pub fn step(app: &mut StudioApp) {
         },
     };
     match doc.gesture_event(&command) {
-        Ok(()) => app.stats.sync_ms += doc.last_sync_ms,
-        Err(e) => app.log_error(format!("benchmark drag: {e}")),
+        Ok(()) => diag.stats.sync_ms += doc.last_sync_ms,
+        Err(e) => diag.log.error(format!("benchmark drag: {e}")),
     }
 }

@@ -5,87 +5,88 @@ use cagerig::session::SyncLocks;
 use cagerig::skinning::SkinningMethod;
 use glam::{DQuat, DVec3, EulerRot};
 
-use crate::app::{ColorMode, StudioApp, Tool};
-use crate::document::Command;
-
-/// Numeric-entry fields kept between frames.
-#[derive(Debug, Clone, Default)]
-pub struct NumericEntry {
-    /// Offset applied to the cage selection by "Move by".
-    pub offset: [f64; 3],
-    /// Whether the Euler drag values are being dragged (one undo step per drag).
-    euler_dragging: bool,
-}
+use crate::diagnostics::Diagnostics;
+use crate::doc_commands::run_command;
+use crate::document::{Command, Document};
+use crate::selection::{Selection, Tool};
+use crate::tools::{NumericEntry, Tools};
+use crate::view_state::{ColorMode, ViewState};
 
 /// The right-hand panel.
-pub fn inspector_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
+pub fn inspector_ui(
+    ui: &mut egui::Ui,
+    mut doc: Option<&mut Document>,
+    view: &mut ViewState,
+    tools: &mut Tools,
+    diag: &mut Diagnostics,
+) {
     egui::Panel::right("inspector")
         .resizable(true)
         .default_size(260.0)
         .show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
-                display_ui(app, ui);
+                display_ui(ui, view, &tools.selection);
                 ui.separator();
-                rig_ui(app, ui);
+                rig_ui(ui, doc.as_deref_mut(), &mut tools.tool, diag);
                 ui.separator();
-                selection_ui(app, ui);
+                selection_ui(ui, doc, &tools.selection, &mut tools.numeric, diag);
             });
         });
 }
 
-fn display_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
+fn display_ui(ui: &mut egui::Ui, view: &mut ViewState, selection: &Selection) {
     ui.heading("Display");
     ui.horizontal_wrapped(|ui| {
-        ui.checkbox(&mut app.layers.mesh, "Mesh");
-        ui.checkbox(&mut app.layers.wireframe, "Wireframe");
-        ui.checkbox(&mut app.layers.cage, "Cage");
-        ui.checkbox(&mut app.layers.skeleton, "Skeleton");
-        ui.checkbox(&mut app.layers.flat, "Flat");
-        ui.checkbox(&mut app.layers.ground, "Ground");
+        ui.checkbox(&mut view.layers.mesh, "Mesh");
+        ui.checkbox(&mut view.layers.wireframe, "Wireframe");
+        ui.checkbox(&mut view.layers.cage, "Cage");
+        ui.checkbox(&mut view.layers.skeleton, "Skeleton");
+        ui.checkbox(&mut view.layers.flat, "Flat");
+        ui.checkbox(&mut view.layers.ground, "Ground");
     });
     ui.label("Colour map");
-    ui.radio_value(&mut app.color_mode, ColorMode::None, "None");
+    ui.radio_value(&mut view.color_mode, ColorMode::None, "None");
     ui.radio_value(
-        &mut app.color_mode,
+        &mut view.color_mode,
         ColorMode::Weights,
         "Skin weights Ω of the joint",
     );
     ui.radio_value(
-        &mut app.color_mode,
+        &mut view.color_mode,
         ColorMode::CageCoords,
         "Φ of the cage vertex",
     );
     ui.radio_value(
-        &mut app.color_mode,
+        &mut view.color_mode,
         ColorMode::JointCoords,
         "Ψ of the joint (cage)",
     );
-    if app.color_mode != ColorMode::None
-        && app.color_by() == cagerig_render::rig_scene::ColorBy::None
+    if view.color_mode != ColorMode::None
+        && view.color_by(selection) == cagerig_render::rig_scene::ColorBy::None
     {
-        ui.weak(match app.color_mode {
+        ui.weak(match view.color_mode {
             ColorMode::CageCoords => "select a cage vertex to see its map",
             _ => "select a joint to see its map",
         });
     }
 }
 
-fn rig_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
+fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: &mut Diagnostics) {
     ui.heading("Rig");
     ui.horizontal(|ui| {
         ui.label("Tool");
-        ui.selectable_value(&mut app.tool, Tool::Move, "Move (W)");
-        ui.selectable_value(&mut app.tool, Tool::Rotate, "Rotate (E)");
-        ui.selectable_value(&mut app.tool, Tool::Scale, "Scale (T)");
+        ui.selectable_value(tool, Tool::Move, "Move (W)");
+        ui.selectable_value(tool, Tool::Rotate, "Rotate (E)");
+        ui.selectable_value(tool, Tool::Scale, "Scale (T)");
     });
-    let Some(doc) = &app.doc else { return };
+    let Some(doc) = doc else { return };
     let method = doc.session.skinning();
     let locks = doc.session.sync_locks();
     ui.horizontal(|ui| {
         ui.label("Skinning");
         for m in SkinningMethod::ALL {
             if ui.selectable_label(method == m, m.label()).clicked() && method != m {
-                app.run_command(&Command::SetSkinning(m));
+                run_command(doc, &Command::SetSkinning(m), diag);
             }
         }
     });
@@ -99,7 +100,7 @@ fn rig_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
         "Lock CageUp (current cage ignores the pose)",
     );
     if new_locks != locks {
-        app.run_command(&Command::SetLocks(new_locks));
+        run_command(doc, &Command::SetLocks(new_locks), diag);
     }
     if new_locks != SyncLocks::default() {
         ui.colored_label(
@@ -108,15 +109,21 @@ fn rig_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
         );
     }
     if ui.button("Reset pose").clicked() {
-        app.run_command(&Command::ResetPose);
+        run_command(doc, &Command::ResetPose, diag);
     }
 }
 
-fn selection_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
+fn selection_ui(
+    ui: &mut egui::Ui,
+    doc: Option<&mut Document>,
+    selection: &Selection,
+    numeric: &mut NumericEntry,
+    diag: &mut Diagnostics,
+) {
     ui.heading("Selection");
-    let Some(doc) = &app.doc else { return };
+    let Some(doc) = doc else { return };
     let s = &doc.session;
-    if let Some(j) = app.selection.joint {
+    if let Some(j) = selection.joint {
         let joint = s.skeleton().joint(j);
         ui.label(format!("Joint {j}: {}", joint.name));
         let q = s.posed_local_rotations()[j];
@@ -143,34 +150,29 @@ fn selection_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
                 euler[2].to_radians(),
             );
             let command = Command::SetJointRotation { joint: j, rotation };
-            if started || app.numeric.euler_dragging {
-                app.numeric.euler_dragging = true;
-                if let Some(doc) = &mut app.doc {
-                    doc.begin_gesture("rotate joint (numeric)");
-                    if let Err(e) = doc.gesture_event(&command) {
-                        app.log_error(format!("rotate joint: {e}"));
-                    }
+            if started || numeric.euler_dragging {
+                numeric.euler_dragging = true;
+                doc.begin_gesture("rotate joint (numeric)");
+                if let Err(e) = doc.gesture_event(&command) {
+                    diag.log.error(format!("rotate joint: {e}"));
                 }
             } else {
-                app.run_command(&command);
+                run_command(doc, &command, diag);
             }
         }
-        if stopped && app.numeric.euler_dragging {
-            app.numeric.euler_dragging = false;
-            if let Some(doc) = &mut app.doc {
-                doc.end_gesture();
-            }
+        if stopped && numeric.euler_dragging {
+            numeric.euler_dragging = false;
+            doc.end_gesture();
         }
     }
-    let Some(doc) = &app.doc else { return };
-    let n = app.selection.cage.len();
+    let n = selection.cage.len();
     if n == 0 {
         ui.weak("Click a cage vertex or a joint in a view (box-drag for several).");
         return;
     }
     ui.label(format!("{n} cage vertices"));
     if n == 1
-        && let Some(&k) = app.selection.cage.first()
+        && let Some(&k) = selection.cage.first()
     {
         let c = doc.session.rest_cage()[k];
         let p = doc.session.posed_cage()[k];
@@ -179,24 +181,32 @@ fn selection_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
     }
     ui.horizontal(|ui| {
         ui.label("Offset");
-        for v in &mut app.numeric.offset {
+        for v in &mut numeric.offset {
             ui.add(egui::DragValue::new(v).speed(0.01).max_decimals(5));
         }
     });
-    let offset = DVec3::from_array(app.numeric.offset);
-    let vertices: Vec<usize> = app.selection.cage.iter().copied().collect();
+    let offset = DVec3::from_array(numeric.offset);
+    let vertices: Vec<usize> = selection.cage.iter().copied().collect();
     ui.horizontal(|ui| {
         if ui.button("Move rest cage C").clicked() {
-            app.run_command(&Command::MoveRestCage {
-                vertices: vertices.clone(),
-                offsets: vec![offset],
-            });
+            run_command(
+                doc,
+                &Command::MoveRestCage {
+                    vertices: vertices.clone(),
+                    offsets: vec![offset],
+                },
+                diag,
+            );
         }
         if ui.button("Move current cage C'").clicked() {
-            app.run_command(&Command::MovePosedCage {
-                vertices,
-                offsets: vec![offset],
-            });
+            run_command(
+                doc,
+                &Command::MovePosedCage {
+                    vertices,
+                    offsets: vec![offset],
+                },
+                diag,
+            );
         }
     });
 }

@@ -63,7 +63,7 @@ struct Args {
     /// Colour map at start: weights (Ω of the selected joint), cage-coords (Φ of the first
     /// selected cage vertex), joint-coords (Ψ of the selected joint).
     #[arg(long, value_enum, default_value = "none")]
-    color_map: cagerig_studio::app::ColorMode,
+    color_map: cagerig_studio::view_state::ColorMode,
     /// Simulate a drag (one event per frame) to measure interactive frame times.
     #[arg(long, value_enum)]
     benchmark_drag: Option<DragBenchmark>,

@@ -1,14 +1,11 @@
-//! Opening characters and sessions: unsaved edits are asked about first, the rig is loaded on a
-//! background thread while the window keeps drawing (a progress window shows what is loading),
-//! and the new document replaces the old one only once it is ready (a failure leaves the old
-//! one as it was).
+//! What can be opened (a character, a session, the recovery file), what waits for the answer
+//! to the unsaved-edits question, and the background load of a rig with its progress window
+//! (the application's side, which swaps the documents, is in `open_document`).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::mpsc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use crate::app::StudioApp;
-use crate::document::Document;
 use crate::rig_open::{OpenError, OpenedRig, RigSource, open_rig};
 use crate::session_file::SessionFile;
 
@@ -51,56 +48,15 @@ pub struct PendingOpen {
     result: mpsc::Receiver<Result<OpenedRig, OpenError>>,
 }
 
-impl StudioApp {
-    /// Opens a path by its extension (a session, or a character), asking about unsaved edits
-    /// first.
-    pub fn open_path(&mut self, path: &Path) {
-        let is_session = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("cagerig"));
-        let request = if is_session {
-            OpenRequest::Session(path.to_path_buf())
-        } else {
-            let vertices = if self.dialogs.cage_vertices == 0 {
-                100
-            } else {
-                self.dialogs.cage_vertices
-            };
-            OpenRequest::Rig(RigSource::File {
-                path: path.to_path_buf(),
-                cage: None,
-                auto_cage: self.dialogs.generate_cage.then_some(vertices),
-                skin: None,
-            })
-        };
-        self.request_open(request);
-    }
-
-    /// Opens `request` in place of the current document: with unsaved edits (in an interactive
-    /// run) asks Save / Don't save / Cancel first, then loads in the background.
-    pub fn request_open(&mut self, request: OpenRequest) {
-        if self.unsaved() && !self.is_scripted() {
-            self.dialogs.confirm = Some(AfterConfirm::Open(request));
-        } else {
-            self.start_open(request);
-        }
-    }
-
-    /// Carries out what the unsaved-edits question was asked for.
-    pub fn continue_after_confirm(&mut self, ctx: &egui::Context, after: AfterConfirm) {
-        match after {
-            AfterConfirm::Close => self.approve_close(ctx),
-            AfterConfirm::Open(request) => self.start_open(request),
-        }
-    }
-
-    /// Starts loading `request` on a background thread (a load still pending is abandoned: its
-    /// result is dropped). A session file is read first; if it cannot be read, that is logged
-    /// and nothing else happens.
-    pub fn start_open(&mut self, request: OpenRequest) {
-        let Some((source, session)) = self.source_of(&request) else {
-            return;
-        };
+impl PendingOpen {
+    /// Starts loading `source` on a background thread for `request` (with `session`, the
+    /// session file of a session or recovery request, read before); gives the arguments
+    /// back with the error when no thread can be started.
+    pub fn spawn(
+        request: OpenRequest,
+        source: &RigSource,
+        session: Option<SessionFile>,
+    ) -> Result<Self, Box<NoThread>> {
         let (sender, receiver) = mpsc::channel();
         let job = source.clone();
         let spawned = std::thread::Builder::new()
@@ -111,196 +67,52 @@ impl StudioApp {
             });
         let started = Instant::now();
         match spawned {
-            Ok(_) => {
-                self.pending_open = Some(PendingOpen {
-                    request,
-                    session,
-                    started,
-                    result: receiver,
-                })
-            }
-            Err(e) => {
-                self.log_warning(format!(
-                    "no thread to load in the background ({e}): loading now"
-                ));
-                let result = open_rig(&source);
-                self.finish_open(request, session, started, result);
-            }
+            Ok(_) => Ok(Self {
+                request,
+                session,
+                started,
+                result: receiver,
+            }),
+            Err(error) => Err(Box::new(NoThread {
+                request,
+                session,
+                started,
+                error,
+            })),
         }
     }
 
-    /// Opens `request` now, blocking (at start and in scripted runs).
-    pub fn open_blocking(&mut self, request: OpenRequest) {
-        self.pending_open = None;
-        let Some((source, session)) = self.source_of(&request) else {
-            return;
-        };
-        let started = Instant::now();
-        let result = open_rig(&source);
-        self.finish_open(request, session, started, result);
-    }
-
-    /// Whether a rig is loading in the background.
-    pub fn is_opening(&self) -> bool {
-        self.pending_open.is_some()
-    }
-
-    /// Abandons a background load (its result is dropped when it arrives).
-    pub fn cancel_open(&mut self) {
-        if let Some(pending) = self.pending_open.take() {
-            self.log_info(format!(
-                "stopped waiting for {}",
-                pending.request.display_name()
-            ));
+    /// The result of the load once it has arrived.
+    pub fn try_result(&self) -> Option<Result<OpenedRig, OpenError>> {
+        match self.result.try_recv() {
+            Ok(result) => Some(result),
+            Err(mpsc::TryRecvError::Empty) => None,
+            Err(mpsc::TryRecvError::Disconnected) => Some(Err(OpenError::Interrupted)),
         }
     }
 
-    /// Once per frame: takes the result of a background load when it has arrived.
-    pub(crate) fn poll_open(&mut self, ctx: &egui::Context) {
-        let Some(pending) = &self.pending_open else {
-            return;
-        };
-        let result = match pending.result.try_recv() {
-            Ok(result) => result,
-            Err(mpsc::TryRecvError::Empty) => {
-                ctx.request_repaint_after(Duration::from_millis(50));
-                return;
-            }
-            Err(mpsc::TryRecvError::Disconnected) => Err(OpenError::Interrupted),
-        };
-        if let Some(pending) = self.pending_open.take() {
-            self.finish_open(pending.request, pending.session, pending.started, result);
-        }
-        ctx.request_repaint();
+    pub fn request(&self) -> &OpenRequest {
+        &self.request
     }
 
-    /// The rig source of a request, and its session file (read now) for a session.
-    fn source_of(&mut self, request: &OpenRequest) -> Option<(RigSource, Option<SessionFile>)> {
-        match request {
-            OpenRequest::Rig(source) => Some((source.clone(), None)),
-            OpenRequest::Session(path) | OpenRequest::Recovery(path) => {
-                match SessionFile::read(path) {
-                    Ok(file) => Some((file.source.clone(), Some(file))),
-                    Err(e) => {
-                        self.log_error(e.to_string());
-                        if self.doc.is_none() {
-                            self.open_blocking(OpenRequest::Rig(RigSource::default()));
-                        }
-                        None
-                    }
-                }
-            }
-        }
-    }
-
-    /// Puts a loaded rig (and the state of a session) in place, or logs why it could not be
-    /// opened (the current document then stays).
-    fn finish_open(
-        &mut self,
-        request: OpenRequest,
-        session: Option<SessionFile>,
-        started: Instant,
-        result: Result<OpenedRig, OpenError>,
-    ) {
-        let opened = match result {
-            Ok(opened) => opened,
-            Err(e) => {
-                match &request {
-                    OpenRequest::Rig(_) => self.log_error(format!("cannot open: {e}")),
-                    OpenRequest::Session(path) | OpenRequest::Recovery(path) => {
-                        self.log_error(format!("{}: opening its rig: {e}", path.display()))
-                    }
-                }
-                if self.doc.is_none() && request != OpenRequest::Rig(RigSource::default()) {
-                    self.open_blocking(OpenRequest::Rig(RigSource::default()));
-                }
-                return;
-            }
-        };
-        match (request, session) {
-            (OpenRequest::Session(path), Some(file)) => {
-                self.put_session(&path, file, opened);
-                self.session_path = Some(path.clone());
-                self.state_dir.add_recent(&path);
-            }
-            (OpenRequest::Recovery(path), Some(file)) => {
-                self.put_session(&path, file, opened);
-                self.session_path = None;
-            }
-            (request, _) => self.put_rig(request, started, opened),
-        }
-    }
-
-    /// A loaded character becomes the document.
-    fn put_rig(&mut self, request: OpenRequest, started: Instant, opened: OpenedRig) {
-        let source = opened.source.clone();
-        let s = &opened.session;
-        self.log_info(format!(
-            "opened {}: {} vertices, {} joints, {} cage vertices ({:.0} ms)",
-            request.display_name(),
-            s.num_vertices(),
-            s.skeleton().len(),
-            s.rest_cage().len(),
-            started.elapsed().as_secs_f64() * 1e3
-        ));
-        for w in &opened.warnings {
-            self.log_warning(w.to_string());
-        }
-        if !opened.animations.is_empty() {
-            self.log_info(format!(
-                "{} animation(s) in the file: {} (File > Load animation puts one on the \
-                 skeleton track)",
-                opened.animations.len(),
-                opened
-                    .animations
-                    .iter()
-                    .map(|a| a.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-        if let RigSource::File { path, .. } = &source {
-            self.state_dir.add_recent(path);
-        }
-        self.set_document(Document::new(source, opened.session));
-        self.animations = opened.animations;
-        self.morph_targets = opened.morph_targets;
-        self.session_path = None;
-    }
-
-    /// A loaded session's rig with the session's state restored becomes the document.
-    fn put_session(&mut self, path: &Path, file: SessionFile, opened: OpenedRig) {
-        let mut doc = Document::new(file.source.clone(), opened.session);
-        if let Err(e) = doc.restore(&file.state) {
-            self.log_error(format!(
-                "{}: the saved state does not fit the rig {}: {e}",
-                path.display(),
-                file.source.display_name()
-            ));
-            return;
-        }
-        let edits = doc.edits;
-        self.set_document(doc);
-        self.saved_edits = edits;
-        self.mark_autosaved();
-        self.timeline.time = file.time;
-        if let Some(cameras) = file.cameras {
-            for (view, key) in self.views.iter_mut().zip(cameras) {
-                if let Some(camera) = crate::viewport::camera_from_key(key) {
-                    view.camera = camera;
-                    view.framed = true;
-                }
-            }
-        }
-        self.log_info(format!("opened session {}", path.display()));
+    /// The request, its session file and when it started.
+    pub fn into_parts(self) -> (OpenRequest, Option<SessionFile>, Instant) {
+        (self.request, self.session, self.started)
     }
 }
 
-/// The progress window of a background load, with a button to stop waiting.
-pub fn opening_ui(app: &mut StudioApp, ctx: &egui::Context) {
-    let Some(pending) = &app.pending_open else {
-        return;
-    };
+/// No thread could be started for a background load: what it was for.
+#[derive(Debug)]
+pub struct NoThread {
+    pub request: OpenRequest,
+    pub session: Option<SessionFile>,
+    pub started: Instant,
+    pub error: std::io::Error,
+}
+
+/// The progress window of a background load, with a button to stop waiting (true when
+/// clicked).
+pub fn opening_ui(ctx: &egui::Context, pending: &PendingOpen) -> bool {
     let (name, elapsed) = (
         pending.request.display_name(),
         pending.started.elapsed().as_secs_f64(),
@@ -318,7 +130,5 @@ pub fn opening_ui(app: &mut StudioApp, ctx: &egui::Context) {
             ui.label("Computing the cage coordinates and the coupling operators…");
             cancel = ui.button("Stop waiting").clicked();
         });
-    if cancel {
-        app.cancel_open();
-    }
+    cancel
 }

@@ -1,11 +1,15 @@
 //! What egui paints over a view's 3D picture: its title, the selection, the gizmo, the name of
 //! the joint under the mouse, the box selection, and the out-of-sync warning of the locks.
 
+use cagerig::session::RigSession;
 use egui::{Color32, Pos2, Stroke};
 use glam::{DVec2, DVec3};
 
-use crate::app::{CURRENT, StudioApp};
 use crate::gizmo::{self, Axis};
+use crate::picking::ViewProjection;
+use crate::selection::Tool;
+use crate::tools::Tools;
+use crate::view_state::CURRENT;
 
 const SELECTED: Color32 = Color32::from_rgb(255, 214, 0);
 
@@ -21,12 +25,16 @@ fn to_screen(p: DVec2, rect: egui::Rect) -> Pos2 {
     Pos2::new(rect.left() + p.x as f32, rect.top() + p.y as f32)
 }
 
-/// Paints the overlays of view `view` inside `rect`.
-pub fn overlay_ui(app: &StudioApp, painter: &egui::Painter, rect: egui::Rect, view: usize) {
-    let Some(doc) = &app.doc else { return };
-    let s = &doc.session;
+/// Paints the overlays of view `view` (seen through `projection`) inside `rect`.
+pub fn overlay_ui(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    view: usize,
+    projection: &ViewProjection,
+    s: &RigSession,
+    tools: &Tools,
+) {
     let current = view == CURRENT;
-    let projection = app.views[view].projection();
     let title = if current {
         "Current pose (M', S', C')"
     } else {
@@ -62,7 +70,7 @@ pub fn overlay_ui(app: &StudioApp, painter: &egui::Painter, rect: egui::Rect, vi
     } else {
         s.rest_cage()
     };
-    for &k in &app.selection.cage {
+    for &k in &tools.selection.cage {
         if let Some(p) = cage.get(k).and_then(|p| projection.project(*p)) {
             painter.circle(
                 to_screen(p, rect),
@@ -81,26 +89,26 @@ pub fn overlay_ui(app: &StudioApp, painter: &egui::Painter, rect: egui::Rect, vi
         };
         frames.get(j).map(|f| f.translation)
     };
-    if let Some(j) = app.selection.joint
+    if let Some(j) = tools.selection.joint
         && let Some(p) = joint_position(j).and_then(|p| projection.project(p))
     {
         painter.circle_stroke(to_screen(p, rect), 9.0, Stroke::new(2.5, SELECTED));
         label(painter, to_screen(p, rect), &s.skeleton().joint(j).name);
     }
-    if let Some((v, j)) = app.interaction.hovered_joint
+    if let Some((v, j)) = tools.interaction.hovered_joint
         && v == view
-        && app.selection.joint != Some(j)
+        && tools.selection.joint != Some(j)
         && let Some(p) = joint_position(j).and_then(|p| projection.project(p))
     {
         painter.circle_stroke(to_screen(p, rect), 8.0, Stroke::new(1.5, Color32::WHITE));
         label(painter, to_screen(p, rect), &s.skeleton().joint(j).name);
     }
     // Gizmo.
-    if let Some((pivot, arrows, rings)) = app.gizmo_pivot(view) {
-        draw_gizmo(painter, rect, &projection, pivot, arrows, rings, app);
+    if let Some((pivot, arrows, rings)) = tools.gizmo_pivot(s, view) {
+        draw_gizmo(painter, rect, projection, pivot, arrows, rings, tools);
     }
     // Box selection.
-    if let Some((v, start)) = app.interaction.box_select
+    if let Some((v, start)) = tools.interaction.box_select
         && v == view
         && let Some(now) = painter.ctx().input(|i| i.pointer.hover_pos())
     {
@@ -114,7 +122,7 @@ pub fn overlay_ui(app: &StudioApp, painter: &egui::Painter, rect: egui::Rect, vi
         painter.rect_filled(r, 0.0, Color32::from_rgba_unmultiplied(255, 214, 0, 30));
     }
     // Transform status.
-    if let Some(t) = &app.interaction.transform
+    if let Some(t) = &tools.interaction.transform
         && t.view == view
     {
         painter.text(
@@ -142,16 +150,16 @@ fn label(painter: &egui::Painter, at: Pos2, text: &str) {
 fn draw_gizmo(
     painter: &egui::Painter,
     rect: egui::Rect,
-    projection: &crate::picking::ViewProjection,
+    projection: &ViewProjection,
     pivot: DVec3,
     arrows: bool,
     rings: bool,
-    app: &StudioApp,
+    tools: &Tools,
 ) {
     let Some(centre) = projection.project(pivot) else {
         return;
     };
-    let hovered = app
+    let hovered = tools
         .interaction
         .hovered_view
         .and_then(|_| painter.ctx().input(|i| i.pointer.hover_pos()))
@@ -213,7 +221,7 @@ fn draw_gizmo(
             let color = axis_color(axis);
             let (a, b) = (to_screen(a, rect), to_screen(b, rect));
             painter.line_segment([a, b], Stroke::new(width, color));
-            let square = app.tool == crate::app::Tool::Scale;
+            let square = tools.tool == Tool::Scale;
             if square {
                 painter.rect_filled(
                     egui::Rect::from_center_size(b, egui::vec2(9.0, 9.0)),

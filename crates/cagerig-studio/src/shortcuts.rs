@@ -1,60 +1,66 @@
 //! Keyboard shortcuts of the whole window (undo / redo, files, selection, tools, keys, play);
-//! the keys of the view under the mouse are in `view_input`.
+//! the keys of the view under the mouse are in `view_keys`.
 
 use egui::{Key, KeyboardShortcut, Modifiers};
 
-use crate::app::{StudioApp, Tool};
+use crate::action::Action;
+use crate::dialogs::Dialogs;
 use crate::keys::Track;
+use crate::selection::Tool;
 
 fn pressed(ctx: &egui::Context, modifiers: Modifiers, key: Key) -> bool {
     ctx.input_mut(|i| i.consume_shortcut(&KeyboardShortcut::new(modifiers, key)))
 }
 
-/// Handles the window-wide shortcuts (not while a text field has the focus).
-pub fn global_shortcuts(app: &mut StudioApp, ctx: &egui::Context) {
-    if ctx.memory(|m| m.focused().is_some()) {
-        return;
-    }
+/// The shortcuts of the document and its files: undo / redo, save, open (the caller skips
+/// them while a text field has the focus). Dialogs are opened here; the rest is returned.
+pub fn document_shortcuts(ctx: &egui::Context, dialogs: &mut Dialogs) -> Vec<Action> {
+    let mut actions = Vec::new();
     let ctrl_shift = Modifiers::COMMAND | Modifiers::SHIFT;
     if pressed(ctx, ctrl_shift, Key::Z) || pressed(ctx, Modifiers::COMMAND, Key::Y) {
-        app.redo();
+        actions.push(Action::Redo);
     } else if pressed(ctx, Modifiers::COMMAND, Key::Z) {
-        app.undo();
+        actions.push(Action::Undo);
     }
     if pressed(ctx, ctrl_shift, Key::S) {
-        app.dialogs.save_as = Some("session.cagerig".into());
+        dialogs.save_as = Some("session.cagerig".into());
     } else if pressed(ctx, Modifiers::COMMAND, Key::S) {
-        app.save();
+        actions.push(Action::Save);
     }
     if pressed(ctx, Modifiers::COMMAND, Key::O) {
-        app.dialogs.open = Some(String::new());
+        dialogs.open = Some(String::new());
     }
-    if app.interaction.transform.is_none() {
-        if pressed(ctx, Modifiers::ALT, Key::A) {
-            app.selection = Default::default();
-        } else if pressed(ctx, Modifiers::NONE, Key::A) {
-            app.select_all();
-        }
-        if pressed(ctx, Modifiers::SHIFT, Key::K) {
-            app.set_key(Track::Cage);
-        } else if pressed(ctx, Modifiers::NONE, Key::K) {
-            app.set_key(Track::Skeleton);
-        }
-        if pressed(ctx, Modifiers::NONE, Key::Space) {
-            app.toggle_play();
-        }
-        if pressed(ctx, Modifiers::NONE, Key::Delete) {
-            app.delete_selected_key();
-        }
-        for (key, tool) in [
-            (Key::W, Tool::Move),
-            (Key::E, Tool::Rotate),
-            (Key::T, Tool::Scale),
-        ] {
-            if pressed(ctx, Modifiers::NONE, key) {
-                app.tool = tool;
-            }
+    actions
+}
+
+/// The editing shortcuts: selection, keys, play, tools (the caller skips them during a
+/// transform, whose keys are the view's, and while a text field has the focus).
+pub fn editing_shortcuts(ctx: &egui::Context) -> Vec<Action> {
+    let mut actions = Vec::new();
+    if pressed(ctx, Modifiers::ALT, Key::A) {
+        actions.push(Action::SelectNone);
+    } else if pressed(ctx, Modifiers::NONE, Key::A) {
+        actions.push(Action::SelectAll);
+    }
+    if pressed(ctx, Modifiers::SHIFT, Key::K) {
+        actions.push(Action::SetKey(Track::Cage));
+    } else if pressed(ctx, Modifiers::NONE, Key::K) {
+        actions.push(Action::SetKey(Track::Skeleton));
+    }
+    if pressed(ctx, Modifiers::NONE, Key::Space) {
+        actions.push(Action::TogglePlay);
+    }
+    if pressed(ctx, Modifiers::NONE, Key::Delete) {
+        actions.push(Action::DeleteSelectedKey);
+    }
+    for (key, tool) in [
+        (Key::W, Tool::Move),
+        (Key::E, Tool::Rotate),
+        (Key::T, Tool::Scale),
+    ] {
+        if pressed(ctx, Modifiers::NONE, key) {
+            actions.push(Action::SetTool(tool));
         }
     }
-    crate::view_input::view_keys(app, ctx);
+    actions
 }

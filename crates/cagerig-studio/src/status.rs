@@ -1,20 +1,29 @@
 //! The status bar (sync time of the last event, frame time, counts, undo depth) and the log
 //! panel where load warnings and errors are shown.
 
-use crate::app::{LogLevel, StudioApp};
+use crate::diagnostics::{Diagnostics, LogLevel};
+use crate::document::Document;
+use crate::selection::Selection;
 
-/// The bottom status bar and, above it, the log panel (collapsible).
-pub fn status_bar_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
+/// The bottom status bar and, above it, the log panel (collapsible). The Shortcuts button
+/// sets `show_shortcuts`.
+pub fn status_bar_ui(
+    ui: &mut egui::Ui,
+    doc: Option<&Document>,
+    selection: &Selection,
+    diag: &Diagnostics,
+    show_shortcuts: &mut bool,
+) {
     egui::Panel::bottom("status").show(ui, |ui| {
         ui.horizontal(|ui| {
-            match &app.doc {
+            match doc {
                 Some(doc) => {
                     let s = &doc.session;
                     ui.label(format!(
                         "sync {:.2} ms | frame {} | {} vertices, {} joints, {} cage vertices | \
                          {} | undo {} / redo {}",
                         doc.last_sync_ms,
-                        app.stats
+                        diag.stats
                             .last_frame_ms()
                             .map_or_else(|| "–".to_string(), |f| format!("{f:.1} ms")),
                         s.num_vertices(),
@@ -24,11 +33,11 @@ pub fn status_bar_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
                         doc.history().undo_len(),
                         doc.history().redo_len(),
                     ));
-                    let n = app.selection.cage.len();
+                    let n = selection.cage.len();
                     if n > 0 {
                         ui.label(format!("| {n} cage vertices selected"));
                     }
-                    if let Some(j) = app.selection.joint {
+                    if let Some(j) = selection.joint {
                         ui.label(format!("| joint {}", s.skeleton().joint(j).name));
                     }
                 }
@@ -38,21 +47,13 @@ pub fn status_bar_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
             }
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                 if ui.small_button("Shortcuts").clicked() {
-                    app.dialogs.help = true;
+                    *show_shortcuts = true;
                 }
             });
         });
     });
-    let errors = app
-        .log
-        .iter()
-        .filter(|l| l.level == LogLevel::Error)
-        .count();
-    let warnings = app
-        .log
-        .iter()
-        .filter(|l| l.level == LogLevel::Warning)
-        .count();
+    let errors = diag.log.count(LogLevel::Error);
+    let warnings = diag.log.count(LogLevel::Warning);
     egui::Panel::bottom("log")
         .resizable(false)
         .exact_size(84.0)
@@ -62,7 +63,7 @@ pub fn status_bar_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
                 .auto_shrink([false, false])
                 .stick_to_bottom(true)
                 .show(ui, |ui| {
-                    for line in &app.log {
+                    for line in &diag.log {
                         let color = match line.level {
                             LogLevel::Info => ui.visuals().text_color(),
                             LogLevel::Warning => egui::Color32::from_rgb(200, 140, 0),

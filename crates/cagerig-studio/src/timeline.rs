@@ -1,8 +1,9 @@
 //! The timeline: a skeleton track and a cage track with their keys, play / pause / loop /
 //! speed, scrubbing, and key selection, moving and deletion.
 
-use crate::app::StudioApp;
-use crate::document::Command;
+use crate::diagnostics::Diagnostics;
+use crate::doc_commands::{run_command, sample_keys};
+use crate::document::{Command, Document};
 use crate::keys::Track;
 
 /// Playback state.
@@ -36,85 +37,124 @@ impl Default for TimelineState {
 const TRACK_HEIGHT: f32 = 22.0;
 const LABEL_WIDTH: f32 = 70.0;
 
-impl StudioApp {
-    /// Runs a command as one undo step, logging a failure.
-    pub fn run_command(&mut self, command: &Command) -> bool {
-        let Some(doc) = &mut self.doc else {
-            return false;
-        };
-        match doc.execute(command) {
-            Ok(()) => {
-                self.stats.sync_ms += doc.last_sync_ms;
-                true
-            }
-            Err(e) => {
-                self.log_error(format!("{}: {e}", command.label()));
-                false
-            }
-        }
-    }
-
+impl TimelineState {
     /// Moves the playhead and samples the keys there.
-    pub fn scrub_to(&mut self, time: f64) {
-        self.timeline.time = time.max(0.0);
-        let Some(doc) = &mut self.doc else { return };
-        match doc.sample(self.timeline.time) {
-            Ok(_) => self.stats.sync_ms += doc.last_sync_ms,
-            Err(e) => self.log_error(format!("sampling the keys: {e}")),
+    pub fn scrub_to(&mut self, time: f64, doc: Option<&mut Document>, diag: &mut Diagnostics) {
+        self.time = time.max(0.0);
+        if let Some(doc) = doc {
+            sample_keys(doc, self.time, diag);
         }
     }
 
     /// Keys the current pose or rest cage at the playhead.
-    pub fn set_key(&mut self, track: Track) {
-        let time = self.timeline.time;
-        if self.run_command(&Command::SetKey { track, time })
-            && let Some(doc) = &self.doc
+    pub fn set_key(&mut self, track: Track, doc: Option<&mut Document>, diag: &mut Diagnostics) {
+        let time = self.time;
+        if let Some(doc) = doc
+            && run_command(doc, &Command::SetKey { track, time }, diag)
         {
-            self.timeline.selected = doc.keys.index_at(track, time).map(|i| (track, i));
+            self.selected = doc.keys.index_at(track, time).map(|i| (track, i));
         }
     }
 
     /// Deletes the selected key.
-    pub fn delete_selected_key(&mut self) {
-        if let Some((track, index)) = self.timeline.selected.take() {
-            self.run_command(&Command::DeleteKey { track, index });
+    pub fn delete_selected_key(&mut self, doc: Option<&mut Document>, diag: &mut Diagnostics) {
+        if let Some((track, index)) = self.selected.take()
+            && let Some(doc) = doc
+        {
+            run_command(doc, &Command::DeleteKey { track, index }, diag);
         }
+    }
+
+    /// Play / pause (with a warning when there are no keys to play).
+    pub fn toggle_play(&mut self, doc: Option<&Document>, diag: &mut Diagnostics) {
+        let duration = doc.map_or(0.0, |d| d.keys.duration());
+        if doc.is_none_or(|d| d.keys.is_empty()) {
+            diag.log
+                .warning("nothing to play: set keys first (K: skeleton key, Shift+K: cage key)");
+            return;
+        }
+        if !self.playing && self.time >= duration && !self.looping {
+            self.time = 0.0;
+        }
+        self.playing = !self.playing;
+    }
+
+    /// Once per frame while playing: moves the playhead by the frame's time and samples the
+    /// keys there (looping, or stopping at the end).
+    pub fn advance(
+        &mut self,
+        ctx: &egui::Context,
+        doc: Option<&mut Document>,
+        diag: &mut Diagnostics,
+    ) {
+        if !self.playing {
+            return;
+        }
+        let dt = f64::from(ctx.input(|i| i.stable_dt)).min(0.1);
+        let Some(doc) = doc else { return };
+        let duration = doc.keys.duration();
+        let mut t = self.time + dt * self.speed;
+        if t > duration {
+            if self.looping && duration > 0.0 {
+                t = t.rem_euclid(duration);
+            } else {
+                t = duration;
+                self.playing = false;
+            }
+        }
+        self.time = t;
+        match doc.sample(t) {
+            Ok(_) => diag.stats.sync_ms = doc.last_sync_ms,
+            Err(e) => {
+                self.playing = false;
+                diag.log.error(format!("playback: {e}"));
+            }
+        }
+        ctx.request_repaint();
     }
 }
 
 /// The bottom panel with the transport and the two tracks.
-pub fn timeline_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
+pub fn timeline_ui(
+    ui: &mut egui::Ui,
+    mut doc: Option<&mut Document>,
+    timeline: &mut TimelineState,
+    diag: &mut Diagnostics,
+) {
     egui::Panel::bottom("timeline")
         .resizable(false)
         .show(ui, |ui| {
-            transport_ui(app, ui);
-            tracks_ui(app, ui);
+            transport_ui(ui, doc.as_deref_mut(), timeline, diag);
+            if let Some(doc) = doc {
+                tracks_ui(ui, doc, timeline, diag);
+            }
         });
 }
 
-fn transport_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
+fn transport_ui(
+    ui: &mut egui::Ui,
+    mut doc: Option<&mut Document>,
+    timeline: &mut TimelineState,
+    diag: &mut Diagnostics,
+) {
     ui.horizontal(|ui| {
-        let play_label = if app.timeline.playing {
-            "Pause"
-        } else {
-            "Play"
-        };
+        let play_label = if timeline.playing { "Pause" } else { "Play" };
         if ui.button(play_label).on_hover_text("Space").clicked() {
-            app.toggle_play();
+            timeline.toggle_play(doc.as_deref(), diag);
         }
         if ui.button("Rewind").on_hover_text("Back to 0 s").clicked() {
-            app.scrub_to(0.0);
+            timeline.scrub_to(0.0, doc.as_deref_mut(), diag);
         }
-        ui.checkbox(&mut app.timeline.looping, "Loop");
+        ui.checkbox(&mut timeline.looping, "Loop");
         ui.label("Speed");
         ui.add(
-            egui::DragValue::new(&mut app.timeline.speed)
+            egui::DragValue::new(&mut timeline.speed)
                 .range(0.05..=8.0)
                 .speed(0.01)
                 .suffix("×"),
         );
         ui.label("Time");
-        let mut t = app.timeline.time;
+        let mut t = timeline.time;
         if ui
             .add(
                 egui::DragValue::new(&mut t)
@@ -124,7 +164,7 @@ fn transport_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
             )
             .changed()
         {
-            app.scrub_to(t);
+            timeline.scrub_to(t, doc.as_deref_mut(), diag);
         }
         ui.separator();
         if ui
@@ -132,30 +172,34 @@ fn transport_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
             .on_hover_text("K: key the current pose S'")
             .clicked()
         {
-            app.set_key(Track::Skeleton);
+            timeline.set_key(Track::Skeleton, doc.as_deref_mut(), diag);
         }
         if ui
             .button("Key cage")
             .on_hover_text("Shift+K: key the rest cage C")
             .clicked()
         {
-            app.set_key(Track::Cage);
+            timeline.set_key(Track::Cage, doc.as_deref_mut(), diag);
         }
-        let has_selection = app.timeline.selected.is_some();
+        let has_selection = timeline.selected.is_some();
         if ui
             .add_enabled(has_selection, egui::Button::new("Delete key"))
             .clicked()
         {
-            app.delete_selected_key();
+            timeline.delete_selected_key(doc, diag);
         }
     });
 }
 
-fn tracks_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
-    let Some(doc) = &app.doc else { return };
+fn tracks_ui(
+    ui: &mut egui::Ui,
+    doc: &mut Document,
+    timeline: &mut TimelineState,
+    diag: &mut Diagnostics,
+) {
     let skeleton_times: Vec<f64> = doc.keys.skeleton.iter().map(|k| k.time).collect();
     let cage_times: Vec<f64> = doc.keys.cage.iter().map(|k| k.time).collect();
-    let span = (doc.keys.duration().max(app.timeline.time) + 1.0).max(2.0);
+    let span = (doc.keys.duration().max(timeline.time) + 1.0).max(2.0);
     let width = ui.available_width();
     let (rect, response) = ui.allocate_exact_size(
         egui::vec2(width, 2.0 * TRACK_HEIGHT + 14.0),
@@ -213,14 +257,13 @@ fn tracks_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
             visuals.widgets.noninteractive.bg_stroke,
         );
         for (i, &kt) in times.iter().enumerate() {
-            let dragged = app
-                .timeline
+            let dragged = timeline
                 .dragging
                 .filter(|&(dt, di, _)| dt == *track && di == i)
                 .map(|(_, _, t)| t);
             let x = to_x(dragged.unwrap_or(kt));
             let centre = egui::pos2(x, y);
-            let selected = app.timeline.selected == Some((*track, i));
+            let selected = timeline.selected == Some((*track, i));
             let color = match (selected, track) {
                 (true, _) => egui::Color32::from_rgb(255, 200, 40),
                 (false, Track::Skeleton) => egui::Color32::from_rgb(80, 140, 230),
@@ -242,7 +285,7 @@ fn tracks_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
             }
         }
     }
-    let playhead = to_x(app.timeline.time);
+    let playhead = to_x(timeline.time);
     painter.line_segment(
         [
             egui::pos2(playhead, rect.top()),
@@ -255,54 +298,37 @@ fn tracks_ui(app: &mut StudioApp, ui: &mut egui::Ui) {
         && let Some((track, i)) = hovered_key
     {
         {
-            app.timeline.selected = Some((track, i));
+            timeline.selected = Some((track, i));
             let t = match track {
                 Track::Skeleton => skeleton_times[i],
                 Track::Cage => cage_times[i],
             };
-            app.timeline.dragging = Some((track, i, t));
+            timeline.dragging = Some((track, i, t));
         }
     }
     if let Some(pos) = response.interact_pointer_pos() {
         let t = to_t(pos.x);
-        if let Some(d) = &mut app.timeline.dragging {
+        if let Some(d) = &mut timeline.dragging {
             d.2 = (t * 100.0).round() / 100.0;
         } else if response.dragged() || response.clicked() {
             if response.clicked() && hovered_key.is_some() {
-                app.timeline.selected = hovered_key;
+                timeline.selected = hovered_key;
             } else {
-                app.scrub_to(t);
+                timeline.scrub_to(t, Some(&mut *doc), diag);
             }
         }
     }
     if response.drag_stopped()
-        && let Some((track, index, time)) = app.timeline.dragging.take()
+        && let Some((track, index, time)) = timeline.dragging.take()
     {
         let old = match track {
             Track::Skeleton => skeleton_times.get(index),
             Track::Cage => cage_times.get(index),
         };
         if old.is_some_and(|&o| (o - time).abs() > 1e-9)
-            && app.run_command(&Command::MoveKey { track, index, time })
-            && let Some(doc) = &app.doc
+            && run_command(doc, &Command::MoveKey { track, index, time }, diag)
         {
-            app.timeline.selected = doc.keys.index_at(track, time).map(|i| (track, i));
+            timeline.selected = doc.keys.index_at(track, time).map(|i| (track, i));
         }
-    }
-}
-
-impl StudioApp {
-    pub fn toggle_play(&mut self) {
-        let duration = self.doc.as_ref().map_or(0.0, |d| d.keys.duration());
-        if self.doc.as_ref().is_none_or(|d| d.keys.is_empty()) {
-            self.log_warning(
-                "nothing to play: set keys first (K: skeleton key, Shift+K: cage key)",
-            );
-            return;
-        }
-        if !self.timeline.playing && self.timeline.time >= duration && !self.timeline.looping {
-            self.timeline.time = 0.0;
-        }
-        self.timeline.playing = !self.timeline.playing;
     }
 }

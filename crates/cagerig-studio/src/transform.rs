@@ -4,11 +4,14 @@
 //! X / Y / Z, typed values, Enter / Esc). Each mouse move is one session event; the whole
 //! transform is one undo step.
 
+use cagerig::session::RigSession;
 use glam::{DQuat, DVec2, DVec3};
 
-use crate::app::{CURRENT, StudioApp};
 use crate::document::Command;
 use crate::gizmo::{self, Axis, Constraint};
+use crate::picking::ViewProjection;
+use crate::selection::Selection;
+use crate::view_state::CURRENT;
 
 /// Grab, rotate or scale.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,7 +50,7 @@ pub enum TransformTarget {
 /// A transform in progress.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Transform {
-    /// Which view ([`CURRENT`] or [`crate::app::REST`]).
+    /// Which view ([`CURRENT`] or [`crate::view_state::REST`]).
     pub view: usize,
     pub op: TransformOp,
     pub constraint: Constraint,
@@ -114,30 +117,46 @@ fn rotation_axis(constraint: Constraint, view_back: DVec3) -> DVec3 {
     }
 }
 
-impl StudioApp {
-    /// Starts a transform of the active selection in `view` (one undo step until it ends).
-    pub fn begin_transform(
-        &mut self,
-        view: usize,
-        op: TransformOp,
-        constraint: Constraint,
-        mouse: DVec2,
-        modal: bool,
-        trackball: bool,
-    ) -> bool {
-        let Some(doc) = &mut self.doc else {
-            return false;
-        };
-        let target = if self.selection.joint_active() {
-            let Some(joint) = self.selection.joint else {
-                return false;
+/// How a transform starts: in which view, what it does, where the mouse was.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TransformStart {
+    pub view: usize,
+    pub op: TransformOp,
+    pub constraint: Constraint,
+    /// Mouse position (view pixels).
+    pub mouse: DVec2,
+    /// Started by a key (see [`Transform::modal`]).
+    pub modal: bool,
+    /// A joint rotation follows the mouse as a trackball (when free and nothing is typed).
+    pub trackball: bool,
+}
+
+/// Why a joint cannot be transformed but by a rotation in the current-pose view.
+pub const JOINTS_ROTATE_IN_THE_CURRENT_VIEW: &str = "joints are rotated in the current-pose view (R); the rest skeleton follows the rest cage \
+     (SkelUp)";
+
+impl Transform {
+    /// A transform of the active selection of `session`: `Ok(None)` when nothing is selected,
+    /// `Err` with the reason when the selection cannot be transformed so.
+    pub fn begin(
+        session: &RigSession,
+        selection: &Selection,
+        start: TransformStart,
+    ) -> Result<Option<Transform>, &'static str> {
+        let TransformStart {
+            view,
+            op,
+            constraint,
+            mouse,
+            modal,
+            trackball,
+        } = start;
+        let target = if selection.joint_active() {
+            let Some(joint) = selection.joint else {
+                return Ok(None);
             };
             if view != CURRENT || op != TransformOp::Rotate {
-                self.log_warning(
-                    "joints are rotated in the current-pose view (R); the rest skeleton follows \
-                     the rest cage (SkelUp)",
-                );
-                return false;
+                return Err(JOINTS_ROTATE_IN_THE_CURRENT_VIEW);
             }
             TransformTarget::Joint {
                 joint,
@@ -145,15 +164,15 @@ impl StudioApp {
                 trackball,
             }
         } else {
-            if self.selection.cage.is_empty() {
-                return false;
+            if selection.cage.is_empty() {
+                return Ok(None);
             }
             let positions = if view == CURRENT {
-                doc.session.posed_cage()
+                session.posed_cage()
             } else {
-                doc.session.rest_cage()
+                session.rest_cage()
             };
-            let vertices: Vec<usize> = self.selection.cage.iter().copied().collect();
+            let vertices: Vec<usize> = selection.cage.iter().copied().collect();
             TransformTarget::Cage {
                 start: vertices.iter().map(|&k| positions[k]).collect(),
                 vertices,
@@ -164,16 +183,10 @@ impl StudioApp {
                 start.iter().copied().sum::<DVec3>() / start.len() as f64
             }
             TransformTarget::Joint { joint, .. } => {
-                doc.session.posed_world_from_joint()[*joint].translation
+                session.posed_world_from_joint()[*joint].translation
             }
         };
-        let what = match (&target, view == CURRENT) {
-            (TransformTarget::Joint { .. }, _) => "rotate joint".to_string(),
-            (TransformTarget::Cage { .. }, true) => format!("{} current cage", op.label()),
-            (TransformTarget::Cage { .. }, false) => format!("{} rest cage", op.label()),
-        };
-        doc.begin_gesture(what);
-        self.interaction.transform = Some(Transform {
+        Ok(Some(Transform {
             view,
             op,
             constraint,
@@ -182,62 +195,68 @@ impl StudioApp {
             modal,
             typed: String::new(),
             pivot,
-        });
-        true
+        }))
     }
 
-    /// Updates the transform for the mouse at `mouse` (view pixels): one session event.
-    pub fn update_transform(&mut self, mouse: DVec2) {
-        let Some(mut t) = self.interaction.transform.take() else {
-            return;
-        };
-        let projection = self.views[t.view].projection();
+    /// The label of the transform's undo step.
+    pub fn gesture_label(&self) -> String {
+        match (&self.target, self.view == CURRENT) {
+            (TransformTarget::Joint { .. }, _) => "rotate joint".to_string(),
+            (TransformTarget::Cage { .. }, true) => format!("{} current cage", self.op.label()),
+            (TransformTarget::Cage { .. }, false) => format!("{} rest cage", self.op.label()),
+        }
+    }
+
+    /// The command that brings `session` to the transform for the mouse at `mouse` (view
+    /// pixels, `projection` the transform's view); `None` when nothing moves.
+    pub fn step(
+        &mut self,
+        projection: &ViewProjection,
+        session: &RigSession,
+        mouse: DVec2,
+    ) -> Option<Command> {
         let back = projection.camera.backward();
-        let typed = t.typed_value();
-        let command = match &mut t.target {
+        let typed = self.typed_value();
+        let (view, op, constraint, start_mouse, pivot) = (
+            self.view,
+            self.op,
+            self.constraint,
+            self.start_mouse,
+            self.pivot,
+        );
+        match &mut self.target {
             TransformTarget::Cage { vertices, start } => {
-                let targets: Vec<DVec3> = match t.op {
+                let targets: Vec<DVec3> = match op {
                     TransformOp::Grab => {
-                        let d = match (typed, t.constraint) {
+                        let d = match (typed, constraint) {
                             (Some(v), Constraint::Axis(a)) => v * a.vector(),
                             (Some(v), _) => DVec3::new(v, 0.0, 0.0),
-                            (None, c) => gizmo::drag_translation(
-                                &projection,
-                                t.pivot,
-                                c,
-                                t.start_mouse,
-                                mouse,
-                            ),
+                            (None, c) => {
+                                gizmo::drag_translation(projection, pivot, c, start_mouse, mouse)
+                            }
                         };
                         start.iter().map(|p| *p + d).collect()
                     }
                     TransformOp::Rotate => {
-                        let axis = rotation_axis(t.constraint, back);
+                        let axis = rotation_axis(constraint, back);
                         let angle = typed.map(f64::to_radians).unwrap_or_else(|| {
-                            gizmo::drag_rotation_angle(
-                                &projection,
-                                t.pivot,
-                                axis,
-                                t.start_mouse,
-                                mouse,
-                            )
+                            gizmo::drag_rotation_angle(projection, pivot, axis, start_mouse, mouse)
                         });
                         let q = DQuat::from_axis_angle(axis, angle);
-                        start.iter().map(|p| t.pivot + q * (*p - t.pivot)).collect()
+                        start.iter().map(|p| pivot + q * (*p - pivot)).collect()
                     }
                     TransformOp::Scale => {
                         let f = typed.unwrap_or_else(|| {
-                            gizmo::drag_scale(&projection, t.pivot, t.start_mouse, mouse)
+                            gizmo::drag_scale(projection, pivot, start_mouse, mouse)
                         });
-                        let s = gizmo::scale_vector(f, t.constraint);
-                        start.iter().map(|p| t.pivot + s * (*p - t.pivot)).collect()
+                        let s = gizmo::scale_vector(f, constraint);
+                        start.iter().map(|p| pivot + s * (*p - pivot)).collect()
                     }
                 };
-                let Some(doc) = &self.doc else { return };
-                let current = if t.view == CURRENT {
-                    doc.session.posed_cage()
+                let current = if view == CURRENT {
+                    session.posed_cage()
                 } else {
-                    doc.session.rest_cage()
+                    session.rest_cage()
                 };
                 let offsets: Vec<DVec3> = vertices
                     .iter()
@@ -246,7 +265,7 @@ impl StudioApp {
                     .collect();
                 if offsets.iter().all(|o| o.length_squared() == 0.0) {
                     None
-                } else if t.view == CURRENT {
+                } else if view == CURRENT {
                     Some(Command::MovePosedCage {
                         vertices: vertices.clone(),
                         offsets,
@@ -263,12 +282,12 @@ impl StudioApp {
                 applied,
                 trackball,
             } => {
-                let total = if *trackball && typed.is_none() && t.constraint == Constraint::Free {
-                    gizmo::trackball(&projection, t.start_mouse, mouse, 0.01)
+                let total = if *trackball && typed.is_none() && constraint == Constraint::Free {
+                    gizmo::trackball(projection, start_mouse, mouse, 0.01)
                 } else {
-                    let axis = rotation_axis(t.constraint, back);
+                    let axis = rotation_axis(constraint, back);
                     let angle = typed.map(f64::to_radians).unwrap_or_else(|| {
-                        gizmo::drag_rotation_angle(&projection, t.pivot, axis, t.start_mouse, mouse)
+                        gizmo::drag_rotation_angle(projection, pivot, axis, start_mouse, mouse)
                     });
                     DQuat::from_axis_angle(axis, angle)
                 };
@@ -281,38 +300,13 @@ impl StudioApp {
                     angle,
                 })
             }
-        };
-        self.interaction.transform = Some(t);
-        if let (Some(command), Some(doc)) = (command, &mut self.doc) {
-            match doc.gesture_event(&command) {
-                Ok(()) => self.stats.sync_ms += doc.last_sync_ms,
-                Err(e) => {
-                    let message = format!("{}: {e}", command.label());
-                    self.cancel_transform();
-                    self.log_error(message);
-                }
-            }
         }
     }
+}
 
-    /// Confirms the transform (one undo step).
-    pub fn confirm_transform(&mut self) {
-        if self.interaction.transform.take().is_some()
-            && let Some(doc) = &mut self.doc
-        {
-            doc.end_gesture();
-        }
-    }
-
-    /// Cancels the transform: back to the state before it.
-    pub fn cancel_transform(&mut self) {
-        if self.interaction.transform.take().is_some()
-            && let Some(doc) = &mut self.doc
-            && let Err(e) = doc.cancel_gesture()
-        {
-            self.log_error(format!("cancelling the transform: {e}"));
-        }
-    }
+/// Whether a transform target is a joint (for overlays).
+pub fn is_joint_transform(target: &TransformTarget) -> bool {
+    matches!(target, TransformTarget::Joint { .. })
 }
 
 #[cfg(test)]

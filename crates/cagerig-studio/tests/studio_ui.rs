@@ -7,13 +7,13 @@
 
 use std::path::{Path, PathBuf};
 
-use cagerig_studio::app::{CURRENT, REST};
 use cagerig_studio::document::Snapshot;
 use cagerig_studio::gizmo;
 use cagerig_studio::keys::Track;
 use cagerig_studio::opening::{AfterConfirm, OpenRequest};
 use cagerig_studio::rig_open::RigSource;
 use cagerig_studio::session_file::SessionFile;
+use cagerig_studio::view_state::{CURRENT, REST};
 use cagerig_studio::{StartupOptions, StudioApp};
 use egui::{Event, Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
@@ -65,8 +65,8 @@ fn open_bar(name: &str) -> (Harness<'static, StudioApp>, PathBuf) {
 /// Screen position of a world point in a view.
 fn screen_of(h: &Harness<'_, StudioApp>, view: usize, p: DVec3) -> Pos2 {
     let app = h.state();
-    let s = app.views[view].projection().project(p).unwrap();
-    let rect = app.interaction.view_rects[view];
+    let s = app.view.views[view].projection().project(p).unwrap();
+    let rect = app.tools.interaction.view_rects[view];
     Pos2::new(rect.left() + s.x as f32, rect.top() + s.y as f32)
 }
 
@@ -104,13 +104,13 @@ fn drag(h: &mut Harness<'_, StudioApp>, from: Pos2, to: Pos2) {
 
 /// A cage vertex facing the camera in `view` (front view: largest z), and its position.
 fn front_cage_vertex(h: &Harness<'_, StudioApp>, view: usize) -> (usize, DVec3) {
-    let s = &h.state().doc.as_ref().unwrap().session;
+    let s = &h.state().project.doc.as_ref().unwrap().session;
     let cage = if view == CURRENT {
         s.posed_cage()
     } else {
         s.rest_cage()
     };
-    let eye = h.state().views[view].camera.eye();
+    let eye = h.state().view.views[view].camera.eye();
     let (k, p) = cage
         .iter()
         .enumerate()
@@ -121,11 +121,11 @@ fn front_cage_vertex(h: &Harness<'_, StudioApp>, view: usize) -> (usize, DVec3) 
 
 /// Clicks the middle joint in the current view: its index and screen position.
 fn click_middle_joint(h: &mut Harness<'_, StudioApp>) -> (usize, Pos2) {
-    let s = &h.state().doc.as_ref().unwrap().session;
+    let s = &h.state().project.doc.as_ref().unwrap().session;
     let j = s.skeleton().len() / 2;
     let at = screen_of(h, CURRENT, s.posed_world_from_joint()[j].translation);
     click(h, at, Modifiers::NONE);
-    assert_eq!(h.state().selection.joint, Some(j));
+    assert_eq!(h.state().tools.selection.joint, Some(j));
     (j, at)
 }
 
@@ -138,7 +138,7 @@ fn click_front_cage_vertex(h: &mut Harness<'_, StudioApp>) -> (usize, DVec3, Pos
 }
 
 fn snapshot(h: &Harness<'_, StudioApp>) -> Snapshot {
-    h.state().doc.as_ref().unwrap().snapshot()
+    h.state().project.doc.as_ref().unwrap().snapshot()
 }
 
 #[test]
@@ -148,12 +148,16 @@ fn opens_the_demo_and_draws_both_views() {
     }
     let (mut h, dir) = open_bar("draw");
     let app = h.state();
-    assert!(app.doc.is_some(), "log: {:?}", app.log);
-    assert!(app.render_error.is_none(), "{:?}", app.render_error);
+    assert!(app.project.doc.is_some(), "log: {:?}", app.diagnostics.log);
+    assert!(
+        app.view.render_error.is_none(),
+        "{:?}",
+        app.view.render_error
+    );
     let image = h.render().unwrap();
     // The skin (clay) is drawn where its centre projects in each view.
     for view in [CURRENT, REST] {
-        let s = &h.state().doc.as_ref().unwrap().session;
+        let s = &h.state().project.doc.as_ref().unwrap().session;
         let mesh = if view == CURRENT {
             s.posed_mesh()
         } else {
@@ -187,12 +191,18 @@ fn click_selects_a_cage_vertex_and_drag_lands_it_under_the_mouse_then_undo_resto
     let before = snapshot(&h);
     let (k, _, at) = click_front_cage_vertex(&mut h);
     assert_eq!(
-        h.state().selection.cage.iter().copied().collect::<Vec<_>>(),
+        h.state()
+            .tools
+            .selection
+            .cage
+            .iter()
+            .copied()
+            .collect::<Vec<_>>(),
         [k]
     );
     let to = at + egui::vec2(40.0, -25.0);
     drag(&mut h, at, to);
-    let doc = h.state().doc.as_ref().unwrap();
+    let doc = h.state().project.doc.as_ref().unwrap();
     assert_eq!(doc.history().undo_len(), 1, "one drag = one undo step");
     let landed = screen_of(&h, CURRENT, doc.session.posed_cage()[k]);
     // Pointer positions reach egui rounded to the pixel grid: within a pixel.
@@ -218,18 +228,18 @@ fn the_gizmo_plane_handle_moves_the_selection_in_its_plane_only() {
     let (mut h, dir) = open_bar("plane");
     let (k, p, _) = click_front_cage_vertex(&mut h);
     // A three-quarter view so that the plane normal to Y faces the camera.
-    h.state_mut().views[CURRENT].camera.yaw = 0.6;
-    h.state_mut().views[CURRENT].camera.pitch = 0.5;
+    h.state_mut().view.views[CURRENT].camera.yaw = 0.6;
+    h.state_mut().view.views[CURRENT].camera.pitch = 0.5;
     h.run_steps(2);
     let (pivot, arrows, _) = h.state().gizmo_pivot(CURRENT).unwrap();
     assert!(arrows, "the move tool shows arrows and plane handles");
-    let projection = h.state().views[CURRENT].projection();
+    let projection = h.state().view.views[CURRENT].projection();
     let square = gizmo::plane_square(&projection, pivot, gizmo::Axis::Y).unwrap();
     let centre = square.iter().copied().sum::<DVec2>() / 4.0;
-    let rect = h.state().interaction.view_rects[CURRENT];
+    let rect = h.state().tools.interaction.view_rects[CURRENT];
     let from = Pos2::new(rect.left() + centre.x as f32, rect.top() + centre.y as f32);
     drag(&mut h, from, from + egui::vec2(30.0, 12.0));
-    let doc = h.state().doc.as_ref().unwrap();
+    let doc = h.state().project.doc.as_ref().unwrap();
     assert_eq!(doc.history().undo_len(), 1, "one drag = one undo step");
     let moved = doc.session.posed_cage()[k] - p;
     assert!(moved.length() > 1e-3, "C'[{k}] moved by {moved}");
@@ -258,7 +268,7 @@ fn typing_a_joint_rotation_in_the_inspector_sets_it_in_one_undo_step() {
     h.step();
     h.key_press(egui::Key::Enter);
     h.run_steps(3);
-    let s = &h.state().doc.as_ref().unwrap().session;
+    let s = &h.state().project.doc.as_ref().unwrap().session;
     let expected = DQuat::from_rotation_z(40f64.to_radians());
     assert!(
         s.posed_local_rotations()[j].abs_diff_eq(expected, 1e-9)
@@ -266,7 +276,10 @@ fn typing_a_joint_rotation_in_the_inspector_sets_it_in_one_undo_step() {
         "{:?}",
         s.posed_local_rotations()[j]
     );
-    assert_eq!(h.state().doc.as_ref().unwrap().history().undo_len(), 1);
+    assert_eq!(
+        h.state().project.doc.as_ref().unwrap().history().undo_len(),
+        1
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -315,7 +328,7 @@ fn a_dropped_character_file_is_opened() {
     h.step();
     assert!(h.state().is_opening(), "loading in the background");
     wait_for_open(&mut h);
-    let s = &h.state().doc.as_ref().unwrap().session;
+    let s = &h.state().project.doc.as_ref().unwrap().session;
     assert_eq!(
         (s.num_vertices(), s.skeleton().len(), s.rest_cage().len()),
         (2089, 25, 58),
@@ -378,23 +391,23 @@ fn closing_with_unsaved_edits_asks_and_saves_or_discards() {
     h.run_steps(2);
     h.get_by_label("Cancel").click();
     h.run_steps(2);
-    assert!(h.state().dialogs.confirm.is_none() && !h.state().close_approved);
+    assert!(h.state().dialogs.confirm.is_none() && !h.state().dialogs.close_approved);
     // Save: with a session path the edits are written there, then the window may close.
     let path = dir.join("closing.cagerig");
-    h.state_mut().session_path = Some(path.clone());
+    h.state_mut().project.session_path = Some(path.clone());
     request_close(&mut h);
     h.run_steps(2);
     h.get_by_label("Save").click();
     h.step();
     assert!(path.exists(), "saved before closing");
-    assert!(!h.state().unsaved() && h.state().close_approved);
+    assert!(!h.state().unsaved() && h.state().dialogs.close_approved);
     assert!(root_commands(&h).contains(&egui::ViewportCommand::Close));
     // Don't save: another edit is discarded on request.
-    h.state_mut().close_approved = false;
+    h.state_mut().dialogs.close_approved = false;
     let at = screen_of(
         &h,
         CURRENT,
-        h.state().doc.as_ref().unwrap().session.posed_cage()[k],
+        h.state().project.doc.as_ref().unwrap().session.posed_cage()[k],
     );
     drag(&mut h, at, at + egui::vec2(0.0, 15.0));
     assert!(h.state().unsaved());
@@ -402,7 +415,7 @@ fn closing_with_unsaved_edits_asks_and_saves_or_discards() {
     h.run_steps(2);
     h.get_by_label("Don't save").click();
     h.step();
-    assert!(h.state().close_approved && h.state().unsaved());
+    assert!(h.state().dialogs.close_approved && h.state().unsaved());
     assert!(root_commands(&h).contains(&egui::ViewportCommand::Close));
     std::fs::remove_dir_all(dir).ok();
 }
@@ -415,6 +428,7 @@ fn rest_view_drag_moves_the_rest_cage_and_the_bones_follow() {
     let (mut h, dir) = open_bar("rest");
     let joints0: Vec<DVec3> = h
         .state()
+        .project
         .doc
         .as_ref()
         .unwrap()
@@ -426,7 +440,7 @@ fn rest_view_drag_moves_the_rest_cage_and_the_bones_follow() {
     let (_, p) = front_cage_vertex(&h, REST);
     let at = screen_of(&h, REST, p);
     drag(&mut h, at, at + egui::vec2(0.0, -30.0));
-    let s = &h.state().doc.as_ref().unwrap().session;
+    let s = &h.state().project.doc.as_ref().unwrap().session;
     let joints1: Vec<DVec3> = s.rest_joints().collect();
     // The whole cage moved (up on screen, in the view plane): SkelUp moves every joint by the
     // same translation.
@@ -459,11 +473,14 @@ fn keys_select_a_joint_and_rotate_it_by_a_typed_angle() {
     reference
         .rotate_joint(j, DVec3::Z, 30f64.to_radians())
         .unwrap();
-    let s = &h.state().doc.as_ref().unwrap().session;
+    let s = &h.state().project.doc.as_ref().unwrap().session;
     for (a, b) in s.posed_mesh().iter().zip(reference.posed_mesh()) {
         assert!(a.distance(*b) < 1e-9, "{a} vs {b}");
     }
-    assert_eq!(h.state().doc.as_ref().unwrap().history().undo_len(), 1);
+    assert_eq!(
+        h.state().project.doc.as_ref().unwrap().history().undo_len(),
+        1
+    );
     // Esc cancels a transform: R then a value then Esc leaves the state as it was.
     let before = snapshot(&h);
     h.key_press(egui::Key::R);
@@ -482,17 +499,17 @@ fn numeric_offset_buttons_and_the_skinning_switch_are_undoable() {
     }
     let (mut h, dir) = open_bar("numeric");
     let before = snapshot(&h);
-    h.state_mut().selection.cage.insert(0);
-    h.state_mut().numeric.offset = [0.0, 0.25, 0.0];
+    h.state_mut().tools.selection.cage.insert(0);
+    h.state_mut().tools.numeric.offset = [0.0, 0.25, 0.0];
     h.run_steps(2);
     h.get_by_label("Move rest cage C").click();
     h.run_steps(2);
-    let c = h.state().doc.as_ref().unwrap().session.rest_cage()[0];
+    let c = h.state().project.doc.as_ref().unwrap().session.rest_cage()[0];
     assert!((c.y - before.rig.rest_cage[0].y - 0.25).abs() < 1e-12);
     h.get_by_label("DQS").click();
     h.run_steps(2);
     assert_eq!(
-        h.state().doc.as_ref().unwrap().session.skinning(),
+        h.state().project.doc.as_ref().unwrap().session.skinning(),
         cagerig::skinning::SkinningMethod::Dqs
     );
     h.state_mut().undo();
@@ -511,7 +528,16 @@ fn keys_are_set_deleted_and_played_from_the_timeline() {
     h.get_by_label("Key skeleton").click();
     h.run_steps(1);
     h.state_mut().scrub_to(1.0);
-    let j = h.state().doc.as_ref().unwrap().session.skeleton().len() / 2;
+    let j = h
+        .state()
+        .project
+        .doc
+        .as_ref()
+        .unwrap()
+        .session
+        .skeleton()
+        .len()
+        / 2;
     h.state_mut()
         .run_command(&cagerig_studio::document::Command::RotateJoint {
             joint: j,
@@ -521,14 +547,24 @@ fn keys_are_set_deleted_and_played_from_the_timeline() {
     h.get_by_label("Key skeleton").click();
     h.get_by_label("Key cage").click();
     h.run_steps(1);
-    let keys = &h.state().doc.as_ref().unwrap().keys;
+    let keys = &h.state().project.doc.as_ref().unwrap().keys;
     assert_eq!((keys.len(Track::Skeleton), keys.len(Track::Cage)), (2, 1));
     h.get_by_label("Delete key").click();
     h.run_steps(1);
-    assert_eq!(h.state().doc.as_ref().unwrap().keys.len(Track::Cage), 0);
+    assert_eq!(
+        h.state()
+            .project
+            .doc
+            .as_ref()
+            .unwrap()
+            .keys
+            .len(Track::Cage),
+        0
+    );
     h.state_mut().scrub_to(0.0);
     let posed0 = h
         .state()
+        .project
         .doc
         .as_ref()
         .unwrap()
@@ -539,7 +575,7 @@ fn keys_are_set_deleted_and_played_from_the_timeline() {
     h.run_steps(20);
     assert!(h.state().timeline.time > 0.0);
     assert_ne!(
-        h.state().doc.as_ref().unwrap().session.posed_mesh(),
+        h.state().project.doc.as_ref().unwrap().session.posed_mesh(),
         &posed0[..]
     );
     std::fs::remove_dir_all(dir).ok();
@@ -569,8 +605,11 @@ fn a_saved_session_reopens_to_the_same_state_and_picture() {
         },
         &dir,
     );
-    assert!(path.is_file(), "{:?}", h.state().log);
-    assert_eq!(h.state().doc.as_ref().unwrap().history().undo_len(), 2);
+    assert!(path.is_file(), "{:?}", h.state().diagnostics.log);
+    assert_eq!(
+        h.state().project.doc.as_ref().unwrap().history().undo_len(),
+        2
+    );
     h.run_steps(2);
     let first = h.render().unwrap();
     let state = snapshot(&h);
@@ -591,8 +630,8 @@ fn a_saved_session_reopens_to_the_same_state_and_picture() {
     let mut differing = 0;
     let mut total = 0;
     for view in [CURRENT, REST] {
-        let r = h.state().interaction.view_rects[view];
-        assert_eq!(r, again.state().interaction.view_rects[view]);
+        let r = h.state().tools.interaction.view_rects[view];
+        assert_eq!(r, again.state().tools.interaction.view_rects[view]);
         for y in r.top() as u32..r.bottom() as u32 {
             for x in r.left() as u32..r.right() as u32 {
                 let (a, b) = (first.get_pixel(x, y).0, second.get_pixel(x, y).0);
@@ -631,11 +670,14 @@ fn a_corrupt_session_is_reported_and_changes_nothing() {
     );
     let app = h.state();
     assert!(
-        app.log.iter().any(|l| l.text.contains("bad.cagerig")),
+        app.diagnostics
+            .log
+            .iter()
+            .any(|l| l.text.contains("bad.cagerig")),
         "{:?}",
-        app.log
+        app.diagnostics.log
     );
-    assert!(app.doc.is_some(), "falls back to the demo");
+    assert!(app.project.doc.is_some(), "falls back to the demo");
     assert!(std::fs::read_to_string(&path).unwrap().ends_with("sour"));
     let mut value = serde_json::to_value(SessionFile::new(bar(), snapshot(&h), 0.0)).unwrap();
     value["version"] = 99.into();
@@ -647,7 +689,13 @@ fn a_corrupt_session_is_reported_and_changes_nothing() {
         },
         &dir,
     );
-    assert!(h.state().log.iter().any(|l| l.text.contains("newer")));
+    assert!(
+        h.state()
+            .diagnostics
+            .log
+            .iter()
+            .any(|l| l.text.contains("newer"))
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -661,14 +709,22 @@ fn box_selection_picks_only_visible_cage_vertices() {
     h.state_mut()
         .frame_views(Some(cagerig_render::CameraPreset::Side));
     h.run_steps(2);
-    let rect = h.state().interaction.view_rects[CURRENT];
+    let rect = h.state().tools.interaction.view_rects[CURRENT];
     drag(
         &mut h,
         rect.left_top() + egui::vec2(5.0, 30.0),
         rect.right_bottom() - egui::vec2(5.0, 5.0),
     );
-    let selected = h.state().selection.cage.len();
-    let total = h.state().doc.as_ref().unwrap().session.rest_cage().len();
+    let selected = h.state().tools.selection.cage.len();
+    let total = h
+        .state()
+        .project
+        .doc
+        .as_ref()
+        .unwrap()
+        .session
+        .rest_cage()
+        .len();
     assert!(selected > 0 && selected < total, "{selected} of {total}");
     let _ = DVec2::ZERO;
     std::fs::remove_dir_all(dir).ok();
@@ -710,7 +766,7 @@ fn an_autosave_is_offered_at_the_next_start_and_recovers_the_work() {
     assert_eq!(snapshot(&again), edited);
     assert!(again.state().dialogs.recovery.is_none());
     assert!(
-        again.state().session_path.is_none(),
+        again.state().project.session_path.is_none(),
         "a recovered session is not saved back over the autosave"
     );
     std::fs::remove_dir_all(dir).ok();
@@ -778,10 +834,10 @@ fn a_hybrid_export_reopens_with_its_cage_keys_and_plays_as_exported() {
         },
         &dir.join("state"),
     );
-    assert_eq!(h.state().animations.len(), 1);
+    assert_eq!(h.state().project.animations.len(), 1);
     h.state_mut().load_character_animation(0);
     h.run_steps(1);
-    let doc_keys = &h.state().doc.as_ref().unwrap().keys;
+    let doc_keys = &h.state().project.doc.as_ref().unwrap().keys;
     assert_eq!(
         doc_keys.len(Track::Cage),
         times.len(),
@@ -793,7 +849,7 @@ fn a_hybrid_export_reopens_with_its_cage_keys_and_plays_as_exported() {
     for t in [0.37, 2.5, 6.1] {
         player.apply(t, &mut original).unwrap();
         h.state_mut().scrub_to(t);
-        let shown = &h.state().doc.as_ref().unwrap().session;
+        let shown = &h.state().project.doc.as_ref().unwrap().session;
         let off = cagerig::mesh::max_distance(shown.posed_mesh(), original.posed_mesh());
         assert!(
             off <= 1e-5 * diagonal,
