@@ -322,22 +322,8 @@ fn every_multi_file_output_is_complete_or_earlier_after_sigkill() {
         Case {
             name: "export .gltf",
             runs: [
-                strings(&[
-                    "export",
-                    &arm,
-                    "--script",
-                    &one,
-                    "--out",
-                    &s(&gltf_out),
-                ]),
-                strings(&[
-                    "export",
-                    &arm,
-                    "--script",
-                    &two,
-                    "--out",
-                    &s(&gltf_out),
-                ]),
+                strings(&["export", &arm, "--script", &one, "--out", &s(&gltf_out)]),
+                strings(&["export", &arm, "--script", &two, "--out", &s(&gltf_out)]),
             ],
             snapshot: snapshot_gltf,
             target: gltf_out.clone(),
