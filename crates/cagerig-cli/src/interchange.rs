@@ -16,7 +16,7 @@ use crate::rig_source::LoadedRig;
 
 /// Whether `path` is read by `cagerig-formats` rather than as the paper tool's OBJ file set.
 pub fn is_interchange(path: &Path) -> bool {
-    cagerig_formats::format_of(path).is_some()
+    cagerig_formats::CharacterFormat::of(path).is_some()
 }
 
 /// Imports a character (its first skin unless `skin` names one).

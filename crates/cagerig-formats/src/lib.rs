@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod character;
+pub mod character_format;
 pub mod error;
 pub mod fbx;
 pub mod gltf;
@@ -16,6 +17,7 @@ use std::path::Path;
 pub use character::{
     ImportSummary, ImportedAnimation, ImportedCharacter, MorphTargets, SpaceSummary,
 };
+pub use character_format::{CharacterFormat, export_character};
 pub use error::FormatError;
 pub use morph_cage_track::{MorphCageTrack, morph_cage_track};
 
@@ -37,27 +39,16 @@ impl Default for ImportOptions {
     }
 }
 
-/// The interchange format of `path` by extension (`.glb`, `.gltf`, `.fbx`, any case).
-pub fn format_of(path: &Path) -> Option<&'static str> {
-    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-    match ext.as_str() {
-        "glb" | "gltf" => Some("glTF"),
-        "fbx" => Some("FBX"),
-        _ => None,
-    }
-}
-
 /// Imports a character from a `.glb`, `.gltf` or `.fbx` file.
 pub fn import_character(
     path: &Path,
     options: &ImportOptions,
 ) -> Result<ImportedCharacter, FormatError> {
-    match format_of(path) {
-        Some("glTF") => gltf::import_gltf(path, options),
-        Some("FBX") => fbx::import_fbx(path, options),
-        _ => Err(FormatError::Io {
+    match CharacterFormat::of(path) {
+        Some(format) => format.import(path, options),
+        None => Err(FormatError::Io {
             path: path.to_path_buf(),
-            message: "unsupported interchange format (expected .glb, .gltf or .fbx)".into(),
+            message: "unsupported character format (expected .glb, .gltf or .fbx)".into(),
         }),
     }
 }

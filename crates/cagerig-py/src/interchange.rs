@@ -90,15 +90,15 @@ impl Rig {
     ///     Name of the mesh and the skin in the file.
     #[pyo3(signature = (path, name = "cagerig"))]
     fn export_gltf(&self, py: Python<'_>, path: PathBuf, name: &str) -> PyResult<()> {
-        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-        if !(ext.eq_ignore_ascii_case("glb") || ext.eq_ignore_ascii_case("gltf")) {
+        let writable = cagerig_formats::CharacterFormat::of(&path).is_some_and(|f| f.can_export());
+        if !writable {
             return Err(PyValueError::new_err(format!(
                 "{}: expected a path ending in .glb or .gltf",
                 path.display()
             )));
         }
         let session = self.session();
-        py.detach(|| cagerig_formats::gltf::export::export_glb(session, &path, name))
+        py.detach(|| cagerig_formats::export_character(session, &path, name))
             .map_err(format_error)
     }
 }

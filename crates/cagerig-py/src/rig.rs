@@ -198,7 +198,7 @@ impl Rig {
         if keep_file_coords {
             options.given_cage_coords = cagerig::session::GivenCageCoords::Keep;
         }
-        let (parts, warnings) = if cagerig_formats::format_of(&path).is_some() {
+        let (parts, warnings) = if cagerig_formats::CharacterFormat::of(&path).is_some() {
             crate::interchange::load_character(py, &path, cage.as_deref(), auto_cage)?
         } else {
             let missing = match auto_cage {

@@ -83,7 +83,7 @@ pub fn export_all(doc: &Document, dir: &Path) -> Result<Vec<PathBuf>, ExportErro
         written.push(cage);
     }
     let glb = dir.join("rig.glb");
-    cagerig_formats::gltf::export::export_glb(s, &glb, "cagerig")?;
+    cagerig_formats::export_character(s, &glb, "cagerig")?;
     written.push(glb);
     Ok(written)
 }

@@ -136,7 +136,7 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
             cage,
             skin,
             auto_cage,
-        } if cagerig_formats::format_of(path).is_some() => {
+        } if cagerig_formats::CharacterFormat::of(path).is_some() => {
             import_interchange(path, cage.as_deref(), skin.as_deref(), *auto_cage)?
         }
         RigSource::File {

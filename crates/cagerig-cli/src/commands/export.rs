@@ -53,8 +53,8 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or("");
-    if !(ext.eq_ignore_ascii_case("glb") || ext.eq_ignore_ascii_case("gltf")) {
+    let writable = cagerig_formats::CharacterFormat::of(&args.out).is_some_and(|f| f.can_export());
+    if !writable {
         bail!(
             "{}: export writes glTF 2.0: give an --out path ending in .glb (binary) or .gltf \
              (JSON with a .bin beside it)",
@@ -177,7 +177,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 
 fn export(session: &RigSession, out: &Path, name: &str) -> anyhow::Result<()> {
     let t = std::time::Instant::now();
-    cagerig_formats::gltf::export::export_glb(session, out, name)?;
+    cagerig_formats::export_character(session, out, name)?;
     println!(
         "{} written ({} vertices, {} joints) in {:.1} ms",
         out.display(),
