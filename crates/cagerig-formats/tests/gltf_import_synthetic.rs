@@ -245,3 +245,136 @@ fn two_skins_pick_by_name_or_index_and_list_the_others() {
         "{e}"
     );
 }
+
+/// Appends `bytes` as a new embedded buffer with one buffer view; returns the view's index.
+fn push_view(j: &mut Value, bytes: &[u8]) -> usize {
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(bytes)
+    );
+    let buffer = j["buffers"].as_array().unwrap().len();
+    j["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"uri": uri, "byteLength": bytes.len()}));
+    let view = j["bufferViews"].as_array().unwrap().len();
+    j["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"buffer": buffer, "byteLength": bytes.len()}));
+    view
+}
+
+/// Sparse accessors (glTF 2.0 §3.6.2.3): substitutions over a dense POSITION accessor, and a
+/// POSITION accessor made of substitutions alone (no buffer view: zeros, then the values).
+#[test]
+fn sparse_accessors_are_read() {
+    let original = import_character(
+        &data("gltf/SimpleSkin/SimpleSkin.gltf"),
+        &ImportOptions::default(),
+    )
+    .unwrap();
+    let rest = original.mesh.positions.clone();
+    // Vertices 3 and 7 moved by +0.25 in y over the original data.
+    let mut j = simple_skin();
+    let indices: Vec<u8> = [3u16, 7].iter().flat_map(|i| i.to_le_bytes()).collect();
+    let values: Vec<u8> = [3usize, 7]
+        .iter()
+        .flat_map(|&v| [rest[v].x as f32, rest[v].y as f32 + 0.25, rest[v].z as f32])
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let (iv, vv) = (push_view(&mut j, &indices), push_view(&mut j, &values));
+    j["accessors"][1]["sparse"] = json!({
+        "count": 2,
+        "indices": {"bufferView": iv, "componentType": 5123},
+        "values": {"bufferView": vv}
+    });
+    j["accessors"][1]["max"] = json!([0.5, 2.25, 0.0]);
+    let c = import_character(&write_temp("sparse.gltf", &j), &ImportOptions::default()).unwrap();
+    for (v, (a, b)) in c.mesh.positions.iter().zip(&rest).enumerate() {
+        let expected = if v == 3 || v == 7 {
+            *b + DVec3::new(0.0, 0.25, 0.0)
+        } else {
+            *b
+        };
+        assert!(a.distance(expected) < 1e-7, "vertex {v}: {a} vs {expected}");
+    }
+    // Every vertex substituted, no buffer view: the same mesh as the original.
+    let mut j = simple_skin();
+    let indices: Vec<u8> = (0u8..10).collect();
+    let values: Vec<u8> = rest
+        .iter()
+        .flat_map(|p| [p.x as f32, p.y as f32, p.z as f32])
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let (iv, vv) = (push_view(&mut j, &indices), push_view(&mut j, &values));
+    j["accessors"][1] = json!({
+        "componentType": 5126, "count": 10, "type": "VEC3",
+        "max": [0.5, 2.0, 0.0], "min": [-0.5, 0.0, 0.0],
+        "sparse": {"count": 10, "indices": {"bufferView": iv, "componentType": 5121},
+                   "values": {"bufferView": vv}}
+    });
+    let c = import_character(
+        &write_temp("sparse_only.gltf", &j),
+        &ImportOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(c.mesh.positions, rest);
+    // Indices out of order or out of range are refused, naming the accessor.
+    j["accessors"][1]["sparse"]["count"] = 11.into();
+    let e = import_character(
+        &write_temp("sparse_bad.gltf", &j),
+        &ImportOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("accessor 1"), "{e}");
+}
+
+/// KHR_mesh_quantization: POSITION as normalised 16-bit integers, the extension required.
+#[test]
+fn quantized_positions_are_read() {
+    let original = import_character(
+        &data("gltf/SimpleSkin/SimpleSkin.gltf"),
+        &ImportOptions::default(),
+    )
+    .unwrap();
+    let rest = original.mesh.positions.clone();
+    let quantized: Vec<i16> = rest
+        .iter()
+        .flat_map(|p| [p.x, p.y, p.z])
+        .map(|x| (x / 4.0 * 32767.0).round() as i16)
+        .collect();
+    // VEC3 of 16-bit components: each element padded to 8 bytes (4-byte alignment).
+    let bytes: Vec<u8> = quantized
+        .chunks(3)
+        .flat_map(|c| [c[0], c[1], c[2], 0])
+        .flat_map(i16::to_le_bytes)
+        .collect();
+    let mut j = simple_skin();
+    let view = push_view(&mut j, &bytes);
+    j["bufferViews"][view]["byteStride"] = 8.into();
+    j["accessors"][1] = json!({
+        "bufferView": view, "componentType": 5122, "normalized": true, "count": 10,
+        "type": "VEC3", "max": [4096, 16384, 0], "min": [-4096, 0, 0]
+    });
+    j["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+    j["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    let c = import_character(&write_temp("quantized.gltf", &j), &ImportOptions::default()).unwrap();
+    for (k, (a, b)) in c.mesh.positions.iter().zip(&rest).enumerate() {
+        let expected = DVec3::new(
+            f64::from(quantized[3 * k]) / 32767.0,
+            f64::from(quantized[3 * k + 1]) / 32767.0,
+            f64::from(quantized[3 * k + 2]) / 32767.0,
+        );
+        assert_eq!(*a, expected, "vertex {k}");
+        assert!(a.distance(*b / 4.0) < 1e-4);
+    }
+    assert_eq!(c.skeleton.len(), original.skeleton.len());
+    // Another required extension is still refused, by name.
+    j["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    let e = import_character(&write_temp("draco.gltf", &j), &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("KHR_draco_mesh_compression"), "{e}");
+}

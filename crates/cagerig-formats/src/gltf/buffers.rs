@@ -178,15 +178,8 @@ impl Buffers {
                 "has type {dims:?}, expected one of {allowed:?}"
             )));
         }
-        if accessor.sparse().is_some() {
-            return Err(err("sparse accessors are not supported".into()));
-        }
         let ncomp = dims.multiplicity();
-        let size = match accessor.data_type() {
-            DataType::I8 | DataType::U8 => 1,
-            DataType::I16 | DataType::U16 => 2,
-            DataType::U32 | DataType::F32 => 4,
-        };
+        let size = component_size(accessor.data_type());
         if matches!(dims, Dimensions::Mat2 | Dimensions::Mat3) && size < 4 {
             return Err(err(
                 "small-integer matrices (column padding) are not supported".into(),
@@ -194,14 +187,16 @@ impl Buffers {
         }
         let count = accessor.count();
         let Some(view) = accessor.view() else {
-            // No buffer view and no sparse data: all zeros (specification). Bounded by the
-            // file: a document this small cannot claim more than 2^24 zero elements.
+            // No buffer view: all zeros (specification), then the sparse substitutions. Bounded
+            // by the file: a document this small cannot claim more than 2^24 zero elements.
             if count > 1 << 24 {
                 return Err(err(format!(
                     "claims {count} zero elements without any data"
                 )));
             }
-            return Ok(vec![0.0; count * ncomp]);
+            let mut out = vec![0.0; count * ncomp];
+            self.apply_sparse(accessor, &element, &mut out)?;
+            return self.finite(&element, out, ncomp);
         };
         let buffer = &self.data[view.buffer().index()];
         let elem = size * ncomp;
@@ -242,49 +237,130 @@ impl Buffers {
             }
         }
         let start = start.unwrap_or(0);
-        let normalized = accessor.normalized();
         let mut out = Vec::with_capacity(count * ncomp);
         for i in 0..count {
             let base = start + i * stride;
             for c in 0..ncomp {
                 let o = base + c * size;
-                let b = &buffer[o..o + size];
-                let v = match accessor.data_type() {
-                    DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                    DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                    DataType::U16 => {
-                        let x = u16::from_le_bytes([b[0], b[1]]) as f64;
-                        if normalized { x / 65535.0 } else { x }
-                    }
-                    DataType::I16 => {
-                        let x = i16::from_le_bytes([b[0], b[1]]) as f64;
-                        if normalized {
-                            (x / 32767.0).max(-1.0)
-                        } else {
-                            x
-                        }
-                    }
-                    DataType::U8 => {
-                        let x = b[0] as f64;
-                        if normalized { x / 255.0 } else { x }
-                    }
-                    DataType::I8 => {
-                        let x = b[0] as i8 as f64;
-                        if normalized { (x / 127.0).max(-1.0) } else { x }
-                    }
-                };
-                out.push(v);
+                out.push(decode(accessor, &buffer[o..o + size]));
             }
         }
+        self.apply_sparse(accessor, &element, &mut out)?;
+        self.finite(&element, out, ncomp)
+    }
+
+    /// `out` when every value is finite; else an error naming the first element that is not.
+    fn finite(&self, element: &str, out: Vec<f64>, ncomp: usize) -> Result<Vec<f64>, FormatError> {
         if let Some(i) = out.iter().position(|v| !v.is_finite()) {
-            return Err(err(format!(
-                "element {} component {} is not finite ({})",
-                i / ncomp,
-                i % ncomp,
-                out[i]
-            )));
+            return Err(invalid(
+                &self.path,
+                element,
+                format!(
+                    "element {} component {} is not finite ({})",
+                    i / ncomp,
+                    i % ncomp,
+                    out[i]
+                ),
+            ));
         }
         Ok(out)
+    }
+
+    /// Applies the accessor's sparse substitutions (glTF 2.0 §3.6.2.3), if any, to its dense
+    /// elements `out` (`count × components`): `sparse.count` element indices (unsigned 8/16/32
+    /// bit, strictly increasing) and as many tightly packed elements of the accessor's type.
+    fn apply_sparse(
+        &self,
+        accessor: &gltf::Accessor,
+        element: &str,
+        out: &mut [f64],
+    ) -> Result<(), FormatError> {
+        let Some(sparse) = accessor.sparse() else {
+            return Ok(());
+        };
+        let err = |m: String| invalid(&self.path, element, m);
+        let ncomp = accessor.dimensions().multiplicity();
+        let size = component_size(accessor.data_type());
+        let elem = size * ncomp;
+        let n = sparse.count();
+        let count = accessor.count();
+        if n > count {
+            return Err(err(format!(
+                "has {n} sparse substitutions for {count} elements"
+            )));
+        }
+        let index_size = match sparse.indices().index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        let indices = self.view_bytes(
+            &sparse.indices().view(),
+            sparse.indices().offset(),
+            n * index_size,
+            element,
+            "sparse indices",
+        )?;
+        let values = self.view_bytes(
+            &sparse.values().view(),
+            sparse.values().offset(),
+            n * elem,
+            element,
+            "sparse values",
+        )?;
+        let mut previous: Option<usize> = None;
+        for k in 0..n {
+            let b = &indices[k * index_size..(k + 1) * index_size];
+            let index = match index_size {
+                1 => b[0] as usize,
+                2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+            };
+            if index >= count || previous.is_some_and(|p| index <= p) {
+                return Err(err(format!(
+                    "sparse index {k} is {index}: expected strictly increasing element indices \
+                     below {count}"
+                )));
+            }
+            previous = Some(index);
+            for c in 0..ncomp {
+                let o = k * elem + c * size;
+                out[index * ncomp + c] = decode(accessor, &values[o..o + size]);
+            }
+        }
+        Ok(())
+    }
+
+    /// `length` bytes of buffer view `view` from `offset`, bounds-checked against the view and
+    /// its buffer.
+    fn view_bytes(
+        &self,
+        view: &gltf::buffer::View,
+        offset: usize,
+        length: usize,
+        element: &str,
+        what: &str,
+    ) -> Result<&[u8], FormatError> {
+        let buffer = &self.data[view.buffer().index()];
+        let fits_view = offset
+            .checked_add(length)
+            .is_some_and(|e| e <= view.length());
+        let start = view.offset().checked_add(offset);
+        let end = start.and_then(|s| s.checked_add(length));
+        match (fits_view, start, end) {
+            (true, Some(s), Some(e)) if e <= buffer.len() => Ok(&buffer[s..e]),
+            _ => Err(invalid(
+                &self.path,
+                element,
+                format!(
+                    "its {what} ({length} bytes at offset {offset} of buffer view {}) exceed \
+                     the view ({} bytes) or its buffer ({} bytes)",
+                    view.index(),
+                    view.length(),
+                    buffer.len()
+                ),
+            )),
+        }
     }
 
     /// Integer accessor (indices, joints): unsigned 8/16/32-bit, not normalised.
@@ -318,6 +394,45 @@ impl Buffers {
             .into_iter()
             .map(|v| v as u32)
             .collect())
+    }
+}
+
+/// Bytes per component of `data_type`.
+fn component_size(data_type: DataType) -> usize {
+    match data_type {
+        DataType::I8 | DataType::U8 => 1,
+        DataType::I16 | DataType::U16 => 2,
+        DataType::U32 | DataType::F32 => 4,
+    }
+}
+
+/// One component (`b`: its little-endian bytes) of `accessor` as f64, normalised integers
+/// mapped to [0, 1] or [−1, 1] as the specification says (KHR_mesh_quantization's types too).
+fn decode(accessor: &gltf::Accessor, b: &[u8]) -> f64 {
+    let normalized = accessor.normalized();
+    match accessor.data_type() {
+        DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        DataType::U16 => {
+            let x = u16::from_le_bytes([b[0], b[1]]) as f64;
+            if normalized { x / 65535.0 } else { x }
+        }
+        DataType::I16 => {
+            let x = i16::from_le_bytes([b[0], b[1]]) as f64;
+            if normalized {
+                (x / 32767.0).max(-1.0)
+            } else {
+                x
+            }
+        }
+        DataType::U8 => {
+            let x = b[0] as f64;
+            if normalized { x / 255.0 } else { x }
+        }
+        DataType::I8 => {
+            let x = b[0] as i8 as f64;
+            if normalized { (x / 127.0).max(-1.0) } else { x }
+        }
     }
 }
 

@@ -590,7 +590,12 @@ fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, FormatError>
     };
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
-    let root = document.into_json();
+    let mut root = document.into_json();
+    // KHR_mesh_quantization only widens the component types of vertex attributes (normalised or
+    // not, 8/16-bit), which the accessor reader decodes: a file that requires it is read. The
+    // `gltf` crate's validation would refuse it as unsupported.
+    root.extensions_required
+        .retain(|e| e != "KHR_mesh_quantization");
     let accessors = root.accessors.len();
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
