@@ -378,3 +378,105 @@ fn quantized_positions_are_read() {
         .to_string();
     assert!(e.contains("KHR_draco_mesh_compression"), "{e}");
 }
+
+/// Two meshes, each with its own skin object over the same joints and bind pose (the second
+/// listing the joints in the other order, its JOINTS_0 indices to match): one rig of both
+/// meshes, the second mesh's weights on the same joints as the first's.
+#[test]
+fn skins_sharing_a_skeleton_are_one_rig() {
+    let original = import_character(
+        &data("gltf/SimpleSkin/SimpleSkin.gltf"),
+        &ImportOptions::default(),
+    )
+    .unwrap();
+    let (doc, buffers, _) = gltf::import(data("gltf/SimpleSkin/SimpleSkin.gltf")).unwrap();
+    let skin = doc.skins().next().unwrap();
+    let reader = skin.reader(|b| Some(&*buffers[b.index()]));
+    let ibms: Vec<[[f32; 4]; 4]> = reader.read_inverse_bind_matrices().unwrap().collect();
+    let mut j = simple_skin();
+    let joints = j["skins"][0]["joints"].as_array().unwrap().clone();
+    // Skin 1: the joints in the other order, their inverse bind matrices too.
+    let swapped: Vec<u8> = [ibms[1], ibms[0]]
+        .iter()
+        .flat_map(|m| {
+            m.iter()
+                .flatten()
+                .flat_map(|x| x.to_le_bytes())
+                .collect::<Vec<u8>>()
+        })
+        .collect();
+    let ibm_view = push_view(&mut j, &swapped);
+    let ibm_accessor = j["accessors"].as_array().unwrap().len();
+    j["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"bufferView": ibm_view, "componentType": 5126, "count": 2, "type": "MAT4"}));
+    j["skins"].as_array_mut().unwrap().push(json!({
+        "joints": [joints[1].clone(), joints[0].clone()],
+        "inverseBindMatrices": ibm_accessor
+    }));
+    // Mesh 1: mesh 0 with JOINTS_0 indices swapped (0 ↔ 1).
+    let (weights_rows, joint_rows): (Vec<[f32; 4]>, Vec<[u16; 4]>) = {
+        let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+        let r = prim.reader(|b| Some(&*buffers[b.index()]));
+        (
+            r.read_weights(0).unwrap().into_f32().collect(),
+            r.read_joints(0).unwrap().into_u16().collect(),
+        )
+    };
+    assert_eq!(weights_rows.len(), 10);
+    let swapped_joints: Vec<u8> = joint_rows
+        .iter()
+        .flat_map(|row| {
+            row.map(|k| {
+                if k == 0 {
+                    1
+                } else if k == 1 {
+                    0
+                } else {
+                    k
+                }
+            })
+        })
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    let joints_view = push_view(&mut j, &swapped_joints);
+    let joints_accessor = j["accessors"].as_array().unwrap().len();
+    j["accessors"].as_array_mut().unwrap().push(
+        json!({"bufferView": joints_view, "componentType": 5123, "count": 10, "type": "VEC4"}),
+    );
+    let mut mesh1 = j["meshes"][0].clone();
+    mesh1["primitives"][0]["attributes"]["JOINTS_0"] = joints_accessor.into();
+    j["meshes"].as_array_mut().unwrap().push(mesh1);
+    let node = j["nodes"].as_array().unwrap().len();
+    j["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"mesh": 1, "skin": 1}));
+    j["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(node.into());
+    let c = import_character(
+        &write_temp("shared_skins.gltf", &j),
+        &ImportOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(c.mesh.num_vertices(), 20, "both meshes");
+    assert_eq!(c.skeleton.len(), original.skeleton.len());
+    for v in 0..10 {
+        assert_eq!(c.mesh.positions[v + 10], c.mesh.positions[v]);
+        for joint in 0..c.skeleton.len() {
+            assert_eq!(
+                c.skin_weights.get(v + 10, joint),
+                c.skin_weights.get(v, joint),
+                "vertex {v} joint {joint}"
+            );
+        }
+    }
+    let notes: Vec<String> = c.warnings.iter().map(|w| w.to_string()).collect();
+    assert!(
+        notes.iter().any(|n| n.contains("share one skeleton")),
+        "{notes:?}"
+    );
+}

@@ -9,7 +9,8 @@ use glam::{DAffine3, DVec3};
 use gltf::accessor::Dimensions;
 
 use super::buffers::Buffers;
-use super::import::{primitive_triangles, to_vec3};
+use super::import::to_vec3;
+use super::primitive::primitive_triangles;
 use crate::error::{FormatError, invalid};
 
 /// Merges vertices with bit-identical positions (a cage written without an index buffer is a

@@ -15,14 +15,15 @@ use std::path::Path;
 
 use cagerig::{Joint, Skeleton, SkinWeights, TriMesh, Warning};
 use glam::{DAffine3, DVec3};
-use gltf::accessor::Dimensions;
-use gltf::mesh::Mode;
 
 use super::animation::{AnimationTargets, import_animations};
 use super::buffers::Buffers;
 use super::cage::find_cage;
 use super::morph_targets::{default_weights, merge_targets};
-use super::scene::{NodeTree, affine_from_cols};
+use super::parse::parse_validated;
+use super::primitive::read_primitive;
+use super::scene::NodeTree;
+use super::shared_skins::{inverse_bind_matrices, skins_sharing_joints};
 use crate::ImportOptions;
 use crate::character::{
     ImportSummary, ImportedCharacter, MorphTargets, PrimitiveSummary, SkinSummary, max_abs_diff,
@@ -88,16 +89,6 @@ pub fn import_gltf_bytes(
             invalid(path, "skins", "the file has no skin: cagerig needs a skinned character (a skin with joints and JOINTS_0/WEIGHTS_0)")
         })?,
     };
-    if skins.len() > 1 && options.skin.is_none() {
-        warnings.push(Warning::Note {
-            message: format!(
-                "the file has {} skins; imported skin {} (choose with --skin NAME|INDEX): {}",
-                skins.len(),
-                skin.index(),
-                listing()
-            ),
-        });
-    }
     let skin_element = format!("skin {}", skin.index());
     let joint_nodes: Vec<usize> = skin.joints().map(|n| n.index()).collect();
     if joint_nodes.is_empty() {
@@ -115,30 +106,7 @@ pub fn import_gltf_bytes(
         }
         joint_of_node[n] = Some(j);
     }
-    let inverse_bind = match skin.inverse_bind_matrices() {
-        Some(acc) => {
-            if acc.count() < nj {
-                return Err(invalid(
-                    path,
-                    &skin_element,
-                    format!("has {nj} joints but {} inverse bind matrices", acc.count()),
-                ));
-            }
-            let values = buffers.read(&acc, "inverse bind matrices", &[Dimensions::Mat4])?;
-            (0..nj)
-                .map(|j| {
-                    let mut cols = [0.0; 16];
-                    cols.copy_from_slice(&values[16 * j..16 * j + 16]);
-                    affine_from_cols(
-                        cols,
-                        path,
-                        &format!("{skin_element} inverse bind matrix {j}"),
-                    )
-                })
-                .collect::<Result<Vec<_>, _>>()?
-        }
-        None => vec![DAffine3::IDENTITY; nj],
-    };
+    let inverse_bind = inverse_bind_matrices(&skin, &buffers, path)?;
 
     // ----- skeleton -------------------------------------------------------------------------------
     let rest_locals = tree.rest_affines();
@@ -220,6 +188,50 @@ pub fn import_gltf_bytes(
         source,
     })?;
 
+    // ----- other skins over the same skeleton: one rig -------------------------------------------
+    let shared_skins = if options.skin.is_none() {
+        skins_sharing_joints(
+            document,
+            &skin,
+            &joint_of_node,
+            &inverse_bind,
+            &buffers,
+            path,
+        )
+    } else {
+        vec![(skin.index(), (0..nj).collect())]
+    };
+    if skins.len() > 1 && options.skin.is_none() {
+        let merged: Vec<String> = shared_skins[1..]
+            .iter()
+            .map(|(k, _)| k.to_string())
+            .collect();
+        let message = if shared_skins.len() == skins.len() {
+            format!(
+                "the file's {} skins share one skeleton (same joints and bind pose): their meshes \
+                 are imported as one rig",
+                skins.len()
+            )
+        } else if merged.is_empty() {
+            format!(
+                "the file has {} skins; imported skin {} (choose with --skin NAME|INDEX): {}",
+                skins.len(),
+                skin.index(),
+                listing()
+            )
+        } else {
+            format!(
+                "the file has {} skins; imported skin {} with skins {} (they share its skeleton) \
+                 (choose another with --skin NAME|INDEX): {}",
+                skins.len(),
+                skin.index(),
+                merged.join(", "),
+                listing()
+            )
+        };
+        warnings.push(Warning::Note { message });
+    }
+
     // ----- morph targets animated by a weights channel ------------------------------------------
     // Kept when exactly one skinned node of this skin has targets and some animation animates
     // its weights (its default weights are applied to M either way).
@@ -256,9 +268,10 @@ pub fn import_gltf_bytes(
         let (Some(mesh), Some(node_skin)) = (node.mesh(), node.skin()) else {
             continue;
         };
-        if node_skin.index() != skin.index() {
+        let Some((_, joint_map)) = shared_skins.iter().find(|(k, _)| *k == node_skin.index())
+        else {
             continue;
-        }
+        };
         for primitive in mesh.primitives() {
             let source = format!(
                 "node {} {:?}, mesh {} primitive {}",
@@ -268,6 +281,7 @@ pub fn import_gltf_bytes(
                 primitive.index()
             );
             let base = positions.len();
+            let first_weight = triplets.len();
             let collect = morph_node == Some(node.index());
             let summary = read_primitive(
                 &primitive,
@@ -275,7 +289,7 @@ pub fn import_gltf_bytes(
                 &buffers,
                 path,
                 &source,
-                nj,
+                joint_map.len(),
                 &world_from_bind,
                 &mut positions,
                 &mut triangles,
@@ -283,6 +297,10 @@ pub fn import_gltf_bytes(
                 collect.then_some(&mut primitive_targets),
                 &mut warnings,
             )?;
+            // The mesh's own skin's joint indices → the chosen skin's.
+            for t in &mut triplets[first_weight..] {
+                t.1 = joint_map[t.1];
+            }
             if let Some((vertices, tris, indexed)) = summary {
                 if collect {
                     merge_targets(&mut morph_targets, &primitive_targets, base, vertices).map_err(
@@ -367,277 +385,6 @@ pub fn import_gltf_bytes(
     };
     character.fill_influence_summary();
     Ok(character)
-}
-
-/// Triangles of a primitive (local vertex indices) from its mode and optional indices.
-pub(super) fn primitive_triangles(
-    mode: Mode,
-    indices: Option<Vec<u32>>,
-    num_vertices: usize,
-    path: &Path,
-    source: &str,
-    warnings: &mut Vec<Warning>,
-) -> Result<Option<Vec<[u32; 3]>>, FormatError> {
-    let idx: Vec<u32> = match indices {
-        Some(i) => i,
-        None => (0..num_vertices as u32).collect(),
-    };
-    if let Some(&bad) = idx.iter().find(|&&i| i as usize >= num_vertices) {
-        return Err(invalid(
-            path,
-            source,
-            format!("index {bad} is out of range (the primitive has {num_vertices} vertices)"),
-        ));
-    }
-    let tris: Vec<[u32; 3]> = match mode {
-        Mode::Triangles => {
-            if !idx.len().is_multiple_of(3) {
-                warnings.push(Warning::Note {
-                    message: format!(
-                        "{source}: {} indices is not a multiple of 3; the last {} were ignored",
-                        idx.len(),
-                        idx.len() % 3
-                    ),
-                });
-            }
-            idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
-        }
-        Mode::TriangleStrip => (2..idx.len())
-            .map(|k| {
-                if k % 2 == 0 {
-                    [idx[k - 2], idx[k - 1], idx[k]]
-                } else {
-                    [idx[k - 1], idx[k - 2], idx[k]]
-                }
-            })
-            .collect(),
-        Mode::TriangleFan => (2..idx.len())
-            .map(|k| [idx[0], idx[k - 1], idx[k]])
-            .collect(),
-        other => {
-            warnings.push(Warning::Note {
-                message: format!(
-                    "{source}: mode {other:?} is not triangles; the primitive was skipped"
-                ),
-            });
-            return Ok(None);
-        }
-    };
-    Ok(Some(tris))
-}
-
-/// Appends one skinned primitive to the merged mesh. Returns (vertices, triangles, indexed),
-/// or None when the primitive was skipped (with a warning).
-#[allow(clippy::too_many_arguments)]
-fn read_primitive(
-    primitive: &gltf::Primitive,
-    node: &gltf::Node,
-    buffers: &Buffers,
-    path: &Path,
-    source: &str,
-    num_joints: usize,
-    world_from_bind: &DAffine3,
-    positions: &mut Vec<DVec3>,
-    triangles: &mut Vec<[u32; 3]>,
-    triplets: &mut Vec<(usize, usize, f64)>,
-    mut targets_out: Option<&mut Vec<Vec<DVec3>>>,
-    warnings: &mut Vec<Warning>,
-) -> Result<Option<(usize, usize, bool)>, FormatError> {
-    if let Some(out) = targets_out.as_deref_mut() {
-        out.clear();
-    }
-    let position_accessor = primitive
-        .get(&gltf::Semantic::Positions)
-        .ok_or_else(|| invalid(path, source, "has no POSITION attribute"))?;
-    let mut local = to_vec3(&buffers.read(&position_accessor, "POSITION", &[Dimensions::Vec3])?);
-    let nv = local.len();
-    let indices = match primitive.indices() {
-        Some(acc) => Some(buffers.read_indices(&acc, "indices", &[Dimensions::Scalar])?),
-        None => None,
-    };
-    let indexed = indices.is_some();
-    let Some(tris) = primitive_triangles(primitive.mode(), indices, nv, path, source, warnings)?
-    else {
-        return Ok(None);
-    };
-    // Morph targets at their default weights (node weights override mesh weights), before
-    // skinning; all of them kept (world-space displacements) when `targets_out` asks.
-    let targets: Vec<_> = primitive.morph_targets().collect();
-    if !targets.is_empty() {
-        let weights = default_weights(node);
-        let mut applied = 0;
-        for (k, target) in targets.iter().enumerate() {
-            let w = weights.get(k).copied().unwrap_or(0.0);
-            if w == 0.0 && targets_out.is_none() {
-                continue;
-            }
-            if let Some(out) = targets_out.as_deref_mut() {
-                out.resize(k + 1, Vec::new());
-            }
-            if let Some(acc) = target.positions() {
-                let d =
-                    to_vec3(&buffers.read(&acc, "morph target POSITION", &[Dimensions::Vec3])?);
-                if d.len() != nv {
-                    return Err(invalid(
-                        path,
-                        source,
-                        format!(
-                            "morph target {k} has {} positions for {nv} vertices",
-                            d.len()
-                        ),
-                    ));
-                }
-                if w != 0.0 {
-                    for (p, dp) in local.iter_mut().zip(&d) {
-                        *p += *dp * w;
-                    }
-                    applied += 1;
-                }
-                if let Some(out) = targets_out.as_deref_mut() {
-                    out[k] = d
-                        .iter()
-                        .map(|dp| world_from_bind.transform_vector3(*dp))
-                        .collect();
-                }
-            }
-        }
-        if targets_out.is_some() {
-            if applied > 0 {
-                warnings.push(Warning::Note {
-                    message: format!(
-                        "{source}: {applied} of {} morph targets applied at their non-zero default weight to the bind shape; the animations' morph weights are played relative to it",
-                        targets.len()
-                    ),
-                });
-            }
-        } else {
-            warnings.push(Warning::Note {
-                message: format!(
-                    "{source}: {} morph targets; {applied} with non-zero default weight applied to the bind shape before skinning (morph animation is not imported)",
-                    targets.len()
-                ),
-            });
-        }
-    }
-    // Every JOINTS_n / WEIGHTS_n set.
-    let base = positions.len();
-    let mut set = 0;
-    loop {
-        let joints = primitive.get(&gltf::Semantic::Joints(set));
-        let weights = primitive.get(&gltf::Semantic::Weights(set));
-        let (joints, weights) = match (joints, weights) {
-            (None, None) => break,
-            (Some(j), Some(w)) => (j, w),
-            _ => {
-                return Err(invalid(
-                    path,
-                    source,
-                    format!("has only one of JOINTS_{set} and WEIGHTS_{set}"),
-                ));
-            }
-        };
-        let j = buffers.read_indices(&joints, &format!("JOINTS_{set}"), &[Dimensions::Vec4])?;
-        let w = buffers.read(&weights, &format!("WEIGHTS_{set}"), &[Dimensions::Vec4])?;
-        if j.len() != 4 * nv || w.len() != 4 * nv {
-            return Err(invalid(
-                path,
-                source,
-                format!(
-                    "JOINTS_{set}/WEIGHTS_{set} have {}/{} elements for {nv} vertices",
-                    j.len() / 4,
-                    w.len() / 4
-                ),
-            ));
-        }
-        for (k, (&joint, &weight)) in j.iter().zip(&w).enumerate() {
-            if weight == 0.0 {
-                continue;
-            }
-            if joint as usize >= num_joints {
-                return Err(invalid(
-                    path,
-                    source,
-                    format!(
-                        "JOINTS_{set} of vertex {} names joint {joint} with weight {weight}, but the skin has {num_joints} joints",
-                        k / 4
-                    ),
-                ));
-            }
-            triplets.push((base + k / 4, joint as usize, weight));
-        }
-        set += 1;
-    }
-    if set == 0 {
-        return Err(invalid(
-            path,
-            source,
-            "is used with a skin but has no JOINTS_0/WEIGHTS_0",
-        ));
-    }
-    positions.extend(local.iter().map(|p| world_from_bind.transform_point3(*p)));
-    let ntri = tris.len();
-    triangles.extend(tris.iter().map(|t| t.map(|i| i + base as u32)));
-    Ok(Some((nv, ntri, indexed)))
-}
-
-/// Parses and validates glTF/GLB bytes. The `gltf` crate's validation (1.4) indexes the
-/// accessors with each primitive's POSITION index before checking it, and panics on an index
-/// out of range, and it does not check animation channel targets: both are checked here.
-fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, FormatError> {
-    let gltf_error = |message: String| FormatError::Gltf {
-        path: path.to_path_buf(),
-        message,
-    };
-    let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
-    let mut root = document.into_json();
-    // KHR_mesh_quantization only widens the component types of vertex attributes (normalised or
-    // not, 8/16-bit), which the accessor reader decodes: a file that requires it is read. The
-    // `gltf` crate's validation would refuse it as unsupported.
-    root.extensions_required
-        .retain(|e| e != "KHR_mesh_quantization");
-    let accessors = root.accessors.len();
-    for (m, mesh) in root.meshes.iter().enumerate() {
-        for (p, primitive) in mesh.primitives.iter().enumerate() {
-            let position = primitive
-                .attributes
-                .get(&gltf::json::validation::Checked::Valid(
-                    gltf::json::mesh::Semantic::Positions,
-                ))
-                .map(|index| index.value());
-            if let Some(index) = position.filter(|&i| i >= accessors) {
-                return Err(gltf_error(format!(
-                    "meshes[{m}].primitives[{p}].attributes.POSITION names accessor {index}, \
-                     but the file has {accessors} accessors"
-                )));
-            }
-        }
-    }
-    // Nor does it check animation channel targets (node index, path), which the accessors of
-    // the `gltf` crate unwrap.
-    let nodes = root.nodes.len();
-    for (a, animation) in root.animations.iter().enumerate() {
-        for (c, channel) in animation.channels.iter().enumerate() {
-            let node = channel.target.node.value();
-            if node >= nodes {
-                return Err(gltf_error(format!(
-                    "animations[{a}].channels[{c}].target.node is {node}, but the file has \
-                     {nodes} nodes"
-                )));
-            }
-            if !matches!(
-                channel.target.path,
-                gltf::json::validation::Checked::Valid(_)
-            ) {
-                return Err(gltf_error(format!(
-                    "animations[{a}].channels[{c}].target.path is not one of translation, \
-                     rotation, scale, weights"
-                )));
-            }
-        }
-    }
-    let document = gltf::Document::from_json(root).map_err(|e| gltf_error(e.to_string()))?;
-    Ok(gltf::Gltf { document, blob })
 }
 
 /// Weight rows whose sum is 1 up to the f32 rounding of the file (within

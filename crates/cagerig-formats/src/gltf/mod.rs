@@ -5,7 +5,10 @@ pub mod buffers;
 mod cage;
 pub mod import;
 mod morph_targets;
+mod parse;
+mod primitive;
 pub mod scene;
+mod shared_skins;
 
 pub use import::{import_gltf, import_gltf_bytes};
 pub mod export;

@@ -1,0 +1,66 @@
+//! glTF/GLB bytes to a validated document: the checks the `gltf` crate's own validation
+//! misses, and the required extensions cagerig reads.
+
+use std::path::Path;
+
+use crate::error::FormatError;
+
+/// Parses and validates glTF/GLB bytes. The `gltf` crate's validation (1.4) indexes the
+/// accessors with each primitive's POSITION index before checking it, and panics on an index
+/// out of range, and it does not check animation channel targets: both are checked here.
+pub(super) fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, FormatError> {
+    let gltf_error = |message: String| FormatError::Gltf {
+        path: path.to_path_buf(),
+        message,
+    };
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
+    let mut root = document.into_json();
+    // KHR_mesh_quantization only widens the component types of vertex attributes (normalised or
+    // not, 8/16-bit), which the accessor reader decodes: a file that requires it is read. The
+    // `gltf` crate's validation would refuse it as unsupported.
+    root.extensions_required
+        .retain(|e| e != "KHR_mesh_quantization");
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&gltf::json::validation::Checked::Valid(
+                    gltf::json::mesh::Semantic::Positions,
+                ))
+                .map(|index| index.value());
+            if let Some(index) = position.filter(|&i| i >= accessors) {
+                return Err(gltf_error(format!(
+                    "meshes[{m}].primitives[{p}].attributes.POSITION names accessor {index}, \
+                     but the file has {accessors} accessors"
+                )));
+            }
+        }
+    }
+    // Nor does it check animation channel targets (node index, path), which the accessors of
+    // the `gltf` crate unwrap.
+    let nodes = root.nodes.len();
+    for (a, animation) in root.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let node = channel.target.node.value();
+            if node >= nodes {
+                return Err(gltf_error(format!(
+                    "animations[{a}].channels[{c}].target.node is {node}, but the file has \
+                     {nodes} nodes"
+                )));
+            }
+            if !matches!(
+                channel.target.path,
+                gltf::json::validation::Checked::Valid(_)
+            ) {
+                return Err(gltf_error(format!(
+                    "animations[{a}].channels[{c}].target.path is not one of translation, \
+                     rotation, scale, weights"
+                )));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(root).map_err(|e| gltf_error(e.to_string()))?;
+    Ok(gltf::Gltf { document, blob })
+}
