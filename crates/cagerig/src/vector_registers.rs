@@ -43,20 +43,18 @@ thread_local! {
     static CLEARS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
+/// Clears so far on the calling thread and on each thread of the pool (tests).
+#[cfg(test)]
+pub(crate) fn clear_counts() -> (usize, Vec<usize>) {
+    (
+        CLEARS.with(|c| c.get()),
+        rayon::broadcast(|_| CLEARS.with(|c| c.get())),
+    )
+}
+
 #[cfg(test)]
 mod tests {
-    use faer::Mat;
-
     use super::*;
-    use crate::cage_coords::CageCoords;
-
-    /// Clears so far on the calling thread and on each thread of the pool.
-    fn clears() -> (usize, Vec<usize>) {
-        (
-            CLEARS.with(|c| c.get()),
-            rayon::broadcast(|_| CLEARS.with(|c| c.get())),
-        )
-    }
 
     #[test]
     fn clearing_leaves_values_alone() {
@@ -64,27 +62,5 @@ mod tests {
         let before: f64 = values.iter().sum();
         clear_upper_halves_everywhere();
         assert_eq!(values.iter().sum::<f64>(), before);
-    }
-
-    /// Regression: after MaxVol, SkelUp ran 2× slower on the same threads (36 against 70–75 ms
-    /// at Arm N = 3) until a `vzeroupper`. The effect is a speed, measured by the
-    /// `skelup_bench` example (Ψ before and after MaxVol); this checks that MaxVol clears the
-    /// registers on the calling thread and on every thread of the pool before it returns.
-    #[test]
-    fn maxvol_clears_every_thread() {
-        let (rows, cols) = (4000, 48);
-        let matrix = Mat::<f64>::from_fn(rows, cols, |i, k| {
-            let x = ((i * 7919 + k * 104_729) % 1009) as f64 / 1009.0;
-            x + if i % cols == k { 2.0 } else { 0.0 }
-        });
-        let phi = CageCoords::from_matrix(matrix).unwrap();
-        let (caller, workers) = clears();
-        crate::coords::maxvol::select_maxvol_rows(&phi).unwrap();
-        let (caller_after, workers_after) = clears();
-        assert!(caller_after > caller, "calling thread");
-        assert!(
-            workers.iter().zip(&workers_after).all(|(a, b)| b > a),
-            "{workers:?} → {workers_after:?}"
-        );
     }
 }

@@ -28,8 +28,8 @@ use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::memory_estimate::check_table_allocation;
 
-/// Swap while some |B[i, j]| exceeds this (each swap multiplies |det| by at least this).
-pub const SWAP_THRESHOLD: f64 = 1.0 + 1e-3;
+pub use super::maxvol_lu::SWAP_THRESHOLD;
+pub(crate) use super::maxvol_lu::SeqLu;
 
 /// Φ with at most this many entries (`#V·#C`; 4 MB of B, within L3) are refined on all rows
 /// at once: the result needs no dominance check (Arm: 121k entries; subdivided once: 483k).
@@ -321,72 +321,6 @@ fn lu_pivot_rows(
     Ok(lu.forward[..rank].to_vec())
 }
 
-/// Row-pivoted LU factors (faer) of a tall or square matrix, computed and applied sequentially:
-/// faer's global parallelism hands the panels of these `#C`-column factorisations to rayon,
-/// which made the whole Arm selection ~7 % slower with 2 threads than with 1.
-pub(crate) struct SeqLu {
-    /// L (unit lower, below the diagonal) and U (upper) packed, `m × n`.
-    packed: Mat<f64>,
-    /// Row `forward[k]` of the input is row k of L·U.
-    forward: Vec<usize>,
-    inverse: Vec<usize>,
-}
-
-impl SeqLu {
-    pub(crate) fn new(mut packed: Mat<f64>) -> Self {
-        use faer::dyn_stack::{MemBuffer, MemStack};
-        use faer::linalg::lu::partial_pivoting::factor;
-        let (m, n) = packed.shape();
-        let mut forward = vec![0usize; m];
-        let mut inverse = vec![0usize; m];
-        let scratch =
-            factor::lu_in_place_scratch::<usize, f64>(m, n, faer::Par::Seq, Default::default());
-        let mut buffer = MemBuffer::new(scratch);
-        factor::lu_in_place(
-            packed.as_mut(),
-            &mut forward,
-            &mut inverse,
-            faer::Par::Seq,
-            MemStack::new(&mut buffer),
-            Default::default(),
-        );
-        crate::vector_registers::clear_upper_halves();
-        Self {
-            packed,
-            forward,
-            inverse,
-        }
-    }
-
-    /// U[k, k] for k < min(m, n).
-    pub(crate) fn diagonal(&self) -> impl Iterator<Item = f64> + '_ {
-        (0..self.packed.nrows().min(self.packed.ncols())).map(|k| self.packed[(k, k)])
-    }
-
-    /// A⁻¹ of a square A (non-finite entries if A is singular).
-    pub(crate) fn inverse(&self) -> Mat<f64> {
-        use faer::dyn_stack::{MemBuffer, MemStack};
-        use faer::linalg::lu::partial_pivoting::solve;
-        let n = self.packed.nrows();
-        let mut out = Mat::<f64>::identity(n, n);
-        let permutation = faer::perm::PermRef::new_checked(&self.forward, &self.inverse, n);
-        let mut buffer = MemBuffer::new(solve::solve_in_place_scratch::<usize, f64>(
-            n,
-            n,
-            faer::Par::Seq,
-        ));
-        solve::solve_in_place(
-            self.packed.as_ref(),
-            self.packed.as_ref(),
-            permutation,
-            out.as_mut(),
-            faer::Par::Seq,
-            MemStack::new(&mut buffer),
-        );
-        out
-    }
-}
-
 /// Runs the MaxVol single-swap refinement from the given `#C` distinct rows (see module docs).
 /// Errors if the rows are out of range or their submatrix is singular.
 pub fn refine_maxvol_rows(
@@ -426,6 +360,28 @@ pub fn log_abs_det_of_rows(phi: &CageCoords, rows: &[usize]) -> Result<f64, RigE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Regression: after MaxVol, SkelUp ran 2× slower on the same threads (36 against 70–75 ms
+    /// at Arm N = 3) until a `vzeroupper`. The effect is a speed, measured by the
+    /// `skelup_bench` example (Ψ before and after MaxVol); this checks that MaxVol clears the
+    /// registers on the calling thread and on every thread of the pool before it returns.
+    #[test]
+    fn maxvol_clears_every_thread() {
+        let (rows, cols) = (4000, 48);
+        let matrix = Mat::<f64>::from_fn(rows, cols, |i, k| {
+            let x = ((i * 7919 + k * 104_729) % 1009) as f64 / 1009.0;
+            x + if i % cols == k { 2.0 } else { 0.0 }
+        });
+        let phi = CageCoords::from_matrix(matrix).unwrap();
+        let (caller, workers) = crate::vector_registers::clear_counts();
+        select_maxvol_rows(&phi).unwrap();
+        let (caller_after, workers_after) = crate::vector_registers::clear_counts();
+        assert!(caller_after > caller, "calling thread");
+        assert!(
+            workers.iter().zip(&workers_after).all(|(a, b)| b > a),
+            "{workers:?} → {workers_after:?}"
+        );
+    }
 
     fn phi_from_fn(n: usize, r: usize, f: impl Fn(usize, usize) -> f64) -> CageCoords {
         CageCoords::from_matrix(Mat::from_fn(n, r, f)).unwrap()

@@ -5,7 +5,7 @@
 use faer::Mat;
 use rayon::prelude::*;
 
-use super::maxvol::{SWAP_THRESHOLD, SeqLu};
+use super::maxvol_lu::{SWAP_THRESHOLD, SeqLu};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 

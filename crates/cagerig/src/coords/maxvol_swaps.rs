@@ -13,7 +13,8 @@
 use faer::Mat;
 use rayon::prelude::*;
 
-use super::maxvol::{MaxVolSelection, SWAP_THRESHOLD, SeqLu, log_abs_det_of_rows};
+use super::maxvol::{MaxVolSelection, log_abs_det_of_rows};
+use super::maxvol_lu::{SWAP_THRESHOLD, SeqLu};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 

@@ -3,6 +3,7 @@
 pub(crate) mod local_mvc;
 pub mod maxvol;
 mod maxvol_dominance;
+mod maxvol_lu;
 mod maxvol_swaps;
 pub mod mec;
 pub mod mec_signed;

@@ -12,7 +12,7 @@ use faer::MatRef;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::grid::for_each_pair;
+use super::grid_layout::for_each_pair;
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;

@@ -9,7 +9,7 @@
 //! (pair index first): deterministic, and equal to a per-vertex evaluation in pair-enumeration
 //! order up to the last bits (the test below).
 
-use super::grid::{Grid, NONE, PairLookup, for_each_pair};
+use super::grid_layout::{Grid, NONE, PairLookup, for_each_pair};
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::row_blocks::RowBlock;
@@ -173,7 +173,7 @@ fn accumulate_generic(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums:
 
 #[cfg(test)]
 mod tests {
-    use super::super::grid::GridInterpolation;
+    use super::super::grid_layout::GridInterpolation;
     use super::*;
 
     /// Against the plain per-vertex evaluation (pairs in enumeration order, stencil nodes in

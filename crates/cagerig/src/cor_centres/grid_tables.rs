@@ -5,8 +5,8 @@
 use faer::{Accum, Par};
 use rayon::prelude::*;
 
-use super::grid::Grid;
 use super::grid_bins::TriangleBins;
+use super::grid_layout::Grid;
 use crate::error::RigError;
 use crate::memory_estimate::zeroed_table;
 

@@ -16,6 +16,7 @@ pub mod exact;
 mod factored;
 pub mod grid;
 mod grid_bins;
+mod grid_layout;
 mod grid_rows;
 mod grid_tables;
 mod options;
