@@ -67,6 +67,8 @@ pub struct PictureMaker {
     renderer: OffscreenRenderer,
     data: RigSceneData,
     pub options: PictureOptions,
+    /// What the next pictures show (the step, the sample time), drawn under each view's label.
+    pub caption: Option<String>,
 }
 
 impl PictureMaker {
@@ -77,6 +79,7 @@ impl PictureMaker {
             renderer,
             data: RigSceneData::new(),
             options,
+            caption: None,
         })
     }
 
@@ -165,6 +168,16 @@ impl PictureMaker {
                     text_scale,
                     [30, 32, 38, 255],
                 );
+                if let Some(caption) = &self.caption {
+                    annotate::draw_text(
+                        &mut image,
+                        margin,
+                        margin + 11 * text_scale,
+                        caption,
+                        text_scale,
+                        [70, 74, 84, 255],
+                    );
+                }
             }
             if let Some((map, title)) = &legend {
                 let bar_height = h / 3;

@@ -79,6 +79,25 @@ impl ColorMap {
         }
     }
 
+    /// Diverging map symmetric about zero scaled to the bulk of `values`: its limit is the
+    /// `quantile` (in (0, 1]) of their magnitudes, so that a few large values (Φ near its own
+    /// cage vertex) do not leave the rest white; larger values saturate at the ends.
+    pub fn diverging_robust(values: &[f64], quantile: f64) -> Self {
+        let mut magnitudes: Vec<f64> = values
+            .iter()
+            .filter(|v| v.is_finite())
+            .map(|v| v.abs())
+            .collect();
+        if magnitudes.is_empty() {
+            return ColorMap::Diverging { limit: 1.0 };
+        }
+        let k = ((magnitudes.len() - 1) as f64 * quantile.clamp(0.0, 1.0)).round() as usize;
+        let (_, &mut limit, _) = magnitudes.select_nth_unstable_by(k, f64::total_cmp);
+        ColorMap::Diverging {
+            limit: if limit > 0.0 { limit } else { 1.0 },
+        }
+    }
+
     /// The sRGB colour of `value`. Non-finite values map to the palette's low end.
     pub fn color(&self, value: f64) -> [f64; 3] {
         match *self {
@@ -111,6 +130,24 @@ fn finite_range(values: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_robust_diverging_map_follows_the_bulk_of_the_values() {
+        let mut values = vec![0.01; 99];
+        values.push(0.9);
+        let ColorMap::Diverging { limit } = ColorMap::diverging_robust(&values, 0.98) else {
+            panic!("diverging")
+        };
+        assert_eq!(limit, 0.01);
+        assert_eq!(
+            ColorMap::diverging_for(&values),
+            ColorMap::Diverging { limit: 0.9 }
+        );
+        assert_eq!(
+            ColorMap::diverging_robust(&[], 0.98),
+            ColorMap::Diverging { limit: 1.0 }
+        );
+    }
 
     fn luminance(c: [f64; 3]) -> f64 {
         0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]

@@ -126,12 +126,20 @@ impl ColorBy {
             }
             ColorBy::CageCoords(k) => {
                 out.extend_from_slice(session.cage_coords().column(k));
-                Some(ColorMap::diverging_for(out))
+                // Φ[:, k] peaks near cage vertex k and is small elsewhere: the map follows the
+                // bulk (90th percentile of |Φ|), the peak saturates.
+                Some(ColorMap::diverging_robust(out, PHI_MAP_QUANTILE))
             }
             ColorBy::None | ColorBy::JointCageCoords(_) => None,
         }
     }
 }
+
+/// Quantile of |Φ[:, k]| that the Φ colour map's ends stand for.
+const PHI_MAP_QUANTILE: f64 = 0.9;
+
+/// Colour of the cage handle whose Φ column is shown.
+const CHOSEN_HANDLE: [u8; 4] = [25, 30, 60, 255];
 
 impl RigSceneData {
     /// Empty scratch data.
@@ -209,11 +217,20 @@ impl RigSceneData {
                 .extend(self.scalars.iter().map(|&s| map.color_u8(s)));
         }
         self.handle_colors.clear();
-        if let (true, ColorBy::JointCageCoords(j)) = (valid, color_by) {
-            let row = session.skeleton_updater().joint_row(j);
-            let map = ColorMap::diverging_for(row);
-            self.handle_colors
-                .extend(row.iter().map(|&s| map.color_u8(s)));
+        match (valid, color_by) {
+            (true, ColorBy::JointCageCoords(j)) => {
+                let row = session.skeleton_updater().joint_row(j);
+                let map = ColorMap::diverging_for(row);
+                self.handle_colors
+                    .extend(row.iter().map(|&s| map.color_u8(s)));
+            }
+            (true, ColorBy::CageCoords(k)) => {
+                // The chosen cage vertex is marked: dark among the usual handles.
+                let usual = crate::scene::Style::default().cage_handles;
+                self.handle_colors
+                    .extend((0..cage.len()).map(|c| if c == k { CHOSEN_HANDLE } else { usual }));
+            }
+            (true, ColorBy::None | ColorBy::JointWeights(_)) | (false, _) => {}
         }
         Scene {
             mesh: layers.mesh.then_some(MeshLayer {

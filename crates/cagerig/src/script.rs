@@ -93,6 +93,44 @@ impl std::fmt::Display for JointRef {
     }
 }
 
+impl EditStep {
+    /// A short description for captions and logs: `rotate joint 3 by 60° about [1, 0, 0]`,
+    /// `move 5 rest-cage vertices by [0.2, -0.1, 0.15]`, `skinning DQS`.
+    pub fn summary(&self) -> String {
+        let vector = |v: &[f64; 3]| crate::error::vector_text(DVec3::from_array(*v));
+        let count = |n: usize| {
+            if n == 1 {
+                "1 vertex".to_string()
+            } else {
+                format!("{n} vertices")
+            }
+        };
+        match self {
+            EditStep::RotateJoint {
+                joint,
+                axis,
+                degrees,
+            } => format!(
+                "rotate joint {joint} by {}\u{b0} about {}",
+                crate::error::number_text(*degrees),
+                vector(axis)
+            ),
+            EditStep::MoveRestCage { vertices, offset } => format!(
+                "move {} of the rest cage by {}",
+                count(vertices.len()),
+                vector(offset)
+            ),
+            EditStep::MovePosedCage { vertices, offset } => format!(
+                "grab {} of the current cage by {}",
+                count(vertices.len()),
+                vector(offset)
+            ),
+            EditStep::SetSkinning { method } => format!("skinning {}", method.label()),
+            EditStep::ResetPose {} => "reset the pose".into(),
+        }
+    }
+}
+
 impl std::fmt::Display for EditStep {
     /// The step in the script's own terms (its JSON object), for logs:
     /// `{"op":"rotate_joint","joint":3,"axis":[0,0,1],"degrees":-10}`.
@@ -379,6 +417,10 @@ mod tests {
             let text = format!(r#"{{"steps":[{step}]}}"#);
             assert_eq!(&EditScript::parse(&text).unwrap().steps[0], step, "{text}");
         }
+        assert_eq!(
+            s.steps[4].summary(),
+            "rotate joint 3 by -10\u{b0} about [0, 0, 1]"
+        );
         assert_eq!(
             s.steps[4].to_string(),
             r#"{"op":"rotate_joint","joint":3,"axis":[0,0,1],"degrees":-10}"#

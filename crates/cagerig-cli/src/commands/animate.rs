@@ -120,6 +120,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
         write_state(&mut staged, &format!("t{t}"), &session)?;
         if let Some(p) = &mut pictures {
+            p.caption = Some(format!("t = {t} s"));
             p.write_staged(&session, &mut staged, &format!("t{t}.png"))?;
         }
     }

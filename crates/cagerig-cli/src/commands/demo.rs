@@ -39,8 +39,11 @@ impl DemoPictures {
         }
     }
 
-    fn add(&mut self, name: &str, session: &RigSession) -> anyhow::Result<()> {
+    /// The pictures of one step: `name`.png (rest | current) and the step's panel of the strip,
+    /// both captioned with `caption` (what the step did).
+    fn add(&mut self, name: &str, caption: &str, session: &RigSession) -> anyhow::Result<()> {
         if let Some(maker) = &mut self.maker {
+            maker.caption = Some(caption.to_owned());
             let camera = maker.camera(session, 0.0);
             let image = maker.picture(session, &camera)?;
             self.images.push((format!("{name}.png"), image));
@@ -129,7 +132,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut staged = StagedDir::create(out, true)?;
     let mut pictures = DemoPictures::new(pictures);
     write_state(&mut staged, "0_loaded", &s)?;
-    pictures.add("0_loaded", &s)?;
+    pictures.add("0_loaded", "0. as loaded", &s)?;
     let (lo, hi) = cagerig::mesh::bounding_box(s.rest_cage());
     let centre = (lo + hi) * 0.5;
     let size = (hi - lo).length();
@@ -144,7 +147,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         t.elapsed().as_secs_f64() * 1e3
     );
     write_state(&mut staged, "1_bend", &s)?;
-    pictures.add("1_bend", &s)?;
+    pictures.add("1_bend", &format!("1. bend: joint {joint} +60\u{b0}"), &s)?;
 
     // 2. Inflate with the rest cage: push the cage vertices on the far half outwards.
     let (verts, offsets): (Vec<usize>, Vec<DVec3>) = s
@@ -166,7 +169,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         t.elapsed().as_secs_f64() * 1e3
     );
     write_state(&mut staged, "2_inflate", &s)?;
-    pictures.add("2_inflate", &s)?;
+    pictures.add("2_inflate", "2. inflate the rest cage", &s)?;
 
     // 3. Grab the current cage: pull the vertex farthest along +X.
     let far = s
@@ -185,7 +188,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         s.posed_cage()[far].distance(target)
     );
     write_state(&mut staged, "3_grab", &s)?;
-    pictures.add("3_grab", &s)?;
+    pictures.add("3_grab", "3. grab the current cage", &s)?;
     let picture_names = pictures.write_staged(&mut staged)?;
     let n = staged.finish()?;
     println!("{n} files written to {}", out.display());

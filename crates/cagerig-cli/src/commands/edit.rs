@@ -94,6 +94,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", script_path.display()))?;
     write_state(&mut staged, "step0", &session)?;
     if let Some(p) = &mut pictures {
+        p.caption = Some("step 0: as loaded".into());
         p.write_staged(&session, &mut staged, "step0.png")?;
     }
     for k in 0..script.steps.len() {
@@ -109,6 +110,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
         write_state(&mut staged, &format!("step{}", k + 1), &session)?;
         if let Some(p) = &mut pictures {
+            p.caption = Some(format!("step {}: {}", k + 1, script.steps[k].summary()));
             p.write_staged(&session, &mut staged, &format!("step{}.png", k + 1))?;
         }
     }

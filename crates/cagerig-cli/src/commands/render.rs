@@ -280,6 +280,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let mut player = tracks.resolve(&session)?.player(&session)?;
         for &t in &args.times {
             player.apply(t, &mut session)?;
+            maker.caption = Some(format!("t = {t} s"));
             let path = if args.times.len() == 1 {
                 args.out.clone()
             } else {
