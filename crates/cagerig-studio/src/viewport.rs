@@ -80,7 +80,8 @@ impl View {
         )
     }
 
-    /// Frames the whole rig (skin and cage) from `preset` (or the current angles).
+    /// Frames the whole rig (skin and cage; the cage is what the user edits) from `preset` (or
+    /// the current angles).
     pub fn frame_all(&mut self, session: &RigSession, preset: Option<CameraPreset>) {
         let (mut lo, mut hi) = bounds(session, self.pose);
         if !(lo.is_finite() && hi.is_finite()) {
@@ -164,7 +165,7 @@ impl View {
             let t = Instant::now();
             let scene = self.scene_data.scene(session, self.pose, layers, color_by);
             gpu.buffers
-                .update_into(device, queue, &mut encoder, &scene, &Style::default())?;
+                .update_into(device, queue, &mut encoder, &scene, &editor_style())?;
             self.last_upload_ms = t.elapsed().as_secs_f64() * 1e3;
             self.uploaded = Some(upload_key);
         } else {
@@ -223,4 +224,19 @@ pub fn bounds(session: &RigSession, pose: Pose) -> (DVec3, DVec3) {
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), p| (lo.min(*p), hi.max(*p)),
     )
+}
+
+/// The editor's drawing style: the offscreen pictures' style with a lighter cage (fainter faces,
+/// thinner and translucent edges, smaller handles), so that the character reads through the
+/// cage while the cage stays easy to pick.
+pub fn editor_style() -> Style {
+    Style {
+        cage_faces: [255, 140, 30, 14],
+        cage_edges: [235, 110, 10, 150],
+        cage_handles: [255, 150, 40, 230],
+        hidden_alpha: 35,
+        line_width: 1.2,
+        handle_radius: 3.5,
+        ..Style::default()
+    }
 }
