@@ -81,6 +81,7 @@ pub fn load_interchange(
         animations,
         morph_targets,
         warnings,
+        skinning: file_skinning,
         ..
     } = character;
     Ok(LoadedRig {
@@ -93,6 +94,7 @@ pub fn load_interchange(
         morph_targets,
         allow_outside_cage: false,
         generated_cage,
+        file_skinning,
     })
 }
 

@@ -140,6 +140,8 @@ pub struct LoadedRig {
     pub allow_outside_cage: bool,
     /// The cage generated because the rig had none (`--auto-cage`).
     pub generated_cage: Option<GeneratedCage>,
+    /// The skinning method the file says its authoring tool uses (FBX), if any.
+    pub file_skinning: Option<cagerig::skinning::SkinningMethod>,
 }
 
 /// Loads the rig. With `compute_coords`, Φ is computed (with a progress bar when `progress` and
@@ -180,6 +182,7 @@ pub fn load_rig_or_generate_cage(
                 morph_targets: Default::default(),
                 allow_outside_cage: args.allow_outside_cage,
                 generated_cage: None,
+                file_skinning: None,
             }
         }
         (None, Some(mesh)) if crate::interchange::is_interchange(mesh) => LoadedRig {
@@ -253,6 +256,7 @@ fn load_files(
         morph_targets: Default::default(),
         allow_outside_cage,
         generated_cage: rig.generated_cage,
+        file_skinning: None,
     })
 }
 

@@ -121,3 +121,30 @@ pub fn start_session(
     all.append(&mut warnings);
     Ok((session, all))
 }
+
+/// The skinning method of a run, by the one rule of every command: `--skinning`, else the
+/// script's `"skinning"`, else the method the file says its authoring tool uses (FBX skin
+/// deformers; said in a note), else LBS.
+pub fn choose_skinning(
+    option: Option<SkinningMethod>,
+    script: Option<SkinningMethod>,
+    loaded: &LoadedRig,
+) -> SkinningMethod {
+    if let Some(method) = option.or(script) {
+        return method;
+    }
+    match loaded.file_skinning {
+        Some(method) => {
+            if method != SkinningMethod::default() {
+                eprintln!(
+                    "note: {}: skinning with {}, as the file's skin says (choose another with \
+                     --skinning)",
+                    loaded.name,
+                    method.label()
+                );
+            }
+            method
+        }
+        None => SkinningMethod::default(),
+    }
+}

@@ -197,6 +197,32 @@ fn edit_generates_a_cage_with_auto_cage_and_says_so() {
     );
     // Nothing was written beside the user's files.
     assert!(!dir.join("arm_cage.obj").exists());
+    // Regression: rerunning with --force into the same folder failed, generated_cage.obj
+    // counting as a file cagerig had not written.
+    let again = cagerig()
+        .arg("edit")
+        .arg(dir.join("arm.obj"))
+        .args([
+            "--auto-cage",
+            "--cage-vertices",
+            "60",
+            "--force",
+            "--script",
+        ])
+        .arg(&script)
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    assert!(
+        again.status.success(),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    assert_eq!(
+        cagerig::io::read_obj(&written).unwrap().positions,
+        cage.positions
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

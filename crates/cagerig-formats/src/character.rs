@@ -39,6 +39,10 @@ pub struct ImportedCharacter {
     pub node_pose: Vec<glam::DAffine3>,
     /// What `cagerig info` lists about the file.
     pub summary: ImportSummary,
+    /// The skinning method the file's authoring tool poses the character with, when the file
+    /// says (FBX skin deformers: linear, rigid, dual quaternion); front ends use it unless the
+    /// user chooses a method. `None`: the format's own (glTF: linear blend skinning).
+    pub skinning: Option<cagerig::skinning::SkinningMethod>,
     /// Validation and import warnings (weights renormalised, parts not imported, …).
     pub warnings: Vec<Warning>,
 }

@@ -126,6 +126,12 @@ fn left_handed_fbx_is_mirrored_with_its_winding_reversed() {
 /// reference times against ufbx's reference meshes carried through that conversion.
 fn check_against_references(path: &std::path::Path) -> SpaceSummary {
     let c = import_character(path, &ImportOptions::default()).unwrap();
+    // Blender skins linearly, and the file says so: the front ends pose it with LBS.
+    assert_eq!(
+        c.skinning,
+        Some(cagerig::skinning::SkinningMethod::Lbs),
+        "the file's skinning method"
+    );
     assert_eq!(c.mesh.num_vertices(), 290);
     assert_eq!(c.skeleton.len(), 3);
     let names: Vec<&str> = c.animations.iter().map(|a| a.name.as_str()).collect();

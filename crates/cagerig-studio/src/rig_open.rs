@@ -120,7 +120,7 @@ pub struct OpenedRig {
 /// Loads `source` and assembles the session (Φ, MaxVol rows and Ψ are computed when no file
 /// gives them).
 pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
-    let (parts, mut warnings, files, (animations, morph_targets)) = match source {
+    let (parts, mut warnings, files, (animations, morph_targets, file_skinning)) = match source {
         RigSource::Builtin { name, resolution } => {
             let builtin_error = |source| OpenError::Builtin {
                 name: name.clone(),
@@ -164,11 +164,15 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
         }
     };
     let name = source.display_name();
-    let (mut session, mut more) =
-        RigSession::new(parts, SessionOptions::default()).map_err(|e| OpenError::Rig {
-            name: name.clone(),
-            source: e,
-        })?;
+    // A character opens with the skinning method its file says (FBX skin deformers).
+    let options = SessionOptions {
+        skinning: file_skinning.unwrap_or_default(),
+        ..SessionOptions::default()
+    };
+    let (mut session, mut more) = RigSession::new(parts, options).map_err(|e| OpenError::Rig {
+        name: name.clone(),
+        source: e,
+    })?;
     // The views draw the current skin from the f32 display path (within 2e-6 of the bounding-box
     // diagonal of the exact one); every sync operator, export and script result stays exact.
     session
@@ -189,7 +193,11 @@ type Imported = (
     RigParts,
     Vec<Warning>,
     Vec<(String, PathBuf)>,
-    (Vec<ImportedAnimation>, cagerig_formats::MorphTargets),
+    (
+        Vec<ImportedAnimation>,
+        cagerig_formats::MorphTargets,
+        Option<cagerig::skinning::SkinningMethod>,
+    ),
 );
 
 /// The log line of a generated cage: the library's note and where File ▸ Export writes it.
@@ -244,7 +252,11 @@ fn import_interchange(
         ),
         warnings,
         files,
-        (character.animations, character.morph_targets),
+        (
+            character.animations,
+            character.morph_targets,
+            character.skinning,
+        ),
     ))
 }
 

@@ -102,7 +102,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let tracks =
         crate::interchange::animation_tracks(&mut loaded, skeleton_anim, animation, cage_anim)?;
     let mut options = session_args.options();
-    options.skinning = skinning.unwrap_or_default();
+    options.skinning = crate::session_args::choose_skinning(skinning, None, &loaded);
     let (session, warnings) = start_session(loaded, options)?;
     for w in &warnings {
         eprintln!("warning: {w}");

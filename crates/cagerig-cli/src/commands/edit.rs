@@ -84,7 +84,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         write_generated_cage(&mut staged, &g.cage)?;
     }
     let mut options = session_args.options();
-    options.skinning = skinning.or(script.skinning).unwrap_or_default();
+    options.skinning = crate::session_args::choose_skinning(skinning, script.skinning, &loaded);
     let (mut session, warnings) = start_session(loaded, options)?;
     for w in &warnings {
         eprintln!("warning: {w}");

@@ -91,9 +91,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .unwrap_or("cagerig")
         .to_string();
     let mut options = args.session.options();
-    if let Some(s) = script.as_ref().and_then(|s| s.skinning) {
-        options.skinning = s;
-    }
+    options.skinning = crate::session_args::choose_skinning(
+        None,
+        script.as_ref().and_then(|s| s.skinning),
+        &loaded,
+    );
     let (mut session, warnings) =
         RigSession::new(loaded.parts, options).context("assembling the rig")?;
     for w in loaded.warnings.iter().chain(&warnings) {

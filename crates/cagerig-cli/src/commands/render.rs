@@ -239,10 +239,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         args.cage_anim.as_deref(),
     )?;
     let mut options = args.session.options();
-    options.skinning = args
-        .skinning
-        .or(script.as_ref().and_then(|s| s.skinning))
-        .unwrap_or_default();
+    options.skinning = crate::session_args::choose_skinning(
+        args.skinning,
+        script.as_ref().and_then(|s| s.skinning),
+        &loaded,
+    );
     let (mut session, warnings) = start_session(loaded, options)?;
     for w in &warnings {
         eprintln!("warning: {w}");

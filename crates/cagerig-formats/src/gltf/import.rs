@@ -381,6 +381,7 @@ pub fn import_gltf_bytes(
             chosen_skin: skin.index(),
             ..Default::default()
         },
+        skinning: None,
         warnings,
     };
     character.fill_influence_summary();
