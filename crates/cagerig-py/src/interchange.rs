@@ -11,6 +11,7 @@ use cagerig::cage_source::{
 };
 use cagerig::mesh::TriMesh;
 use cagerig::session::RigParts;
+use cagerig::skinning::SkinningMethod;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -33,13 +34,13 @@ pub fn cage_options(vertices: usize, margin: Option<f64>) -> PyResult<CageOption
 }
 
 /// Rig parts of a glTF / FBX character: its cage is `cage` (OBJ), else a cage node in the file,
-/// else a generated one when `auto_cage` is given.
+/// else a generated one when `auto_cage` is given; with the skinning method the file says.
 pub fn load_character(
     py: Python<'_>,
     path: &Path,
     cage: Option<&Path>,
     auto_cage: Option<usize>,
-) -> PyResult<(RigParts, Vec<Warning>)> {
+) -> PyResult<(RigParts, Vec<Warning>, Option<SkinningMethod>)> {
     let character = py
         .detach(|| {
             cagerig_formats::import_character(path, &cagerig_formats::ImportOptions::default())
@@ -73,6 +74,7 @@ pub fn load_character(
             cage_mesh,
         ),
         warnings,
+        character.skinning,
     ))
 }
 

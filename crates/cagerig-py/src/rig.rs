@@ -152,7 +152,9 @@ impl Rig {
     /// auto_cage : int, optional
     ///     When no cage is found, generate one with this many vertices (as ``cagerig cage``;
     ///     issued as a RigWarning) instead of failing.
-    /// skinning : {"lbs", "dqs", "cor"}, default "lbs"
+    /// skinning : {"lbs", "dqs", "cor"}, optional
+    ///     Default: the method the file says its authoring tool uses (FBX skin deformers),
+    ///     else "lbs".
     /// fit_rows : {"maxvol", "all"}, default "maxvol"
     ///     Mesh rows used by CageUp/CageRev (MaxVol square system, or least squares on all rows).
     /// localisation : {"articulation", "reference_tool"}, default "articulation"
@@ -172,7 +174,7 @@ impl Rig {
     ///     With the file, line or element at fault. Accepted oddities (weights renormalised, …)
     ///     are issued as RigWarning and kept in :attr:`warnings`.
     #[staticmethod]
-    #[pyo3(signature = (path, cage = None, *, skinning = "lbs", fit_rows = "maxvol",
+    #[pyo3(signature = (path, cage = None, *, skinning = None, fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
                         keep_file_coords = false, auto_cage = None))]
     #[allow(clippy::too_many_arguments)]
@@ -180,7 +182,7 @@ impl Rig {
         py: Python<'_>,
         path: PathBuf,
         cage: Option<PathBuf>,
-        skinning: &str,
+        skinning: Option<&str>,
         fit_rows: &str,
         localisation: &str,
         fit_source: &str,
@@ -189,7 +191,7 @@ impl Rig {
         auto_cage: Option<usize>,
     ) -> PyResult<Self> {
         let mut options = options::session_options(
-            skinning,
+            skinning.unwrap_or("lbs"),
             fit_rows,
             localisation,
             fit_source,
@@ -199,7 +201,13 @@ impl Rig {
             options.given_cage_coords = cagerig::session::GivenCageCoords::Keep;
         }
         let (parts, warnings) = if cagerig_formats::CharacterFormat::of(&path).is_some() {
-            crate::interchange::load_character(py, &path, cage.as_deref(), auto_cage)?
+            let (parts, warnings, file_skinning) =
+                crate::interchange::load_character(py, &path, cage.as_deref(), auto_cage)?;
+            // The file's own method (FBX skin deformers) unless the caller chose one.
+            if let (None, Some(method)) = (skinning, file_skinning) {
+                options.skinning = method;
+            }
+            (parts, warnings)
         } else {
             let missing = match auto_cage {
                 Some(n) => MissingCage::Generate(crate::interchange::cage_options(n, None)?),

@@ -58,3 +58,13 @@ def test_export_gltf_refuses_other_extensions(tmp_path):
     rig = cagerig.Rig.builtin("bar")
     with pytest.raises(ValueError, match=r"\.glb or \.gltf"):
         rig.export_gltf(tmp_path / "x.obj")
+
+
+def test_fbx_loads_with_the_files_skinning_method_unless_one_is_chosen():
+    fbx = DATA / "fbx" / "blender_279_sausage_7400_binary.fbx"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", cagerig.RigWarning)
+        rig = cagerig.Rig.load(fbx, auto_cage=40)
+        chosen = cagerig.Rig.load(fbx, auto_cage=40, skinning="dqs")
+    assert rig.skinning == "lbs"  # Blender skins linearly, and the file says so
+    assert chosen.skinning == "dqs"

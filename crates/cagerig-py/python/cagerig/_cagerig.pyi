@@ -105,7 +105,7 @@ class Rig:
         path: _PathLike,
         cage: Optional[_PathLike] = None,
         *,
-        skinning: _Skinning = "lbs",
+        skinning: Optional[_Skinning] = None,
         fit_rows: _FitRows = "maxvol",
         localisation: _Localisation = "articulation",
         fit_source: _FitSource = "ghost",
