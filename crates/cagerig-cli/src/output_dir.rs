@@ -30,6 +30,22 @@ pub const STATE_FILE_SUFFIXES: [&str; 6] = [
     "_joints.json",
 ];
 
+/// `--out`, `--force`, `--render`: the output folder of a command that writes the rig's state
+/// after each step or sample (`edit`, `animate`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct StateOutputArgs {
+    /// Output folder; it appears complete, only after every state was written.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Replace a non-empty --out that holds an earlier run's output.
+    #[arg(long)]
+    pub force: bool,
+    /// Also write a picture of each state (rest pose left, current pose right) as PNG;
+    /// needs a Vulkan or GL adapter (software ones work).
+    #[arg(long)]
+    pub render: bool,
+}
+
 /// The file in every output folder that lists the files of the output, one per line: what
 /// `--force` may replace.
 pub const MANIFEST_FILE: &str = ".cagerig-output";

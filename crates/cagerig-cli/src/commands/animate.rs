@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::bail;
 use cagerig::skinning::SkinningMethod;
 
-use crate::output_dir::StagedDir;
+use crate::output_dir::{StagedDir, StateOutputArgs};
 use crate::rig_source::{
     AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_or_generate_cage, report_generated_cage,
     write_generated_cage,
@@ -61,16 +61,8 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     pub times: Vec<f64>,
-    /// Output folder; it appears complete, only after every sample succeeded.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Replace a non-empty --out that holds an earlier run's output.
-    #[arg(long)]
-    pub force: bool,
-    /// Also write a picture of each state (rest pose left, current pose right) as PNG;
-    /// needs a Vulkan or GL adapter (software ones work).
-    #[arg(long)]
-    pub render: bool,
+    #[command(flatten)]
+    pub output: StateOutputArgs,
     /// Skinning method.
     #[arg(long, value_parser = skinning_parser())]
     pub skinning: Option<SkinningMethod>,
@@ -79,15 +71,19 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (rig, auto_cage, out) = (&args.rig, &args.auto_cage, args.out.as_path());
+    let (rig, auto_cage, out) = (&args.rig, &args.auto_cage, args.output.out.as_path());
     let (skeleton_anim, cage_anim, animation, times) = (
         args.skeleton_anim.as_deref(),
         args.cage_anim.as_deref(),
         args.animation.as_deref(),
         args.times.as_slice(),
     );
-    let (force, render, skinning, session_args) =
-        (args.force, args.render, args.skinning, &args.session);
+    let (force, render, skinning, session_args) = (
+        args.output.force,
+        args.output.render,
+        args.skinning,
+        &args.session,
+    );
     if skeleton_anim.is_none() && cage_anim.is_none() && animation.is_none() {
         bail!("give --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
     }

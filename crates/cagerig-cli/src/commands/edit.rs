@@ -7,7 +7,7 @@ use anyhow::Context;
 use cagerig::script::EditScript;
 use cagerig::skinning::SkinningMethod;
 
-use crate::output_dir::StagedDir;
+use crate::output_dir::{StagedDir, StateOutputArgs};
 use crate::pictures::PictureMaker;
 use crate::rig_source::{
     AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_or_generate_cage, report_generated_cage,
@@ -49,16 +49,8 @@ pub struct Args {
     /// The script: {"skinning":..., "steps":[{"op":...}, ...]} (operations: see --help).
     #[arg(long)]
     pub script: PathBuf,
-    /// Output folder; it appears complete, only after every step succeeded.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Replace a non-empty --out that holds an earlier run's output.
-    #[arg(long)]
-    pub force: bool,
-    /// Also write a picture of each state (rest pose left, current pose right) as PNG;
-    /// needs a Vulkan or GL adapter (software ones work).
-    #[arg(long)]
-    pub render: bool,
+    #[command(flatten)]
+    pub output: StateOutputArgs,
     /// Skinning method (overrides the script's).
     #[arg(long, value_parser = skinning_parser())]
     pub skinning: Option<SkinningMethod>,
@@ -71,10 +63,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         &args.rig,
         &args.auto_cage,
         args.script.as_path(),
-        args.out.as_path(),
+        args.output.out.as_path(),
     );
-    let (force, render, skinning, session_args) =
-        (args.force, args.render, args.skinning, &args.session);
+    let (force, render, skinning, session_args) = (
+        args.output.force,
+        args.output.render,
+        args.skinning,
+        &args.session,
+    );
     let script = read_script(script_path)?;
     let mut pictures = PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force)?;
