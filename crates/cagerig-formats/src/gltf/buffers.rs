@@ -289,10 +289,12 @@ impl Buffers {
                 "has {n} sparse substitutions for {count} elements"
             )));
         }
-        let index_size = match sparse.indices().index_type() {
-            gltf::accessor::sparse::IndexType::U8 => 1,
-            gltf::accessor::sparse::IndexType::U16 => 2,
-            gltf::accessor::sparse::IndexType::U32 => 4,
+        use gltf::accessor::sparse::IndexType;
+        let index_type = sparse.indices().index_type();
+        let index_size = match index_type {
+            IndexType::U8 => 1,
+            IndexType::U16 => 2,
+            IndexType::U32 => 4,
         };
         let indices = self.view_bytes(
             &sparse.indices().view(),
@@ -311,10 +313,10 @@ impl Buffers {
         let mut previous: Option<usize> = None;
         for k in 0..n {
             let b = &indices[k * index_size..(k + 1) * index_size];
-            let index = match index_size {
-                1 => b[0] as usize,
-                2 => u16::from_le_bytes([b[0], b[1]]) as usize,
-                _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+            let index = match index_type {
+                IndexType::U8 => b[0] as usize,
+                IndexType::U16 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                IndexType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
             };
             if index >= count || previous.is_some_and(|p| index <= p) {
                 return Err(err(format!(
