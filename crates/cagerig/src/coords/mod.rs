@@ -1,5 +1,7 @@
-//! Barycentric coordinates: mean value (Φ), max-entropy (Ψ projection), MaxVol row selection.
+//! Barycentric coordinates: mean value (Φ), Green (φ, ψ), max-entropy (Ψ projection), MaxVol row selection.
 
+pub mod green;
+mod green_triangle;
 pub(crate) mod local_mvc;
 pub mod maxvol;
 mod maxvol_dominance;
@@ -11,3 +13,4 @@ pub mod mvc;
 mod mvc_batch;
 mod mvc_lanes;
 mod mvc_triangle;
+pub mod stretched_normals;
