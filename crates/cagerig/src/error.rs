@@ -264,6 +264,42 @@ pub enum RigError {
         /// The position it would have moved to (world space).
         value: [f64; 3],
     },
+    /// Green coordinates: CageUp found no current cage fitting this state (see
+    /// `docs/green-coordinates.md`: where the fitted cage folds a face, Lipman's stretched normal
+    /// jumps, and the fit has no solution beyond the fold).
+    #[error(
+        "the event was refused and the rig left as it was: Green CageUp found no current cage \
+         fitting it (the fit stopped with a gradient of {residual:.3e}, expected at most \
+         {limit:.3e}; the closest cage folds cage triangle {face}, whose area fell to \
+         {area_ratio:.2e} of its rest area — a Green cage cannot follow the skin past a folded \
+         triangle); try a smaller step, or mean value coordinates for this pose"
+    )]
+    GreenFitFailed {
+        /// max |Jᵀr| where the fit stopped.
+        residual: f64,
+        /// The tolerance it had to reach.
+        limit: f64,
+        /// The cage triangle with the smallest area ratio at the stopping point.
+        face: usize,
+        /// That triangle's area over its binding area.
+        area_ratio: f64,
+    },
+    /// Green coordinates: CageRev found no rest cage that makes CageUp return the grabbed
+    /// current cage.
+    #[error(
+        "the grab was refused and the rig left as it was: Green CageRev found no rest cage \
+         making the current cage land where it was dragged (Newton stopped at a residual of \
+         {residual:.3e} after {iterations} steps, expected at most {limit:.3e}); try a smaller \
+         drag"
+    )]
+    GreenGrabFailed {
+        /// max |G| where Newton stopped.
+        residual: f64,
+        /// The tolerance it had to reach.
+        limit: f64,
+        /// Newton steps taken.
+        iterations: usize,
+    },
     /// A matrix could not be factorised (singular or too ill-conditioned).
     #[error("{what} is singular or too ill-conditioned to factorise")]
     Singular {

@@ -17,6 +17,7 @@ pub mod cage_enclosure;
 pub mod cage_gen;
 pub mod cage_source;
 pub mod coords;
+pub mod coords_kind;
 pub mod cor_centres;
 pub mod demo;
 pub mod error;
@@ -40,6 +41,7 @@ mod test_random;
 mod vector_registers;
 
 pub use cage_coords::CageCoords;
+pub use coords_kind::CoordsKind;
 pub use error::{RigError, Warning};
 pub use mesh::TriMesh;
 pub use skeleton::{Joint, Skeleton};

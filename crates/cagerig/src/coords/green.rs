@@ -139,7 +139,7 @@ pub fn face_normals(positions: &[DVec3], triangles: &[[u32; 3]], out: &mut [DVec
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::test_random::uniform;
 

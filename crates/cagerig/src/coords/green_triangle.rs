@@ -113,6 +113,7 @@ impl GreenTriangle {
 
 /// Green terms of triangle `corners` (counter-clockwise seen from outside) for the point `eta`.
 /// A degenerate triangle (zero area) contributes nothing.
+#[cfg(test)]
 pub fn triangle_green_terms(corners: [DVec3; 3], eta: DVec3) -> TriangleGreenTerms {
     match GreenTriangle::new(corners) {
         Some(triangle) => triangle.terms(eta),

@@ -99,8 +99,13 @@ impl StretchedNormals {
     /// ∂g_t/∂v'_a for the three corners a of face t (3×3 each, columns: d/dx, d/dy, d/dz), at
     /// `cage`. Zero for a degenerate deformed or binding triangle.
     pub fn face_jacobian(&self, cage: &[DVec3], t: usize) -> [DMat3; 3] {
+        self.face_jacobian_at(t, self.triangles[t].map(|v| cage[v as usize]))
+    }
+
+    /// [`Self::face_jacobian`] of face t with its corners at `corners`.
+    pub fn face_jacobian_at(&self, t: usize, corners: [DVec3; 3]) -> [DMat3; 3] {
         let f = &self.binding[t];
-        let [a, b, c] = self.triangles[t].map(|v| cage[v as usize]);
+        let [a, b, c] = corners;
         let (u, v) = (b - a, c - a);
         let cross = u.cross(v);
         let length = cross.length();
@@ -117,6 +122,46 @@ impl StretchedNormals {
         let dg_du = outer(n, ds_du) - project * cross_matrix(v) * k;
         let dg_dv = outer(n, ds_dv) + project * cross_matrix(u) * k;
         [-(dg_du + dg_dv), dg_du, dg_dv]
+    }
+}
+
+impl StretchedNormals {
+    /// The Hessian (9 × 9, symmetric, over the corners' coordinates, index 3·corner + axis) of
+    /// x ↦ w·g_t(x) for a fixed vector `w`, at `corners`, by central differences of its analytic
+    /// gradient (∂g_t/∂x)ᵀw with steps of `step`. Used by the Newton CageUp's second-order term,
+    /// where its error only slows convergence, not the solution.
+    pub fn weighted_face_hessian(
+        &self,
+        t: usize,
+        corners: [DVec3; 3],
+        w: DVec3,
+        step: f64,
+    ) -> [[f64; 9]; 9] {
+        let mut hessian = [[0.0; 9]; 9];
+        for q in 0..9 {
+            let mut plus = corners;
+            let mut minus = corners;
+            plus[q / 3][q % 3] += step;
+            minus[q / 3][q % 3] -= step;
+            let (jp, jm) = (
+                self.face_jacobian_at(t, plus),
+                self.face_jacobian_at(t, minus),
+            );
+            for corner in 0..3 {
+                let difference =
+                    (jp[corner].transpose() * w - jm[corner].transpose() * w) / (2.0 * step);
+                for axis in 0..3 {
+                    hessian[3 * corner + axis][q] = difference[axis];
+                }
+            }
+        }
+        let unsymmetric = hessian;
+        for (i, row) in hessian.iter_mut().enumerate() {
+            for (j, value) in row.iter_mut().enumerate() {
+                *value = 0.5 * (unsymmetric[i][j] + unsymmetric[j][i]);
+            }
+        }
+        hessian
     }
 }
 

@@ -66,10 +66,10 @@ impl RigSession {
             .map(|(c, o)| *c + *o)
             .collect();
         let mut mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
-        self.cage_coords.apply(&cage, &mut mesh);
+        self.rest_mesh_of_cage(&cage, &mut mesh);
         let centres = self.cor.as_ref().map(|cor| {
             let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
-            cor.centre_coords.apply(&cage, &mut centres);
+            self.centres_of_cage(cor, &cage, &mut centres);
             centres
         });
         Ok(RestKeyframe {
@@ -80,7 +80,7 @@ impl RigSession {
     }
 
     /// Animation sample between two precomputed cage keyframes (weight `a` on `hi`): C, M and
-    /// the CoR centres are lerped, then pose, SkelUp, skinning and CageUp as in
+    /// the CoR centres are lerped (Green rigs: C is lerped and M = φC + ψ·g(C) evaluated), then pose, SkelUp, skinning and CageUp as in
     /// [`RigSession::set_animation_sample`]. No allocation.
     pub fn set_animation_sample_between(
         &mut self,
@@ -134,6 +134,12 @@ impl RigSession {
         }
         self.store_pose(pose)?;
         lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
+        if self.green.is_some() {
+            // M is not linear in C: evaluate it at the blended cage (the CoR centres too).
+            self.rest_from_cage_in_full();
+            self.sync_from_rest_cage();
+            return Ok(());
+        }
         lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
         self.rest_mesh_is_phi_c = true;
         self.rest_mesh_rows_only = false;

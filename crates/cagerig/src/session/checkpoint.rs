@@ -106,11 +106,16 @@ impl RigSession {
             Err(e) if !changed => return Err(e),
             Err(e) => Some(e),
             Ok(()) => self
-                .first_bad_state()
-                .map(|(what, index, value)| RigError::EventRefused {
-                    what,
-                    index,
-                    value: value.to_array(),
+                .green
+                .as_mut()
+                .and_then(|g| g.fit_failure.take())
+                .or_else(|| {
+                    self.first_bad_state()
+                        .map(|(what, index, value)| RigError::EventRefused {
+                            what,
+                            index,
+                            value: value.to_array(),
+                        })
                 }),
         };
         let Some(error) = refused else {
@@ -131,8 +136,16 @@ impl RigSession {
             self.rest_from_cage_in_full();
         }
         self.reverser.invalidate();
+        // The saved C' is CageUp's answer for the restored state: start there (Green).
+        self.posed_cage.copy_from_slice(&self.checkpoint.posed_cage);
+        if let Some(green) = &mut self.green {
+            green.start_from_posed_cage = true;
+        }
         self.pose_and_fit();
         self.posed_cage.copy_from_slice(&self.checkpoint.posed_cage);
+        if let Some(green) = &mut self.green {
+            green.fit_failure = None;
+        }
         Err(error)
     }
 }

@@ -127,6 +127,9 @@ pub struct SessionOptions {
     /// Accept mesh vertices outside the cage (reported as a warning) instead of failing with
     /// [`RigError::MeshOutsideCage`].
     pub allow_mesh_outside_cage: bool,
+    /// The cage coordinates to bind with: mean value (M = ΦC, the paper) or Green
+    /// (M = φC + ψ·g(C); see `docs/green-coordinates.md`).
+    pub coords: CoordsKind,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).

@@ -1,0 +1,125 @@
+//! The kind of cage coordinates a rig binds with, as a value: its names, and the one parser of
+//! them (`--coords`, Python's `coords=`, session files).
+//!
+//! - [`CoordsKind::Mvc`]: mean value coordinates Φ, the paper's linear map M = ΦC.
+//! - [`CoordsKind::Green`]: Green coordinates (Lipman et al. 2008), M = φC + ψ·(s(C)·N(C)):
+//!   quasi-conformal, shape-preserving cage edits; the sync operators become Newton iterations
+//!   (see `docs/green-coordinates.md`).
+
+use std::fmt;
+use std::str::FromStr;
+
+/// The cage coordinates of a rig.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub enum CoordsKind {
+    /// Mean value coordinates (Eq. 7, linear in C).
+    #[default]
+    Mvc,
+    /// Green coordinates (vertex and face terms, non-linear in C).
+    Green,
+}
+
+/// A coordinates name that [`CoordsKind::from_str`] does not know.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown cage coordinates {found:?}: expected {}",
+    CoordsKind::names_text()
+)]
+pub struct UnknownCoordsKind {
+    /// The name as given.
+    pub found: String,
+}
+
+impl CoordsKind {
+    /// Every kind, in the order front ends list them.
+    pub const ALL: [CoordsKind; 2] = [Self::Mvc, Self::Green];
+
+    /// The name in options, scripts and files: `"mvc"` or `"green"`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Mvc => "mvc",
+            Self::Green => "green",
+        }
+    }
+
+    /// The name for people: `"mean value"` or `"Green"`.
+    pub const fn label(self) -> &'static str {
+        match self {
+            Self::Mvc => "mean value",
+            Self::Green => "Green",
+        }
+    }
+
+    /// Whether the rest skin is linear in the rest cage (M = ΦC).
+    pub const fn is_linear(self) -> bool {
+        match self {
+            Self::Mvc => true,
+            Self::Green => false,
+        }
+    }
+
+    /// The accepted names as a sentence: `"mvc or green"`.
+    pub fn names_text() -> String {
+        let names: Vec<&str> = Self::ALL.iter().map(|m| m.name()).collect();
+        match names.split_last() {
+            Some((last, [])) => (*last).to_string(),
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
+        }
+    }
+}
+
+impl FromStr for CoordsKind {
+    type Err = UnknownCoordsKind;
+
+    /// The kind of [`CoordsKind::name`], ignoring ASCII case.
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(text))
+            .ok_or_else(|| UnknownCoordsKind {
+                found: text.to_string(),
+            })
+    }
+}
+
+impl fmt::Display for CoordsKind {
+    /// Writes [`CoordsKind::name`].
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl serde::Serialize for CoordsKind {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for CoordsKind {
+    /// Reads a name through [`FromStr`], the one parser of coordinates names.
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(deserializer)?;
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_name_parses_back_and_unknown_names_list_the_accepted_ones() {
+        for k in CoordsKind::ALL {
+            assert_eq!(k.name().parse::<CoordsKind>(), Ok(k));
+            assert_eq!(k.to_string(), k.name());
+            let json = serde_json::to_string(&k).unwrap();
+            assert_eq!(serde_json::from_str::<CoordsKind>(&json).unwrap(), k);
+        }
+        assert_eq!("GREEN".parse::<CoordsKind>(), Ok(CoordsKind::Green));
+        assert_eq!(
+            "harmonic".parse::<CoordsKind>().unwrap_err().to_string(),
+            "unknown cage coordinates \"harmonic\": expected mvc or green"
+        );
+    }
+}

@@ -1,0 +1,501 @@
+//! The session's Green-coordinates terms ([`crate::CoordsKind::Green`]): M = φC + ψ·g(C), the
+//! Newton CageUp and CageRev, and the face part of the CoR centres.
+//!
+//! The session keeps the vertex part φ where MVC rigs keep Φ (`cage_coords`), so everything that
+//! is linear in C — the MaxVol rows, the linear CageUp map P, SkelUp's Ψ and the linear CageRev
+//! L — is built on φ unchanged; this module adds the face terms ψ·g(C) and turns CageUp and
+//! CageRev into the Newton solves of [`crate::sync::green_cage_fit`] and
+//! [`crate::sync::green_cage_reverser`]. The derivation is in `docs/green-coordinates.md`.
+
+use faer::Mat;
+
+use super::*;
+use crate::coords::stretched_normals::StretchedNormals;
+use crate::sync::green_cage_fit::GreenCageFit;
+use crate::sync::green_cage_reverser::{GrabState, GreenCageReverser};
+use crate::sync::newton::NewtonReport;
+
+/// The Green terms of a session.
+#[derive(Debug, Clone)]
+pub(super) struct GreenState {
+    /// ψ, `#V × #F`.
+    pub(super) face_coords: CageCoords,
+    pub(super) fit: GreenCageFit,
+    reverser: GreenCageReverser,
+    /// g(C) for the current rest cage C, `#F`.
+    pub(super) rest_terms: Vec<DVec3>,
+    /// 0..#F, to add ψ·g with `CageCoords::apply_delta`.
+    all_faces: Vec<usize>,
+    /// Faces around each cage vertex (CSR: `vertex_face_start[k]..vertex_face_start[k+1]`).
+    vertex_face_start: Vec<usize>,
+    vertex_faces: Vec<usize>,
+    /// Scratch: faces touched by an edit, their g changes, a per-face mark.
+    touched_faces: Vec<usize>,
+    face_changes: Vec<DVec3>,
+    face_marked: Vec<bool>,
+    /// The skinned fitting rows M'_R CageUp fitted last, `#R`.
+    pub(super) target_rows: Vec<DVec3>,
+    /// Skinning weights of the cage vertices, P·Ω̃ (`#C × #J`, row-major): the predictor of
+    /// CageUp's warm start.
+    cage_weights: Vec<f64>,
+    /// The skinning transforms (`#J`) and the rest cage (`#C`) of the last CageUp, for the
+    /// predictor.
+    last_transforms: Vec<DAffine3>,
+    last_rest_cage: Vec<DVec3>,
+    has_last_transforms: bool,
+    /// Scratch: the rest cage skinned with the cage weights, `#C`.
+    skinned_cage: Vec<DVec3>,
+    /// Set by a grab: the next CageUp starts from the grabbed C' (CageRev made it the answer).
+    pub(super) start_from_posed_cage: bool,
+    /// Λ_ψ = S·ψ (`#V × #F`) for the CoR centres, built with them.
+    pub(super) face_centre_coords: Option<CageCoords>,
+    /// Set when the last CageUp stopped above [`GREEN_FIT_LIMIT`] (the event is refused).
+    pub(super) fit_failure: Option<RigError>,
+    /// The cage's bounding-box diagonal.
+    size: f64,
+    /// Newton reports of the last CageUp and CageRev.
+    pub(super) last_reverse: NewtonReport,
+}
+
+/// A Green CageUp that stops above this fraction of the cage size refuses the event.
+pub const GREEN_FIT_LIMIT: f64 = 1e-10;
+
+impl GreenState {
+    /// From the Green coordinates of the rest mesh (φ is the session's `cage_coords`, ψ is
+    /// `face_coords`), the CageUp rows, the rest cage and the number of joints.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn new(
+        vertex_coords: &CageCoords,
+        face_coords: CageCoords,
+        triangles: Vec<[u32; 3]>,
+        rows: &[usize],
+        cage_from_rows: &Mat<f64>,
+        skin_weights: &SkinWeights,
+        rest_cage: &[DVec3],
+        num_joints: usize,
+    ) -> Result<Self, RigError> {
+        let mut cage_weights = vec![0.0; rest_cage.len() * num_joints];
+        for (r, &row) in rows.iter().enumerate() {
+            let (joints, weights) = skin_weights.row(row);
+            for k in 0..rest_cage.len() {
+                let p = cage_from_rows[(k, r)];
+                for (&j, &w) in joints.iter().zip(weights) {
+                    cage_weights[k * num_joints + j as usize] += p * w;
+                }
+            }
+        }
+        let (lo, hi) = rest_cage.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let size = (hi - lo).length();
+        let normals = StretchedNormals::new(rest_cage, triangles);
+        let num_faces = normals.len();
+        let num_cage = rest_cage.len();
+        let mut vertex_face_start = vec![0usize; num_cage + 1];
+        for t in normals.triangles() {
+            for &v in t {
+                vertex_face_start[v as usize + 1] += 1;
+            }
+        }
+        for k in 0..num_cage {
+            vertex_face_start[k + 1] += vertex_face_start[k];
+        }
+        let mut fill = vertex_face_start.clone();
+        let mut vertex_faces = vec![0usize; vertex_face_start[num_cage]];
+        for (f, t) in normals.triangles().iter().enumerate() {
+            for &v in t {
+                vertex_faces[fill[v as usize]] = f;
+                fill[v as usize] += 1;
+            }
+        }
+        let mut rest_terms = vec![DVec3::ZERO; num_faces];
+        normals.apply(rest_cage, &mut rest_terms);
+        let fit = GreenCageFit::new(
+            vertex_coords.select_rows(rows),
+            face_coords.select_rows(rows),
+            rest_cage,
+            normals,
+        )?;
+        Ok(Self {
+            face_coords,
+            reverser: GreenCageReverser::new(num_cage, num_faces, rows.len(), num_joints, size),
+            fit,
+            rest_terms,
+            all_faces: (0..num_faces).collect(),
+            vertex_face_start,
+            vertex_faces,
+            touched_faces: Vec::with_capacity(num_faces),
+            face_changes: Vec::with_capacity(num_faces),
+            face_marked: vec![false; num_faces],
+            target_rows: vec![DVec3::ZERO; rows.len()],
+            cage_weights,
+            last_transforms: vec![DAffine3::IDENTITY; num_joints],
+            last_rest_cage: rest_cage.to_vec(),
+            has_last_transforms: false,
+            start_from_posed_cage: false,
+            skinned_cage: rest_cage.to_vec(),
+            face_centre_coords: None,
+            fit_failure: None,
+            size,
+            last_reverse: NewtonReport::default(),
+        })
+    }
+
+    /// out += ψ·g for face terms `g` (`#F`) and `out` (`#V`).
+    pub(super) fn add_face_terms(&self, g: &[DVec3], out: &mut [DVec3]) {
+        self.face_coords.apply_delta(&self.all_faces, g, out);
+    }
+
+    /// out += Λ_ψ·g (the CoR centres' face part), when built.
+    pub(super) fn add_centre_face_terms(&self, g: &[DVec3], out: &mut [DVec3]) {
+        if let Some(lambda) = &self.face_centre_coords {
+            lambda.apply_delta(&self.all_faces, g, out);
+        }
+    }
+
+    /// g of `cage` into a new vector (`#F`).
+    pub(super) fn terms_of(&self, cage: &[DVec3]) -> Vec<DVec3> {
+        let mut g = vec![DVec3::ZERO; self.all_faces.len()];
+        self.fit.normals().apply(cage, &mut g);
+        g
+    }
+}
+
+impl RigSession {
+    /// After C changed everywhere: g(C) and M += ψ·g(C) (M already holds φC).
+    pub(super) fn add_green_rest_terms_in_full(&mut self) {
+        if let Some(green) = &mut self.green {
+            let normals = green.fit.normals();
+            normals.apply(&self.rest_cage, &mut green.rest_terms);
+            green.add_face_terms(&green.rest_terms, &mut self.rest_mesh);
+        }
+    }
+
+    /// After the rest-cage vertices `vertices` moved (C already updated, M += φ ΔC applied): the
+    /// faces around them get their new g, and M += ψ_f·Δg_f for those faces only. No allocation.
+    pub(super) fn apply_green_rest_delta(&mut self, vertices: &[usize]) {
+        let Some(green) = &mut self.green else {
+            return;
+        };
+        green.touched_faces.clear();
+        green.face_changes.clear();
+        for &k in vertices {
+            for &f in
+                &green.vertex_faces[green.vertex_face_start[k]..green.vertex_face_start[k + 1]]
+            {
+                if !green.face_marked[f] {
+                    green.face_marked[f] = true;
+                    green.touched_faces.push(f);
+                }
+            }
+        }
+        let normals = green.fit.normals();
+        for &f in &green.touched_faces {
+            let new = normals.face(&self.rest_cage, f);
+            green.face_changes.push(new - green.rest_terms[f]);
+            green.rest_terms[f] = new;
+            green.face_marked[f] = false;
+        }
+        green.face_coords.apply_delta(
+            &green.touched_faces,
+            &green.face_changes,
+            &mut self.rest_mesh,
+        );
+    }
+
+    /// CageUp under Green coordinates: C' fitted to the rows M'_R (in `green.target_rows`) by
+    /// Gauss–Newton, warm-started from the current C'. Records a failure to converge for
+    /// `finish_event`.
+    pub(super) fn fit_green_cage(&mut self) {
+        let Some(green) = &mut self.green else {
+            return;
+        };
+        let limit = GREEN_FIT_LIMIT * green.size;
+        let predict = !green.start_from_posed_cage;
+        green.start_from_posed_cage = false;
+        if predict {
+            // Two warm starts, the one the fit likes better: the previous C' moved by the change
+            // of the skinning transforms and the skinned change of the rest cage, and the rest
+            // cage skinned outright — both blended with the cage vertices' weights P·Ω̃ (the
+            // normals turn with the bones; at the rest pose the second is C, the exact answer).
+            let nj = green.last_transforms.len();
+            let continuing =
+                green.has_last_transforms && self.posed_cage.iter().all(|p| p.is_finite());
+            for (k, (p, s)) in self
+                .posed_cage
+                .iter_mut()
+                .zip(green.skinned_cage.iter_mut())
+                .enumerate()
+            {
+                let weights = &green.cage_weights[k * nj..(k + 1) * nj];
+                let rest_change = self.rest_cage[k] - green.last_rest_cage[k];
+                let (mut moved, mut skinned) = (DVec3::ZERO, DVec3::ZERO);
+                for (j, &w) in weights.iter().enumerate() {
+                    if w != 0.0 {
+                        let transform = &self.posed_from_rest[j];
+                        skinned += w * transform.transform_point3(self.rest_cage[k]);
+                        if continuing {
+                            let back = green.last_transforms[j].inverse().transform_point3(*p);
+                            moved += w
+                                * (transform.transform_point3(back)
+                                    + transform.transform_vector3(rest_change));
+                        }
+                    }
+                }
+                *s = skinned;
+                if continuing {
+                    *p = moved;
+                }
+            }
+            let skinned_energy = green.fit.energy(&green.target_rows, &green.skinned_cage);
+            if !continuing
+                || skinned_energy < green.fit.energy(&green.target_rows, &self.posed_cage)
+            {
+                self.posed_cage.copy_from_slice(&green.skinned_cage);
+            }
+        }
+        green.last_transforms.copy_from_slice(&self.posed_from_rest);
+        green.last_rest_cage.copy_from_slice(&self.rest_cage);
+        green.has_last_transforms = true;
+        let result = green.fit.apply(&green.target_rows, &mut self.posed_cage);
+        let residual = match result {
+            Ok(report) if report.residual <= limit => {
+                green.fit_failure = None;
+                return;
+            }
+            Ok(report) => report.residual,
+            Err(_) => f64::INFINITY,
+        };
+        let (face, area_ratio) = green
+            .fit
+            .normals()
+            .triangles()
+            .iter()
+            .enumerate()
+            .map(|(f, t)| {
+                let [a, b, c] = t.map(|v| self.posed_cage[v as usize]);
+                let [a0, b0, c0] = t.map(|v| self.original_rest_cage[v as usize]);
+                let rest = (b0 - a0).cross(c0 - a0).length();
+                (
+                    f,
+                    (b - a).cross(c - a).length() / rest.max(f64::MIN_POSITIVE),
+                )
+            })
+            .fold(
+                (0, f64::INFINITY),
+                |best, x| if x.1 < best.1 { x } else { best },
+            );
+        green.fit_failure = Some(RigError::GreenFitFailed {
+            residual,
+            limit,
+            face,
+            area_ratio,
+        });
+    }
+
+    /// The skinning transforms (`#J`) of the current pose on the rest skeleton whose joints are
+    /// at `rest_joints` (`#J`): the first half of `pose_and_fit`, into caller scratch.
+    fn posed_from_rest_for(
+        &self,
+        rest_joints: &[DVec3],
+        rest_world: &mut [DAffine3],
+        locals: &mut [DAffine3],
+        posed_world: &mut [DAffine3],
+        out: &mut [DAffine3],
+    ) {
+        for ((frame, current), a) in rest_world
+            .iter_mut()
+            .zip(&self.rest_world_from_joint)
+            .zip(rest_joints)
+        {
+            *frame = *current;
+            frame.translation = *a;
+        }
+        for (j, local) in locals.iter_mut().enumerate() {
+            let rest_offset = match self.skeleton.parent(j) {
+                Some(p) => rest_world[p]
+                    .inverse()
+                    .transform_point3(rest_world[j].translation),
+                None => rest_world[j].translation,
+            };
+            *local = local_transform(
+                rest_offset + self.translation_offset[j],
+                self.posed_local_rotation[j],
+                self.posed_local_scale[j],
+            );
+        }
+        self.skeleton.forward_kinematics(locals, posed_world);
+        Skeleton::skinning_transforms(rest_world, posed_world, out);
+    }
+
+    /// Builds R̃ and K = Ω̃ ∂T/∂A Ψ of the Green CageRev for the current pose, unless they are
+    /// already built for it. K by exact differences: the translations are affine in the rest
+    /// joints for fixed rotations.
+    pub(super) fn prepare_green_reverser(&mut self) -> Result<(), RigError> {
+        let Some(green) = &self.green else {
+            return Ok(());
+        };
+        let pose = || self.posed_from_rest.iter().map(|t| t.matrix3);
+        if green.reverser.is_ready_for(pose()) {
+            return Ok(());
+        }
+        let rows = self.cage_updater.rows();
+        let nj = self.skeleton.len();
+        let nc = self.rest_cage.len();
+        let row_linear: Vec<DMat3> = rows
+            .iter()
+            .map(|&row| {
+                let (joints, weights) = self.skin_weights.row(row);
+                joints
+                    .iter()
+                    .zip(weights)
+                    .fold(DMat3::ZERO, |acc, (&j, &w)| {
+                        acc + self.posed_from_rest[j as usize].matrix3 * w
+                    })
+            })
+            .collect();
+        let rest_joints: Vec<DVec3> = self
+            .rest_world_from_joint
+            .iter()
+            .map(|f| f.translation)
+            .collect();
+        let (mut rest_world, mut locals, mut posed_world) = (
+            vec![DAffine3::IDENTITY; nj],
+            vec![DAffine3::IDENTITY; nj],
+            vec![DAffine3::IDENTITY; nj],
+        );
+        let mut base = vec![DAffine3::IDENTITY; nj];
+        self.posed_from_rest_for(
+            &rest_joints,
+            &mut rest_world,
+            &mut locals,
+            &mut posed_world,
+            &mut base,
+        );
+        let step = green.size.max(f64::MIN_POSITIVE);
+        let mut moved_joints = rest_joints.clone();
+        let mut moved = vec![DAffine3::IDENTITY; nj];
+        let mut skeleton_rows = Mat::<f64>::zeros(3 * rows.len(), 3 * nc);
+        for k in 0..nc {
+            for c in 0..3 {
+                let mut direction = DVec3::ZERO;
+                direction[c] = step;
+                for (j, a) in moved_joints.iter_mut().enumerate() {
+                    *a = rest_joints[j] + self.skeleton_updater.joint_row(j)[k] * direction;
+                }
+                self.posed_from_rest_for(
+                    &moved_joints,
+                    &mut rest_world,
+                    &mut locals,
+                    &mut posed_world,
+                    &mut moved,
+                );
+                let mut column = skeleton_rows.col_mut(3 * k + c);
+                for (i, &row) in rows.iter().enumerate() {
+                    let (joints, weights) = self.skin_weights.row(row);
+                    let change = joints
+                        .iter()
+                        .zip(weights)
+                        .fold(DVec3::ZERO, |acc, (&j, &w)| {
+                            let j = j as usize;
+                            acc + w * (moved[j].translation - base[j].translation)
+                        })
+                        / step;
+                    column[3 * i] = change.x;
+                    column[3 * i + 1] = change.y;
+                    column[3 * i + 2] = change.z;
+                }
+            }
+        }
+        let pose_linear: Vec<DMat3> = self.posed_from_rest.iter().map(|t| t.matrix3).collect();
+        if let Some(green) = &mut self.green {
+            green
+                .reverser
+                .prepare(row_linear.into_iter(), pose_linear.into_iter(), |out| {
+                    *out = skeleton_rows
+                });
+        }
+        Ok(())
+    }
+
+    /// CageRev under Green coordinates: the rest-cage change `rest_delta` (`#C`) for the
+    /// current-cage change `posed_delta` (`#C`).
+    pub(super) fn reverse_green(
+        &mut self,
+        posed_delta: &[DVec3],
+        rest_delta: &mut [DVec3],
+    ) -> Result<(), RigError> {
+        self.prepare_green_reverser()?;
+        let Some(green) = &mut self.green else {
+            return self.reverser.solve(posed_delta, rest_delta);
+        };
+        for (r, &row) in self
+            .scratch_rows_rest
+            .iter_mut()
+            .zip(self.cage_updater.rows())
+        {
+            *r = self.rest_mesh[row];
+        }
+        let at = GrabState {
+            rest_cage: &self.rest_cage,
+            rest_rows: &self.scratch_rows_rest,
+            posed_rows: &green.target_rows,
+            posed_cage: &self.posed_cage,
+        };
+        let report = green
+            .reverser
+            .solve(&green.fit, at, posed_delta, rest_delta)?;
+        green.last_reverse = report;
+        if report.residual > GREEN_FIT_LIMIT * green.size {
+            return Err(RigError::GreenGrabFailed {
+                residual: report.residual,
+                limit: GREEN_FIT_LIMIT * green.size,
+                iterations: report.iterations,
+            });
+        }
+        Ok(())
+    }
+
+    /// The CoR centres Λ·C (+ Λ_ψ·g(C)) into `out` for the rest cage `cage`.
+    pub(super) fn centres_of_cage(&self, cor: &CorState, cage: &[DVec3], out: &mut [DVec3]) {
+        cor.centre_coords.apply(cage, out);
+        if let Some(green) = &self.green {
+            green.add_centre_face_terms(&green.terms_of(cage), out);
+        }
+    }
+
+    /// M = φC (+ ψ·g(C)) for the rest cage `cage` into `out` (`#V`).
+    pub(super) fn rest_mesh_of_cage(&self, cage: &[DVec3], out: &mut [DVec3]) {
+        self.cage_coords.apply(cage, out);
+        if let Some(green) = &self.green {
+            green.add_face_terms(&green.terms_of(cage), out);
+        }
+    }
+
+    /// The coordinates kind the rig is bound with.
+    pub fn coords_kind(&self) -> CoordsKind {
+        match self.green {
+            Some(_) => CoordsKind::Green,
+            None => CoordsKind::Mvc,
+        }
+    }
+
+    /// Green rigs: ψ (`#V × #F`, one column per cage triangle of
+    /// [`RigSession::green_triangles`]); `None` for MVC rigs.
+    pub fn green_face_coords(&self) -> Option<&CageCoords> {
+        self.green.as_ref().map(|g| &g.face_coords)
+    }
+
+    /// Green rigs: the outward-oriented cage triangles the face coordinates refer to.
+    pub fn green_triangles(&self) -> Option<&[[u32; 3]]> {
+        self.green.as_ref().map(|g| g.fit.normals().triangles())
+    }
+
+    /// Green rigs: the Newton reports of the last CageUp and the last CageRev.
+    pub fn green_newton_reports(&self) -> Option<(NewtonReport, NewtonReport)> {
+        self.green
+            .as_ref()
+            .map(|g| (g.fit.last_report(), g.last_reverse))
+    }
+}

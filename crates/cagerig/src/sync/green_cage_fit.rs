@@ -1,0 +1,652 @@
+//! CageUp for Green coordinates (S'→C'): the current cage C' whose Green deformation fits the
+//! skinned fitting rows M'_R, by Gauss–Newton.
+//!
+//! With Green coordinates the fitting rows are `F_R(C') = φ_R C' + ψ_R g(C')` (g = s·n, see
+//! [`crate::coords::stretched_normals`]), non-linear in C'. An exact interpolation of #C rows (the
+//! MVC CageUp) has no solution once the skinned rows leave what a Green cage can produce (a
+//! strong bend folds the interpolation map), so CageUp is the least-squares fit
+//!
+//! `C' = argmin ½ ‖F_R(C') − M'_R‖²`  over the rows R (MaxVol rows of [φ ψ], #C + #F of them, or
+//! all rows),
+//!
+//! solved by Newton's method on the gradient Jᵀr, with the analytic Jacobian
+//! `J = φ_R ⊗ I₃ + ψ_R ∂g/∂C'` (`3#R × 3#C`) and the Hessian `JᵀJ + Σ_f ∇²(u_f·g_f)` (u = ψ_Rᵀr;
+//! the second-order term by differences of the analytic ∂g, as the fitted rows are not all
+//! reachable and Gauss–Newton alone converges slowly on such large-residual fits). Where that
+//! Hessian is not positive definite, or its quadratic model predicts the decrease of ½‖r‖² badly,
+//! the step is damped (Levenberg–Marquardt on the full Hessian, i.e. a trust region whose damping
+//! shrinks to 0 — pure Newton — as the iterate converges). Warm-started from the previous C'
+//! moved by the change of the skinning transforms (done by the session). The fit is converged when the
+//! gradient Jᵀr is below [`GRADIENT_TOLERANCE`] of the cage size: C' is then a stationary point
+//! to round-off, which is what CageRev inverts exactly ([`super::green_cage_reverser`]). A large
+//! change of pose in one event is split into pieces (continuation) when the direct solve stalls.
+
+use faer::{Accum, Mat, Par};
+use glam::DVec3;
+
+use super::dense_lu::DenseLu;
+use super::newton::NewtonReport;
+use crate::coords::stretched_normals::StretchedNormals;
+use crate::error::RigError;
+
+/// Converged when max |Jᵀr| is at most this fraction of the cage size.
+pub const GRADIENT_TOLERANCE: f64 = 1e-13;
+/// At most this many steps for the direct solve of an event.
+pub const MAX_STEPS: usize = 60;
+/// At most this many steps per piece of a continuation.
+pub const MAX_PIECE_STEPS: usize = 20;
+
+/// Precomputed Green CageUp (see the module docs).
+#[derive(Debug, Clone)]
+pub struct GreenCageFit {
+    num_cage: usize,
+    /// φ_R, `#R × #C`.
+    vertex_rows: Mat<f64>,
+    /// ψ_R, `#R × #F`.
+    face_rows: Mat<f64>,
+    normals: StretchedNormals,
+    /// The binding cage (the start when a warm start is not finite).
+    binding_cage: Vec<DVec3>,
+    lu: DenseLu,
+    /// The Levenberg–Marquardt damping the last solve ended with (the next one starts there).
+    damping: f64,
+    tolerance: f64,
+    /// J (`3#R × 3#C`) and JᵀJ (`3#C × 3#C`), refreshed with the factors.
+    jacobian: Mat<f64>,
+    normal_matrix: Mat<f64>,
+    g: Vec<DVec3>,
+    face_sums: Vec<DVec3>,
+    residual: Vec<DVec3>,
+    trial_residual: Vec<DVec3>,
+    gradient: Vec<DVec3>,
+    trial_gradient: Vec<DVec3>,
+    trial: Vec<DVec3>,
+    step: Vec<f64>,
+    /// The rows the last converged solution was fitted to, and that solution (the start of a
+    /// continuation).
+    last_target: Vec<DVec3>,
+    has_last_target: bool,
+    last_solution: Vec<DVec3>,
+    piece_target: Vec<DVec3>,
+    last: NewtonReport,
+}
+
+impl GreenCageFit {
+    /// From φ_R (`#R × #C`) and ψ_R (`#R × #F`) of the fitting rows, the binding cage (`#C`) and
+    /// its stretched normals.
+    pub fn new(
+        vertex_rows: Mat<f64>,
+        face_rows: Mat<f64>,
+        binding_cage: &[DVec3],
+        normals: StretchedNormals,
+    ) -> Result<Self, RigError> {
+        let (lo, hi) = crate::mesh::bounding_box(binding_cage);
+        let cage_size = (hi - lo).length();
+        let num_rows = vertex_rows.nrows();
+        if face_rows.nrows() != num_rows || face_rows.ncols() != normals.len() {
+            return Err(RigError::SizeMismatch {
+                what: "Green CageUp: fitting rows of ψ (#R × #F)",
+                expected: num_rows * normals.len(),
+                actual: face_rows.nrows() * face_rows.ncols(),
+            });
+        }
+        let num_cage = vertex_rows.ncols();
+        if num_rows < num_cage {
+            return Err(RigError::SizeMismatch {
+                what: "Green CageUp: fitting rows (at least one per cage vertex)",
+                expected: num_cage,
+                actual: num_rows,
+            });
+        }
+        if binding_cage.len() != num_cage {
+            return Err(RigError::SizeMismatch {
+                what: "Green CageUp: binding cage vertices",
+                expected: num_cage,
+                actual: binding_cage.len(),
+            });
+        }
+        let num_faces = normals.len();
+        Ok(Self {
+            num_cage,
+            vertex_rows,
+            face_rows,
+            normals,
+            binding_cage: binding_cage.to_vec(),
+            lu: DenseLu::new(3 * num_cage),
+            damping: 0.0,
+            tolerance: GRADIENT_TOLERANCE * cage_size.max(f64::MIN_POSITIVE),
+            jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
+            normal_matrix: Mat::zeros(3 * num_cage, 3 * num_cage),
+            g: vec![DVec3::ZERO; num_faces],
+            face_sums: vec![DVec3::ZERO; num_faces],
+            residual: vec![DVec3::ZERO; num_rows],
+            trial_residual: vec![DVec3::ZERO; num_rows],
+            gradient: vec![DVec3::ZERO; num_cage],
+            trial_gradient: vec![DVec3::ZERO; num_cage],
+            trial: vec![DVec3::ZERO; num_cage],
+            step: vec![0.0; 3 * num_cage],
+            last_target: vec![DVec3::ZERO; num_rows],
+            has_last_target: false,
+            last_solution: vec![DVec3::ZERO; num_cage],
+            piece_target: vec![DVec3::ZERO; num_rows],
+            last: NewtonReport::default(),
+        })
+    }
+
+    /// The stretched normals g of the binding cage.
+    pub fn normals(&self) -> &StretchedNormals {
+        &self.normals
+    }
+
+    /// φ_R, `#R × #C`.
+    pub fn vertex_rows(&self) -> &Mat<f64> {
+        &self.vertex_rows
+    }
+
+    /// ψ_R, `#R × #F`.
+    pub fn face_rows(&self) -> &Mat<f64> {
+        &self.face_rows
+    }
+
+    /// The report of the last [`GreenCageFit::apply`] (`residual` is max |Jᵀr|).
+    pub fn last_report(&self) -> NewtonReport {
+        self.last
+    }
+
+    /// The convergence tolerance on max |Jᵀr|, in scene units.
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
+    /// ½‖F_R(x) − target‖² (the fit's energy at x). No allocation.
+    pub fn energy(&mut self, target: &[DVec3], x: &[DVec3]) -> f64 {
+        let mut g = std::mem::take(&mut self.g);
+        let mut rows = std::mem::take(&mut self.trial_residual);
+        self.rows_of(x, &mut g, &mut rows);
+        let energy = rows
+            .iter()
+            .zip(target)
+            .map(|(r, t)| 0.5 * r.distance_squared(*t))
+            .sum::<f64>();
+        self.g = g;
+        self.trial_residual = rows;
+        if energy.is_finite() {
+            energy
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// F_R(x) = φ_R x + ψ_R g(x) into `out` (`#R`), with g(x) into `g`.
+    pub fn rows_of(&self, x: &[DVec3], g: &mut [DVec3], out: &mut [DVec3]) {
+        self.normals.apply(x, g);
+        rows_of(&self.vertex_rows, &self.face_rows, x, g, out);
+    }
+
+    /// Fits C' (`posed_cage`, `#C`; on entry the warm start, normally the previous C'; a
+    /// non-finite start is replaced by the binding cage) to the rows `target` (M'_R, `#R`). Errors when JᵀJ is singular; a fit
+    /// that stops above the tolerance is reported in [`NewtonReport::residual`] (the caller
+    /// decides). No allocation (a refactorisation reuses the stored matrices).
+    pub fn apply(
+        &mut self,
+        target: &[DVec3],
+        posed_cage: &mut [DVec3],
+    ) -> Result<NewtonReport, RigError> {
+        debug_assert_eq!(target.len(), self.residual.len());
+        if posed_cage.iter().any(|p| !p.is_finite()) {
+            posed_cage.copy_from_slice(&self.binding_cage);
+            self.has_last_target = false;
+        }
+        let mut total = self.solve_for(target, posed_cage, MAX_STEPS)?;
+        if total.residual > self.tolerance && self.has_last_target {
+            for pieces in [4usize, 16] {
+                posed_cage.copy_from_slice(&self.last_solution);
+                let mut converged = true;
+                for piece in 1..=pieces {
+                    let a = piece as f64 / pieces as f64;
+                    let mut piece_target = std::mem::take(&mut self.piece_target);
+                    for ((p, last), t) in piece_target.iter_mut().zip(&self.last_target).zip(target)
+                    {
+                        *p = last.lerp(*t, a);
+                    }
+                    let report = self.solve_for(&piece_target, posed_cage, MAX_PIECE_STEPS);
+                    self.piece_target = piece_target;
+                    let report = report?;
+                    total.iterations += report.iterations;
+                    total.factorisations += report.factorisations;
+                    total.residual = report.residual;
+                    if report.residual > self.tolerance {
+                        converged = false;
+                        break;
+                    }
+                }
+                if converged {
+                    break;
+                }
+            }
+        }
+        if total.residual <= self.tolerance {
+            self.last_target.copy_from_slice(target);
+            self.last_solution.copy_from_slice(posed_cage);
+            self.has_last_target = true;
+        }
+        self.last = total;
+        Ok(total)
+    }
+
+    /// ½‖r‖² and Jᵀr at x (r = F_R(x) − target into `residual`, Jᵀr into `gradient`); returns
+    /// (½‖r‖², max |Jᵀr|), infinite when not finite.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate(
+        &self,
+        x: &[DVec3],
+        target: &[DVec3],
+        g: &mut [DVec3],
+        face_sums: &mut [DVec3],
+        residual: &mut [DVec3],
+        gradient: &mut [DVec3],
+    ) -> (f64, f64) {
+        self.normals.apply(x, g);
+        rows_of(&self.vertex_rows, &self.face_rows, x, g, residual);
+        let mut energy = 0.0;
+        for (r, t) in residual.iter_mut().zip(target) {
+            *r -= *t;
+            energy += 0.5 * r.length_squared();
+        }
+        // Jᵀr = φ_Rᵀ r + Σ_f (∂g_f/∂x)ᵀ (ψ_Rᵀ r)_f.
+        for (k, out) in gradient.iter_mut().enumerate() {
+            let column = self.vertex_rows.col(k);
+            *out = residual
+                .iter()
+                .enumerate()
+                .fold(DVec3::ZERO, |acc, (i, r)| acc + column[i] * *r);
+        }
+        for (f, sum) in face_sums.iter_mut().enumerate() {
+            let column = self.face_rows.col(f);
+            *sum = residual
+                .iter()
+                .enumerate()
+                .fold(DVec3::ZERO, |acc, (i, r)| acc + column[i] * *r);
+        }
+        for (f, triangle) in self.normals.triangles().iter().enumerate() {
+            let blocks = self.normals.face_jacobian(x, f);
+            for (corner, block) in triangle.iter().zip(blocks) {
+                gradient[*corner as usize] += block.transpose() * face_sums[f];
+            }
+        }
+        let largest = gradient
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+        if energy.is_finite() && largest.is_finite() {
+            (energy, largest)
+        } else {
+            (f64::INFINITY, f64::INFINITY)
+        }
+    }
+
+    /// J = φ_R ⊗ I₃ + ψ_R ∂g/∂x at x into `out` (`3#R × 3#C`).
+    pub fn jacobian_into(&self, x: &[DVec3], out: &mut Mat<f64>) {
+        let num_rows = self.vertex_rows.nrows();
+        out.fill(0.0);
+        for k in 0..self.num_cage {
+            let column = self.vertex_rows.col(k);
+            for i in 0..num_rows {
+                for a in 0..3 {
+                    out[(3 * i + a, 3 * k + a)] = column[i];
+                }
+            }
+        }
+        for (f, triangle) in self.normals.triangles().iter().enumerate() {
+            let blocks = self.normals.face_jacobian(x, f);
+            let column = self.face_rows.col(f);
+            for (corner, block) in triangle.iter().zip(blocks) {
+                let m = *corner as usize;
+                for c in 0..3 {
+                    let d = block.col(c);
+                    let mut target = out.col_mut(3 * m + c);
+                    for i in 0..num_rows {
+                        let w = column[i];
+                        target[3 * i] += w * d.x;
+                        target[3 * i + 1] += w * d.y;
+                        target[3 * i + 2] += w * d.z;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The Hessian of ½‖r‖² at x into `self.normal_matrix`: JᵀJ + Σ_f ∇²((ψ_Rᵀr)_f · g_f), with r
+    /// the residual rows at x (`residual`, `#R`).
+    fn hessian_at(&mut self, x: &[DVec3], residual: &[DVec3]) {
+        let mut jacobian = std::mem::replace(&mut self.jacobian, Mat::zeros(0, 0));
+        self.jacobian_into(x, &mut jacobian);
+        self.jacobian = jacobian;
+        faer::linalg::matmul::matmul(
+            self.normal_matrix.as_mut(),
+            Accum::Replace,
+            self.jacobian.transpose(),
+            self.jacobian.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        for (f, triangle) in self.normals.triangles().iter().enumerate() {
+            let column = self.face_rows.col(f);
+            let weight = residual
+                .iter()
+                .enumerate()
+                .fold(DVec3::ZERO, |acc, (i, r)| acc + column[i] * *r);
+            let corners = triangle.map(|v| x[v as usize]);
+            let scale = (corners[1] - corners[0])
+                .length()
+                .max((corners[2] - corners[0]).length());
+            let step = 1e-6 * scale.max(f64::MIN_POSITIVE);
+            let hessian = self.normals.weighted_face_hessian(f, corners, weight, step);
+            for (p, row) in hessian.iter().enumerate() {
+                let i = 3 * triangle[p / 3] as usize + p % 3;
+                for (q, value) in row.iter().enumerate() {
+                    let j = 3 * triangle[q / 3] as usize + q % 3;
+                    self.normal_matrix[(i, j)] += value;
+                }
+            }
+        }
+    }
+
+    /// Factorises the stored Hessian plus `damping`·I.
+    fn factorise_damped(&mut self, damping: f64) -> Result<(), RigError> {
+        let n = 3 * self.num_cage;
+        let a = self.lu.matrix_mut();
+        for c in 0..n {
+            let column = self.normal_matrix.col(c);
+            for r in 0..n {
+                a[c * n + r] = column[r];
+            }
+            a[c * n + c] += damping;
+        }
+        self.lu.factorise()
+    }
+
+    /// One Gauss–Newton solve for the rows `target` from `posed_cage`.
+    fn solve_for(
+        &mut self,
+        target: &[DVec3],
+        posed_cage: &mut [DVec3],
+        max_steps: usize,
+    ) -> Result<NewtonReport, RigError> {
+        let mut g = std::mem::take(&mut self.g);
+        let mut face_sums = std::mem::take(&mut self.face_sums);
+        let mut residual = std::mem::take(&mut self.residual);
+        let mut trial_residual = std::mem::take(&mut self.trial_residual);
+        let mut gradient = std::mem::take(&mut self.gradient);
+        let mut trial_gradient = std::mem::take(&mut self.trial_gradient);
+        let mut trial = std::mem::take(&mut self.trial);
+        let mut report = NewtonReport::default();
+        #[allow(clippy::redundant_closure_call)] // the loop's `?` stays inside, scratch goes back
+        let outcome = (|| {
+            let (mut energy, mut norm) = self.evaluate(
+                posed_cage,
+                target,
+                &mut g,
+                &mut face_sums,
+                &mut residual,
+                &mut gradient,
+            );
+            // Levenberg–Marquardt on the full Hessian (a trust region): the damping μ grows when
+            // the quadratic model predicts badly and shrinks (to 0: Newton) when it predicts well.
+            let mut damping = self.damping;
+            let mut hessian_current = false;
+            while norm > self.tolerance && report.iterations < max_steps {
+                if !hessian_current {
+                    self.hessian_at(posed_cage, &residual);
+                    hessian_current = true;
+                    report.factorisations += 1;
+                }
+                if self.factorise_damped(damping).is_err() {
+                    damping = raise_damping(damping, &self.normal_matrix, 10.0);
+                    if !damping.is_finite() {
+                        break;
+                    }
+                    continue;
+                }
+                for (k, d) in gradient.iter().enumerate() {
+                    self.step[3 * k] = -d.x;
+                    self.step[3 * k + 1] = -d.y;
+                    self.step[3 * k + 2] = -d.z;
+                }
+                self.lu.solve(&mut self.step);
+                let slope: f64 = gradient
+                    .iter()
+                    .enumerate()
+                    .map(|(k, d)| {
+                        d.dot(DVec3::new(
+                            self.step[3 * k],
+                            self.step[3 * k + 1],
+                            self.step[3 * k + 2],
+                        ))
+                    })
+                    .sum();
+                if slope.is_nan() || slope >= 0.0 {
+                    damping = raise_damping(damping, &self.normal_matrix, 10.0);
+                    if !damping.is_finite() {
+                        break;
+                    }
+                    continue;
+                }
+                let step_squared: f64 = self.step.iter().map(|v| v * v).sum();
+                let predicted = -0.5 * slope + 0.5 * damping * step_squared;
+                for (k, (t, p)) in trial.iter_mut().zip(posed_cage.iter()).enumerate() {
+                    *t = *p
+                        + DVec3::new(self.step[3 * k], self.step[3 * k + 1], self.step[3 * k + 2]);
+                }
+                let (trial_energy, trial_norm) = self.evaluate(
+                    &trial,
+                    target,
+                    &mut g,
+                    &mut face_sums,
+                    &mut trial_residual,
+                    &mut trial_gradient,
+                );
+                let ratio = (energy - trial_energy) / predicted;
+                // At the round-off floor ½‖r‖² no longer changes measurably: accept a step that
+                // still reduces the gradient.
+                let floor = trial_energy <= energy * (1.0 + 1e-12) && trial_norm < norm;
+                if !(ratio > 1e-4 || floor) {
+                    damping = raise_damping(damping, &self.normal_matrix, 4.0);
+                    if !damping.is_finite() {
+                        break;
+                    }
+                    continue;
+                }
+                report.iterations += 1;
+                if ratio > 0.75 {
+                    damping = lower_damping(damping, &self.normal_matrix);
+                } else if ratio < 0.25 {
+                    damping = raise_damping(damping, &self.normal_matrix, 2.0);
+                }
+                posed_cage.copy_from_slice(&trial);
+                std::mem::swap(&mut residual, &mut trial_residual);
+                std::mem::swap(&mut gradient, &mut trial_gradient);
+                energy = trial_energy;
+                norm = trial_norm;
+                hessian_current = false;
+            }
+            self.damping = if damping.is_finite() { damping } else { 0.0 };
+            report.residual = norm;
+            Ok(())
+        })();
+        self.g = g;
+        self.face_sums = face_sums;
+        self.residual = residual;
+        self.trial_residual = trial_residual;
+        self.gradient = gradient;
+        self.trial_gradient = trial_gradient;
+        self.trial = trial;
+        outcome.map(|()| report)
+    }
+}
+
+/// The mean |diagonal| of the Hessian: the scale of the damping.
+fn damping_scale(hessian: &Mat<f64>) -> f64 {
+    let n = hessian.nrows().max(1);
+    let mean = (0..hessian.nrows())
+        .map(|i| hessian[(i, i)].abs())
+        .sum::<f64>()
+        / n as f64;
+    mean.max(f64::MIN_POSITIVE)
+}
+
+/// μ × `factor` (from 1e-9 of the Hessian's scale when μ = 0); infinite past 1e9 of the scale.
+fn raise_damping(damping: f64, hessian: &Mat<f64>, factor: f64) -> f64 {
+    let scale = damping_scale(hessian);
+    let raised = if damping == 0.0 {
+        1e-9 * scale
+    } else {
+        damping * factor
+    };
+    if raised > 1e9 * scale {
+        f64::INFINITY
+    } else {
+        raised
+    }
+}
+
+/// μ / 4, and 0 (Newton) below 1e-12 of the Hessian's scale.
+fn lower_damping(damping: f64, hessian: &Mat<f64>) -> f64 {
+    let lowered = damping / 4.0;
+    if lowered < 1e-12 * damping_scale(hessian) {
+        0.0
+    } else {
+        lowered
+    }
+}
+
+/// out = φ_R x + ψ_R g (`#R`).
+pub(crate) fn rows_of(
+    vertex_rows: &Mat<f64>,
+    face_rows: &Mat<f64>,
+    x: &[DVec3],
+    g: &[DVec3],
+    out: &mut [DVec3],
+) {
+    out.iter_mut().for_each(|o| *o = DVec3::ZERO);
+    for (k, xk) in x.iter().enumerate() {
+        let column = vertex_rows.col(k);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += column[i] * *xk;
+        }
+    }
+    for (f, gf) in g.iter().enumerate() {
+        let column = face_rows.col(f);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += column[i] * *gf;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DQuat;
+
+    use super::*;
+    use crate::coords::green::compute_green_coords;
+    use crate::coords::green::tests::{random_inside, test_cage};
+
+    #[test]
+    fn recovers_a_deformed_cage_from_its_green_deformation() {
+        let points = random_inside(5, 60);
+        let cage = test_cage();
+        let coords = compute_green_coords(&cage, &points, None).unwrap();
+        let normals = StretchedNormals::new(&cage.positions, coords.triangles.clone());
+        let mut fit = GreenCageFit::new(
+            coords.vertex.matrix().clone(),
+            coords.face.matrix().clone(),
+            &cage.positions,
+            normals,
+        )
+        .unwrap();
+        let rotation = DQuat::from_axis_angle(DVec3::new(0.3, 1.0, 0.2).normalize(), 0.9);
+        let deformed: Vec<DVec3> = cage
+            .positions
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                rotation * (*c * DVec3::new(1.4, 0.9, 1.0)) + DVec3::splat(0.05 * i as f64)
+            })
+            .collect();
+        let mut g = vec![DVec3::ZERO; fit.normals().len()];
+        let mut rows = vec![DVec3::ZERO; points.len()];
+        fit.rows_of(&deformed, &mut g, &mut rows);
+        let mut solved = cage.positions.clone();
+        let report = fit.apply(&rows, &mut solved).unwrap();
+        assert!(report.residual <= fit.tolerance(), "{report:?}");
+        for (s, d) in solved.iter().zip(&deformed) {
+            assert!(s.distance(*d) < 1e-11, "{s} vs {d}");
+        }
+        // Warm start at the solution: nothing to do.
+        let again = fit.apply(&rows, &mut solved).unwrap();
+        assert_eq!(again.iterations, 0);
+    }
+}
+
+#[cfg(test)]
+mod hessian_tests {
+    use super::*;
+    use crate::coords::green::compute_green_coords;
+    use crate::coords::green::tests::{random_inside, test_cage};
+
+    #[test]
+    fn newton_matrix_is_the_hessian_of_the_fit() {
+        let points = random_inside(9, 40);
+        let cage = test_cage();
+        let coords = compute_green_coords(&cage, &points, None).unwrap();
+        let normals = StretchedNormals::new(&cage.positions, coords.triangles.clone());
+        let mut fit = GreenCageFit::new(
+            coords.vertex.matrix().clone(),
+            coords.face.matrix().clone(),
+            &cage.positions,
+            normals,
+        )
+        .unwrap();
+        // A target no cage reaches: the rest rows pushed around (large residual).
+        let target: Vec<DVec3> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p * 1.2 + DVec3::new(0.1 * (i % 3) as f64, 0.05, -0.1 * (i % 5) as f64))
+            .collect();
+        let x: Vec<DVec3> = cage
+            .positions
+            .iter()
+            .enumerate()
+            .map(|(i, c)| *c + DVec3::splat(0.03 * i as f64))
+            .collect();
+        let nr = points.len();
+        let nf = fit.normals().len();
+        let gradient_at = |fit: &GreenCageFit, x: &[DVec3]| {
+            let mut g = vec![DVec3::ZERO; nf];
+            let mut sums = vec![DVec3::ZERO; nf];
+            let mut r = vec![DVec3::ZERO; nr];
+            let mut grad = vec![DVec3::ZERO; x.len()];
+            fit.evaluate(x, &target, &mut g, &mut sums, &mut r, &mut grad);
+            (grad, r)
+        };
+        let (_, residual) = gradient_at(&fit, &x);
+        fit.hessian_at(&x, &residual);
+        let n = 3 * x.len();
+        let h = 1e-6;
+        for q in 0..n {
+            let mut plus = x.clone();
+            let mut minus = x.clone();
+            plus[q / 3][q % 3] += h;
+            minus[q / 3][q % 3] -= h;
+            let (gp, _) = gradient_at(&fit, &plus);
+            let (gm, _) = gradient_at(&fit, &minus);
+            for p in 0..n {
+                let fd = (gp[p / 3][p % 3] - gm[p / 3][p % 3]) / (2.0 * h);
+                let analytic = fit.normal_matrix[(p, q)];
+                assert!(
+                    (fd - analytic).abs() < 1e-5 * (1.0 + fd.abs()),
+                    "({p}, {q}): {fd} vs {analytic}"
+                );
+            }
+        }
+    }
+}

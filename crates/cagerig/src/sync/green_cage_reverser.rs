@@ -1,0 +1,286 @@
+//! CageRev for Green coordinates (C'→C): the rest-cage change δ that makes CageUp return the
+//! grabbed current cage C'_t = C'_0 + ∂C' exactly (grabbed vertices on their targets, the others
+//! where they were).
+//!
+//! Green CageUp ([`super::green_cage_fit`]) returns a stationary point of ½‖F_R(C') − M'_R‖²,
+//! i.e. `J(C')ᵀ (F_R(C') − M'_R) = 0` with J the Jacobian of the fitting rows F_R. So C'_t is
+//! CageUp's answer exactly when the new skinned rows satisfy
+//!
+//! `G(δ) = J_tᵀ (M'_R(C₀ + δ) − F_R(C'_t)) = 0`,  `J_t = J(C'_t)` (fixed for the grab).
+//!
+//! Under LBS with the pose's rotations fixed, the chain C → (M_R = F_R(C), A = ΨC) → M'_R is
+//! affine in M_R and A (Eq. 15–18), so
+//!
+//! `M'_R(C₀ + δ) = M'_R(C₀) + R̃ (F_R(C₀ + δ) − F_R(C₀)) + K δ`
+//!
+//! with R̃ the blended linear parts of the rows' LBS transforms and `K = Ω̃ ∂T/∂A Ψ`
+//! (`3#R × 3#C`), the skeleton's part (SkelUp moves the joints, which moves the translations):
+//! both depend on the pose only and are built once per pose ([`GreenCageReverser::prepare`]).
+//! Newton's method ([`super::newton`]) solves G(δ) = 0 with its exact Jacobian
+//! `J_tᵀ (R̃ J(C₀ + δ) + K)` from δ = 0; a large grab that stalls is split into pieces. For MVC
+//! (ψ = 0, J = Φ̃) this is Eq. 19 in its least-squares form.
+
+use faer::{Accum, Mat, Par};
+use glam::{DMat3, DVec3};
+
+use super::green_cage_fit::{GRADIENT_TOLERANCE, GreenCageFit, rows_of};
+use super::newton::{NewtonReport, NewtonSolver};
+use crate::error::RigError;
+
+/// Precomputed Green CageRev for one pose (see the module docs).
+#[derive(Debug, Clone)]
+pub struct GreenCageReverser {
+    num_cage: usize,
+    /// R̃_r of every fitting row, `#R`.
+    row_linear: Vec<DMat3>,
+    /// K = Ω̃ ∂T/∂A Ψ, `3#R × 3#C`.
+    skeleton_rows: Mat<f64>,
+    /// The skinning transforms' linear parts K and R̃ were built for, `#J`.
+    pose_key: Vec<DMat3>,
+    ready: bool,
+    solver: NewtonSolver,
+    tolerance: f64,
+    /// J_t (`3#R × 3#C`), R̃ J + K (`3#R × 3#C`) and J_tᵀ(R̃ J + K) (`3#C × 3#C`).
+    target_jacobian: Mat<f64>,
+    chain_jacobian: Mat<f64>,
+    system: Mat<f64>,
+    posed_target: Vec<DVec3>,
+    rows_target: Vec<DVec3>,
+    rows_trial: Vec<DVec3>,
+    row_change: Vec<DVec3>,
+    g: Vec<DVec3>,
+    moved: Vec<DVec3>,
+    moved_for_jacobian: Vec<DVec3>,
+}
+
+/// The state a grab starts from.
+#[derive(Debug, Clone, Copy)]
+pub struct GrabState<'a> {
+    /// The rest cage C₀, `#C`.
+    pub rest_cage: &'a [DVec3],
+    /// F_R(C₀): the rest skin's fitting rows, `#R`.
+    pub rest_rows: &'a [DVec3],
+    /// M'_R(C₀): the skinned fitting rows CageUp fitted, `#R`.
+    pub posed_rows: &'a [DVec3],
+    /// C'_0: CageUp's converged current cage, `#C`.
+    pub posed_cage: &'a [DVec3],
+}
+
+impl GreenCageReverser {
+    /// For `num_cage` cage vertices, `num_faces` faces, `num_rows` fitting rows, `num_joints`
+    /// joints and the cage size (bounding-box diagonal, for the tolerance).
+    pub fn new(
+        num_cage: usize,
+        num_faces: usize,
+        num_rows: usize,
+        num_joints: usize,
+        cage_size: f64,
+    ) -> Self {
+        Self {
+            num_cage,
+            row_linear: vec![DMat3::IDENTITY; num_rows],
+            skeleton_rows: Mat::zeros(3 * num_rows, 3 * num_cage),
+            pose_key: vec![DMat3::ZERO; num_joints],
+            ready: false,
+            solver: NewtonSolver::new(num_cage),
+            tolerance: GRADIENT_TOLERANCE * cage_size.max(f64::MIN_POSITIVE),
+            target_jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
+            chain_jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
+            system: Mat::zeros(3 * num_cage, 3 * num_cage),
+            posed_target: vec![DVec3::ZERO; num_cage],
+            rows_target: vec![DVec3::ZERO; num_rows],
+            rows_trial: vec![DVec3::ZERO; num_rows],
+            row_change: vec![DVec3::ZERO; num_rows],
+            g: vec![DVec3::ZERO; num_faces],
+            moved: vec![DVec3::ZERO; num_cage],
+            moved_for_jacobian: vec![DVec3::ZERO; num_cage],
+        }
+    }
+
+    /// Whether K and R̃ were built for the pose whose skinning transforms have these linear
+    /// parts (`#J`).
+    pub fn is_ready_for(&self, pose_linear: impl Iterator<Item = DMat3>) -> bool {
+        self.ready && self.pose_key.iter().copied().eq(pose_linear)
+    }
+
+    /// Stores R̃ (`#R`), K (`3#R × 3#C`, filled by `fill_skeleton_rows`) and the pose key (`#J`).
+    pub fn prepare(
+        &mut self,
+        row_linear: impl Iterator<Item = DMat3>,
+        pose_linear: impl Iterator<Item = DMat3>,
+        fill_skeleton_rows: impl FnOnce(&mut Mat<f64>),
+    ) {
+        for (r, m) in self.row_linear.iter_mut().zip(row_linear) {
+            *r = m;
+        }
+        for (k, m) in self.pose_key.iter_mut().zip(pose_linear) {
+            *k = m;
+        }
+        fill_skeleton_rows(&mut self.skeleton_rows);
+        self.ready = true;
+        self.solver.invalidate();
+    }
+
+    /// The rest-cage change δ (`rest_delta`, `#C`) that makes CageUp return C'_0 + `posed_delta`
+    /// (`#C`, zero for untouched vertices), from the state `at`. Requires [`Self::prepare`] for
+    /// the pose.
+    pub fn solve(
+        &mut self,
+        fit: &GreenCageFit,
+        at: GrabState<'_>,
+        posed_delta: &[DVec3],
+        rest_delta: &mut [DVec3],
+    ) -> Result<NewtonReport, RigError> {
+        if !self.ready {
+            return Err(RigError::Invalid(
+                "the Green reverse cage deformer was not prepared for the current pose".into(),
+            ));
+        }
+        rest_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
+        let mut total = self.solve_piece(fit, &at, posed_delta, 1.0, rest_delta)?;
+        if total.residual > self.tolerance {
+            for pieces in [4usize, 16] {
+                rest_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
+                let mut converged = true;
+                for piece in 1..=pieces {
+                    let a = piece as f64 / pieces as f64;
+                    let report = self.solve_piece(fit, &at, posed_delta, a, rest_delta)?;
+                    total.iterations += report.iterations;
+                    total.factorisations += report.factorisations;
+                    total.residual = report.residual;
+                    if report.residual > self.tolerance {
+                        converged = false;
+                        break;
+                    }
+                }
+                if converged {
+                    break;
+                }
+            }
+        }
+        Ok(total)
+    }
+
+    /// Newton on G(δ) = 0 for the fraction `a` of the grab, from `rest_delta` as given.
+    fn solve_piece(
+        &mut self,
+        fit: &GreenCageFit,
+        at: &GrabState<'_>,
+        posed_delta: &[DVec3],
+        a: f64,
+        rest_delta: &mut [DVec3],
+    ) -> Result<NewtonReport, RigError> {
+        for ((t, p), d) in self
+            .posed_target
+            .iter_mut()
+            .zip(at.posed_cage)
+            .zip(posed_delta)
+        {
+            *t = *p + a * *d;
+        }
+        fit.rows_of(&self.posed_target, &mut self.g, &mut self.rows_target);
+        fit.jacobian_into(&self.posed_target, &mut self.target_jacobian);
+        // A new J_t: the factors of the previous piece or grab do not apply.
+        self.solver.invalidate();
+        let n = 3 * self.num_cage;
+        let rest_cage = at.rest_cage;
+        let vertex_rows = fit.vertex_rows();
+        let face_rows = fit.face_rows();
+        let normals = fit.normals();
+        let row_linear = &self.row_linear;
+        let skeleton_rows = &self.skeleton_rows;
+        let target_jacobian = &self.target_jacobian;
+        let chain_jacobian = &mut self.chain_jacobian;
+        let system = &mut self.system;
+        let rows_target = &self.rows_target;
+        let rows_trial = &mut self.rows_trial;
+        let row_change = &mut self.row_change;
+        let g = &mut self.g;
+        let moved = &mut self.moved;
+        let moved_for_jacobian = &mut self.moved_for_jacobian;
+        self.solver.solve(
+            rest_delta,
+            self.tolerance,
+            |delta, out| {
+                // r = M'_R(C₀) + R̃ (F_R(C₀ + δ) − F_R(C₀)) + K δ − F_R(C'_t); out = J_tᵀ r.
+                for ((m, c), d) in moved.iter_mut().zip(rest_cage).zip(delta) {
+                    *m = *c + *d;
+                }
+                normals.apply(moved, g);
+                rows_of(vertex_rows, face_rows, moved, g, rows_trial);
+                for (i, change) in row_change.iter_mut().enumerate() {
+                    let mut skeleton = DVec3::ZERO;
+                    for (k, d) in delta.iter().enumerate() {
+                        for (c, value) in d.to_array().into_iter().enumerate() {
+                            if value != 0.0 {
+                                let column = skeleton_rows.col(3 * k + c);
+                                skeleton += value
+                                    * DVec3::new(
+                                        column[3 * i],
+                                        column[3 * i + 1],
+                                        column[3 * i + 2],
+                                    );
+                            }
+                        }
+                    }
+                    *change = at.posed_rows[i]
+                        + row_linear[i] * (rows_trial[i] - at.rest_rows[i])
+                        + skeleton
+                        - rows_target[i];
+                }
+                let mut largest: f64 = 0.0;
+                for (k, o) in out.iter_mut().enumerate() {
+                    let mut sum = [0.0; 3];
+                    for (c, s) in sum.iter_mut().enumerate() {
+                        let column = target_jacobian.col(3 * k + c);
+                        *s = row_change.iter().enumerate().fold(0.0, |acc, (i, r)| {
+                            acc + column[3 * i] * r.x
+                                + column[3 * i + 1] * r.y
+                                + column[3 * i + 2] * r.z
+                        });
+                    }
+                    *o = DVec3::from_array(sum);
+                    largest = largest.max(o.abs().max_element());
+                }
+                if largest.is_finite() {
+                    largest
+                } else {
+                    f64::INFINITY
+                }
+            },
+            |delta, out| {
+                for ((m, c), d) in moved_for_jacobian.iter_mut().zip(rest_cage).zip(delta) {
+                    *m = *c + *d;
+                }
+                fit.jacobian_into(moved_for_jacobian, chain_jacobian);
+                // R̃ J + K, row block by row block.
+                for col in 0..n {
+                    let skeleton = skeleton_rows.col(col);
+                    let mut column = chain_jacobian.col_mut(col);
+                    for (i, rotation) in row_linear.iter().enumerate() {
+                        let v = DVec3::new(column[3 * i], column[3 * i + 1], column[3 * i + 2]);
+                        let w = *rotation * v
+                            + DVec3::new(skeleton[3 * i], skeleton[3 * i + 1], skeleton[3 * i + 2]);
+                        column[3 * i] = w.x;
+                        column[3 * i + 1] = w.y;
+                        column[3 * i + 2] = w.z;
+                    }
+                }
+                faer::linalg::matmul::matmul(
+                    system.as_mut(),
+                    Accum::Replace,
+                    target_jacobian.transpose(),
+                    chain_jacobian.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                for c in 0..n {
+                    let column = system.col(c);
+                    for r in 0..n {
+                        out[c * n + r] = column[r];
+                    }
+                }
+            },
+        )
+    }
+}

@@ -1,0 +1,321 @@
+//! Green-coordinates rigs (issue 24): identity, similarity, shape preservation against MVC, and
+//! the coupled loop (grabs land exactly, nothing else moves) under LBS, DQS and CoR, on the Arm
+//! and on the built-in rigs, with every structure in consensus after many interleaved events.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
+use std::path::Path;
+
+use cagerig::CoordsKind;
+use cagerig::demo;
+use cagerig::mesh::max_distance;
+use cagerig::rig_files::load_rig_files;
+use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::skinning::SkinningMethod;
+use glam::{DQuat, DVec3};
+
+fn green() -> SessionOptions {
+    SessionOptions {
+        coords: CoordsKind::Green,
+        ..SessionOptions::default()
+    }
+}
+
+fn builtin(name: &str, options: SessionOptions) -> RigSession {
+    let rig = demo::builtin(name, None).unwrap();
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+    RigSession::new(parts, options).unwrap().0
+}
+
+fn arm(options: SessionOptions) -> (RigSession, Vec<DVec3>) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
+    let files = load_rig_files(&dir.join("arm.obj"), None).unwrap();
+    let loaded = files.parts.mesh.positions.clone();
+    (RigSession::new(files.parts, options).unwrap().0, loaded)
+}
+
+fn diagonal(points: &[DVec3]) -> f64 {
+    let (lo, hi) = cagerig::mesh::bounding_box(points);
+    (hi - lo).length()
+}
+
+/// M = φC + ψ·g(C) recomputed from scratch, against the session's M.
+fn check_rest_mesh(s: &RigSession, tol: f64) {
+    let mut m = vec![DVec3::ZERO; s.num_vertices()];
+    s.cage_coords().apply(s.rest_cage(), &mut m);
+    let psi = s.green_face_coords().unwrap();
+    let triangles = s.green_triangles().unwrap();
+    let rest = cagerig::coords::stretched_normals::StretchedNormals::new(
+        s.original_rest_cage(),
+        triangles.to_vec(),
+    );
+    let mut g = vec![DVec3::ZERO; triangles.len()];
+    rest.apply(s.rest_cage(), &mut g);
+    let faces: Vec<usize> = (0..g.len()).collect();
+    psi.apply_delta(&faces, &g, &mut m);
+    let off = max_distance(&m, s.rest_mesh());
+    assert!(off < tol, "M != φC + ψ·g(C): {off:e}");
+    let mut a = vec![DVec3::ZERO; s.skeleton().len()];
+    s.skeleton_updater().apply(s.rest_cage(), &mut a);
+    let joints: Vec<DVec3> = s.rest_joints().collect();
+    assert!(max_distance(&a, &joints) < tol, "A != ΨC");
+}
+
+fn grab_lands_exactly(s: &mut RigSession, vertices: &[usize], offset: DVec3, tol: f64) {
+    let before = s.posed_cage().to_vec();
+    s.move_posed_cage(vertices, &[offset]).unwrap();
+    for (k, (after, b)) in s.posed_cage().iter().zip(&before).enumerate() {
+        let expect = if vertices.contains(&k) {
+            *b + offset
+        } else {
+            *b
+        };
+        let off = after.distance(expect);
+        assert!(
+            off < tol,
+            "cage vertex {k}: off by {off:e} (tolerance {tol:e})"
+        );
+    }
+}
+
+#[test]
+fn identity_reproduces_the_rest_mesh_on_the_arm_and_the_builtin_rigs() {
+    let (s, loaded) = arm(green());
+    assert_eq!(s.coords_kind(), CoordsKind::Green);
+    let d = diagonal(s.rest_cage());
+    assert!(max_distance(s.rest_mesh(), &loaded) < 1e-9 * d);
+    assert!(max_distance(s.posed_mesh(), &loaded) < 1e-9 * d);
+    assert!(max_distance(s.posed_cage(), s.rest_cage()) < 1e-9 * d);
+    for name in ["bar", "bar_irregular", "snake"] {
+        let rig = demo::builtin(name, None).unwrap();
+        let loaded = rig.mesh.positions.clone();
+        let s = builtin(name, green());
+        let d = diagonal(s.rest_cage());
+        let off = max_distance(s.rest_mesh(), &loaded);
+        assert!(off < 1e-9 * d, "{name}: {off:e}");
+        assert!(
+            max_distance(s.posed_cage(), s.rest_cage()) < 1e-9 * d,
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn a_similarity_of_the_rest_cage_moves_the_mesh_by_the_same_similarity() {
+    let (mut s, loaded) = arm(green());
+    let d = diagonal(s.rest_cage());
+    let rotation = DQuat::from_axis_angle(DVec3::new(0.2, 1.0, -0.4).normalize(), 0.7);
+    let (scale, shift) = (1.3, DVec3::new(0.4, -0.2, 0.9));
+    let similarity = |p: DVec3| rotation * (p * scale) + shift;
+    let cage = s.rest_cage().to_vec();
+    let vertices: Vec<usize> = (0..cage.len()).collect();
+    let offsets: Vec<DVec3> = cage.iter().map(|c| similarity(*c) - *c).collect();
+    s.move_rest_cage(&vertices, &offsets).unwrap();
+    let expected: Vec<DVec3> = loaded.iter().map(|p| similarity(*p)).collect();
+    let off = max_distance(s.rest_mesh(), &expected);
+    assert!(off < 1e-9 * d * scale, "{off:e}");
+    check_rest_mesh(&s, 1e-9 * d);
+}
+
+/// Mean absolute change of the triangles' corner angles (radians) between two meshes.
+fn mean_angle_change(triangles: &[[u32; 3]], a: &[DVec3], b: &[DVec3]) -> f64 {
+    let angles = |p: &[DVec3], t: &[u32; 3]| -> [f64; 3] {
+        std::array::from_fn(|i| {
+            let o = p[t[i] as usize];
+            let u = p[t[(i + 1) % 3] as usize] - o;
+            let v = p[t[(i + 2) % 3] as usize] - o;
+            u.angle_between(v)
+        })
+    };
+    let mut sum = 0.0;
+    for t in triangles {
+        let (x, y) = (angles(a, t), angles(b, t));
+        sum += (0..3).map(|i| (x[i] - y[i]).abs()).sum::<f64>();
+    }
+    sum / (3 * triangles.len()) as f64
+}
+
+#[test]
+fn stretching_the_cage_preserves_shape_better_than_mean_value_coordinates() {
+    let stretched = |s: &mut RigSession| {
+        let cage = s.rest_cage().to_vec();
+        let centre = cage.iter().copied().sum::<DVec3>() / cage.len() as f64;
+        let vertices: Vec<usize> = (0..cage.len()).collect();
+        let offsets: Vec<DVec3> = cage
+            .iter()
+            .map(|c| DVec3::new(0.6 * (c.x - centre.x), 0.0, 0.0))
+            .collect();
+        s.move_rest_cage(&vertices, &offsets).unwrap();
+    };
+    let (mut g, loaded) = arm(green());
+    let (mut m, _) = arm(SessionOptions::default());
+    stretched(&mut g);
+    stretched(&mut m);
+    let triangles = g.mesh_triangles().to_vec();
+    let green_change = mean_angle_change(&triangles, &loaded, g.rest_mesh());
+    let mvc_change = mean_angle_change(&triangles, &loaded, m.rest_mesh());
+    // Not the affine image (which MVC reproduces exactly: linear precision).
+    let centre =
+        g.original_rest_cage().iter().copied().sum::<DVec3>() / g.original_rest_cage().len() as f64;
+    let affine: Vec<DVec3> = loaded
+        .iter()
+        .map(|p| DVec3::new(centre.x + 1.6 * (p.x - centre.x), p.y, p.z))
+        .collect();
+    let d = diagonal(g.rest_cage());
+    assert!(max_distance(m.rest_mesh(), &affine) < 1e-9 * d);
+    assert!(max_distance(g.rest_mesh(), &affine) > 1e-3 * d);
+    assert!(
+        green_change < 0.8 * mvc_change,
+        "mean angle change: Green {green_change:.4} rad, MVC {mvc_change:.4} rad"
+    );
+}
+
+#[test]
+fn the_arm_scenario_under_green_lands_grabs_exactly_under_every_method() {
+    for method in SkinningMethod::ALL {
+        let (mut s, _) = arm(green());
+        s.set_skinning(method).unwrap();
+        let d = diagonal(s.rest_cage());
+        let tol = 1e-9 * d;
+        // Elbow bend, rest-cage inflate, current-cage grab (examples/edits.json).
+        s.rotate_joint(3, DVec3::X, 60f64.to_radians()).unwrap();
+        s.move_rest_cage(&[0, 2, 4, 5, 6], &[DVec3::new(0.2, -0.1, 0.15)])
+            .unwrap();
+        grab_lands_exactly(&mut s, &[10, 13, 15], DVec3::new(-0.15, 0.2, 0.05), tol);
+        check_rest_mesh(&s, tol);
+        let (fit, reverse) = s.green_newton_reports().unwrap();
+        assert!(fit.residual <= 1e-12 * d && reverse.residual <= 1e-12 * d);
+    }
+}
+
+/// Deterministic pseudo-random numbers (no extra dependency).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64)
+    }
+    fn index(&mut self, n: usize) -> usize {
+        ((self.next() * n as f64) as usize).min(n - 1)
+    }
+    fn vec(&mut self, r: f64) -> DVec3 {
+        DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * 2.0 * r
+    }
+}
+
+/// Applies `event`; a refusal must be Green CageUp's fold (the fitted cage would fold a
+/// triangle) or a grab CageRev cannot reach, and leave every structure as it was. Returns whether it was applied.
+fn applied_or_refused_cleanly(
+    s: &mut RigSession,
+    event: impl FnOnce(&mut RigSession) -> Result<(), cagerig::RigError>,
+) -> bool {
+    let before = (
+        s.rest_cage().to_vec(),
+        s.posed_cage().to_vec(),
+        s.rest_mesh().to_vec(),
+    );
+    match event(s) {
+        Ok(()) => true,
+        Err(
+            cagerig::RigError::GreenFitFailed { .. } | cagerig::RigError::GreenGrabFailed { .. },
+        ) => {
+            assert_eq!(before.0, s.rest_cage());
+            assert_eq!(before.1, s.posed_cage());
+            assert!(max_distance(&before.2, s.rest_mesh()) < 1e-9 * diagonal(s.rest_cage()));
+            false
+        }
+        Err(e) => panic!("unexpected refusal: {e}"),
+    }
+}
+
+#[test]
+fn thousand_interleaved_events_keep_every_invariant_on_the_builtin_rigs() {
+    for (name, events) in [("bar_irregular", 1000), ("snake", 200)] {
+        let mut s = builtin(name, green());
+        let mut rng = Lcg(11);
+        let nc = s.rest_cage().len();
+        let nj = s.skeleton().len();
+        let d = diagonal(s.rest_cage());
+        let tol = 1e-9 * d;
+        let mut refused = 0;
+        for event in 0..events {
+            let applied = match rng.index(5) {
+                0 | 1 => {
+                    // Joints wander within ±50° of rest (a random walk pulled back to rest).
+                    let joint = rng.index(nj);
+                    let axis = rng.vec(1.0) + DVec3::splat(1e-3);
+                    let angle = (rng.next() - 0.5) * 0.4;
+                    applied_or_refused_cleanly(&mut s, |s| s.rotate_joint(joint, axis, angle))
+                }
+                2 => {
+                    let v = [rng.index(nc), rng.index(nc)];
+                    let offset = rng.vec(0.02 * d);
+                    applied_or_refused_cleanly(&mut s, |s| s.move_rest_cage(&v, &[offset]))
+                }
+                3 => {
+                    let v = [rng.index(nc)];
+                    let offset = rng.vec(0.02 * d);
+                    let before = s.posed_cage().to_vec();
+                    let applied =
+                        applied_or_refused_cleanly(&mut s, |s| s.move_posed_cage(&v, &[offset]));
+                    if applied {
+                        for (k, (after, b)) in s.posed_cage().iter().zip(&before).enumerate() {
+                            let expect = if k == v[0] { *b + offset } else { *b };
+                            assert!(
+                                after.distance(expect) < tol,
+                                "{name} event {event}: vertex {k}"
+                            );
+                        }
+                    }
+                    applied
+                }
+                _ => {
+                    let m = SkinningMethod::ALL[rng.index(3)];
+                    applied_or_refused_cleanly(&mut s, |s| s.set_skinning(m))
+                }
+            };
+            if !applied {
+                refused += 1;
+                // Pull the pose back towards rest, as an artist would after a refused step.
+                s.reset_pose();
+            }
+            if event % 50 == 0 {
+                check_rest_mesh(&s, tol);
+            }
+        }
+        check_rest_mesh(&s, tol);
+        s.reset_pose();
+        let off = max_distance(s.posed_cage(), s.rest_cage());
+        assert!(off < tol, "{name}: C' != C at rest pose ({off:e})");
+        eprintln!("{name}: {refused} of {events} events refused");
+        // Random walks of the joints reach strong bends, where the fitted cage folds.
+        assert!(
+            refused * 5 <= events,
+            "{name}: {refused} of {events} events refused"
+        );
+    }
+}
+
+#[test]
+fn a_bend_past_the_fold_is_refused_with_a_clear_error_and_nothing_moves() {
+    let (mut s, _) = arm(green());
+    let mut bent = 0;
+    for _ in 0..20 {
+        let before = s.posed_cage().to_vec();
+        match s.rotate_joint(3, DVec3::X, 6f64.to_radians()) {
+            Ok(()) => bent += 1,
+            Err(e @ cagerig::RigError::GreenFitFailed { .. }) => {
+                assert_eq!(before, s.posed_cage());
+                let message = e.to_string();
+                assert!(message.contains("folds cage triangle"), "{message}");
+                break;
+            }
+            Err(e) => panic!("{e}"),
+        }
+    }
+    // The Arm's elbow bends to at least 60° under Green coordinates.
+    assert!(bent >= 10, "only {bent} steps of 6°");
+}
