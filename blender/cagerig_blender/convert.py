@@ -58,6 +58,14 @@ def write_world_coords(obj: bpy.types.Object, world: np.ndarray) -> None:
     mesh.update()
 
 
+def as_displayed(obj: bpy.types.Object, world: np.ndarray) -> np.ndarray:
+    """World points as ``write_world_coords`` then ``world_coords`` would give them back
+    (float32 in the object's space)."""
+    m = matrix_np(obj.matrix_world)
+    local = _apply(np.linalg.inv(m), np.asarray(world, dtype=F64)).astype(np.float32)
+    return _apply(m, local.astype(F64))
+
+
 def triangles(mesh: bpy.types.Mesh) -> np.ndarray:
     """Triangles of the mesh (its polygons triangulated by Blender), (m, 3) int64."""
     mesh.calc_loop_triangles()

@@ -136,7 +136,7 @@ def coupling(skin: bpy.types.Object) -> Coupling:
         rig=rig,
         parents=b.parents,
         rest_heads=rig.rest_joints,
-        last_cage=np.asarray(shown, dtype=np.float32).astype(np.float64),
+        last_cage=convert.as_displayed(cage_of(skin), shown),
         last_transforms=pose,
         last_mode=mode,
     )
@@ -220,24 +220,24 @@ def _sync(skin: bpy.types.Object) -> bool:
             target = rig.posed_cage
         else:
             target = rig.rest_cage
-        if not cage_in_edit:
-            convert.write_world_coords(cage, target)
         c.last_mode = mode
-        c.last_cage = np.asarray(target, dtype=np.float32).astype(np.float64)
+        c.last_cage = _write_cage(cage, target) if not cage_in_edit else shown
         wrote = True
     elif mode == "POSE":
         changed = np.flatnonzero(np.any(shown != c.last_cage, axis=1))
+        moved_by = shown[changed] - c.last_cage[changed]
         pose_changed = _set_pose_from(arm, c)
         if len(changed):
-            rig.move_posed_cage(changed, shown[changed] - rig.posed_cage[changed])
+            # A grab lands where the user put the vertices; with a pose change in the same
+            # update (rare), the user's displacement is applied to the new C'.
+            offsets = moved_by if pose_changed else shown[changed] - rig.posed_cage[changed]
+            rig.move_posed_cage(changed, offsets)
             rest_changed = True
         if pose_changed or rest_changed:
-            target = rig.posed_cage
-            if not cage_in_edit:
-                convert.write_world_coords(cage, target)
-            c.last_cage = np.asarray(target, dtype=np.float32).astype(np.float64)
             if cage_in_edit:
-                c.last_cage[changed] = shown[changed]
+                c.last_cage = shown
+            else:
+                c.last_cage = _write_cage(cage, rig.posed_cage)
             wrote = True
     else:
         changed = np.flatnonzero(np.any(shown != c.last_cage, axis=1))
@@ -258,6 +258,13 @@ def _sync(skin: bpy.types.Object) -> bool:
     if wrote:
         c.last_sync_ms = 1000.0 * (time.perf_counter() - start)
     return wrote
+
+
+def _write_cage(cage: bpy.types.Object, world: np.ndarray) -> np.ndarray:
+    """Writes the cage and returns it as read back (float32-rounded, through matrix_world), so
+    that the next comparison with what Blender shows is exact."""
+    convert.write_world_coords(cage, world)
+    return convert.world_coords(cage)
 
 
 def _set_pose_from(arm: bpy.types.Object, c: Coupling) -> bool:

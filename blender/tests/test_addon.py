@@ -148,6 +148,28 @@ check("couple", store.is_coupled(skin) and skin.cagerig.cage == cage, "binding s
 c = engine.coupling(skin)
 check("skin data untouched by couple", np.abs(world(skin) - rest_skin0).max() == 0.0, "rest skin as imported")
 
+# ---- the same edits through the Python package (what `cagerig edit` computes), step by step ---
+# Blender's importers turn glTF/OBJ's +Y up into +Z up: (x, y, z)_file = (x, z, -y)_Blender.
+to_file = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
+ref = cagerig.Rig.load(ARM_GLB, cage=ARM_CAGE, skinning="lbs")
+order = [ref.joint_names.index(n) for n in c.rig.joint_names]
+# Vertex order: the glTF importer keeps it when it does not split vertices; check it.
+e = float(np.abs(np.asarray(ref.rest_mesh) - rest_skin0 @ to_file.T).max())
+check("glTF import keeps the vertex order", e <= TOL * diag, f"rest skins agree row by row ({e / diag:.2e})")
+
+
+def compare_with_package(step: str) -> None:
+    for what, ours, theirs in (
+        ("rest skin M", world(skin) @ to_file.T, np.asarray(ref.rest_mesh)),
+        ("posed skin M'", deformed_skin(skin) @ to_file.T, np.asarray(ref.posed_mesh)),
+        ("rest cage C", np.asarray(c.rig.rest_cage) @ to_file.T, np.asarray(ref.rest_cage)),
+        ("posed cage C'", np.asarray(c.rig.posed_cage) @ to_file.T, np.asarray(ref.posed_cage)),
+        ("rest bones S", bone_heads(arm) @ to_file.T, np.asarray(ref.rest_joints)[order]),
+    ):
+        e = float(np.abs(ours - theirs).max())
+        check(f"{step}: same as the Python package: {what}", e <= TOL * diag, f"{e / diag:.2e}")
+
+
 # ---- 1. pose a bone: CageUp ---------------------------------------------------------------------
 JOINT = "lowerarm01.R"
 AXIS_BL = np.array([1.0, 0.0, 0.0])
@@ -159,6 +181,8 @@ check("pose: Φ_R·C' = Blender's deformed skin (fit rows)", err <= TOL * diag, 
 err_all = float(np.abs(np.asarray(c.rig.posed_mesh) - deformed_skin(skin)).max())
 check("pose: rig's M' = Blender's deformed skin (all rows)", err_all <= TOL * diag, f"{err_all / diag:.2e}")
 check("pose: cage shows C'", np.abs(world(cage) - c.rig.posed_cage).max() <= TOL * diag, "cage mesh = rig C'")
+ref.rotate_joint(JOINT, to_file @ AXIS_BL, 60.0)
+compare_with_package("pose")
 
 # ---- 2. move three posed-cage vertices: CageRev + SkelUp ----------------------------------------
 GRAB = [10, 13, 15]
@@ -185,6 +209,8 @@ e_bones = float(np.abs(bone_heads(arm) - c.rig.rest_joints).max())
 check("grab: rest bones = rig's S", e_bones <= TOL * diag, f"{e_bones / diag:.2e}")
 e_m = float(np.abs(world(skin) - c.rig.rest_mesh).max())
 check("grab: skin mesh data = rig's M", e_m <= TOL * diag, f"{e_m / diag:.2e}")
+ref.move_posed_cage(GRAB, (to_file @ OFFSET_BL)[None, :].repeat(len(GRAB), 0))
+compare_with_package("grab")
 check("grab: sync time", True, f"{c.last_sync_ms:.2f} ms (last sync, in the handler)")
 
 # ---- 3. Rest Position: move rest-cage vertices --------------------------------------------------
@@ -207,40 +233,20 @@ moved = float(np.abs(bone_heads(arm) - heads1).max())
 check("rest edit: bones moved (SkelUp)", moved > 1e-4 * diag, f"max head move {moved / diag:.2e}")
 e_bones = float(np.abs(bone_heads(arm) - c.rig.rest_joints).max())
 check("rest edit: rest bones = rig's S", e_bones <= TOL * diag, f"{e_bones / diag:.2e}")
+ref.move_rest_cage(REST_MOVE, (to_file @ REST_OFFSET_BL)[None, :].repeat(len(REST_MOVE), 0))
 arm.data.pose_position = "POSE"
 update()
+compare_with_package("rest edit, back in the pose")
 err = fit_row_error(skin, cage, c)
 check("back to pose: Φ_R·C' = Blender's deformed skin", err <= TOL * diag, f"{err / diag:.2e}")
-
-# ---- the same edits through the Python package (what `cagerig edit` computes) --------------------
-# Blender's importers turn glTF/OBJ's +Y up into +Z up: (x, y, z)_file = (x, z, -y)_Blender.
-to_file = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
-ref = cagerig.Rig.load(ARM_GLB, cage=ARM_CAGE, skinning="lbs")
-order = [ref.joint_names.index(n) for n in c.rig.joint_names]
-bl_rest = world(skin) @ to_file.T
-# Vertex order: the glTF importer keeps it when it does not split vertices; check it.
-same_order = np.abs(np.asarray(ref.rest_mesh) - rest_skin0 @ to_file.T).max() <= TOL * diag
-check("glTF import keeps the vertex order", bool(same_order), "rest skins agree row by row")
-ref.rotate_joint(JOINT, to_file @ AXIS_BL, 60.0)
-ref.move_posed_cage(GRAB, (to_file @ OFFSET_BL)[None, :].repeat(len(GRAB), 0))
-ref.move_rest_cage(REST_MOVE, (to_file @ REST_OFFSET_BL)[None, :].repeat(len(REST_MOVE), 0))
-for what, ours, theirs in (
-    ("rest skin M", bl_rest, np.asarray(ref.rest_mesh)),
-    ("posed skin M'", deformed_skin(skin) @ to_file.T, np.asarray(ref.posed_mesh)),
-    ("rest cage C", np.asarray(c.rig.rest_cage) @ to_file.T, np.asarray(ref.rest_cage)),
-    ("posed cage C'", world(cage) @ to_file.T, np.asarray(ref.posed_cage)),
-    ("rest bones S", bone_heads(arm) @ to_file.T, np.asarray(ref.rest_joints)[order]),
-):
-    e = float(np.abs(ours - theirs).max())
-    check(f"same as the Python package: {what}", e <= TOL * diag, f"{e / diag:.2e}")
 
 # ---- save, reopen, sync again -------------------------------------------------------------------
 path = os.path.join(WORK, "arm_coupled.blend")
 snapshot = {"cage": world(cage), "skin": world(skin), "heads": bone_heads(arm)}
+names = (skin.name, arm.name)
 bpy.ops.wm.save_as_mainfile(filepath=path)
 bpy.ops.wm.open_mainfile(filepath=path)
-skin = bpy.data.objects[skin.name]
-arm = bpy.data.objects[arm.name]
+skin, arm = (bpy.data.objects[n] for n in names)
 cage = skin.cagerig.cage
 check("reopen: binding survived", store.is_coupled(skin) and cage is not None, f"cage {cage.name if cage else None}")
 t0 = time.perf_counter()
@@ -270,9 +276,10 @@ try:
     cage.data.update()
     update()
     bpy.ops.ed.undo_push(message="grab")
+    skin_name = skin.name
     bpy.ops.ed.undo()
     update()
-    skin = bpy.data.objects[skin.name]
+    skin = bpy.data.objects[skin_name]
     cage = skin.cagerig.cage
     c = engine.coupling(skin)
     e1 = float(np.abs(world(cage) - before_cage).max())
@@ -287,6 +294,7 @@ except RuntimeError as e:
 # ---- bake ---------------------------------------------------------------------------------------
 scene = bpy.context.scene
 scene.frame_start, scene.frame_end = 1, 5
+arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
 pb = arm.pose.bones[JOINT]
 pb.rotation_mode = "QUATERNION"
 q0 = pb.rotation_quaternion.copy()
