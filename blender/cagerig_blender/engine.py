@@ -114,10 +114,10 @@ def coupling(skin: bpy.types.Object) -> Coupling:
     """The run-time coupling of ``skin``, rebuilt from the stored binding when missing (file
     opened, undo). A rebuilt coupling takes the cage as Blender shows it for a user edit, so
     that the next sync brings everything into step."""
-    b = store.load(skin)
     c = _couplings.get(skin.name)
-    if c is not None and c.bind_id == b.bind_id:
+    if c is not None and c.bind_id == store.bind_id(skin):
         return c
+    b = store.load(skin)
     arm, _ = armature_of(skin)
     rig = build_rig(b)
     mode = arm.data.pose_position
@@ -144,9 +144,31 @@ def coupling(skin: bpy.types.Object) -> Coupling:
     return c
 
 
+_tolerances: dict[int, float] = {}
+
+
 def _tolerance(rig: object) -> float:
-    m = rig.rest_mesh
-    return 1e-6 * float(np.linalg.norm(m.max(axis=0) - m.min(axis=0)))
+    """1e-6 of the rest skin's bounding-box diagonal (cached per rig: reading M copies it)."""
+    t = _tolerances.get(id(rig))
+    if t is None:
+        m = rig.rest_mesh
+        t = 1e-6 * float(np.linalg.norm(m.max(axis=0) - m.min(axis=0)))
+        if len(_tolerances) > 64:
+            _tolerances.clear()
+        _tolerances[id(rig)] = t
+    return t
+
+
+def _mode_set(mode: str) -> None:
+    """object.mode_set without an undo step and without the full view-layer evaluation that
+    ``bpy.ops`` runs before and after every call from Python (at 133k vertices that is two
+    evaluations of the skin per call). Falls back to ``bpy.ops`` where the low-level call differs."""
+    try:
+        from _bpy import ops as _ops  # type: ignore[import-not-found]
+
+        _ops.call("OBJECT_OT_mode_set", None, {"mode": mode}, "EXEC_DEFAULT", False)
+    except (ImportError, TypeError, AttributeError):
+        bpy.ops.object.mode_set("EXEC_DEFAULT", False, mode=mode)
 
 
 def write_rest_bones(arm: bpy.types.Object, heads_world: np.ndarray) -> None:
@@ -165,7 +187,7 @@ def write_rest_bones(arm: bpy.types.Object, heads_world: np.ndarray) -> None:
     try:
         view_layer.objects.active = arm
         with bpy.context.temp_override(active_object=arm, object=arm, edit_object=None):
-            bpy.ops.object.mode_set("EXEC_DEFAULT", False, mode="EDIT")
+            _mode_set("EDIT")
         ebones = arm.data.edit_bones
         names = [b.name for b in arm.data.bones]
         for eb in ebones:
@@ -176,7 +198,7 @@ def write_rest_bones(arm: bpy.types.Object, heads_world: np.ndarray) -> None:
             eb.head = local[j]
             eb.tail = eb.head + d
         with bpy.context.temp_override(active_object=arm, object=arm, edit_object=arm):
-            bpy.ops.object.mode_set("EXEC_DEFAULT", False, mode=prev_mode if prev_mode != "EDIT" else "OBJECT")
+            _mode_set(prev_mode if prev_mode != "EDIT" else "OBJECT")
     finally:
         view_layer.objects.active = prev_active
         if hidden:

@@ -82,6 +82,13 @@ def is_coupled(obj: bpy.types.Object) -> bool:
     return obj.type == "MESH" and KEY in obj.keys()
 
 
+def bind_id(skin: bpy.types.Object) -> str:
+    """The stored binding's id (cheap: reads no array)."""
+    if not is_coupled(skin):
+        raise ValueError(f"{skin.name!r} is not coupled (no cagerig binding stored with it)")
+    return str(skin[KEY].get("bind_id", ""))
+
+
 def load(skin: bpy.types.Object) -> Binding:
     """The stored binding; raises ValueError naming what is missing or damaged."""
     if not is_coupled(skin):
