@@ -25,6 +25,18 @@ def _skin_with_armature(
         return None
 
 
+def _is_posed(arm: bpy.types.Object, skin: bpy.types.Object) -> bool:
+    """Whether the armature's pose moves the skin (beyond float32 noise: a glTF import leaves
+    rounding in the pose bones)."""
+    t = convert.skinning_transforms(arm)
+    pts = convert.world_coords(skin)
+    diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))) or 1.0
+    rot = float(np.abs(t[:, :3, :3] - np.eye(3)).max())
+    centre = pts.mean(axis=0)
+    shift = float(np.abs(np.einsum("jab,b->ja", t[:, :3, :3], centre) + t[:, :3, 3] - centre).max())
+    return rot > 1e-5 or shift > 1e-5 * diag
+
+
 def _coupled_skin(context: bpy.types.Context) -> Optional[bpy.types.Object]:
     """The coupled skin the user means: the active object, or the skin whose cage is active."""
     obj = context.active_object
@@ -116,6 +128,10 @@ class CAGERIG_OT_couple(bpy.types.Operator):
         if skin.modifiers[0] != mod:
             self.report({"WARNING"}, f"The Armature modifier {mod.name!r} is not first in the stack: "
                         "the modifiers before it are not seen by cagerig")
+        if arm.data.pose_position == "POSE" and _is_posed(arm, skin):
+            self.report({"ERROR"}, f"{arm.name!r} is posed: couple in the rest pose (switch the armature to "
+                        "Rest Position, or clear the pose); the cage is taken as the rest cage C")
+            return {"CANCELLED"}
         names, heads, parents, deform = convert.rest_skeleton(arm)
         rows, cols, vals = convert.skin_weights_sparse(skin, names, deform)
         n = len(skin.data.vertices)

@@ -138,6 +138,16 @@ try:
     check("cage not enclosing refused", False, "Couple accepted a cage at half size")
 except RuntimeError as e:
     check("cage not enclosing refused", "does not enclose" in str(e) or "outside" in str(e), str(e).strip()[:200])
+pb0 = arm.pose.bones["wrist.R"]
+pb0.rotation_mode = "XYZ"
+pb0.rotation_euler = (0.3, 0.0, 0.0)
+try:
+    couple(skin, cage)
+    check("posed armature refused", False, "Couple accepted a posed armature")
+except RuntimeError as e:
+    check("posed armature refused", "is posed" in str(e), str(e).strip()[:160])
+pb0.rotation_euler = (0.0, 0.0, 0.0)
+pb0.rotation_mode = "QUATERNION"
 check("refusals keep the skin uncoupled", not store.is_coupled(skin), "no binding stored")
 bpy.data.objects.remove(small)
 
@@ -266,6 +276,29 @@ update()
 err = fit_row_error(skin, cage, c)
 check("reopen: grab syncs (Φ_R·C' = deformed skin)", err <= TOL * diag, f"{err / diag:.2e}")
 
+# ---- a cage edit in Edit Mode: synced live (skin), bones when leaving Edit Mode -------------------
+import bmesh  # noqa: E402
+
+bpy.ops.object.select_all(action="DESELECT")
+cage.select_set(True)
+bpy.context.view_layer.objects.active = cage
+bpy.ops.object.mode_set(mode="EDIT")
+bm = bmesh.from_edit_mesh(cage.data)
+bm.verts.ensure_lookup_table()
+rest_skin_before = world(skin)
+bm.verts[30].co.z -= 0.02 * diag
+bmesh.update_edit_mesh(cage.data)
+update()
+e = float(np.abs(world(skin) - rest_skin_before).max())
+check("edit mode: rest skin updated live", e > 1e-6 * diag, f"rest skin moved by {e / diag:.2e}")
+bpy.ops.object.mode_set(mode="OBJECT")
+update()
+err = fit_row_error(skin, cage, c)
+check("edit mode: after leaving it, Φ_R·C' = deformed skin", err <= TOL * diag, f"{err / diag:.2e}")
+e_bones = float(np.abs(bone_heads(arm) - c.rig.rest_joints).max())
+check("edit mode: rest bones = rig's S after leaving it", e_bones <= TOL * diag, f"{e_bones / diag:.2e}")
+bpy.context.view_layer.objects.active = skin
+
 # ---- undo ---------------------------------------------------------------------------------------
 # Background Blender keeps an undo stack when pushed explicitly; Ctrl+Z runs ed.undo.
 try:
@@ -317,5 +350,30 @@ baked = convert.world_coords(cage, ev.data)
 e = float(np.abs(baked - live_cage_f3).max())
 check("bake: the baked cage at frame 3 = the live sync's", e <= TOL * diag, f"{e / diag:.2e}")
 check("bake: live sync off", not skin.cagerig.live, "skin.cagerig.live = False")
+
+# ---- Preserve Volume = DQS --------------------------------------------------------------------
+for sk in list(cage.data.shape_keys.key_blocks)[::-1] if cage.data.shape_keys else []:
+    cage.shape_key_remove(sk)
+arm.animation_data_clear()
+skin.cagerig.live = True
+arm.data.pose_position = "REST"  # the cage shows C: the rest cage to couple again with
+update()
+bpy.context.view_layer.objects.active = skin
+bpy.ops.cagerig.uncouple()
+check("uncouple", not store.is_coupled(skin), "binding removed, state kept")
+arm.data.pose_position = "POSE"
+mod = next(m for m in skin.modifiers if m.type == "ARMATURE")
+mod.use_deform_preserve_volume = True
+for p in arm.pose.bones:
+    p.rotation_quaternion = (1.0, 0.0, 0.0, 0.0)
+update()
+couple(skin, cage)
+c = engine.coupling(skin)
+check("preserve volume couples as DQS", c.rig.skinning == "dqs", c.rig.skinning)
+rotate_bone(arm, JOINT, AXIS_BL, 70.0)
+rotate_bone(arm, "wrist.R", np.array([0.0, 0.0, 1.0]), 30.0)
+update()
+e = float(np.abs(np.asarray(c.rig.posed_mesh) - deformed_skin(skin)).max())
+check("DQS: rig's M' = Blender's Preserve Volume skin", e <= TOL * diag, f"{e / diag:.2e}")
 
 print("\n".join(["", "summary:"] + results))
