@@ -24,19 +24,19 @@ class CAGERIG_PT_main(bpy.types.Panel):
             col.label(text="1. Active: skinned mesh")
             col.label(text="2. Also selected: its cage")
             if obj is not None and obj.type == "MESH":
-                row = layout.row(align=True)
-                row.prop(obj.cagerig, "cage_vertices", text="Vertices")
-                op = row.operator("cagerig.generate_cage", text="Generate Cage")
+                col = layout.column(align=True)
+                col.prop(obj.cagerig, "cage_vertices")
+                op = col.operator("cagerig.generate_cage", icon="MESH_ICOSPHERE")
                 op.vertices = obj.cagerig.cage_vertices
             layout.operator("cagerig.couple", icon="LINKED")
             return
         box = layout.box()
-        box.label(text=f"Skin: {skin.name}", icon="MESH_DATA")
+        box.label(text=skin.name, icon="MESH_DATA")
         cage = skin.cagerig.cage
-        box.label(text=f"Cage: {cage.name if cage else '(missing)'}", icon="MESH_ICOSPHERE")
+        box.label(text=cage.name if cage else "(cage missing)", icon="MESH_ICOSPHERE")
         try:
             arm, mod = engine.armature_of(skin)
-            box.label(text=f"Armature: {arm.name} ({'DQS' if mod.use_deform_preserve_volume else 'LBS'})",
+            box.label(text=f"{arm.name} · {'DQS' if mod.use_deform_preserve_volume else 'LBS'}",
                       icon="ARMATURE_DATA")
             box.label(text=f"Cage shows: {'C (rest)' if arm.data.pose_position == 'REST' else 'C′ (pose)'}")
         except engine.SyncError as e:
@@ -48,7 +48,8 @@ class CAGERIG_PT_main(bpy.types.Panel):
         layout.operator("cagerig.uncouple", icon="UNLINKED")
         c = engine.status(skin)
         if c is not None:
-            layout.label(text=f"Last sync: {c.last_sync_ms:.2f} ms")
+            if c.last_sync_ms > 0.0:
+                layout.label(text=f"Last sync: {c.last_sync_ms:.2f} ms")
             for m in c.messages[:4]:
                 layout.label(text=m, icon="INFO")
         if store.is_coupled(skin) and skin.cagerig.cage is not None and skin.cagerig.cage.data.shape_keys:
