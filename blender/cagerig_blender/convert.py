@@ -7,7 +7,6 @@ Blender stores coordinates as float32, so a round trip rounds to float32.
 
 from __future__ import annotations
 
-from typing import Optional
 
 import bpy
 import numpy as np
@@ -33,12 +32,12 @@ def mesh_local_coords(mesh: bpy.types.Mesh) -> np.ndarray:
     return co.reshape(n, 3).astype(F64)
 
 
-def world_coords(obj: bpy.types.Object, mesh: Optional[bpy.types.Mesh] = None) -> np.ndarray:
+def world_coords(obj: bpy.types.Object, mesh: bpy.types.Mesh | None = None) -> np.ndarray:
     """The object's mesh vertices (its own data unless ``mesh`` is given) in world space."""
     return _apply(matrix_np(obj.matrix_world), mesh_local_coords(mesh or obj.data))
 
 
-def edit_mode_world_coords(obj: bpy.types.Object) -> Optional[np.ndarray]:
+def edit_mode_world_coords(obj: bpy.types.Object) -> np.ndarray | None:
     """While ``obj`` is in Edit Mode: its edit-mesh coordinates in world space (else None)."""
     if obj.mode != "EDIT" or obj.type != "MESH":
         return None
@@ -113,7 +112,7 @@ class SparseWeights:
         self.col = col
         self.data = data
 
-    def tocoo(self) -> "SparseWeights":
+    def tocoo(self) -> SparseWeights:
         return self
 
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Optional
 
 import bpy
 import numpy as np
@@ -27,7 +26,7 @@ from . import convert, store
 # Base rigs (Φ, MaxVol, Ψ computed) by bind id: reopening or undoing copies one instead of
 # recomputing the coordinates.
 _base_rigs: dict[str, object] = {}
-_couplings: dict[str, "Coupling"] = {}
+_couplings: dict[str, Coupling] = {}
 _busy = False
 
 
@@ -61,7 +60,7 @@ class Coupling:
     parents: np.ndarray
     rest_heads: np.ndarray  # S as last written into the bones (world)
     last_cage: np.ndarray  # the cage as last written / seen (world, float32-rounded)
-    last_transforms: Optional[tuple[np.ndarray, np.ndarray]]  # last pose set (rotations, motion)
+    last_transforms: tuple[np.ndarray, np.ndarray] | None  # last pose set (rotations, motion)
     last_mode: str
     bones_pending: bool = False
     last_sync_ms: float = 0.0
@@ -93,7 +92,7 @@ def build_rig(b: store.Binding) -> object:
     return rig
 
 
-def forget(skin_name: Optional[str] = None) -> None:
+def forget(skin_name: str | None = None) -> None:
     """Drops the run-time state (all of it, or one skin's); the next sync rebuilds it."""
     if skin_name is None:
         _couplings.clear()
@@ -125,7 +124,7 @@ def coupling(skin: bpy.types.Object) -> Coupling:
         t = convert.skinning_transforms(arm)
         q, motion, _ = convert.cagerig_pose(t, rig.rest_joints, b.parents, _tolerance(rig))
         rig.set_pose(q, motion)
-        pose: Optional[tuple[np.ndarray, np.ndarray]] = (q, motion)
+        pose: tuple[np.ndarray, np.ndarray] | None = (q, motion)
         shown = rig.posed_cage
     else:
         pose = None
@@ -308,19 +307,40 @@ def _set_pose_from(arm: bpy.types.Object, c: Coupling) -> bool:
     return True
 
 
-def sync_all(scene: bpy.types.Scene) -> None:
-    """Live sync of every coupled skin in the scene (errors are kept for the panel)."""
+_last_errors: dict[str, str] = {}
+
+
+def sync_all(scene: bpy.types.Scene, updated: set[int] | None = None) -> None:
+    """Live sync of every coupled skin in the scene. ``updated``: pointers of the IDs the
+    depsgraph update touched (None: sync all); a coupling none of whose objects (skin, armature,
+    cage, their data) changed is skipped. Errors are kept for the panel and printed once."""
     for obj in scene.objects:
         if not store.is_coupled(obj) or not obj.cagerig.live:
             continue
+        if updated is not None and not _touched(obj, updated):
+            continue
         try:
             sync(obj)
+            _last_errors.pop(obj.name, None)
         except (SyncError, ValueError) as e:
             c = _couplings.get(obj.name)
             if c is not None:
                 c.messages = [str(e)]
-            print(f"cagerig: {e}")
+            if _last_errors.get(obj.name) != str(e):
+                _last_errors[obj.name] = str(e)
+                print(f"cagerig: {e}")
 
 
-def status(skin: bpy.types.Object) -> Optional[Coupling]:
+def _touched(skin: bpy.types.Object, updated: set[int]) -> bool:
+    ids: list[bpy.types.ID] = [skin, skin.data]
+    cage = skin.cagerig.cage
+    if cage is not None:
+        ids += [cage, cage.data]
+    for m in skin.modifiers:
+        if m.type == "ARMATURE" and m.object is not None:
+            ids += [m.object, m.object.data]
+    return any(i.as_pointer() in updated for i in ids)
+
+
+def status(skin: bpy.types.Object) -> Coupling | None:
     return _couplings.get(skin.name)

@@ -10,8 +10,9 @@ from . import engine
 
 
 @persistent
-def on_depsgraph_update(scene: bpy.types.Scene, _depsgraph: bpy.types.Depsgraph) -> None:
-    engine.sync_all(scene)
+def on_depsgraph_update(scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph) -> None:
+    updated = {u.id.original.as_pointer() for u in depsgraph.updates}
+    engine.sync_all(scene, updated)
 
 
 @persistent

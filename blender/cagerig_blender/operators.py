@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Optional
 
 import bpy
 import numpy as np
@@ -12,8 +11,8 @@ from . import convert, engine, store
 
 
 def _skin_with_armature(
-    op: bpy.types.Operator, obj: Optional[bpy.types.Object]
-) -> Optional[tuple[bpy.types.Object, bpy.types.ArmatureModifier]]:
+    op: bpy.types.Operator, obj: bpy.types.Object | None
+) -> tuple[bpy.types.Object, bpy.types.ArmatureModifier] | None:
     """The armature of the skin ``obj``, or None after reporting what is missing."""
     if obj is None or obj.type != "MESH":
         op.report({"ERROR"}, "Make the skinned mesh (a mesh with an Armature modifier) the active object")
@@ -37,7 +36,7 @@ def _is_posed(arm: bpy.types.Object, skin: bpy.types.Object) -> bool:
     return rot > 1e-5 or shift > 1e-5 * diag
 
 
-def _coupled_skin(context: bpy.types.Context) -> Optional[bpy.types.Object]:
+def _coupled_skin(context: bpy.types.Context) -> bpy.types.Object | None:
     """The coupled skin the user means: the active object, or the skin whose cage is active."""
     obj = context.active_object
     if obj is None:
@@ -103,7 +102,6 @@ class CAGERIG_OT_couple(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context: bpy.types.Context) -> set[str]:
-        import cagerig
 
         skin = context.active_object
         found = _skin_with_armature(self, skin)
@@ -121,6 +119,15 @@ class CAGERIG_OT_couple(bpy.types.Operator):
         if cage.mode == "EDIT" or skin.mode == "EDIT" or arm.mode == "EDIT":
             self.report({"ERROR"}, "Leave Edit Mode before coupling")
             return {"CANCELLED"}
+        for obj, what in ((skin, "skin"), (cage, "cage")):
+            if obj.data.shape_keys is not None:
+                self.report({"ERROR"}, f"The {what} {obj.name!r} has shape keys: cagerig rewrites its mesh data; "
+                            "apply or remove the shape keys first")
+                return {"CANCELLED"}
+            if obj.data.users > 1:
+                self.report({"ERROR"}, f"The {what}'s mesh {obj.data.name!r} is shared by {obj.data.users} objects: "
+                            "cagerig rewrites it; make it single-user first (Object ▸ Relations ▸ Make Single User)")
+                return {"CANCELLED"}
         if not mod.use_vertex_groups or mod.use_bone_envelopes:
             self.report({"ERROR"}, f"The Armature modifier {mod.name!r} must deform with vertex groups only "
                         "(Bind To: Vertex Groups on, Bone Envelopes off)")
@@ -251,7 +258,7 @@ class CAGERIG_OT_bake(bpy.types.Operator):
         skin.cagerig.live = False
         basis = cage.shape_key_add(name="Basis", from_mix=False)
         basis.interpolation = "KEY_LINEAR"
-        for f, co in zip(frames, shapes):
+        for f, co in zip(frames, shapes, strict=True):
             key = cage.shape_key_add(name=f"cagerig_{f:04d}", from_mix=False)
             key.data.foreach_set("co", co.astype(np.float32).ravel())
             for g, v in ((f - 1, 0.0), (f, 1.0), (f + 1, 0.0)):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import uuid
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import Any
 
 import bpy
 import numpy as np
@@ -45,7 +45,7 @@ def _ints(a: np.ndarray) -> list[int]:
     return np.asarray(a, dtype=np.int64).ravel().tolist()
 
 
-def _array(group: Any, name: str, dtype: Any, cols: Optional[int] = None) -> np.ndarray:
+def _array(group: Any, name: str, dtype: Any, cols: int | None = None) -> np.ndarray:
     value = group[name]
     a = np.array(value.to_list() if hasattr(value, "to_list") else list(value), dtype=dtype)
     return a.reshape(-1, cols) if cols else a

@@ -95,7 +95,7 @@ def couple(skin: bpy.types.Object, cage: bpy.types.Object) -> None:
 def rotate_bone(arm: bpy.types.Object, name: str, axis_world: np.ndarray, degrees: float) -> None:
     """Rotates pose bone ``name`` about a world axis through its head (the armature is not
     transformed in this test), composing with its current pose."""
-    from mathutils import Matrix, Quaternion, Vector
+    from mathutils import Quaternion, Vector
 
     pb = arm.pose.bones[name]
     pb.rotation_mode = "QUATERNION"
@@ -117,7 +117,8 @@ def fit_row_error(skin: bpy.types.Object, cage: bpy.types.Object, c: engine.Coup
 # ---- errors explained to the user ---------------------------------------------------------------
 skin, arm, cage = load_arm()
 diag = float(np.linalg.norm(world(skin).max(0) - world(skin).min(0)))
-print(f"Arm: {len(skin.data.vertices)} vertices, {len(arm.data.bones)} bones, cage {len(cage.data.vertices)}, diag {diag:.4g}")
+print(f"Arm: {len(skin.data.vertices)} vertices, {len(arm.data.bones)} bones, "
+      f"cage {len(cage.data.vertices)}, diag {diag:.4g}")
 mod = next(m for m in skin.modifiers if m.type == "ARMATURE")
 mod.show_viewport = True
 saved_object = mod.object
@@ -148,6 +149,18 @@ except RuntimeError as e:
     check("posed armature refused", "is posed" in str(e), str(e).strip()[:160])
 pb0.rotation_euler = (0.0, 0.0, 0.0)
 pb0.rotation_mode = "QUATERNION"
+keyed = cage.copy()
+keyed.data = cage.data.copy()
+bpy.context.scene.collection.objects.link(keyed)
+keyed.shape_key_add(name="Basis")
+try:
+    couple(skin, keyed)
+    check("cage with shape keys refused", False, "Couple accepted a cage with shape keys")
+except RuntimeError as e:
+    check("cage with shape keys refused", "shape keys" in str(e), str(e).strip()[:160])
+keyed_mesh = keyed.data
+bpy.data.objects.remove(keyed)
+bpy.data.meshes.remove(keyed_mesh)
 check("refusals keep the skin uncoupled", not store.is_coupled(skin), "no binding stored")
 bpy.data.objects.remove(small)
 
@@ -318,7 +331,8 @@ try:
     e1 = float(np.abs(world(cage) - before_cage).max())
     e2 = float(np.abs(store.load(skin).rest_cage - before_store).max())
     err = fit_row_error(skin, cage, c)
-    check("undo: cage and stored C restored", e1 <= TOL * diag and e2 <= TOL * diag, f"{e1 / diag:.2e}, {e2 / diag:.2e}")
+    check("undo: cage and stored C restored", e1 <= TOL * diag and e2 <= TOL * diag,
+          f"{e1 / diag:.2e}, {e2 / diag:.2e}")
     check("undo: consistent after undo (Φ_R·C' = deformed skin)", err <= TOL * diag, f"{err / diag:.2e}")
 except RuntimeError as e:
     print(f"skip undo: {e}")
