@@ -17,8 +17,10 @@ rm -rf "$wheels" && mkdir -p "$wheels"
 "$maturin" build --release -m crates/cagerig-py/Cargo.toml --out "$wheels" >&2
 wheel=$(ls "$wheels"/cagerig-*.whl | head -n1)
 stage="target/blender-addon"
-rm -rf "$stage" && mkdir -p "$stage/cagerig_blender/vendor"
+rm -rf "$stage" && mkdir -p "$stage/cagerig_blender/vendor" "$stage/cagerig_blender/wheels"
 cp blender/cagerig_blender/*.py blender/cagerig_blender/blender_manifest.toml "$stage/cagerig_blender/"
+cp "$wheel" "$stage/cagerig_blender/wheels/"
+printf 'wheels = ["./wheels/%s"]\n' "$(basename "$wheel")" >> "$stage/cagerig_blender/blender_manifest.toml"
 out="target/cagerig_blender-$version.zip"
 python3 - "$wheel" "$stage" "$out" <<'PY'
 import os, sys, zipfile

@@ -2,8 +2,9 @@
 (Corda et al., Real-Time Deformation with Coupled Cages and Skeletons, CGF 2020).
 
 The cagerig Python package (with its compiled abi3 module) ships inside the add-on, under
-``vendor/``; enabling the add-on puts that folder on ``sys.path`` so that ``import cagerig``
-works in Blender's Python (3.10 or newer; it needs numpy, which Blender ships — on Debian's
+``vendor/`` (and as a wheel under ``wheels/`` for Blender >= 4.2's extension installer); enabling
+the add-on puts ``vendor/`` on ``sys.path`` when ``cagerig`` is not importable otherwise, so that
+``import cagerig`` works in Blender's Python (3.10 or newer; it needs numpy, which Blender ships — on Debian's
 Blender: ``apt-get install python3-numpy``).
 """
 
@@ -26,8 +27,13 @@ _VENDOR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "vendor")
 
 
 def _vendor_path() -> None:
-    if os.path.isdir(_VENDOR) and _VENDOR not in sys.path:
-        sys.path.insert(0, _VENDOR)
+    """Blender >= 4.2 installs the bundled wheel (blender_manifest.toml); older Blenders import
+    the package from vendor/."""
+    try:
+        import cagerig  # noqa: F401
+    except ImportError:
+        if os.path.isdir(_VENDOR) and _VENDOR not in sys.path:
+            sys.path.insert(0, _VENDOR)
 
 
 def register() -> None:

@@ -389,5 +389,33 @@ rotate_bone(arm, "wrist.R", np.array([0.0, 0.0, 1.0]), 30.0)
 update()
 e = float(np.abs(np.asarray(c.rig.posed_mesh) - deformed_skin(skin)).max())
 check("DQS: rig's M' = Blender's Preserve Volume skin", e <= TOL * diag, f"{e / diag:.2e}")
+rows = c.rig.fit_rows
+ghost = cagerig.lbs(c.rig.rest_mesh, c.rig.skin_weights, c.rig.skinning_transforms)
+e = float(np.abs(np.asarray(c.rig.cage_coords)[rows] @ world(cage) - ghost[rows]).max())
+check("DQS: Φ_R·C' = the LBS ghost of the fitting rows", e <= TOL * diag, f"{e / diag:.2e}")
+
+# ---- Generate Cage, then couple with it ---------------------------------------------------------
+arm.data.pose_position = "REST"
+update()
+bpy.context.view_layer.objects.active = skin
+bpy.ops.cagerig.uncouple()
+arm.data.pose_position = "POSE"
+mod.use_deform_preserve_volume = False  # LBS: Φ_R·C' fits the displayed skin (DQS: its LBS ghost)
+for p in arm.pose.bones:
+    p.rotation_quaternion = (1.0, 0.0, 0.0, 0.0)
+update()
+bpy.ops.object.select_all(action="DESELECT")
+skin.select_set(True)
+bpy.context.view_layer.objects.active = skin
+bpy.ops.cagerig.generate_cage(vertices=80)
+generated = skin.cagerig.cage
+check("generate cage", generated is not None and generated != cage and 40 <= len(generated.data.vertices) <= 200,
+      f"{generated.name if generated else None}: {len(generated.data.vertices) if generated else 0} vertices")
+couple(skin, generated)
+c = engine.coupling(skin)
+rotate_bone(arm, JOINT, AXIS_BL, 45.0)
+update()
+err = fit_row_error(skin, generated, c)
+check("generated cage: Φ_R·C' = deformed skin after a pose", err <= TOL * diag, f"{err / diag:.2e}")
 
 print("\n".join(["", "summary:"] + results))
