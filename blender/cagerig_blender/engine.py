@@ -272,7 +272,13 @@ def _sync(skin: bpy.types.Object) -> bool:
         store.save_rest_cage(skin, rig.rest_cage)
         c.bones_pending = True
     if c.bones_pending and not cage_in_edit:
-        write_rest_bones(arm, rig.rest_joints)
+        try:
+            write_rest_bones(arm, rig.rest_joints)
+        except RuntimeError as e:  # mode_set refused: the armature is not editable here
+            raise SyncError(
+                f"could not write SkelUp's rest bones into {arm.name!r} ({e}); is it in the view layer and "
+                "editable? They will be written at the next sync"
+            ) from None
         c.rest_heads = rig.rest_joints
         c.bones_pending = False
         wrote = True
