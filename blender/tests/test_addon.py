@@ -350,8 +350,9 @@ from mathutils import Quaternion  # noqa: E402
 for f, deg in ((1, 0.0), (5, 40.0)):
     pb.rotation_quaternion = q0 @ Quaternion((1.0, 0.0, 0.0), math.radians(deg))
     pb.keyframe_insert("rotation_quaternion", frame=f)
-scene.frame_set(3)
-engine.sync(skin)
+scene.frame_set(3)  # the frame-change handler syncs (no explicit call)
+err = fit_row_error(skin, cage, c)
+check("animation: at frame 3, Φ_R·C' = deformed skin", err <= TOL * diag, f"{err / diag:.2e}")
 live_cage_f3 = world(cage)
 bpy.context.view_layer.objects.active = skin
 bpy.ops.cagerig.bake()
