@@ -1,0 +1,194 @@
+"""Blender data <-> numpy arrays, all in world space (float64).
+
+The rig lives in world space: the skin, the cage and the bones are brought there with their
+objects' ``matrix_world``; what is written back is brought into each object's own space.
+Blender stores coordinates as float32, so a round trip rounds to float32.
+"""
+
+from __future__ import annotations
+
+
+import bpy
+import numpy as np
+from mathutils import Matrix
+
+F64 = np.float64
+
+
+def matrix_np(m: Matrix) -> np.ndarray:
+    """A mathutils 4x4 matrix as a float64 (4, 4) array."""
+    return np.array([list(row) for row in m], dtype=F64)
+
+
+def _apply(m: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    return pts @ m[:3, :3].T + m[:3, 3]
+
+
+def mesh_local_coords(mesh: bpy.types.Mesh) -> np.ndarray:
+    """Vertex coordinates of mesh data (object space), (n, 3) float64."""
+    n = len(mesh.vertices)
+    co = np.empty(n * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    return co.reshape(n, 3).astype(F64)
+
+
+def world_coords(obj: bpy.types.Object, mesh: bpy.types.Mesh | None = None) -> np.ndarray:
+    """The object's mesh vertices (its own data unless ``mesh`` is given) in world space."""
+    return _apply(matrix_np(obj.matrix_world), mesh_local_coords(mesh or obj.data))
+
+
+def edit_mode_world_coords(obj: bpy.types.Object) -> np.ndarray | None:
+    """While ``obj`` is in Edit Mode: its edit-mesh coordinates in world space (else None)."""
+    if obj.mode != "EDIT" or obj.type != "MESH":
+        return None
+    import bmesh
+
+    bm = bmesh.from_edit_mesh(obj.data)
+    co = np.array([v.co[:] for v in bm.verts], dtype=F64)
+    return _apply(matrix_np(obj.matrix_world), co)
+
+
+def write_world_coords(obj: bpy.types.Object, world: np.ndarray) -> None:
+    """Writes world-space points into the object's mesh data (object space) and tags it."""
+    inv = np.linalg.inv(matrix_np(obj.matrix_world))
+    local = _apply(inv, np.asarray(world, dtype=F64)).astype(np.float32)
+    mesh = obj.data
+    mesh.vertices.foreach_set("co", local.ravel())
+    mesh.update()
+
+
+def as_displayed(obj: bpy.types.Object, world: np.ndarray) -> np.ndarray:
+    """World points as ``write_world_coords`` then ``world_coords`` would give them back
+    (float32 in the object's space)."""
+    m = matrix_np(obj.matrix_world)
+    local = _apply(np.linalg.inv(m), np.asarray(world, dtype=F64)).astype(np.float32)
+    return _apply(m, local.astype(F64))
+
+
+def triangles(mesh: bpy.types.Mesh) -> np.ndarray:
+    """Triangles of the mesh (its polygons triangulated by Blender), (m, 3) int64."""
+    mesh.calc_loop_triangles()
+    n = len(mesh.loop_triangles)
+    t = np.empty(n * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", t)
+    return t.reshape(n, 3).astype(np.int64)
+
+
+def skin_weights_sparse(
+    obj: bpy.types.Object, bone_names: list[str], deform: list[bool]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertex groups named after deforming bones as sparse (rows, cols, values), rows
+    normalised as Blender's Armature modifier does (it divides by the weight sum)."""
+    col_of_group: dict[int, int] = {}
+    for j, name in enumerate(bone_names):
+        g = obj.vertex_groups.get(name)
+        if g is not None and deform[j]:
+            col_of_group[g.index] = j
+    rows: list[int] = []
+    cols: list[int] = []
+    vals: list[float] = []
+    for v in obj.data.vertices:
+        for ge in v.groups:
+            j = col_of_group.get(ge.group)
+            if j is not None and ge.weight > 0.0:
+                rows.append(v.index)
+                cols.append(j)
+                vals.append(ge.weight)
+    r = np.array(rows, dtype=np.int64)
+    c = np.array(cols, dtype=np.int64)
+    w = np.array(vals, dtype=F64)
+    sums = np.bincount(r, weights=w, minlength=len(obj.data.vertices))
+    if len(r):
+        w = w / sums[r]
+    return r, c, w
+
+
+class SparseWeights:
+    """The duck-typed sparse matrix cagerig accepts (``tocoo()`` → shape, row, col, data)."""
+
+    def __init__(self, shape: tuple[int, int], row: np.ndarray, col: np.ndarray, data: np.ndarray):
+        self.shape = shape
+        self.row = row
+        self.col = col
+        self.data = data
+
+    def tocoo(self) -> SparseWeights:
+        return self
+
+
+def rest_skeleton(arm: bpy.types.Object) -> tuple[list[str], np.ndarray, np.ndarray, list[bool]]:
+    """Bone names, rest heads in world space (J, 3), parent indices (-1 = root), deform flags.
+
+    Joint j of the rig is bone j of ``arm.data.bones`` (Blender lists parents before children)."""
+    bones = arm.data.bones
+    names = [b.name for b in bones]
+    index = {n: j for j, n in enumerate(names)}
+    heads = np.array([b.head_local[:] for b in bones], dtype=F64).reshape(-1, 3)
+    heads = _apply(matrix_np(arm.matrix_world), heads)
+    parents = np.array([index[b.parent.name] if b.parent else -1 for b in bones], dtype=np.int64)
+    deform = [bool(b.use_deform) for b in bones]
+    return names, heads, parents, deform
+
+
+def skinning_transforms(arm: bpy.types.Object) -> np.ndarray:
+    """World-space skinning transforms of the bones, K_j = A·P_j·B_j⁻¹·A⁻¹ (J, 4, 4), where A is
+    the armature's matrix_world, P_j the pose matrix and B_j the rest matrix (what the Armature
+    modifier applies). Only meaningful while the armature shows its pose (in Rest Position Blender
+    evaluates the pose bones at rest)."""
+    a = matrix_np(arm.matrix_world)
+    a_inv = np.linalg.inv(a)
+    out = np.empty((len(arm.data.bones), 4, 4), dtype=F64)
+    for j, bone in enumerate(arm.data.bones):
+        pb = arm.pose.bones[bone.name]
+        k = matrix_np(pb.matrix) @ np.linalg.inv(matrix_np(bone.matrix_local))
+        out[j] = a @ k @ a_inv
+    return out
+
+
+def _quat_xyzw(r: np.ndarray) -> np.ndarray:
+    """A rotation matrix (nearest, by polar decomposition) as a quaternion x, y, z, w."""
+    u, _, vt = np.linalg.svd(r)
+    rot = u @ vt
+    if np.linalg.det(rot) < 0:  # a mirroring scale: not a rotation; keep the proper part
+        u[:, -1] *= -1
+        rot = u @ vt
+    q = Matrix(rot.tolist()).to_quaternion()  # w, x, y, z
+    return np.array([q.x, q.y, q.z, q.w], dtype=F64)
+
+
+class PoseMismatch(Exception):
+    """The Blender pose holds something the rig's pose model (rotations about the joints plus
+    root motion) cannot represent."""
+
+
+def cagerig_pose(
+    transforms: np.ndarray, rest_heads: np.ndarray, parents: np.ndarray, tolerance: float
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Blender's skinning transforms as cagerig's pose: local rotations (J, 4) xyzw in world
+    axes (G_j = G_parent·L_j) and root motion (J, 3). Returns also what does not fit the model
+    (scale, a non-root bone moved off its parent), as messages."""
+    nj = len(transforms)
+    g = np.empty((nj, 3, 3), dtype=F64)
+    problems: list[str] = []
+    for j in range(nj):
+        m = transforms[j, :3, :3]
+        u, s, vt = np.linalg.svd(m)
+        g[j] = u @ vt
+        if np.max(np.abs(s - 1.0)) > 1e-4:
+            problems.append(f"joint {j} is scaled in the pose (×{s.min():.4g}…{s.max():.4g})")
+    locals_q = np.empty((nj, 4), dtype=F64)
+    motion = np.zeros((nj, 3), dtype=F64)
+    for j in range(nj):
+        p = parents[j]
+        if p < 0:
+            locals_q[j] = _quat_xyzw(g[j])
+            head = rest_heads[j]
+            motion[j] = transforms[j, :3, :3] @ head + transforms[j, :3, 3] - head
+        else:
+            locals_q[j] = _quat_xyzw(g[p].T @ g[j])
+            head = rest_heads[j]
+            own = transforms[j, :3, :3] @ head + transforms[j, :3, 3]
+            via_parent = transforms[p, :3, :3] @ head + transforms[p, :3, 3]
+            if np.linalg.norm(own - via_parent) > tolerance:
+                problems.append(f"joint {j} is moved off its parent in the pose")
+    return locals_q, motion, problems

@@ -1,0 +1,352 @@
+"""The coupling at run time: one cagerig.Rig per coupled skin, kept in step with Blender.
+
+Where each state lives (docs/blender.md):
+
+* the skin's mesh data holds the rest skin M (Blender's Armature modifier poses it into M');
+* the armature's bones hold the rest skeleton S, its pose bones the pose S';
+* the cage object's mesh data holds C' while the armature shows its pose, C in Rest Position;
+* the Rig holds all six; the .blend holds the binding and C (store.py).
+
+A sync compares what Blender shows with what the add-on last wrote and runs the paper's chain
+for what changed: a pose change → set_pose (skinning, CageUp) → C' written into the cage; a
+posed-cage edit → move_posed_cage (CageRev, SkelUp) → M into the skin, S into the bones; a
+rest-cage edit (Rest Position) → move_rest_cage (M = Φ·C, SkelUp) → M and S written.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+
+from . import convert, store
+
+# Base rigs (Φ, MaxVol, Ψ computed) by bind id: reopening or undoing copies one instead of
+# recomputing the coordinates.
+_base_rigs: dict[str, object] = {}
+_couplings: dict[str, Coupling] = {}
+_busy = False
+
+
+class SyncError(Exception):
+    """A sync could not run; the message says what the user should do."""
+
+
+def armature_of(skin: bpy.types.Object) -> tuple[bpy.types.Object, bpy.types.ArmatureModifier]:
+    """The skin's Armature modifier and its armature object, or SyncError saying what is wrong."""
+    mods = [m for m in skin.modifiers if m.type == "ARMATURE"]
+    if not mods:
+        raise SyncError(f"{skin.name!r} has no Armature modifier: add one that points at the armature")
+    mod = mods[0]
+    if mod.object is None or mod.object.type != "ARMATURE":
+        raise SyncError(f"the Armature modifier of {skin.name!r} has no armature object set")
+    return mod.object, mod
+
+
+def cage_of(skin: bpy.types.Object) -> bpy.types.Object:
+    cage = skin.cagerig.cage
+    if cage is None:
+        raise SyncError(f"{skin.name!r} has no cage object (it was deleted?): couple again")
+    return cage
+
+
+@dataclass
+class Coupling:
+    skin_name: str
+    bind_id: str
+    rig: object  # cagerig.Rig
+    parents: np.ndarray
+    rest_heads: np.ndarray  # S as last written into the bones (world)
+    last_cage: np.ndarray  # the cage as last written / seen (world, float32-rounded)
+    last_transforms: tuple[np.ndarray, np.ndarray] | None  # last pose set (rotations, motion)
+    last_mode: str
+    bones_pending: bool = False
+    last_sync_ms: float = 0.0
+    messages: list[str] = field(default_factory=list)
+
+
+def _base_rig(b: store.Binding) -> object:
+    import cagerig
+
+    rig = _base_rigs.get(b.bind_id)
+    if rig is None:
+        n, nj = len(b.mesh), len(b.joints)
+        weights = convert.SparseWeights((n, nj), b.weight_rows, b.weight_cols, b.weight_values)
+        rig = cagerig.Rig.from_arrays(
+            b.mesh, b.triangles, weights, b.joints, b.parents, b.cage, b.cage_triangles,
+            b.names, skinning=b.skinning,
+        )
+        _base_rigs[b.bind_id] = rig
+    return rig.copy()
+
+
+def build_rig(b: store.Binding) -> object:
+    """The rig in the stored state: the bind-time rig with the stored rest cage applied."""
+    rig = _base_rig(b)
+    delta = b.rest_cage - b.cage
+    moved = np.flatnonzero(np.any(delta != 0.0, axis=1))
+    if len(moved):
+        rig.move_rest_cage(moved, delta[moved])
+    return rig
+
+
+def forget(skin_name: str | None = None) -> None:
+    """Drops the run-time state (all of it, or one skin's); the next sync rebuilds it."""
+    if skin_name is None:
+        _couplings.clear()
+    else:
+        _couplings.pop(skin_name, None)
+
+
+def forget_bases() -> None:
+    _base_rigs.clear()
+
+
+def displayed_cage(cage: bpy.types.Object) -> np.ndarray:
+    edit = convert.edit_mode_world_coords(cage)
+    return edit if edit is not None else convert.world_coords(cage)
+
+
+def coupling(skin: bpy.types.Object) -> Coupling:
+    """The run-time coupling of ``skin``, rebuilt from the stored binding when missing (file
+    opened, undo). A rebuilt coupling takes the cage as Blender shows it for a user edit, so
+    that the next sync brings everything into step."""
+    c = _couplings.get(skin.name)
+    if c is not None and c.bind_id == store.bind_id(skin):
+        return c
+    b = store.load(skin)
+    arm, _ = armature_of(skin)
+    rig = build_rig(b)
+    mode = arm.data.pose_position
+    if mode == "POSE":
+        t = convert.skinning_transforms(arm)
+        q, motion, _ = convert.cagerig_pose(t, rig.rest_joints, b.parents, _tolerance(rig))
+        rig.set_pose(q, motion)
+        pose: tuple[np.ndarray, np.ndarray] | None = (q, motion)
+        shown = rig.posed_cage
+    else:
+        pose = None
+        shown = rig.rest_cage
+    c = Coupling(
+        skin_name=skin.name,
+        bind_id=b.bind_id,
+        rig=rig,
+        parents=b.parents,
+        rest_heads=rig.rest_joints,
+        last_cage=convert.as_displayed(cage_of(skin), shown),
+        last_transforms=pose,
+        last_mode=mode,
+    )
+    _couplings[skin.name] = c
+    return c
+
+
+_tolerances: dict[int, float] = {}
+
+
+def _tolerance(rig: object) -> float:
+    """1e-6 of the rest skin's bounding-box diagonal (cached per rig: reading M copies it)."""
+    t = _tolerances.get(id(rig))
+    if t is None:
+        m = rig.rest_mesh
+        t = 1e-6 * float(np.linalg.norm(m.max(axis=0) - m.min(axis=0)))
+        if len(_tolerances) > 64:
+            _tolerances.clear()
+        _tolerances[id(rig)] = t
+    return t
+
+
+def _mode_set(mode: str) -> None:
+    """object.mode_set without an undo step and without the full view-layer evaluation that
+    ``bpy.ops`` runs before and after every call from Python (at 133k vertices that is two
+    evaluations of the skin per call). Falls back to ``bpy.ops`` where the low-level call differs."""
+    try:
+        from _bpy import ops as _ops  # type: ignore[import-not-found]
+
+        _ops.call("OBJECT_OT_mode_set", None, {"mode": mode}, "EXEC_DEFAULT", False)
+    except (ImportError, TypeError, AttributeError):
+        bpy.ops.object.mode_set("EXEC_DEFAULT", False, mode=mode)
+
+
+def write_rest_bones(arm: bpy.types.Object, heads_world: np.ndarray) -> None:
+    """Moves the rest bones' heads to ``heads_world`` (SkelUp's S) keeping each bone's
+    orientation and length, so that the pose's local rotations mean what they meant. Bones are
+    disconnected where needed (a connected child's head is its parent's tail). Enters the
+    armature's Edit Mode for this and restores the previous mode and active object."""
+    a_inv = np.linalg.inv(convert.matrix_np(arm.matrix_world))
+    local = heads_world @ a_inv[:3, :3].T + a_inv[:3, 3]
+    view_layer = bpy.context.view_layer
+    prev_active = view_layer.objects.active
+    prev_mode = arm.mode
+    hidden = arm.hide_get()
+    if hidden:
+        arm.hide_set(False)
+    try:
+        view_layer.objects.active = arm
+        with bpy.context.temp_override(active_object=arm, object=arm, edit_object=None):
+            _mode_set("EDIT")
+        ebones = arm.data.edit_bones
+        names = [b.name for b in arm.data.bones]
+        for eb in ebones:
+            eb.use_connect = False
+        for j, name in enumerate(names):
+            eb = ebones[name]
+            d = eb.tail - eb.head
+            eb.head = local[j]
+            eb.tail = eb.head + d
+        with bpy.context.temp_override(active_object=arm, object=arm, edit_object=arm):
+            _mode_set(prev_mode if prev_mode != "EDIT" else "OBJECT")
+    finally:
+        view_layer.objects.active = prev_active
+        if hidden:
+            arm.hide_set(True)
+
+
+def sync(skin: bpy.types.Object) -> bool:
+    """Runs one sync of ``skin``'s coupling; True when something was written."""
+    global _busy
+    if _busy:
+        return False
+    _busy = True
+    try:
+        return _sync(skin)
+    finally:
+        _busy = False
+
+
+def _sync(skin: bpy.types.Object) -> bool:
+    start = time.perf_counter()
+    arm, _mod = armature_of(skin)
+    cage = cage_of(skin)
+    c = coupling(skin)
+    rig = c.rig
+    if arm.mode == "EDIT":
+        return False  # the user is editing the bones: Blender's rest data is in flux
+    shown = displayed_cage(cage)
+    if shown.shape != c.last_cage.shape:
+        raise SyncError(
+            f"the cage {cage.name!r} has {len(shown)} vertices, it had {len(c.last_cage)} when coupled: "
+            "couple again after changing its topology"
+        )
+    mode = arm.data.pose_position
+    cage_in_edit = cage.mode == "EDIT"
+    wrote = False
+    rest_changed = False
+    if mode != c.last_mode:
+        # Pose Position <-> Rest Position: the cage shows the other state.
+        if mode == "POSE":
+            _set_pose_from(arm, c)
+            target = rig.posed_cage
+        else:
+            target = rig.rest_cage
+        c.last_mode = mode
+        c.last_cage = _write_cage(cage, target) if not cage_in_edit else shown
+        wrote = True
+    elif mode == "POSE":
+        changed = np.flatnonzero(np.any(shown != c.last_cage, axis=1))
+        moved_by = shown[changed] - c.last_cage[changed]
+        pose_changed = _set_pose_from(arm, c)
+        if len(changed):
+            # A grab lands where the user put the vertices; with a pose change in the same
+            # update (rare), the user's displacement is applied to the new C'.
+            offsets = moved_by if pose_changed else shown[changed] - rig.posed_cage[changed]
+            rig.move_posed_cage(changed, offsets)
+            rest_changed = True
+        if pose_changed or rest_changed:
+            if cage_in_edit:
+                c.last_cage = shown
+            else:
+                c.last_cage = _write_cage(cage, rig.posed_cage)
+            wrote = True
+    else:
+        changed = np.flatnonzero(np.any(shown != c.last_cage, axis=1))
+        if len(changed):
+            rig.move_rest_cage(changed, shown[changed] - rig.rest_cage[changed])
+            c.last_cage = shown.copy()
+            rest_changed = True
+            wrote = True
+    if rest_changed:
+        convert.write_world_coords(skin, rig.rest_mesh)
+        store.save_rest_cage(skin, rig.rest_cage)
+        c.bones_pending = True
+    if c.bones_pending and not cage_in_edit:
+        try:
+            write_rest_bones(arm, rig.rest_joints)
+        except RuntimeError as e:  # mode_set refused: the armature is not editable here
+            raise SyncError(
+                f"could not write SkelUp's rest bones into {arm.name!r} ({e}); is it in the view layer and "
+                "editable? They will be written at the next sync"
+            ) from None
+        c.rest_heads = rig.rest_joints
+        c.bones_pending = False
+        wrote = True
+    if wrote:
+        c.last_sync_ms = 1000.0 * (time.perf_counter() - start)
+    return wrote
+
+
+def _write_cage(cage: bpy.types.Object, world: np.ndarray) -> np.ndarray:
+    """Writes the cage and returns it as read back (float32-rounded, through matrix_world), so
+    that the next comparison with what Blender shows is exact."""
+    convert.write_world_coords(cage, world)
+    return convert.world_coords(cage)
+
+
+def _set_pose_from(arm: bpy.types.Object, c: Coupling) -> bool:
+    """Reads Blender's pose; when it changed, sets it on the rig (skinning + CageUp).
+
+    Compared as cagerig's pose (local rotations, root motion), not as Blender's matrices: after
+    SkelUp rewrites the rest bones Blender's matrices change by float32 rounding alone."""
+    rig = c.rig
+    t = convert.skinning_transforms(arm)
+    q, motion, problems = convert.cagerig_pose(t, rig.rest_joints, c.parents, _tolerance(rig))
+    if c.last_transforms is not None:
+        q0, m0 = c.last_transforms
+        same_q = np.all(np.minimum(np.abs(q - q0).max(axis=1), np.abs(q + q0).max(axis=1)) < 1e-7)
+        if same_q and np.abs(motion - m0).max() <= _tolerance(rig):
+            return False
+    rig.set_pose(q, motion)
+    c.last_transforms = (q, motion)
+    c.messages = problems
+    return True
+
+
+_last_errors: dict[str, str] = {}
+
+
+def sync_all(scene: bpy.types.Scene, updated: set[int] | None = None) -> None:
+    """Live sync of every coupled skin in the scene. ``updated``: pointers of the IDs the
+    depsgraph update touched (None: sync all); a coupling none of whose objects (skin, armature,
+    cage, their data) changed is skipped. Errors are kept for the panel and printed once."""
+    for obj in scene.objects:
+        if not store.is_coupled(obj) or not obj.cagerig.live:
+            continue
+        if updated is not None and not _touched(obj, updated):
+            continue
+        try:
+            sync(obj)
+            _last_errors.pop(obj.name, None)
+        except (SyncError, ValueError) as e:
+            c = _couplings.get(obj.name)
+            if c is not None:
+                c.messages = [str(e)]
+            if _last_errors.get(obj.name) != str(e):
+                _last_errors[obj.name] = str(e)
+                print(f"cagerig: {e}")
+
+
+def _touched(skin: bpy.types.Object, updated: set[int]) -> bool:
+    ids: list[bpy.types.ID] = [skin, skin.data]
+    cage = skin.cagerig.cage
+    if cage is not None:
+        ids += [cage, cage.data]
+    for m in skin.modifiers:
+        if m.type == "ARMATURE" and m.object is not None:
+            ids += [m.object, m.object.data]
+    return any(i.as_pointer() in updated for i in ids)
+
+
+def status(skin: bpy.types.Object) -> Coupling | None:
+    return _couplings.get(skin.name)

@@ -1,0 +1,422 @@
+"""Headless checks of the cagerig add-on on the paper's Arm, run inside Blender by run.sh:
+
+    blender -b --factory-startup --python-exit-code 1 --python blender/tests/test_addon.py -- \
+        ZIP ARM_GLB ARM_CAGE_OBJ WORKDIR
+
+Installs the zip and enables the add-on, imports the Arm (glTF) and its cage (OBJ), couples,
+then checks the three interactions against Blender's own evaluation, save/reopen, undo, bake,
+the error reports, and the same edits through the cagerig Python package (what `cagerig edit`
+computes). Every check prints its measured error; the first failure raises (exit code 1).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+
+import bpy
+import numpy as np
+
+argv = sys.argv[sys.argv.index("--") + 1:]
+ZIP, ARM_GLB, ARM_CAGE, WORK = argv[:4]
+TOL = 1e-5  # of the bounding-box diagonal
+
+results: list[str] = []
+
+
+def check(name: str, ok: bool, detail: str) -> None:
+    line = f"{'ok  ' if ok else 'FAIL'} {name}: {detail}"
+    print(line, flush=True)
+    results.append(line)
+    if not ok:
+        raise AssertionError(line)
+
+
+# ---- install + enable ---------------------------------------------------------------------------
+bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
+bpy.ops.preferences.addon_enable(module="cagerig_blender")
+import cagerig  # noqa: E402  (importable once the add-on is enabled)
+from cagerig_blender import convert, engine, store  # noqa: E402
+
+check("import cagerig", hasattr(cagerig.Rig, "from_arrays"), f"cagerig {cagerig.__version__} from {cagerig.__file__}")
+
+# Debian's Blender 3.4 glTF importer uses numpy.bool, removed in numpy 1.24.
+if "bool" not in np.__dict__:
+    np.bool = bool  # type: ignore[attr-defined]
+
+
+def update() -> None:
+    bpy.context.view_layer.update()
+
+
+def world(obj: bpy.types.Object) -> np.ndarray:
+    return convert.world_coords(obj)
+
+
+def deformed_skin(obj: bpy.types.Object) -> np.ndarray:
+    dg = bpy.context.evaluated_depsgraph_get()
+    ev = obj.evaluated_get(dg)
+    me = ev.to_mesh()
+    try:
+        return convert.world_coords(obj, me)
+    finally:
+        ev.to_mesh_clear()
+
+
+def bone_heads(arm: bpy.types.Object) -> np.ndarray:
+    return convert.rest_skeleton(arm)[1]
+
+
+def load_arm() -> tuple[bpy.types.Object, bpy.types.Object, bpy.types.Object]:
+    for o in list(bpy.data.objects):  # an empty scene (read_factory_settings would disable the add-on)
+        bpy.data.objects.remove(o)
+    bpy.ops.import_scene.gltf(filepath=ARM_GLB)
+    skin = next(o for o in bpy.data.objects if o.type == "MESH" and any(m.type == "ARMATURE" for m in o.modifiers))
+    arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+    # The glb carries the cage as a node too; the test uses the cage OBJ, as a user would.
+    for o in list(bpy.data.objects):
+        if o.type == "MESH" and o is not skin:
+            bpy.data.objects.remove(o)
+    bpy.ops.wm.obj_import(filepath=ARM_CAGE)
+    cage = bpy.context.selected_objects[0]
+    return skin, arm, cage
+
+
+def couple(skin: bpy.types.Object, cage: bpy.types.Object) -> None:
+    bpy.ops.object.select_all(action="DESELECT")
+    skin.select_set(True)
+    cage.select_set(True)
+    bpy.context.view_layer.objects.active = skin
+    bpy.ops.cagerig.couple()
+
+
+def rotate_bone(arm: bpy.types.Object, name: str, axis_world: np.ndarray, degrees: float) -> None:
+    """Rotates pose bone ``name`` about a world axis through its head (the armature is not
+    transformed in this test), composing with its current pose."""
+    from mathutils import Quaternion, Vector
+
+    pb = arm.pose.bones[name]
+    pb.rotation_mode = "QUATERNION"
+    # World rotation of the bone's frame in the pose: R_world · (pose frame) → new basis.
+    pose_rot = pb.matrix.to_3x3().normalized()
+    r = Quaternion(Vector(axis_world.tolist()), math.radians(degrees)).to_matrix()
+    basis_rot = pb.matrix_basis.to_3x3().normalized()
+    new_basis = basis_rot @ pose_rot.inverted() @ r @ pose_rot
+    pb.rotation_quaternion = new_basis.to_quaternion()
+
+
+def fit_row_error(skin: bpy.types.Object, cage: bpy.types.Object, c: engine.Coupling) -> float:
+    rows = c.rig.fit_rows
+    phi = np.asarray(c.rig.cage_coords)
+    shown = world(cage)
+    return float(np.abs(phi[rows] @ shown - deformed_skin(skin)[rows]).max())
+
+
+# ---- errors explained to the user ---------------------------------------------------------------
+skin, arm, cage = load_arm()
+diag = float(np.linalg.norm(world(skin).max(0) - world(skin).min(0)))
+print(f"Arm: {len(skin.data.vertices)} vertices, {len(arm.data.bones)} bones, "
+      f"cage {len(cage.data.vertices)}, diag {diag:.4g}")
+mod = next(m for m in skin.modifiers if m.type == "ARMATURE")
+mod.show_viewport = True
+saved_object = mod.object
+mod.object = None
+try:
+    couple(skin, cage)
+    check("no armature object refused", False, "Couple accepted a modifier without armature")
+except RuntimeError as e:
+    check("no armature object refused", "no armature object" in str(e), str(e).strip())
+mod.object = saved_object
+small = cage.copy()
+small.data = cage.data.copy()
+bpy.context.scene.collection.objects.link(small)
+centre = world(cage).mean(0)
+convert.write_world_coords(small, centre + 0.5 * (world(cage) - centre))
+try:
+    couple(skin, small)
+    check("cage not enclosing refused", False, "Couple accepted a cage at half size")
+except RuntimeError as e:
+    check("cage not enclosing refused", "does not enclose" in str(e) or "outside" in str(e), str(e).strip()[:200])
+pb0 = arm.pose.bones["wrist.R"]
+pb0.rotation_mode = "XYZ"
+pb0.rotation_euler = (0.3, 0.0, 0.0)
+try:
+    couple(skin, cage)
+    check("posed armature refused", False, "Couple accepted a posed armature")
+except RuntimeError as e:
+    check("posed armature refused", "is posed" in str(e), str(e).strip()[:160])
+pb0.rotation_euler = (0.0, 0.0, 0.0)
+pb0.rotation_mode = "QUATERNION"
+keyed = cage.copy()
+keyed.data = cage.data.copy()
+bpy.context.scene.collection.objects.link(keyed)
+keyed.shape_key_add(name="Basis")
+try:
+    couple(skin, keyed)
+    check("cage with shape keys refused", False, "Couple accepted a cage with shape keys")
+except RuntimeError as e:
+    check("cage with shape keys refused", "shape keys" in str(e), str(e).strip()[:160])
+keyed_mesh = keyed.data
+bpy.data.objects.remove(keyed)
+bpy.data.meshes.remove(keyed_mesh)
+check("refusals keep the skin uncoupled", not store.is_coupled(skin), "no binding stored")
+bpy.data.objects.remove(small)
+
+# ---- couple --------------------------------------------------------------------------------------
+rest_skin0 = world(skin)
+couple(skin, cage)
+check("couple", store.is_coupled(skin) and skin.cagerig.cage == cage, "binding stored with the skin")
+c = engine.coupling(skin)
+check("skin data untouched by couple", np.abs(world(skin) - rest_skin0).max() == 0.0, "rest skin as imported")
+
+# ---- the same edits through the Python package (what `cagerig edit` computes), step by step ---
+# Blender's importers turn glTF/OBJ's +Y up into +Z up: (x, y, z)_file = (x, z, -y)_Blender.
+to_file = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
+ref = cagerig.Rig.load(ARM_GLB, cage=ARM_CAGE, skinning="lbs")
+order = [ref.joint_names.index(n) for n in c.rig.joint_names]
+# Vertex order: the glTF importer keeps it when it does not split vertices; check it.
+e = float(np.abs(np.asarray(ref.rest_mesh) - rest_skin0 @ to_file.T).max())
+check("glTF import keeps the vertex order", e <= TOL * diag, f"rest skins agree row by row ({e / diag:.2e})")
+
+
+def compare_with_package(step: str) -> None:
+    for what, ours, theirs in (
+        ("rest skin M", world(skin) @ to_file.T, np.asarray(ref.rest_mesh)),
+        ("posed skin M'", deformed_skin(skin) @ to_file.T, np.asarray(ref.posed_mesh)),
+        ("rest cage C", np.asarray(c.rig.rest_cage) @ to_file.T, np.asarray(ref.rest_cage)),
+        ("posed cage C'", np.asarray(c.rig.posed_cage) @ to_file.T, np.asarray(ref.posed_cage)),
+        ("rest bones S", bone_heads(arm) @ to_file.T, np.asarray(ref.rest_joints)[order]),
+    ):
+        e = float(np.abs(ours - theirs).max())
+        check(f"{step}: same as the Python package: {what}", e <= TOL * diag, f"{e / diag:.2e}")
+
+
+# ---- 1. pose a bone: CageUp ---------------------------------------------------------------------
+JOINT = "lowerarm01.R"
+AXIS_BL = np.array([1.0, 0.0, 0.0])
+heads0 = bone_heads(arm)
+rotate_bone(arm, JOINT, AXIS_BL, 60.0)
+update()
+err = fit_row_error(skin, cage, c)
+check("pose: Φ_R·C' = Blender's deformed skin (fit rows)", err <= TOL * diag, f"{err / diag:.2e} of the diagonal")
+err_all = float(np.abs(np.asarray(c.rig.posed_mesh) - deformed_skin(skin)).max())
+check("pose: rig's M' = Blender's deformed skin (all rows)", err_all <= TOL * diag, f"{err_all / diag:.2e}")
+check("pose: cage shows C'", np.abs(world(cage) - c.rig.posed_cage).max() <= TOL * diag, "cage mesh = rig C'")
+ref.rotate_joint(JOINT, to_file @ AXIS_BL, 60.0)
+compare_with_package("pose")
+
+# ---- 2. move three posed-cage vertices: CageRev + SkelUp ----------------------------------------
+GRAB = [10, 13, 15]
+OFFSET_BL = np.array([-0.15, -0.05, 0.2]) * diag / 10
+before = world(cage)
+target = before.copy()
+target[GRAB] += OFFSET_BL
+m_inv = np.linalg.inv(convert.matrix_np(cage.matrix_world))
+for i in GRAB:
+    cage.data.vertices[i].co = (m_inv[:3, :3] @ target[i] + m_inv[:3, 3]).tolist()
+cage.data.update()
+update()
+after = world(cage)
+others = np.setdiff1d(np.arange(len(after)), GRAB)
+e_grab = float(np.abs(after[GRAB] - target[GRAB]).max())
+e_others = float(np.abs(after[others] - before[others]).max())
+check("grab: the three vertices stay where put", e_grab <= TOL * diag, f"{e_grab / diag:.2e}")
+check("grab: the other cage vertices stay", e_others <= TOL * diag, f"{e_others / diag:.2e}")
+err = fit_row_error(skin, cage, c)
+check("grab: Φ_R·C' = Blender's new deformed skin", err <= TOL * diag, f"{err / diag:.2e}")
+moved = float(np.abs(bone_heads(arm) - heads0).max())
+check("grab: rest bones moved (SkelUp)", moved > 1e-4 * diag, f"max head move {moved / diag:.2e} of the diagonal")
+e_bones = float(np.abs(bone_heads(arm) - c.rig.rest_joints).max())
+check("grab: rest bones = rig's S", e_bones <= TOL * diag, f"{e_bones / diag:.2e}")
+e_m = float(np.abs(world(skin) - c.rig.rest_mesh).max())
+check("grab: skin mesh data = rig's M", e_m <= TOL * diag, f"{e_m / diag:.2e}")
+ref.move_posed_cage(GRAB, (to_file @ OFFSET_BL)[None, :].repeat(len(GRAB), 0))
+compare_with_package("grab")
+check("grab: sync time", True, f"{c.last_sync_ms:.2f} ms (last sync, in the handler)")
+
+# ---- 3. Rest Position: move rest-cage vertices --------------------------------------------------
+arm.data.pose_position = "REST"
+update()
+check("rest position: cage shows C", np.abs(world(cage) - c.rig.rest_cage).max() <= TOL * diag, "cage mesh = rig C")
+REST_MOVE = [0, 2, 4, 5, 6]
+REST_OFFSET_BL = np.array([0.2, -0.15, -0.1]) * diag / 10
+heads1 = bone_heads(arm)
+target = world(cage)
+target[REST_MOVE] += REST_OFFSET_BL
+for i in REST_MOVE:
+    cage.data.vertices[i].co = (m_inv[:3, :3] @ target[i] + m_inv[:3, 3]).tolist()
+cage.data.update()
+update()
+phi = np.asarray(c.rig.cage_coords)
+e_rest = float(np.abs(world(skin) - phi @ world(cage)).max())
+check("rest edit: skin mesh data = Φ·C", e_rest <= TOL * diag, f"{e_rest / diag:.2e}")
+moved = float(np.abs(bone_heads(arm) - heads1).max())
+check("rest edit: bones moved (SkelUp)", moved > 1e-4 * diag, f"max head move {moved / diag:.2e}")
+e_bones = float(np.abs(bone_heads(arm) - c.rig.rest_joints).max())
+check("rest edit: rest bones = rig's S", e_bones <= TOL * diag, f"{e_bones / diag:.2e}")
+ref.move_rest_cage(REST_MOVE, (to_file @ REST_OFFSET_BL)[None, :].repeat(len(REST_MOVE), 0))
+arm.data.pose_position = "POSE"
+update()
+compare_with_package("rest edit, back in the pose")
+err = fit_row_error(skin, cage, c)
+check("back to pose: Φ_R·C' = Blender's deformed skin", err <= TOL * diag, f"{err / diag:.2e}")
+
+# ---- save, reopen, sync again -------------------------------------------------------------------
+path = os.path.join(WORK, "arm_coupled.blend")
+snapshot = {"cage": world(cage), "skin": world(skin), "heads": bone_heads(arm)}
+names = (skin.name, arm.name)
+bpy.ops.wm.save_as_mainfile(filepath=path)
+bpy.ops.wm.open_mainfile(filepath=path)
+skin, arm = (bpy.data.objects[n] for n in names)
+cage = skin.cagerig.cage
+check("reopen: binding survived", store.is_coupled(skin) and cage is not None, f"cage {cage.name if cage else None}")
+t0 = time.perf_counter()
+c = engine.coupling(skin)
+rebuild_ms = 1000 * (time.perf_counter() - t0)
+e = max(float(np.abs(np.asarray(c.rig.posed_cage) - snapshot["cage"]).max()),
+        float(np.abs(np.asarray(c.rig.rest_mesh) - snapshot["skin"]).max()),
+        float(np.abs(np.asarray(c.rig.rest_joints) - snapshot["heads"]).max()))
+check("reopen: rebuilt rig = state before saving", e <= TOL * diag, f"{e / diag:.2e} (rebuild {rebuild_ms:.0f} ms)")
+rotate_bone(arm, "upperarm02.R", np.array([0.0, 1.0, 0.0]), 25.0)
+update()
+err = fit_row_error(skin, cage, c)
+check("reopen: pose syncs (Φ_R·C' = deformed skin)", err <= TOL * diag, f"{err / diag:.2e}")
+cage.data.vertices[20].co.z += 0.02 * diag
+cage.data.update()
+update()
+err = fit_row_error(skin, cage, c)
+check("reopen: grab syncs (Φ_R·C' = deformed skin)", err <= TOL * diag, f"{err / diag:.2e}")
+
+# ---- a cage edit in Edit Mode: synced live (skin), bones when leaving Edit Mode -------------------
+import bmesh  # noqa: E402
+
+bpy.ops.object.select_all(action="DESELECT")
+cage.select_set(True)
+bpy.context.view_layer.objects.active = cage
+bpy.ops.object.mode_set(mode="EDIT")
+bm = bmesh.from_edit_mesh(cage.data)
+bm.verts.ensure_lookup_table()
+rest_skin_before = world(skin)
+bm.verts[30].co.z -= 0.02 * diag
+bmesh.update_edit_mesh(cage.data)
+update()
+e = float(np.abs(world(skin) - rest_skin_before).max())
+check("edit mode: rest skin updated live", e > 1e-6 * diag, f"rest skin moved by {e / diag:.2e}")
+bpy.ops.object.mode_set(mode="OBJECT")
+update()
+err = fit_row_error(skin, cage, c)
+check("edit mode: after leaving it, Φ_R·C' = deformed skin", err <= TOL * diag, f"{err / diag:.2e}")
+e_bones = float(np.abs(bone_heads(arm) - c.rig.rest_joints).max())
+check("edit mode: rest bones = rig's S after leaving it", e_bones <= TOL * diag, f"{e_bones / diag:.2e}")
+bpy.context.view_layer.objects.active = skin
+
+# ---- undo ---------------------------------------------------------------------------------------
+# Background Blender keeps an undo stack when pushed explicitly; Ctrl+Z runs ed.undo.
+try:
+    bpy.ops.ed.undo_push(message="before grab")
+    before_cage = world(cage)
+    before_store = store.load(skin).rest_cage
+    cage.data.vertices[21].co.x += 0.03 * diag
+    cage.data.update()
+    update()
+    bpy.ops.ed.undo_push(message="grab")
+    skin_name = skin.name
+    bpy.ops.ed.undo()
+    update()
+    skin = bpy.data.objects[skin_name]
+    cage = skin.cagerig.cage
+    c = engine.coupling(skin)
+    e1 = float(np.abs(world(cage) - before_cage).max())
+    e2 = float(np.abs(store.load(skin).rest_cage - before_store).max())
+    err = fit_row_error(skin, cage, c)
+    check("undo: cage and stored C restored", e1 <= TOL * diag and e2 <= TOL * diag,
+          f"{e1 / diag:.2e}, {e2 / diag:.2e}")
+    check("undo: consistent after undo (Φ_R·C' = deformed skin)", err <= TOL * diag, f"{err / diag:.2e}")
+except RuntimeError as e:
+    print(f"skip undo: {e}")
+    results.append(f"skip undo: {e}")
+
+# ---- bake ---------------------------------------------------------------------------------------
+scene = bpy.context.scene
+scene.frame_start, scene.frame_end = 1, 5
+arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+pb = arm.pose.bones[JOINT]
+pb.rotation_mode = "QUATERNION"
+q0 = pb.rotation_quaternion.copy()
+from mathutils import Quaternion  # noqa: E402
+
+for f, deg in ((1, 0.0), (5, 40.0)):
+    pb.rotation_quaternion = q0 @ Quaternion((1.0, 0.0, 0.0), math.radians(deg))
+    pb.keyframe_insert("rotation_quaternion", frame=f)
+scene.frame_set(3)  # the frame-change handler syncs (no explicit call)
+err = fit_row_error(skin, cage, c)
+check("animation: at frame 3, Φ_R·C' = deformed skin", err <= TOL * diag, f"{err / diag:.2e}")
+live_cage_f3 = world(cage)
+bpy.context.view_layer.objects.active = skin
+bpy.ops.cagerig.bake()
+keys = cage.data.shape_keys.key_blocks if cage.data.shape_keys else []
+check("bake: one shape key per frame", len(keys) == 6, f"{len(keys)} keys (basis + 5)")
+scene.frame_set(3)
+dg = bpy.context.evaluated_depsgraph_get()
+ev = cage.evaluated_get(dg)
+baked = convert.world_coords(cage, ev.data)
+e = float(np.abs(baked - live_cage_f3).max())
+check("bake: the baked cage at frame 3 = the live sync's", e <= TOL * diag, f"{e / diag:.2e}")
+check("bake: live sync off", not skin.cagerig.live, "skin.cagerig.live = False")
+
+# ---- Preserve Volume = DQS --------------------------------------------------------------------
+for sk in list(cage.data.shape_keys.key_blocks)[::-1] if cage.data.shape_keys else []:
+    cage.shape_key_remove(sk)
+arm.animation_data_clear()
+skin.cagerig.live = True
+arm.data.pose_position = "REST"  # the cage shows C: the rest cage to couple again with
+update()
+bpy.context.view_layer.objects.active = skin
+bpy.ops.cagerig.uncouple()
+check("uncouple", not store.is_coupled(skin), "binding removed, state kept")
+arm.data.pose_position = "POSE"
+mod = next(m for m in skin.modifiers if m.type == "ARMATURE")
+mod.use_deform_preserve_volume = True
+for p in arm.pose.bones:
+    p.rotation_quaternion = (1.0, 0.0, 0.0, 0.0)
+update()
+couple(skin, cage)
+c = engine.coupling(skin)
+check("preserve volume couples as DQS", c.rig.skinning == "dqs", c.rig.skinning)
+rotate_bone(arm, JOINT, AXIS_BL, 70.0)
+rotate_bone(arm, "wrist.R", np.array([0.0, 0.0, 1.0]), 30.0)
+update()
+e = float(np.abs(np.asarray(c.rig.posed_mesh) - deformed_skin(skin)).max())
+check("DQS: rig's M' = Blender's Preserve Volume skin", e <= TOL * diag, f"{e / diag:.2e}")
+rows = c.rig.fit_rows
+ghost = cagerig.lbs(c.rig.rest_mesh, c.rig.skin_weights, c.rig.skinning_transforms)
+e = float(np.abs(np.asarray(c.rig.cage_coords)[rows] @ world(cage) - ghost[rows]).max())
+check("DQS: Φ_R·C' = the LBS ghost of the fitting rows", e <= TOL * diag, f"{e / diag:.2e}")
+
+# ---- Generate Cage, then couple with it ---------------------------------------------------------
+arm.data.pose_position = "REST"
+update()
+bpy.context.view_layer.objects.active = skin
+bpy.ops.cagerig.uncouple()
+arm.data.pose_position = "POSE"
+mod.use_deform_preserve_volume = False  # LBS: Φ_R·C' fits the displayed skin (DQS: its LBS ghost)
+for p in arm.pose.bones:
+    p.rotation_quaternion = (1.0, 0.0, 0.0, 0.0)
+update()
+bpy.ops.object.select_all(action="DESELECT")
+skin.select_set(True)
+bpy.context.view_layer.objects.active = skin
+bpy.ops.cagerig.generate_cage(vertices=80)
+generated = skin.cagerig.cage
+check("generate cage", generated is not None and generated != cage and 40 <= len(generated.data.vertices) <= 200,
+      f"{generated.name if generated else None}: {len(generated.data.vertices) if generated else 0} vertices")
+couple(skin, generated)
+c = engine.coupling(skin)
+rotate_bone(arm, JOINT, AXIS_BL, 45.0)
+update()
+err = fit_row_error(skin, generated, c)
+check("generated cage: Φ_R·C' = deformed skin after a pose", err <= TOL * diag, f"{err / diag:.2e}")
+
+print("\n".join(["", "summary:"] + results))
