@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod animation;
+pub mod auto_weights;
 pub mod cage;
 pub mod cage_coords;
 pub mod cage_enclosure;
