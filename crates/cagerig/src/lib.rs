@@ -39,6 +39,7 @@ pub mod sync;
 #[cfg(test)]
 mod test_random;
 mod vector_registers;
+pub mod weights_source;
 
 pub use cage_coords::CageCoords;
 pub use error::{RigError, Warning};

@@ -37,9 +37,9 @@ use voxel_grid::VoxelGrid;
 /// Default most influences per vertex (as glTF's `JOINTS_0`).
 pub const DEFAULT_MAX_INFLUENCES: usize = 4;
 /// Default voxels along the longest side of the mesh's box.
-pub const DEFAULT_RESOLUTION: usize = 160;
+pub const DEFAULT_RESOLUTION: usize = 128;
 /// Default falloff exponent p of `w ∝ (d_min / d)^p`.
-pub const DEFAULT_EXPONENT: f64 = 4.0;
+pub const DEFAULT_EXPONENT: f64 = 8.0;
 /// Most voxels a grid may have (a few bytes each).
 pub const MAX_VOXELS: usize = 64 << 20;
 
