@@ -70,6 +70,7 @@ struct WeightsOutput<'a> {
     voxel_grid: [usize; 3],
     voxel_size: f64,
     solid_voxels: usize,
+    capped_holes: usize,
     straight_distance_vertices: usize,
     warnings: Vec<String>,
     seconds: f64,
@@ -209,6 +210,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         dims,
         spacing,
         solid_voxels,
+        capped_holes,
         deforming_joints,
         straight_distance_vertices,
         warnings,
@@ -229,6 +231,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         voxel_grid: *dims,
         voxel_size: *spacing,
         solid_voxels: *solid_voxels,
+        capped_holes: *capped_holes,
         straight_distance_vertices: *straight_distance_vertices,
         warnings: warnings.iter().map(ToString::to_string).collect(),
         seconds,
@@ -256,8 +259,13 @@ fn print_report(o: &WeightsOutput) {
         println!("no weight      {}", o.static_joints.join(", "));
     }
     println!(
-        "voxels         {}×{}×{} grid, voxel size {:.4}, {} solid",
-        o.voxel_grid[0], o.voxel_grid[1], o.voxel_grid[2], o.voxel_size, o.solid_voxels
+        "voxels         {}×{}×{} grid, voxel size {:.4}, {} solid ({} holes capped)",
+        o.voxel_grid[0],
+        o.voxel_grid[1],
+        o.voxel_grid[2],
+        o.voxel_size,
+        o.solid_voxels,
+        o.capped_holes
     );
     let counts: Vec<String> = o
         .influences_histogram

@@ -1,9 +1,10 @@
 //! Automatic skinning weights Ω (`#V × #J`) from a mesh and a skeleton, computed in the volume.
 //!
 //! Method (geodesic voxel binding, Dionne & de Lasa, SCA 2013):
-//! 1. [`voxel_grid`] — voxelise the mesh's surface triangle by triangle and fill what it
-//!    encloses (closing small holes; a cage's interior, when given, is part of the volume), so
-//!    triangle soups, several pieces, non-manifold edges and holes all work;
+//! 1. [`hole_caps`], [`voxel_grid`] — cap the mesh's holes (up to a fraction of its size),
+//!    voxelise its surface triangle by triangle and fill what it encloses (closing small gaps;
+//!    a cage's interior, when given, is part of the volume), so triangle soups, several
+//!    pieces, non-manifold edges and holes all work;
 //! 2. [`bones`] — the deforming joints and their bone segments (joint → each child; tips by
 //!    [`TipJoints`]);
 //! 3. [`geodesic`] — for each deforming joint, the geodesic distance through the solid voxels
@@ -18,6 +19,7 @@
 pub mod bones;
 pub mod falloff;
 pub mod geodesic;
+pub mod hole_caps;
 pub mod voxel_grid;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -59,6 +61,9 @@ pub struct AutoWeightsOptions {
     pub tip_length: f64,
     /// Holes up to about `2·closing + 1` voxels wide are closed before filling (0 … 8).
     pub closing: usize,
+    /// Holes (boundary loops) whose box diagonal is below this fraction of the mesh's are
+    /// capped before filling (0 … 1; 0 caps none).
+    pub max_hole_fraction: f64,
 }
 
 impl Default for AutoWeightsOptions {
@@ -70,6 +75,7 @@ impl Default for AutoWeightsOptions {
             tips: TipJoints::default(),
             tip_length: 1.0,
             closing: 1,
+            max_hole_fraction: hole_caps::DEFAULT_MAX_HOLE_FRACTION,
         }
     }
 }
@@ -179,6 +185,8 @@ pub struct AutoWeightsReport {
     pub spacing: f64,
     /// Voxels of the solid.
     pub solid_voxels: usize,
+    /// Holes of the mesh capped before filling.
+    pub capped_holes: usize,
     /// Joints that deform (ascending); the others get no weight.
     pub deforming_joints: Vec<usize>,
     /// Vertices in no solid voxel any bone reaches, weighted by straight distances.
@@ -232,6 +240,13 @@ impl AutoWeights {
                 "tip_length",
                 "a number in [0, 10]",
                 options.tip_length.to_string(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&options.max_hole_fraction) {
+            return Err(invalid(
+                "max_hole_fraction",
+                "a number in [0, 1]",
+                options.max_hole_fraction.to_string(),
             ));
         }
         if options.closing > 8 {
@@ -322,7 +337,23 @@ impl AutoWeights {
                 resolution: o.resolution,
             });
         }
-        let surface = voxel_grid::surface_voxels(&grid, &mesh.positions, &mesh.triangles);
+        let (caps, capped_holes) = if o.max_hole_fraction > 0.0 {
+            hole_caps::hole_caps(&mesh.positions, &mesh.triangles, o.max_hole_fraction)
+        } else {
+            (Vec::new(), 0)
+        };
+        let surface = if caps.is_empty() {
+            voxel_grid::surface_voxels(&grid, &mesh.positions, &mesh.triangles)
+        } else {
+            let mut positions = mesh.positions.clone();
+            let mut triangles = mesh.triangles.clone();
+            for cap in caps {
+                let base = positions.len() as u32;
+                positions.extend(cap);
+                triangles.push([base, base + 1, base + 2]);
+            }
+            voxel_grid::surface_voxels(&grid, &positions, &triangles)
+        };
         let cage_solid = cage.map(|c| {
             let s = voxel_grid::surface_voxels(&grid, &c.positions, &c.triangles);
             voxel_grid::solid_voxels(&grid, &s, 0, None)
@@ -406,6 +437,7 @@ impl AutoWeights {
                 dims: solid.grid.dims,
                 spacing: solid.grid.spacing,
                 solid_voxels: solid.len(),
+                capped_holes,
                 deforming_joints: deforming,
                 straight_distance_vertices: unreached.len(),
                 warnings,
