@@ -116,6 +116,32 @@ fn default_weights_beat_blenders_bone_heat_on_the_arm_and_the_fox() {
 }
 
 #[test]
+fn every_deforming_joint_gets_weight_and_only_those() {
+    let aw = AutoWeights::new(AutoWeightsOptions::default()).unwrap();
+    let (arm_mesh, arm_skeleton, _) = arm();
+    let (fox_mesh, fox_skeleton, _, _) = fox();
+    for (mesh, skeleton) in [(arm_mesh, arm_skeleton), (fox_mesh, fox_skeleton)] {
+        let r = aw.compute(&mesh, &skeleton, None).unwrap();
+        let mut total = vec![0.0; skeleton.len()];
+        for v in 0..mesh.num_vertices() {
+            let (joints, weights) = r.weights.row(v);
+            for (&j, &w) in joints.iter().zip(weights) {
+                total[j as usize] += w;
+            }
+        }
+        for (j, t) in total.iter().enumerate() {
+            let deforms = r.report.deforming_joints.contains(&j);
+            assert_eq!(
+                *t > 0.5,
+                deforms,
+                "joint {j} ({}): total weight {t}",
+                skeleton.joint(j).name
+            );
+        }
+    }
+}
+
+#[test]
 fn the_artists_weights_agree_with_themselves() {
     // Control of the measure: the artist's weights against themselves.
     let (mesh, skeleton, artist, locals) = fox();
