@@ -127,6 +127,11 @@ fn two_bone_bar_weights_follow_the_nearest_bone() {
         along.windows(2).all(|w| w[1].1 <= w[0].1 + 1e-9),
         "{along:?}"
     );
+    // Smooth: neighbouring rings (0.1 apart, a quarter of the bar's width) differ by < 0.25.
+    assert!(
+        along.windows(2).all(|w| w[0].1 - w[1].1 < 0.25),
+        "{along:?}"
+    );
     let mid = along.iter().find(|(x, _)| (x - 2.0).abs() < 1e-9).unwrap();
     assert!((mid.1 - 0.5).abs() < 0.1, "{mid:?}");
 }
