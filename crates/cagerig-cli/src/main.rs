@@ -13,7 +13,9 @@ mod state_files;
 
 use clap::{Parser, Subcommand};
 
-use commands::{animate, bench, cage, coords, demo, edit, export, info, maxvol, render, subdivide};
+use commands::{
+    animate, bench, cage, coords, demo, edit, export, info, maxvol, render, subdivide, weights,
+};
 
 #[derive(Parser)]
 #[command(
@@ -53,6 +55,8 @@ enum Command {
     Export(export::Args),
     /// Generate a validated deformation cage for a mesh.
     Cage(cage::Args),
+    /// Compute skinning weights for a mesh and a skeleton (geodesic voxel binding), as `.skw`.
+    Weights(weights::Args),
 }
 
 impl Command {
@@ -63,6 +67,7 @@ impl Command {
             Command::Maxvol(args) => args.json,
             Command::Bench(args) => args.json,
             Command::Cage(args) => args.json,
+            Command::Weights(args) => args.json,
             Command::Coords(_)
             | Command::Edit(_)
             | Command::Animate(_)
@@ -86,6 +91,7 @@ impl Command {
             Command::Render(args) => render::run(args),
             Command::Export(args) => export::run(args),
             Command::Cage(args) => cage::run(args),
+            Command::Weights(args) => weights::run(args),
         }
     }
 }

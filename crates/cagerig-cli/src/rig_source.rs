@@ -5,9 +5,11 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
+use cagerig::auto_weights::AutoWeightsOptions;
 use cagerig::cage_gen::{CageOptions, GeneratedCage};
-use cagerig::rig_files::{MissingCage, load_rig_files_or_generate};
+use cagerig::rig_files::{MissingCage, load_rig_files_with_weights};
 use cagerig::session::RigParts;
+use cagerig::weights_source::{WeightsSource, apply_weights_source};
 use cagerig::{CageCoords, Warning};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -44,6 +46,26 @@ pub struct RigArgs {
     /// instead of failing: mean value coordinates extrapolate there.
     #[arg(long)]
     pub allow_outside_cage: bool,
+    /// Skinning weights (`.skw`, cagerig's vertex order and joint indices, as `cagerig weights`
+    /// writes them) instead of the character's own.
+    #[arg(long, conflicts_with = "auto_weights")]
+    pub weights: Option<PathBuf>,
+    /// Compute skinning weights (as `cagerig weights` does with its default options, the rig's
+    /// cage bounding the volume) instead of using the character's own; an OBJ then needs no
+    /// `.skw`.
+    #[arg(long)]
+    pub auto_weights: bool,
+}
+
+impl RigArgs {
+    /// Where the weights come from (`--weights`, `--auto-weights`, else the character's).
+    pub fn weights_source(&self) -> WeightsSource {
+        match (&self.weights, self.auto_weights) {
+            (Some(p), _) => WeightsSource::File(p.clone()),
+            (None, true) => WeightsSource::Automatic(AutoWeightsOptions::default()),
+            (None, false) => WeightsSource::Character,
+        }
+    }
 }
 
 /// `--auto-cage` (every command that builds a rig): what to do when the rig has no cage.
@@ -158,6 +180,19 @@ pub fn load_rig_or_generate_cage(
     compute_coords: bool,
     auto_cage: Option<CageOptions>,
 ) -> anyhow::Result<LoadedRig> {
+    let weights = args.weights_source();
+    let bar = crate::commands::weights::DelayedBar::new();
+    let progress_bar = |p| {
+        if progress {
+            bar.update(p);
+        }
+    };
+    // OBJ rigs take the weights source in the loader (their `.skw` is then not needed).
+    let obj_files = args.builtin.is_none()
+        && args
+            .mesh
+            .as_deref()
+            .is_some_and(|m| !crate::interchange::is_interchange(m));
     let mut loaded = match (&args.builtin, &args.mesh) {
         (Some(name), _) => {
             let (vertices, cage_vertices) =
@@ -199,9 +234,23 @@ pub fn load_rig_or_generate_cage(
             args.cage.as_deref(),
             args.allow_outside_cage,
             auto_cage,
+            &weights,
+            &progress_bar,
         )?,
         (None, None) => bail!("give a mesh file or --builtin NAME"),
     };
+    if !obj_files {
+        let (warnings, file) =
+            apply_weights_source(&weights, &mut loaded.parts, &loaded.name, &progress_bar)?;
+        loaded.warnings.extend(warnings);
+        if let Some(path) = file {
+            loaded.files.push(FileUse {
+                role: "skin_weights".into(),
+                path,
+            });
+        }
+    }
+    bar.finish();
     // The one cage validation, the same for every command (and again in the session).
     let cage_name = loaded.files.iter().find(|f| f.role == "cage").map_or_else(
         || format!("the cage of {}", loaded.name),
@@ -226,19 +275,36 @@ fn load_files(
     cage: Option<&Path>,
     allow_outside_cage: bool,
     auto_cage: Option<CageOptions>,
+    weights: &WeightsSource,
+    progress: &(dyn Fn(cagerig::auto_weights::Progress) + Sync),
 ) -> anyhow::Result<LoadedRig> {
     let missing_cage = auto_cage.map_or(MissingCage::Fail, MissingCage::Generate);
-    let rig = load_rig_files_or_generate(mesh, cage, missing_cage).map_err(|e| {
-        let cage_missing = matches!(
-            &e,
-            cagerig::io::ParseError::Io { message, .. } if message.starts_with("no cage found")
-        );
-        if auto_cage.is_none() && cage_missing {
-            anyhow::anyhow!("{e}; or pass --auto-cage to generate one")
-        } else {
-            e.into()
-        }
-    })?;
+    let rig =
+        load_rig_files_with_weights(mesh, cage, missing_cage, weights, progress).map_err(|e| {
+            let cage_missing = matches!(
+                &e,
+                cagerig::weights_source::WeightsSourceError::Read(cagerig::io::ParseError::Io {
+                    message,
+                    ..
+                }) if message.starts_with("no cage found")
+            );
+            let weights_missing = matches!(
+                &e,
+                cagerig::weights_source::WeightsSourceError::Read(cagerig::io::ParseError::Io {
+                    message,
+                    ..
+                }) if message.starts_with("no skinning weights found")
+            );
+            if auto_cage.is_none() && cage_missing {
+                anyhow::anyhow!("{e}; or pass --auto-cage to generate one")
+            } else if weights_missing {
+                anyhow::anyhow!(
+                    "{e}; or pass --weights FILE.skw, or --auto-weights to compute them"
+                )
+            } else {
+                e.into()
+            }
+        })?;
     Ok(LoadedRig {
         name: mesh.display().to_string(),
         files: rig

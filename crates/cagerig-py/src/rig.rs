@@ -7,20 +7,20 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use cagerig::Warning;
+use cagerig::auto_weights::AutoWeightsOptions;
 use cagerig::mesh::TriMesh;
 use cagerig::playback::AnimationPlayer;
-use cagerig::rig_files::{MissingCage, load_rig_files_or_generate};
+use cagerig::rig_files::{MissingCage, load_rig_files_with_weights};
 use cagerig::script::{JointRef, resolve_joint};
 use cagerig::session::{RigParts, RigSession, SessionOptions};
-use cagerig::skeleton::Joint;
-use cagerig::{Skeleton, Warning};
+use cagerig::weights_source::{WeightsSource, apply_weights_source};
 use glam::{DAffine3, DQuat, DVec3};
-use numpy::PyArrayMethods;
 use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 
 use crate::convert;
-use crate::errors::{file_error, rig_error, warn_all};
+use crate::errors::{rig_error, warn_all};
 use crate::options;
 
 /// A coupled cage + skeleton rig (Corda et al. 2020): rest skin M, skeleton S, cage C and their
@@ -163,6 +163,9 @@ impl Rig {
     ///     What CageUp fits under DQS/CoR.
     /// coords_precision : {"f64", "f32"}, default "f64"
     ///     Storage of Φ in the per-frame products.
+    /// auto_weights : bool, default False
+    ///     Compute the skinning weights (as :func:`skin_weights`, the rig's cage bounding the
+    ///     volume) instead of using the character's own; an OBJ then needs no ``.skw``.
     /// keep_file_coords : bool, default False
     ///     Keep a cage-weights file's Φ even when it does not reproduce the mesh (the paper
     ///     tool's 6-decimal files; for conformance). By default such a Φ is recomputed, so that
@@ -176,7 +179,7 @@ impl Rig {
     #[staticmethod]
     #[pyo3(signature = (path, cage = None, *, skinning = None, fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
-                        keep_file_coords = false, auto_cage = None))]
+                        keep_file_coords = false, auto_cage = None, auto_weights = false))]
     #[allow(clippy::too_many_arguments)]
     fn load(
         py: Python<'_>,
@@ -189,7 +192,13 @@ impl Rig {
         coords_precision: &str,
         keep_file_coords: bool,
         auto_cage: Option<usize>,
+        auto_weights: bool,
     ) -> PyResult<Self> {
+        let weights_source = if auto_weights {
+            WeightsSource::Automatic(AutoWeightsOptions::default())
+        } else {
+            WeightsSource::Character
+        };
         let mut options = options::session_options(
             skinning.unwrap_or("lbs"),
             fit_rows,
@@ -207,6 +216,12 @@ impl Rig {
             if let (None, Some(method)) = (skinning, file_skinning) {
                 options.skinning = method;
             }
+            let (mut parts, mut warnings) = (parts, warnings);
+            let name = path.display().to_string();
+            let (more, _) = py
+                .detach(|| apply_weights_source(&weights_source, &mut parts, &name, &|_| {}))
+                .map_err(crate::auto_weights::weights_source_error)?;
+            warnings.extend(more);
             (parts, warnings)
         } else {
             let missing = match auto_cage {
@@ -214,8 +229,16 @@ impl Rig {
                 None => MissingCage::Fail,
             };
             let files = py
-                .detach(|| load_rig_files_or_generate(&path, cage.as_deref(), missing))
-                .map_err(file_error)?;
+                .detach(|| {
+                    load_rig_files_with_weights(
+                        &path,
+                        cage.as_deref(),
+                        missing,
+                        &weights_source,
+                        &|_| {},
+                    )
+                })
+                .map_err(crate::auto_weights::weights_source_error)?;
             let mut warnings = files.warnings;
             if let Some(g) = &files.generated_cage {
                 warnings.push(cagerig::cage_source::generated_cage_note(g));
@@ -309,41 +332,8 @@ impl Rig {
         let tris = convert::triangles(triangles, "triangles", positions.len())?;
         let (weights, warnings) =
             convert::skin_weights(skin_weights, "skin_weights", Some(positions.len()))?;
-        let joints = convert::points(joint_positions, "joint_positions")?;
-        let nj = joints.len();
-        let parents_arr = convert::int_array(joint_parents, "joint_parents")?;
-        let parents: Vec<i64> = parents_arr.readonly().as_array().iter().copied().collect();
-        if parents.len() != nj {
-            return Err(PyValueError::new_err(format!(
-                "joint_parents must have one entry per joint ({nj}), got {}",
-                parents.len()
-            )));
-        }
-        let names = joint_names.unwrap_or_else(|| (0..nj).map(|j| format!("joint{j}")).collect());
-        if names.len() != nj {
-            return Err(PyValueError::new_err(format!(
-                "joint_names must have one name per joint ({nj}), got {}",
-                names.len()
-            )));
-        }
-        let mut skeleton_joints = Vec::with_capacity(nj);
-        for (j, ((p, name), position)) in parents.iter().zip(names).zip(&joints).enumerate() {
-            let parent = match *p {
-                -1 => None,
-                p if p >= 0 && (p as usize) < nj => Some(p as usize),
-                p => {
-                    return Err(PyIndexError::new_err(format!(
-                        "joint_parents[{j}] = {p} is out of range (-1 for a root, else 0..{nj})"
-                    )));
-                }
-            };
-            skeleton_joints.push(Joint {
-                name,
-                parent,
-                rest_world_from_joint: DAffine3::from_translation(*position),
-            });
-        }
-        let skeleton = Skeleton::new(skeleton_joints).map_err(rig_error)?;
+        let skeleton =
+            crate::auto_weights::skeleton_from_arrays(joint_positions, joint_parents, joint_names)?;
         let cage_pos = convert::points(cage_vertices, "cage_vertices")?;
         let cage_tris = convert::triangles(cage_triangles, "cage_triangles", cage_pos.len())?;
         let mesh = TriMesh::new(positions, tris).map_err(rig_error)?;

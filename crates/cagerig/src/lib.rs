@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod animation;
+pub mod auto_weights;
 pub mod cage;
 pub mod cage_coords;
 pub mod cage_enclosure;
@@ -39,6 +40,7 @@ pub mod sync;
 #[cfg(test)]
 mod test_random;
 mod vector_registers;
+pub mod weights_source;
 
 pub use cage_coords::CageCoords;
 pub use coords_kind::CoordsKind;

@@ -12,6 +12,8 @@ use crate::io::discovery::discover;
 use crate::io::error::ParseError;
 use crate::io::text::FloatFormat;
 use crate::session::RigParts;
+use crate::skin_weights::SkinWeights;
+use crate::weights_source::{WeightsSource, WeightsSourceError, apply_weights_source};
 
 /// A rig read from files.
 #[derive(Debug, Clone)]
@@ -52,6 +54,27 @@ pub fn load_rig_files_or_generate(
     cage: Option<&Path>,
     missing_cage: MissingCage,
 ) -> Result<RigFiles, ParseError> {
+    load_rig_files_with_weights(mesh, cage, missing_cage, &WeightsSource::Character, &|_| {})
+        .map_err(|e| match e {
+            WeightsSourceError::Read(e) => e,
+            e @ WeightsSourceError::Automatic { .. } => ParseError::Rig {
+                path: mesh.to_path_buf(),
+                source: crate::error::RigError::Invalid(e.to_string()),
+            },
+        })
+}
+
+/// [`load_rig_files_or_generate`] with the weights of `weights` ([`crate::weights_source`]):
+/// unless they are the character's own, the `.skw` beside the mesh is not needed, and the
+/// CoR weights beside it (derived from that `.skw`) are not read. `progress` follows the
+/// automatic weights.
+pub fn load_rig_files_with_weights(
+    mesh: &Path,
+    cage: Option<&Path>,
+    missing_cage: MissingCage,
+    weights: &WeightsSource,
+    progress: &(dyn Fn(crate::auto_weights::Progress) + Sync),
+) -> Result<RigFiles, WeightsSourceError> {
     let mut found = discover(mesh, cage);
     let missing = |what: &str, expected: String| ParseError::Io {
         path: mesh.to_path_buf(),
@@ -72,13 +95,26 @@ pub fn load_rig_files_or_generate(
         .ok_or_else(|| missing("skeleton", format!("{stem}.skt")))?;
     let skeleton = crate::io::skt::read_skt(&skeleton_path)?;
     files.push(("skeleton", skeleton_path));
-    let weights_path = found
-        .skin_weights
-        .clone()
-        .ok_or_else(|| missing("skinning weights", format!("{stem}.skw")))?;
-    let (skin_weights, mut warnings) =
-        crate::io::skw::read_skw(&weights_path, mesh_data.num_vertices(), skeleton.len())?;
-    files.push(("skin_weights", weights_path));
+    let (skin_weights, mut warnings) = if weights.replaces_character_weights() {
+        // Replaced below, once the cage is known; the CoR rows beside the mesh belong to the
+        // `.skw` beside it.
+        found.cor_weights = None;
+        let (empty, _) = SkinWeights::from_triplets(mesh_data.num_vertices(), skeleton.len(), [])
+            .map_err(|source| ParseError::Rig {
+            path: mesh.to_path_buf(),
+            source,
+        })?;
+        (empty, Vec::new())
+    } else {
+        let weights_path = found
+            .skin_weights
+            .clone()
+            .ok_or_else(|| missing("skinning weights", format!("{stem}.skw")))?;
+        let read =
+            crate::io::skw::read_skw(&weights_path, mesh_data.num_vertices(), skeleton.len())?;
+        files.push(("skin_weights", weights_path));
+        read
+    };
     warnings.append(&mut mesh_warnings);
     let request = CageRequest {
         given: found.cage.as_deref(),
@@ -133,7 +169,8 @@ pub fn load_rig_files_or_generate(
                          cage could not be fitted; delete the file to have the rows computed",
                         rows.len()
                     )),
-                });
+                }
+                .into());
             }
             if rows.len() != nc {
                 warnings.push(Warning::Note {
@@ -156,18 +193,26 @@ pub fn load_rig_files_or_generate(
         }
         None => None,
     };
+    let mut parts = RigParts {
+        mesh: mesh_data,
+        skeleton,
+        skin_weights,
+        cage: cage_data,
+        cage_coords,
+        maxvol_rows,
+        cor_rows,
+        joint_coords: None,
+        cor_centre_coords: None,
+    };
+    let name = mesh.display().to_string();
+    let (mut weight_warnings, weights_file) =
+        apply_weights_source(weights, &mut parts, &name, progress)?;
+    warnings.append(&mut weight_warnings);
+    if let Some(p) = weights_file {
+        files.push(("skin_weights", p));
+    }
     Ok(RigFiles {
-        parts: RigParts {
-            mesh: mesh_data,
-            skeleton,
-            skin_weights,
-            cage: cage_data,
-            cage_coords,
-            maxvol_rows,
-            cor_rows,
-            joint_coords: None,
-            cor_centre_coords: None,
-        },
+        parts,
         files,
         warnings,
         maxvol_path: found.maxvol,

@@ -165,6 +165,8 @@ fn load_parts(args: &Args) -> anyhow::Result<(String, RigParts)> {
         },
         skin: None,
         allow_outside_cage: false,
+        weights: None,
+        auto_weights: false,
     };
     let loaded = crate::rig_source::load_rig(&rig_args, false, false)?;
     Ok((loaded.name, loaded.parts))

@@ -112,6 +112,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         resolution,
         skin: None,
         allow_outside_cage: false,
+        weights: None,
+        auto_weights: false,
     };
     let t = Instant::now();
     let loaded = load_rig(&args, true, true)?;

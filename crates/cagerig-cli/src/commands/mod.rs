@@ -13,3 +13,4 @@ pub mod info;
 pub mod maxvol;
 pub mod render;
 pub mod subdivide;
+pub mod weights;

@@ -32,6 +32,22 @@ class RigWarning(UserWarning): ...
 def mvc(points: _ArrayLike, cage_vertices: _ArrayLike, cage_triangles: _ArrayLike) -> _F64Array:
     """Mean value coordinates Φ, (n, #C), of ``points`` w.r.t. the cage."""
 
+def skin_weights(
+    vertices: _ArrayLike,
+    triangles: _ArrayLike,
+    joint_positions: _ArrayLike,
+    parents: _ArrayLike,
+    max_influences: int = 4,
+    cage: Optional[tuple[_ArrayLike, _ArrayLike]] = None,
+    *,
+    joint_names: Optional[Sequence[str]] = None,
+    tips: Union[Literal["auto", "all", "none"], Sequence[int], None] = None,
+    resolution: int = 128,
+    exponent: float = 8.0,
+) -> _F64Array:
+    """Automatic skinning weights Ω, (n, #J), by geodesic voxel binding: rows sum to 1, at
+    most ``max_influences`` non-zeros; ``cage`` = (vertices, triangles) of a closed cage."""
+
 def maxvol_rows(phi: _ArrayLike) -> tuple[_I64Array, float]:
     """MaxVol rows of Φ and ``log|det Φ[rows]|``."""
 
@@ -112,6 +128,7 @@ class Rig:
         coords_precision: _Precision = "f64",
         keep_file_coords: bool = False,
         auto_cage: Optional[int] = None,
+        auto_weights: bool = False,
     ) -> Rig: ...
     @staticmethod
     def builtin(

@@ -1,0 +1,238 @@
+//! End-to-end tests of `cagerig weights` and of `--weights` / `--auto-weights` on the commands
+//! that build a rig: the `.skw` written reads back as valid weights (rows sum to 1, at most
+//! `--max-influences`), in the joint order `edit` writes in `step0_joints.json`; an OBJ needs
+//! `--skeleton`; a hand-written five-joint `.skt` (the README's) binds the Arm.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use cagerig::SkinWeights;
+
+fn cagerig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_cagerig"))
+}
+
+fn root(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(path)
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cagerig-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run_ok(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn check_rows(w: &SkinWeights, max_influences: usize) {
+    for v in 0..w.num_vertices() {
+        let (joints, weights) = w.row(v);
+        assert!(
+            !joints.is_empty() && joints.len() <= max_influences,
+            "vertex {v}"
+        );
+        assert!(
+            (weights.iter().sum::<f64>() - 1.0).abs() < 1e-12,
+            "vertex {v}"
+        );
+    }
+}
+
+#[test]
+fn weights_on_the_arm_write_valid_rows_with_the_asked_influences() {
+    let dir = temp_dir("weights-arm");
+    for k in [4, 2] {
+        let out = dir.join(format!("arm{k}.skw"));
+        let json = run_ok(
+            cagerig()
+                .arg("weights")
+                .arg(root("data/arm/arm.obj"))
+                .arg("--skeleton")
+                .arg(root("data/arm/arm.skt"))
+                .args(["--max-influences", &k.to_string(), "--json", "--out"])
+                .arg(&out),
+        );
+        let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(report["vertices"], 2089);
+        assert_eq!(report["max_influences"], k);
+        // `Skeleton` and `upperarm01.R` sit on their child: no bone, no weight.
+        assert_eq!(
+            report["static_joints"],
+            serde_json::json!(["Skeleton", "upperarm01.R"])
+        );
+        let (w, warnings) = cagerig::io::skw::read_skw(&out, 2089, 25).unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        check_rows(&w, k);
+        assert_eq!(w.max_influences(), k);
+    }
+}
+
+#[test]
+fn an_obj_needs_a_skeleton_and_nothing_is_written_without_one() {
+    let dir = temp_dir("weights-noskel");
+    let out_path = dir.join("w.skw");
+    let out = cagerig()
+        .arg("weights")
+        .arg(root("data/arm/arm.obj"))
+        .arg("--out")
+        .arg(&out_path)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--skeleton"), "{stderr}");
+    assert!(!out_path.exists());
+    // A bad option names itself.
+    let out = cagerig()
+        .arg("weights")
+        .arg(root("data/fox/Fox.glb"))
+        .args(["--max-influences", "0", "--out"])
+        .arg(&out_path)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("max_influences"));
+    assert!(!out_path.exists());
+}
+
+#[test]
+fn fox_weights_follow_the_joint_order_of_edit_and_drive_edit() {
+    let dir = temp_dir("weights-fox");
+    let skw = dir.join("fox.skw");
+    run_ok(
+        cagerig()
+            .arg("weights")
+            .arg(root("data/fox/Fox.glb"))
+            .arg("--out")
+            .arg(&skw),
+    );
+    let script = dir.join("empty.json");
+    std::fs::write(&script, r#"{"steps":[]}"#).unwrap();
+    let out = dir.join("edit");
+    run_ok(
+        cagerig()
+            .arg("edit")
+            .arg(root("data/fox/Fox.glb"))
+            .arg("--cage")
+            .arg(root("data/fox/Fox_cage.obj"))
+            .arg("--weights")
+            .arg(&skw)
+            .arg("--script")
+            .arg(&script)
+            .arg("--out")
+            .arg(&out),
+    );
+    let joints: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("step0_joints.json")).unwrap()).unwrap();
+    let names: Vec<&str> = joints
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["name"].as_str().unwrap())
+        .collect();
+    let mesh = cagerig::io::obj::read_obj(&out.join("step0_mesh_rest.obj")).unwrap();
+    let (w, _) = cagerig::io::skw::read_skw(&skw, mesh.num_vertices(), names.len()).unwrap();
+    check_rows(&w, 4);
+    // The vertex farthest forward (the snout) follows the head; the one farthest back (the
+    // tail's tip) the last tail joint.
+    let by = |key: fn(&glam::DVec3) -> f64| {
+        (0..mesh.num_vertices())
+            .max_by(|&a, &b| key(&mesh.positions[a]).total_cmp(&key(&mesh.positions[b])))
+            .unwrap()
+    };
+    let snout = by(|p| p.z);
+    let tail = by(|p| -p.z);
+    assert_eq!(names[w.heaviest(snout).unwrap()], "b_Head_05");
+    assert_eq!(names[w.heaviest(tail).unwrap()], "b_Tail03_014");
+}
+
+#[test]
+fn auto_weights_rig_an_obj_that_has_no_skw_and_conflict_with_weights() {
+    let dir = temp_dir("weights-auto");
+    for f in ["arm.obj", "arm.skt", "arm_cage.obj"] {
+        std::fs::copy(root("data/arm").join(f), dir.join(f)).unwrap();
+    }
+    let script = root("examples/edits.json");
+    let out = cagerig()
+        .arg("edit")
+        .arg(dir.join("arm.obj"))
+        .arg("--script")
+        .arg(&script)
+        .arg("--out")
+        .arg(dir.join("without"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--auto-weights"), "{stderr}");
+    run_ok(
+        cagerig()
+            .arg("edit")
+            .arg(dir.join("arm.obj"))
+            .arg("--auto-weights")
+            .arg("--script")
+            .arg(&script)
+            .arg("--out")
+            .arg(dir.join("auto")),
+    );
+    let posed = cagerig::io::obj::read_obj(&dir.join("auto/step1_mesh_posed.obj")).unwrap();
+    let rest = cagerig::io::obj::read_obj(&dir.join("auto/step1_mesh_rest.obj")).unwrap();
+    // The elbow bend moved the forearm.
+    assert!(
+        posed
+            .positions
+            .iter()
+            .zip(&rest.positions)
+            .any(|(a, b)| a.distance(*b) > 1.0)
+    );
+    let out = cagerig()
+        .arg("edit")
+        .arg(dir.join("arm.obj"))
+        .arg("--auto-weights")
+        .arg("--weights")
+        .arg(dir.join("x.skw"))
+        .arg("--script")
+        .arg(&script)
+        .arg("--out")
+        .arg(dir.join("both"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+}
+
+#[test]
+fn the_readmes_five_joint_skeleton_binds_the_arm() {
+    let dir = temp_dir("weights-five");
+    let out = dir.join("arm5.skw");
+    let json = run_ok(
+        cagerig()
+            .arg("weights")
+            .arg(root("data/arm/arm.obj"))
+            .arg("--skeleton")
+            .arg(root("examples/arm-5-joints.skt"))
+            .arg("--json")
+            .arg("--out")
+            .arg(&out),
+    );
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(report["deforming_joints"].as_array().unwrap().len(), 5);
+    let (w, _) = cagerig::io::skw::read_skw(&out, 2089, 5).unwrap();
+    check_rows(&w, 4);
+    // Every joint is the heaviest somewhere.
+    for j in 0..5 {
+        assert!((0..2089).any(|v| w.heaviest(v) == Some(j)), "joint {j}");
+    }
+}
