@@ -1,6 +1,8 @@
 //! `cagerig`: command-line front end of the cagerig library.
 
 mod bench_bandwidth;
+mod bench_events;
+mod bench_green;
 mod bench_table;
 mod commands;
 mod errors;

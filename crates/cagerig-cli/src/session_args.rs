@@ -2,11 +2,11 @@
 //! and starting a session from a loaded rig.
 
 use anyhow::Context;
-use cagerig::Warning;
 use cagerig::cage_coords::CoordsPrecision;
 use cagerig::session::{CageFitSource, FitRows, GivenCageCoords, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use cagerig::sync::skeleton_updater::JointLocalisation;
+use cagerig::{CoordsKind, Warning};
 use clap::{Args, ValueEnum};
 
 use crate::rig_source::LoadedRig;
@@ -17,6 +17,14 @@ pub fn skinning_parser() -> impl clap::builder::TypedValueParser<Value = Skinnin
     use clap::builder::TypedValueParser;
     clap::builder::PossibleValuesParser::new(SkinningMethod::ALL.map(SkinningMethod::name))
         .try_map(|name| name.parse::<SkinningMethod>())
+}
+
+/// The `--coords` value parser: the names of [`CoordsKind::ALL`], read through
+/// `CoordsKind: FromStr`, the one parser of coordinates names.
+pub fn coords_parser() -> impl clap::builder::TypedValueParser<Value = CoordsKind> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(CoordsKind::ALL.map(CoordsKind::name))
+        .try_map(|name| name.parse::<CoordsKind>())
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, Default)]
@@ -59,7 +67,11 @@ pub enum PrecisionArg {
 /// Session options shared by `edit` and `animate`.
 #[derive(Debug, Clone, Args)]
 pub struct SessionArgs {
-    /// Mesh rows used by CageUp/CageRev.
+    /// Cage coordinates: mean value (the paper's linear M = ΦC) or Green (shape-preserving cage
+    /// edits; see docs/green-coordinates.md).
+    #[arg(long, value_parser = coords_parser(), default_value = "mvc")]
+    pub coords: CoordsKind,
+    /// Mesh rows used by CageUp/CageRev (Green: MaxVol rows of [φ ψ], least squares).
     #[arg(long, value_enum, default_value_t)]
     pub fit_rows: FitRowsArg,
     /// Joint localisation of the skeleton updater.
@@ -81,6 +93,7 @@ pub struct SessionArgs {
 impl SessionArgs {
     pub fn options(&self) -> SessionOptions {
         SessionOptions {
+            coords: self.coords,
             localisation: match self.localisation {
                 LocalisationArg::Articulation => JointLocalisation::default(),
                 LocalisationArg::ReferenceTool => JointLocalisation::reference_tool(),

@@ -7,6 +7,7 @@ mod auto_weights;
 mod convert;
 mod errors;
 mod functions;
+mod green;
 mod interchange;
 mod options;
 mod rig;
@@ -27,6 +28,7 @@ fn _cagerig(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<rig::Rig>()?;
     m.add_class::<script::EditScriptPy>()?;
     m.add_function(wrap_pyfunction!(functions::mvc, m)?)?;
+    m.add_function(wrap_pyfunction!(green::green_coordinates, m)?)?;
     m.add_function(wrap_pyfunction!(auto_weights::skin_weights, m)?)?;
     m.add_function(wrap_pyfunction!(functions::maxvol_rows, m)?)?;
     m.add_function(wrap_pyfunction!(functions::max_entropy_coordinates, m)?)?;

@@ -42,8 +42,12 @@ pub fn session_options(
     localisation: &str,
     fit_source_name: &str,
     coords_precision: &str,
+    coords: &str,
 ) -> PyResult<SessionOptions> {
     Ok(SessionOptions {
+        coords: coords
+            .parse::<cagerig::CoordsKind>()
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("coords: {e}")))?,
         skinning: skinning_method(skinning)?,
         fit_rows: match fit_rows {
             "maxvol" => FitRows::MaxVol,

@@ -179,7 +179,8 @@ impl Rig {
     #[staticmethod]
     #[pyo3(signature = (path, cage = None, *, skinning = None, fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
-                        keep_file_coords = false, auto_cage = None, auto_weights = false))]
+                        keep_file_coords = false, auto_cage = None, auto_weights = false,
+                        coords = "mvc"))]
     #[allow(clippy::too_many_arguments)]
     fn load(
         py: Python<'_>,
@@ -193,6 +194,7 @@ impl Rig {
         keep_file_coords: bool,
         auto_cage: Option<usize>,
         auto_weights: bool,
+        coords: &str,
     ) -> PyResult<Self> {
         let weights_source = if auto_weights {
             WeightsSource::Automatic(AutoWeightsOptions::default())
@@ -205,6 +207,7 @@ impl Rig {
             localisation,
             fit_source,
             coords_precision,
+            coords,
         )?;
         if keep_file_coords {
             options.given_cage_coords = cagerig::session::GivenCageCoords::Keep;
@@ -253,7 +256,8 @@ impl Rig {
     /// Options as for :meth:`load`.
     #[staticmethod]
     #[pyo3(signature = (name, resolution = None, *, skinning = "lbs", fit_rows = "maxvol",
-                        localisation = "articulation", fit_source = "ghost", coords_precision = "f64"))]
+                        localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
+                        coords = "mvc"))]
     #[allow(clippy::too_many_arguments)]
     fn builtin(
         py: Python<'_>,
@@ -264,6 +268,7 @@ impl Rig {
         localisation: &str,
         fit_source: &str,
         coords_precision: &str,
+        coords: &str,
     ) -> PyResult<Self> {
         let options = options::session_options(
             skinning,
@@ -271,6 +276,7 @@ impl Rig {
             localisation,
             fit_source,
             coords_precision,
+            coords,
         )?;
         let rig = py
             .detach(|| cagerig::demo::builtin(name, resolution))
@@ -303,7 +309,7 @@ impl Rig {
     #[pyo3(signature = (vertices, triangles, skin_weights, joint_positions, joint_parents,
                         cage_vertices, cage_triangles, joint_names = None, *, skinning = "lbs",
                         fit_rows = "maxvol", localisation = "articulation", fit_source = "ghost",
-                        coords_precision = "f64"))]
+                        coords_precision = "f64", coords = "mvc"))]
     #[allow(clippy::too_many_arguments)]
     fn from_arrays(
         py: Python<'_>,
@@ -320,6 +326,7 @@ impl Rig {
         localisation: &str,
         fit_source: &str,
         coords_precision: &str,
+        coords: &str,
     ) -> PyResult<Self> {
         let options = options::session_options(
             skinning,
@@ -327,6 +334,7 @@ impl Rig {
             localisation,
             fit_source,
             coords_precision,
+            coords,
         )?;
         let positions = convert::points(vertices, "vertices")?;
         let tris = convert::triangles(triangles, "triangles", positions.len())?;

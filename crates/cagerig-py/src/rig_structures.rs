@@ -15,6 +15,12 @@ impl Rig {
     // ----- structures (copies unless said otherwise) -----------------------------------------
 
     /// Rest skin M, (#V, 3) float64 (copy).
+    /// The cage coordinates the rig is bound with: ``"mvc"`` or ``"green"``.
+    #[getter]
+    fn coords(&self) -> &'static str {
+        self.session.coords_kind().name()
+    }
+
     #[getter]
     fn rest_mesh<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         convert::points_to_py(py, self.session.rest_mesh())

@@ -21,7 +21,9 @@ use cagerig::skinning::{
 };
 use cagerig::sync::cage_updater::{CageFitMode, CageUpdater};
 use cagerig::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
-use glam::{DAffine3, DQuat, DVec3};
+use glam::{DAffine3, DVec3};
+
+use crate::bench_events::{bench_cage_events, synthetic_tracks};
 use serde::Serialize;
 
 #[derive(Debug, Clone, clap::Args)]
@@ -50,6 +52,10 @@ pub struct Args {
     /// Multiplies the number of repetitions.
     #[arg(long, default_value_t = 1.0)]
     pub repeat_scale: f64,
+    /// Cage coordinates of the session rows: `green` benches binding (against MVC), the
+    /// per-event rows and their Newton iterations for a Green rig (docs/green-coordinates.md).
+    #[arg(long, value_parser = crate::session_args::coords_parser(), default_value = "mvc")]
+    pub coords: cagerig::CoordsKind,
 }
 
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -62,7 +68,7 @@ pub(crate) struct Stat {
 }
 
 impl Stat {
-    fn with_bytes(mut self, bytes: u64) -> Self {
+    pub(crate) fn with_bytes(mut self, bytes: u64) -> Self {
         self.bytes_moved = Some(bytes);
         self
     }
@@ -120,7 +126,7 @@ pub(crate) struct ModelReport {
 }
 
 /// Runs `f` `warmup` times untimed, then `reps` times; returns median/min/max in ms.
-fn time(reps: usize, warmup: usize, mut f: impl FnMut()) -> Stat {
+pub(crate) fn time(reps: usize, warmup: usize, mut f: impl FnMut()) -> Stat {
     for _ in 0..warmup {
         f();
     }
@@ -141,7 +147,7 @@ fn time(reps: usize, warmup: usize, mut f: impl FnMut()) -> Stat {
 }
 
 /// Peak resident memory of this process (VmHWM), in MB; 0 where unknown.
-fn peak_memory_mb() -> f64 {
+pub(crate) fn peak_memory_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
@@ -185,27 +191,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             base.cage.num_vertices() as u64,
         )?;
     }
+    if args.coords == cagerig::CoordsKind::Green {
+        return run_green(args, &name, &base);
+    }
     let mut measured = Vec::new();
     for &levels in &args.subdivide {
-        let parts = if levels == 0 {
-            base.clone()
-        } else {
-            // The bench computes Λ itself (as a session does when no CoR rows are loaded), so
-            // the loaded CoR rows are not carried: subdivided, they would only hold memory.
-            let sub =
-                cagerig::subdivide::subdivide_rig(&base.mesh, &base.skin_weights, None, levels)?;
-            RigParts::new(
-                sub.mesh,
-                base.skeleton.clone(),
-                sub.skin_weights,
-                base.cage.clone(),
-            )
-        };
-        let model = if levels == 0 {
-            name.clone()
-        } else {
-            format!("{name} N={levels}")
-        };
+        let (model, parts) = model_parts(&name, &base, levels)?;
         if !args.json {
             eprintln!(
                 "benchmarking {model} ({} vertices)…",
@@ -242,6 +233,47 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
         crate::bench_table::print_table(&rows);
+    }
+    Ok(())
+}
+
+/// The model at `levels` subdivisions of `base` (Λ rows not carried: the bench computes Λ).
+fn model_parts(name: &str, base: &RigParts, levels: usize) -> anyhow::Result<(String, RigParts)> {
+    if levels == 0 {
+        return Ok((name.to_string(), base.clone()));
+    }
+    let sub = cagerig::subdivide::subdivide_rig(&base.mesh, &base.skin_weights, None, levels)?;
+    Ok((
+        format!("{name} N={levels}"),
+        RigParts::new(
+            sub.mesh,
+            base.skeleton.clone(),
+            sub.skin_weights,
+            base.cage.clone(),
+        ),
+    ))
+}
+
+/// `bench --coords green`: the Green rows of every model ([`crate::bench_green`]).
+fn run_green(args: &Args, name: &str, base: &RigParts) -> anyhow::Result<()> {
+    let mut rows = Vec::new();
+    for &levels in &args.subdivide {
+        let (model, parts) = model_parts(name, base, levels)?;
+        let nv = parts.mesh.num_vertices();
+        if !args.json {
+            eprintln!("benchmarking {model} ({nv} vertices, Green coordinates)…");
+        }
+        let scale = args.repeat_scale;
+        rows.push(crate::bench_green::bench_green_model(
+            model,
+            parts,
+            |base| reps(base, scale, nv),
+        )?);
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    } else {
+        crate::bench_green::print_green_table(&rows);
     }
     Ok(())
 }
@@ -499,105 +531,4 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         dqs_f32: dqs32_stat,
         cor_f32: cor32_stat,
     })
-}
-
-/// A rest-cage drag of the 5 cage vertices nearest `bend_joint` (`drag_reps` events), then
-/// `grab_reps` current-cage grabs each right after a small skeleton edit (refactor + solve +
-/// full chain). `phi_bytes` is the size of one coordinate the drag and the grab read (8 for
-/// f64, 4 for f32).
-fn bench_cage_events(
-    session: &mut RigSession,
-    bend_joint: usize,
-    drag_reps: usize,
-    grab_reps: usize,
-    skin_bytes: u64,
-    [drag_phi_bytes, grab_phi_bytes]: [usize; 2],
-) -> anyhow::Result<(Stat, Stat)> {
-    let (nv, nc) = (session.rest_mesh().len(), session.rest_cage().len());
-    let joint_pos = session.rest_world_from_joint()[bend_joint].translation;
-    let mut by_distance: Vec<usize> = (0..nc).collect();
-    by_distance.sort_by(|&a, &b| {
-        session.rest_cage()[a]
-            .distance(joint_pos)
-            .total_cmp(&session.rest_cage()[b].distance(joint_pos))
-    });
-    let drag: Vec<usize> = by_distance[..5.min(nc)].to_vec();
-    let step = 1e-3 * {
-        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
-        (hi - lo).length()
-    };
-    let mut sign = 1.0;
-    let drag_stat = time(drag_reps, 5, || {
-        sign = -sign;
-        let _ = session.move_rest_cage(&drag, &[DVec3::new(sign * step, 0.0, 0.0)]);
-    })
-    .with_bytes(skin_bytes + (nv * drag.len() * drag_phi_bytes) as u64 + nv as u64 * 48);
-
-    let mut samples = Vec::with_capacity(grab_reps);
-    for i in 0..grab_reps + 3 {
-        let angle = if i % 2 == 0 { 0.01 } else { -0.01 };
-        session.rotate_joint(bend_joint, DVec3::Y, angle)?;
-        let t = Instant::now();
-        session.move_posed_cage(&drag[..1], &[DVec3::new(0.0, sign * step, 0.0)])?;
-        let ms = t.elapsed().as_secs_f64() * 1e3;
-        sign = -sign;
-        if i >= 3 {
-            samples.push(ms);
-        }
-    }
-    samples.sort_by(f64::total_cmp);
-    let grab_stat = Stat {
-        median_ms: samples[samples.len() / 2],
-        min_ms: samples[0],
-        max_ms: samples[samples.len() - 1],
-        bytes_moved: Some(skin_bytes + (nv * nc * grab_phi_bytes) as u64 + nv as u64 * 48),
-    };
-    Ok((drag_stat, grab_stat))
-}
-
-/// A 5-key skeleton track bending every joint a little about alternating axes, and a 3-key
-/// cage track breathing the rest cage, with unrelated key times (asynchronous tracks).
-fn synthetic_tracks(
-    session: &RigSession,
-) -> anyhow::Result<(
-    cagerig::animation::SkeletonTrack,
-    cagerig::animation::CageTrack,
-)> {
-    let skeleton = session.skeleton();
-    let rest = skeleton.rest_world_from_joint();
-    let mut rest_locals = vec![DAffine3::IDENTITY; skeleton.len()];
-    skeleton.locals_from_worlds(&rest, &mut rest_locals);
-    let times = vec![0.0, 3.0, 6.5, 9.0, 10.0];
-    let keys = times
-        .iter()
-        .enumerate()
-        .map(|(k, _)| {
-            rest_locals
-                .iter()
-                .enumerate()
-                .map(|(j, l)| {
-                    let axis = [DVec3::X, DVec3::Y, DVec3::Z][(j + k) % 3];
-                    *l * DAffine3::from_quat(DQuat::from_axis_angle(axis, 0.2 * k as f64))
-                })
-                .collect()
-        })
-        .collect();
-    let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
-    let centre = (lo + hi) * 0.5;
-    let cage_times = vec![0.0, 1.5, 3.0];
-    let offsets = cage_times
-        .iter()
-        .enumerate()
-        .map(|(k, _)| {
-            session
-                .rest_cage()
-                .iter()
-                .map(|c| (*c - centre) * 0.05 * k as f64)
-                .collect()
-        })
-        .collect();
-    Ok((
-        cagerig::animation::SkeletonTrack::new(times, keys)?,
-        cagerig::animation::CageTrack::new(cage_times, offsets)?,
-    ))
 }

@@ -17,6 +17,56 @@ struct InfoReport {
     warnings: Vec<String>,
     /// The cage validator's checks and figures for this mesh (margin required: none).
     cage_checks: Option<cagerig::cage_gen::CageReport>,
+    /// With `--coords green`: the Green binding of this mesh.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    green: Option<GreenReport>,
+}
+
+/// What a Green binding of the rig gives (`--coords green`).
+#[derive(Serialize)]
+struct GreenReport {
+    /// Face coordinates per vertex (#F, the cage triangles).
+    face_coordinates: usize,
+    /// max |M − (φC + ψN)| over the vertices inside the cage, as a fraction of the cage's
+    /// bounding-box diagonal.
+    reproduction_error: f64,
+    /// Mesh vertices outside the cage (Σφ ≠ 1), which a Green rig moves by mean value
+    /// coordinates.
+    outside_cage: usize,
+    /// Seconds the binding took.
+    binding_seconds: f64,
+}
+
+/// Binds the mesh with Green coordinates and measures the reproduction.
+fn green_report(p: &cagerig::session::RigParts) -> anyhow::Result<GreenReport> {
+    use cagerig::coords::green::{compute_green_coords, face_normals};
+    use glam::DVec3;
+    let start = std::time::Instant::now();
+    let coords = compute_green_coords(&p.cage, &p.mesh.positions, None)?;
+    let binding_seconds = start.elapsed().as_secs_f64();
+    let mut normals = vec![DVec3::ZERO; coords.triangles.len()];
+    face_normals(&p.cage.positions, &coords.triangles, &mut normals);
+    let mut reproduced = vec![DVec3::ZERO; p.mesh.num_vertices()];
+    coords.vertex.apply(&p.cage.positions, &mut reproduced);
+    let faces: Vec<usize> = (0..normals.len()).collect();
+    coords.face.apply_delta(&faces, &normals, &mut reproduced);
+    let nc = p.cage.num_vertices();
+    let (mut worst, mut outside) = (0.0f64, 0);
+    for (i, (r, m)) in reproduced.iter().zip(&p.mesh.positions).enumerate() {
+        let sum: f64 = (0..nc).map(|k| coords.vertex.get(i, k)).sum();
+        if (sum - 1.0).abs() > 1e-6 {
+            outside += 1;
+        } else {
+            worst = worst.max(r.distance(*m));
+        }
+    }
+    let (lo, hi) = p.cage.bounding_box();
+    Ok(GreenReport {
+        face_coordinates: coords.triangles.len(),
+        reproduction_error: worst / (hi - lo).length().max(f64::MIN_POSITIVE),
+        outside_cage: outside,
+        binding_seconds,
+    })
 }
 
 /// `cagerig info`.
@@ -27,6 +77,10 @@ pub struct Args {
     /// Machine-readable output (errors too).
     #[arg(long)]
     pub json: bool,
+    /// Also bind with these cage coordinates and report it (`green`: face coordinates,
+    /// reproduction error, vertices outside the cage, binding time).
+    #[arg(long, value_parser = crate::session_args::coords_parser(), default_value = "mvc")]
+    pub coords: cagerig::CoordsKind,
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
@@ -59,6 +113,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         cage_checks: cage_check
             .is_ok()
             .then(|| crate::commands::cage::validate_rig_cage(&p.cage, &p.mesh)),
+        green: match args.coords {
+            cagerig::CoordsKind::Mvc => None,
+            cagerig::CoordsKind::Green => Some(green_report(p)?),
+        },
     };
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -86,6 +144,16 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 100.0 * checks.mean_distance_fraction
             );
             crate::commands::cage::print_checks(checks);
+        }
+        if let Some(green) = &report.green {
+            println!(
+                "green coords   {} face coordinates, reproduction {:.2e} of the diagonal, {} \
+                 vertices outside the cage, bound in {:.3} s",
+                green.face_coordinates,
+                green.reproduction_error,
+                green.outside_cage,
+                green.binding_seconds
+            );
         }
         if report.warnings.is_empty() {
             println!("warnings       none");

@@ -32,6 +32,11 @@ class RigWarning(UserWarning): ...
 def mvc(points: _ArrayLike, cage_vertices: _ArrayLike, cage_triangles: _ArrayLike) -> _F64Array:
     """Mean value coordinates Φ, (n, #C), of ``points`` w.r.t. the cage."""
 
+def green_coordinates(
+    points: _ArrayLike, cage_vertices: _ArrayLike, cage_triangles: _ArrayLike
+) -> tuple[_F64Array, _F64Array]:
+    """Green coordinates (φ (n, #C), ψ (n, #F)) of ``points`` w.r.t. the closed cage."""
+
 def skin_weights(
     vertices: _ArrayLike,
     triangles: _ArrayLike,
@@ -129,6 +134,7 @@ class Rig:
         keep_file_coords: bool = False,
         auto_cage: Optional[int] = None,
         auto_weights: bool = False,
+        coords: Literal["mvc", "green"] = "mvc",
     ) -> Rig: ...
     @staticmethod
     def builtin(
@@ -140,6 +146,7 @@ class Rig:
         localisation: _Localisation = "articulation",
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
+        coords: Literal["mvc", "green"] = "mvc",
     ) -> Rig: ...
     @staticmethod
     def from_arrays(
@@ -157,8 +164,11 @@ class Rig:
         localisation: _Localisation = "articulation",
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
+        coords: Literal["mvc", "green"] = "mvc",
     ) -> Rig: ...
     def copy(self) -> Rig: ...
+    @property
+    def coords(self) -> Literal["mvc", "green"]: ...
     def __copy__(self) -> Rig: ...
     def __deepcopy__(self, memo: Any) -> Rig: ...
     # Edits.

@@ -1,0 +1,316 @@
+//! `cagerig bench --coords green`: the session-level rows of the bench for a rig bound with
+//! Green coordinates — binding (against mean value coordinates on the same mesh), session
+//! assembly, the per-event rows (animation frame, rest-cage drag, grab after a skeleton edit) —
+//! and the Newton iterations each event took (CageUp's Levenberg–Marquardt steps and Hessians,
+//! CageRev's Newton steps). The skinning kernels do not depend on the coordinates and are
+//! benched by the MVC pass.
+
+use std::time::Instant;
+
+use anyhow::Context;
+use cagerig::CoordsKind;
+use cagerig::coords::{green, mvc};
+use cagerig::playback::AnimationPlayer;
+use cagerig::session::{RigParts, RigSession, SessionOptions};
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::commands::bench::Stat;
+
+/// Newton work per event: medians and maxima over the events of a row.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub(crate) struct IterationStat {
+    /// CageUp steps (each with one Hessian) per event.
+    pub cageup_median: usize,
+    pub cageup_max: usize,
+    /// CageRev Newton steps per grab (0 for events without a grab).
+    pub cagerev_median: usize,
+    pub cagerev_max: usize,
+}
+
+/// One model's Green figures.
+#[derive(Debug, Serialize)]
+pub(crate) struct GreenModelRow {
+    pub model: String,
+    pub coords: &'static str,
+    pub vertices: usize,
+    pub joints: usize,
+    pub cage_vertices: usize,
+    pub cage_faces: usize,
+    pub peak_memory_mb: f64,
+    /// Green coordinates (φ, ψ) of every mesh vertex.
+    pub binding: Stat,
+    /// Mean value coordinates of the same vertices, for the ratio.
+    pub mvc_binding: Stat,
+    pub binding_over_mvc: f64,
+    /// `RigSession::new` with Green coordinates (binding, MaxVol rows of [φ ψ], Ψ, the fit).
+    pub session_build: Stat,
+    pub animation_frame: Stat,
+    pub animation_frame_iterations: IterationStat,
+    pub rest_cage_drag: Stat,
+    pub rest_cage_drag_iterations: IterationStat,
+    pub grab_after_skeleton_edit: Stat,
+    pub grab_after_skeleton_edit_iterations: IterationStat,
+    /// Events refused (Green CageUp fold) among the timed ones.
+    pub refused_events: usize,
+}
+
+/// Median/min/max of samples in ms.
+fn stat(mut samples: Vec<f64>) -> Stat {
+    samples.sort_by(f64::total_cmp);
+    let n = samples.len().max(1);
+    Stat {
+        median_ms: samples.get(n / 2).copied().unwrap_or(0.0),
+        min_ms: samples.first().copied().unwrap_or(0.0),
+        max_ms: samples.last().copied().unwrap_or(0.0),
+        bytes_moved: None,
+    }
+}
+
+fn iterations(mut cageup: Vec<usize>, mut cagerev: Vec<usize>) -> IterationStat {
+    cageup.sort_unstable();
+    cagerev.sort_unstable();
+    IterationStat {
+        cageup_median: cageup.get(cageup.len() / 2).copied().unwrap_or(0),
+        cageup_max: cageup.last().copied().unwrap_or(0),
+        cagerev_median: cagerev.get(cagerev.len() / 2).copied().unwrap_or(0),
+        cagerev_max: cagerev.last().copied().unwrap_or(0),
+    }
+}
+
+/// Times `event` `reps` times on `session` (after `warmup` untimed runs), with the Newton
+/// iterations of each; a refused event (Green fold) is counted, not timed.
+fn timed_events(
+    session: &mut RigSession,
+    reps: usize,
+    warmup: usize,
+    refused: &mut usize,
+    mut event: impl FnMut(&mut RigSession, usize) -> Result<(), cagerig::RigError>,
+) -> anyhow::Result<(Stat, IterationStat)> {
+    let (mut times, mut up, mut rev) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..reps + warmup {
+        let before = session.green_newton_reports().map(|(_, r)| r);
+        let start = Instant::now();
+        let result = event(session, i);
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        match result {
+            Ok(()) => {}
+            Err(
+                cagerig::RigError::GreenFitFailed { .. }
+                | cagerig::RigError::GreenGrabFailed { .. },
+            ) => {
+                *refused += 1;
+                continue;
+            }
+            Err(e) => return Err(e).context("a benched event"),
+        }
+        if i < warmup {
+            continue;
+        }
+        times.push(ms);
+        if let Some((fit, reverse)) = session.green_newton_reports() {
+            up.push(fit.iterations);
+            rev.push(if Some(reverse) == before {
+                0
+            } else {
+                reverse.iterations
+            });
+        }
+    }
+    Ok((stat(times), iterations(up, rev)))
+}
+
+/// The Green rows of one model.
+pub(crate) fn bench_green_model(
+    model: String,
+    parts: RigParts,
+    reps: impl Fn(usize) -> usize,
+) -> anyhow::Result<GreenModelRow> {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+    let nv = parts.mesh.num_vertices();
+    let (cage, _) = cagerig::cage_enclosure::validate_cage_for_mesh(
+        parts.cage.clone(),
+        &parts.mesh.positions,
+        false,
+    )?;
+    let time = |n: usize, f: &mut dyn FnMut() -> anyhow::Result<()>| -> anyhow::Result<Stat> {
+        let mut samples = Vec::with_capacity(n);
+        for _ in 0..n {
+            let start = Instant::now();
+            f()?;
+            samples.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+        Ok(stat(samples))
+    };
+    let binding = time(reps(5), &mut || {
+        drop(green::compute_green_coords(
+            &cage,
+            &parts.mesh.positions,
+            None,
+        )?);
+        Ok(())
+    })?;
+    let mvc_binding = time(reps(5), &mut || {
+        drop(mvc::compute_cage_coords(
+            &cage,
+            &parts.mesh.positions,
+            None,
+        )?);
+        Ok(())
+    })?;
+    let options = SessionOptions {
+        coords: CoordsKind::Green,
+        ..SessionOptions::default()
+    };
+    let mut built = None;
+    let session_build = time(reps(3).min(3), &mut || {
+        built = None;
+        built = Some(RigSession::new(parts.clone(), options.clone())?.0);
+        Ok(())
+    })?;
+    let mut session = built.context("no timing run")?;
+    let nj = session.skeleton().len();
+    let nc = session.rest_cage().len();
+    let cage_faces = session.green_triangles().map_or(0, <[[u32; 3]]>::len);
+    let bend_joint = session.skeleton().find("lowerarm01.R").unwrap_or(nj / 2);
+    let mut refused = 0;
+
+    // Animation: the bench's synthetic tracks (skeleton keys and breathing cage keys).
+    let (skeleton_track, cage_track) = crate::bench_events::synthetic_tracks(&session)?;
+    let mut player = AnimationPlayer::new(&session, Some(skeleton_track), Some(cage_track))?;
+    let duration = player.duration();
+    let (animation_frame, animation_frame_iterations) =
+        timed_events(&mut session, reps(100), 3, &mut refused, |s, i| {
+            player.apply((i as f64 * 0.037) % duration, s)
+        })?;
+    drop(player);
+    session.reset_pose();
+    // The MVC pass's pose (the joint bent by 60° about +X), reached in 10° steps: a Green
+    // CageUp follows a large bend better in steps (docs/green-coordinates.md).
+    for _ in 0..6 {
+        session.rotate_joint(bend_joint, DVec3::X, 10f64.to_radians())?;
+    }
+
+    // The rest-cage drag of the 5 cage vertices nearest the bent joint, back and forth.
+    let joint = session.rest_world_from_joint()[bend_joint].translation;
+    let mut by_distance: Vec<usize> = (0..nc).collect();
+    by_distance.sort_by(|&a, &b| {
+        session.rest_cage()[a]
+            .distance(joint)
+            .total_cmp(&session.rest_cage()[b].distance(joint))
+    });
+    let drag: Vec<usize> = by_distance[..5.min(nc)].to_vec();
+    let step = 1e-3 * {
+        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
+        (hi - lo).length()
+    };
+    let (rest_cage_drag, rest_cage_drag_iterations) =
+        timed_events(&mut session, reps(100), 3, &mut refused, |s, i| {
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            s.move_rest_cage(&drag, &[DVec3::new(sign * step, 0.0, 0.0)])
+        })?;
+
+    // A grab right after a small skeleton edit (the edit untimed, as in the MVC pass).
+    let (mut times, mut up, mut rev) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..reps(51) + 3 {
+        let angle = if i % 2 == 0 { 0.01 } else { -0.01 };
+        session.rotate_joint(bend_joint, DVec3::Y, angle)?;
+        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+        let start = Instant::now();
+        match session.move_posed_cage(&drag[..1], &[DVec3::new(0.0, sign * step, 0.0)]) {
+            Ok(()) => {}
+            Err(
+                cagerig::RigError::GreenFitFailed { .. }
+                | cagerig::RigError::GreenGrabFailed { .. },
+            ) => {
+                refused += 1;
+                continue;
+            }
+            Err(e) => return Err(e).context("a benched grab"),
+        }
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        if i >= 3 {
+            times.push(ms);
+            if let Some((fit, reverse)) = session.green_newton_reports() {
+                up.push(fit.iterations);
+                rev.push(reverse.iterations);
+            }
+        }
+    }
+    Ok(GreenModelRow {
+        model,
+        coords: CoordsKind::Green.name(),
+        vertices: nv,
+        joints: nj,
+        cage_vertices: nc,
+        cage_faces,
+        peak_memory_mb: crate::commands::bench::peak_memory_mb(),
+        binding_over_mvc: binding.median_ms / mvc_binding.median_ms.max(f64::MIN_POSITIVE),
+        binding,
+        mvc_binding,
+        session_build,
+        animation_frame,
+        animation_frame_iterations,
+        rest_cage_drag,
+        rest_cage_drag_iterations,
+        grab_after_skeleton_edit: stat(times),
+        grab_after_skeleton_edit_iterations: iterations(up, rev),
+        refused_events: refused,
+    })
+}
+
+/// The table of `bench --coords green`.
+pub(crate) fn print_green_table(rows: &[GreenModelRow]) {
+    for row in rows {
+        println!(
+            "\n{} (Green coordinates): {} vertices, {} joints, cage {} vertices / {} faces, peak {:.0} MB",
+            row.model,
+            row.vertices,
+            row.joints,
+            row.cage_vertices,
+            row.cage_faces,
+            row.peak_memory_mb
+        );
+        println!(
+            "{:<26} {:>10} {:>10} {:>10}   Newton steps per event (CageUp, CageRev): median / max",
+            "row", "median ms", "min ms", "max ms"
+        );
+        let line = |name: &str, s: &Stat, it: Option<&IterationStat>| {
+            let steps = it.map_or(String::new(), |i| {
+                format!(
+                    "   {} / {}, {} / {}",
+                    i.cageup_median, i.cageup_max, i.cagerev_median, i.cagerev_max
+                )
+            });
+            println!(
+                "{name:<26} {:>10.3} {:>10.3} {:>10.3}{steps}",
+                s.median_ms, s.min_ms, s.max_ms
+            );
+        };
+        line("binding (Green)", &row.binding, None);
+        line("binding (MVC)", &row.mvc_binding, None);
+        println!(
+            "{:<26} {:>10.2}×",
+            "binding Green / MVC", row.binding_over_mvc
+        );
+        line("session build", &row.session_build, None);
+        line(
+            "animation frame",
+            &row.animation_frame,
+            Some(&row.animation_frame_iterations),
+        );
+        line(
+            "rest-cage drag",
+            &row.rest_cage_drag,
+            Some(&row.rest_cage_drag_iterations),
+        );
+        line(
+            "grab after skeleton edit",
+            &row.grab_after_skeleton_edit,
+            Some(&row.grab_after_skeleton_edit_iterations),
+        );
+        if row.refused_events > 0 {
+            println!("refused events (Green fold): {}", row.refused_events);
+        }
+    }
+}
