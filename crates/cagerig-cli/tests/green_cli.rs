@@ -1,0 +1,94 @@
+//! `--coords green` on the command line: the Arm scenario's grab lands exactly, `info` reports
+//! the Green binding, an unknown kind lists the accepted ones.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn cagerig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_cagerig"))
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn positions(path: &Path) -> Vec<glam::DVec3> {
+    cagerig::io::read_obj(path).unwrap().positions
+}
+
+#[test]
+fn edit_with_green_coordinates_lands_the_grab_exactly() {
+    let dir = std::env::temp_dir().join(format!("cagerig-green-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let status = cagerig()
+        .arg("edit")
+        .arg(repo().join("data/arm/arm.obj"))
+        .args(["--coords", "green", "--script"])
+        .arg(repo().join("examples/edits.json"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    // Step 3 grabs current-cage vertices 10, 13, 15 by (-0.15, 0.2, 0.05).
+    let before = positions(&dir.join("step2_cage_posed.obj"));
+    let after = positions(&dir.join("step3_cage_posed.obj"));
+    let (lo, hi) = cagerig::mesh::bounding_box(&before);
+    let tol = 1e-9 * (hi - lo).length();
+    let offset = glam::DVec3::new(-0.15, 0.2, 0.05);
+    for (k, (a, b)) in after.iter().zip(&before).enumerate() {
+        let expected = if [10, 13, 15].contains(&k) {
+            *b + offset
+        } else {
+            *b
+        };
+        // The OBJ files hold 17 significant digits: round-off of the text is far below tol.
+        assert!(
+            a.distance(expected) < tol,
+            "cage vertex {k}: {a} vs {expected}"
+        );
+    }
+    // The rest mesh at step 0 is the loaded mesh (Green coordinates reproduce it).
+    let loaded = positions(&repo().join("data/arm/arm.obj"));
+    let rest = positions(&dir.join("step0_mesh_rest.obj"));
+    assert!(cagerig::mesh::max_distance(&loaded, &rest) < tol);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn info_reports_the_green_binding_and_unknown_kinds_are_refused() {
+    let output = cagerig()
+        .arg("info")
+        .arg(repo().join("data/arm/arm.obj"))
+        .args(["--coords", "green", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let green = &report["green"];
+    assert_eq!(green["face_coordinates"], 112);
+    assert_eq!(green["outside_cage"], 0);
+    assert!(green["reproduction_error"].as_f64().unwrap() < 1e-9);
+    let output = cagerig()
+        .arg("edit")
+        .arg(repo().join("data/arm/arm.obj"))
+        .args(["--coords", "harmonic", "--out", "unused"])
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("mvc") && stderr.contains("green"),
+        "{stderr}"
+    );
+}
