@@ -85,6 +85,12 @@ impl StudioApp {
                 app.open_blocking(OpenRequest::Rig(source.clone().unwrap_or_default()))
             }
         }
+        if let (Some(kind), Some(doc)) = (options.coords, app.project.doc.as_mut())
+            && doc.session.coords_kind() != kind
+            && let Err(e) = doc.execute(&crate::document::Command::SetCoords(kind))
+        {
+            app.diagnostics.log.error(format!("--coords {kind}: {e}"));
+        }
         app.select_at_start(&options);
         app.view.color_mode = options.color_mode;
         let errors_before = app.diagnostics.log.error_count();

@@ -49,6 +49,8 @@ pub enum Command {
         offsets: Vec<DVec3>,
     },
     SetSkinning(SkinningMethod),
+    /// Rebind with other cage coordinates (MVC ↔ Green), keeping every edit.
+    SetCoords(cagerig::CoordsKind),
     ResetPose,
     SetLocks(SyncLocks),
     /// Key the current pose (skeleton track) or the current rest cage (cage track).
@@ -75,6 +77,7 @@ impl Command {
             Command::MoveRestCage { .. } => "move rest cage".into(),
             Command::MovePosedCage { .. } => "move current cage".into(),
             Command::SetSkinning(m) => format!("skinning {}", m.label()),
+            Command::SetCoords(k) => format!("{} coordinates", k.label()),
             Command::ResetPose => "reset pose".into(),
             Command::SetLocks(_) => "sync locks".into(),
             Command::SetKey { track, .. } => format!("set {track:?} key").to_lowercase(),
@@ -219,6 +222,13 @@ impl Document {
                 s.move_posed_cage(vertices, offsets)?;
             }
             Command::SetSkinning(method) => s.set_skinning(*method)?,
+            Command::SetCoords(kind) => {
+                let mut state = s.editable_state();
+                state.coords = *kind;
+                s.restore_editable_state(&state)?;
+                // A new binding: the player's keyframes belong to the old one.
+                self.player = None;
+            }
             Command::ResetPose => s.reset_pose(),
             Command::SetLocks(locks) => s.set_sync_locks(*locks),
             Command::SetKey { track, time } => {

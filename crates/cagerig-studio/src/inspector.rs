@@ -90,6 +90,27 @@ fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: 
             }
         }
     });
+    let coords = doc.session.coords_kind();
+    ui.horizontal(|ui| {
+        ui.label("Coordinates");
+        for k in cagerig::CoordsKind::ALL {
+            let label = match k {
+                cagerig::CoordsKind::Mvc => "MVC",
+                cagerig::CoordsKind::Green => "Green",
+            };
+            if ui
+                .selectable_label(coords == k, label)
+                .on_hover_text(format!(
+                    "Bind with {} coordinates (keeps every edit)",
+                    k.label()
+                ))
+                .clicked()
+                && coords != k
+            {
+                run_command(doc, &Command::SetCoords(k), diag);
+            }
+        }
+    });
     let mut new_locks = locks;
     ui.checkbox(
         &mut new_locks.skel_up,

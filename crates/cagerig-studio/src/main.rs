@@ -64,6 +64,10 @@ struct Args {
     /// selected cage vertex), joint-coords (Ψ of the selected joint).
     #[arg(long, value_enum, default_value = "none")]
     color_map: cagerig_studio::view_state::ColorMode,
+    /// Bind with these cage coordinates after opening: mvc (the paper's) or green
+    /// (shape-preserving cage edits); switchable later in the Rig panel.
+    #[arg(long, value_parser = parse_coords)]
+    coords: Option<cagerig::CoordsKind>,
     /// Simulate a drag (one event per frame) to measure interactive frame times.
     #[arg(long, value_enum)]
     benchmark_drag: Option<DragBenchmark>,
@@ -100,6 +104,12 @@ fn display_available() -> bool {
     }
     let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
     set("DISPLAY") || set("WAYLAND_DISPLAY")
+}
+
+/// `--coords`: a name of `CoordsKind::ALL`, through its `FromStr`.
+fn parse_coords(text: &str) -> Result<cagerig::CoordsKind, String> {
+    text.parse()
+        .map_err(|e: cagerig::coords_kind::UnknownCoordsKind| e.to_string())
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
@@ -150,6 +160,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         select_cage: args.select_cage,
         select_joint: args.select_joint,
         color_mode: args.color_map,
+        coords: args.coords,
     };
     let failures = std::sync::Arc::clone(&options.failures);
     let native = eframe::NativeOptions {

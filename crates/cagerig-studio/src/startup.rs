@@ -35,6 +35,8 @@ pub struct StartupOptions {
     pub select_joint: Option<usize>,
     /// Colour map at start.
     pub color_mode: ColorMode,
+    /// Cage coordinates to bind with after opening (`--coords`); `None`: as opened.
+    pub coords: Option<cagerig::CoordsKind>,
     /// Failures of the startup actions (open, script, save), for the binary's exit status.
     pub failures: Arc<std::sync::Mutex<Vec<String>>>,
 }

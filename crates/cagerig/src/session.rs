@@ -42,6 +42,7 @@ mod editable_state;
 mod green;
 mod parts;
 mod pose_events;
+mod rebind;
 mod sync_chain;
 #[cfg(test)]
 mod test_rigs;
@@ -154,12 +155,15 @@ pub struct RigSession {
     /// Green coordinates' face terms and Newton operators (`None` for MVC rigs; see
     /// [`green`]).
     green: Option<Box<GreenState>>,
+    /// The options the session was built with (a rebind keeps them, see [`rebind`]).
+    options: SessionOptions,
 }
 
 impl RigSession {
     /// Validates the parts, computes what is missing (Φ, MaxVol rows, Ψ), builds the operators
     /// and places the rig at rest. Returns the warnings gathered on the way.
     pub fn new(parts: RigParts, options: SessionOptions) -> Result<(Self, Vec<Warning>), RigError> {
+        let stored_options = options.clone();
         let RigParts {
             mut mesh,
             skeleton,
@@ -396,6 +400,7 @@ impl RigSession {
             cor_rows,
             given_centre_coords: cor_centre_coords,
             green,
+            options: stored_options,
             cor: None,
             cor_options: options.cor_centres,
             options_fit_source: options.fit_source,

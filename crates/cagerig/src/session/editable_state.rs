@@ -9,7 +9,8 @@
 use glam::{DAffine3, DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::RigSession;
+use super::{PHI_C_TOLERANCE, RigSession};
+use crate::coords_kind::CoordsKind;
 use crate::error::RigError;
 use crate::pose::LocalPose;
 use crate::skinning::SkinningMethod;
@@ -52,6 +53,9 @@ pub struct EditableState {
     pub skinning: SkinningMethod,
     /// The SkelUp / CageUp locks.
     pub locks: SyncLocks,
+    /// The cage coordinates the rig is bound with (absent in older files: mean value).
+    #[serde(default)]
+    pub coords: CoordsKind,
 }
 
 impl RigSession {
@@ -103,12 +107,35 @@ impl RigSession {
             translation_offsets: self.translation_offset.clone(),
             skinning: self.method,
             locks: self.locks,
+            coords: self.coords_kind(),
         }
     }
 
     /// Restores a state taken with [`RigSession::editable_state`] (from this rig: the sizes
-    /// must match, every number finite). One all-or-nothing event.
+    /// must match, every number finite). One all-or-nothing event. A state bound with other
+    /// cage coordinates rebinds the rig first ([`RigSession::rebound`]).
     pub fn restore_editable_state(&mut self, state: &EditableState) -> Result<(), RigError> {
+        if state.coords != self.coords_kind() {
+            let (mut rebound, _) = self.rebound(state.coords)?;
+            let mut adapted = state.clone();
+            if !state.locks.skel_up && state.rest_cage.len() == rebound.rest_cage.len() {
+                // SkelUp of the new binding places the joints (its Ψ differs), unless the
+                // state's joints already agree with it (then they are kept bit for bit: an undo
+                // restores the exact state).
+                rebound
+                    .skeleton_updater
+                    .apply(&state.rest_cage, &mut adapted.rest_joints);
+                let (lo, hi) = crate::mesh::bounding_box(&state.rest_cage);
+                let agree = crate::mesh::max_distance(&adapted.rest_joints, &state.rest_joints)
+                    <= PHI_C_TOLERANCE * (hi - lo).length();
+                if agree {
+                    adapted.rest_joints.clone_from(&state.rest_joints);
+                }
+            }
+            rebound.restore_editable_state(&adapted)?;
+            *self = rebound;
+            return Ok(());
+        }
         let nc = self.rest_cage.len();
         let nj = self.skeleton.len();
         let posed_cage = state.posed_cage.as_deref().unwrap_or(&state.rest_cage);
