@@ -16,7 +16,9 @@
 //! Hessian is not positive definite, or its quadratic model predicts the decrease of ½‖r‖² badly,
 //! the step is damped (Levenberg–Marquardt on the full Hessian, i.e. a trust region whose damping
 //! shrinks to 0 — pure Newton — as the iterate converges). Warm-started from the previous C'
-//! moved by the change of the skinning transforms (done by the session). The fit is converged when the
+//! moved by the change of the skinning transforms (done by the session); the first steps of an
+//! event reuse the previous event's undamped Hessian factors (chord steps) while each halves the
+//! gradient. The fit is converged when the
 //! gradient Jᵀr is below [`GRADIENT_TOLERANCE`] of the cage size: C' is then a stationary point
 //! to round-off, which is what CageRev inverts exactly ([`super::green_cage_reverser`]). A large
 //! change of pose in one event is split into pieces (continuation) when the direct solve stalls.
@@ -31,6 +33,9 @@ use crate::error::RigError;
 
 /// Converged when max |Jᵀr| is at most this fraction of the cage size.
 pub const GRADIENT_TOLERANCE: f64 = 1e-13;
+/// A chord step (stale Hessian) is kept only when it leaves at most this fraction of the
+/// gradient.
+pub const CHORD_RATE: f64 = 0.5;
 /// At most this many steps for the direct solve of an event.
 pub const MAX_STEPS: usize = 60;
 /// At most this many steps per piece of a continuation.
@@ -50,6 +55,8 @@ pub struct GreenCageFit {
     lu: DenseLu,
     /// The Levenberg–Marquardt damping the last solve ended with (the next one starts there).
     damping: f64,
+    /// The damping of the factors in `lu` (0: an undamped Hessian, usable for chord steps).
+    factor_damping: f64,
     tolerance: f64,
     /// J (`3#R × 3#C`) and JᵀJ (`3#C × 3#C`), refreshed with the factors.
     jacobian: Mat<f64>,
@@ -114,6 +121,7 @@ impl GreenCageFit {
             binding_cage: binding_cage.to_vec(),
             lu: DenseLu::new(3 * num_cage),
             damping: 0.0,
+            factor_damping: f64::INFINITY,
             tolerance: GRADIENT_TOLERANCE * cage_size.max(f64::MIN_POSITIVE),
             jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
             normal_matrix: Mat::zeros(3 * num_cage, 3 * num_cage),
@@ -353,6 +361,7 @@ impl GreenCageFit {
 
     /// Factorises the stored Hessian plus `damping`·I.
     fn factorise_damped(&mut self, damping: f64) -> Result<(), RigError> {
+        self.factor_damping = damping;
         let n = 3 * self.num_cage;
         let a = self.lu.matrix_mut();
         for c in 0..n {
@@ -390,6 +399,43 @@ impl GreenCageFit {
                 &mut residual,
                 &mut gradient,
             );
+            // Chord steps first: the last solve's undamped Hessian factors (the previous event's
+            // solution is close), as long as each step at least halves the gradient.
+            if self.lu.is_factorised() && self.factor_damping == 0.0 {
+                while norm > self.tolerance && report.iterations < max_steps {
+                    for (k, d) in gradient.iter().enumerate() {
+                        self.step[3 * k] = -d.x;
+                        self.step[3 * k + 1] = -d.y;
+                        self.step[3 * k + 2] = -d.z;
+                    }
+                    self.lu.solve(&mut self.step);
+                    for (k, (t, p)) in trial.iter_mut().zip(posed_cage.iter()).enumerate() {
+                        *t = *p
+                            + DVec3::new(
+                                self.step[3 * k],
+                                self.step[3 * k + 1],
+                                self.step[3 * k + 2],
+                            );
+                    }
+                    let (trial_energy, trial_norm) = self.evaluate(
+                        &trial,
+                        target,
+                        &mut g,
+                        &mut face_sums,
+                        &mut trial_residual,
+                        &mut trial_gradient,
+                    );
+                    if !(trial_energy <= energy && trial_norm <= CHORD_RATE * norm) {
+                        break;
+                    }
+                    report.iterations += 1;
+                    posed_cage.copy_from_slice(&trial);
+                    std::mem::swap(&mut residual, &mut trial_residual);
+                    std::mem::swap(&mut gradient, &mut trial_gradient);
+                    energy = trial_energy;
+                    norm = trial_norm;
+                }
+            }
             // Levenberg–Marquardt on the full Hessian (a trust region): the damping μ grows when
             // the quadratic model predicts badly and shrinks (to 0: Newton) when it predicts well.
             let mut damping = self.damping;
