@@ -60,12 +60,7 @@ impl CoordsKind {
 
     /// The accepted names as a sentence: `"mvc or green"`.
     pub fn names_text() -> String {
-        let names: Vec<&str> = Self::ALL.iter().map(|m| m.name()).collect();
-        match names.split_last() {
-            Some((last, [])) => (*last).to_string(),
-            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
-            None => String::new(),
-        }
+        crate::error::names_sentence(&Self::ALL.map(Self::name))
     }
 }
 

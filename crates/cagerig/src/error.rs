@@ -397,6 +397,16 @@ impl std::fmt::Display for Warning {
     }
 }
 
+/// Accepted names as a sentence: `"a"`, `"a or b"`, `"a, b or c"` (the messages of the kinds'
+/// parsers: skinning methods, coordinates).
+pub(crate) fn names_sentence(names: &[&str]) -> String {
+    match names.split_last() {
+        Some((last, [])) => (*last).to_string(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

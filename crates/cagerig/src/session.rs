@@ -278,12 +278,13 @@ impl RigSession {
             }
             _ => None,
         };
-        let (rows, mode) = match options.fit_rows {
-            _ if green_rows.is_some() => {
-                (green_rows.unwrap_or_default(), CageFitMode::LeastSquares)
+        let (rows, mode) = match (green_rows, options.fit_rows) {
+            // Green: the MaxVol rows of [φ ψ], or the given rows, always least squares.
+            (Some(rows), _) => (rows, CageFitMode::LeastSquares),
+            (None, FitRows::Rows(rows)) if green_parts.is_some() => {
+                (rows, CageFitMode::LeastSquares)
             }
-            FitRows::Rows(rows) if green_parts.is_some() => (rows, CageFitMode::LeastSquares),
-            FitRows::MaxVol => match maxvol_rows {
+            (None, FitRows::MaxVol) => match maxvol_rows {
                 Some(rows) if rows.len() < nc => {
                     return Err(RigError::SizeMismatch {
                         what: "given MaxVol rows (at least one per cage vertex)",
@@ -298,8 +299,8 @@ impl RigSession {
                     CageFitMode::Interpolate,
                 ),
             },
-            FitRows::AllRows => ((0..nv).collect(), CageFitMode::LeastSquares),
-            FitRows::Rows(rows) => {
+            (None, FitRows::AllRows) => ((0..nv).collect(), CageFitMode::LeastSquares),
+            (None, FitRows::Rows(rows)) => {
                 let mode = if rows.len() == nc {
                     CageFitMode::Interpolate
                 } else {

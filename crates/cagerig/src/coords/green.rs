@@ -61,23 +61,15 @@ pub fn compute_green_coords(
     points: &[DVec3],
     progress: Option<&(dyn Fn(usize) + Sync)>,
 ) -> Result<GreenCoords, RigError> {
-    if cage.triangles.is_empty() {
-        return Err(RigError::EmptyCage);
-    }
-    if let Some(index) = points.iter().position(|p| !p.is_finite()) {
-        return Err(RigError::NonFinite {
-            what: "point",
-            index,
-        });
-    }
     let num_cage = cage.num_vertices();
+    super::check_coords_inputs(
+        cage,
+        points,
+        "Green vertex and face coordinates (#V × (#C + #F))",
+        num_cage + cage.triangles.len(),
+    )?;
     let triangles = outward_triangles(cage);
     let num_faces = triangles.len();
-    crate::memory_estimate::check_dense_allocation(
-        "Green vertex and face coordinates (#V × (#C + #F))",
-        points.len(),
-        num_cage + num_faces,
-    )?;
     let frames: Vec<Option<GreenTriangle>> = triangles
         .iter()
         .map(|t| GreenTriangle::new(t.map(|v| cage.positions[v as usize])))

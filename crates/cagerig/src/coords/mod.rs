@@ -14,3 +14,23 @@ mod mvc_batch;
 mod mvc_lanes;
 mod mvc_triangle;
 pub mod stretched_normals;
+
+/// The checks every cage-coordinates computation makes first: a cage with triangles, finite
+/// points, and room for the dense `#points × columns` result (named `what` in the error).
+pub(crate) fn check_coords_inputs(
+    cage: &crate::mesh::TriMesh,
+    points: &[glam::DVec3],
+    what: &'static str,
+    columns: usize,
+) -> Result<(), crate::error::RigError> {
+    if cage.triangles.is_empty() {
+        return Err(crate::error::RigError::EmptyCage);
+    }
+    if let Some(index) = points.iter().position(|p| !p.is_finite()) {
+        return Err(crate::error::RigError::NonFinite {
+            what: "point",
+            index,
+        });
+    }
+    crate::memory_estimate::check_dense_allocation(what, points.len(), columns)
+}

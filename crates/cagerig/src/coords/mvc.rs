@@ -240,22 +240,14 @@ pub fn compute_cage_coords(
     points: &[DVec3],
     progress: Option<&(dyn Fn(usize) + Sync)>,
 ) -> Result<CageCoords, RigError> {
-    if cage.triangles.is_empty() {
-        return Err(RigError::EmptyCage);
-    }
-    if let Some(index) = points.iter().position(|p| !p.is_finite()) {
-        return Err(RigError::NonFinite {
-            what: "point",
-            index,
-        });
-    }
+    super::check_coords_inputs(
+        cage,
+        points,
+        "cage coordinates Φ (#V × #C)",
+        cage.num_vertices(),
+    )?;
     let evaluator = MvcEvaluator::new(&cage.positions, &cage.triangles);
     let (num_points, num_cage) = (points.len(), cage.num_vertices());
-    crate::memory_estimate::check_dense_allocation(
-        "cage coordinates Φ (#V × #C)",
-        num_points,
-        num_cage,
-    )?;
     // Φ is 8 · #V · #C bytes (62 MB at N = 3): not zero-filled first; the blocks below write every
     // entry, so the page faults of first touch are spread over the worker threads.
     let mut matrix = Mat::<f64>::with_capacity(num_points, num_cage);

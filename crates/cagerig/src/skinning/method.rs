@@ -64,12 +64,7 @@ impl SkinningMethod {
 
     /// The accepted names as a sentence: `"lbs, dqs or cor"`.
     pub fn names_text() -> String {
-        let names: Vec<&str> = Self::ALL.iter().map(|m| m.name()).collect();
-        match names.split_last() {
-            Some((last, [])) => (*last).to_string(),
-            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
-            None => String::new(),
-        }
+        crate::error::names_sentence(&Self::ALL.map(Self::name))
     }
 }
 

@@ -27,7 +27,7 @@ use faer::{Accum, Mat, Par};
 use glam::DVec3;
 
 use super::dense_lu::DenseLu;
-use super::newton::NewtonReport;
+use super::newton::{NewtonReport, solve_by_continuation};
 use crate::coords::stretched_normals::StretchedNormals;
 use crate::error::RigError;
 
@@ -207,31 +207,19 @@ impl GreenCageFit {
         }
         let mut total = self.solve_for(target, posed_cage, MAX_STEPS)?;
         if total.residual > self.tolerance && self.has_last_target {
-            for pieces in [4usize, 16] {
-                posed_cage.copy_from_slice(&self.last_solution);
-                let mut converged = true;
-                for piece in 1..=pieces {
-                    let a = piece as f64 / pieces as f64;
-                    let mut piece_target = std::mem::take(&mut self.piece_target);
-                    for ((p, last), t) in piece_target.iter_mut().zip(&self.last_target).zip(target)
-                    {
-                        *p = last.lerp(*t, a);
-                    }
-                    let report = self.solve_for(&piece_target, posed_cage, MAX_PIECE_STEPS);
-                    self.piece_target = piece_target;
-                    let report = report?;
-                    total.iterations += report.iterations;
-                    total.factorisations += report.factorisations;
-                    total.residual = report.residual;
-                    if report.residual > self.tolerance {
-                        converged = false;
-                        break;
-                    }
+            let tolerance = self.tolerance;
+            solve_by_continuation(tolerance, &mut total, |a, first| {
+                if first {
+                    posed_cage.copy_from_slice(&self.last_solution);
                 }
-                if converged {
-                    break;
+                let mut piece_target = std::mem::take(&mut self.piece_target);
+                for ((p, last), t) in piece_target.iter_mut().zip(&self.last_target).zip(target) {
+                    *p = last.lerp(*t, a);
                 }
-            }
+                let report = self.solve_for(&piece_target, posed_cage, MAX_PIECE_STEPS);
+                self.piece_target = piece_target;
+                report
+            })?;
         }
         if total.residual <= self.tolerance {
             self.last_target.copy_from_slice(target);
@@ -596,19 +584,25 @@ mod tests {
     use crate::coords::green::compute_green_coords;
     use crate::coords::green::tests::{random_inside, test_cage};
 
-    #[test]
-    fn recovers_a_deformed_cage_from_its_green_deformation() {
-        let points = random_inside(5, 60);
+    /// The fit of all rows of `points` inside the test cage (and the cage).
+    fn fit_of(points: &[DVec3]) -> (GreenCageFit, crate::mesh::TriMesh) {
         let cage = test_cage();
-        let coords = compute_green_coords(&cage, &points, None).unwrap();
+        let coords = compute_green_coords(&cage, points, None).unwrap();
         let normals = StretchedNormals::new(&cage.positions, coords.triangles.clone());
-        let mut fit = GreenCageFit::new(
+        let fit = GreenCageFit::new(
             coords.vertex.matrix().clone(),
             coords.face.matrix().clone(),
             &cage.positions,
             normals,
         )
         .unwrap();
+        (fit, cage)
+    }
+
+    #[test]
+    fn recovers_a_deformed_cage_from_its_green_deformation() {
+        let points = random_inside(5, 60);
+        let (mut fit, cage) = fit_of(&points);
         let rotation = DQuat::from_axis_angle(DVec3::new(0.3, 1.0, 0.2).normalize(), 0.9);
         let deformed: Vec<DVec3> = cage
             .positions
@@ -631,27 +625,11 @@ mod tests {
         let again = fit.apply(&rows, &mut solved).unwrap();
         assert_eq!(again.iterations, 0);
     }
-}
-
-#[cfg(test)]
-mod hessian_tests {
-    use super::*;
-    use crate::coords::green::compute_green_coords;
-    use crate::coords::green::tests::{random_inside, test_cage};
 
     #[test]
     fn newton_matrix_is_the_hessian_of_the_fit() {
         let points = random_inside(9, 40);
-        let cage = test_cage();
-        let coords = compute_green_coords(&cage, &points, None).unwrap();
-        let normals = StretchedNormals::new(&cage.positions, coords.triangles.clone());
-        let mut fit = GreenCageFit::new(
-            coords.vertex.matrix().clone(),
-            coords.face.matrix().clone(),
-            &cage.positions,
-            normals,
-        )
-        .unwrap();
+        let (mut fit, cage) = fit_of(&points);
         // A target no cage reaches: the rest rows pushed around (large residual).
         let target: Vec<DVec3> = points
             .iter()

@@ -24,7 +24,7 @@ use faer::{Accum, Mat, Par};
 use glam::{DMat3, DVec3};
 
 use super::green_cage_fit::{GRADIENT_TOLERANCE, GreenCageFit, rows_of};
-use super::newton::{NewtonReport, NewtonSolver};
+use super::newton::{NewtonReport, NewtonSolver, solve_by_continuation};
 use crate::error::RigError;
 
 /// Precomputed Green CageRev for one pose (see the module docs).
@@ -139,24 +139,13 @@ impl GreenCageReverser {
         rest_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
         let mut total = self.solve_piece(fit, &at, posed_delta, 1.0, rest_delta)?;
         if total.residual > self.tolerance {
-            for pieces in [4usize, 16] {
-                rest_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
-                let mut converged = true;
-                for piece in 1..=pieces {
-                    let a = piece as f64 / pieces as f64;
-                    let report = self.solve_piece(fit, &at, posed_delta, a, rest_delta)?;
-                    total.iterations += report.iterations;
-                    total.factorisations += report.factorisations;
-                    total.residual = report.residual;
-                    if report.residual > self.tolerance {
-                        converged = false;
-                        break;
-                    }
+            let tolerance = self.tolerance;
+            solve_by_continuation(tolerance, &mut total, |a, first| {
+                if first {
+                    rest_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
                 }
-                if converged {
-                    break;
-                }
-            }
+                self.solve_piece(fit, &at, posed_delta, a, rest_delta)
+            })?;
         }
         Ok(total)
     }

@@ -32,6 +32,38 @@ pub struct NewtonReport {
     pub residual: f64,
 }
 
+/// The continuation of the Green sync operators when a direct solve stalls: the change is split
+/// into 4, then 16 pieces, solved in turn until one split converges throughout.
+pub const CONTINUATION_PIECES: [usize; 2] = [4, 16];
+
+/// Runs the continuation: `piece(a, first)` solves the fraction `a` of the change (`first`: the
+/// first piece of a split, which restarts from the unchanged state) and reports it; the reports
+/// add up into `total`, whose residual ends as the last piece's. Stops at the first split whose
+/// every piece reaches `tolerance`.
+pub fn solve_by_continuation(
+    tolerance: f64,
+    total: &mut NewtonReport,
+    mut piece: impl FnMut(f64, bool) -> Result<NewtonReport, RigError>,
+) -> Result<(), RigError> {
+    for pieces in CONTINUATION_PIECES {
+        let mut converged = true;
+        for i in 1..=pieces {
+            let report = piece(i as f64 / pieces as f64, i == 1)?;
+            total.iterations += report.iterations;
+            total.factorisations += report.factorisations;
+            total.residual = report.residual;
+            if report.residual > tolerance {
+                converged = false;
+                break;
+            }
+        }
+        if converged {
+            break;
+        }
+    }
+    Ok(())
+}
+
 /// Factors and scratch of one Newton solver over `n` points (`3n` unknowns).
 #[derive(Debug, Clone)]
 pub struct NewtonSolver {
