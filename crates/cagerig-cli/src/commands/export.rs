@@ -185,9 +185,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         )
         .map_err(|e| anyhow::anyhow!("refining the samples: {e}"))?;
         refinement = format!(
-            " ({} added so that a viewer stays within {:.1e} of the diagonal between samples, \
+            " ({} added so that a viewer{} stays within {:.1e} of the diagonal between samples, \
              {:.1e} at the worst midpoint)",
             refined.added,
+            if method.is_linear() {
+                ""
+            } else {
+                "'s LBS of the rig"
+            },
             args.max_between,
             refined.largest_checked / diagonal.max(f64::MIN_POSITIVE)
         );
@@ -248,7 +253,8 @@ fn report_bake(session: &RigSession, report: &BakeReport, cage_keys: usize) {
     println!(
         "baked {label}: {} morph targets ({:.2} MB: 12 B × {} vertices per sample, and their \
          weights); at the samples a viewer shows cagerig's {label} skin to {:.1e} of the \
-         diagonal (the LBS alone was {:.1e} off)",
+         diagonal (the LBS alone was {:.1e} off); between samples it blends the two samples' \
+         corrections linearly",
         report.samples,
         bytes / 1e6,
         session.num_vertices(),

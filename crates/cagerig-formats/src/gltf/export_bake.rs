@@ -68,7 +68,7 @@ pub(crate) fn bake_target(
         if sum > 0.0 {
             for (&j, &w) in joints.iter().zip(ws) {
                 let t = &transforms[j as usize];
-                linear += DMat3::from(t.matrix3) * (w / sum);
+                linear += t.matrix3 * (w / sum);
                 translation += t.translation * (w / sum);
             }
         }

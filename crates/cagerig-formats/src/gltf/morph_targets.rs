@@ -19,11 +19,13 @@ pub(super) fn baked_targets(mesh: &gltf::Mesh) -> Option<(usize, String)> {
     let extras: serde_json::Value = serde_json::from_str(mesh.extras().as_ref()?.get()).ok()?;
     let baked = extras.get("cagerig_baked_skinning")?;
     let first = usize::try_from(baked.get("first_target")?.as_u64()?).ok()?;
-    let method = baked
+    let name = baked
         .get("method")
         .and_then(serde_json::Value::as_str)
-        .unwrap_or("skinning")
-        .to_owned();
+        .unwrap_or("skinning");
+    let method = name
+        .parse::<cagerig::skinning::SkinningMethod>()
+        .map_or_else(|_| name.to_owned(), |m| m.label().to_owned());
     Some((first, method))
 }
 
