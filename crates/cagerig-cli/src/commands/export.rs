@@ -5,15 +5,21 @@
 //! With `--skeleton-anim A --cage-anim B` or `--animation NAME` (glTF/FBX) `[--fps F]`: the
 //! hybrid animation, sampled at F samples/s plus every key time, as node TRS animation and cage
 //! keys as morph targets (see `cagerig_formats::gltf::export_animation`).
+//!
+//! glTF skins with LBS only: under `--skinning dqs|cor` a viewer shows the LBS result of the rig
+//! (said in a warning) unless `--bake` adds one morph target per sample that turns it into
+//! cagerig's DQS/CoR M' at the sample (`cagerig_formats::gltf::export_bake`).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use cagerig::session::RigSession;
+use cagerig::skinning::SkinningMethod;
 use cagerig_formats::gltf::export_animation;
+use cagerig_formats::gltf::export_bake::BakeReport;
 
 use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_or_generate_cage, note_generated_cage};
-use crate::session_args::SessionArgs;
+use crate::session_args::{SessionArgs, skinning_parser};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
@@ -48,6 +54,15 @@ pub struct Args {
     /// The most samples the refinement of `--max-between` may reach.
     #[arg(long, default_value_t = 100_000)]
     pub max_samples: usize,
+    /// Skinning method (default: the script's, else the file's, else LBS). glTF viewers skin
+    /// with LBS: under DQS/CoR they show the LBS result unless `--bake`.
+    #[arg(long, value_parser = skinning_parser())]
+    pub skinning: Option<SkinningMethod>,
+    /// With an animation under DQS/CoR: write cagerig's posed skin at every sample as a morph
+    /// target (12 bytes per vertex and sample; weight 1 at its sample, LINEAR), so that viewers
+    /// show the DQS/CoR result at the samples. Under LBS there is nothing to bake (a note says so).
+    #[arg(long)]
+    pub bake: bool,
     #[command(flatten)]
     pub session: SessionArgs,
 }
@@ -90,9 +105,17 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .and_then(|f| f.split('.').next())
         .unwrap_or("cagerig")
         .to_string();
+    let animated =
+        args.skeleton_anim.is_some() || args.cage_anim.is_some() || args.animation.is_some();
+    if args.bake && !animated {
+        bail!(
+            "--bake writes the posed skin at the samples of an animation: give --animation, \
+             --skeleton-anim or --cage-anim (for one pose, a one-key --skeleton-anim)"
+        );
+    }
     let mut options = args.session.options();
     options.skinning = crate::session_args::choose_skinning(
-        None,
+        args.skinning,
         script.as_ref().and_then(|s| s.skinning),
         &loaded,
     );
@@ -110,6 +133,26 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 .run_step(k, &mut session)
                 .with_context(|| format!("in {}", path.display()))?;
         }
+    }
+    let method = session.skinning();
+    let bake = args.bake && !method.is_linear();
+    match (method, args.bake) {
+        (SkinningMethod::Lbs, true) => eprintln!(
+            "note: --bake under LBS: viewers skin with LBS as cagerig does, nothing to bake (no \
+             target added)"
+        ),
+        (SkinningMethod::Lbs, false) | (SkinningMethod::Dqs | SkinningMethod::Cor, true) => {}
+        (SkinningMethod::Dqs | SkinningMethod::Cor, false) => eprintln!(
+            "warning: glTF skins with LBS: viewers show the LBS result of this rig, not \
+             cagerig's {label} skin (up to a few % of the diagonal apart){hint}",
+            label = method.label(),
+            hint = if animated {
+                "; --bake writes the {label} result as morph targets"
+                    .replace("{label}", method.label())
+            } else {
+                String::new()
+            }
+        ),
     }
     let tracks = tracks.resolve(&session)?;
     if tracks.skeleton.is_none() && tracks.cage.is_none() {
@@ -142,9 +185,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         )
         .map_err(|e| anyhow::anyhow!("refining the samples: {e}"))?;
         refinement = format!(
-            " ({} added so that a viewer stays within {:.1e} of the diagonal between samples, \
+            " ({} added so that a viewer{} stays within {:.1e} of the diagonal between samples, \
              {:.1e} at the worst midpoint)",
             refined.added,
+            if method.is_linear() {
+                ""
+            } else {
+                "'s LBS of the rig"
+            },
             args.max_between,
             refined.largest_checked / diagonal.max(f64::MIN_POSITIVE)
         );
@@ -158,13 +206,24 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
         times = refined.times;
     }
-    let (document, bin) = export_animation::animation_to_gltf(
-        &mut session,
-        &mut player,
-        cage_track.as_ref(),
-        &times,
-        &name,
-    )
+    let (document, bin, report) = if bake {
+        export_animation::baked_animation_to_gltf(
+            &mut session,
+            &mut player,
+            cage_track.as_ref(),
+            &times,
+            &name,
+        )
+    } else {
+        export_animation::animation_to_gltf(
+            &mut session,
+            &mut player,
+            cage_track.as_ref(),
+            &times,
+            &name,
+        )
+        .map(|(document, bin)| (document, bin, BakeReport::default()))
+    }
     .map_err(|e| anyhow::anyhow!("exporting the animation: {e}"))?;
     cagerig_formats::gltf::export::write_gltf_or_glb(&args.out, &document, &bin)?;
     println!(
@@ -174,7 +233,48 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         player.duration(),
         t.elapsed().as_secs_f64() * 1e3
     );
+    if bake {
+        report_bake(
+            &session,
+            &report,
+            cage_track.as_ref().map_or(0, |c| c.times().len()),
+        );
+    }
     Ok(())
+}
+
+/// Says what `--bake` wrote and how close a viewer is to cagerig's M' at the samples.
+fn report_bake(session: &RigSession, report: &BakeReport, cage_keys: usize) {
+    let (lo, hi) = cagerig::mesh::bounding_box(session.rest_mesh());
+    let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+    let bytes =
+        export_animation::baked_bytes(session.num_vertices(), cage_keys, report.samples) as f64;
+    let label = session.skinning().label();
+    println!(
+        "baked {label}: {} morph targets ({:.2} MB: 12 B × {} vertices per sample, and their \
+         weights); at the samples a viewer shows cagerig's {label} skin to {:.1e} of the \
+         diagonal (the LBS alone was {:.1e} off); between samples it blends the two samples' \
+         corrections linearly",
+        report.samples,
+        bytes / 1e6,
+        session.num_vertices(),
+        report.worst_residual / diagonal,
+        report.largest_correction / diagonal
+    );
+    if report.singular > 0 {
+        eprintln!(
+            "warning: --bake: at {} vertex-samples the blended LBS matrix is singular (its \
+             rotations cancel); their targets are least-squares solutions",
+            report.singular
+        );
+    }
+    if report.worst_residual > 1e-5 * diagonal {
+        eprintln!(
+            "warning: --bake: a viewer is up to {:.1e} of the diagonal from cagerig's {label} skin \
+             at some sample",
+            report.worst_residual / diagonal
+        );
+    }
 }
 
 fn export(session: &RigSession, out: &Path, name: &str) -> anyhow::Result<()> {

@@ -16,7 +16,11 @@
 //! - Exactness: under LBS, exact (to the f32 rounding of glTF) at every sample time; samples are
 //!   the union of the skeleton keys, the cage keys and a grid at `fps`. Between samples a viewer
 //!   slerps/lerps the node TRS, which differs from cagerig's interpolation by the resampling.
-//!   Under DQS/CoR the file still carries the LBS rig (glTF skins with LBS only).
+//!   Under DQS/CoR the file still carries the LBS rig (glTF skins with LBS only), unless it is
+//!   baked ([`baked_animation_to_gltf`]): then each sample also gets a morph target that turns the
+//!   viewer's LBS into cagerig's DQS/CoR M' at that sample ([`super::export_bake`]), with LINEAR
+//!   weights that are 1 at its sample and 0 at every other, so that between two samples a viewer
+//!   blends the two corrections linearly.
 
 use cagerig::animation::{CageTrack, bracket};
 use cagerig::playback::AnimationPlayer;
@@ -25,6 +29,7 @@ use glam::{DAffine3, DQuat, DVec3};
 use serde_json::{Value, json};
 
 use super::export::{Builder, f32_bytes, position_accessor, session_to_gltf};
+use super::export_bake::{BakeReport, bake_target, f32_rounded};
 
 /// Sample times: a grid at `fps` over `[0, duration]` plus every key time, sorted, unique as f32.
 pub fn sample_times(duration: f64, fps: f64, key_times: &[f64]) -> Vec<f64> {
@@ -88,6 +93,60 @@ pub fn animation_to_gltf(
     times: &[f64],
     name: &str,
 ) -> Result<(Value, Vec<u8>), String> {
+    write_animation(session, player, cage_track, times, name, false)
+        .map(|(document, bin, _)| (document, bin))
+}
+
+/// [`animation_to_gltf`] with the session's skinning result baked: after the cage-key targets,
+/// one morph target per sample (`#V` bind-space corrections, see [`super::export_bake`]) whose
+/// weight is 1 at its sample and 0 at the others (LINEAR), so that at every sample time a viewer
+/// shows the session's M' (DQS or CoR) instead of the LBS of the rig. The mesh's `extras` name
+/// the targets (`targetNames`, which Blender uses for shape keys) and mark the baked ones
+/// (`cagerig_baked_skinning`: `method`, `first_target`) so that cagerig's importer leaves them
+/// out. Under LBS nothing needs baking and no target is added. Refused when the file would pass
+/// the GLB limit of 4 GiB (12 bytes × `#V` per sample, plus `#samples × #targets` weights).
+pub fn baked_animation_to_gltf(
+    session: &mut RigSession,
+    player: &mut AnimationPlayer,
+    cage_track: Option<&CageTrack>,
+    times: &[f64],
+    name: &str,
+) -> Result<(Value, Vec<u8>, BakeReport), String> {
+    let bake = !session.skinning().is_linear();
+    if bake {
+        let cage_keys = cage_track.map_or(0, |c| c.times().len());
+        let bytes = baked_bytes(session.num_vertices(), cage_keys, times.len());
+        if bytes > u64::from(u32::MAX) {
+            return Err(format!(
+                "baking {} samples of {} vertices takes {:.1} GiB, past glTF's 4 GiB binary \
+                 limit: export fewer samples (--fps, --max-samples) or leave --bake out",
+                times.len(),
+                session.num_vertices(),
+                bytes as f64 / f64::from(1u32 << 30)
+            ));
+        }
+    }
+    write_animation(session, player, cage_track, times, name, bake)
+}
+
+/// Bytes the baked targets add: 12 per vertex and sample (f32 VEC3), plus the weights of every
+/// target (`cage_keys + samples`) at every sample (f32).
+pub fn baked_bytes(vertices: usize, cage_keys: usize, samples: usize) -> u64 {
+    let (v, c, s) = (vertices as u64, cage_keys as u64, samples as u64);
+    12u64
+        .saturating_mul(v)
+        .saturating_mul(s)
+        .saturating_add(4u64.saturating_mul(s).saturating_mul(c.saturating_add(s)))
+}
+
+fn write_animation(
+    session: &mut RigSession,
+    player: &mut AnimationPlayer,
+    cage_track: Option<&CageTrack>,
+    times: &[f64],
+    name: &str,
+    bake: bool,
+) -> Result<(Value, Vec<u8>, BakeReport), String> {
     if times.is_empty() {
         return Err("no sample times".into());
     }
@@ -98,8 +157,11 @@ pub fn animation_to_gltf(
     let nj = session.skeleton().len();
     // Morph targets: the rest mesh at each cage key.
     let mut targets = Vec::new();
+    let mut target_names = Vec::new();
+    // The cage-key targets as the file holds them (f32), for the baked targets' bind shape.
+    let mut cage_deltas: Vec<Vec<DVec3>> = Vec::new();
     if let Some(track) = cage_track {
-        for &t in track.times() {
+        for (k, &t) in track.times().iter().enumerate() {
             player.apply(t, session).map_err(|e| e.to_string())?;
             let delta: Vec<DVec3> = session
                 .rest_mesh()
@@ -108,8 +170,17 @@ pub fn animation_to_gltf(
                 .map(|(m, m0)| *m - *m0)
                 .collect();
             targets.push(json!({"POSITION": position_accessor(&mut b, &delta, true)}));
+            target_names.push(format!("cage key {k} (t = {t} s)"));
+            if bake {
+                cage_deltas.push(delta.into_iter().map(f32_rounded).collect());
+            }
         }
     }
+    let cage_targets = targets.len();
+    let mut report = BakeReport::default();
+    let bind_base: Vec<DVec3> = base.iter().copied().map(f32_rounded).collect();
+    let mut bind_shape = Vec::with_capacity(if bake { base.len() } else { 0 });
+    let mut correction = Vec::new();
     // Node TRS and morph weights at each sample.
     let mut translations = Vec::with_capacity(nj * times.len());
     let mut rotations = Vec::with_capacity(nj * times.len());
@@ -125,9 +196,10 @@ pub fn animation_to_gltf(
             rotations.push(r);
             scales.push(s);
         }
+        let first_weight = weights.len();
         if let Some(track) = cage_track {
             let br = bracket(track.times(), t);
-            weights.extend((0..targets.len()).map(|k| {
+            weights.extend((0..cage_targets).map(|k| {
                 if br.lo == br.hi {
                     f64::from(u8::from(k == br.lo))
                 } else if k == br.lo {
@@ -138,6 +210,30 @@ pub fn animation_to_gltf(
                     0.0
                 }
             }));
+        }
+        if bake {
+            // The viewer's bind shape at t: M₀ plus the cage targets at their weights (f32).
+            bind_shape.clone_from(&bind_base);
+            for (delta, &w) in cage_deltas.iter().zip(&weights[first_weight..]) {
+                if w != 0.0 {
+                    for (x, d) in bind_shape.iter_mut().zip(delta) {
+                        *x += w * *d;
+                    }
+                }
+            }
+            bake_target(session, &bind_shape, &mut correction, &mut report);
+            targets.push(json!({"POSITION": position_accessor(&mut b, &correction, true)}));
+            target_names.push(format!("{} t = {t} s", session.skinning().label()));
+        }
+    }
+    if bake {
+        // One-hot: baked target k has weight 1 at sample k (rows of `#samples` after the cage
+        // weights of each sample).
+        let ns = times.len();
+        let cage_weights = std::mem::replace(&mut weights, Vec::with_capacity(ns * targets.len()));
+        for k in 0..ns {
+            weights.extend_from_slice(&cage_weights[k * cage_targets..(k + 1) * cage_targets]);
+            weights.extend((0..ns).map(|i| f64::from(u8::from(i == k))));
         }
     }
     // Keep consecutive quaternions in one hemisphere (viewers slerp without flipping).
@@ -190,7 +286,15 @@ pub fn animation_to_gltf(
         let count = targets.len();
         document["meshes"][0]["primitives"][0]["targets"] = Value::Array(targets);
         document["meshes"][0]["weights"] = json!(vec![0.0; count]);
+        document["meshes"][0]["extras"] = json!({"targetNames": target_names});
+        if bake {
+            document["meshes"][0]["extras"]["cagerig_baked_skinning"] = json!({
+                "method": session.skinning().name(),
+                "first_target": cage_targets,
+            });
+        }
     }
     document["animations"] = json!([{"name": name, "channels": channels, "samplers": samplers}]);
-    Ok(b.finish(document))
+    let (document, bin) = b.finish(document);
+    Ok((document, bin, report))
 }

@@ -19,7 +19,7 @@ use glam::{DAffine3, DVec3};
 use super::animation::{AnimationTargets, import_animations};
 use super::buffers::Buffers;
 use super::cage::find_cage;
-use super::morph_targets::{default_weights, merge_targets};
+use super::morph_targets::{baked_targets, default_weights, drop_baked_targets, merge_targets};
 use super::parse::parse_validated;
 use super::primitive::read_primitive;
 use super::scene::NodeTree;
@@ -349,7 +349,7 @@ pub fn import_gltf_bytes(
     })?;
     let cage = find_cage(document, &buffers, &rest_globals, path)?;
 
-    let (animations, node_pose, animation_warnings) = import_animations(
+    let (mut animations, node_pose, animation_warnings) = import_animations(
         document,
         &buffers,
         &tree,
@@ -362,6 +362,29 @@ pub fn import_gltf_bytes(
         path,
     )?;
     warnings.extend(animation_warnings);
+    // Targets that `cagerig export --bake` wrote hold a skinning result, not a shape: left out
+    // (cagerig skins with its own method).
+    let baked = morph_node
+        .and_then(|n| document.nodes().nth(n))
+        .and_then(|n| n.mesh())
+        .and_then(|m| baked_targets(&m));
+    if let Some((first, method)) = baked {
+        let total = morph_targets.len();
+        drop_baked_targets(
+            first,
+            total,
+            &mut morph_targets,
+            &mut default_morph_weights,
+            &mut animations,
+        );
+        warnings.push(Warning::Note {
+            message: format!(
+                "{} of the {total} morph targets hold a baked {method} result (cagerig export \
+                 --bake): left out; cagerig skins with its own method (--skinning)",
+                total.saturating_sub(first)
+            ),
+        });
+    }
 
     let mut character = ImportedCharacter {
         mesh,

@@ -13,4 +13,5 @@ mod shared_skins;
 pub use import::{import_gltf, import_gltf_bytes};
 pub mod export;
 pub mod export_animation;
+pub mod export_bake;
 pub mod export_resampling;

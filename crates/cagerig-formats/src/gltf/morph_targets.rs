@@ -12,6 +12,48 @@ pub(super) fn default_weights(node: &gltf::Node) -> Vec<f64> {
         .unwrap_or_default()
 }
 
+/// The first baked target of `mesh` and the method baked (its `extras.cagerig_baked_skinning`,
+/// written by `cagerig export --bake`, see [`super::export_animation::baked_animation_to_gltf`]),
+/// or `None` when the mesh holds no baked targets.
+pub(super) fn baked_targets(mesh: &gltf::Mesh) -> Option<(usize, String)> {
+    let extras: serde_json::Value = serde_json::from_str(mesh.extras().as_ref()?.get()).ok()?;
+    let baked = extras.get("cagerig_baked_skinning")?;
+    let first = usize::try_from(baked.get("first_target")?.as_u64()?).ok()?;
+    let name = baked
+        .get("method")
+        .and_then(serde_json::Value::as_str)
+        .unwrap_or("skinning");
+    let method = name
+        .parse::<cagerig::skinning::SkinningMethod>()
+        .map_or_else(|_| name.to_owned(), |m| m.label().to_owned());
+    Some((first, method))
+}
+
+/// Leaves out the targets from `first` on (`targets`: `#targets × #V`, `default_weights`:
+/// `#targets`), and their columns of each animation's morph weights (`#keys × #targets`,
+/// row-major, `total` targets per key); an animation left with no target has no morph weights.
+pub(super) fn drop_baked_targets(
+    first: usize,
+    total: usize,
+    targets: &mut Vec<Vec<DVec3>>,
+    default_weights: &mut Vec<f64>,
+    animations: &mut [crate::character::ImportedAnimation],
+) {
+    let first = first.min(total);
+    targets.truncate(first);
+    default_weights.truncate(first);
+    for animation in animations {
+        animation.morph_weights = match animation.morph_weights.take() {
+            Some(w) if first > 0 && total > 0 => Some(
+                w.chunks_exact(total)
+                    .flat_map(|row| row[..first].iter().copied())
+                    .collect(),
+            ),
+            Some(_) | None => None,
+        };
+    }
+}
+
 /// Appends one primitive's target displacements (`primitive`: per target, `vertices` each) to
 /// the merged targets, whose vertices so far number `base`; targets the primitive lacks get
 /// zeros. The dense `#targets × #V` table is reserved first: a file declaring more targets
@@ -59,6 +101,30 @@ mod tests {
                 vec![DVec3::ZERO, DVec3::ZERO, DVec3::Z],
             ]
         );
+    }
+
+    #[test]
+    fn baked_targets_and_their_weight_columns_are_left_out() {
+        let mut targets = vec![vec![DVec3::X], vec![DVec3::Y], vec![DVec3::Z]];
+        let mut defaults = vec![0.0; 3];
+        let track = cagerig::animation::SkeletonTrack::new(vec![0.0, 1.0], vec![vec![]; 2]);
+        let animation = |weights: Vec<f64>| crate::character::ImportedAnimation {
+            name: "a".into(),
+            duration: 1.0,
+            track: track.clone().unwrap(),
+            exact: true,
+            morph_weights: Some(weights),
+        };
+        // One cage target then two baked ones: key rows (cage, baked 0, baked 1).
+        let mut animations = vec![animation(vec![0.5, 1.0, 0.0, 0.25, 0.0, 1.0])];
+        drop_baked_targets(1, 3, &mut targets, &mut defaults, &mut animations);
+        assert_eq!(targets, vec![vec![DVec3::X]]);
+        assert_eq!(defaults, vec![0.0]);
+        assert_eq!(animations[0].morph_weights, Some(vec![0.5, 0.25]));
+        // Only baked targets: no morph weights remain.
+        let mut animations = vec![animation(vec![1.0, 0.0, 0.0, 1.0])];
+        drop_baked_targets(0, 2, &mut targets, &mut defaults, &mut animations);
+        assert!(targets.is_empty() && animations[0].morph_weights.is_none());
     }
 
     #[test]
