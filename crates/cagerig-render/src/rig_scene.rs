@@ -180,6 +180,20 @@ impl RigSceneData {
         layers: Layers,
         color_by: ColorBy,
     ) -> Scene<'a> {
+        self.scene_with_skeleton(session, pose, layers, color_by, None)
+    }
+
+    /// [`RigSceneData::scene`] drawing `skeleton` — joint positions (`#J'`, world space) and
+    /// their parents — instead of the session's (an editor's skeleton being built); `None`
+    /// draws the session's.
+    pub fn scene_with_skeleton<'a>(
+        &'a mut self,
+        session: &'a RigSession,
+        pose: Pose,
+        layers: Layers,
+        color_by: ColorBy,
+        skeleton: Option<(&[DVec3], &[Option<usize>])>,
+    ) -> Scene<'a> {
         // Both skins come from the session's f32 display path when it is on.
         let (mesh, cage) = match pose {
             Pose::Rest => (
@@ -198,13 +212,19 @@ impl RigSceneData {
             ),
         };
         self.joints.clear();
-        match pose {
-            Pose::Rest => self.joints.extend(session.rest_joints()),
-            Pose::Current => self.joints.extend(session.posed_joints()),
-        }
         self.parents.clear();
-        self.parents
-            .extend(session.skeleton().joints().iter().map(|j| j.parent));
+        match (skeleton, pose) {
+            (Some((joints, parents)), _) => {
+                self.joints.extend_from_slice(joints);
+                self.parents.extend_from_slice(parents);
+            }
+            (None, Pose::Rest) => self.joints.extend(session.rest_joints()),
+            (None, Pose::Current) => self.joints.extend(session.posed_joints()),
+        }
+        if skeleton.is_none() {
+            self.parents
+                .extend(session.skeleton().joints().iter().map(|j| j.parent));
+        }
         let valid = color_by.validate(session).is_ok();
         let mesh_map = if valid {
             color_by.mesh_scalars(session, &mut self.scalars)

@@ -295,7 +295,8 @@ impl StudioApp {
     /// Where the gizmo of the active selection sits in `view`, and which handles it shows.
     pub fn gizmo_pivot(&self, view: usize) -> Option<(DVec3, bool, bool)> {
         let doc = self.project.doc.as_ref()?;
-        self.tools.gizmo_pivot(&doc.session, view)
+        self.tools
+            .gizmo_pivot(&doc.session, &doc.shown_skeleton(view), view)
     }
 
     pub fn renderer(&self) -> Option<&Arc<Renderer>> {
@@ -325,6 +326,7 @@ impl eframe::App for StudioApp {
         let ctx = ui.ctx().clone();
         self.diagnostics.stats.begin_frame();
         self.poll_open(&ctx);
+        self.poll_bind();
         self.handle_dropped_files(&ctx);
         self.hold_close_with_unsaved_edits(&ctx);
         self.shortcuts(&ctx);
@@ -431,6 +433,27 @@ impl StudioApp {
         {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
             self.dialogs.confirm = Some(AfterConfirm::Close);
+        }
+    }
+
+    /// A finished background Bind becomes the rig (one undo step); the views then show the
+    /// new weights Ω of the selected joint (the first when none is).
+    pub fn poll_bind(&mut self) {
+        let Some(doc) = self.project.doc.as_mut() else {
+            return;
+        };
+        match doc.poll_bind() {
+            None => {}
+            Some(Ok(line)) => {
+                self.diagnostics.log.info(line);
+                let joints = doc.session.skeleton().len();
+                let selection = &mut self.tools.selection;
+                if selection.joint.is_none_or(|j| j >= joints) {
+                    selection.joint = Some(0);
+                }
+                self.view.color_mode = crate::view_state::ColorMode::Weights;
+            }
+            Some(Err(e)) => self.diagnostics.log.error(format!("bind: {e}")),
         }
     }
 

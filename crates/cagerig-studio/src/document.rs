@@ -13,15 +13,84 @@ use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::binding::BindJob;
 use crate::history::History;
 use crate::keys::{KeyError, Keys, Track};
 use crate::rig_open::RigSource;
+use crate::skeleton_draft::{DraftError, Mirror, SkeletonDraft};
 
-/// What undo restores: the rig's editable state and the keys.
+/// What undo restores: the rig's editable state, the keys, the skeleton being built, and
+/// which binding (skeleton and weights) the rig has.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
     pub rig: EditableState,
     pub keys: Keys,
+    /// The skeleton being built or changed in the rest view, not bound yet.
+    #[serde(default)]
+    pub draft: Option<SkeletonDraft>,
+    /// The binding in force (session files carry a binding apart: see `session_file`).
+    #[serde(skip)]
+    pub binding: BindingKey,
+}
+
+/// Which binding of the document a state belongs to: 0 is the rig as opened; each Bind makes
+/// a new one. `rigged` is false for the placeholder rig of a mesh opened with no skeleton.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BindingKey {
+    pub id: u64,
+    pub rigged: bool,
+}
+
+impl Default for BindingKey {
+    fn default() -> Self {
+        Self {
+            id: 0,
+            rigged: true,
+        }
+    }
+}
+
+/// An edit of the skeleton in the rest view (it changes the draft; Bind applies it).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SkeletonEdit {
+    /// A joint at `position` below `parent` (a root when `None`).
+    Add {
+        position: DVec3,
+        parent: Option<usize>,
+        mirror: Option<Mirror>,
+    },
+    Move {
+        joint: usize,
+        position: DVec3,
+        mirror: Option<Mirror>,
+    },
+    Delete {
+        joint: usize,
+        mirror: bool,
+    },
+    SetParent {
+        joint: usize,
+        parent: Option<usize>,
+    },
+    Rename {
+        joint: usize,
+        name: String,
+    },
+    /// Drops the changes since the last bind.
+    Discard,
+}
+
+impl SkeletonEdit {
+    fn label(&self) -> &'static str {
+        match self {
+            SkeletonEdit::Add { .. } => "add joint",
+            SkeletonEdit::Move { .. } => "move joint",
+            SkeletonEdit::Delete { .. } => "delete joint",
+            SkeletonEdit::SetParent { .. } => "re-parent joint",
+            SkeletonEdit::Rename { .. } => "rename joint",
+            SkeletonEdit::Discard => "discard skeleton changes",
+        }
+    }
 }
 
 /// One user action on the document.
@@ -67,6 +136,8 @@ pub enum Command {
         index: usize,
         time: f64,
     },
+    /// Build or change the skeleton in the rest view.
+    EditSkeleton(SkeletonEdit),
 }
 
 impl Command {
@@ -83,6 +154,7 @@ impl Command {
             Command::SetKey { track, .. } => format!("set {track:?} key").to_lowercase(),
             Command::DeleteKey { track, .. } => format!("delete {track:?} key").to_lowercase(),
             Command::MoveKey { track, .. } => format!("move {track:?} key").to_lowercase(),
+            Command::EditSkeleton(edit) => edit.label().into(),
         }
     }
 }
@@ -97,6 +169,22 @@ pub enum DocError {
     Script(#[from] ScriptError),
     #[error("no {0:?} key {1}")]
     NoKey(Track, usize),
+    #[error("{0}")]
+    Skeleton(#[from] DraftError),
+    #[error(
+        "the mesh has no skeleton yet: add joints in the rest view (Skeleton panel: \
+         \"Add joints by clicking\"), then Bind"
+    )]
+    NotRigged,
+    #[error(
+        "the skeleton has changes that are not bound yet: Bind them (Skeleton panel) or \
+         discard them to pose"
+    )]
+    SkeletonPending,
+    #[error("binding {0} is no longer in memory")]
+    NoBinding(u64),
+    #[error("{0}")]
+    Bind(String),
 }
 
 struct Gesture {
@@ -110,9 +198,9 @@ pub struct Document {
     pub source: RigSource,
     pub session: RigSession,
     pub keys: Keys,
-    history: History<Snapshot>,
+    pub(crate) history: History<Snapshot>,
     gesture: Option<Gesture>,
-    player: Option<AnimationPlayer>,
+    pub(crate) player: Option<AnimationPlayer>,
     /// Bumped on every change of the rig (the current view re-uploads).
     pub revision: u64,
     /// Bumped when the rest pose (M, S, C) may have changed (the rest view re-uploads).
@@ -121,6 +209,17 @@ pub struct Document {
     pub edits: u64,
     /// Milliseconds of the last session event (the sync chain).
     pub last_sync_ms: f64,
+    /// The skeleton being built or changed in the rest view, not bound yet.
+    pub draft: Option<SkeletonDraft>,
+    /// The binding in force.
+    pub(crate) binding: BindingKey,
+    /// The sessions of the other bindings in the history (undo / redo of a Bind).
+    pub(crate) stored_bindings: std::collections::HashMap<u64, RigSession>,
+    pub(crate) last_binding_id: u64,
+    /// A bind running in the background.
+    pub(crate) bind_job: Option<BindJob>,
+    /// X mirror of skeleton edits: joints off the middle plane get `.L` / `.R` twins.
+    pub mirror_x: bool,
 }
 
 impl Document {
@@ -136,21 +235,60 @@ impl Document {
             rest_revision: 0,
             edits: 0,
             last_sync_ms: 0.0,
+            draft: None,
+            binding: BindingKey::default(),
+            stored_bindings: Default::default(),
+            last_binding_id: 0,
+            bind_job: None,
+            mirror_x: false,
         }
+    }
+
+    /// A document on the placeholder rig of a mesh opened with no skeleton (`rigged` false):
+    /// its skeleton is empty until the first Bind.
+    pub fn with_rigged(mut self, rigged: bool) -> Self {
+        self.binding.rigged = rigged;
+        self
+    }
+
+    /// Whether the rig has a bound skeleton (false for a mesh opened with no skeleton).
+    pub fn rigged(&self) -> bool {
+        self.binding.rigged
     }
 
     pub fn snapshot(&self) -> Snapshot {
         Snapshot {
             rig: self.session.editable_state(),
             keys: self.keys.clone(),
+            draft: self.draft.clone(),
+            binding: self.binding,
         }
     }
 
     /// Restores a snapshot (undo, redo, cancelled gesture, session file).
     pub fn restore(&mut self, snapshot: &Snapshot) -> Result<(), DocError> {
-        snapshot.keys.validate(&self.session)?;
         let t = Instant::now();
-        self.session.restore_editable_state(&snapshot.rig)?;
+        let previous = self.binding;
+        if snapshot.binding != self.binding {
+            self.switch_binding(snapshot.binding)?;
+        }
+        let restored = snapshot
+            .keys
+            .validate(&self.session)
+            .map_err(DocError::from)
+            .and_then(|()| {
+                self.session
+                    .restore_editable_state(&snapshot.rig)
+                    .map_err(DocError::from)
+            });
+        if let Err(e) = restored {
+            if previous != self.binding {
+                // Back to the binding in force before (its session is stored, as is).
+                let _ = self.switch_binding(previous);
+            }
+            return Err(e);
+        }
+        self.draft = snapshot.draft.clone();
         self.last_sync_ms = t.elapsed().as_secs_f64() * 1e3;
         if self.keys != snapshot.keys {
             self.keys = snapshot.keys.clone();
@@ -170,7 +308,7 @@ impl Document {
         Ok(())
     }
 
-    fn changed(&mut self) {
+    pub(crate) fn changed(&mut self) {
         self.revision += 1;
         self.rest_revision += 1;
         self.edits += 1;
@@ -195,6 +333,17 @@ impl Document {
     /// Runs `command` on the rig without touching the history.
     fn apply(&mut self, command: &Command) -> Result<(), DocError> {
         let t = Instant::now();
+        if matches!(
+            command,
+            Command::RotateJoint { .. }
+                | Command::SetJointRotation { .. }
+                | Command::SetKey {
+                    track: Track::Skeleton,
+                    ..
+                }
+        ) {
+            self.check_posable()?;
+        }
         let s = &mut self.session;
         match command {
             Command::RotateJoint { joint, axis, angle } => s.rotate_joint(*joint, *axis, *angle)?,
@@ -251,6 +400,7 @@ impl Document {
                 self.keys.move_key(*track, *index, *time)?;
                 self.player = None;
             }
+            Command::EditSkeleton(edit) => self.edit_skeleton(edit)?,
         }
         if !matches!(
             command,
@@ -412,127 +562,5 @@ impl Document {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::rig_open::open_rig;
-
-    fn doc() -> Document {
-        let source = RigSource::Builtin {
-            name: "bar".into(),
-            resolution: Some(6),
-        };
-        let opened = open_rig(&source).unwrap();
-        Document::new(source, opened.session)
-    }
-
-    #[test]
-    fn undo_and_redo_restore_the_exact_state() {
-        let mut d = doc();
-        let s0 = d.snapshot();
-        d.execute(&Command::RotateJoint {
-            joint: 1,
-            axis: DVec3::Z,
-            angle: 0.5,
-        })
-        .unwrap();
-        let s1 = d.snapshot();
-        d.execute(&Command::MovePosedCage {
-            vertices: vec![2, 3],
-            offsets: vec![DVec3::new(0.0, 0.1, 0.0)],
-        })
-        .unwrap();
-        let s2 = d.snapshot();
-        assert!(d.undo().unwrap());
-        assert_eq!(d.snapshot(), s1);
-        assert!(d.undo().unwrap());
-        assert_eq!(d.snapshot(), s0);
-        assert!(!d.undo().unwrap());
-        assert!(d.redo().unwrap());
-        assert!(d.redo().unwrap());
-        assert_eq!(d.snapshot(), s2);
-    }
-
-    #[test]
-    fn a_drag_is_one_undo_step_and_cancel_restores() {
-        let mut d = doc();
-        let s0 = d.snapshot();
-        d.begin_gesture("drag");
-        for _ in 0..5 {
-            d.gesture_event(&Command::MoveRestCage {
-                vertices: vec![0],
-                offsets: vec![DVec3::new(0.01, 0.0, 0.0)],
-            })
-            .unwrap();
-        }
-        d.end_gesture();
-        assert_eq!(d.history().undo_len(), 1);
-        d.begin_gesture("drag 2");
-        d.gesture_event(&Command::MoveRestCage {
-            vertices: vec![1],
-            offsets: vec![DVec3::new(0.0, 0.05, 0.0)],
-        })
-        .unwrap();
-        let before_cancel = d.gesture_start().unwrap().clone();
-        d.cancel_gesture().unwrap();
-        assert_eq!(d.snapshot(), before_cancel);
-        assert_eq!(d.history().undo_len(), 1);
-        d.undo().unwrap();
-        assert_eq!(d.snapshot(), s0);
-    }
-
-    #[test]
-    fn a_failed_command_changes_nothing_and_records_nothing() {
-        let mut d = doc();
-        let s0 = d.snapshot();
-        let err = d
-            .execute(&Command::MoveRestCage {
-                vertices: vec![10_000],
-                offsets: vec![DVec3::X],
-            })
-            .unwrap_err();
-        assert!(err.to_string().contains("10000"), "{err}");
-        assert_eq!(d.snapshot(), s0);
-        assert_eq!(d.history().undo_len(), 0);
-    }
-
-    #[test]
-    fn keys_are_undoable() {
-        let mut d = doc();
-        d.execute(&Command::SetKey {
-            track: Track::Cage,
-            time: 0.5,
-        })
-        .unwrap();
-        assert_eq!(d.keys.len(Track::Cage), 1);
-        d.undo().unwrap();
-        assert_eq!(d.keys.len(Track::Cage), 0);
-        d.redo().unwrap();
-        assert_eq!(d.keys.len(Track::Cage), 1);
-    }
-
-    #[test]
-    fn a_script_matches_the_library_run_of_the_same_script() {
-        let text = r#"{"skinning":"dqs","steps":[
-            {"op":"rotate_joint","joint":1,"axis":[0,0,1],"degrees":40},
-            {"op":"move_rest_cage","vertices":[0,1],"offset":[0,0.2,0]},
-            {"op":"move_posed_cage","vertices":[5],"offset":[0.1,0,0]}]}"#;
-        let script = EditScript::parse(text).unwrap();
-        let mut d = doc();
-        d.run_script(&script).unwrap();
-        assert_eq!(d.history().undo_len(), 4);
-        let mut reference = doc();
-        reference.session.set_skinning(SkinningMethod::Dqs).unwrap();
-        for k in 0..script.steps.len() {
-            script.run_step(k, &mut reference.session).unwrap();
-        }
-        for (a, b) in d
-            .session
-            .posed_mesh()
-            .iter()
-            .zip(reference.session.posed_mesh())
-        {
-            assert!(a.distance(*b) < 1e-12);
-        }
-        assert_eq!(d.session.rest_cage(), reference.session.rest_cage());
-    }
-}
+#[path = "document_tests.rs"]
+mod tests;

@@ -1,9 +1,12 @@
 //! File ▸ Export: the rest and current skin and cage as OBJ, the joints as JSON, the keys as the
-//! paper tool's animation files, and the rig as glTF 2.0 (`.glb`). Every file is replaced
-//! atomically; nothing non-finite is written.
+//! paper tool's animation files, the rig as the paper tool's file set (`rig.obj`, `rig.skt`,
+//! `rig.skw`, `rig_cage.obj`: `cagerig edit rig.obj` opens it) and as glTF 2.0 (`.glb`, with
+//! its skin). Every file is replaced atomically; nothing non-finite is written. A mesh with no
+//! skeleton bound yet exports no skeleton, weights or glTF.
 
 use std::path::{Path, PathBuf};
 
+use cagerig::io::text::FloatFormat;
 use serde::Serialize;
 use thiserror::Error;
 
@@ -82,6 +85,21 @@ pub fn export_all(doc: &Document, dir: &Path) -> Result<Vec<PathBuf>, ExportErro
     if doc.keys.export_cage_animation(&cage, s)? {
         written.push(cage);
     }
+    if !doc.rigged() {
+        return Ok(written);
+    }
+    // The rig at its current rest pose: the skeleton where SkelUp put the joints.
+    let rest_joints: Vec<glam::DVec3> = s.rest_joints().collect();
+    let skeleton = s.skeleton().with_rest_positions(&rest_joints);
+    let rig_mesh = dir.join("rig.obj");
+    cagerig::io::write_obj(&rig_mesh, s.rest_mesh(), s.mesh_triangles())?;
+    let skt = dir.join("rig.skt");
+    cagerig::io::skt::write_skt(&skt, &skeleton)?;
+    let skw = dir.join("rig.skw");
+    cagerig::io::skw::write_skw(&skw, s.skin_weights(), FloatFormat::RoundTrip)?;
+    let rig_cage = dir.join("rig_cage.obj");
+    cagerig::io::write_obj(&rig_cage, s.rest_cage(), s.cage_triangles())?;
+    written.extend([rig_mesh, skt, skw, rig_cage]);
     let glb = dir.join("rig.glb");
     cagerig_formats::export_character(s, &glb, "cagerig")?;
     written.push(glb);
@@ -108,9 +126,13 @@ mod tests {
         let dir =
             std::env::temp_dir().join(format!("cagerig-studio-export-{}", std::process::id()));
         let files = export_all(&doc, &dir).unwrap();
-        assert_eq!(files.len(), 7, "{files:?}");
+        assert_eq!(files.len(), 11, "{files:?}");
         let back = cagerig::io::read_obj(&dir.join("mesh_posed.obj")).unwrap();
         assert_eq!(back.positions, doc.session.posed_mesh());
+        // The file set opens as a rig with the same skeleton and weights.
+        let rig = cagerig::rig_files::load_rig_files(&dir.join("rig.obj"), None).unwrap();
+        assert_eq!(rig.parts.skeleton.len(), doc.session.skeleton().len());
+        assert_eq!(rig.parts.skin_weights, *doc.session.skin_weights());
         std::fs::remove_dir_all(dir).ok();
     }
 }

@@ -29,6 +29,8 @@ pub fn inspector_ui(
                 ui.separator();
                 rig_ui(ui, doc.as_deref_mut(), &mut tools.tool, diag);
                 ui.separator();
+                crate::skeleton_panel::skeleton_ui(ui, doc.as_deref_mut(), tools, diag);
+                ui.separator();
                 selection_ui(ui, doc, &tools.selection, &mut tools.numeric, diag);
             });
         });

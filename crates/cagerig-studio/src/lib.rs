@@ -25,6 +25,7 @@
 //! | **panels** | |
 //! | `menus` | menu bar |
 //! | `inspector` | layers, colour maps, skinning, locks, numeric entry |
+//! | `skeleton_panel` | building the skeleton: add by clicking, mirror, list, rename, parent, Bind |
 //! | `status` | status bar and log panel |
 //! | `shortcuts` | window-wide keyboard shortcuts |
 //! | `views` | the central panel: lays out, draws the two views |
@@ -34,12 +35,18 @@
 //! | **below the panels** | |
 //! | `doc_commands` | a command as the panels run it: logged, timed |
 //! | `history` | undo / redo stacks of snapshots |
+//! | `document_skeleton` | skeleton building: draft edits, shown skeletons, Bind as one undo step |
+//! | `skeleton_draft` | the skeleton being built: add, move, re-parent, rename, delete, X mirror |
+//! | `binding` | Bind: automatic or carried weights and the new session, on a background thread |
 //! | `keys` | skeleton and cage keyframes, playback, the paper tool's animation files |
 //! | `session_file` | the versioned `.cagerig` session file, autosave and recovery |
+//! | `saved_binding` | a skeleton and weights bound in the studio, as a session file keeps them |
 //! | `rig_open` | opening a character (built-in demo, OBJ set, glTF, FBX) |
+//! | `unrigged` | opening a mesh with no skeleton: its cage and a placeholder rig |
 //! | `viewport` | a 3D view rendered by `cagerig-render` into its own textures |
 //! | `view_picking` | what the mouse hits in a view |
 //! | `picking` | projection, mouse rays, nearest visible point, occlusion |
+//! | `joint_placement` | a clicked joint goes to the middle of the body under the cursor |
 //! | `gizmo` | gizmo maths (axis / plane / free drags, rings, trackball, scale) |
 //! | `transform` | grab / rotate / scale of the selection: start, one step |
 //! | `export` | OBJ / JSON / animation / glTF export |
@@ -49,15 +56,18 @@
 pub mod action;
 pub mod app;
 pub mod benchmark_drag;
+pub mod binding;
 pub mod diagnostics;
 pub mod dialogs;
 pub mod doc_commands;
 pub mod document;
+pub mod document_skeleton;
 pub mod export;
 pub mod frame_stats;
 pub mod gizmo;
 pub mod history;
 pub mod inspector;
+pub mod joint_placement;
 pub mod keys;
 pub mod menus;
 pub mod open_document;
@@ -66,15 +76,19 @@ pub mod overlay;
 pub mod picking;
 pub mod project;
 pub mod rig_open;
+pub mod saved_binding;
 pub mod scripted_run;
 pub mod selection;
 pub mod session_file;
 pub mod shortcuts;
+pub mod skeleton_draft;
+pub mod skeleton_panel;
 pub mod startup;
 pub mod status;
 pub mod timeline;
 pub mod tools;
 pub mod transform;
+pub mod unrigged;
 pub mod view_keys;
 pub mod view_mouse;
 pub mod view_picking;

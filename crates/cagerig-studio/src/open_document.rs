@@ -214,7 +214,7 @@ impl StudioApp {
         if let RigSource::File { path, .. } = &source {
             self.project.state_dir.add_recent(path);
         }
-        self.set_document(Document::new(source, opened.session));
+        self.set_document(Document::new(source, opened.session).with_rigged(opened.rigged));
         self.project.animations = opened.animations;
         self.project.morph_targets = opened.morph_targets;
         self.project.session_path = None;
@@ -222,8 +222,22 @@ impl StudioApp {
 
     /// A loaded session's rig with the session's state restored becomes the document.
     fn put_session(&mut self, path: &Path, file: SessionFile, opened: OpenedRig) {
-        let mut doc = Document::new(file.source.clone(), opened.session);
-        if let Err(e) = doc.restore(&file.state) {
+        let mut doc = Document::new(file.source.clone(), opened.session).with_rigged(opened.rigged);
+        if let Some(binding) = &file.binding {
+            match binding.bind(&doc.session) {
+                Ok(session) => doc.adopt_binding(session),
+                Err(e) => {
+                    self.diagnostics.log.error(format!(
+                        "{}: the skeleton bound in the studio cannot be rebuilt: {e}",
+                        path.display()
+                    ));
+                    return;
+                }
+            }
+        }
+        let mut state = file.state.clone();
+        state.binding = doc.binding;
+        if let Err(e) = doc.restore(&state) {
             self.diagnostics.log.error(format!(
                 "{}: the saved state does not fit the rig {}: {e}",
                 path.display(),

@@ -5,6 +5,7 @@ use cagerig::session::RigSession;
 use egui::{Color32, Pos2, Stroke};
 use glam::{DVec2, DVec3};
 
+use crate::document_skeleton::ShownSkeleton;
 use crate::gizmo::{self, Axis};
 use crate::picking::ViewProjection;
 use crate::selection::Tool;
@@ -32,6 +33,7 @@ pub fn overlay_ui(
     view: usize,
     projection: &ViewProjection,
     s: &RigSession,
+    skeleton: &ShownSkeleton,
     tools: &Tools,
 ) {
     let current = view == CURRENT;
@@ -81,30 +83,26 @@ pub fn overlay_ui(
         }
     }
     // Selected and hovered joints.
-    let joint_position = |j: usize| -> Option<DVec3> {
-        let frames = if current {
-            s.posed_world_from_joint()
-        } else {
-            s.rest_frames()
-        };
-        frames.get(j).map(|f| f.translation)
+    let joint = |j: usize| -> Option<(DVec2, &str)> {
+        let p = projection.project(*skeleton.positions.get(j)?)?;
+        Some((p, skeleton.names.get(j)?.as_str()))
     };
     if let Some(j) = tools.selection.joint
-        && let Some(p) = joint_position(j).and_then(|p| projection.project(p))
+        && let Some((p, name)) = joint(j)
     {
         painter.circle_stroke(to_screen(p, rect), 9.0, Stroke::new(2.5, SELECTED));
-        label(painter, to_screen(p, rect), &s.skeleton().joint(j).name);
+        label(painter, to_screen(p, rect), name);
     }
     if let Some((v, j)) = tools.interaction.hovered_joint
         && v == view
         && tools.selection.joint != Some(j)
-        && let Some(p) = joint_position(j).and_then(|p| projection.project(p))
+        && let Some((p, name)) = joint(j)
     {
         painter.circle_stroke(to_screen(p, rect), 8.0, Stroke::new(1.5, Color32::WHITE));
-        label(painter, to_screen(p, rect), &s.skeleton().joint(j).name);
+        label(painter, to_screen(p, rect), name);
     }
     // Gizmo.
-    if let Some((pivot, arrows, rings)) = tools.gizmo_pivot(s, view) {
+    if let Some((pivot, arrows, rings)) = tools.gizmo_pivot(s, skeleton, view) {
         draw_gizmo(painter, rect, projection, pivot, arrows, rings, tools);
     }
     // Box selection.

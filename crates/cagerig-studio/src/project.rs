@@ -11,7 +11,7 @@ use cagerig_formats::{ImportedAnimation, MorphTargets};
 use crate::diagnostics::Log;
 use crate::document::Document;
 use crate::keys::Track;
-use crate::session_file::{SessionFile, StateDir};
+use crate::session_file::StateDir;
 
 /// The document and its files.
 pub struct Project {
@@ -75,7 +75,7 @@ impl Project {
             log.error("nothing to save: no rig is open");
             return false;
         };
-        let mut file = SessionFile::new(doc.source.clone(), doc.snapshot(), time);
+        let mut file = doc.session_file(time);
         file.cameras = cameras;
         let edits = doc.edits;
         match file.write(path) {
@@ -101,7 +101,7 @@ impl Project {
     /// Writes the recovery file now, with the playhead at `time` (true when written).
     pub fn autosave_now(&mut self, time: f64, log: &mut Log) -> bool {
         let Some(doc) = &self.doc else { return false };
-        let file = SessionFile::new(doc.source.clone(), doc.snapshot(), time);
+        let file = doc.session_file(time);
         let edits = doc.edits;
         self.last_autosave = Instant::now();
         match self.state_dir.write_recovery(&file) {

@@ -115,11 +115,14 @@ pub struct OpenedRig {
     pub animations: Vec<ImportedAnimation>,
     /// The character's morph targets that the animations animate (empty otherwise).
     pub morph_targets: cagerig_formats::MorphTargets,
+    /// False for a mesh opened with no skeleton (its rig is a placeholder: see `unrigged`).
+    pub rigged: bool,
 }
 
 /// Loads `source` and assembles the session (Φ, MaxVol rows and Ψ are computed when no file
 /// gives them).
 pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
+    let mut rigged = true;
     let (parts, mut warnings, files, (animations, morph_targets, file_skinning)) = match source {
         RigSource::Builtin { name, resolution } => {
             let builtin_error = |source| OpenError::Builtin {
@@ -138,6 +141,17 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
             auto_cage,
         } if cagerig_formats::CharacterFormat::of(path).is_some() => {
             import_interchange(path, cage.as_deref(), skin.as_deref(), *auto_cage)?
+        }
+        RigSource::File {
+            path,
+            cage,
+            auto_cage,
+            ..
+        } if crate::unrigged::is_unrigged_obj(path) => {
+            rigged = false;
+            let (parts, warnings, files) =
+                crate::unrigged::open_unrigged_obj(path, cage.as_deref(), *auto_cage)?;
+            (parts, warnings, files, Default::default())
         }
         RigSource::File {
             path,
@@ -186,6 +200,7 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
         files,
         animations,
         morph_targets,
+        rigged,
     })
 }
 
@@ -201,7 +216,7 @@ type Imported = (
 );
 
 /// The log line of a generated cage: the library's note and where File ▸ Export writes it.
-fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
+pub(crate) fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
     match cagerig::cage_source::generated_cage_note(g) {
         Warning::Note { message } => Warning::Note {
             message: format!("{message}; File > Export writes it as cage_rest.obj"),

@@ -46,6 +46,9 @@ pub struct SessionFile {
     /// field of view (radians); absent: framed on opening.
     #[serde(default)]
     pub cameras: Option<[[f64; 7]; 2]>,
+    /// A skeleton and weights bound in the studio (absent: the source's own rig).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub binding: Option<crate::saved_binding::SavedBinding>,
 }
 
 #[derive(Debug, Error)]
@@ -79,6 +82,7 @@ impl SessionFile {
             state,
             time,
             cameras: None,
+            binding: None,
         }
     }
 

@@ -8,6 +8,7 @@ use glam::{DVec2, DVec3};
 
 use crate::diagnostics::{Diagnostics, Log};
 use crate::document::Document;
+use crate::document_skeleton::ShownSkeleton;
 use crate::selection::{Selection, Tool};
 use crate::transform::{Transform, TransformStart};
 use crate::view_state::{CURRENT, ViewState};
@@ -55,6 +56,10 @@ pub struct NumericEntry {
 pub struct Tools {
     pub selection: Selection,
     pub tool: Tool,
+    /// A click on the mesh in the rest view adds a joint (below the selected joint).
+    pub add_joints: bool,
+    /// The Skeleton panel's name field: (joint, text being typed).
+    pub joint_name: Option<(usize, String)>,
     pub interaction: Interaction,
     pub numeric: NumericEntry,
 }
@@ -64,6 +69,8 @@ impl Default for Tools {
         Self {
             selection: Selection::default(),
             tool: Tool::Move,
+            add_joints: false,
+            joint_name: None,
             interaction: Interaction::default(),
             numeric: NumericEntry::default(),
         }
@@ -80,14 +87,19 @@ impl Tools {
 
     /// Where the gizmo of the active selection sits in `view`, and which handles it shows
     /// (arrows and plane squares, rings).
-    pub fn gizmo_pivot(&self, session: &RigSession, view: usize) -> Option<(DVec3, bool, bool)> {
+    pub fn gizmo_pivot(
+        &self,
+        session: &RigSession,
+        skeleton: &ShownSkeleton,
+        view: usize,
+    ) -> Option<(DVec3, bool, bool)> {
         if let Some(t) = &self.interaction.transform {
             return (t.view == view).then_some((t.pivot, false, false));
         }
         if self.selection.joint_active() {
-            let j = self.selection.joint?;
-            return (view == CURRENT)
-                .then(|| (session.posed_world_from_joint()[j].translation, false, true));
+            let position = *skeleton.positions.get(self.selection.joint?)?;
+            // Joints rotate in the current view and move (skeleton building) in the rest view.
+            return Some((position, view != CURRENT, view == CURRENT));
         }
         if self.selection.cage.is_empty() {
             return None;
@@ -117,7 +129,7 @@ impl Tools {
         let Some(doc) = doc else {
             return false;
         };
-        match Transform::begin(&doc.session, &self.selection, start) {
+        match Transform::begin(doc, &self.selection, start) {
             Ok(Some(transform)) => {
                 doc.begin_gesture(transform.gesture_label());
                 self.interaction.transform = Some(transform);

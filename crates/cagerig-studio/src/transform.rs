@@ -7,10 +7,11 @@
 use cagerig::session::RigSession;
 use glam::{DQuat, DVec2, DVec3};
 
-use crate::document::Command;
+use crate::document::{Command, Document, SkeletonEdit};
 use crate::gizmo::{self, Axis, Constraint};
 use crate::picking::ViewProjection;
 use crate::selection::Selection;
+use crate::skeleton_draft::Mirror;
 use crate::view_state::CURRENT;
 
 /// Grab, rotate or scale.
@@ -44,6 +45,13 @@ pub enum TransformTarget {
         joint: usize,
         applied: DQuat,
         trackball: bool,
+    },
+    /// A joint of the skeleton being built (rest view), moved with its X-mirror twin when
+    /// `mirror` is on; `start` is where it was.
+    RestJoint {
+        joint: usize,
+        start: DVec3,
+        mirror: Option<Mirror>,
     },
 }
 
@@ -131,18 +139,23 @@ pub struct TransformStart {
     pub trackball: bool,
 }
 
-/// Why a joint cannot be transformed but by a rotation in the current-pose view.
-pub const JOINTS_ROTATE_IN_THE_CURRENT_VIEW: &str = "joints are rotated in the current-pose view (R); the rest skeleton follows the rest cage \
-     (SkelUp)";
+/// Why a joint cannot be transformed so in the current-pose view.
+pub const JOINTS_ROTATE_IN_THE_CURRENT_VIEW: &str = "joints are rotated in the current-pose view (R), and moved in the rest-pose view (G) to \
+     change the skeleton";
+
+/// Why a joint cannot be rotated or scaled in the rest-pose view.
+pub const JOINTS_MOVE_IN_THE_REST_VIEW: &str = "in the rest-pose view joints are moved (G) to change the skeleton; rotate them in the \
+     current-pose view (R)";
 
 impl Transform {
     /// A transform of the active selection of `session`: `Ok(None)` when nothing is selected,
     /// `Err` with the reason when the selection cannot be transformed so.
     pub fn begin(
-        session: &RigSession,
+        doc: &Document,
         selection: &Selection,
         start: TransformStart,
-    ) -> Result<Option<Transform>, &'static str> {
+    ) -> Result<Option<Transform>, String> {
+        let session = &doc.session;
         let TransformStart {
             view,
             op,
@@ -155,13 +168,29 @@ impl Transform {
             let Some(joint) = selection.joint else {
                 return Ok(None);
             };
-            if view != CURRENT || op != TransformOp::Rotate {
-                return Err(JOINTS_ROTATE_IN_THE_CURRENT_VIEW);
-            }
-            TransformTarget::Joint {
-                joint,
-                applied: DQuat::IDENTITY,
-                trackball,
+            let Some(&position) = doc.shown_skeleton(view).positions.get(joint) else {
+                return Ok(None);
+            };
+            match (view == CURRENT, op) {
+                (true, TransformOp::Rotate) => {
+                    doc.check_posable().map_err(|e| e.to_string())?;
+                    TransformTarget::Joint {
+                        joint,
+                        applied: DQuat::IDENTITY,
+                        trackball,
+                    }
+                }
+                (true, TransformOp::Grab | TransformOp::Scale) => {
+                    return Err(JOINTS_ROTATE_IN_THE_CURRENT_VIEW.into());
+                }
+                (false, TransformOp::Grab) => TransformTarget::RestJoint {
+                    joint,
+                    start: position,
+                    mirror: doc.mirror_x.then(|| doc.mirror()),
+                },
+                (false, TransformOp::Rotate | TransformOp::Scale) => {
+                    return Err(JOINTS_MOVE_IN_THE_REST_VIEW.into());
+                }
             }
         } else {
             if selection.cage.is_empty() {
@@ -185,6 +214,7 @@ impl Transform {
             TransformTarget::Joint { joint, .. } => {
                 session.posed_world_from_joint()[*joint].translation
             }
+            TransformTarget::RestJoint { start, .. } => *start,
         };
         Ok(Some(Transform {
             view,
@@ -202,6 +232,7 @@ impl Transform {
     pub fn gesture_label(&self) -> String {
         match (&self.target, self.view == CURRENT) {
             (TransformTarget::Joint { .. }, _) => "rotate joint".to_string(),
+            (TransformTarget::RestJoint { .. }, _) => "move joint".to_string(),
             (TransformTarget::Cage { .. }, true) => format!("{} current cage", self.op.label()),
             (TransformTarget::Cage { .. }, false) => format!("{} rest cage", self.op.label()),
         }
@@ -299,6 +330,22 @@ impl Transform {
                     axis,
                     angle,
                 })
+            }
+            TransformTarget::RestJoint {
+                joint,
+                start,
+                mirror,
+            } => {
+                let d = match (typed, constraint) {
+                    (Some(v), Constraint::Axis(a)) => v * a.vector(),
+                    (Some(v), _) => DVec3::new(v, 0.0, 0.0),
+                    (None, c) => gizmo::drag_translation(projection, pivot, c, start_mouse, mouse),
+                };
+                Some(Command::EditSkeleton(SkeletonEdit::Move {
+                    joint: *joint,
+                    position: *start + d,
+                    mirror: *mirror,
+                }))
             }
         }
     }

@@ -5,13 +5,15 @@ use cagerig_render::OrbitCamera;
 use glam::DVec2;
 
 use crate::diagnostics::Diagnostics;
-use crate::document::Document;
+use crate::doc_commands::run_command;
+use crate::document::{Command, Document, SkeletonEdit};
 use crate::gizmo::{self, Constraint, Handle};
+use crate::joint_placement::joint_in_body;
 use crate::selection::{Picked, Tool};
 use crate::tools::Tools;
 use crate::transform::{TransformOp, TransformStart};
 use crate::view_picking::ViewPicker;
-use crate::view_state::{CURRENT, ViewState};
+use crate::view_state::{CURRENT, REST, ViewState};
 
 /// A screen position in view pixels of the view at `rect`.
 pub fn to_view(pos: egui::Pos2, rect: egui::Rect) -> DVec2 {
@@ -82,7 +84,7 @@ pub fn handle_mouse(
     }
     // Hovered joint name (joints only: cheap, no occlusion test, fine every frame).
     if let Some(m) = hover {
-        let picked = ViewPicker::new(&doc.session, views, view)
+        let picked = ViewPicker::new(doc, views, view)
             .pick_joint(m)
             .map(Picked::Joint);
         match picked {
@@ -152,15 +154,51 @@ pub fn handle_mouse(
             && v == view
             && let Some(end) = response.interact_pointer_pos().map(|p| to_view(p, rect))
         {
-            let inside = ViewPicker::new(&doc.session, views, view).cage_in_box(start, end);
+            let inside = ViewPicker::new(doc, views, view).cage_in_box(start, end);
             tools.selection.box_select(inside, modifiers);
         }
     }
     if response.clicked_by(primary)
         && let Some(m) = response.interact_pointer_pos().map(|p| to_view(p, rect))
     {
-        let picked = ViewPicker::new(&doc.session, views, view).pick(m);
-        tools.selection.click(picked, modifiers);
+        let picked = ViewPicker::new(doc, views, view).pick(m);
+        if tools.add_joints && view == REST && !matches!(picked, Some(Picked::Joint(_))) {
+            add_joint_at(doc, views, m, tools, diag);
+        } else {
+            tools.selection.click(picked, modifiers);
+        }
+    }
+}
+
+/// Adds a joint in the middle of the body under `mouse` (rest view), below the selected
+/// joint, and selects it: successive clicks build a chain.
+fn add_joint_at(
+    doc: &mut Document,
+    views: &ViewState,
+    mouse: DVec2,
+    tools: &mut Tools,
+    diag: &mut Diagnostics,
+) {
+    let (origin, dir) = views.projection(REST).ray(mouse);
+    let s = &doc.session;
+    let Some(position) = joint_in_body(origin, dir, s.rest_mesh(), s.mesh_triangles()) else {
+        diag.log
+            .warning("no joint added: click on the mesh (the joint goes inside the body)");
+        return;
+    };
+    let count = doc.shown_skeleton(REST).positions.len();
+    let parent = tools.selection.joint.filter(|&j| j < count);
+    let mirror = doc.mirror_x.then(|| doc.mirror());
+    let command = Command::EditSkeleton(SkeletonEdit::Add {
+        position,
+        parent,
+        mirror,
+    });
+    if run_command(doc, &command, diag) {
+        // The new joint is pushed first, its mirror twin (if any) after it.
+        tools.selection.cage.clear();
+        tools.selection.joint = Some(count);
+        tools.selection.joint_is_active = true;
     }
 }
 
@@ -183,7 +221,8 @@ fn start_drag(
         modal: false,
         trackball,
     };
-    if let Some((pivot, arrows, rings)) = tools.gizmo_pivot(&doc.session, view) {
+    let skeleton = doc.shown_skeleton(view);
+    if let Some((pivot, arrows, rings)) = tools.gizmo_pivot(&doc.session, &skeleton, view) {
         let handle = gizmo::hit_handle(
             &projection,
             pivot,
@@ -209,7 +248,7 @@ fn start_drag(
             return;
         }
     }
-    match ViewPicker::new(&doc.session, views, view).pick(origin) {
+    match ViewPicker::new(doc, views, view).pick(origin) {
         Some(Picked::CageVertex(k)) if tools.selection.cage.contains(&k) && !modifiers.shift => {
             tools.selection.joint_is_active = false;
             let op = match tools.tool {
@@ -225,6 +264,15 @@ fn start_drag(
             tools.begin_transform(
                 Some(doc),
                 start(TransformOp::Rotate, Constraint::Free, true),
+                &mut diag.log,
+            );
+        }
+        Some(Picked::Joint(j)) if view == REST && !modifiers.shift => {
+            tools.selection.joint = Some(j);
+            tools.selection.joint_is_active = true;
+            tools.begin_transform(
+                Some(doc),
+                start(TransformOp::Grab, Constraint::Free, false),
                 &mut diag.log,
             );
         }

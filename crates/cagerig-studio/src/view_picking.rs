@@ -5,6 +5,7 @@ use cagerig::session::RigSession;
 use cagerig_render::rig_scene::Layers;
 use glam::{DVec2, DVec3};
 
+use crate::document::Document;
 use crate::picking::{Occluder, ViewProjection, pick_box, pick_nearest};
 use crate::selection::Picked;
 use crate::view_state::{CURRENT, ViewState};
@@ -15,6 +16,8 @@ pub const PICK_PIXELS: f64 = 12.0;
 /// The rig as one view shows it, for picking.
 pub struct ViewPicker<'a> {
     session: &'a RigSession,
+    /// The joints the view shows (`#J` of its skeleton).
+    joints: Vec<DVec3>,
     layers: Layers,
     projection: ViewProjection,
     /// The current-pose view (else the rest-pose view).
@@ -23,9 +26,10 @@ pub struct ViewPicker<'a> {
 
 impl<'a> ViewPicker<'a> {
     /// Picking in view `view` of `views` as last shown.
-    pub fn new(session: &'a RigSession, views: &ViewState, view: usize) -> Self {
+    pub fn new(doc: &'a Document, views: &ViewState, view: usize) -> Self {
         Self {
-            session,
+            session: &doc.session,
+            joints: doc.shown_skeleton(view).positions,
             layers: views.layers,
             projection: views.projection(view),
             current: view == CURRENT,
@@ -45,14 +49,6 @@ impl<'a> ViewPicker<'a> {
         })
     }
 
-    fn joints(&self) -> Vec<DVec3> {
-        if self.current {
-            self.session.posed_joints().collect()
-        } else {
-            self.session.rest_joints().collect()
-        }
-    }
-
     fn cage(&self) -> &'a [DVec3] {
         if self.current {
             self.session.posed_cage()
@@ -66,7 +62,7 @@ impl<'a> ViewPicker<'a> {
     pub fn pick(&self, mouse: DVec2) -> Option<Picked> {
         let projection = &self.projection;
         let occluder = self.skin_occluder();
-        let joints = self.joints();
+        let joints = &self.joints;
         let cage = self.cage();
         let screen_distance = |p: DVec3| {
             projection
@@ -76,7 +72,7 @@ impl<'a> ViewPicker<'a> {
         let joint = self
             .layers
             .skeleton
-            .then(|| pick_nearest(projection, &joints, mouse, PICK_PIXELS, None))
+            .then(|| pick_nearest(projection, joints, mouse, PICK_PIXELS, None))
             .flatten();
         let vertex = self
             .layers
@@ -98,7 +94,7 @@ impl<'a> ViewPicker<'a> {
         if !self.layers.skeleton {
             return None;
         }
-        pick_nearest(&self.projection, &self.joints(), mouse, PICK_PIXELS, None)
+        pick_nearest(&self.projection, &self.joints, mouse, PICK_PIXELS, None)
     }
 
     /// The visible cage vertices inside the box between two corners (view pixels).

@@ -11,6 +11,7 @@ use cagerig_render::{CameraPreset, OrbitCamera, RenderTarget, Renderer, SceneBuf
 use egui_wgpu::RenderState;
 use glam::DVec3;
 
+use crate::document_skeleton::ShownSkeleton;
 use crate::picking::ViewProjection;
 
 /// What a view's picture depends on; the view re-renders only when it changes.
@@ -109,6 +110,7 @@ impl View {
         layers: Layers,
         color_by: ColorBy,
         size: (u32, u32),
+        skeleton: &ShownSkeleton,
     ) -> Result<egui::TextureId, cagerig_render::RenderError> {
         let device = &render_state.device;
         let queue = &render_state.queue;
@@ -163,7 +165,13 @@ impl View {
         let uploaded = self.uploaded != Some(upload_key);
         if uploaded {
             let t = Instant::now();
-            let scene = self.scene_data.scene(session, self.pose, layers, color_by);
+            let scene = self.scene_data.scene_with_skeleton(
+                session,
+                self.pose,
+                layers,
+                color_by,
+                Some((&skeleton.positions, &skeleton.parents)),
+            );
             gpu.buffers
                 .update_into(device, queue, &mut encoder, &scene, &editor_style())?;
             self.last_upload_ms = t.elapsed().as_secs_f64() * 1e3;

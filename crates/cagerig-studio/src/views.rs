@@ -93,6 +93,7 @@ fn view_ui(
     );
     let color_by = views.color_by(&tools.selection);
     let layers = views.layers;
+    let skeleton = doc.shown_skeleton(view);
     let texture = match gpu {
         Some(gpu) => {
             let v = &mut views.views[view];
@@ -108,6 +109,7 @@ fn view_ui(
                 layers,
                 color_by,
                 size,
+                &skeleton,
             );
             diag.stats.upload_ms += v.last_upload_ms;
             diag.stats.render_ms += v.last_render_ms;
@@ -136,5 +138,13 @@ fn view_ui(
         None => painter.rect_filled(rect, 0.0, egui::Color32::from_gray(200)),
     };
     let projection = views.projection(view);
-    crate::overlay::overlay_ui(&painter, rect, view, &projection, &doc.session, tools);
+    crate::overlay::overlay_ui(
+        &painter,
+        rect,
+        view,
+        &projection,
+        &doc.session,
+        &skeleton,
+        tools,
+    );
 }

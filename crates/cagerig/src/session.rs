@@ -43,6 +43,7 @@ mod green;
 mod parts;
 mod pose_events;
 mod rebind;
+mod reskeleton;
 mod sync_chain;
 #[cfg(test)]
 mod test_rigs;

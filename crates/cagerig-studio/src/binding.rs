@@ -1,0 +1,332 @@
+//! Binding the skeleton: the rig's skeleton S becomes the draft built in the rest view (or
+//! stays, for a re-weighting), with automatic skinning weights Ω (geodesic voxel binding, the
+//! `cagerig weights` method) or the bound weights carried over. The heavy part — the weights
+//! and the new session — runs on a background thread with progress; the document takes the
+//! result as one undo step ([`crate::document::Document::finish_bind`]).
+
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use cagerig::auto_weights::{AutoWeights, AutoWeightsOptions, Progress, Stage};
+use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
+use cagerig::{Skeleton, SkinWeights, Warning};
+use glam::{DQuat, DVec3};
+
+use crate::skeleton_draft::SkeletonDraft;
+
+/// Where the new Ω comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BindWeights {
+    /// Computed from the mesh, the new skeleton and the cage's interior.
+    Automatic(AutoWeightsOptions),
+    /// The bound weights, each joint's column carried to the joint that stands for it; the
+    /// weight of a deleted joint goes to its nearest kept ancestor; new joints get none.
+    KeepBound,
+}
+
+/// Everything a bind needs, taken from the document (cheap) so the rest can run elsewhere.
+pub struct BindRequest {
+    parts: RigParts,
+    options: SessionOptions,
+    precision: DisplayPrecision,
+    weights: BindWeights,
+    /// For each new joint, the bound joint it stands for (`#J` new).
+    pub origins: Vec<Option<usize>>,
+}
+
+/// A finished bind.
+pub struct BoundRig {
+    pub session: RigSession,
+    pub warnings: Vec<Warning>,
+    /// For each joint of the new skeleton, the old joint it stands for.
+    pub origins: Vec<Option<usize>>,
+    pub seconds: f64,
+}
+
+impl BindRequest {
+    /// A bind of `session` to `draft` (`None`: the session's own skeleton, re-weighted).
+    /// `rigged` is false for the placeholder rig of a mesh opened without a skeleton, whose
+    /// weights cannot be kept.
+    pub fn new(
+        session: &RigSession,
+        draft: Option<&SkeletonDraft>,
+        rigged: bool,
+        weights: BindWeights,
+    ) -> Result<Self, String> {
+        let own;
+        let draft = match draft {
+            Some(d) => d,
+            None if rigged => {
+                own = SkeletonDraft::from_session(session);
+                &own
+            }
+            None => return Err(crate::skeleton_draft::DraftError::Empty.to_string()),
+        };
+        if !rigged && weights == BindWeights::KeepBound {
+            return Err(
+                "the rig has no bound weights to keep: bind with automatic weights".to_string(),
+            );
+        }
+        let skeleton = draft
+            .to_skeleton(session.rest_frames())
+            .map_err(|e| e.to_string())?;
+        let origins: Vec<Option<usize>> = if rigged {
+            draft.joints.iter().map(|j| j.bound).collect()
+        } else {
+            vec![None; draft.len()]
+        };
+        let placeholder = SkinWeights::from_triplets(session.num_vertices(), skeleton.len(), [])
+            .map_err(|e| e.to_string())?
+            .0;
+        Ok(Self {
+            parts: session.parts_with_skeleton(skeleton, placeholder),
+            options: session.rebinding_options(),
+            precision: session.display_precision(),
+            weights,
+            origins,
+        })
+    }
+
+    /// Computes Ω and builds the new session; `progress` follows the automatic weights.
+    pub fn run(
+        mut self,
+        old_weights: Option<&SkinWeights>,
+        old_parents: &[Option<usize>],
+        progress: &(dyn Fn(Progress) + Sync),
+    ) -> Result<BoundRig, String> {
+        let t = Instant::now();
+        let mut warnings = Vec::new();
+        self.parts.skin_weights = match &self.weights {
+            BindWeights::Automatic(options) => {
+                let result = AutoWeights::new(options.clone())
+                    .map_err(|e| format!("automatic weights: {e}"))?
+                    .compute_with_progress(
+                        &self.parts.mesh,
+                        &self.parts.skeleton,
+                        Some(&self.parts.cage),
+                        progress,
+                    )
+                    .map_err(|e| format!("automatic weights: {e}"))?;
+                warnings.extend(result.report.warnings);
+                result.weights
+            }
+            BindWeights::KeepBound => {
+                let old = old_weights.ok_or("the rig has no bound weights to keep")?;
+                carry_weights(old, old_parents, &self.origins, &self.parts.skeleton)?
+            }
+        };
+        let (mut session, more) =
+            RigSession::new(self.parts, self.options).map_err(|e| e.to_string())?;
+        warnings.extend(more);
+        session
+            .set_display_precision(self.precision)
+            .map_err(|e| e.to_string())?;
+        Ok(BoundRig {
+            session,
+            warnings,
+            origins: self.origins,
+            seconds: t.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// Ω of the old rig (`#V × #J old`, parents `old_parents`) carried to `skeleton`
+/// (`#V × #J new`) by `origins` (new joint → old joint): a deleted joint's weight goes to its
+/// nearest ancestor that was kept, or to new joint 0 when none was.
+pub fn carry_weights(
+    old: &SkinWeights,
+    old_parents: &[Option<usize>],
+    origins: &[Option<usize>],
+    skeleton: &Skeleton,
+) -> Result<SkinWeights, String> {
+    let mut new_of_old = vec![None; old.num_joints()];
+    for (new, origin) in origins.iter().enumerate() {
+        if let Some(o) = origin
+            && let Some(slot) = new_of_old.get_mut(*o)
+        {
+            *slot = Some(new);
+        }
+    }
+    let target = |mut j: usize| -> usize {
+        for _ in 0..=old_parents.len() {
+            if let Some(Some(n)) = new_of_old.get(j) {
+                return *n;
+            }
+            match old_parents.get(j).copied().flatten() {
+                Some(p) => j = p,
+                None => break,
+            }
+        }
+        0
+    };
+    let mut triplets = Vec::with_capacity(old.num_entries());
+    for v in 0..old.num_vertices() {
+        let (joints, weights) = old.row(v);
+        for (&j, &w) in joints.iter().zip(weights) {
+            triplets.push((v, target(j as usize), w));
+        }
+    }
+    SkinWeights::from_triplets(old.num_vertices(), skeleton.len(), triplets)
+        .map(|(w, _)| w)
+        .map_err(|e| e.to_string())
+}
+
+/// The pose of the old rig (`rotations`, `scales`, `offsets`, `#J old`) on the new skeleton
+/// (`#J new`): a joint that stands for an old one keeps its pose, a new joint is at rest.
+pub fn carry_pose(
+    origins: &[Option<usize>],
+    rotations: &[DQuat],
+    scales: &[DVec3],
+    offsets: &[DVec3],
+) -> (Vec<DQuat>, Vec<DVec3>, Vec<DVec3>) {
+    let pick = |o: &Option<usize>| o.filter(|&o| o < rotations.len());
+    (
+        origins
+            .iter()
+            .map(|o| pick(o).map_or(DQuat::IDENTITY, |o| rotations[o]))
+            .collect(),
+        origins
+            .iter()
+            .map(|o| {
+                pick(o)
+                    .and_then(|o| scales.get(o).copied())
+                    .unwrap_or(DVec3::ONE)
+            })
+            .collect(),
+        origins
+            .iter()
+            .map(|o| {
+                pick(o)
+                    .and_then(|o| offsets.get(o).copied())
+                    .unwrap_or(DVec3::ZERO)
+            })
+            .collect(),
+    )
+}
+
+/// A bind running on a background thread.
+pub struct BindJob {
+    receiver: Receiver<Result<BoundRig, String>>,
+    progress: Arc<Mutex<Option<Progress>>>,
+    started: Instant,
+}
+
+impl BindJob {
+    /// Starts `request` on a new thread.
+    pub fn spawn(
+        request: BindRequest,
+        old_weights: Option<SkinWeights>,
+        old_parents: Vec<Option<usize>>,
+    ) -> Self {
+        let (sender, receiver) = channel();
+        let progress = Arc::new(Mutex::new(None));
+        let shared = Arc::clone(&progress);
+        std::thread::spawn(move || {
+            let report = |p: Progress| {
+                if let Ok(mut slot) = shared.lock() {
+                    *slot = Some(p);
+                }
+            };
+            let result = request.run(old_weights.as_ref(), &old_parents, &report);
+            // The studio may have closed the document meanwhile: nobody to tell.
+            let _ = sender.send(result);
+        });
+        Self {
+            receiver,
+            progress,
+            started: Instant::now(),
+        }
+    }
+
+    /// The result once the thread is done (`None` while it runs).
+    pub fn poll(&self) -> Option<Result<BoundRig, String>> {
+        match self.receiver.try_recv() {
+            Ok(result) => Some(result),
+            Err(TryRecvError::Empty) => None,
+            Err(TryRecvError::Disconnected) => Some(Err(
+                "the bind stopped unexpectedly (its thread ended)".into(),
+            )),
+        }
+    }
+
+    /// Fraction done (0…1) and a line for the progress bar.
+    pub fn progress(&self) -> (f32, String) {
+        let seconds = self.started.elapsed().as_secs_f64();
+        let p = self.progress.lock().ok().and_then(|p| *p);
+        let Some(p) = p else {
+            return (0.0, format!("binding… {seconds:.1} s"));
+        };
+        let within = if p.total == 0 {
+            0.0
+        } else {
+            p.done as f32 / p.total as f32
+        };
+        let (start, span, what) = match p.stage {
+            Stage::Voxelising => (0.0, 0.2, "voxelising the body"),
+            Stage::Distances => (0.2, 0.7, "geodesic distances"),
+            Stage::Weights => (0.9, 0.1, "weights"),
+        };
+        (
+            start + span * within,
+            format!("binding: {what} ({}/{}) {seconds:.1} s", p.done, p.total),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cagerig::Joint;
+    use glam::DAffine3;
+
+    fn chain(names: &[&str]) -> Skeleton {
+        Skeleton::new(
+            names
+                .iter()
+                .enumerate()
+                .map(|(j, n)| Joint {
+                    name: (*n).into(),
+                    parent: j.checked_sub(1),
+                    rest_world_from_joint: DAffine3::from_translation(DVec3::Y * j as f64),
+                })
+                .collect(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn weights_of_a_deleted_joint_go_to_its_kept_ancestor() {
+        // Old chain a-b-c; b deleted, a joint d added: new = [a, c, d].
+        let old =
+            SkinWeights::from_triplets(3, 3, [(0, 0, 1.0), (1, 1, 1.0), (2, 1, 0.5), (2, 2, 0.5)])
+                .unwrap()
+                .0;
+        let new = chain(&["a", "c", "d"]);
+        let w = carry_weights(
+            &old,
+            &[None, Some(0), Some(1)],
+            &[Some(0), Some(2), None],
+            &new,
+        )
+        .unwrap();
+        assert_eq!(w.get(1, 0), 1.0, "b's vertex goes to a");
+        assert_eq!(w.get(2, 0), 0.5);
+        assert_eq!(w.get(2, 1), 0.5);
+        assert_eq!(w.get(0, 2), 0.0, "a new joint gets no weight");
+    }
+
+    #[test]
+    fn the_pose_follows_the_joints_and_new_joints_rest() {
+        let q = DQuat::from_rotation_z(0.5);
+        let (r, s, o) = carry_pose(
+            &[Some(1), None],
+            &[DQuat::IDENTITY, q],
+            &[DVec3::ONE, DVec3::splat(2.0)],
+            &[DVec3::ZERO, DVec3::X],
+        );
+        assert_eq!(r, vec![q, DQuat::IDENTITY]);
+        assert_eq!(s, vec![DVec3::splat(2.0), DVec3::ONE]);
+        assert_eq!(o, vec![DVec3::X, DVec3::ZERO]);
+    }
+}
