@@ -146,7 +146,13 @@ fn selection_ui(
     ui.heading("Selection");
     let Some(doc) = doc else { return };
     let s = &doc.session;
-    if let Some(j) = selection.joint {
+    // The selected joint's pose: only for a bound joint while the rig can be posed (a joint
+    // of a skeleton being built is edited in the Skeleton panel).
+    let posable = doc.check_posable().is_ok();
+    if let Some(j) = selection
+        .joint
+        .filter(|&j| posable && j < s.skeleton().len())
+    {
         let joint = s.skeleton().joint(j);
         ui.label(format!("Joint {j}: {}", joint.name));
         let q = s.posed_local_rotations()[j];

@@ -191,7 +191,7 @@ impl StudioApp {
             "opened {}: {} vertices, {} joints, {} cage vertices ({:.0} ms)",
             request.display_name(),
             s.num_vertices(),
-            s.skeleton().len(),
+            if opened.rigged { s.skeleton().len() } else { 0 },
             s.rest_cage().len(),
             started.elapsed().as_secs_f64() * 1e3
         ));

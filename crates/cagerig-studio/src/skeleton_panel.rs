@@ -35,6 +35,7 @@ pub fn skeleton_ui(
         (false, true) => format!("{} joints, bound", skeleton.positions.len()),
     };
     ui.label(status);
+    bind_ui(ui, doc, diag);
     ui.checkbox(&mut tools.add_joints, "Add joints by clicking")
         .on_hover_text(
             "In the rest view a click on the mesh adds a joint in the middle of the body under \
@@ -47,7 +48,6 @@ pub fn skeleton_ui(
         );
     joint_list_ui(ui, &skeleton, tools);
     selected_joint_ui(ui, doc, &skeleton, tools, diag);
-    bind_ui(ui, doc, diag);
 }
 
 fn depth(parents: &[Option<usize>], mut j: usize) -> usize {

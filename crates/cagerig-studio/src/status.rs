@@ -4,6 +4,7 @@
 use crate::diagnostics::{Diagnostics, LogLevel};
 use crate::document::Document;
 use crate::selection::Selection;
+use crate::view_state::REST;
 
 /// The bottom status bar and, above it, the log panel (collapsible). The Shortcuts button
 /// sets `show_shortcuts`.
@@ -27,7 +28,7 @@ pub fn status_bar_ui(
                             .last_frame_ms()
                             .map_or_else(|| "–".to_string(), |f| format!("{f:.1} ms")),
                         s.num_vertices(),
-                        s.skeleton().len(),
+                        if doc.rigged() { s.skeleton().len() } else { 0 },
                         s.rest_cage().len(),
                         s.skinning().label(),
                         doc.history().undo_len(),
@@ -37,8 +38,11 @@ pub fn status_bar_ui(
                     if n > 0 {
                         ui.label(format!("| {n} cage vertices selected"));
                     }
-                    if let Some(j) = selection.joint {
-                        ui.label(format!("| joint {}", s.skeleton().joint(j).name));
+                    if let Some(name) = selection
+                        .joint
+                        .and_then(|j| doc.shown_skeleton(REST).names.get(j).cloned())
+                    {
+                        ui.label(format!("| joint {name}"));
                     }
                 }
                 None => {
