@@ -29,9 +29,15 @@ pub fn inspector_ui(
                 ui.separator();
                 rig_ui(ui, doc.as_deref_mut(), &mut tools.tool, diag);
                 ui.separator();
-                crate::skeleton_panel::skeleton_ui(ui, doc.as_deref_mut(), tools, diag);
+                selection_ui(
+                    ui,
+                    doc.as_deref_mut(),
+                    &tools.selection,
+                    &mut tools.numeric,
+                    diag,
+                );
                 ui.separator();
-                selection_ui(ui, doc, &tools.selection, &mut tools.numeric, diag);
+                crate::skeleton_panel::skeleton_ui(ui, doc, tools, diag);
             });
         });
 }

@@ -20,8 +20,21 @@ pub fn skeleton_ui(
     tools: &mut Tools,
     diag: &mut Diagnostics,
 ) {
-    ui.heading("Skeleton");
     let Some(doc) = doc else { return };
+    // Open while a skeleton is being built; folded on a rigged character until asked for.
+    let building = !doc.rigged() || doc.draft.is_some() || doc.bind_job().is_some();
+    egui::CollapsingHeader::new(egui::RichText::new("Skeleton").heading())
+        .id_salt("skeleton section")
+        .open(building.then_some(true))
+        .show(ui, |ui| skeleton_section_ui(ui, doc, tools, diag));
+}
+
+fn skeleton_section_ui(
+    ui: &mut egui::Ui,
+    doc: &mut Document,
+    tools: &mut Tools,
+    diag: &mut Diagnostics,
+) {
     let skeleton = doc.shown_skeleton(REST);
     let status = match (doc.draft.is_some(), doc.rigged()) {
         (_, false) if skeleton.positions.is_empty() => {

@@ -1,6 +1,6 @@
 //! Rigging a mesh with no skeleton in the studio, through its real UI (egui_kittest on a wgpu
 //! device — lavapipe where there is no GPU): open an OBJ with no rig, add a chain of three
-//! joints by clicking on the mesh in the rest view, Bind (automatic weights on a background
+//! joints by clicking on the mesh in the rest view, move one with G, Bind (automatic weights on a background
 //! thread), rotate a joint in the current view, and the mesh deforms. The test saves a
 //! screenshot (`$CAGERIG_STUDIO_TEST_IMAGES/skeleton_built.png`, else in the temporary folder).
 //! `CAGERIG_SKIP_GPU_TESTS=1` skips it where no wgpu adapter exists.
@@ -104,10 +104,35 @@ fn a_mesh_with_no_rig_gets_a_clicked_skeleton_binds_and_poses() {
     }
     assert_eq!(doc.history().undo_len(), 3, "one undo step per joint");
 
+    // G, the axis key, a typed distance, Enter: the selected joint moves along the bar.
+    let before = draft.joints[2].position;
+    let step = -0.05 * (hi[axis] - lo[axis]);
+    let at = screen_of(&h, REST, before);
+    h.hover_at(at + egui::vec2(30.0, 30.0));
+    h.step();
+    h.key_press(egui::Key::G);
+    h.step();
+    h.key_press([egui::Key::X, egui::Key::Y, egui::Key::Z][axis]);
+    // Minus toggles the sign (Blender's way), the digits are typed.
+    h.key_press(egui::Key::Minus);
+    h.event(Event::Text(format!("{}", -step)));
+    h.step();
+    h.key_press(egui::Key::Enter);
+    h.run_steps(2);
+    let doc = h.state().project.doc.as_ref().unwrap();
+    let moved = doc.draft.as_ref().unwrap().joints[2].position;
+    let mut expected = before;
+    expected[axis] += step;
+    assert!(moved.distance(expected) < 1e-9 * diagonal, "{moved} vs {expected}");
+    assert_eq!(doc.history().undo_len(), 4, "a move is one undo step");
+
     // Bind: automatic weights in the background, then one undo step.
     h.get_by_label("Add joints by clicking").click();
     if let Ok(out) = std::env::var("CAGERIG_STUDIO_TEST_IMAGES") {
-        h.render().unwrap().save(format!("{out}/skeleton_clicked.png")).unwrap();
+        h.render()
+            .unwrap()
+            .save(format!("{out}/skeleton_clicked.png"))
+            .unwrap();
     }
     h.get_by_label("Bind").click();
     h.run_steps(2);
@@ -124,7 +149,7 @@ fn a_mesh_with_no_rig_gets_a_clicked_skeleton_binds_and_poses() {
     let doc = h.state().project.doc.as_ref().unwrap();
     assert!(doc.rigged(), "{:?}", h.state().diagnostics.log);
     assert_eq!(doc.session.skeleton().len(), 3);
-    assert_eq!(doc.history().undo_len(), 4);
+    assert_eq!(doc.history().undo_len(), 5, "a bind is one undo step");
 
     // Rotate the middle joint in the current view: R, Z, 40, Enter.
     let middle = doc.session.posed_world_from_joint()[1].translation;
