@@ -220,17 +220,17 @@ fn bind_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
                 diag.log.error(format!("bind: {e}"));
             }
         }
-        if doc.draft.is_some() && doc.rigged() {
-            if ui
+        if doc.draft.is_some()
+            && doc.rigged()
+            && ui
                 .button("Apply, keep weights")
                 .on_hover_text(
                     "Bind the changed skeleton keeping the bound weights (new joints get none)",
                 )
                 .clicked()
-                && let Err(e) = doc.start_bind(BindWeights::KeepBound)
-            {
-                diag.log.error(format!("bind: {e}"));
-            }
+            && let Err(e) = doc.start_bind(BindWeights::KeepBound)
+        {
+            diag.log.error(format!("bind: {e}"));
         }
         if doc.draft.is_some() && ui.button("Discard changes").clicked() {
             run_command(doc, &Command::EditSkeleton(SkeletonEdit::Discard), diag);

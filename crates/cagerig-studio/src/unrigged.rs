@@ -38,13 +38,17 @@ pub fn placeholder_parts(mesh: TriMesh, cage: TriMesh) -> Result<RigParts, RigEr
     Ok(RigParts::new(mesh, skeleton, weights, cage))
 }
 
+/// A mesh opened with no skeleton: its placeholder rig, the load warnings and the files read
+/// as (role, path).
+pub type UnriggedMesh = (RigParts, Vec<Warning>, Vec<(String, PathBuf)>);
+
 /// The mesh of the OBJ `path` with its cage: `cage` if given, else the one beside it, else one
 /// generated with `auto_cage` vertices (the default generator when `None`).
 pub fn open_unrigged_obj(
     path: &Path,
     cage: Option<&Path>,
     auto_cage: Option<usize>,
-) -> Result<(RigParts, Vec<Warning>, Vec<(String, PathBuf)>), OpenError> {
+) -> Result<UnriggedMesh, OpenError> {
     let mesh = cagerig::io::obj::read_obj(path)?;
     let mut warnings = cagerig::rig_files::check_character_mesh(path, &mesh)?;
     let mut files = vec![("mesh".to_string(), path.to_path_buf())];

@@ -123,7 +123,10 @@ fn a_mesh_with_no_rig_gets_a_clicked_skeleton_binds_and_poses() {
     let moved = doc.draft.as_ref().unwrap().joints[2].position;
     let mut expected = before;
     expected[axis] += step;
-    assert!(moved.distance(expected) < 1e-9 * diagonal, "{moved} vs {expected}");
+    assert!(
+        moved.distance(expected) < 1e-9 * diagonal,
+        "{moved} vs {expected}"
+    );
     assert_eq!(doc.history().undo_len(), 4, "a move is one undo step");
 
     // Bind: automatic weights in the background, then one undo step.
