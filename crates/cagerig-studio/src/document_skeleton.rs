@@ -245,7 +245,7 @@ impl Document {
         if self.binding.id != 0 {
             file.binding = Some(SavedBinding::of(&self.session));
         }
-        file
+        file.versioned()
     }
 
     /// Puts the session of binding `key` in force, storing the current one.

@@ -261,6 +261,7 @@ mod skeleton_building {
         assert!(moved > 1e-3 * (hi - lo).length(), "the mesh did not deform");
         // The session file keeps the binding and reopens it exactly.
         let file = d.session_file(0.0);
+        assert_eq!(file.version, 2, "a studio binding needs version 2");
         let binding = file.binding.clone().unwrap();
         let reopened = crate::rig_open::open_rig(&file.source).unwrap();
         let rebuilt = binding.bind(&reopened.session).unwrap();

@@ -29,8 +29,10 @@ use crate::rig_open::RigSource;
 
 /// The `format` value of a session file.
 pub const FORMAT: &str = "cagerig-studio-session";
-/// The version this build writes and the newest it reads.
-pub const VERSION: u32 = 1;
+/// The newest version this build reads and writes: 2 adds a skeleton being built
+/// (`state.draft`) and a skeleton bound in the studio (`binding`). A file without them is
+/// written as version 1, which older builds read.
+pub const VERSION: u32 = 2;
 
 /// A session file's content.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -77,13 +79,24 @@ impl SessionFile {
     pub fn new(source: RigSource, state: Snapshot, time: f64) -> Self {
         Self {
             format: FORMAT.into(),
-            version: VERSION,
+            version: 1,
             source: absolute_source(source),
             state,
             time,
             cameras: None,
             binding: None,
         }
+        .versioned()
+    }
+
+    /// Sets the version to the oldest that holds this content (see [`VERSION`]).
+    pub fn versioned(mut self) -> Self {
+        self.version = if self.binding.is_some() || self.state.draft.is_some() {
+            VERSION
+        } else {
+            1
+        };
+        self
     }
 
     /// Parses a session file's text; `path` names it in errors.
