@@ -236,3 +236,118 @@ fn the_readmes_five_joint_skeleton_binds_the_arm() {
         assert!((0..2089).any(|v| w.heaviest(v) == Some(j)), "joint {j}");
     }
 }
+
+/// `Fox.glb` with its skin removed (skins, animations, the node's skin, JOINTS_0/WEIGHTS_0),
+/// written as a GLB over the same binary chunk: a static mesh like a sculpt's export.
+fn unskinned_fox(path: &Path) {
+    let glb = std::fs::read(root("data/fox/Fox.glb")).unwrap();
+    let u32_at = |k: usize| u32::from_le_bytes(glb[k..k + 4].try_into().unwrap()) as usize;
+    assert_eq!(&glb[0..4], b"glTF");
+    let json_len = u32_at(12);
+    assert_eq!(&glb[16..20], b"JSON");
+    let mut j: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let bin = &glb[20 + json_len..];
+    let root_object = j.as_object_mut().unwrap();
+    root_object.remove("skins");
+    root_object.remove("animations");
+    for node in j["nodes"].as_array_mut().unwrap() {
+        node.as_object_mut().unwrap().remove("skin");
+    }
+    for mesh in j["meshes"].as_array_mut().unwrap() {
+        for primitive in mesh["primitives"].as_array_mut().unwrap() {
+            let attributes = primitive["attributes"].as_object_mut().unwrap();
+            attributes.remove("JOINTS_0");
+            attributes.remove("WEIGHTS_0");
+        }
+    }
+    let mut json = serde_json::to_vec(&j).unwrap();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + 8 + json.len() + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(bin);
+    std::fs::write(path, out).unwrap();
+}
+
+/// A mesh with no skin binds to `--skeleton` (the same weights as the skinned Fox bound to the
+/// same skeleton: the static mesh is its rest skin); without `--skeleton` the command says it
+/// is required and writes nothing; the rig commands say how to bind the file.
+#[test]
+fn weights_bind_a_glb_with_no_skin_to_the_given_skeleton() {
+    let dir = temp_dir("weights-noskin");
+    let glb = dir.join("fox_noskin.glb");
+    unskinned_fox(&glb);
+    let fox = cagerig_formats::import_character(
+        &root("data/fox/Fox.glb"),
+        &cagerig_formats::ImportOptions::default(),
+    )
+    .unwrap();
+    // The Fox's joints as positions (what a `.skt` holds; its frames are scaled).
+    let joints = (0..fox.skeleton.len())
+        .map(|j| {
+            let joint = fox.skeleton.joint(j);
+            cagerig::Joint {
+                name: joint.name.clone(),
+                parent: joint.parent,
+                rest_world_from_joint: glam::DAffine3::from_translation(
+                    joint.rest_world_from_joint.translation,
+                ),
+            }
+        })
+        .collect();
+    let skeleton = cagerig::Skeleton::new(joints).unwrap();
+    let skt = dir.join("fox.skt");
+    cagerig::io::skt::write_skt(&skt, &skeleton).unwrap();
+    let (skinned, unskinned) = (dir.join("skinned.skw"), dir.join("unskinned.skw"));
+    for (mesh, out) in [(&root("data/fox/Fox.glb"), &skinned), (&glb, &unskinned)] {
+        run_ok(
+            cagerig()
+                .arg("weights")
+                .arg(mesh)
+                .arg("--skeleton")
+                .arg(&skt)
+                .arg("--out")
+                .arg(out),
+        );
+    }
+    let nv = fox.mesh.num_vertices();
+    let (w, warnings) = cagerig::io::skw::read_skw(&unskinned, nv, skeleton.len()).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    check_rows(&w, 4);
+    assert_eq!(
+        std::fs::read(&unskinned).unwrap(),
+        std::fs::read(&skinned).unwrap()
+    );
+
+    let missing = dir.join("missing.skw");
+    let out = cagerig()
+        .arg("weights")
+        .arg(&glb)
+        .arg("--out")
+        .arg(&missing)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("--skeleton FILE.skt is required for a file with no skin")
+            && stderr.contains("fox_noskin.glb"),
+        "{stderr}"
+    );
+    assert!(!missing.exists());
+
+    let out = cagerig().arg("info").arg(&glb).output().unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("fox_noskin.glb")
+            && stderr.contains("has no skin: bind it with `cagerig weights"),
+        "{stderr}"
+    );
+}

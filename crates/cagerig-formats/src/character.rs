@@ -270,6 +270,13 @@ impl ImportedCharacter {
     }
 }
 
+/// Whether a mesh node named `name` holds the character's cage: the name ends in `_cage`
+/// (`<name>_cage`). The one rule of every format's cage lookup (glTF also accepts a node marked
+/// with `extras.cagerig_cage`).
+pub(crate) fn is_cage_name(name: &str) -> bool {
+    name.ends_with("_cage")
+}
+
 /// Column lengths within this relative spread count as one uniform scale.
 const UNIFORM_SCALE_TOLERANCE: f64 = 1e-5;
 

@@ -1,14 +1,15 @@
 //! The character file formats, as a type: every front end asks this one place which files are
 //! characters, how to read them and how to write a rig back.
 //!
-//! A new format is one importer file returning [`ImportedCharacter`] and a variant here; the
-//! compiler then points at the exhaustive matches below (name, extensions, import, export).
+//! A new format is one importer file returning [`ImportedCharacter`] (and one returning
+//! [`StaticMesh`]) and a variant here; the compiler then points at the exhaustive matches below
+//! (name, extensions, import, import_static, export).
 
 use std::path::Path;
 
 use cagerig::session::RigSession;
 
-use crate::{FormatError, ImportOptions, ImportedCharacter};
+use crate::{FormatError, ImportOptions, ImportedCharacter, StaticMesh};
 
 /// A character (skinned mesh, skeleton, weights, animations) file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -56,6 +57,15 @@ impl CharacterFormat {
         match self {
             Self::Gltf => crate::gltf::import_gltf(path, options),
             Self::Fbx => crate::fbx::import_fbx(path, options),
+        }
+    }
+
+    /// Reads `path` in this format as a static mesh: every mesh in world space, no skeleton or
+    /// weights (a file without a skin, or a skinned one's bind shape; see [`StaticMesh`]).
+    pub fn import_static(self, path: &Path) -> Result<StaticMesh, FormatError> {
+        match self {
+            Self::Gltf => crate::gltf::import_gltf_static(path),
+            Self::Fbx => crate::fbx::import_fbx_static(path),
         }
     }
 

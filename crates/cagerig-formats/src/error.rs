@@ -46,6 +46,20 @@ pub enum FormatError {
         #[source]
         source: RigError,
     },
+    /// The file has no skin (a static mesh from a sculpting tool or a scan): it cannot be
+    /// imported as a character, but [`crate::import_static_mesh`] reads its mesh for binding.
+    #[error(
+        "{path}: the {format} file has no skin: bind it with `cagerig weights {file} --skeleton \
+         SKELETON.skt --out WEIGHTS.skw` or open it in the studio to build a skeleton",
+        path = path.display(),
+        file = path.display()
+    )]
+    NoSkin {
+        /// The file.
+        path: PathBuf,
+        /// The format's name (`"glTF"`, `"FBX"`).
+        format: &'static str,
+    },
     /// The FBX reader rejected the file.
     #[error("{path}: FBX: {message}", path = path.display())]
     Fbx {

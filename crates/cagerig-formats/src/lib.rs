@@ -11,6 +11,7 @@ pub mod error;
 pub mod fbx;
 pub mod gltf;
 pub mod morph_cage_track;
+pub mod static_mesh;
 
 use std::path::Path;
 
@@ -20,6 +21,7 @@ pub use character::{
 pub use character_format::{CharacterFormat, export_character};
 pub use error::FormatError;
 pub use morph_cage_track::{MorphCageTrack, morph_cage_track};
+pub use static_mesh::StaticMesh;
 
 /// Import choices.
 #[derive(Debug, Clone)]
@@ -39,16 +41,26 @@ impl Default for ImportOptions {
     }
 }
 
-/// Imports a character from a `.glb`, `.gltf` or `.fbx` file.
+/// Imports a character from a `.glb`, `.gltf` or `.fbx` file. A file without a skin is
+/// refused with [`FormatError::NoSkin`]; read it with [`import_static_mesh`].
 pub fn import_character(
     path: &Path,
     options: &ImportOptions,
 ) -> Result<ImportedCharacter, FormatError> {
-    match CharacterFormat::of(path) {
-        Some(format) => format.import(path, options),
-        None => Err(FormatError::Io {
-            path: path.to_path_buf(),
-            message: "unsupported character format (expected .glb, .gltf or .fbx)".into(),
-        }),
-    }
+    format_of(path)?.import(path, options)
+}
+
+/// Imports the meshes of a `.glb`, `.gltf` or `.fbx` file as one static mesh in world space,
+/// with its cage node if it has one: a sculpt or a scan without a skin, to bind to a skeleton
+/// (a skinned file gives its bind shape; see [`StaticMesh`]).
+pub fn import_static_mesh(path: &Path) -> Result<StaticMesh, FormatError> {
+    format_of(path)?.import_static(path)
+}
+
+/// The character format of `path`, or an error naming the extensions read.
+fn format_of(path: &Path) -> Result<CharacterFormat, FormatError> {
+    CharacterFormat::of(path).ok_or_else(|| FormatError::Io {
+        path: path.to_path_buf(),
+        message: "unsupported character format (expected .glb, .gltf or .fbx)".into(),
+    })
 }

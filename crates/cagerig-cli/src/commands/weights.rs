@@ -15,16 +15,20 @@ use cagerig::io::skt::read_skt;
 use cagerig::io::skw::write_skw;
 use cagerig::io::text::FloatFormat;
 use cagerig::{Skeleton, TriMesh};
+use cagerig_formats::{
+    FormatError, ImportOptions, StaticMesh, import_character, import_static_mesh,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// Mesh to bind: OBJ, or a glTF 2.0 (`.glb`/`.gltf`) or FBX character (its rest pose; its
-    /// own weights are ignored).
+    /// Mesh to bind: OBJ, or a glTF 2.0 (`.glb`/`.gltf`) or FBX file: a character (its rest
+    /// pose; its own weights are ignored) or a mesh with no skin (every mesh of the file in
+    /// world space, as `cagerig_formats::import_static_mesh` reads it).
     pub mesh: PathBuf,
-    /// Skeleton (`.skt`, rest pose in the mesh's space). Required for an OBJ; a glTF/FBX
-    /// character defaults to its own skeleton.
+    /// Skeleton (`.skt`, rest pose in the mesh's space). Required for an OBJ and for a glTF/FBX
+    /// file with no skin; a glTF/FBX character defaults to its own skeleton.
     #[arg(long)]
     pub skeleton: Option<PathBuf>,
     /// A closed cage (OBJ) around the mesh: its interior is part of the volume the weights are
@@ -77,15 +81,39 @@ struct WeightsOutput<'a> {
     out: &'a PathBuf,
 }
 
-/// The mesh, the skeleton and the mesh's name.
-fn load(args: &Args) -> anyhow::Result<(TriMesh, Skeleton)> {
+/// The mesh, the skeleton and the import's notes.
+fn load(args: &Args) -> anyhow::Result<(TriMesh, Skeleton, Vec<String>)> {
     if crate::interchange::is_interchange(&args.mesh) {
-        let character = crate::interchange::import(&args.mesh, args.skin.as_deref())?;
-        let skeleton = match &args.skeleton {
-            Some(p) => read_skt(p).with_context(|| format!("reading {}", p.display()))?,
-            None => character.skeleton,
+        let options = ImportOptions {
+            skin: args.skin.clone(),
+            ..ImportOptions::default()
         };
-        return Ok((character.mesh, skeleton));
+        return match import_character(&args.mesh, &options) {
+            Ok(character) => {
+                let skeleton = match &args.skeleton {
+                    Some(p) => read_skt(p).with_context(|| format!("reading {}", p.display()))?,
+                    None => character.skeleton,
+                };
+                Ok((character.mesh, skeleton, Vec::new()))
+            }
+            // A static mesh (a sculpt, a scan): every mesh of the file, bound to --skeleton.
+            Err(FormatError::NoSkin { path, format }) => {
+                let Some(p) = &args.skeleton else {
+                    bail!(
+                        "{}: the {format} file has no skin, so it has no skeleton of its own:                          --skeleton FILE.skt is required for a file with no skin (lines `j                          <index> <name> <parent index or -1> x y z` in the file's world space)",
+                        path.display()
+                    );
+                };
+                let skeleton = read_skt(p).with_context(|| format!("reading {}", p.display()))?;
+                let StaticMesh { mesh, warnings, .. } = import_static_mesh(&args.mesh)?;
+                Ok((
+                    mesh,
+                    skeleton,
+                    warnings.iter().map(ToString::to_string).collect(),
+                ))
+            }
+            Err(e) => Err(e.into()),
+        };
     }
     if args.skin.is_some() {
         bail!(
@@ -102,7 +130,7 @@ fn load(args: &Args) -> anyhow::Result<(TriMesh, Skeleton)> {
         );
     };
     let skeleton = read_skt(p).with_context(|| format!("reading {}", p.display()))?;
-    Ok((mesh, skeleton))
+    Ok((mesh, skeleton, Vec::new()))
 }
 
 /// The `--tips` value as a policy, tip names resolved against `skeleton`.
@@ -179,7 +207,7 @@ impl DelayedBar {
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (mesh, skeleton) = load(args)?;
+    let (mesh, skeleton, import_notes) = load(args)?;
     let cage = match &args.cage {
         Some(p) => Some(read_obj(p).with_context(|| format!("reading the cage {}", p.display()))?),
         None => None,
@@ -233,7 +261,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         solid_voxels: *solid_voxels,
         capped_holes: *capped_holes,
         straight_distance_vertices: *straight_distance_vertices,
-        warnings: warnings.iter().map(ToString::to_string).collect(),
+        warnings: import_notes
+            .into_iter()
+            .chain(warnings.iter().map(ToString::to_string))
+            .collect(),
         seconds,
         out: &args.out,
     };

@@ -1,5 +1,5 @@
-//! A cage stored inside a glTF file: a mesh node named `<name>_cage` (node or mesh name) or with
-//! `extras.cagerig_cage`, in world space, its vertices welded by exact position (a cage written
+//! A cage stored inside a glTF file: a mesh node named `<name>_cage` (node or mesh name,
+//! [`is_cage_name`]) or with `extras.cagerig_cage`, in world space, its vertices welded by exact position (a cage written
 //! without an index buffer is a triangle soup).
 
 use std::path::Path;
@@ -11,7 +11,9 @@ use gltf::accessor::Dimensions;
 use super::buffers::Buffers;
 use super::import::to_vec3;
 use super::primitive::primitive_triangles;
+use crate::character::is_cage_name;
 use crate::error::{FormatError, invalid};
+use crate::static_mesh::append_part;
 
 /// Merges vertices with bit-identical positions (a cage written without an index buffer is a
 /// triangle soup); first occurrence order is kept.
@@ -35,8 +37,23 @@ fn weld_exact(positions: &[DVec3], triangles: &[[u32; 3]]) -> (Vec<DVec3>, Vec<[
     (welded, triangles)
 }
 
-/// A mesh node marked as the character's cage: node or mesh name ending in `_cage`, or
-/// `extras.cagerig_cage`; its positions in world space (the node's world transform applied).
+/// Whether `node` is marked as the character's cage: an unskinned mesh node whose node or mesh
+/// name is a cage name ([`is_cage_name`]), or with `extras.cagerig_cage`.
+pub(super) fn is_cage_node(node: &gltf::Node) -> bool {
+    let Some(mesh) = node.mesh() else {
+        return false;
+    };
+    let named = node.name().is_some_and(is_cage_name) || mesh.name().is_some_and(is_cage_name);
+    let marked = node
+        .extras()
+        .as_ref()
+        .is_some_and(|e| e.get().contains("cagerig_cage"));
+    (named || marked) && node.skin().is_none()
+}
+
+/// The first node marked as the character's cage ([`is_cage_node`]); its positions in world
+/// space (the node's world transform applied; the winding reversed when that transform
+/// mirrors, det < 0, as glTF specifies, so that outward faces stay outward).
 pub(super) fn find_cage(
     document: &gltf::Document,
     buffers: &Buffers,
@@ -44,16 +61,10 @@ pub(super) fn find_cage(
     path: &Path,
 ) -> Result<Option<TriMesh>, FormatError> {
     for node in document.nodes() {
-        let Some(mesh) = node.mesh() else { continue };
-        let named = node.name().is_some_and(|n| n.ends_with("_cage"))
-            || mesh.name().is_some_and(|n| n.ends_with("_cage"));
-        let marked = node
-            .extras()
-            .as_ref()
-            .is_some_and(|e| e.get().contains("cagerig_cage"));
-        if !(named || marked) || node.skin().is_some() {
+        let Some(mesh) = node.mesh().filter(|_| is_cage_node(&node)) else {
             continue;
-        }
+        };
+        let world_from_node = rest_globals[node.index()];
         let source = format!("cage node {} {:?}", node.index(), node.name().unwrap_or(""));
         let mut positions = Vec::new();
         let mut triangles = Vec::new();
@@ -77,12 +88,7 @@ pub(super) fn find_cage(
                 &source,
                 &mut notes,
             )? {
-                let base = positions.len() as u32;
-                triangles.extend(t.iter().map(|t| t.map(|i| i + base)));
-                positions.extend(
-                    p.iter()
-                        .map(|x| rest_globals[node.index()].transform_point3(*x)),
-                );
+                append_part(&world_from_node, &p, &t, &mut positions, &mut triangles);
             }
         }
         let (positions, triangles) = weld_exact(&positions, &triangles);

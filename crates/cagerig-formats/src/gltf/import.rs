@@ -83,10 +83,24 @@ pub fn import_gltf_bytes(
         Some(sel) => document
             .skins()
             .find(|s| s.name() == Some(sel.as_str()))
-            .or_else(|| sel.parse::<usize>().ok().and_then(|i| document.skins().nth(i)))
-            .ok_or_else(|| invalid(path, "skins", format!("no skin named or numbered {sel:?}; the file has: {}", listing())))?,
-        None => document.skins().next().ok_or_else(|| {
-            invalid(path, "skins", "the file has no skin: cagerig needs a skinned character (a skin with joints and JOINTS_0/WEIGHTS_0)")
+            .or_else(|| {
+                sel.parse::<usize>()
+                    .ok()
+                    .and_then(|i| document.skins().nth(i))
+            })
+            .ok_or_else(|| {
+                invalid(
+                    path,
+                    "skins",
+                    format!(
+                        "no skin named or numbered {sel:?}; the file has: {}",
+                        listing()
+                    ),
+                )
+            })?,
+        None => document.skins().next().ok_or_else(|| FormatError::NoSkin {
+            path: path.to_path_buf(),
+            format: "glTF",
         })?,
     };
     let skin_element = format!("skin {}", skin.index());

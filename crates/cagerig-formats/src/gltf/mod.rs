@@ -9,8 +9,10 @@ mod parse;
 mod primitive;
 pub mod scene;
 mod shared_skins;
+pub mod static_mesh;
 
 pub use import::{import_gltf, import_gltf_bytes};
+pub use static_mesh::{import_gltf_static, import_gltf_static_bytes};
 pub mod export;
 pub mod export_animation;
 pub mod export_bake;

@@ -71,23 +71,32 @@ pub(super) fn primitive_triangles(
     Ok(Some(tris))
 }
 
-/// Appends one skinned primitive to the merged mesh. Returns (vertices, triangles, indexed),
-/// or None when the primitive was skipped (with a warning).
+/// The geometry of one primitive: local positions (bind shape, the node's default morph weights
+/// applied) and triangles (local vertex indices).
+pub(super) struct PrimitiveGeometry {
+    /// Local positions, one per vertex of the primitive's accessors.
+    pub local: Vec<DVec3>,
+    /// Triangles in the file's winding, indices into `local`.
+    pub triangles: Vec<[u32; 3]>,
+    /// Whether the triangles come from an index buffer.
+    pub indexed: bool,
+}
+
+/// Reads a primitive's positions and triangles (any triangle mode; None with a note for points
+/// and lines), with its morph targets at the node's default weights. When `targets_out` asks,
+/// every target's displacements are kept, mapped by `world_from_bind` (a linear map of
+/// displacements).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn read_primitive(
+pub(super) fn read_geometry(
     primitive: &gltf::Primitive,
     node: &gltf::Node,
     buffers: &Buffers,
     path: &Path,
     source: &str,
-    num_joints: usize,
     world_from_bind: &DAffine3,
-    positions: &mut Vec<DVec3>,
-    triangles: &mut Vec<[u32; 3]>,
-    triplets: &mut Vec<(usize, usize, f64)>,
     mut targets_out: Option<&mut Vec<Vec<DVec3>>>,
     warnings: &mut Vec<Warning>,
-) -> Result<Option<(usize, usize, bool)>, FormatError> {
+) -> Result<Option<PrimitiveGeometry>, FormatError> {
     if let Some(out) = targets_out.as_deref_mut() {
         out.clear();
     }
@@ -164,6 +173,48 @@ pub(super) fn read_primitive(
             });
         }
     }
+    Ok(Some(PrimitiveGeometry {
+        local,
+        triangles: tris,
+        indexed,
+    }))
+}
+
+/// Appends one skinned primitive to the merged mesh. Returns (vertices, triangles, indexed),
+/// or None when the primitive was skipped (with a warning).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn read_primitive(
+    primitive: &gltf::Primitive,
+    node: &gltf::Node,
+    buffers: &Buffers,
+    path: &Path,
+    source: &str,
+    num_joints: usize,
+    world_from_bind: &DAffine3,
+    positions: &mut Vec<DVec3>,
+    triangles: &mut Vec<[u32; 3]>,
+    triplets: &mut Vec<(usize, usize, f64)>,
+    targets_out: Option<&mut Vec<Vec<DVec3>>>,
+    warnings: &mut Vec<Warning>,
+) -> Result<Option<(usize, usize, bool)>, FormatError> {
+    let Some(PrimitiveGeometry {
+        local,
+        triangles: tris,
+        indexed,
+    }) = read_geometry(
+        primitive,
+        node,
+        buffers,
+        path,
+        source,
+        world_from_bind,
+        targets_out,
+        warnings,
+    )?
+    else {
+        return Ok(None);
+    };
+    let nv = local.len();
     // Every JOINTS_n / WEIGHTS_n set.
     let base = positions.len();
     let mut set = 0;

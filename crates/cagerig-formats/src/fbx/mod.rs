@@ -30,6 +30,58 @@ use crate::character::{
 };
 use crate::error::{FormatError, invalid};
 
+mod static_mesh;
+
+pub use static_mesh::{import_fbx_static, import_fbx_static_bytes};
+
+/// Loads an FBX scene converted to glTF's convention (right-handed, +Y up, metres; see the
+/// module doc), with the file's own axes and unit and the conversion applied.
+fn load_scene(bytes: &[u8], path: &Path) -> Result<(ufbx::SceneRoot, SpaceSummary), FormatError> {
+    let opts = ufbx::LoadOpts {
+        load_external_files: false,
+        target_axes: ufbx::CoordinateAxes::right_handed_y_up(),
+        target_unit_meters: 1.0,
+        space_conversion: ufbx::SpaceConversion::TransformRoot,
+        ..Default::default()
+    };
+    let scene = ufbx::load_memory(bytes, opts).map_err(|e| fbx_error(path, &e))?;
+    let space = space_summary(&scene);
+    Ok((scene, space))
+}
+
+/// The triangles of `mesh` (faces triangulated by ufbx) as indices into its control points
+/// `mesh.vertices`, in face order; `source` names the mesh node in messages.
+fn mesh_triangles(
+    mesh: &ufbx::Mesh,
+    path: &Path,
+    source: &str,
+) -> Result<Vec<[u32; 3]>, FormatError> {
+    let nv = mesh.vertices.len();
+    let mut triangles = Vec::with_capacity(mesh.num_triangles);
+    let mut tri = Vec::new();
+    for face in mesh.faces.iter() {
+        let n = ufbx::triangulate_face_vec(&mut tri, mesh, *face) as usize;
+        for t in tri[..3 * n].chunks_exact(3) {
+            let v = |i: u32| mesh.vertex_indices.get(i as usize).copied();
+            match (v(t[0]), v(t[1]), v(t[2])) {
+                (Some(a), Some(b), Some(c))
+                    if (a as usize) < nv && (b as usize) < nv && (c as usize) < nv =>
+                {
+                    triangles.push([a, b, c]);
+                }
+                _ => {
+                    return Err(invalid(
+                        path,
+                        source,
+                        "a face refers to a vertex out of range",
+                    ));
+                }
+            }
+        }
+    }
+    Ok(triangles)
+}
+
 fn affine(m: &ufbx::Matrix) -> DAffine3 {
     DAffine3::from_mat3_translation(
         DMat3::from_cols(
@@ -122,16 +174,8 @@ pub fn import_fbx_bytes(
     options: &ImportOptions,
 ) -> Result<ImportedCharacter, FormatError> {
     let _ = options;
-    let opts = ufbx::LoadOpts {
-        load_external_files: false,
-        target_axes: ufbx::CoordinateAxes::right_handed_y_up(),
-        target_unit_meters: 1.0,
-        space_conversion: ufbx::SpaceConversion::TransformRoot,
-        ..Default::default()
-    };
-    let scene = ufbx::load_memory(bytes, opts).map_err(|e| fbx_error(path, &e))?;
+    let (scene, space) = load_scene(bytes, path)?;
     let mut warnings = Vec::new();
-    let space = space_summary(&scene);
 
     // Skinned mesh nodes and their bones.
     let mut bone_ids: Vec<u32> = Vec::new();
@@ -222,28 +266,12 @@ pub fn import_fbx_bytes(
                 .iter()
                 .map(|p| world_from_geometry.transform_point3(DVec3::new(p.x, p.y, p.z))),
         );
-        let mut tri = Vec::new();
         let before = triangles.len();
-        for face in mesh.faces.iter() {
-            let n = ufbx::triangulate_face_vec(&mut tri, mesh, *face) as usize;
-            for t in tri[..3 * n].chunks_exact(3) {
-                let v = |i: u32| mesh.vertex_indices.get(i as usize).copied();
-                match (v(t[0]), v(t[1]), v(t[2])) {
-                    (Some(a), Some(b), Some(c))
-                        if (a as usize) < nv && (b as usize) < nv && (c as usize) < nv =>
-                    {
-                        triangles.push([a + base as u32, b + base as u32, c + base as u32]);
-                    }
-                    _ => {
-                        return Err(invalid(
-                            path,
-                            &source,
-                            "a face refers to a vertex out of range",
-                        ));
-                    }
-                }
-            }
-        }
+        triangles.extend(
+            mesh_triangles(mesh, path, &source)?
+                .iter()
+                .map(|t| t.map(|i| i + base as u32)),
+        );
         for (v, sv) in skin.vertices.iter().enumerate() {
             let begin = sv.weight_begin as usize;
             let end = begin + sv.num_weights as usize;
@@ -276,11 +304,10 @@ pub fn import_fbx_bytes(
         });
     }
     if bone_nodes.is_empty() {
-        return Err(invalid(
-            path,
-            "scene",
-            "no mesh with a skin deformer: cagerig needs a skinned character",
-        ));
+        return Err(FormatError::NoSkin {
+            path: path.to_path_buf(),
+            format: "FBX",
+        });
     }
     if worst_bind.0 > 1e-4 {
         warnings.push(Warning::Note {
