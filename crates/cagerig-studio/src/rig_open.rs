@@ -140,7 +140,18 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
             skin,
             auto_cage,
         } if cagerig_formats::CharacterFormat::of(path).is_some() => {
-            import_interchange(path, cage.as_deref(), skin.as_deref(), *auto_cage)?
+            match import_interchange(path, cage.as_deref(), skin.as_deref(), *auto_cage) {
+                Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
+                    rigged = false;
+                    let (parts, warnings, files) = crate::unrigged::open_unskinned_character(
+                        path,
+                        cage.as_deref(),
+                        *auto_cage,
+                    )?;
+                    (parts, warnings, files, Default::default())
+                }
+                other => other?,
+            }
         }
         RigSource::File {
             path,
