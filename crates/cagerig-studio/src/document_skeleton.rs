@@ -209,23 +209,15 @@ impl Document {
         session.restore_editable_state(&state)?;
         let keys = carry_keys(&self.keys, &origins);
         keys.validate(&session)?;
-        let old = std::mem::replace(&mut self.session, session);
-        self.stored_bindings.insert(self.binding.id, old);
-        self.last_binding_id += 1;
-        self.binding = BindingKey {
-            id: self.last_binding_id,
-            rigged: true,
-        };
+        self.adopt_binding(session);
         self.draft = None;
         self.keys = keys;
-        self.player = None;
         self.history.record("bind skeleton", before);
-        self.changed();
         Ok(())
     }
 
-    /// Makes `session` the document's rig without an undo step (a session file's saved
-    /// binding, on opening).
+    /// Makes `session` the document's rig as a new binding, the old one stored for undo,
+    /// without an undo step of its own (a session file's saved binding, on opening).
     pub fn adopt_binding(&mut self, session: RigSession) {
         let old = std::mem::replace(&mut self.session, session);
         self.stored_bindings.insert(self.binding.id, old);

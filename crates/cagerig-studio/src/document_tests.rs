@@ -264,8 +264,8 @@ mod skeleton_building {
         crate::export::export_all(&d, &out).unwrap();
         let rig = cagerig::rig_files::load_rig_files(&out.join("rig.obj"), None).unwrap();
         assert_eq!(rig.parts.skeleton.len(), 3);
-        let glb = cagerig_formats::import_character(&out.join("rig.glb"), &Default::default())
-            .unwrap();
+        let glb =
+            cagerig_formats::import_character(&out.join("rig.glb"), &Default::default()).unwrap();
         assert_eq!(glb.skeleton.len(), 3);
         assert_eq!(glb.skin_weights.num_vertices(), d.session.num_vertices());
         // The session file keeps the binding and reopens it exactly.

@@ -103,6 +103,20 @@ pub enum OpenError {
     },
 }
 
+impl From<CageSourceError> for OpenError {
+    /// The cage-source rule's failures, worded for the studio.
+    fn from(e: CageSourceError) -> Self {
+        match e {
+            CageSourceError::Read(e) => OpenError::from(e),
+            CageSourceError::Generate { character, source } => OpenError::Generate {
+                path: character,
+                source,
+            },
+            CageSourceError::Missing { character } => OpenError::NoCage { path: character },
+        }
+    }
+}
+
 /// A rig ready to edit.
 pub struct OpenedRig {
     pub source: RigSource,
@@ -256,15 +270,7 @@ fn import_interchange(
         given: cage,
         generate: auto_cage.map(cage_options_with_vertices),
     };
-    let chosen =
-        choose_cage(path, &character.mesh, character.cage, &request).map_err(|e| match e {
-            CageSourceError::Read(e) => OpenError::from(e),
-            CageSourceError::Generate { character, source } => OpenError::Generate {
-                path: character,
-                source,
-            },
-            CageSourceError::Missing { character } => OpenError::NoCage { path: character },
-        })?;
+    let chosen = choose_cage(path, &character.mesh, character.cage, &request)?;
     if let CageOrigin::Generated(g) = &chosen.origin {
         warnings.push(generated_note(g));
     }

@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use cagerig::cage_gen::CageOptions;
-use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, choose_cage};
+use cagerig::cage_source::{CageOrigin, CageRequest, choose_cage};
 use cagerig::session::RigParts;
 use cagerig::{Joint, RigError, Skeleton, SkinWeights, TriMesh, Warning};
 use glam::DAffine3;
@@ -100,14 +100,7 @@ fn unrigged(
             cagerig::cage_source::cage_options_with_vertices,
         )),
     };
-    let chosen = choose_cage(path, &mesh, cage_in_file, &request).map_err(|e| match e {
-        CageSourceError::Read(e) => OpenError::from(e),
-        CageSourceError::Generate { character, source } => OpenError::Generate {
-            path: character,
-            source,
-        },
-        CageSourceError::Missing { character } => OpenError::NoCage { path: character },
-    })?;
+    let chosen = choose_cage(path, &mesh, cage_in_file, &request)?;
     match &chosen.origin {
         CageOrigin::Given(p) => files.push(("cage".into(), p.clone())),
         CageOrigin::Generated(g) => warnings.push(crate::rig_open::generated_note(g)),
