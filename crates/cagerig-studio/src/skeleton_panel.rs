@@ -123,7 +123,12 @@ fn selected_joint_ui(
                 }
             }
         };
-        let response = ui.text_edit_singleline(buffer);
+        // While the field is not being typed in it shows the joint's name (undo may change it).
+        let id = ui.make_persistent_id("joint name");
+        if !ui.memory(|m| m.has_focus(id)) && *buffer != skeleton.names[j] {
+            buffer.clone_from(&skeleton.names[j]);
+        }
+        let response = ui.add(egui::TextEdit::singleline(buffer).id(id));
         if response.lost_focus() && *buffer != skeleton.names[j] {
             let name = buffer.clone();
             if !run(doc, SkeletonEdit::Rename { joint: j, name }) {
