@@ -213,7 +213,7 @@ impl PictureMaker {
     ) -> anyhow::Result<()> {
         let camera = self.camera(session, 0.0);
         let png = self.picture(session, &camera)?.to_png()?;
-        staged.write(name, &|w| w.write_all(&png))
+        Ok(staged.write(name, &|w| w.write_all(&png))?)
     }
 
     /// Pictures for `edit --render` / `animate --render`: rest | current side by side.

@@ -136,14 +136,14 @@ pub fn write_generated_cage(
     staged: &mut crate::output_dir::StagedDir,
     cage: &cagerig::TriMesh,
 ) -> anyhow::Result<()> {
-    staged.write(GENERATED_CAGE_FILE, &|w| {
+    Ok(staged.write(GENERATED_CAGE_FILE, &|w| {
         cagerig::io::obj::write_obj_to(
             w,
             &cage.positions,
             &cage.triangles,
             cagerig::io::text::FloatFormat::RoundTrip,
         )
-    })
+    })?)
 }
 
 /// A loaded rig and what was used to build it.

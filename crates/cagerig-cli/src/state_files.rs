@@ -27,7 +27,7 @@ impl StateSink for StagedDir {
         name: &str,
         write: &dyn Fn(&mut dyn Write) -> std::io::Result<()>,
     ) -> anyhow::Result<()> {
-        self.write(name, write)
+        Ok(self.write(name, write)?)
     }
 }
 

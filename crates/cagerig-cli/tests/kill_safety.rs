@@ -1,5 +1,6 @@
 //! Outputs survive `kill -9`: every command that writes several files is killed with SIGKILL at
-//! random moments (110 kills in all), alternating between two runs that write different outputs
+//! random moments (110 kills in all, and 10 of `render --times` where there is an adapter;
+//! `CAGERIG_SKIP_GPU_TESTS=1` leaves them out), alternating between two runs that write different outputs
 //! into the same place. After each kill the place must hold the complete earlier output or the
 //! complete new one — never a mix, never nothing — and the next run must succeed.
 
@@ -204,7 +205,23 @@ fn every_multi_file_output_is_complete_or_earlier_after_sigkill() {
     let demo_out = out("demo");
     let subdivide_out = out("subdivide");
     let gltf_out = out("export.gltf");
-    let cases = [
+    let render_out = out("render");
+    let render = |times: &str| {
+        strings(&[
+            "render",
+            &arm,
+            "--skeleton-anim",
+            &skel,
+            "--times",
+            times,
+            "--size",
+            "64x48",
+            "--force",
+            "--out",
+            &s(&render_out),
+        ])
+    };
+    let mut cases = vec![
         Case {
             name: "edit",
             runs: [
@@ -332,6 +349,16 @@ fn every_multi_file_output_is_complete_or_earlier_after_sigkill() {
     ];
     let total: usize = cases.iter().map(|c| c.kills).sum();
     assert!(total >= 100);
+    // Pictures need an adapter (a software one is fine); render.rs's switch skips them.
+    if std::env::var_os("CAGERIG_SKIP_GPU_TESTS").is_none() {
+        cases.push(Case {
+            name: "render --times",
+            runs: [render("0.5,1.5,2.5"), render("1,2")],
+            snapshot: snapshot_folder,
+            target: render_out.clone(),
+            kills: 10,
+        });
+    }
     for case in &cases {
         check_case(case, &mut random);
     }

@@ -170,7 +170,7 @@ fn arm_edit_script_colour_map_and_animation_times_render() {
     assert_eq!((image.0, image.1), (320, 240));
     assert!(content_pixels(&image, 0, 320) > 1000);
 
-    let anim = dir.join("anim.png");
+    let anim = dir.join("anim");
     let stdout = run(&[
         "render",
         mesh.to_str().unwrap(),
@@ -188,10 +188,30 @@ fn arm_edit_script_colour_map_and_animation_times_render() {
     .stdout;
     let listed = String::from_utf8(stdout).unwrap();
     for t in ["0.75", "2.25"] {
-        let path = dir.join(format!("anim_t{t}.png"));
+        let path = anim.join(format!("t{t}.png"));
         assert!(path.is_file(), "{}", path.display());
         assert!(listed.contains(path.to_str().unwrap()), "{listed}");
     }
+    // Several pictures are one output folder: a `.png` name is refused before anything is
+    // drawn, and a non-empty folder is replaced only with --force.
+    let refused = cagerig()
+        .args(["render", mesh.to_str().unwrap(), "--times", "0,1"])
+        .args([
+            "--skeleton-anim",
+            arm.join("arm_skelAnim.txt").to_str().unwrap(),
+        ])
+        .arg("--out")
+        .arg(dir.join("anim.png"))
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(
+        said.contains("--times with 2 times writes a folder of pictures")
+            && said.contains("expected a folder name"),
+        "{said}"
+    );
+    assert!(!dir.join("anim.png").exists());
 }
 
 #[test]
@@ -200,24 +220,48 @@ fn turntable_writes_frames_and_an_animated_png() {
         return;
     }
     let dir = temp_dir("turntable");
-    let out = dir.join("spin.png");
-    run(&[
-        "render",
-        "--builtin",
-        "bar",
-        "--turntable",
-        "3",
-        "--size",
-        "96x64",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    for k in 0..3 {
-        assert!(dir.join(format!("spin_{k:03}.png")).is_file());
-    }
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).unwrap()));
+    let out = dir.join("spin");
+    let spin = |frames: &str, force: bool| {
+        let mut c = cagerig();
+        c.args(["render", "--builtin", "bar", "--turntable", frames])
+            .args(["--size", "96x64", "--out", out.to_str().unwrap()]);
+        if force {
+            c.arg("--force");
+        }
+        c.output().unwrap()
+    };
+    assert!(spin("3", false).status.success());
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            ".cagerig-output",
+            "frame_000.png",
+            "frame_001.png",
+            "frame_002.png",
+            "turntable.png"
+        ]
+    );
+    let animated = out.join("turntable.png");
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(&animated).unwrap(),
+    ));
     let reader = decoder.read_info().unwrap();
     assert_eq!(reader.info().animation_control().unwrap().num_frames, 3);
+    // An earlier output is replaced with --force only, and then wholly (no frame_002 left).
+    let again = spin("2", false);
+    assert!(!again.status.success());
+    assert!(
+        String::from_utf8_lossy(&again.stderr).contains("give --force"),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    assert!(spin("2", true).status.success());
+    assert!(out.join("frame_001.png").is_file() && !out.join("frame_002.png").exists());
 }
 
 #[test]

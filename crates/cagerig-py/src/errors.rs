@@ -49,6 +49,28 @@ pub fn file_error(e: cagerig::io::ParseError) -> PyErr {
     }
 }
 
+/// An output-folder error: a folder that may not be replaced as `FileExistsError`, a file in
+/// place of it as `NotADirectoryError`, the OS's refusals as `OSError` subclasses, a bad name as
+/// `ValueError`.
+pub fn folder_error(e: cagerig::io::StagedDirError) -> PyErr {
+    use cagerig::io::StagedDirError as E;
+    use pyo3::exceptions::{PyFileExistsError, PyNotADirectoryError};
+    use std::io::ErrorKind;
+    let message = e.to_string();
+    match &e {
+        E::NotEmpty { .. } | E::Foreign { .. } => PyFileExistsError::new_err(message),
+        E::NotAFolder { .. } => PyNotADirectoryError::new_err(message),
+        E::NotAFolderName { .. } | E::BadFileName { .. } | E::DuplicateName { .. } => {
+            PyValueError::new_err(message)
+        }
+        E::Io { kind, .. } => match kind {
+            ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+            ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+            _ => PyOSError::new_err(message),
+        },
+    }
+}
+
 /// An edit-script error as a [`ScriptError`].
 pub fn script_error(e: cagerig::script::ScriptError) -> PyErr {
     ScriptError::new_err(e.to_string())

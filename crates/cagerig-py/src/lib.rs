@@ -10,6 +10,7 @@ mod functions;
 mod green;
 mod interchange;
 mod options;
+mod output_folder;
 mod rig;
 mod rig_output;
 mod rig_sequences;
@@ -27,6 +28,7 @@ fn _cagerig(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RigWarning", py.get_type::<errors::RigWarning>())?;
     m.add_class::<rig::Rig>()?;
     m.add_class::<script::EditScriptPy>()?;
+    m.add_class::<output_folder::OutputFolder>()?;
     m.add_function(wrap_pyfunction!(functions::mvc, m)?)?;
     m.add_function(wrap_pyfunction!(green::green_coordinates, m)?)?;
     m.add_function(wrap_pyfunction!(auto_weights::skin_weights, m)?)?;

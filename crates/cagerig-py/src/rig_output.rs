@@ -2,25 +2,47 @@
 
 use std::path::PathBuf;
 
+use cagerig::io::staged_dir::{StagedDir, StagedDirError};
 use cagerig::mesh::TriMesh;
 use cagerig::rig_files::write_rig_files;
 use cagerig::session::RigParts;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::errors::file_error;
+use crate::errors::{file_error, folder_error};
+use crate::output_folder::DIRECTORY;
 use crate::rig::{Rig, rest_joints};
+
+/// Why [`Rig::save`] failed: a file of the set, or the folder.
+enum SaveError {
+    File(cagerig::io::ParseError),
+    Folder(StagedDirError),
+}
+
+impl From<StagedDirError> for SaveError {
+    fn from(e: StagedDirError) -> Self {
+        Self::Folder(e)
+    }
+}
 
 #[pymethods]
 impl Rig {
     // ----- output ----------------------------------------------------------------------------
 
-    /// Writes the current REST state as a rig file set that :meth:`load` reads back:
-    /// ``<name>.obj`` (M), ``.skt`` (S), ``.skw`` (Ω), ``<name>_cage.obj`` (C),
-    /// ``<name>_cage_cageWeights.txt`` (Φ, with M = ΦC) and ``<name>_cage.maxvol`` (CageUp's
-    /// rows), each replaced atomically. The directory is created if needed.
-    #[pyo3(signature = (directory, name = "rig"))]
-    fn save(&self, py: Python<'_>, directory: PathBuf, name: &str) -> PyResult<()> {
+    /// Writes the current REST state as a rig file set that :meth:`load` reads back, as the
+    /// folder ``directory``: ``<name>.obj`` (M), ``.skt`` (S), ``.skw`` (Ω), ``<name>_cage.obj``
+    /// (C), ``<name>_cage_cageWeights.txt`` (Φ, with M = ΦC) and ``<name>_cage.maxvol``
+    /// (CageUp's rows). The folder appears complete or not at all (see :class:`OutputFolder`):
+    /// it must be new or empty, or, with ``overwrite=True``, an earlier cagerig output, which is
+    /// replaced as a whole; a folder holding other files raises ``FileExistsError``.
+    #[pyo3(signature = (directory, name = "rig", overwrite = false))]
+    fn save(
+        &self,
+        py: Python<'_>,
+        directory: PathBuf,
+        name: &str,
+        overwrite: bool,
+    ) -> PyResult<()> {
         let s = &self.session;
         let parts = RigParts::new(
             TriMesh {
@@ -34,21 +56,19 @@ impl Rig {
                 triangles: s.cage_triangles().to_vec(),
             },
         );
-        py.detach(|| {
-            std::fs::create_dir_all(&directory).map_err(|e| cagerig::io::ParseError::Io {
-                path: directory.clone(),
-                kind: e.kind(),
-                message: e.to_string(),
+        py.detach(|| -> Result<(), SaveError> {
+            let mut staged = StagedDir::create(&directory, overwrite, DIRECTORY)?;
+            staged.write_into(|dir| {
+                write_rig_files(dir, name, &parts, s.cage_coords(), s.cage_updater().rows())
+                    .map_err(SaveError::File)
             })?;
-            write_rig_files(
-                &directory,
-                name,
-                &parts,
-                s.cage_coords(),
-                s.cage_updater().rows(),
-            )
+            staged.finish()?;
+            Ok(())
         })
-        .map_err(file_error)
+        .map_err(|e| match e {
+            SaveError::File(e) => file_error(e),
+            SaveError::Folder(e) => folder_error(e),
+        })
     }
 
     /// Writes one structure as OBJ: ``what`` is ``"posed_mesh"`` (M', default),

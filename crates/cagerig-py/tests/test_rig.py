@@ -200,3 +200,65 @@ def test_heavy_calls_release_the_gil(arm):
         t.join()
     assert not errors
     np.testing.assert_allclose(rigs[0].rest_cage, rigs[1].rest_cage)
+
+
+def _partial_folders(parent):
+    return [p.name for p in parent.iterdir() if ".partial-" in p.name]
+
+
+def test_save_writes_one_folder_complete_or_not_at_all(arm, tmp_path):
+    out = tmp_path / "saved"
+    arm.save(out, "first")
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        arm.save(out, "second")
+    assert sorted(p.name for p in out.iterdir() if p.name.startswith("first")) != []
+    # An earlier output is replaced as a whole: no file of the first set lingers.
+    arm.save(out, "second", overwrite=True)
+    names = sorted(p.name for p in out.iterdir())
+    assert names[0] == ".cagerig-output" and all(n.startswith("second") for n in names[1:])
+    assert cagerig.Rig.load(out / "second.obj").num_joints == arm.num_joints
+    # A folder with the user's own file is never replaced, even with overwrite=True.
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(FileExistsError, match="notes.txt"):
+        arm.save(out, "third", overwrite=True)
+    assert (out / "notes.txt").read_text() == "mine" and (out / "second.obj").is_file()
+    assert _partial_folders(tmp_path) == []
+
+
+def test_replay_script_folder_appears_whole_and_replaces_only_its_own(arm, tmp_path):
+    script = {"steps": [{"op": "rotate_joint", "joint": 3, "axis": [1, 0, 0], "degrees": 30}]}
+    out = tmp_path / "replay"
+    written = cagerig.replay_script(arm.copy(), script, out)
+    assert sorted(p.name for p in written) == sorted(
+        f"step{k}_{w}" for k in range(2) for w in ("joints.json",) + tuple(f"{s}.obj" for s in STRUCTURES)
+    )
+    assert all(p.parent == out and p.is_file() for p in written)
+    with pytest.raises(FileExistsError):
+        cagerig.replay_script(arm.copy(), script, out)
+    two = {"steps": script["steps"] * 2}
+    assert len(cagerig.replay_script(arm.copy(), two, out, overwrite=True)) == 15
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "holiday.png").write_bytes(b"png")
+    with pytest.raises(FileExistsError, match="holiday.png"):
+        cagerig.replay_script(arm.copy(), script, mine, overwrite=True)
+    assert [p.name for p in mine.iterdir()] == ["holiday.png"]
+    assert _partial_folders(tmp_path) == []
+
+
+def test_replay_output_folder_abandoned_on_error_leaves_nothing(tmp_path):
+    out = tmp_path / "never"
+    with pytest.raises(RuntimeError):
+        with cagerig.OutputFolder(out) as folder:
+            folder.write_text("a.json", "[]")
+            assert not out.exists()
+            raise RuntimeError("stop")
+    assert not out.exists() and _partial_folders(tmp_path) == []
+    with pytest.raises(ValueError, match="plain file name"):
+        with cagerig.OutputFolder(out) as folder:
+            folder.write_text("../escape.txt", "x")
+    with cagerig.OutputFolder(out) as folder:
+        folder.write_obj("t.obj", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    assert sorted(p.name for p in out.iterdir()) == [".cagerig-output", "t.obj"]
+    with pytest.raises(ValueError, match="already finished"):
+        folder.write_text("late.txt", "x")

@@ -276,8 +276,10 @@ pub fn dialogs_ui(ctx: &egui::Context, dialogs: &mut Dialogs) -> Vec<Action> {
         }
     }
     if let Some(mut path) = dialogs.export_dir.take() {
-        let note = "Folder for mesh_rest.obj, mesh_posed.obj, cage_rest.obj, cage_posed.obj, \
-                    joints.json, the animation files of the keys and rig.glb";
+        let note = "A new folder (or an earlier export, which is replaced) for mesh_rest.obj, \
+                    mesh_posed.obj, cage_rest.obj, cage_posed.obj, joints.json, the animation \
+                    files of the keys and the rig (rig.obj, .skt, .skw, rig_cage.obj, rig.glb); \
+                    it appears complete or not at all";
         match path_window_ui(ctx, "Export", Some(note), &mut path, "Export", |_| {}) {
             PathAction::Act => actions.push(Action::Export(PathBuf::from(path.trim()))),
             PathAction::None => dialogs.export_dir = Some(path),

@@ -1,21 +1,34 @@
 //! File ▸ Export: the rest and current skin and cage as OBJ, the joints as JSON, the keys as the
 //! paper tool's animation files, the rig as the paper tool's file set (`rig.obj`, `rig.skt`,
 //! `rig.skw`, `rig_cage.obj`: `cagerig edit rig.obj` opens it) and as glTF 2.0 (`.glb`, with
-//! its skin). Every file is replaced atomically; nothing non-finite is written. A mesh with no
-//! skeleton bound yet exports no skeleton, weights or glTF.
+//! its skin). Nothing non-finite is written. A mesh with no skeleton bound yet exports no
+//! skeleton, weights or glTF.
+//!
+//! The folder the user picks is the export: it appears complete or not at all (the library's
+//! [`StagedDir`]: the files are written into a staging folder beside it, which is swapped in at
+//! the end). A new or empty folder is filled; an earlier export (its `.cagerig-output` manifest
+//! lists every file in it) is replaced as a whole, so no file of an older export lingers; a
+//! folder holding anything else — the user's own files — is refused and left untouched.
 
 use std::path::{Path, PathBuf};
 
+use cagerig::io::staged_dir::{FolderNaming, StagedDir, StagedDirError};
 use cagerig::io::text::FloatFormat;
 use serde::Serialize;
 use thiserror::Error;
 
 use crate::document::Document;
 
+/// How export messages name the folder: the editor always replaces an earlier export.
+const EXPORT_FOLDER: FolderNaming = FolderNaming {
+    folder: "export folder",
+    replace_option: None,
+};
+
 #[derive(Debug, Error)]
 pub enum ExportError {
-    #[error("{path}: cannot create the folder: {message}", path = path.display())]
-    Folder { path: PathBuf, message: String },
+    #[error("{0}")]
+    Folder(#[from] StagedDirError),
     #[error("{0}")]
     File(#[from] cagerig::io::ParseError),
     #[error("{0}")]
@@ -34,12 +47,25 @@ struct JointOut<'a> {
     posed: [f64; 3],
 }
 
-/// Writes every export of `doc` into `dir`; returns the files written.
+/// Writes every export of `doc` as the folder `dir` (see the module documentation); returns
+/// the files written.
 pub fn export_all(doc: &Document, dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
-    std::fs::create_dir_all(dir).map_err(|e| ExportError::Folder {
-        path: dir.to_path_buf(),
-        message: e.to_string(),
+    let mut staged = StagedDir::create(dir, true, EXPORT_FOLDER)?;
+    let mut written = Vec::new();
+    staged.write_into(|staging| {
+        written = write_exports(doc, staging)?;
+        Ok::<(), ExportError>(())
     })?;
+    staged.finish()?;
+    Ok(written
+        .iter()
+        .filter_map(|path| path.file_name())
+        .map(|name| dir.join(name))
+        .collect())
+}
+
+/// Writes every export of `doc` into the folder `dir`; returns the files written.
+fn write_exports(doc: &Document, dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
     let s = &doc.session;
     let mut written = Vec::new();
     for (name, positions, triangles) in [
@@ -111,13 +137,26 @@ mod tests {
     use super::*;
     use crate::rig_open::{RigSource, open_rig};
 
-    #[test]
-    fn export_writes_every_file_and_the_objs_read_back() {
+    fn bar_document() -> Document {
         let source = RigSource::Builtin {
             name: "bar".into(),
             resolution: Some(6),
         };
-        let mut doc = Document::new(source.clone(), open_rig(&source).unwrap().session);
+        Document::new(source.clone(), open_rig(&source).unwrap().session)
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn export_writes_every_file_and_the_objs_read_back() {
+        let mut doc = bar_document();
         doc.execute(&crate::document::Command::SetKey {
             track: crate::keys::Track::Cage,
             time: 0.0,
@@ -125,6 +164,7 @@ mod tests {
         .unwrap();
         let dir =
             std::env::temp_dir().join(format!("cagerig-studio-export-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
         let files = export_all(&doc, &dir).unwrap();
         assert_eq!(files.len(), 11, "{files:?}");
         let back = cagerig::io::read_obj(&dir.join("mesh_posed.obj")).unwrap();
@@ -134,5 +174,60 @@ mod tests {
         assert_eq!(rig.parts.skeleton.len(), doc.session.skeleton().len());
         assert_eq!(rig.parts.skin_weights, *doc.session.skin_weights());
         std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// The export folder is complete or absent: the user's own folder is refused untouched, an
+    /// earlier export is replaced as a whole, and what a killed export left is cleaned up.
+    #[test]
+    fn export_replaces_only_an_earlier_export_and_leaves_no_staging() {
+        let doc = bar_document();
+        let root = std::env::temp_dir().join(format!(
+            "cagerig-studio-export-staged-{}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&root);
+        let mine = root.join("mine");
+        std::fs::create_dir_all(&mine).unwrap();
+        std::fs::write(mine.join("notes.txt"), b"mine").unwrap();
+        let e = export_all(&doc, &mine).unwrap_err().to_string();
+        assert!(
+            e.contains("export folder") && e.contains("notes.txt") && e.contains("new folder"),
+            "{e}"
+        );
+        assert_eq!(entries(&mine), ["notes.txt"]);
+
+        let out = root.join("export");
+        let first = export_all(&doc, &out).unwrap();
+        assert!(
+            first
+                .iter()
+                .all(|p| p.parent() == Some(out.as_path()) && p.is_file())
+        );
+        // An earlier export that listed a file this one does not write: replaced wholly.
+        std::fs::write(out.join("old_pose.obj"), b"v 0 0 0\n").unwrap();
+        let manifest = out.join(cagerig::io::staged_dir::MANIFEST_FILE);
+        let mut listed = std::fs::read_to_string(&manifest).unwrap();
+        listed.push_str("old_pose.obj\n");
+        std::fs::write(&manifest, listed).unwrap();
+        // A staging folder of an export killed in a process that no longer runs.
+        let abandoned = root.join(".export.partial-4294967");
+        std::fs::create_dir_all(&abandoned).unwrap();
+        std::fs::write(abandoned.join("mesh_rest.obj"), b"half").unwrap();
+        let second = export_all(&doc, &out).unwrap();
+        assert_eq!(second, first);
+        assert!(!out.join("old_pose.obj").exists());
+        assert!(!abandoned.exists() || !Path::new("/proc/self").exists());
+        assert_eq!(
+            entries(&root)
+                .into_iter()
+                .filter(|n| n.contains(".partial-") && !n.ends_with("4294967"))
+                .count(),
+            0
+        );
+        // A file the user added after the export makes the folder theirs.
+        std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+        assert!(export_all(&doc, &out).is_err());
+        assert!(out.join("notes.txt").is_file() && out.join("rig.glb").is_file());
+        std::fs::remove_dir_all(&root).ok();
     }
 }

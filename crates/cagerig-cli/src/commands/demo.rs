@@ -131,7 +131,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     // The output folder is complete or absent: files go to a staging folder renamed to `out`
     // at the end; an earlier demo's output there is replaced (the demo writes only its own
     // state files and pictures, and a folder holding anything else is refused).
-    let mut staged = StagedDir::create(out, true)?;
+    let mut staged = StagedDir::create(out, true, crate::output_dir::OUT)?;
     let mut pictures = DemoPictures::new(pictures);
     write_state(&mut staged, "0_loaded", &s)?;
     pictures.add("0_loaded", "0. as loaded", &s)?;

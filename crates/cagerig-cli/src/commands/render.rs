@@ -1,4 +1,7 @@
-//! `cagerig render`: pictures of a rig, after an edit script or at animation times.
+//! `cagerig render`: pictures of a rig, after an edit script or at animation times. One
+//! picture is one PNG file at `--out`, replaced atomically; several (`--times` with more than
+//! one time, `--turntable`) are one output folder at `--out` that appears complete, only after
+//! every picture was drawn ([`StagedDir`]).
 
 use std::path::{Path, PathBuf};
 
@@ -9,6 +12,7 @@ use cagerig_render::CameraPreset;
 use cagerig_render::rig_scene::{ColorBy, Layers};
 use glam::DVec3;
 
+use crate::output_dir::{OUT, StagedDir};
 use crate::pictures::{CameraChoice, PictureMaker, PictureOptions, ViewArg};
 use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_or_generate_cage, note_generated_cage};
 use crate::session_args::{SessionArgs, start_session};
@@ -32,13 +36,17 @@ pub struct Args {
     /// Cage animation (rest-cage offsets) sampled at `--times`.
     #[arg(long, requires = "times")]
     pub cage_anim: Option<PathBuf>,
-    /// Comma-separated sample times in seconds (one picture each: OUT_t<time>.png when more
+    /// Comma-separated sample times in seconds (one picture each: OUT/t<time>.png when more
     /// than one).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub times: Vec<f64>,
-    /// Output PNG file.
+    /// Output PNG file; for several pictures (--times with more than one time, --turntable)
+    /// an output folder, which appears complete, only after every picture was drawn.
     #[arg(long)]
     pub out: PathBuf,
+    /// Replace a non-empty --out folder that holds an earlier run's output.
+    #[arg(long)]
+    pub force: bool,
     /// Pose(s) shown: current (M', C', S'), rest (M, C, S), or both side by side (rest left).
     #[arg(long, value_enum, default_value_t = ViewArg::Current)]
     pub view: ViewArg,
@@ -64,7 +72,8 @@ pub struct Args {
     /// Leave out the pose labels.
     #[arg(long)]
     pub no_labels: bool,
-    /// Write N pictures around the model (OUT_000.png …) and an animated PNG at OUT.
+    /// Write N pictures around the model (OUT/frame_000.png …) and an animated PNG of them
+    /// (OUT/turntable.png); with several --times, OUT/t<time>_frame_000.png … per time.
     #[arg(long)]
     pub turntable: Option<u32>,
     /// Skinning method.
@@ -184,17 +193,34 @@ pub fn parse_color_by(session: &RigSession, text: &str) -> anyhow::Result<ColorB
     Ok(color_by)
 }
 
-/// `OUT` with `suffix` added to its file stem (`out.png` + `_t1` → `out_t1.png`).
-pub fn with_suffix(out: &Path, suffix: &str) -> PathBuf {
-    let stem = out
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let ext = out
+/// Where the pictures go: one file, or the output folder of several.
+enum Pictures {
+    File(PathBuf),
+    Folder(StagedDir),
+}
+
+/// The output of `args`: a folder when it asks for several pictures (refusing a `.png` name,
+/// which was the file prefix of older versions), else the file `--out`.
+fn open_pictures(args: &Args) -> anyhow::Result<Pictures> {
+    let several = match (args.times.len(), args.turntable) {
+        (n, _) if n > 1 => format!("--times with {n} times"),
+        (_, Some(_)) => "--turntable".to_owned(),
+        _ => return Ok(Pictures::File(args.out.clone())),
+    };
+    let is_png = args
+        .out
         .extension()
-        .map(|e| e.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "png".into());
-    out.with_file_name(format!("{stem}{suffix}.{ext}"))
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if is_png {
+        bail!(
+            "--out {}: {several} writes a folder of pictures; expected a folder name, e.g. {}",
+            args.out.display(),
+            args.out.with_extension("").display()
+        );
+    }
+    Ok(Pictures::Folder(StagedDir::create(
+        &args.out, args.force, OUT,
+    )?))
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
@@ -230,6 +256,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .as_deref()
         .map(crate::commands::edit::read_script)
         .transpose()?;
+    let mut pictures = open_pictures(args)?;
     let mut loaded = load_rig_or_generate_cage(&args.rig, true, true, args.auto_cage.options())?;
     note_generated_cage(&loaded);
     let tracks = crate::interchange::animation_tracks(
@@ -274,55 +301,71 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         color_by,
         labels: !args.no_labels,
     })?;
-    let mut written = Vec::new();
     if args.times.is_empty() {
-        render_state(&mut maker, &session, args, &args.out, &mut written)?;
+        render_state(&mut maker, &session, args, "", &mut pictures)?;
     } else {
         let mut player = tracks.resolve(&session)?.player(&session)?;
         for &t in &args.times {
             player.apply(t, &mut session)?;
             maker.caption = Some(format!("t = {t} s"));
-            let path = if args.times.len() == 1 {
-                args.out.clone()
+            let name = if args.times.len() == 1 {
+                String::new()
             } else {
-                with_suffix(&args.out, &format!("_t{t}"))
+                format!("t{t}")
             };
-            render_state(&mut maker, &session, args, &path, &mut written)?;
+            render_state(&mut maker, &session, args, &name, &mut pictures)?;
         }
     }
     eprintln!("rendered on {}", maker.adapter_name());
+    let written = match pictures {
+        Pictures::File(path) => vec![path],
+        Pictures::Folder(staged) => {
+            let names = staged.names().to_vec();
+            staged.finish()?;
+            names.iter().map(|n| args.out.join(n)).collect()
+        }
+    };
     for path in &written {
         println!("{}", path.display());
     }
     Ok(())
 }
 
-/// One picture at `path`, or a turntable (frames + animated PNG at `path`).
+/// The pictures of one state: one picture (the file, or `<name>.png` in the folder) or a
+/// turntable (`<name>_frame_000.png` … and the animated `<name>_turntable.png`, without the
+/// `<name>_` when `name` is empty).
 fn render_state(
     maker: &mut PictureMaker,
     session: &RigSession,
     args: &Args,
-    path: &Path,
-    written: &mut Vec<PathBuf>,
+    name: &str,
+    pictures: &mut Pictures,
 ) -> anyhow::Result<()> {
+    let staged = match pictures {
+        Pictures::File(path) => return maker.write(session, path),
+        Pictures::Folder(staged) => staged,
+    };
     let Some(frames) = args.turntable else {
-        maker.write(session, path)?;
-        written.push(path.to_path_buf());
-        return Ok(());
+        return maker.write_staged(session, staged, &format!("{name}.png"));
+    };
+    let prefix = if name.is_empty() {
+        String::new()
+    } else {
+        format!("{name}_")
     };
     let mut images = Vec::with_capacity(frames as usize);
     for k in 0..frames {
         let yaw = std::f64::consts::TAU * k as f64 / frames as f64;
         let camera = maker.camera(session, yaw);
         let image = maker.picture(session, &camera)?;
-        let frame_path = with_suffix(path, &format!("_{k:03}"));
-        image.write_png(&frame_path)?;
-        written.push(frame_path);
+        let png = image.to_png()?;
+        staged.write(&format!("{prefix}frame_{k:03}.png"), &|w| w.write_all(&png))?;
         images.push(image);
     }
-    cagerig_render::image::write_apng(path, &images, 80)?;
-    written.push(path.to_path_buf());
-    Ok(())
+    staged.write_into(|dir| -> anyhow::Result<()> {
+        let path = dir.join(format!("{prefix}turntable.png"));
+        Ok(cagerig_render::image::write_apng(&path, &images, 80)?)
+    })
 }
 
 #[cfg(test)]
@@ -348,10 +391,6 @@ mod tests {
                 .contains("bogus")
         );
         assert!(parse_layers("ground").is_err());
-        assert_eq!(
-            with_suffix(Path::new("a/b.png"), "_t1.5"),
-            Path::new("a/b_t1.5.png")
-        );
         assert!(parse_point("--eye", "1,2").is_err());
         assert_eq!(
             parse_point("--eye", "1,-2,3").unwrap(),

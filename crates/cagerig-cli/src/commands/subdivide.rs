@@ -48,7 +48,7 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
              path separator, not starting with a dot)"
         );
     }
-    let mut staged = StagedDir::create(out, force)?;
+    let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
     let loaded = load_rig(args, true, false)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
@@ -85,7 +85,7 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
     };
     let phi = compute_coords_with_progress(&sub_parts, true)?;
     let rows = cagerig::coords::maxvol::select_maxvol_rows(&phi)?.rows;
-    staged.write_into(|dir| {
+    staged.write_into(|dir| -> anyhow::Result<()> {
         Ok(cagerig::rig_files::write_rig_files(
             dir, name, &sub_parts, &phi, &rows,
         )?)

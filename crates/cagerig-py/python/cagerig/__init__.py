@@ -14,6 +14,7 @@ triangles.
 
 from ._cagerig import (
     EditScript as EditScript,
+    OutputFolder as OutputFolder,
     Rig as Rig,
     RigError as RigError,
     RigFileError as RigFileError,
@@ -39,6 +40,7 @@ from .states import replay_script as replay_script, save_state as save_state
 
 __all__ = [
     "EditScript",
+    "OutputFolder",
     "Rig",
     "RigError",
     "RigFileError",

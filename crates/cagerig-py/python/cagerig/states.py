@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Union
 
-from ._cagerig import EditScript, Rig, write_obj
+from ._cagerig import EditScript, OutputFolder, Rig, write_obj
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -73,12 +73,13 @@ def save_state(rig: Rig, directory: PathLike, prefix: str) -> list[Path]:
     return _write_snapshot(_snapshot(rig), directory, prefix)
 
 
-def replay_script(rig: Rig, script, directory: PathLike) -> list[Path]:
+def replay_script(rig: Rig, script, directory: PathLike, overwrite: bool = False) -> list[Path]:
     """Replay an edit script and write every state, like ``cagerig edit --out directory``.
 
     ``step0_*`` is the rig as given (after the script's ``skinning``, if any), then
     ``stepK_*`` after step K. The script is checked against the rig before any step runs, and,
-    as with the CLI, nothing is written unless every step succeeded.
+    as with the CLI, the folder appears complete, only after every step succeeded (see
+    :class:`OutputFolder`).
 
     Parameters
     ----------
@@ -86,6 +87,9 @@ def replay_script(rig: Rig, script, directory: PathLike) -> list[Path]:
         Edited in place.
     script : EditScript, str, dict or os.PathLike
     directory : str or os.PathLike
+        New or empty; with ``overwrite=True`` also an earlier cagerig output, replaced as a
+        whole. A folder holding other files raises ``FileExistsError``.
+    overwrite : bool
 
     Returns
     -------
@@ -101,7 +105,12 @@ def replay_script(rig: Rig, script, directory: PathLike) -> list[Path]:
     for k in range(len(script)):
         script.run_step(rig, k)
         states.append(_snapshot(rig))
-    written = []
-    for k, state in enumerate(states):
-        written += _write_snapshot(state, directory, f"step{k}")
-    return written
+    folder = OutputFolder(directory, overwrite)
+    try:
+        for k, state in enumerate(states):
+            for what in ("mesh_rest", "mesh_posed", "cage_rest", "cage_posed"):
+                folder.write_obj(f"step{k}_{what}.obj", *state[what])
+            folder.write_text(f"step{k}_joints.json", json.dumps(state["joints"], indent=2))
+        return [Path(p) for p in folder.finish()]
+    finally:
+        folder.discard()

@@ -4,7 +4,8 @@
 //!
 //! Every reader has a `read_*(path, …)` form and a `parse_*(bytes, source, …)` form (for tests
 //! and in-memory data); every writer has a `write_*(path, …)` form that replaces the file
-//! atomically ([`write_atomically`]) and a `write_*_to(writer, …)` form. Readers never panic:
+//! atomically ([`write_atomically`]) and a `write_*_to(writer, …)` form; an output of several files
+//! goes into a folder that appears complete or not at all ([`StagedDir`]). Readers never panic:
 //! any malformed input gives a [`ParseError`] naming the file and line.
 
 pub mod atomic;
@@ -20,6 +21,7 @@ pub mod obj;
 pub mod skeleton_animation;
 pub mod skt;
 pub mod skw;
+pub mod staged_dir;
 pub mod text;
 
 pub use atomic::write_atomically;
@@ -37,4 +39,5 @@ pub use skeleton_animation::{
 };
 pub use skt::{parse_skt, read_skt, write_skt};
 pub use skw::{parse_skw, read_skw, write_skw};
+pub use staged_dir::{FolderNaming, StagedDir, StagedDirError};
 pub use text::FloatFormat;
