@@ -31,6 +31,7 @@ pub mod rig_files;
 mod row_blocks;
 pub mod script;
 pub mod session;
+mod simd_dispatch;
 pub mod skeleton;
 pub mod skin_weights;
 pub mod skinning;

@@ -4,6 +4,8 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::simd_dispatch::simd_dispatch;
+
 /// Rows per parallel task in the per-frame products.
 pub(super) const ROW_BLOCK: usize = 8192;
 
@@ -217,34 +219,14 @@ impl TileSums {
         }
     }
 
-    /// `sums[i] += Σ_c columns[c][i] · d_c` for a group of columns of equal length (eight per
-    /// pass: the traffic of the sums, not of Φ, bounds the product; four then one at a time for
-    /// the rest).
-    fn add_columns<W: Weight, const N: usize>(&mut self, columns: [&[W]; N], d: [DVec3; N]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe { self.add_columns_avx512(columns, d) };
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: as above.
-                return unsafe { self.add_columns_avx2(columns, d) };
-            }
-        }
-        self.add_columns_generic(columns, d)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    fn add_columns_avx512<W: Weight, const N: usize>(&mut self, columns: [&[W]; N], d: [DVec3; N]) {
-        self.add_columns_generic(columns, d)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn add_columns_avx2<W: Weight, const N: usize>(&mut self, columns: [&[W]; N], d: [DVec3; N]) {
-        self.add_columns_generic(columns, d)
+    simd_dispatch! {
+        /// `sums[i] += Σ_c columns[c][i] · d_c` for a group of columns of equal length (eight
+        /// per pass: the traffic of the sums, not of Φ, bounds the product; four then one at a
+        /// time for the rest).
+        fn add_columns[W: Weight, const N: usize](&mut self, columns: [&[W]; N], d: [DVec3; N])
+            => Self::add_columns_generic;
+        avx512f: add_columns_avx512;
+        avx2: add_columns_avx2;
     }
 
     /// The order of operations of [`group_sum`], per coordinate, vectorised over the points.

@@ -28,6 +28,7 @@ pub(crate) use super::mvc_lanes::LANES;
 use super::mvc_lanes::{Avx512Math, FusedMath};
 use super::mvc_lanes::{LaneMath, Lanes, Mask, PlainMath, V8, not, or};
 use crate::row_blocks::RowBlock;
+use crate::simd_dispatch::simd_dispatch;
 
 /// One cage triangle as the batch kernel reads it.
 #[derive(Debug, Clone, Copy)]
@@ -129,49 +130,17 @@ impl BatchScratch {
     }
 }
 
-/// MVC of `points` (`n`) into the rows of `out` (`n × #C`). Every entry of `out` is written.
-/// Returns the first row (index into `points`) holding a non-finite weight, if any.
-pub(crate) fn evaluate_rows(
-    evaluator: &MvcEvaluator,
-    points: &[DVec3],
-    scratch: &mut BatchScratch,
-    out: &mut RowBlock,
-) -> Option<usize> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports the enabled feature (checked just above).
-            return unsafe { evaluate_rows_avx512(evaluator, points, scratch, out) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: as above.
-            return unsafe { evaluate_rows_avx2(evaluator, points, scratch, out) };
-        }
-    }
-    evaluate_rows_generic::<PlainMath>(evaluator, points, scratch, out)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn evaluate_rows_avx512(
-    evaluator: &MvcEvaluator,
-    points: &[DVec3],
-    scratch: &mut BatchScratch,
-    out: &mut RowBlock,
-) -> Option<usize> {
-    evaluate_rows_generic::<Avx512Math>(evaluator, points, scratch, out)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn evaluate_rows_avx2(
-    evaluator: &MvcEvaluator,
-    points: &[DVec3],
-    scratch: &mut BatchScratch,
-    out: &mut RowBlock,
-) -> Option<usize> {
-    evaluate_rows_generic::<FusedMath>(evaluator, points, scratch, out)
+simd_dispatch! {
+    /// MVC of `points` (`n`) into the rows of `out` (`n × #C`). Every entry of `out` is written.
+    /// Returns the first row (index into `points`) holding a non-finite weight, if any.
+    pub(crate) fn evaluate_rows(
+        evaluator: &MvcEvaluator,
+        points: &[DVec3],
+        scratch: &mut BatchScratch,
+        out: &mut RowBlock,
+    ) -> Option<usize> => evaluate_rows_generic::<PlainMath>;
+    avx512f: evaluate_rows_avx512 => evaluate_rows_generic::<Avx512Math>;
+    avx2_fma: evaluate_rows_avx2 => evaluate_rows_generic::<FusedMath>;
 }
 
 #[inline(always)]
@@ -445,12 +414,11 @@ mod tests {
                     evaluate_rows_generic::<PlainMath>(&evaluator, &points, &mut scratch, &mut out)
                 }
                 #[cfg(target_arch = "x86_64")]
-                1 if std::arch::is_x86_feature_detected!("avx2")
-                    && std::arch::is_x86_feature_detected!("fma") =>
+                1 if crate::simd_dispatch::cpu().avx2_fma() =>
                 // SAFETY: features checked.
                 unsafe { evaluate_rows_avx2(&evaluator, &points, &mut scratch, &mut out) },
                 #[cfg(target_arch = "x86_64")]
-                2 if std::arch::is_x86_feature_detected!("avx512f") =>
+                2 if crate::simd_dispatch::cpu().avx512f() =>
                 // SAFETY: feature checked.
                 unsafe { evaluate_rows_avx512(&evaluator, &points, &mut scratch, &mut out) },
                 _ => return Vec::new(),

@@ -13,6 +13,7 @@ use super::grid_layout::{Grid, NONE, PairLookup, for_each_pair};
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::row_blocks::RowBlock;
+use crate::simd_dispatch::simd_dispatch;
 
 /// The tables and how to find a (pair, node)'s row in them.
 pub(super) struct Tables<'a> {
@@ -100,33 +101,13 @@ pub(super) fn fill_rows(
     }
 }
 
-/// `sums[r] += x y interp(G_pair)(x, y)` for every item (sort key, block row r, x, y) in turn,
-/// vectorised for the CPU at hand (no fused multiply-add: the same bits on every CPU).
-fn accumulate(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports the enabled feature (checked just above).
-            return unsafe { accumulate_avx512(items, tables, sums) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: as above.
-            return unsafe { accumulate_avx2(items, tables, sums) };
-        }
-    }
-    accumulate_generic(items, tables, sums)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn accumulate_avx512(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums: &mut [f64]) {
-    accumulate_generic(items, tables, sums)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn accumulate_avx2(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums: &mut [f64]) {
-    accumulate_generic(items, tables, sums)
+simd_dispatch! {
+    /// `sums[r] += x y interp(G_pair)(x, y)` for every item (sort key, block row r, x, y) in
+    /// turn, vectorised for the CPU at hand (no fused multiply-add: the same bits on every CPU).
+    fn accumulate(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums: &mut [f64])
+        => accumulate_generic;
+    avx512f: accumulate_avx512;
+    avx2: accumulate_avx2;
 }
 
 /// Columns per register-held partial sum of [`accumulate_generic`].

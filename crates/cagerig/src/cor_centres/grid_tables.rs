@@ -9,6 +9,7 @@ use super::grid_bins::TriangleBins;
 use super::grid_layout::Grid;
 use crate::error::RigError;
 use crate::memory_estimate::zeroed_table;
+use crate::simd_dispatch::simd_dispatch;
 
 /// Table nodes evaluated per dense product (rows of the kernel matrix).
 const NODE_CHUNK: usize = 256;
@@ -77,52 +78,18 @@ pub(super) fn similarity_tables(
     Ok(tables)
 }
 
-/// Kernel matrix `K_nb = exp(−(x_n b̄_b − y_n ā_b)²/σ²)` (nodes × bins, column-major) into
-/// `out`, for the bins `(mass, ā, b̄)`, vectorised for the CPU at hand.
-fn fill_kernel(
-    out: &mut [f64],
-    xs: &[f64],
-    ys: &[f64],
-    bins: &[(f64, f64, f64)],
-    inv_sigma_sq: f64,
-) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports the enabled feature (checked just above).
-            return unsafe { fill_kernel_avx512(out, xs, ys, bins, inv_sigma_sq) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: as above.
-            return unsafe { fill_kernel_avx2(out, xs, ys, bins, inv_sigma_sq) };
-        }
-    }
-    fill_kernel_generic(out, xs, ys, bins, inv_sigma_sq)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn fill_kernel_avx512(
-    out: &mut [f64],
-    xs: &[f64],
-    ys: &[f64],
-    bins: &[(f64, f64, f64)],
-    inv_sigma_sq: f64,
-) {
-    fill_kernel_generic(out, xs, ys, bins, inv_sigma_sq)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn fill_kernel_avx2(
-    out: &mut [f64],
-    xs: &[f64],
-    ys: &[f64],
-    bins: &[(f64, f64, f64)],
-    inv_sigma_sq: f64,
-) {
-    fill_kernel_generic(out, xs, ys, bins, inv_sigma_sq)
+simd_dispatch! {
+    /// Kernel matrix `K_nb = exp(−(x_n b̄_b − y_n ā_b)²/σ²)` (nodes × bins, column-major) into
+    /// `out`, for the bins `(mass, ā, b̄)`, vectorised for the CPU at hand.
+    fn fill_kernel(
+        out: &mut [f64],
+        xs: &[f64],
+        ys: &[f64],
+        bins: &[(f64, f64, f64)],
+        inv_sigma_sq: f64,
+    ) => fill_kernel_generic;
+    avx512f: fill_kernel_avx512;
+    avx2_fma: fill_kernel_avx2;
 }
 
 #[inline(always)]

@@ -22,6 +22,7 @@ use rayon::prelude::*;
 
 use super::VERTEX_GRAIN_F32;
 use super::precision::{RestPoint, SkinReal};
+use crate::simd_dispatch::simd_dispatch;
 use crate::{RigError, SkinWeights};
 
 // Sorted slots index vertices within a chunk as u16.
@@ -258,34 +259,17 @@ impl<S: SkinReal> CountSortedWeights<S> {
             .for_each(|(chunk, out)| self.skin_chunk(kernel, chunk, out));
     }
 
-    /// One chunk of [`Self::skin`], compiled for AVX2 where the CPU has it (wider registers and
-    /// three-operand forms for the glam arithmetic; no fused multiply-add, so the results
-    /// are the same on every path).
-    fn skin_chunk<Kernel: VertexKernel<S>>(
-        &self,
-        kernel: &Kernel,
-        chunk: usize,
-        out: &mut [S::Out],
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe { self.skin_chunk_avx2(kernel, chunk, out) };
-            }
-        }
-        self.skin_chunk_generic(kernel, chunk, out)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn skin_chunk_avx2<Kernel: VertexKernel<S>>(
-        &self,
-        kernel: &Kernel,
-        chunk: usize,
-        out: &mut [S::Out],
-    ) {
-        self.skin_chunk_generic(kernel, chunk, out)
+    simd_dispatch! {
+        /// One chunk of [`Self::skin`], compiled for AVX2 where the CPU has it (wider registers
+        /// and three-operand forms for the glam arithmetic; no fused multiply-add, so the results
+        /// are the same on every path).
+        fn skin_chunk[Kernel: VertexKernel<S>](
+            &self,
+            kernel: &Kernel,
+            chunk: usize,
+            out: &mut [S::Out],
+        ) => Self::skin_chunk_generic;
+        avx2: skin_chunk_avx2;
     }
 
     #[inline(always)]

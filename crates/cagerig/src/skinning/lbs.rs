@@ -8,6 +8,7 @@ use super::VERTEX_GRAIN_F32;
 use super::compact_weights::{JointColumns, RestPoints, VertexKernel};
 use super::precision::SkinReal;
 use crate::SkinWeights;
+use crate::simd_dispatch::simd_dispatch;
 
 /// Precomputed LBS: Ω (`#V × #J`) as flat CSR rows, streamed in vertex order by
 /// [`LinearBlendSkinning::apply`] (LBS is memory-bound: sequential rows beat the count-sorted
@@ -138,30 +139,18 @@ impl LinearBlendSkinning {
         }
     }
 
-    /// `out[i] = LBS(first + i)` at rest position `rest[i]`, compiled for AVX2 where the CPU has
-    /// it (wider registers and three-operand forms for the glam arithmetic; no fused
-    /// multiply-add, so the same bits as the baseline code).
-    fn skin_range(&self, first: usize, transforms: &[DAffine3], rest: &[DVec3], out: &mut [DVec3]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports the enabled feature (checked just above).
-                return unsafe { self.skin_range_avx2(first, transforms, rest, out) };
-            }
-        }
-        self.skin_range_generic(first, transforms, rest, out)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn skin_range_avx2(
-        &self,
-        first: usize,
-        transforms: &[DAffine3],
-        rest: &[DVec3],
-        out: &mut [DVec3],
-    ) {
-        self.skin_range_generic(first, transforms, rest, out)
+    simd_dispatch! {
+        /// `out[i] = LBS(first + i)` at rest position `rest[i]`, compiled for AVX2 where the CPU
+        /// has it (wider registers and three-operand forms for the glam arithmetic; no fused
+        /// multiply-add, so the same bits as the baseline code).
+        fn skin_range(
+            &self,
+            first: usize,
+            transforms: &[DAffine3],
+            rest: &[DVec3],
+            out: &mut [DVec3],
+        ) => Self::skin_range_generic;
+        avx2: skin_range_avx2;
     }
 
     #[inline(always)]
