@@ -220,6 +220,8 @@ pub struct Document {
     pub(crate) bind_job: Option<BindJob>,
     /// X mirror of skeleton edits: joints off the middle plane get `.L` / `.R` twins.
     pub mirror_x: bool,
+    /// Which tip joints (no child) get weight at Bind.
+    pub bind_tips: cagerig::auto_weights::TipJoints,
 }
 
 impl Document {
@@ -241,6 +243,7 @@ impl Document {
             last_binding_id: 0,
             bind_job: None,
             mirror_x: false,
+            bind_tips: Default::default(),
         }
     }
 

@@ -2,7 +2,7 @@
 //! on the mesh, the X mirror, the joint list, renaming, re-parenting, adding a child, deleting
 //! — and Bind it (automatic weights on a background thread, with progress).
 
-use cagerig::auto_weights::AutoWeightsOptions;
+use cagerig::auto_weights::{AutoWeightsOptions, TipJoints};
 use glam::DVec3;
 
 use crate::binding::BindWeights;
@@ -220,7 +220,10 @@ fn bind_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
             )
             .clicked()
         {
-            let weights = BindWeights::Automatic(AutoWeightsOptions::default());
+            let weights = BindWeights::Automatic(AutoWeightsOptions {
+                tips: doc.bind_tips.clone(),
+                ..AutoWeightsOptions::default()
+            });
             if let Err(e) = doc.start_bind(weights) {
                 diag.log.error(format!("bind: {e}"));
             }
@@ -239,6 +242,22 @@ fn bind_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
         }
         if doc.draft.is_some() && ui.button("Discard changes").clicked() {
             run_command(doc, &Command::EditSkeleton(SkeletonEdit::Discard), diag);
+        }
+    });
+    ui.horizontal(|ui| {
+        ui.label("Tip joints deform").on_hover_text(
+            "Which joints with no child get weight at Bind: all but end markers (names ending \
+             in end, nub, tip or null), all, or none",
+        );
+        let tips = &mut doc.bind_tips;
+        for (choice, label) in [
+            (TipJoints::AllButEndMarkers, "Auto"),
+            (TipJoints::All, "All"),
+            (TipJoints::None, "None"),
+        ] {
+            if ui.selectable_label(*tips == choice, label).clicked() {
+                *tips = choice;
+            }
         }
     });
 }
