@@ -25,12 +25,15 @@ pub enum BindWeights {
     KeepBound,
 }
 
-/// Everything a bind needs, taken from the document (cheap) so the rest can run elsewhere.
+/// Everything a bind needs, taken from the document (cheap: carried weights are made here)
+/// so the rest can run elsewhere.
 pub struct BindRequest {
+    /// The parts of the new rig; Ω is final unless `automatic` computes it.
     parts: RigParts,
     options: SessionOptions,
     precision: DisplayPrecision,
-    weights: BindWeights,
+    /// The automatic weights' options, when Ω is to be computed.
+    automatic: Option<AutoWeightsOptions>,
     /// For each new joint, the bound joint it stands for (`#J` new).
     pub origins: Vec<Option<usize>>,
 }
@@ -76,46 +79,51 @@ impl BindRequest {
         } else {
             vec![None; draft.len()]
         };
-        let placeholder = SkinWeights::from_triplets(session.num_vertices(), skeleton.len(), [])
-            .map_err(|e| e.to_string())?
-            .0;
+        let (weights, automatic) = match weights {
+            BindWeights::Automatic(options) => (
+                SkinWeights::from_triplets(session.num_vertices(), skeleton.len(), [])
+                    .map_err(|e| e.to_string())?
+                    .0,
+                Some(options),
+            ),
+            BindWeights::KeepBound => {
+                let old_parents: Vec<Option<usize>> = session
+                    .skeleton()
+                    .joints()
+                    .iter()
+                    .map(|j| j.parent)
+                    .collect();
+                let carried =
+                    carry_weights(session.skin_weights(), &old_parents, &origins, &skeleton)?;
+                (carried, None)
+            }
+        };
         Ok(Self {
-            parts: session.parts_with_skeleton(skeleton, placeholder),
+            parts: session.parts_with_skeleton(skeleton, weights),
             options: session.rebinding_options(),
             precision: session.display_precision(),
-            weights,
+            automatic,
             origins,
         })
     }
 
     /// Computes Ω and builds the new session; `progress` follows the automatic weights.
-    pub fn run(
-        mut self,
-        old_weights: Option<&SkinWeights>,
-        old_parents: &[Option<usize>],
-        progress: &(dyn Fn(Progress) + Sync),
-    ) -> Result<BoundRig, String> {
+    pub fn run(mut self, progress: &(dyn Fn(Progress) + Sync)) -> Result<BoundRig, String> {
         let t = Instant::now();
         let mut warnings = Vec::new();
-        self.parts.skin_weights = match &self.weights {
-            BindWeights::Automatic(options) => {
-                let result = AutoWeights::new(options.clone())
-                    .map_err(|e| format!("automatic weights: {e}"))?
-                    .compute_with_progress(
-                        &self.parts.mesh,
-                        &self.parts.skeleton,
-                        Some(&self.parts.cage),
-                        progress,
-                    )
-                    .map_err(|e| format!("automatic weights: {e}"))?;
-                warnings.extend(result.report.warnings);
-                result.weights
-            }
-            BindWeights::KeepBound => {
-                let old = old_weights.ok_or("the rig has no bound weights to keep")?;
-                carry_weights(old, old_parents, &self.origins, &self.parts.skeleton)?
-            }
-        };
+        if let Some(options) = &self.automatic {
+            let result = AutoWeights::new(options.clone())
+                .map_err(|e| format!("automatic weights: {e}"))?
+                .compute_with_progress(
+                    &self.parts.mesh,
+                    &self.parts.skeleton,
+                    Some(&self.parts.cage),
+                    progress,
+                )
+                .map_err(|e| format!("automatic weights: {e}"))?;
+            warnings.extend(result.report.warnings);
+            self.parts.skin_weights = result.weights;
+        }
         let (mut session, more) =
             RigSession::new(self.parts, self.options).map_err(|e| e.to_string())?;
         warnings.extend(more);
@@ -214,11 +222,7 @@ pub struct BindJob {
 
 impl BindJob {
     /// Starts `request` on a new thread.
-    pub fn spawn(
-        request: BindRequest,
-        old_weights: Option<SkinWeights>,
-        old_parents: Vec<Option<usize>>,
-    ) -> Self {
+    pub fn spawn(request: BindRequest) -> Self {
         let (sender, receiver) = channel();
         let progress = Arc::new(Mutex::new(None));
         let shared = Arc::clone(&progress);
@@ -228,7 +232,7 @@ impl BindJob {
                     *slot = Some(p);
                 }
             };
-            let result = request.run(old_weights.as_ref(), &old_parents, &report);
+            let result = request.run(&report);
             // The studio may have closed the document meanwhile: nobody to tell.
             let _ = sender.send(result);
         });

@@ -123,36 +123,23 @@ impl Document {
         if self.bind_job.is_some() {
             return Err(DocError::Bind("a bind is already running".into()));
         }
-        let request = BindRequest::new(&self.session, self.draft.as_ref(), self.rigged(), weights)
-            .map_err(DocError::Bind)?;
-        let old_weights = self.rigged().then(|| self.session.skin_weights().clone());
-        let old_parents = self
-            .session
-            .skeleton()
-            .joints()
-            .iter()
-            .map(|j| j.parent)
-            .collect();
-        self.bind_job = Some(BindJob::spawn(request, old_weights, old_parents));
+        self.bind_job = Some(BindJob::spawn(self.bind_request(weights)?));
         Ok(())
     }
 
     /// Binds on this thread (scripts and tests); the result is one undo step.
     pub fn bind_blocking(&mut self, weights: BindWeights) -> Result<(), DocError> {
-        let request = BindRequest::new(&self.session, self.draft.as_ref(), self.rigged(), weights)
-            .map_err(DocError::Bind)?;
-        let old_weights = self.rigged().then(|| self.session.skin_weights().clone());
-        let old_parents: Vec<Option<usize>> = self
-            .session
-            .skeleton()
-            .joints()
-            .iter()
-            .map(|j| j.parent)
-            .collect();
-        let bound = request
-            .run(old_weights.as_ref(), &old_parents, &|_| {})
+        let bound = self
+            .bind_request(weights)?
+            .run(&|_| {})
             .map_err(DocError::Bind)?;
         self.finish_bind(bound)
+    }
+
+    /// The bind of the draft (or of the bound skeleton, re-weighted) with `weights`.
+    fn bind_request(&self, weights: BindWeights) -> Result<BindRequest, DocError> {
+        BindRequest::new(&self.session, self.draft.as_ref(), self.rigged(), weights)
+            .map_err(DocError::Bind)
     }
 
     /// The running bind, if any (for its progress).
