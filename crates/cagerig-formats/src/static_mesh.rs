@@ -70,3 +70,40 @@ pub(crate) fn append_part(
     }));
     local_triangles.len()
 }
+
+/// Parts being merged into one mesh (`#V` positions, `#F` triangles) with the summary of each
+/// part, in vertex order: what both static importers build.
+#[derive(Debug, Default)]
+pub(crate) struct MergedParts {
+    pub(crate) positions: Vec<glam::DVec3>,
+    pub(crate) triangles: Vec<[u32; 3]>,
+    pub(crate) primitives: Vec<PrimitiveSummary>,
+}
+
+impl MergedParts {
+    /// Merges one part ([`append_part`]) and records its summary under `source`.
+    pub(crate) fn add(
+        &mut self,
+        source: String,
+        world_from_local: &glam::DAffine3,
+        local: &[glam::DVec3],
+        local_triangles: &[[u32; 3]],
+        indexed: bool,
+    ) {
+        let first_vertex = self.positions.len();
+        let triangles = append_part(
+            world_from_local,
+            local,
+            local_triangles,
+            &mut self.positions,
+            &mut self.triangles,
+        );
+        self.primitives.push(PrimitiveSummary {
+            source,
+            first_vertex,
+            vertices: local.len(),
+            triangles,
+            indexed,
+        });
+    }
+}

@@ -13,9 +13,9 @@ use cagerig::{TriMesh, Warning};
 use glam::DVec3;
 
 use super::{affine, load_scene, mesh_triangles};
-use crate::character::{PrimitiveSummary, is_cage_name};
+use crate::character::is_cage_name;
 use crate::error::{FormatError, invalid};
-use crate::static_mesh::{StaticMesh, append_part, name_of};
+use crate::static_mesh::{MergedParts, StaticMesh, append_part, name_of};
 
 /// Reads an FBX file (binary or ASCII) as a static mesh (see the module doc).
 pub fn import_fbx_static(path: &Path) -> Result<StaticMesh, FormatError> {
@@ -30,9 +30,7 @@ pub fn import_fbx_static(path: &Path) -> Result<StaticMesh, FormatError> {
 pub fn import_fbx_static_bytes(bytes: &[u8], path: &Path) -> Result<StaticMesh, FormatError> {
     let (scene, space) = load_scene(bytes, path)?;
     let mut warnings = Vec::new();
-    let mut positions: Vec<DVec3> = Vec::new();
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let mut primitives = Vec::new();
+    let mut merged = MergedParts::default();
     let mut cage = None;
     let mut had_skin = false;
     let mut mirrored_nodes = 0usize;
@@ -76,23 +74,9 @@ pub fn import_fbx_static_bytes(bytes: &[u8], path: &Path) -> Result<StaticMesh, 
         if world_from_geometry.matrix3.determinant() < 0.0 {
             mirrored_nodes += 1;
         }
-        let first_vertex = positions.len();
-        let count = append_part(
-            &world_from_geometry,
-            &local,
-            &local_triangles,
-            &mut positions,
-            &mut triangles,
-        );
-        primitives.push(PrimitiveSummary {
-            source,
-            first_vertex,
-            vertices: local.len(),
-            triangles: count,
-            indexed: true,
-        });
+        merged.add(source, &world_from_geometry, &local, &local_triangles, true);
     }
-    if triangles.is_empty() {
+    if merged.triangles.is_empty() {
         return Err(invalid(
             path,
             "scene",
@@ -108,16 +92,17 @@ pub fn import_fbx_static_bytes(bytes: &[u8], path: &Path) -> Result<StaticMesh, 
             ),
         });
     }
-    let mesh = TriMesh::new(positions, triangles).map_err(|source| FormatError::Rig {
-        path: path.to_path_buf(),
-        element: "meshes".into(),
-        source,
-    })?;
+    let mesh =
+        TriMesh::new(merged.positions, merged.triangles).map_err(|source| FormatError::Rig {
+            path: path.to_path_buf(),
+            element: "meshes".into(),
+            source,
+        })?;
     Ok(StaticMesh {
         mesh,
         cage,
         name: name_of(path),
-        primitives,
+        primitives: merged.primitives,
         space,
         had_skin,
         warnings,

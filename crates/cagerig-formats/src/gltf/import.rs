@@ -21,7 +21,7 @@ use super::buffers::Buffers;
 use super::cage::find_cage;
 use super::morph_targets::{baked_targets, default_weights, drop_baked_targets, merge_targets};
 use super::parse::parse_validated;
-use super::primitive::read_primitive;
+use super::primitive::{primitive_source, read_primitive};
 use super::scene::NodeTree;
 use super::shared_skins::{inverse_bind_matrices, skins_sharing_joints};
 use crate::ImportOptions;
@@ -287,13 +287,7 @@ pub fn import_gltf_bytes(
             continue;
         };
         for primitive in mesh.primitives() {
-            let source = format!(
-                "node {} {:?}, mesh {} primitive {}",
-                node.index(),
-                node.name().unwrap_or(""),
-                mesh.index(),
-                primitive.index()
-            );
+            let source = primitive_source(&node, &mesh, &primitive);
             let base = positions.len();
             let first_weight = triplets.len();
             let collect = morph_node == Some(node.index());

@@ -82,6 +82,21 @@ pub(super) struct PrimitiveGeometry {
     pub indexed: bool,
 }
 
+/// How messages name a primitive: its node (index and name), mesh and primitive index.
+pub(super) fn primitive_source(
+    node: &gltf::Node<'_>,
+    mesh: &gltf::Mesh<'_>,
+    primitive: &gltf::Primitive<'_>,
+) -> String {
+    format!(
+        "node {} {:?}, mesh {} primitive {}",
+        node.index(),
+        node.name().unwrap_or(""),
+        mesh.index(),
+        primitive.index()
+    )
+}
+
 /// Reads a primitive's positions and triangles (any triangle mode; None with a note for points
 /// and lines), with its morph targets at the node's default weights. When `targets_out` asks,
 /// every target's displacements are kept, mapped by `world_from_bind` (a linear map of

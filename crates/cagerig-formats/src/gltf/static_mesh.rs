@@ -8,16 +8,14 @@
 
 use std::path::Path;
 
-use glam::DVec3;
-
 use super::buffers::Buffers;
 use super::cage::{find_cage, is_cage_node};
 use super::parse::parse_validated;
-use super::primitive::{PrimitiveGeometry, read_geometry};
+use super::primitive::{PrimitiveGeometry, primitive_source, read_geometry};
 use super::scene::NodeTree;
-use crate::character::{PrimitiveSummary, SpaceSummary};
+use crate::character::SpaceSummary;
 use crate::error::{FormatError, invalid};
-use crate::static_mesh::{StaticMesh, append_part, name_of};
+use crate::static_mesh::{MergedParts, StaticMesh, name_of};
 
 /// Reads a `.gltf` or `.glb` file as a static mesh (see the module doc).
 pub fn import_gltf_static(path: &Path) -> Result<StaticMesh, FormatError> {
@@ -40,22 +38,14 @@ pub fn import_gltf_static_bytes(bytes: &[u8], path: &Path) -> Result<StaticMesh,
     tree.globals(&locals, &mut world);
     let in_scene = default_scene_nodes(document);
     let mut warnings = Vec::new();
-    let mut positions: Vec<DVec3> = Vec::new();
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let mut primitives = Vec::new();
+    let mut merged = MergedParts::default();
     for node in document.nodes() {
         let Some(mesh) = node.mesh() else { continue };
         if !in_scene[node.index()] || is_cage_node(&node) {
             continue;
         }
         for primitive in mesh.primitives() {
-            let source = format!(
-                "node {} {:?}, mesh {} primitive {}",
-                node.index(),
-                node.name().unwrap_or(""),
-                mesh.index(),
-                primitive.index()
-            );
+            let source = primitive_source(&node, &mesh, &primitive);
             let world_from_node = world[node.index()];
             let Some(PrimitiveGeometry {
                 local,
@@ -74,24 +64,10 @@ pub fn import_gltf_static_bytes(bytes: &[u8], path: &Path) -> Result<StaticMesh,
             else {
                 continue;
             };
-            let first_vertex = positions.len();
-            let count = append_part(
-                &world_from_node,
-                &local,
-                &local_triangles,
-                &mut positions,
-                &mut triangles,
-            );
-            primitives.push(PrimitiveSummary {
-                source,
-                first_vertex,
-                vertices: local.len(),
-                triangles: count,
-                indexed,
-            });
+            merged.add(source, &world_from_node, &local, &local_triangles, indexed);
         }
     }
-    if triangles.is_empty() {
+    if merged.triangles.is_empty() {
         return Err(invalid(
             path,
             "meshes",
@@ -99,17 +75,19 @@ pub fn import_gltf_static_bytes(bytes: &[u8], path: &Path) -> Result<StaticMesh,
              of mode TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN outside the cage node)",
         ));
     }
-    let mesh = cagerig::TriMesh::new(positions, triangles).map_err(|source| FormatError::Rig {
-        path: path.to_path_buf(),
-        element: "meshes".into(),
-        source,
+    let mesh = cagerig::TriMesh::new(merged.positions, merged.triangles).map_err(|source| {
+        FormatError::Rig {
+            path: path.to_path_buf(),
+            element: "meshes".into(),
+            source,
+        }
     })?;
     let cage = find_cage(document, &buffers, &world, path)?;
     Ok(StaticMesh {
         mesh,
         cage,
         name: name_of(path),
-        primitives,
+        primitives: merged.primitives,
         space: SpaceSummary::default(),
         had_skin: document.skins().next().is_some(),
         warnings,
