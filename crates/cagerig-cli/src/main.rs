@@ -1,5 +1,6 @@
 //! `cagerig`: command-line front end of the cagerig library.
 
+mod animation_args;
 mod bench_bandwidth;
 mod bench_events;
 mod bench_green;

@@ -10,6 +10,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
+mod support;
+
 #[path = "../../cagerig-formats/tests/common/mod.rs"]
 mod common;
 
@@ -17,31 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use glam::DVec3;
-
-fn cagerig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cagerig"))
-}
-
-fn data(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data")
-        .join(rel)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cagerig-bake-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Runs `cmd`; returns (stdout, stderr), failing the test with stderr when it fails.
-fn run_ok(cmd: &mut Command) -> (String, String) {
-    let out = cmd.output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(out.status.success(), "{stderr}");
-    (String::from_utf8(out.stdout).unwrap(), stderr)
-}
+use support::{cagerig, data, run_ok_with_stderr, temp_dir};
 
 fn positions(path: &Path) -> Vec<DVec3> {
     cagerig::io::obj::read_obj(path).unwrap().positions
@@ -123,7 +101,7 @@ fn arm(method: &'static str) -> Case {
 fn animate(case: &Case, dir: &Path, times: &[f64]) -> (Vec<Vec<DVec3>>, f64) {
     let out = dir.join(format!("{}-{}-animate", case.name, case.method));
     let list: Vec<String> = times.iter().map(f64::to_string).collect();
-    run_ok(
+    run_ok_with_stderr(
         cagerig()
             .arg("animate")
             .args(&case.rig)
@@ -171,7 +149,7 @@ fn export(case: &Case, dir: &Path, bake: bool, extension: &str) -> (PathBuf, Str
     if bake {
         cmd.arg("--bake");
     }
-    let (stdout, stderr) = run_ok(&mut cmd);
+    let (stdout, stderr) = run_ok_with_stderr(&mut cmd);
     (out, stdout, stderr)
 }
 
@@ -256,7 +234,7 @@ fn baked_text_gltf_reads_back_into_cagerig() {
     let viewer = common::ReferenceGltf::load(&file);
     let e = viewer_error(&viewer, 2.0, &posed[0], diagonal);
     assert!(e <= 1e-5, "{e:e}");
-    let (_, stderr) = run_ok(
+    let (_, stderr) = run_ok_with_stderr(
         cagerig()
             .arg("animate")
             .arg(&file)
@@ -328,7 +306,7 @@ fn blender_reads_the_baked_fox() {
     let (file, _, _) = export(&case, &dir, true, "glb");
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender_read_baked.py");
     let posed_obj = dir.join("fox-dqs-animate/t0.5_mesh_posed.obj");
-    let (stdout, _) = run_ok(
+    let (stdout, _) = run_ok_with_stderr(
         Command::new("blender")
             .args(["-b", "--factory-startup", "--python"])
             .arg(&script)

@@ -5,29 +5,9 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod support;
 
-fn cagerig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cagerig"))
-}
-
-fn data(path: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data")
-        .join(path)
-}
-
-fn arm() -> PathBuf {
-    data("arm/arm.obj")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cagerig-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use support::{arm, cagerig, data, temp_dir};
 
 #[test]
 fn cage_writes_a_validated_cage_that_info_accepts() {

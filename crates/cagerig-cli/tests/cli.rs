@@ -3,23 +3,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn cagerig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cagerig"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cagerig-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn arm() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm/arm.obj")
-}
+use support::{arm, cagerig, temp_dir};
 
 const SCRIPT: &str = r#"{"skinning":"lbs","steps":[
   {"op":"rotate_joint","joint":"lowerarm01.R","axis":[1,0,0],"degrees":60},

@@ -3,16 +3,10 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod support;
 
-fn cagerig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cagerig"))
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use std::path::Path;
+use support::{cagerig, repo};
 
 fn positions(path: &Path) -> Vec<glam::DVec3> {
     cagerig::io::read_obj(path).unwrap().positions

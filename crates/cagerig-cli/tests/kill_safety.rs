@@ -7,30 +7,16 @@
 #![cfg(unix)]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
+use support::{cagerig, data, temp_dir};
 
 /// File name → bytes.
 type Snapshot = BTreeMap<String, Vec<u8>>;
-
-fn cagerig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cagerig"))
-}
-
-fn data(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data")
-        .join(rel)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cagerig-kill-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// xorshift64*, seeded from the clock (the seed is printed so a failure can be replayed with
 /// CAGERIG_KILL_SEED).

@@ -7,12 +7,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn arm_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm")
-}
+use support::arm_dir;
 
 /// xorshift64*: deterministic, no dependency.
 struct Rng(u64);

@@ -6,26 +6,14 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod support;
 
-fn cagerig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cagerig"))
-}
+use std::path::Path;
+use std::process::Output;
+use support::{arm_dir, cagerig, temp_dir};
 
 fn gpu_tests() -> bool {
     std::env::var_os("CAGERIG_SKIP_GPU_TESTS").is_none()
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cagerig-render-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn arm_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm")
 }
 
 fn run(args: &[&str]) -> Output {

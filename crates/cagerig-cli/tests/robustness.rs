@@ -4,23 +4,11 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn cagerig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_cagerig"))
-}
-
-fn arm_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cagerig-robust-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::process::Output;
+use support::{arm_dir, cagerig, stderr, temp_dir};
 
 /// A private copy of the Arm rig in `dir/arm`, with `edit` applied to the text of `file`.
 fn arm_copy(dir: &Path, file: &str, edit: impl FnOnce(String) -> String) -> PathBuf {
@@ -48,10 +36,6 @@ fn run(args: &[&str], paths: &[(&str, &Path)]) -> Output {
         c.arg(p);
     }
     c.output().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Asserts a clean failure: exit 1 (not a panic), one `error:` line holding every needle.

@@ -6,9 +6,6 @@
 //!   quasi-conformal, shape-preserving cage edits; the sync operators become Newton iterations
 //!   (see `docs/green-coordinates.md`).
 
-use std::fmt;
-use std::str::FromStr;
-
 /// The cage coordinates of a rig.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum CoordsKind {
@@ -64,40 +61,7 @@ impl CoordsKind {
     }
 }
 
-impl FromStr for CoordsKind {
-    type Err = UnknownCoordsKind;
-
-    /// The kind of [`CoordsKind::name`], ignoring ASCII case.
-    fn from_str(text: &str) -> Result<Self, Self::Err> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(text))
-            .ok_or_else(|| UnknownCoordsKind {
-                found: text.to_string(),
-            })
-    }
-}
-
-impl fmt::Display for CoordsKind {
-    /// Writes [`CoordsKind::name`].
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl serde::Serialize for CoordsKind {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.serialize_str(self.name())
-    }
-}
-
-impl<'de> serde::Deserialize<'de> for CoordsKind {
-    /// Reads a name through [`FromStr`], the one parser of coordinates names.
-    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        let text = String::deserialize(deserializer)?;
-        text.parse().map_err(serde::de::Error::custom)
-    }
-}
+crate::named_kind::named_kind!(CoordsKind, UnknownCoordsKind);
 
 #[cfg(test)]
 mod tests {

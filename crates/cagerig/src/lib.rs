@@ -25,6 +25,7 @@ pub mod error;
 pub mod io;
 pub mod memory_estimate;
 pub mod mesh;
+mod named_kind;
 pub mod playback;
 pub mod pose;
 pub mod rig_files;

@@ -36,6 +36,7 @@ use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
 mod accessors;
 mod animation_sample;
+mod cage_map;
 mod checkpoint;
 mod display_path;
 mod editable_state;
@@ -47,6 +48,7 @@ mod reskeleton;
 mod sync_chain;
 #[cfg(test)]
 mod test_rigs;
+use cage_map::{BoundCageMap, CageMap, GivenCoords, bind_cage_map};
 use checkpoint::Checkpoint;
 pub use checkpoint::MAX_STATE_MAGNITUDE;
 use display_path::DisplayPath;
@@ -153,9 +155,9 @@ pub struct RigSession {
     rest_revision: u64,
     /// SkelUp / CageUp switched off by the user (see [`SyncLocks`]).
     locks: SyncLocks,
-    /// Green coordinates' face terms and Newton operators (`None` for MVC rigs; see
-    /// [`green`]).
-    green: Option<Box<GreenState>>,
+    /// The coordinates kind's map from C to M beyond the vertex part `cage_coords` (see
+    /// [`cage_map`]).
+    cage_map: CageMap,
     /// The options the session was built with (a rebind keeps them, see [`rebind`]).
     options: SessionOptions,
 }
@@ -204,132 +206,30 @@ impl RigSession {
         let nc = cage.num_vertices();
         let (lo, hi) = cage.bounding_box();
         let phi_c_tolerance = PHI_C_TOLERANCE * (hi - lo).length();
-        let mut green_parts = None;
-        let mut maxvol_rows = maxvol_rows;
-        let mut cor_centre_coords = cor_centre_coords;
-        let mut precision = options.cage_coords_precision;
-        let given_cage_coords = match options.coords {
-            CoordsKind::Mvc => cage_coords,
-            CoordsKind::Green => {
-                if cage_coords.is_some() || maxvol_rows.is_some() || cor_centre_coords.is_some() {
-                    warnings.push(Warning::Note {
-                        message: "Green coordinates: the given mean value coordinates (Φ, their \
-                                  MaxVol rows, Λ) do not apply and were recomputed"
-                            .into(),
-                    });
-                }
-                if precision == CoordsPrecision::F32 {
-                    warnings.push(Warning::Note {
-                        message: "Green coordinates are kept in f64 (f32 coordinates are for \
-                                  mean value coordinates only)"
-                            .into(),
-                    });
-                    precision = CoordsPrecision::F64;
-                }
-                maxvol_rows = None;
-                cor_centre_coords = None;
-                let (coords, outside) = compute_green_coords_for_mesh(&cage, &mesh.positions)?;
-                if outside > 0 {
-                    warnings.push(Warning::Note {
-                        message: format!(
-                            "{outside} mesh vertices lie outside the cage, where Green \
-                             coordinates do not reach: they follow the cage by mean value \
-                             coordinates"
-                        ),
-                    });
-                }
-                green_parts = Some((coords.face, coords.triangles));
-                Some(coords.vertex)
-            }
-        };
-        let mut cage_coords = match given_cage_coords {
-            Some(phi) if green_parts.is_some() => phi,
-            Some(phi) => {
-                if phi.num_vertices() != nv || phi.num_cage_vertices() != nc {
-                    return Err(RigError::SizeMismatch {
-                        what: "cage coordinates shape (#V × #C)",
-                        expected: nv * nc,
-                        actual: phi.num_vertices() * phi.num_cage_vertices(),
-                    });
-                }
-                let residual = phi_c_residual(&phi, &cage.positions, &mesh.positions);
-                if residual > phi_c_tolerance
-                    && options.given_cage_coords == GivenCageCoords::RecomputeIfInexact
-                {
-                    warnings.push(Warning::Note {
-                        message: format!(
-                            "the given cage coordinates reproduce the rest mesh only to \
-                             {residual:.3e} (M ≠ ΦC, e.g. a file with 6 decimals): recomputed, so \
-                             that nothing the user does not touch moves at the first cage edit"
-                        ),
-                    });
-                    mvc::compute_cage_coords(&cage, &mesh.positions, None)?
-                } else {
-                    phi
-                }
-            }
-            None => mvc::compute_cage_coords(&cage, &mesh.positions, None)?,
-        };
-        if precision == CoordsPrecision::F32 {
-            cage_coords.round_to_f32();
-        }
-        let green_rows = match (&green_parts, &options.fit_rows) {
-            (Some((face_coords, _)), FitRows::MaxVol) => {
-                Some(green_fit_rows(&cage_coords, face_coords)?)
-            }
-            _ => None,
-        };
-        let (rows, mode) = match (green_rows, options.fit_rows) {
-            // Green: the MaxVol rows of [φ ψ], or the given rows, always least squares.
-            (Some(rows), _) => (rows, CageFitMode::LeastSquares),
-            (None, FitRows::Rows(rows)) if green_parts.is_some() => {
-                (rows, CageFitMode::LeastSquares)
-            }
-            (None, FitRows::MaxVol) => match maxvol_rows {
-                Some(rows) if rows.len() < nc => {
-                    return Err(RigError::SizeMismatch {
-                        what: "given MaxVol rows (at least one per cage vertex)",
-                        expected: nc,
-                        actual: rows.len(),
-                    });
-                }
-                Some(rows) if rows.len() > nc => (rows, CageFitMode::LeastSquares),
-                Some(rows) => (rows, CageFitMode::Interpolate),
-                None => (
-                    maxvol::select_maxvol_rows(&cage_coords)?.rows,
-                    CageFitMode::Interpolate,
-                ),
+        let BoundCageMap {
+            cage_coords,
+            cage_updater,
+            cage_map,
+            precision,
+            cor_centre_coords,
+        } = bind_cage_map(
+            &cage,
+            &mesh.positions,
+            GivenCoords {
+                cage_coords,
+                maxvol_rows,
+                cor_centre_coords,
             },
-            (None, FitRows::AllRows) => ((0..nv).collect(), CageFitMode::LeastSquares),
-            (None, FitRows::Rows(rows)) => {
-                let mode = if rows.len() == nc {
-                    CageFitMode::Interpolate
-                } else {
-                    CageFitMode::LeastSquares
-                };
-                (rows, mode)
-            }
-        };
-        let cage_updater = CageUpdater::new(&cage_coords, rows, mode)?;
+            &options,
+            phi_c_tolerance,
+            &skin_weights,
+            skeleton.len(),
+            &mut warnings,
+        )?;
         let rest_cage = cage.positions.clone();
-        let green = match green_parts {
-            Some((face_coords, triangles)) => Some(Box::new(GreenState::new(
-                &cage_coords,
-                face_coords,
-                triangles,
-                cage_updater.rows(),
-                cage_updater.cage_from_rows(),
-                &skin_weights,
-                &rest_cage,
-                skeleton.len(),
-            )?)),
-            None => None,
-        };
         let mut phi_c = vec![DVec3::ZERO; nv];
         cage_coords.apply(&rest_cage, &mut phi_c);
-        if let Some(green) = &green {
-            green.add_face_terms(&green.rest_terms, &mut phi_c);
-        }
+        cage_map.add_rest_terms_of(&rest_cage, &mut phi_c);
         let residual = crate::mesh::max_distance(&phi_c, &mesh.positions);
         let mut rest_mesh_is_phi_c = residual <= phi_c_tolerance;
         if precision == CoordsPrecision::F32
@@ -401,7 +301,7 @@ impl RigSession {
             reverser,
             cor_rows,
             given_centre_coords: cor_centre_coords,
-            green,
+            cage_map,
             options: stored_options,
             cor: None,
             cor_options: options.cor_centres,
@@ -508,24 +408,15 @@ impl RigSession {
                     .into(),
             ));
         }
-        if self.green.is_none() && !self.reverser.is_factorised() {
-            self.refactor_reverser()?;
-        }
         let mut posed_delta = std::mem::take(&mut self.scratch_cage_a);
         scatter_edit(vertices, offsets, &mut posed_delta);
         let mut rest_delta = std::mem::take(&mut self.scratch_cage_b);
-        let solved = self.reverse_green(&posed_delta, &mut rest_delta);
+        let solved = self.reverse_cage(&posed_delta, &mut rest_delta);
         if solved.is_ok() {
             for (c, d) in self.rest_cage.iter_mut().zip(&rest_delta) {
                 *c += *d;
             }
-            if let Some(green) = &mut self.green {
-                // CageUp's answer is the grabbed cage: start there.
-                for (p, d) in self.posed_cage.iter_mut().zip(&posed_delta) {
-                    *p += *d;
-                }
-                green.start_from_posed_cage = true;
-            }
+            self.start_fit_from_grab(&posed_delta);
             self.rest_from_cage_for_event();
         }
         self.scratch_cage_a = posed_delta;
@@ -533,18 +424,6 @@ impl RigSession {
         solved?;
         self.sync_from_rest_cage();
         Ok(())
-    }
-
-    /// Factorises the reverse cage deformer (Eq. 19) for the current pose now. An editor calls
-    /// this when a cage grab starts; [`RigSession::move_posed_cage`] does it lazily otherwise.
-    pub fn refactor_reverser(&mut self) -> Result<(), RigError> {
-        for (r, t) in self.scratch_rotations.iter_mut().zip(&self.posed_from_rest) {
-            *r = t.matrix3;
-        }
-        if self.green.is_some() {
-            return self.prepare_green_reverser();
-        }
-        self.reverser.refactor(&self.scratch_rotations)
     }
 }
 
@@ -562,60 +441,4 @@ fn roots_only<'a>(rotations: &'a [DQuat], root_motion: &'a [DVec3]) -> LocalPose
 fn next_topology_id() -> u64 {
     static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
     NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-}
-
-/// Green coordinates of the rest mesh's vertices, and how many lie outside the cage: those
-/// (where Σφ ≠ 1: Green coordinates reproduce only interior points) get their mean value
-/// coordinates as φ and no face terms.
-fn compute_green_coords_for_mesh(
-    cage: &TriMesh,
-    positions: &[DVec3],
-) -> Result<(crate::coords::green::GreenCoords, usize), RigError> {
-    let mut coords = compute_green_coords(cage, positions, None)?;
-    let nc = cage.num_vertices();
-    let outside: Vec<usize> = (0..positions.len())
-        .filter(|&i| {
-            let sum: f64 = (0..nc).map(|k| coords.vertex.get(i, k)).sum();
-            (sum - 1.0).abs() > 1e-6
-        })
-        .collect();
-    if outside.is_empty() {
-        return Ok((coords, 0));
-    }
-    let points: Vec<DVec3> = outside.iter().map(|&i| positions[i]).collect();
-    let mvc_rows = mvc::compute_cage_coords(cage, &points, None)?;
-    let mut vertex = coords.vertex.matrix().clone();
-    let mut face = coords.face.matrix().clone();
-    for (r, &i) in outside.iter().enumerate() {
-        for k in 0..nc {
-            vertex[(i, k)] = mvc_rows.get(r, k);
-        }
-        for f in 0..face.ncols() {
-            face[(i, f)] = 0.0;
-        }
-    }
-    coords.vertex = CageCoords::from_matrix(vertex)?;
-    coords.face = CageCoords::from_matrix(face)?;
-    Ok((coords, outside.len()))
-}
-
-/// CageUp's rows for a Green rig: MaxVol rows of [φ ψ] (`#V × (#C + #F)`), so that the
-/// least-squares fit sees the face terms too; all rows when the mesh has fewer vertices.
-fn green_fit_rows(vertex: &CageCoords, face: &CageCoords) -> Result<Vec<usize>, RigError> {
-    let (nv, nc, nf) = (
-        vertex.num_vertices(),
-        vertex.num_cage_vertices(),
-        face.num_cage_vertices(),
-    );
-    if nv <= nc + nf {
-        return Ok((0..nv).collect());
-    }
-    let combined = faer::Mat::from_fn(nv, nc + nf, |i, k| {
-        if k < nc {
-            vertex.get(i, k)
-        } else {
-            face.get(i, k - nc)
-        }
-    });
-    Ok(maxvol::select_maxvol_rows(&CageCoords::from_matrix(combined)?)?.rows)
 }

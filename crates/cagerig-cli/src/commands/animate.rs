@@ -1,12 +1,12 @@
 //! `cagerig animate`: samples skeleton and cage animations at given times and writes the
 //! structures at each time.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::bail;
 use cagerig::skinning::SkinningMethod;
 
+use crate::animation_args::{AnimationSourceArgs, NO_ANIMATION};
 use crate::output_dir::{StagedDir, StateOutputArgs};
 use crate::rig_source::{
     AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_or_generate_cage, report_generated_cage,
@@ -44,15 +44,8 @@ pub struct Args {
     pub rig: RigArgs,
     #[command(flatten)]
     pub auto_cage: AutoCageArgs,
-    /// Skeleton animation (V1/V2/V3 text format).
-    #[arg(long)]
-    pub skeleton_anim: Option<PathBuf>,
-    /// Cage animation (rest-cage offsets).
-    #[arg(long)]
-    pub cage_anim: Option<PathBuf>,
-    /// glTF/FBX: the file's animation to play, by name or index (all channels).
-    #[arg(long)]
-    pub animation: Option<String>,
+    #[command(flatten)]
+    pub animation: AnimationSourceArgs,
     /// Comma-separated sample times in seconds, each once (negative times allowed).
     #[arg(
         long,
@@ -72,20 +65,15 @@ pub struct Args {
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (rig, auto_cage, out) = (&args.rig, &args.auto_cage, args.output.out.as_path());
-    let (skeleton_anim, cage_anim, animation, times) = (
-        args.skeleton_anim.as_deref(),
-        args.cage_anim.as_deref(),
-        args.animation.as_deref(),
-        args.times.as_slice(),
-    );
+    let times = args.times.as_slice();
     let (force, render, skinning, session_args) = (
         args.output.force,
         args.output.render,
         args.skinning,
         &args.session,
     );
-    if skeleton_anim.is_none() && cage_anim.is_none() && animation.is_none() {
-        bail!("give --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
+    if !args.animation.is_given() {
+        bail!("{NO_ANIMATION}");
     }
     check_times(times)?;
     let mut pictures = crate::pictures::PictureMaker::for_steps(render)?;
@@ -95,8 +83,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
         write_generated_cage(&mut staged, &g.cage)?;
     }
-    let tracks =
-        crate::interchange::animation_tracks(&mut loaded, skeleton_anim, animation, cage_anim)?;
+    let tracks = args.animation.tracks(&mut loaded)?;
     let mut options = session_args.options();
     options.skinning = crate::session_args::choose_skinning(skinning, None, &loaded);
     let (session, warnings) = start_session(loaded, options)?;

@@ -18,6 +18,7 @@ use cagerig::skinning::SkinningMethod;
 use cagerig_formats::gltf::export_animation;
 use cagerig_formats::gltf::export_bake::BakeReport;
 
+use crate::animation_args::AnimationSourceArgs;
 use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_or_generate_cage, note_generated_cage};
 use crate::session_args::{SessionArgs, skinning_parser};
 
@@ -34,15 +35,9 @@ pub struct Args {
     /// written beside it); replaced atomically.
     #[arg(long)]
     pub out: PathBuf,
-    /// Skeleton animation to export (the paper tool's text format).
-    #[arg(long)]
-    pub skeleton_anim: Option<PathBuf>,
-    /// Cage animation to export (rest-cage offsets; keys become morph targets).
-    #[arg(long)]
-    pub cage_anim: Option<PathBuf>,
-    /// glTF/FBX: the file's animation to export, by name or index.
-    #[arg(long)]
-    pub animation: Option<String>,
+    /// The animation to export (none: the rig at its pose after the script).
+    #[command(flatten)]
+    pub animation: AnimationSourceArgs,
     /// Samples per second of the exported animation (key times are always samples).
     #[arg(long, default_value_t = 30.0)]
     pub fps: f64,
@@ -92,12 +87,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let mut loaded = load_rig_or_generate_cage(&args.rig, true, true, args.auto_cage.options())?;
     note_generated_cage(&loaded);
-    let tracks = crate::interchange::animation_tracks(
-        &mut loaded,
-        args.skeleton_anim.as_deref(),
-        args.animation.as_deref(),
-        args.cage_anim.as_deref(),
-    )?;
+    let tracks = args.animation.tracks(&mut loaded)?;
     let name = loaded
         .name
         .rsplit(['/', '\\'])
@@ -105,8 +95,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .and_then(|f| f.split('.').next())
         .unwrap_or("cagerig")
         .to_string();
-    let animated =
-        args.skeleton_anim.is_some() || args.cage_anim.is_some() || args.animation.is_some();
+    let animated = args.animation.is_given();
     if args.bake && !animated {
         bail!(
             "--bake writes the posed skin at the samples of an animation: give --animation, \

@@ -12,6 +12,7 @@ use cagerig_render::CameraPreset;
 use cagerig_render::rig_scene::{ColorBy, Layers};
 use glam::DVec3;
 
+use crate::animation_args::{AnimationSourceArgs, NO_ANIMATION};
 use crate::output_dir::{OUT, StagedDir};
 use crate::pictures::{CameraChoice, PictureMaker, PictureOptions, ViewArg};
 use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_or_generate_cage, note_generated_cage};
@@ -27,15 +28,9 @@ pub struct Args {
     /// the state after its last step.
     #[arg(long, conflicts_with_all = ["skeleton_anim", "cage_anim", "animation"])]
     pub script: Option<PathBuf>,
-    /// Skeleton animation (V1/V2/V3 text format) sampled at `--times`.
-    #[arg(long, requires = "times")]
-    pub skeleton_anim: Option<PathBuf>,
-    /// glTF/FBX: the file's animation (name or index) sampled at `--times`.
-    #[arg(long, requires = "times", conflicts_with = "skeleton_anim")]
-    pub animation: Option<String>,
-    /// Cage animation (rest-cage offsets) sampled at `--times`.
-    #[arg(long, requires = "times")]
-    pub cage_anim: Option<PathBuf>,
+    /// The animation sampled at `--times`.
+    #[command(flatten)]
+    pub animation: AnimationSourceArgs,
     /// Comma-separated sample times in seconds (one picture each: OUT/t<time>.png when more
     /// than one).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
@@ -244,12 +239,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.turntable == Some(0) {
         bail!("--turntable 0: expected at least one frame");
     }
-    if !args.times.is_empty()
-        && args.skeleton_anim.is_none()
-        && args.cage_anim.is_none()
-        && args.animation.is_none()
-    {
-        bail!("--times needs --skeleton-anim (or --animation for glTF/FBX) and/or --cage-anim");
+    match (args.times.is_empty(), args.animation.is_given()) {
+        (false, false) => bail!("--times samples an animation: {NO_ANIMATION}"),
+        (true, true) => bail!(
+            "--skeleton-anim, --animation and --cage-anim are sampled at --times: give the times \
+             to draw (e.g. --times 0,0.5)"
+        ),
+        (true, false) | (false, true) => {}
     }
     let script = args
         .script
@@ -259,12 +255,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut pictures = open_pictures(args)?;
     let mut loaded = load_rig_or_generate_cage(&args.rig, true, true, args.auto_cage.options())?;
     note_generated_cage(&loaded);
-    let tracks = crate::interchange::animation_tracks(
-        &mut loaded,
-        args.skeleton_anim.as_deref(),
-        args.animation.as_deref(),
-        args.cage_anim.as_deref(),
-    )?;
+    let tracks = args.animation.tracks(&mut loaded)?;
     let mut options = args.session.options();
     options.skinning = crate::session_args::choose_skinning(
         args.skinning,

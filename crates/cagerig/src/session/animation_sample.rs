@@ -134,7 +134,7 @@ impl RigSession {
         }
         self.store_pose(pose)?;
         lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
-        if self.green.is_some() {
+        if !self.cage_map.is_linear() {
             // M is not linear in C: evaluate it at the blended cage (the CoR centres too).
             self.rest_from_cage_in_full();
             self.sync_from_rest_cage();

@@ -105,18 +105,14 @@ impl RigSession {
         let refused = match result {
             Err(e) if !changed => return Err(e),
             Err(e) => Some(e),
-            Ok(()) => self
-                .green
-                .as_mut()
-                .and_then(|g| g.fit_failure.take())
-                .or_else(|| {
-                    self.first_bad_state()
-                        .map(|(what, index, value)| RigError::EventRefused {
-                            what,
-                            index,
-                            value: value.to_array(),
-                        })
-                }),
+            Ok(()) => self.cage_map.take_fit_failure().or_else(|| {
+                self.first_bad_state()
+                    .map(|(what, index, value)| RigError::EventRefused {
+                        what,
+                        index,
+                        value: value.to_array(),
+                    })
+            }),
         };
         let Some(error) = refused else {
             return Ok(());
@@ -138,14 +134,11 @@ impl RigSession {
         self.reverser.invalidate();
         // The saved C' is CageUp's answer for the restored state: start there (Green).
         self.posed_cage.copy_from_slice(&self.checkpoint.posed_cage);
-        if let Some(green) = &mut self.green {
-            green.start_from_posed_cage = true;
-        }
+        self.cage_map.start_next_fit_from_posed_cage();
         self.pose_and_fit();
         self.posed_cage.copy_from_slice(&self.checkpoint.posed_cage);
-        if let Some(green) = &mut self.green {
-            green.fit_failure = None;
-        }
+        // The restored state's own fit is not this event's: its failure is not reported.
+        self.cage_map.take_fit_failure();
         Err(error)
     }
 }

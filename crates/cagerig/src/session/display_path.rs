@@ -173,9 +173,9 @@ impl RigSession {
     /// and the exact M on the MaxVol rows (see the module notes), else M = ΦC in full. Then the
     /// CoR centres.
     pub(super) fn rest_from_cage_for_event(&mut self) {
-        if self.green.is_some() {
-            // Green rigs keep the exact M in full (its face terms have no f32 form yet); the
-            // display path still skins M' in f32.
+        if !self.cage_map.is_linear() {
+            // Non-linear maps keep the exact M in full (Green's face terms have no f32 form
+            // yet); the display path still skins M' in f32.
             return self.rest_from_cage_in_full();
         }
         let Some(display) = self.display.as_deref_mut() else {

@@ -162,53 +162,52 @@ impl GreenState {
     }
 }
 
-impl RigSession {
-    /// After C changed everywhere: g(C) and M += ψ·g(C) (M already holds φC).
-    pub(super) fn add_green_rest_terms_in_full(&mut self) {
-        if let Some(green) = &mut self.green {
-            let normals = green.fit.normals();
-            normals.apply(&self.rest_cage, &mut green.rest_terms);
-            green.add_face_terms(&green.rest_terms, &mut self.rest_mesh);
-        }
+impl GreenState {
+    /// After C changed everywhere: g(C) for `rest_cage` (`#C`) and `rest_mesh` += ψ·g(C)
+    /// (`#V`, holding φC).
+    pub(super) fn refresh_rest_terms(&mut self, rest_cage: &[DVec3], rest_mesh: &mut [DVec3]) {
+        let normals = self.fit.normals();
+        normals.apply(rest_cage, &mut self.rest_terms);
+        self.add_face_terms(&self.rest_terms, rest_mesh);
     }
 
-    /// After the rest-cage vertices `vertices` moved (C already updated, M += φ ΔC applied): the
-    /// faces around them get their new g, and M += ψ_f·Δg_f for those faces only. No allocation.
-    pub(super) fn apply_green_rest_delta(&mut self, vertices: &[usize]) {
-        let Some(green) = &mut self.green else {
-            return;
-        };
-        green.touched_faces.clear();
-        green.face_changes.clear();
+    /// After the rest-cage vertices `vertices` moved (`rest_cage` already updated, `rest_mesh`
+    /// += φ ΔC applied): the faces around them get their new g, and `rest_mesh` += ψ_f·Δg_f for
+    /// those faces only. No allocation.
+    pub(super) fn apply_rest_delta(
+        &mut self,
+        vertices: &[usize],
+        rest_cage: &[DVec3],
+        rest_mesh: &mut [DVec3],
+    ) {
+        self.touched_faces.clear();
+        self.face_changes.clear();
         for &k in vertices {
-            for &f in
-                &green.vertex_faces[green.vertex_face_start[k]..green.vertex_face_start[k + 1]]
-            {
-                if !green.face_marked[f] {
-                    green.face_marked[f] = true;
-                    green.touched_faces.push(f);
+            for &f in &self.vertex_faces[self.vertex_face_start[k]..self.vertex_face_start[k + 1]] {
+                if !self.face_marked[f] {
+                    self.face_marked[f] = true;
+                    self.touched_faces.push(f);
                 }
             }
         }
-        let normals = green.fit.normals();
-        for &f in &green.touched_faces {
-            let new = normals.face(&self.rest_cage, f);
-            green.face_changes.push(new - green.rest_terms[f]);
-            green.rest_terms[f] = new;
-            green.face_marked[f] = false;
+        let normals = self.fit.normals();
+        for &f in &self.touched_faces {
+            let new = normals.face(rest_cage, f);
+            self.face_changes.push(new - self.rest_terms[f]);
+            self.rest_terms[f] = new;
+            self.face_marked[f] = false;
         }
-        green.face_coords.apply_delta(
-            &green.touched_faces,
-            &green.face_changes,
-            &mut self.rest_mesh,
-        );
+        self.face_coords
+            .apply_delta(&self.touched_faces, &self.face_changes, rest_mesh);
     }
+}
 
+impl RigSession {
     /// CageUp under Green coordinates: C' fitted to the rows M'_R (in `green.target_rows`) by
     /// Gauss–Newton, warm-started from the current C'. Records a failure to converge for
     /// `finish_event`.
     pub(super) fn fit_green_cage(&mut self) {
-        let Some(green) = &mut self.green else {
+        let CageMap::Green(green) = &mut self.cage_map else {
             return;
         };
         let limit = GREEN_FIT_LIMIT * green.size;
@@ -333,7 +332,7 @@ impl RigSession {
     /// already built for it. K by exact differences: the translations are affine in the rest
     /// joints for fixed rotations.
     pub(super) fn prepare_green_reverser(&mut self) -> Result<(), RigError> {
-        let Some(green) = &self.green else {
+        let CageMap::Green(green) = &self.cage_map else {
             return Ok(());
         };
         let pose = || self.posed_from_rest.iter().map(|t| t.matrix3);
@@ -409,7 +408,7 @@ impl RigSession {
             }
         }
         let pose_linear: Vec<DMat3> = self.posed_from_rest.iter().map(|t| t.matrix3).collect();
-        if let Some(green) = &mut self.green {
+        if let CageMap::Green(green) = &mut self.cage_map {
             green
                 .reverser
                 .prepare(row_linear.into_iter(), pose_linear.into_iter(), |out| {
@@ -427,8 +426,10 @@ impl RigSession {
         rest_delta: &mut [DVec3],
     ) -> Result<(), RigError> {
         self.prepare_green_reverser()?;
-        let Some(green) = &mut self.green else {
-            return self.reverser.solve(posed_delta, rest_delta);
+        let CageMap::Green(green) = &mut self.cage_map else {
+            return Err(RigError::Invalid(
+                "the Green CageRev was asked of a rig bound with another coordinates kind".into(),
+            ));
         };
         for (r, &row) in self
             .scratch_rows_rest
@@ -457,45 +458,28 @@ impl RigSession {
         Ok(())
     }
 
-    /// The CoR centres Λ·C (+ Λ_ψ·g(C)) into `out` for the rest cage `cage`.
-    pub(super) fn centres_of_cage(&self, cor: &CorState, cage: &[DVec3], out: &mut [DVec3]) {
-        cor.centre_coords.apply(cage, out);
-        if let Some(green) = &self.green {
-            green.add_centre_face_terms(&green.terms_of(cage), out);
-        }
-    }
-
-    /// M = φC (+ ψ·g(C)) for the rest cage `cage` into `out` (`#V`).
-    pub(super) fn rest_mesh_of_cage(&self, cage: &[DVec3], out: &mut [DVec3]) {
-        self.cage_coords.apply(cage, out);
-        if let Some(green) = &self.green {
-            green.add_face_terms(&green.terms_of(cage), out);
-        }
-    }
-
-    /// The coordinates kind the rig is bound with.
-    pub fn coords_kind(&self) -> CoordsKind {
-        match self.green {
-            Some(_) => CoordsKind::Green,
-            None => CoordsKind::Mvc,
-        }
-    }
-
     /// Green rigs: ψ (`#V × #F`, one column per cage triangle of
     /// [`RigSession::green_triangles`]); `None` for MVC rigs.
     pub fn green_face_coords(&self) -> Option<&CageCoords> {
-        self.green.as_ref().map(|g| &g.face_coords)
+        match &self.cage_map {
+            CageMap::Mvc => None,
+            CageMap::Green(green) => Some(&green.face_coords),
+        }
     }
 
     /// Green rigs: the outward-oriented cage triangles the face coordinates refer to.
     pub fn green_triangles(&self) -> Option<&[[u32; 3]]> {
-        self.green.as_ref().map(|g| g.fit.normals().triangles())
+        match &self.cage_map {
+            CageMap::Mvc => None,
+            CageMap::Green(green) => Some(green.fit.normals().triangles()),
+        }
     }
 
     /// Green rigs: the Newton reports of the last CageUp and the last CageRev.
     pub fn green_newton_reports(&self) -> Option<(NewtonReport, NewtonReport)> {
-        self.green
-            .as_ref()
-            .map(|g| (g.fit.last_report(), g.last_reverse))
+        match &self.cage_map {
+            CageMap::Mvc => None,
+            CageMap::Green(green) => Some((green.fit.last_report(), green.last_reverse)),
+        }
     }
 }

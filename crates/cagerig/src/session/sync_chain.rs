@@ -74,27 +74,22 @@ impl RigSession {
         if self.cage_coords.precision() == CoordsPrecision::F32 {
             centre_coords.round_to_f32();
         }
-        if let Some(green) = &self.green {
-            // Green rigs: the centres' face part Λ_ψ = S·ψ, from the same centre rows.
-            let face_centre_coords = match &self.cor_rows {
-                Some(rows) => rows.compose_dense(&green.face_coords)?,
-                None => compute_centre_coords(
-                    &self.rest_mesh,
-                    &self.mesh_triangles,
-                    &self.skin_weights,
-                    &green.face_coords,
-                    &self.cor_options,
-                )?,
-            };
-            if let Some(green) = &mut self.green {
-                green.face_centre_coords = Some(face_centre_coords);
+        let (cor_rows, rest_mesh, mesh_triangles, skin_weights, cor_options) = (
+            &self.cor_rows,
+            &self.rest_mesh,
+            &self.mesh_triangles,
+            &self.skin_weights,
+            &self.cor_options,
+        );
+        self.cage_map.build_centre_terms(|coords| match cor_rows {
+            Some(rows) => rows.compose_dense(coords),
+            None => {
+                compute_centre_coords(rest_mesh, mesh_triangles, skin_weights, coords, cor_options)
             }
-        }
+        })?;
         let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
         centre_coords.apply(&self.rest_cage, &mut centres);
-        if let Some(green) = &self.green {
-            green.add_centre_face_terms(&green.rest_terms, &mut centres);
-        }
+        self.cage_map.add_centre_terms(&mut centres);
         self.cor = Some(CorState {
             centre_coords,
             centres,
@@ -109,7 +104,8 @@ impl RigSession {
     /// skinning is not active).
     pub(super) fn rest_from_cage_in_full(&mut self) {
         self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
-        self.add_green_rest_terms_in_full();
+        self.cage_map
+            .refresh_rest_terms(&self.rest_cage, &mut self.rest_mesh);
         self.rest_mesh_is_phi_c = true;
         self.rest_mesh_rows_only = false;
         self.rest_mesh_changed();
@@ -122,9 +118,7 @@ impl RigSession {
         if let Some(cor) = &mut self.cor {
             if self.method == SkinningMethod::Cor {
                 cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
-                if let Some(green) = &self.green {
-                    green.add_centre_face_terms(&green.rest_terms, &mut cor.centres);
-                }
+                self.cage_map.add_centre_terms(&mut cor.centres);
             } else {
                 cor.stale = true;
             }
@@ -140,16 +134,18 @@ impl RigSession {
         }
         if !self.rest_mesh_is_phi_c {
             self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
-            self.add_green_rest_terms_in_full();
+            self.cage_map
+                .refresh_rest_terms(&self.rest_cage, &mut self.rest_mesh);
             self.rest_mesh_is_phi_c = true;
         } else {
             self.cage_coords
                 .apply_delta(vertices, deltas, &mut self.rest_mesh);
-            self.apply_green_rest_delta(vertices);
+            self.cage_map
+                .apply_rest_delta(vertices, &self.rest_cage, &mut self.rest_mesh);
         }
         if let Some(cor) = &mut self.cor {
-            // Green rigs refresh the centres in full (their face part changed too).
-            if self.method == SkinningMethod::Cor && !cor.stale && self.green.is_none() {
+            // Non-linear maps refresh the centres in full (their terms changed too).
+            if self.method == SkinningMethod::Cor && !cor.stale && self.cage_map.is_linear() {
                 cor.centre_coords
                     .apply_delta(vertices, deltas, &mut cor.centres);
             } else {
@@ -211,9 +207,7 @@ impl RigSession {
             && cor.stale
         {
             cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
-            if let Some(green) = &self.green {
-                green.add_centre_face_terms(&green.rest_terms, &mut cor.centres);
-            }
+            self.cage_map.add_centre_terms(&mut cor.centres);
             cor.stale = false;
         }
         if self.display.is_some() {
@@ -280,41 +274,9 @@ impl RigSession {
         }
     }
 
-    /// CageUp: C' from the fitting rows of M' (or their ghost LBS): the linear map P for MVC
-    /// rigs, the Gauss–Newton fit for Green rigs ([`RigSession::fit_green_cage`]).
-    pub(super) fn fit_cage(&mut self) {
-        let ghost = !self.method.is_linear() && self.options_fit_source == CageFitSource::GhostLbs;
-        if self.green.is_some() {
-            return self.fit_green_cage_rows(ghost);
-        }
-        let mut out = std::mem::take(&mut self.posed_cage);
-        if ghost {
-            for (r, &row) in self
-                .scratch_rows_rest
-                .iter_mut()
-                .zip(self.cage_updater.rows())
-            {
-                *r = self.rest_mesh[row];
-            }
-            self.ghost_lbs.apply(
-                &self.posed_from_rest,
-                &self.scratch_rows_rest,
-                &mut self.scratch_rows_posed,
-            );
-            self.cage_updater
-                .apply_rows(&self.scratch_rows_posed, &mut out);
-        } else if self.display.is_some() {
-            self.skin_rows_exact();
-            self.cage_updater
-                .apply_rows(&self.scratch_rows_posed, &mut out);
-        } else {
-            self.cage_updater.apply(&self.posed_mesh, &mut out);
-        }
-        self.posed_cage = out;
-    }
-
-    /// Green CageUp: the fitting rows of M' (or of their ghost LBS), then the Gauss–Newton fit.
-    fn fit_green_cage_rows(&mut self, ghost: bool) {
+    /// CageUp's target M'_R (`#R`) into `scratch_rows_posed`: the ghost LBS of the fitting
+    /// rows (`ghost`, Sec. 4.3), else the exact skinned rows (skinned here on the display path).
+    fn posed_fit_rows(&mut self, ghost: bool) {
         if ghost {
             for (r, &row) in self
                 .scratch_rows_rest
@@ -339,7 +301,19 @@ impl RigSession {
                 *r = self.posed_mesh[row];
             }
         }
-        if let Some(green) = &mut self.green {
+    }
+
+    /// MVC CageUp: C' = P·M'_R (Sec. 4.1, Eq. 8).
+    pub(super) fn fit_linear_cage(&mut self, ghost: bool) {
+        self.posed_fit_rows(ghost);
+        self.cage_updater
+            .apply_rows(&self.scratch_rows_posed, &mut self.posed_cage);
+    }
+
+    /// Green CageUp: M'_R, then the Gauss–Newton fit.
+    pub(super) fn fit_green_cage_rows(&mut self, ghost: bool) {
+        self.posed_fit_rows(ghost);
+        if let CageMap::Green(green) = &mut self.cage_map {
             green.target_rows.copy_from_slice(&self.scratch_rows_posed);
         }
         self.fit_green_cage();

@@ -5,9 +5,6 @@
 //! new variant here and the kernels in [`crate::session`]'s skinning dispatch, and nothing else
 //! (the compiler points at every exhaustive `match`).
 
-use std::fmt;
-use std::str::FromStr;
-
 /// The skinning method S→S'→M' of a session.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum SkinningMethod {
@@ -68,40 +65,7 @@ impl SkinningMethod {
     }
 }
 
-impl FromStr for SkinningMethod {
-    type Err = UnknownSkinningMethod;
-
-    /// The method of [`SkinningMethod::name`], ignoring ASCII case (`"CoR"` is CoR).
-    fn from_str(text: &str) -> Result<Self, Self::Err> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(text))
-            .ok_or_else(|| UnknownSkinningMethod {
-                found: text.to_string(),
-            })
-    }
-}
-
-impl fmt::Display for SkinningMethod {
-    /// Writes [`SkinningMethod::name`].
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl serde::Serialize for SkinningMethod {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.serialize_str(self.name())
-    }
-}
-
-impl<'de> serde::Deserialize<'de> for SkinningMethod {
-    /// Reads a name through [`FromStr`], the one parser of method names.
-    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        let text = String::deserialize(deserializer)?;
-        text.parse().map_err(serde::de::Error::custom)
-    }
-}
+crate::named_kind::named_kind!(SkinningMethod, UnknownSkinningMethod);
 
 #[cfg(test)]
 mod tests {

@@ -1,0 +1,433 @@
+//! The cage map: how the rest skin follows the rest cage, M = f(C), and the extension point of
+//! the coordinates kinds ([`CoordsKind`]).
+//!
+//! Every kind keeps its *vertex part* in the session's `cage_coords` (`#V × #C`: Φ for mean
+//! value coordinates, φ for Green coordinates), so everything linear in C — the MaxVol rows,
+//! CageUp's linear map P, SkelUp's Ψ, the linear CageRev of Eq. 19 — is built on it for every
+//! kind. [`CageMap`] holds what a kind adds beyond that, and every place the session's
+//! behaviour depends on the kind matches on it exhaustively:
+//!
+//! | hook | [`CageMap::Mvc`] (M = ΦC) | [`CageMap::Green`] (M = φC + ψ·g(C)) |
+//! |---|---|---|
+//! | [`bind_cage_map`] | Φ (given or computed), MaxVol rows of Φ | φ, ψ, MaxVol rows of [φ ψ] |
+//! | [`CageMap::refresh_rest_terms`], [`CageMap::apply_rest_delta`] | nothing | M += ψ·g(C), by face |
+//! | [`CageMap::is_linear`] (keyframe lerp, centre deltas, the f32 M̃) | yes | no |
+//! | CageUp ([`RigSession::fit_cage`]) | C' = P·M'_R | Gauss–Newton on the rows |
+//! | CageRev ([`RigSession::reverse_cage`]) | Eq. 19, factorised per pose | Newton on the fit's stationarity |
+//! | CoR centres | Λ·C | Λ·C + Λ_ψ·g(C) |
+//!
+//! A new kind is a variant here, its state in its own file (as [`GreenState`] in
+//! `session/green.rs`), and the arms the compiler asks for. See `docs/architecture.md`.
+
+use super::*;
+
+/// The non-linear part of the map from the rest cage C to the rest skin M, by kind.
+#[derive(Debug, Clone)]
+pub(super) enum CageMap {
+    /// Mean value coordinates: M = ΦC, linear; nothing beyond Φ.
+    Mvc,
+    /// Green coordinates: M = φC + ψ·g(C), with the face coordinates ψ, the stretched normals
+    /// g and the Newton CageUp and CageRev (see `session/green.rs`).
+    Green(Box<GreenState>),
+}
+
+/// What binding a mesh to its cage produces for a session.
+pub(super) struct BoundCageMap {
+    /// Φ or φ, `#V × #C`.
+    pub(super) cage_coords: CageCoords,
+    /// CageUp on its fitting rows.
+    pub(super) cage_updater: CageUpdater,
+    pub(super) cage_map: CageMap,
+    /// The precision the coordinates are kept in (Green coordinates stay f64).
+    pub(super) precision: CoordsPrecision,
+    /// The given Λ, when it applies to the kind.
+    pub(super) cor_centre_coords: Option<CageCoords>,
+}
+
+/// The coordinates given with a rig's parts (each optional).
+pub(super) struct GivenCoords {
+    /// Φ, `#V × #C`.
+    pub(super) cage_coords: Option<CageCoords>,
+    /// CageUp's MaxVol rows of Φ.
+    pub(super) maxvol_rows: Option<Vec<usize>>,
+    /// Λ = S·Φ, `#V × #C`.
+    pub(super) cor_centre_coords: Option<CageCoords>,
+}
+
+/// Binds `mesh_positions` (`#V`) to `cage` with the kind `options.coords`: the vertex part, the
+/// fitting rows and CageUp, and the kind's own terms. Given coordinates are checked (and
+/// recomputed when they do not reproduce M and the options say so); notes go to `warnings`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn bind_cage_map(
+    cage: &TriMesh,
+    mesh_positions: &[DVec3],
+    given: GivenCoords,
+    options: &SessionOptions,
+    phi_c_tolerance: f64,
+    skin_weights: &SkinWeights,
+    num_joints: usize,
+    warnings: &mut Vec<Warning>,
+) -> Result<BoundCageMap, RigError> {
+    let nv = mesh_positions.len();
+    let nc = cage.num_vertices();
+    let GivenCoords {
+        cage_coords,
+        mut maxvol_rows,
+        mut cor_centre_coords,
+    } = given;
+    let mut green_parts = None;
+    let mut precision = options.cage_coords_precision;
+    let given_cage_coords = match options.coords {
+        CoordsKind::Mvc => cage_coords,
+        CoordsKind::Green => {
+            if cage_coords.is_some() || maxvol_rows.is_some() || cor_centre_coords.is_some() {
+                warnings.push(Warning::Note {
+                    message: "Green coordinates: the given mean value coordinates (Φ, their \
+                              MaxVol rows, Λ) do not apply and were recomputed"
+                        .into(),
+                });
+            }
+            if precision == CoordsPrecision::F32 {
+                warnings.push(Warning::Note {
+                    message: "Green coordinates are kept in f64 (f32 coordinates are for mean \
+                              value coordinates only)"
+                        .into(),
+                });
+                precision = CoordsPrecision::F64;
+            }
+            maxvol_rows = None;
+            cor_centre_coords = None;
+            let (coords, outside) = compute_green_coords_for_mesh(cage, mesh_positions)?;
+            if outside > 0 {
+                warnings.push(Warning::Note {
+                    message: format!(
+                        "{outside} mesh vertices lie outside the cage, where Green coordinates \
+                         do not reach: they follow the cage by mean value coordinates"
+                    ),
+                });
+            }
+            green_parts = Some((coords.face, coords.triangles));
+            Some(coords.vertex)
+        }
+    };
+    let mut cage_coords = match given_cage_coords {
+        Some(phi) if green_parts.is_some() => phi,
+        Some(phi) => {
+            if phi.num_vertices() != nv || phi.num_cage_vertices() != nc {
+                return Err(RigError::SizeMismatch {
+                    what: "cage coordinates shape (#V × #C)",
+                    expected: nv * nc,
+                    actual: phi.num_vertices() * phi.num_cage_vertices(),
+                });
+            }
+            let residual = phi_c_residual(&phi, &cage.positions, mesh_positions);
+            if residual > phi_c_tolerance
+                && options.given_cage_coords == GivenCageCoords::RecomputeIfInexact
+            {
+                warnings.push(Warning::Note {
+                    message: format!(
+                        "the given cage coordinates reproduce the rest mesh only to \
+                         {residual:.3e} (M ≠ ΦC, e.g. a file with 6 decimals): recomputed, so \
+                         that nothing the user does not touch moves at the first cage edit"
+                    ),
+                });
+                mvc::compute_cage_coords(cage, mesh_positions, None)?
+            } else {
+                phi
+            }
+        }
+        None => mvc::compute_cage_coords(cage, mesh_positions, None)?,
+    };
+    if precision == CoordsPrecision::F32 {
+        cage_coords.round_to_f32();
+    }
+    let green_rows = match (&green_parts, &options.fit_rows) {
+        (Some((face_coords, _)), FitRows::MaxVol) => {
+            Some(green_fit_rows(&cage_coords, face_coords)?)
+        }
+        _ => None,
+    };
+    let (rows, mode) = match (green_rows, options.fit_rows.clone()) {
+        // Green: the MaxVol rows of [φ ψ], or the given rows, always least squares.
+        (Some(rows), _) => (rows, CageFitMode::LeastSquares),
+        (None, FitRows::Rows(rows)) if green_parts.is_some() => (rows, CageFitMode::LeastSquares),
+        (None, FitRows::MaxVol) => match maxvol_rows {
+            Some(rows) if rows.len() < nc => {
+                return Err(RigError::SizeMismatch {
+                    what: "given MaxVol rows (at least one per cage vertex)",
+                    expected: nc,
+                    actual: rows.len(),
+                });
+            }
+            Some(rows) if rows.len() > nc => (rows, CageFitMode::LeastSquares),
+            Some(rows) => (rows, CageFitMode::Interpolate),
+            None => (
+                maxvol::select_maxvol_rows(&cage_coords)?.rows,
+                CageFitMode::Interpolate,
+            ),
+        },
+        (None, FitRows::AllRows) => ((0..nv).collect(), CageFitMode::LeastSquares),
+        (None, FitRows::Rows(rows)) => {
+            let mode = if rows.len() == nc {
+                CageFitMode::Interpolate
+            } else {
+                CageFitMode::LeastSquares
+            };
+            (rows, mode)
+        }
+    };
+    let cage_updater = CageUpdater::new(&cage_coords, rows, mode)?;
+    let cage_map = match green_parts {
+        Some((face_coords, triangles)) => CageMap::Green(Box::new(GreenState::new(
+            &cage_coords,
+            face_coords,
+            triangles,
+            cage_updater.rows(),
+            cage_updater.cage_from_rows(),
+            skin_weights,
+            &cage.positions,
+            num_joints,
+        )?)),
+        None => CageMap::Mvc,
+    };
+    Ok(BoundCageMap {
+        cage_coords,
+        cage_updater,
+        cage_map,
+        precision,
+        cor_centre_coords,
+    })
+}
+
+impl CageMap {
+    /// The coordinates kind of this map.
+    pub(super) fn kind(&self) -> CoordsKind {
+        match self {
+            CageMap::Mvc => CoordsKind::Mvc,
+            CageMap::Green(_) => CoordsKind::Green,
+        }
+    }
+
+    /// Whether M is linear in C (M = ΦC): then keyframes lerp, the CoR centres follow a cage
+    /// edit by columns, and the f32 display path may compute M̃ = Φ̃·C; otherwise M is
+    /// evaluated in full at each new cage.
+    pub(super) fn is_linear(&self) -> bool {
+        match self {
+            CageMap::Mvc => true,
+            CageMap::Green(_) => false,
+        }
+    }
+
+    /// After C changed everywhere and `rest_mesh` (`#V`) holds the vertex part ΦC: adds the
+    /// kind's terms for `rest_cage` (`#C`), refreshing what it keeps of C.
+    pub(super) fn refresh_rest_terms(&mut self, rest_cage: &[DVec3], rest_mesh: &mut [DVec3]) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.refresh_rest_terms(rest_cage, rest_mesh),
+        }
+    }
+
+    /// After the rest-cage vertices `vertices` moved (`rest_cage` already updated and the
+    /// vertex part's delta applied to `rest_mesh`): the kind's terms of the change. No
+    /// allocation.
+    pub(super) fn apply_rest_delta(
+        &mut self,
+        vertices: &[usize],
+        rest_cage: &[DVec3],
+        rest_mesh: &mut [DVec3],
+    ) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.apply_rest_delta(vertices, rest_cage, rest_mesh),
+        }
+    }
+
+    /// out (`#V`) += the kind's terms of M for the rest cage `cage` (`#C`), which need not be
+    /// the session's.
+    pub(super) fn add_rest_terms_of(&self, cage: &[DVec3], out: &mut [DVec3]) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.add_face_terms(&green.terms_of(cage), out),
+        }
+    }
+
+    /// out (`#V`) += the kind's terms of the CoR centres at the current rest cage.
+    pub(super) fn add_centre_terms(&self, out: &mut [DVec3]) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.add_centre_face_terms(&green.rest_terms, out),
+        }
+    }
+
+    /// out (`#V`) += the kind's terms of the CoR centres for the rest cage `cage` (`#C`).
+    pub(super) fn add_centre_terms_of(&self, cage: &[DVec3], out: &mut [DVec3]) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.add_centre_face_terms(&green.terms_of(cage), out),
+        }
+    }
+
+    /// Builds the kind's part of the CoR centre coordinates with `centre_coords_of`, which
+    /// turns per-vertex coordinates into the centres' (Λ = S·X for a coordinate matrix X).
+    pub(super) fn build_centre_terms(
+        &mut self,
+        centre_coords_of: impl FnOnce(&CageCoords) -> Result<CageCoords, RigError>,
+    ) -> Result<(), RigError> {
+        match self {
+            CageMap::Mvc => Ok(()),
+            CageMap::Green(green) => {
+                // Green rigs: the centres' face part Λ_ψ = S·ψ, from the same centre rows.
+                green.face_centre_coords = Some(centre_coords_of(&green.face_coords)?);
+                Ok(())
+            }
+        }
+    }
+
+    /// The next CageUp starts from the current C' (a grab made it the answer, or a restored
+    /// checkpoint holds it).
+    pub(super) fn start_next_fit_from_posed_cage(&mut self) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.start_from_posed_cage = true,
+        }
+    }
+
+    /// The failure of the last CageUp that refuses the event, taken (none for linear maps).
+    pub(super) fn take_fit_failure(&mut self) -> Option<RigError> {
+        match self {
+            CageMap::Mvc => None,
+            CageMap::Green(green) => green.fit_failure.take(),
+        }
+    }
+}
+
+impl RigSession {
+    /// The coordinates kind the rig is bound with.
+    pub fn coords_kind(&self) -> CoordsKind {
+        self.cage_map.kind()
+    }
+
+    /// CageUp: C' from the fitting rows of M' (or their ghost LBS, Sec. 4.3 for DQS/CoR): the
+    /// linear map P for MVC rigs, the Gauss–Newton fit for Green rigs.
+    pub(super) fn fit_cage(&mut self) {
+        let ghost = !self.method.is_linear() && self.options_fit_source == CageFitSource::GhostLbs;
+        match self.cage_map {
+            CageMap::Mvc => self.fit_linear_cage(ghost),
+            CageMap::Green(_) => self.fit_green_cage_rows(ghost),
+        }
+    }
+
+    /// CageRev: the rest-cage change `rest_delta` (`#C`) for the current-cage change
+    /// `posed_delta` (`#C`): Eq. 19 (factorised for the pose first if needed) for MVC rigs, the
+    /// Newton solve for Green rigs.
+    pub(super) fn reverse_cage(
+        &mut self,
+        posed_delta: &[DVec3],
+        rest_delta: &mut [DVec3],
+    ) -> Result<(), RigError> {
+        match self.cage_map {
+            CageMap::Mvc => {
+                if !self.reverser.is_factorised() {
+                    self.refactor_reverser()?;
+                }
+                self.reverser.solve(posed_delta, rest_delta)
+            }
+            CageMap::Green(_) => self.reverse_green(posed_delta, rest_delta),
+        }
+    }
+
+    /// After a grab's CageRev moved C: a non-linear map's CageUp starts from the grabbed C'
+    /// (C' + `posed_delta`, `#C`), which CageRev made the answer. A linear map re-fits C' in
+    /// one product and needs nothing.
+    pub(super) fn start_fit_from_grab(&mut self, posed_delta: &[DVec3]) {
+        match self.cage_map {
+            CageMap::Mvc => {}
+            CageMap::Green(_) => {
+                for (p, d) in self.posed_cage.iter_mut().zip(posed_delta) {
+                    *p += *d;
+                }
+                self.cage_map.start_next_fit_from_posed_cage();
+            }
+        }
+    }
+
+    /// Factorises the reverse cage deformer (Eq. 19) for the current pose now. An editor calls
+    /// this when a cage grab starts; [`RigSession::move_posed_cage`] does it lazily otherwise.
+    pub fn refactor_reverser(&mut self) -> Result<(), RigError> {
+        for (r, t) in self.scratch_rotations.iter_mut().zip(&self.posed_from_rest) {
+            *r = t.matrix3;
+        }
+        match self.cage_map {
+            CageMap::Mvc => self.reverser.refactor(&self.scratch_rotations),
+            CageMap::Green(_) => self.prepare_green_reverser(),
+        }
+    }
+
+    /// M = ΦC (+ the kind's terms) for the rest cage `cage` (`#C`) into `out` (`#V`).
+    pub(super) fn rest_mesh_of_cage(&self, cage: &[DVec3], out: &mut [DVec3]) {
+        self.cage_coords.apply(cage, out);
+        self.cage_map.add_rest_terms_of(cage, out);
+    }
+
+    /// The CoR centres Λ·C (+ the kind's terms) into `out` (`#V`) for the rest cage `cage`.
+    pub(super) fn centres_of_cage(&self, cor: &CorState, cage: &[DVec3], out: &mut [DVec3]) {
+        cor.centre_coords.apply(cage, out);
+        self.cage_map.add_centre_terms_of(cage, out);
+    }
+}
+
+/// Green coordinates of the rest mesh's vertices, and how many lie outside the cage: those
+/// (where Σφ ≠ 1: Green coordinates reproduce only interior points) get their mean value
+/// coordinates as φ and no face terms.
+fn compute_green_coords_for_mesh(
+    cage: &TriMesh,
+    positions: &[DVec3],
+) -> Result<(crate::coords::green::GreenCoords, usize), RigError> {
+    let mut coords = compute_green_coords(cage, positions, None)?;
+    let nc = cage.num_vertices();
+    let outside: Vec<usize> = (0..positions.len())
+        .filter(|&i| {
+            let sum: f64 = (0..nc).map(|k| coords.vertex.get(i, k)).sum();
+            (sum - 1.0).abs() > 1e-6
+        })
+        .collect();
+    if outside.is_empty() {
+        return Ok((coords, 0));
+    }
+    let points: Vec<DVec3> = outside.iter().map(|&i| positions[i]).collect();
+    let mvc_rows = mvc::compute_cage_coords(cage, &points, None)?;
+    let mut vertex = coords.vertex.matrix().clone();
+    let mut face = coords.face.matrix().clone();
+    for (r, &i) in outside.iter().enumerate() {
+        for k in 0..nc {
+            vertex[(i, k)] = mvc_rows.get(r, k);
+        }
+        for f in 0..face.ncols() {
+            face[(i, f)] = 0.0;
+        }
+    }
+    coords.vertex = CageCoords::from_matrix(vertex)?;
+    coords.face = CageCoords::from_matrix(face)?;
+    Ok((coords, outside.len()))
+}
+
+/// CageUp's rows for a Green rig: MaxVol rows of [φ ψ] (`#V × (#C + #F)`), so that the
+/// least-squares fit sees the face terms too; all rows when the mesh has fewer vertices.
+fn green_fit_rows(vertex: &CageCoords, face: &CageCoords) -> Result<Vec<usize>, RigError> {
+    let (nv, nc, nf) = (
+        vertex.num_vertices(),
+        vertex.num_cage_vertices(),
+        face.num_cage_vertices(),
+    );
+    if nv <= nc + nf {
+        return Ok((0..nv).collect());
+    }
+    let combined = faer::Mat::from_fn(nv, nc + nf, |i, k| {
+        if k < nc {
+            vertex.get(i, k)
+        } else {
+            face.get(i, k - nc)
+        }
+    });
+    Ok(maxvol::select_maxvol_rows(&CageCoords::from_matrix(combined)?)?.rows)
+}

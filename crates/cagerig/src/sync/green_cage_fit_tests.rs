@@ -1,0 +1,96 @@
+//! Tests of [`super::GreenCageFit`]: the fit recovers a cage from its own Green deformation,
+//! and its Newton matrix is the fit's Hessian.
+
+use glam::DQuat;
+
+use super::*;
+use crate::coords::green::compute_green_coords;
+use crate::coords::green::tests::{random_inside, test_cage};
+
+/// The fit of all rows of `points` inside the test cage (and the cage).
+fn fit_of(points: &[DVec3]) -> (GreenCageFit, crate::mesh::TriMesh) {
+    let cage = test_cage();
+    let coords = compute_green_coords(&cage, points, None).unwrap();
+    let normals = StretchedNormals::new(&cage.positions, coords.triangles.clone());
+    let fit = GreenCageFit::new(
+        coords.vertex.matrix().clone(),
+        coords.face.matrix().clone(),
+        &cage.positions,
+        normals,
+    )
+    .unwrap();
+    (fit, cage)
+}
+
+#[test]
+fn recovers_a_deformed_cage_from_its_green_deformation() {
+    let points = random_inside(5, 60);
+    let (mut fit, cage) = fit_of(&points);
+    let rotation = DQuat::from_axis_angle(DVec3::new(0.3, 1.0, 0.2).normalize(), 0.9);
+    let deformed: Vec<DVec3> = cage
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, c)| rotation * (*c * DVec3::new(1.4, 0.9, 1.0)) + DVec3::splat(0.05 * i as f64))
+        .collect();
+    let mut g = vec![DVec3::ZERO; fit.normals().len()];
+    let mut rows = vec![DVec3::ZERO; points.len()];
+    fit.rows_of(&deformed, &mut g, &mut rows);
+    let mut solved = cage.positions.clone();
+    let report = fit.apply(&rows, &mut solved).unwrap();
+    assert!(report.residual <= fit.tolerance(), "{report:?}");
+    for (s, d) in solved.iter().zip(&deformed) {
+        assert!(s.distance(*d) < 1e-11, "{s} vs {d}");
+    }
+    // Warm start at the solution: nothing to do.
+    let again = fit.apply(&rows, &mut solved).unwrap();
+    assert_eq!(again.iterations, 0);
+}
+
+#[test]
+fn newton_matrix_is_the_hessian_of_the_fit() {
+    let points = random_inside(9, 40);
+    let (mut fit, cage) = fit_of(&points);
+    // A target no cage reaches: the rest rows pushed around (large residual).
+    let target: Vec<DVec3> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| *p * 1.2 + DVec3::new(0.1 * (i % 3) as f64, 0.05, -0.1 * (i % 5) as f64))
+        .collect();
+    let x: Vec<DVec3> = cage
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, c)| *c + DVec3::splat(0.03 * i as f64))
+        .collect();
+    let nr = points.len();
+    let nf = fit.normals().len();
+    let gradient_at = |fit: &GreenCageFit, x: &[DVec3]| {
+        let mut g = vec![DVec3::ZERO; nf];
+        let mut sums = vec![DVec3::ZERO; nf];
+        let mut r = vec![DVec3::ZERO; nr];
+        let mut grad = vec![DVec3::ZERO; x.len()];
+        fit.evaluate(x, &target, &mut g, &mut sums, &mut r, &mut grad);
+        (grad, r)
+    };
+    let (_, residual) = gradient_at(&fit, &x);
+    fit.hessian_at(&x, &residual);
+    let n = 3 * x.len();
+    let h = 1e-6;
+    for q in 0..n {
+        let mut plus = x.clone();
+        let mut minus = x.clone();
+        plus[q / 3][q % 3] += h;
+        minus[q / 3][q % 3] -= h;
+        let (gp, _) = gradient_at(&fit, &plus);
+        let (gm, _) = gradient_at(&fit, &minus);
+        for p in 0..n {
+            let fd = (gp[p / 3][p % 3] - gm[p / 3][p % 3]) / (2.0 * h);
+            let analytic = fit.normal_matrix[(p, q)];
+            assert!(
+                (fd - analytic).abs() < 1e-5 * (1.0 + fd.abs()),
+                "({p}, {q}): {fd} vs {analytic}"
+            );
+        }
+    }
+}
