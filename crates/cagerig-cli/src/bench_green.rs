@@ -11,7 +11,7 @@ use anyhow::Context;
 use cagerig::CoordsKind;
 use cagerig::coords::{green, mvc};
 use cagerig::playback::AnimationPlayer;
-use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use glam::DVec3;
 use serde::Serialize;
 
@@ -45,14 +45,27 @@ pub(crate) struct GreenModelRow {
     pub binding_over_mvc: f64,
     /// `RigSession::new` with Green coordinates (binding, MaxVol rows of [φ ψ], Ψ, the fit).
     pub session_build: Stat,
+    /// The per-event rows on the exact path (every structure in f64).
+    #[serde(flatten)]
+    pub exact: GreenEventRows,
+    /// The same events on the f32 display path (`DisplayPrecision::F32`: the drawn M and M' in
+    /// f32 within 2e-6 of the diagonal; C, C', S, S' and CageUp's rows exact).
+    pub display_f32: GreenEventRows,
+    /// Events refused (Green CageUp fold) among the timed ones.
+    pub refused_events: usize,
+}
+
+/// The per-event rows of one display precision, with their Newton steps.
+#[derive(Debug, Serialize)]
+pub(crate) struct GreenEventRows {
     pub animation_frame: Stat,
     pub animation_frame_iterations: IterationStat,
     pub rest_cage_drag: Stat,
     pub rest_cage_drag_iterations: IterationStat,
     pub grab_after_skeleton_edit: Stat,
     pub grab_after_skeleton_edit_iterations: IterationStat,
-    /// Events refused (Green CageUp fold) among the timed ones.
-    pub refused_events: usize,
+    /// Events of these rows refused (Green CageUp fold), not timed.
+    pub refused: usize,
 }
 
 /// Median/min/max of samples in ms.
@@ -173,14 +186,45 @@ pub(crate) fn bench_green_model(
     let nc = session.rest_cage().len();
     let cage_faces = session.green_triangles().map_or(0, <[[u32; 3]]>::len);
     let bend_joint = session.skeleton().find("lowerarm01.R").unwrap_or(nj / 2);
+    let exact = event_rows(&mut session, bend_joint, &reps)?;
+    session.set_display_precision(DisplayPrecision::F32)?;
+    let display_f32 = event_rows(&mut session, bend_joint, &reps)?;
+    Ok(GreenModelRow {
+        model,
+        coords: CoordsKind::Green.name(),
+        vertices: nv,
+        joints: nj,
+        cage_vertices: nc,
+        cage_faces,
+        peak_memory_mb: crate::commands::bench::peak_memory_mb(),
+        binding_over_mvc: binding.median_ms / mvc_binding.median_ms.max(f64::MIN_POSITIVE),
+        binding,
+        mvc_binding,
+        session_build,
+        refused_events: exact.refused + display_f32.refused,
+        exact,
+        display_f32,
+    })
+}
+
+/// The per-event rows on `session` at its display precision: animation frames of the synthetic
+/// tracks, a rest-cage drag and a grab after a skeleton edit near `bend_joint`.
+fn event_rows(
+    session: &mut RigSession,
+    bend_joint: usize,
+    reps: &impl Fn(usize) -> usize,
+) -> anyhow::Result<GreenEventRows> {
+    let nc = session.rest_cage().len();
     let mut refused = 0;
+    let refused = &mut refused;
+    session.reset_pose();
 
     // Animation: the bench's synthetic tracks (skeleton keys and breathing cage keys).
-    let (skeleton_track, cage_track) = crate::bench_events::synthetic_tracks(&session)?;
-    let mut player = AnimationPlayer::new(&session, Some(skeleton_track), Some(cage_track))?;
+    let (skeleton_track, cage_track) = crate::bench_events::synthetic_tracks(session)?;
+    let mut player = AnimationPlayer::new(session, Some(skeleton_track), Some(cage_track))?;
     let duration = player.duration();
     let (animation_frame, animation_frame_iterations) =
-        timed_events(&mut session, reps(100), 3, &mut refused, |s, i| {
+        timed_events(session, reps(100), 3, refused, |s, i| {
             player.apply((i as f64 * 0.037) % duration, s)
         })?;
     drop(player);
@@ -205,7 +249,7 @@ pub(crate) fn bench_green_model(
         (hi - lo).length()
     };
     let (rest_cage_drag, rest_cage_drag_iterations) =
-        timed_events(&mut session, reps(100), 3, &mut refused, |s, i| {
+        timed_events(session, reps(100), 3, refused, |s, i| {
             let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
             s.move_rest_cage(&drag, &[DVec3::new(sign * step, 0.0, 0.0)])
         })?;
@@ -223,7 +267,7 @@ pub(crate) fn bench_green_model(
                 cagerig::RigError::GreenFitFailed { .. }
                 | cagerig::RigError::GreenGrabFailed { .. },
             ) => {
-                refused += 1;
+                *refused += 1;
                 continue;
             }
             Err(e) => return Err(e).context("a benched grab"),
@@ -237,25 +281,14 @@ pub(crate) fn bench_green_model(
             }
         }
     }
-    Ok(GreenModelRow {
-        model,
-        coords: CoordsKind::Green.name(),
-        vertices: nv,
-        joints: nj,
-        cage_vertices: nc,
-        cage_faces,
-        peak_memory_mb: crate::commands::bench::peak_memory_mb(),
-        binding_over_mvc: binding.median_ms / mvc_binding.median_ms.max(f64::MIN_POSITIVE),
-        binding,
-        mvc_binding,
-        session_build,
+    Ok(GreenEventRows {
         animation_frame,
         animation_frame_iterations,
         rest_cage_drag,
         rest_cage_drag_iterations,
         grab_after_skeleton_edit: stat(times),
         grab_after_skeleton_edit_iterations: iterations(up, rev),
-        refused_events: refused,
+        refused: *refused,
     })
 }
 
@@ -294,23 +327,28 @@ pub(crate) fn print_green_table(rows: &[GreenModelRow]) {
             "binding Green / MVC", row.binding_over_mvc
         );
         line("session build", &row.session_build, None);
-        line(
-            "animation frame",
-            &row.animation_frame,
-            Some(&row.animation_frame_iterations),
-        );
-        line(
-            "rest-cage drag",
-            &row.rest_cage_drag,
-            Some(&row.rest_cage_drag_iterations),
-        );
-        line(
-            "grab after skeleton edit",
-            &row.grab_after_skeleton_edit,
-            Some(&row.grab_after_skeleton_edit_iterations),
-        );
+        for (precision, events) in [("", &row.exact), (" (f32 display)", &row.display_f32)] {
+            line(
+                &format!("animation frame{precision}"),
+                &events.animation_frame,
+                Some(&events.animation_frame_iterations),
+            );
+            line(
+                &format!("rest-cage drag{precision}"),
+                &events.rest_cage_drag,
+                Some(&events.rest_cage_drag_iterations),
+            );
+            line(
+                &format!("grab after skel. edit{precision}"),
+                &events.grab_after_skeleton_edit,
+                Some(&events.grab_after_skeleton_edit_iterations),
+            );
+        }
         if row.refused_events > 0 {
-            println!("refused events (Green fold): {}", row.refused_events);
+            println!(
+                "refused events (Green fold; not timed): {} exact, {} f32 display",
+                row.exact.refused, row.display_f32.refused
+            );
         }
     }
 }

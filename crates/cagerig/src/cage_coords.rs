@@ -183,13 +183,33 @@ impl CageCoords {
     /// rows with it.
     pub fn apply_rows(&self, rows: &[usize], cage: &[DVec3], out: &mut [DVec3]) {
         debug_assert_eq!(cage.len(), self.num_cage_vertices());
+        self.rows(rows, cage, false, out);
+    }
+
+    /// Rows `rows` of M += Φ·D into `out` (`rows.len()`, holding those rows of M) for one
+    /// `d_k` per column (`D`, `#C`): the same bits as those rows of
+    /// [`Self::apply_delta`] over every column in order. The Green display path keeps the exact
+    /// face terms ψ·g on CageUp's rows with it.
+    pub fn add_rows(&self, rows: &[usize], deltas: &[DVec3], out: &mut [DVec3]) {
+        debug_assert_eq!(deltas.len(), self.num_cage_vertices());
+        self.rows(rows, deltas, true, out);
+    }
+
+    /// [`Self::apply_rows`] / [`Self::add_rows`].
+    fn rows(&self, rows: &[usize], cage: &[DVec3], add_to_out: bool, out: &mut [DVec3]) {
         let terms = cage.iter().enumerate().map(|(k, c)| (k, *c));
         match &self.compact {
             Some(compact) => {
                 let nv = self.num_vertices();
-                rows_of_columns(|k| &compact[k * nv..(k + 1) * nv], terms, rows, out)
+                rows_of_columns(
+                    |k| &compact[k * nv..(k + 1) * nv],
+                    terms,
+                    add_to_out,
+                    rows,
+                    out,
+                )
             }
-            None => rows_of_columns(|k| self.column(k), terms, rows, out),
+            None => rows_of_columns(|k| self.column(k), terms, add_to_out, rows, out),
         }
     }
 

@@ -49,12 +49,14 @@ pub(super) fn accumulate_columns<'a, W, P, I>(
         });
 }
 
-/// Rows `rows` of `Σ column(k)·d_k` over `terms` into `out` (`rows.len()`): the same operations
-/// in the same order as [`accumulate_columns`] without `add_to_out`, so the same bits as those
-/// rows of its output. O(#rows · #terms).
+/// Rows `rows` of `[out +] Σ column(k)·d_k` over `terms` into `out` (`rows.len()`, holding
+/// those rows of the `out` of [`accumulate_columns`] when `add_to_out`): the same operations in
+/// the same order as [`accumulate_columns`], so the same bits as those rows of its output.
+/// O(#rows · #terms).
 pub(super) fn rows_of_columns<'a, W, I>(
     column: impl Fn(usize) -> &'a [W],
     terms: I,
+    add_to_out: bool,
     rows: &[usize],
     out: &mut [DVec3],
 ) where
@@ -63,7 +65,7 @@ pub(super) fn rows_of_columns<'a, W, I>(
 {
     debug_assert_eq!(rows.len(), out.len());
     for (&row, o) in rows.iter().zip(out.iter_mut()) {
-        let mut sum = DVec3::ZERO;
+        let mut sum = if add_to_out { *o } else { DVec3::ZERO };
         let weight = |k: usize| column(k)[row].widen();
         for_each_group(terms.clone(), |group| match group {
             Group::Eight(g) => sum += group_sum(g.map(|(k, _)| weight(k)), g.map(|t| t.1)),

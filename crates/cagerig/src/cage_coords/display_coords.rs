@@ -22,11 +22,24 @@ impl DisplayCageCoords {
     /// Rounds Φ (`#V × #C`) to f32. `None` when the `#V · #C · 4` bytes cannot be reserved (the
     /// caller then stays on the exact product).
     pub fn try_new(coords: &CageCoords) -> Option<Self> {
-        let (nv, nc) = (coords.num_vertices(), coords.num_cage_vertices());
+        Self::try_new_concatenated(&[coords])
+    }
+
+    /// The columns of `parts` side by side, rounded to f32: `[Φ ψ]` (`#V × (#C + #F)`) for the
+    /// Green display path, whose M̃ = φ̃·C + ψ̃·g is one product. `None` when the parts' row counts
+    /// differ or the bytes cannot be reserved.
+    pub fn try_new_concatenated(parts: &[&CageCoords]) -> Option<Self> {
+        let nv = parts.first()?.num_vertices();
+        if parts.iter().any(|p| p.num_vertices() != nv) {
+            return None;
+        }
+        let nc: usize = parts.iter().map(|p| p.num_cage_vertices()).sum();
         let mut columns = Vec::new();
         columns.try_reserve_exact(nv.checked_mul(nc)?).ok()?;
-        for k in 0..nc {
-            columns.extend(coords.column(k).iter().map(|&w| w as f32));
+        for part in parts {
+            for k in 0..part.num_cage_vertices() {
+                columns.extend(part.column(k).iter().map(|&w| w as f32));
+            }
         }
         Some(Self {
             columns,
@@ -52,12 +65,26 @@ impl DisplayCageCoords {
     /// # Panics
     /// If `cage` is not `#C` long or `out` not `#V` long.
     pub fn apply(&self, cage: &[DVec3], out: &mut [Vec3]) {
-        assert_eq!(cage.len(), self.num_cage_vertices(), "Φ̃·C: cage length");
+        self.apply_concatenated(cage, &[], out);
+    }
+
+    /// M̃ = Φ̃·[`head`; `tail`] for concatenated columns ([`Self::try_new_concatenated`]): the
+    /// Green display path's φ̃·C + ψ̃·g with `head` = C (`#C`) and `tail` = g (`#F`), summed in
+    /// f64 and rounded once. Parallel over row blocks, no allocation.
+    ///
+    /// # Panics
+    /// If `head` and `tail` together are not as long as the columns, or `out` not `#V` long.
+    pub fn apply_concatenated(&self, head: &[DVec3], tail: &[DVec3], out: &mut [Vec3]) {
+        assert_eq!(
+            head.len() + tail.len(),
+            self.num_cage_vertices(),
+            "Φ̃·C: cage length"
+        );
         assert_eq!(out.len(), self.num_vertices, "Φ̃·C: output length");
         let nv = self.num_vertices;
         accumulate_columns(
             |k| &self.columns[k * nv..(k + 1) * nv],
-            cage.iter().enumerate().map(|(k, c)| (k, *c)),
+            head.iter().chain(tail).enumerate().map(|(k, c)| (k, *c)),
             false,
             out,
         );

@@ -135,8 +135,9 @@ impl RigSession {
         self.store_pose(pose)?;
         lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
         if !self.cage_map.is_linear() {
-            // M is not linear in C: evaluate it at the blended cage (the CoR centres too).
-            self.rest_from_cage_in_full();
+            // M is not linear in C: evaluate it at the blended cage (the CoR centres too; on the
+            // display path M̃ and the exact fitting rows, as after a grab).
+            self.rest_from_cage_for_event();
             self.sync_from_rest_cage();
             return Ok(());
         }

@@ -11,7 +11,8 @@
 //! |---|---|---|
 //! | [`bind_cage_map`] | Φ (given or computed), MaxVol rows of Φ | φ, ψ, MaxVol rows of [φ ψ] |
 //! | [`CageMap::refresh_rest_terms`], [`CageMap::apply_rest_delta`] | nothing | M += ψ·g(C), by face |
-//! | [`CageMap::is_linear`] (keyframe lerp, centre deltas, the f32 M̃) | yes | no |
+//! | [`CageMap::is_linear`] (keyframe lerp, centre deltas) | yes | no |
+//! | the f32 display path's M̃ ([`CageMap::extra_coords`], [`CageMap::terms`]) | Φ̃·C | [φ̃ ψ̃]·[C; g(C)] |
 //! | CageUp ([`RigSession::fit_cage`]) | C' = P·M'_R | Gauss–Newton on the rows |
 //! | CageRev ([`RigSession::reverse_cage`]) | Eq. 19, factorised per pose | Newton on the fit's stationarity |
 //! | CoR centres | Λ·C | Λ·C + Λ_ψ·g(C) |
@@ -224,6 +225,51 @@ impl CageMap {
         match self {
             CageMap::Mvc => {}
             CageMap::Green(green) => green.refresh_rest_terms(rest_cage, rest_mesh),
+        }
+    }
+
+    /// Brings the kind's terms of C up to date for `rest_cage` (`#C`) without touching M (the
+    /// display path then evaluates M̃ and the exact rows from them).
+    pub(super) fn update_terms(&mut self, rest_cage: &[DVec3]) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.fit.normals().apply(rest_cage, &mut green.rest_terms),
+        }
+    }
+
+    /// The kind's terms of the current C, the inputs of its extra coordinate columns: g(C)
+    /// (`#F`) for Green, none for MVC.
+    pub(super) fn terms(&self) -> &[DVec3] {
+        match self {
+            CageMap::Mvc => &[],
+            CageMap::Green(green) => &green.rest_terms,
+        }
+    }
+
+    /// The kind's extra coordinate columns (ψ, `#V × #F`, for Green), whose inputs are
+    /// [`CageMap::terms`].
+    pub(super) fn extra_coords(&self) -> Option<&CageCoords> {
+        match self {
+            CageMap::Mvc => None,
+            CageMap::Green(green) => Some(&green.face_coords),
+        }
+    }
+
+    /// `out` (`#V`, holding ΦC) += the kind's terms at the current C: the bits of
+    /// [`CageMap::refresh_rest_terms`] when the terms are current.
+    pub(super) fn add_terms(&self, out: &mut [DVec3]) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.add_face_terms(&green.rest_terms, out),
+        }
+    }
+
+    /// Rows `rows` of [`CageMap::add_terms`] into `out` (`rows.len()`, holding those rows of ΦC),
+    /// the same bits.
+    pub(super) fn add_terms_rows(&self, rows: &[usize], out: &mut [DVec3]) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.face_coords.add_rows(rows, &green.rest_terms, out),
         }
     }
 

@@ -15,6 +15,10 @@
 //! ([`CageCoords::apply_rows`], the bits of the full product), which is all the sync operators
 //! read; [`RigSession::rest_mesh`] computes the whole exact M on its first call, and any
 //! rest-cage edit does so before it applies its increment. The f32 kernels then skin M̃.
+//!
+//! Green rigs take the same path with the face terms as extra columns: M̃ = [φ̃ ψ̃]·[C; g(C)]
+//! (one f32 product, g(C) exact in f64) and the exact rows φ_R C + ψ_R g(C), the bits of the full
+//! product's rows ([`CageCoords::add_rows`]).
 
 use std::sync::OnceLock;
 
@@ -169,28 +173,33 @@ impl RigSession {
         self.display.as_deref().map(|d| &d.rest_positions[..])
     }
 
-    /// After a current-cage edit changed C everywhere: on the display path M̃ = Φ̃·C for display
-    /// and the exact M on the MaxVol rows (see the module notes), else M = ΦC in full. Then the
-    /// CoR centres.
+    /// After a current-cage edit (or a cage keyframe) changed C everywhere: on the display path
+    /// M̃ = Φ̃·C (Green: [φ̃ ψ̃]·[C; g(C)]) for display and the exact M on the MaxVol rows (see the
+    /// module notes), else M in full. Then the CoR centres.
     pub(super) fn rest_from_cage_for_event(&mut self) {
-        if !self.cage_map.is_linear() {
-            // Non-linear maps keep the exact M in full (Green's face terms have no f32 form
-            // yet); the display path still skins M' in f32.
-            return self.rest_from_cage_in_full();
-        }
         let Some(display) = self.display.as_deref_mut() else {
             return self.rest_from_cage_in_full();
         };
         if display.coords.is_none() {
-            display.coords = DisplayCageCoords::try_new(&self.cage_coords);
+            display.coords = match self.cage_map.extra_coords() {
+                None => DisplayCageCoords::try_new(&self.cage_coords),
+                Some(extra) => DisplayCageCoords::try_new_concatenated(&[&self.cage_coords, extra]),
+            };
         }
         let Some(coords) = &display.coords else {
             return self.rest_from_cage_in_full();
         };
-        coords.apply(&self.rest_cage, &mut display.rest_positions);
+        self.cage_map.update_terms(&self.rest_cage);
+        coords.apply_concatenated(
+            &self.rest_cage,
+            self.cage_map.terms(),
+            &mut display.rest_positions,
+        );
         let rows = self.cage_updater.rows();
         self.cage_coords
             .apply_rows(rows, &self.rest_cage, &mut self.scratch_rows_rest);
+        self.cage_map
+            .add_terms_rows(rows, &mut self.scratch_rows_rest);
         for (&row, p) in rows.iter().zip(&self.scratch_rows_rest) {
             self.rest_mesh[row] = *p;
         }
@@ -216,16 +225,21 @@ impl RigSession {
             .and_then(|d| d.exact_rest.take())
         {
             Some(exact) => self.rest_mesh = exact,
-            None => self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh),
+            None => {
+                self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
+                self.cage_map.add_terms(&mut self.rest_mesh);
+            }
         }
         self.rest_mesh_rows_only = false;
     }
 
     /// The exact M while it is kept on the MaxVol rows only (computed on first use).
     pub(super) fn exact_rest_mesh<'a>(&'a self, display: &'a DisplayPath) -> &'a [DVec3] {
-        display
-            .exact_rest
-            .get_or_init(|| full_product(&self.cage_coords, &self.rest_cage))
+        display.exact_rest.get_or_init(|| {
+            let mut exact = full_product(&self.cage_coords, &self.rest_cage);
+            self.cage_map.add_terms(&mut exact);
+            exact
+        })
     }
 
     /// Marks the rest mesh M (and the CoR centres) as changed for the display kernels.

@@ -94,3 +94,27 @@ fn newton_matrix_is_the_hessian_of_the_fit() {
         }
     }
 }
+
+#[test]
+fn gauss_newton_matrix_from_the_gram_matrices_is_j_transpose_j() {
+    let points = random_inside(11, 50);
+    let (mut fit, cage) = fit_of(&points);
+    let x: Vec<DVec3> = cage
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, c)| *c * 1.1 + DVec3::new(0.02 * i as f64, -0.01, 0.03 * (i % 3) as f64))
+        .collect();
+    let n = 3 * x.len();
+    let mut jacobian = Mat::<f64>::zeros(3 * points.len(), n);
+    fit.jacobian_into(&x, &mut jacobian);
+    let explicit = jacobian.transpose() * &jacobian;
+    fit.gauss_newton_matrix_at(&x);
+    let scale = (0..n).map(|i| explicit[(i, i)].abs()).fold(0.0, f64::max);
+    for p in 0..n {
+        for q in 0..n {
+            let (a, b) = (fit.normal_matrix[(p, q)], explicit[(p, q)]);
+            assert!((a - b).abs() <= 1e-12 * scale, "({p}, {q}): {a} vs {b}");
+        }
+    }
+}
