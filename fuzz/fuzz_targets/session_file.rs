@@ -9,7 +9,8 @@
 //! `MAX_VERTICES` skin vertices); a larger one goes only through the library's memory check
 //! (`check_fits`, which `demo::builtin` runs first): refused or not, it is not built, so a huge
 //! resolution costs nothing here and must not allocate. A file source is never opened — the
-//! target must not read arbitrary paths — its state is restored onto the built-in bar instead,
+//! target must not read arbitrary paths — its state is restored onto the built-in bar
+//! (resolution 2) instead,
 //! so the restore path is fuzzed whatever the source says. No panic, no allocation beyond
 //! libFuzzer's limits, every structure finite after every event.
 #![no_main]
@@ -112,7 +113,7 @@ fuzz_target!(|data: &[u8]| {
                 },
             }
         }
-        RigSource::File { .. } => match opened("bar", Some(4)) {
+        RigSource::File { .. } => match opened("bar", Some(2)) {
             Some(o) => o,
             None => return,
         },

@@ -19,7 +19,7 @@ use glam::DVec3;
 fn bar() -> RigSource {
     RigSource::Builtin {
         name: "bar".into(),
-        resolution: Some(4),
+        resolution: Some(2),
     }
 }
 
@@ -113,7 +113,12 @@ fn the_fuzz_seeds_are_current_session_files_that_open() {
         }
         let read = SessionFile::read(&path)
             .unwrap_or_else(|e| panic!("{e} (CAGERIG_WRITE_FUZZ_SEEDS=1 rewrites the seeds)"));
-        assert_eq!(read, file, "{name} differs from what this build writes");
+        // As written (the state's binding key is the document's, not the file's).
+        assert_eq!(
+            serde_json::to_value(&read).unwrap(),
+            serde_json::to_value(&file).unwrap(),
+            "{name} differs from what this build writes"
+        );
         // Every seed opens as the fuzz target opens it (a file source onto the bar).
         let source = match &read.source {
             RigSource::Builtin { .. } => read.source.clone(),
