@@ -74,7 +74,10 @@ fn check_shown(doc: &Document) {
         let n = shown.positions.len();
         assert_eq!(shown.parents.len(), n);
         assert_eq!(shown.names.len(), n);
-        assert!(shown.parents.iter().flatten().all(|&p| p < n), "a parent out of range");
+        assert!(
+            shown.parents.iter().flatten().all(|&p| p < n),
+            "a parent out of range"
+        );
         assert!(shown.positions.iter().all(|p| p.is_finite()));
     }
 }
@@ -94,14 +97,16 @@ fuzz_target!(|data: &[u8]| {
 
     let opened = match &file.source {
         RigSource::Builtin { name, resolution } => {
-            let fits = cagerig::demo::builtin_names().contains(&name.as_str()).then(|| {
-                let (vertices, cage_vertices) =
-                    cagerig::memory_estimate::builtin_size(name, *resolution);
-                (
-                    vertices,
-                    cagerig::memory_estimate::check_fits("fuzz", vertices, cage_vertices),
-                )
-            });
+            let fits = cagerig::demo::builtin_names()
+                .contains(&name.as_str())
+                .then(|| {
+                    let (vertices, cage_vertices) =
+                        cagerig::memory_estimate::builtin_size(name, *resolution);
+                    (
+                        vertices,
+                        cagerig::memory_estimate::check_fits("fuzz", vertices, cage_vertices),
+                    )
+                });
             match fits {
                 // Too large to hold: the studio refuses it before building (check_fits).
                 Some((_, Err(_))) => return,
@@ -128,7 +133,10 @@ fuzz_target!(|data: &[u8]| {
     let duration = doc.keys.duration();
     for t in [0.0, 0.5 * duration, duration, file.time] {
         if doc.sample(t).is_ok() {
-            assert!(all_finite(&doc.session), "playback at {t} left a non-finite structure");
+            assert!(
+                all_finite(&doc.session),
+                "playback at {t} left a non-finite structure"
+            );
         }
     }
     // A joint rotated and undone.
@@ -172,11 +180,15 @@ fuzz_target!(|data: &[u8]| {
             check_shown(&doc);
         }
         if doc.bind_blocking(BindWeights::KeepBound).is_ok() {
-            assert!(all_finite(&doc.session), "a bind left a non-finite structure");
+            assert!(
+                all_finite(&doc.session),
+                "a bind left a non-finite structure"
+            );
             check_shown(&doc);
         }
     }
     // Saved again, the session parses.
-    let saved = serde_json::to_string(&doc.session_file(file.time)).expect("the session serialises");
+    let saved =
+        serde_json::to_string(&doc.session_file(file.time)).expect("the session serialises");
     SessionFile::parse(&saved, path).expect("a saved session parses");
 });

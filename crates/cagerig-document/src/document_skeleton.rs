@@ -88,9 +88,7 @@ impl Document {
     /// view the draft when there is one; nothing for a mesh with no skeleton; else the rig's
     /// (rest or current).
     pub fn shown_skeleton(&self, rest: bool) -> ShownSkeleton {
-        if rest
-            && let Some(d) = &self.draft
-        {
+        if rest && let Some(d) = &self.draft {
             return ShownSkeleton {
                 positions: d.positions(),
                 parents: d.parents(),

@@ -225,11 +225,7 @@ mod skeleton_building {
         let opened = crate::rig_open::open_rig(&source).unwrap();
         assert!(!opened.rigged);
         let mut d = Document::new(source, opened.session).with_rigged(false);
-        assert!(
-            d.shown_skeleton(true)
-                .positions
-                .is_empty()
-        );
+        assert!(d.shown_skeleton(true).positions.is_empty());
         assert!(matches!(
             d.execute(&Command::RotateJoint {
                 joint: 0,

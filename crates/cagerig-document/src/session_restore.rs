@@ -23,6 +23,16 @@ pub enum RestoreError {
         path = path.display()
     )]
     Binding { path: PathBuf, message: String },
+    /// The skeleton being built (`state.draft`) breaks what the editor keeps true of one.
+    #[error(
+        "{path}: the skeleton being built (\"state\".\"draft\") is damaged: {source}",
+        path = path.display()
+    )]
+    Draft {
+        path: PathBuf,
+        #[source]
+        source: crate::skeleton_draft::DraftError,
+    },
     /// The saved state (`state`) does not fit the rig.
     #[error(
         "{path}: the saved state does not fit the rig {rig}: {source}",
@@ -44,6 +54,12 @@ pub fn restore_session(
     file: &SessionFile,
     opened: OpenedRig,
 ) -> Result<Document, RestoreError> {
+    if let Some(draft) = &file.state.draft {
+        draft.validate().map_err(|source| RestoreError::Draft {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    }
     let mut doc = Document::new(file.source.clone(), opened.session).with_rigged(opened.rigged);
     if let Some(binding) = &file.binding {
         let session = binding
@@ -91,7 +107,8 @@ mod tests {
     #[test]
     fn a_saved_state_is_restored_exactly() {
         let file = edited_file();
-        let doc = restore_session(Path::new("a.cagerig"), &file, open_rig(&bar()).unwrap()).unwrap();
+        let doc =
+            restore_session(Path::new("a.cagerig"), &file, open_rig(&bar()).unwrap()).unwrap();
         assert_eq!(doc.snapshot().rig, file.state.rig);
         assert_eq!(doc.session_file(0.5), file);
     }
@@ -100,13 +117,42 @@ mod tests {
     fn a_state_of_another_rig_is_refused_naming_the_file_and_the_rig() {
         let mut file = edited_file();
         file.state.rig.rest_cage.pop();
-        let err = match restore_session(Path::new("b.cagerig"), &file, open_rig(&bar()).unwrap())
-        {
+        let err = match restore_session(Path::new("b.cagerig"), &file, open_rig(&bar()).unwrap()) {
             Err(e) => e.to_string(),
             Ok(_) => panic!("a state with one cage vertex too few was restored"),
         };
         assert!(
             err.contains("b.cagerig") && err.contains("builtin:bar") && err.contains("saved state"),
+            "{err}"
+        );
+    }
+
+    /// Regression: a draft whose parent is out of range or forms a cycle was restored, and the
+    /// editor indexed its joints with it (a panic drawing the rest view or re-parenting).
+    #[test]
+    fn a_damaged_skeleton_draft_is_refused_naming_the_file_and_the_joint() {
+        let opened = open_rig(&bar()).unwrap();
+        let mut file = edited_file();
+        let mut draft = crate::skeleton_draft::SkeletonDraft::from_session(&opened.session);
+        draft.joints[2].parent = Some(99);
+        file.state.draft = Some(draft.clone());
+        let err = match restore_session(Path::new("d.cagerig"), &file, opened) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("a draft with parent 99 of 4 joints was restored"),
+        };
+        assert!(
+            err.contains("d.cagerig") && err.contains("draft") && err.contains("99"),
+            "{err}"
+        );
+        draft.joints[2].parent = Some(3);
+        draft.joints[3].parent = Some(2);
+        file.state.draft = Some(draft);
+        let err = match restore_session(Path::new("e.cagerig"), &file, open_rig(&bar()).unwrap()) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("a draft with a parent cycle was restored"),
+        };
+        assert!(
+            err.contains("e.cagerig") && err.contains("below it"),
             "{err}"
         );
     }
@@ -123,7 +169,9 @@ mod tests {
             Ok(_) => panic!("a binding of 3 vertices was rebuilt on the bar"),
         };
         assert!(
-            err.contains("c.cagerig") && err.contains("mesh and") && err.contains("cannot be rebuilt"),
+            err.contains("c.cagerig")
+                && err.contains("mesh and")
+                && err.contains("cannot be rebuilt"),
             "{err}"
         );
     }

@@ -107,7 +107,11 @@ fn the_fuzz_seeds_are_current_session_files_that_open() {
     for (name, file) in seeds() {
         let path = dir.join(name);
         let text = serde_json::to_string(&file).unwrap();
-        assert!(text.len() <= 8192, "{name}: {} bytes, over run_all.sh's -max_len", text.len());
+        assert!(
+            text.len() <= 8192,
+            "{name}: {} bytes, over run_all.sh's -max_len",
+            text.len()
+        );
         if write {
             file.write(&path).unwrap();
         }
