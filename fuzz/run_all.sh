@@ -8,7 +8,7 @@ set -u
 cd "$(dirname "$0")"
 SECONDS_EACH=${1:-3600}
 JOBS=${JOBS:-2}
-TARGETS=(parsers edit_script rig_assembly gltf_import fbx_import gltf_roundtrip cage_gen)
+TARGETS=(parsers edit_script rig_assembly gltf_import fbx_import gltf_roundtrip cage_gen session_file)
 DATA=../data
 mkdir -p logs
 
@@ -30,6 +30,11 @@ mkdir -p corpus/rig_assembly
 mkdir -p corpus/edit_script
 printf '%s' '{"steps":[{"op":"rotate_joint","joint":1,"axis":[0,0,1],"degrees":30},{"op":"move_posed_cage","vertices":[3],"offset":[0,0.1,0]}]}' \
   > corpus/edit_script/seed0
+
+# Session files of the built-in bar written by this build (crates/cagerig-document/tests/
+# fuzz_seeds.rs checks they are current): as opened, edited with keys, a skeleton draft, a studio
+# binding, a file source.
+for f in seeds/session_file/*.cagerig; do seed session_file "$f" "$(basename "$f")"; done
 
 # --- build once, then run JOBS targets at a time --------------------------------------------------
 if ! RUSTC_BOOTSTRAP=1 nice -n 19 cargo fuzz build -O -s none > logs/build.log 2>&1; then

@@ -26,7 +26,7 @@ use crate::status::status_bar_ui;
 use crate::timeline::{TimelineState, timeline_ui};
 use crate::tools::Tools;
 use crate::view_keys::view_keys;
-use crate::view_state::ViewState;
+use crate::view_state::{REST, ViewState};
 use crate::views::{Gpu, views_ui};
 
 /// The editor.
@@ -296,7 +296,7 @@ impl StudioApp {
     pub fn gizmo_pivot(&self, view: usize) -> Option<(DVec3, bool, bool)> {
         let doc = self.project.doc.as_ref()?;
         self.tools
-            .gizmo_pivot(&doc.session, &doc.shown_skeleton(view), view)
+            .gizmo_pivot(&doc.session, &doc.shown_skeleton(view == REST), view)
     }
 
     pub fn renderer(&self) -> Option<&Arc<Renderer>> {

@@ -230,4 +230,56 @@ mod tests {
         assert!(out.join("notes.txt").is_file() && out.join("rig.glb").is_file());
         std::fs::remove_dir_all(&root).ok();
     }
+
+    /// A skeleton built and bound in the studio on a mesh that had none is what the export
+    /// writes: the file set and the glTF carry its joints and weights.
+    #[test]
+    fn a_skeleton_bound_in_the_studio_is_exported() {
+        use crate::binding::BindWeights;
+        use crate::document::{Command, SkeletonEdit};
+        let dir = std::env::temp_dir().join(format!(
+            "cagerig-studio-export-bound-{}",
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bar = bar_document().session;
+        let mesh = dir.join("bar.obj");
+        cagerig::io::write_obj(&mesh, bar.rest_mesh(), bar.mesh_triangles()).unwrap();
+        let source = RigSource::File {
+            path: mesh,
+            cage: None,
+            skin: None,
+            auto_cage: Some(40),
+        };
+        let opened = open_rig(&source).unwrap();
+        let mut doc = Document::new(source, opened.session).with_rigged(opened.rigged);
+        let (lo, hi) = cagerig::mesh::bounding_box(doc.session.rest_mesh());
+        let axis = (hi - lo).max_position();
+        for k in 0..3usize {
+            let mut position = 0.5 * (lo + hi);
+            position[axis] = lo[axis] + (0.15 + 0.35 * k as f64) * (hi[axis] - lo[axis]);
+            doc.execute(&Command::EditSkeleton(SkeletonEdit::Add {
+                position,
+                parent: k.checked_sub(1),
+                mirror: None,
+            }))
+            .unwrap();
+        }
+        doc.bind_blocking(BindWeights::Automatic(
+            cagerig::auto_weights::AutoWeightsOptions {
+                resolution: 48,
+                ..Default::default()
+            },
+        ))
+        .unwrap();
+        let out = dir.join("export");
+        export_all(&doc, &out).unwrap();
+        let rig = cagerig::rig_files::load_rig_files(&out.join("rig.obj"), None).unwrap();
+        assert_eq!(rig.parts.skeleton.len(), 3);
+        let glb =
+            cagerig_formats::import_character(&out.join("rig.glb"), &Default::default()).unwrap();
+        assert_eq!(glb.skeleton.len(), 3);
+        assert_eq!(glb.skin_weights.num_vertices(), doc.session.num_vertices());
+        std::fs::remove_dir_all(dir).ok();
+    }
 }

@@ -7,7 +7,7 @@
 //! | module | concern |
 //! |---|---|
 //! | **parts of the state** | |
-//! | `document` | the rig session, its keys, one command path, gestures, undo / redo |
+//! | `document` (and `document_skeleton`, `history`, `keys`, `skeleton_draft`, `binding`, `rig_open`, `unrigged`, `session_file`, `saved_binding`, `session_restore`) | the document model, from the GUI-free crate `cagerig-document`: the rig session, keys, skeleton building, undo, opening characters, session files |
 //! | `project` | the document with its files: saving, autosave, export, animation import |
 //! | `view_state` | the two views' cameras, layout, layers, colour map |
 //! | `tools` | selection, tool, mouse state, numeric entry; a transform as one gesture |
@@ -34,15 +34,6 @@
 //! | `overlay` | selection, gizmo, names and warnings painted over a view |
 //! | **below the panels** | |
 //! | `doc_commands` | a command as the panels run it: logged, timed |
-//! | `history` | undo / redo stacks of snapshots |
-//! | `document_skeleton` | skeleton building: draft edits, shown skeletons, Bind as one undo step |
-//! | `skeleton_draft` | the skeleton being built: add, move, re-parent, rename, delete, X mirror |
-//! | `binding` | Bind: automatic or carried weights and the new session, on a background thread |
-//! | `keys` | skeleton and cage keyframes, playback, the paper tool's animation files |
-//! | `session_file` | the versioned `.cagerig` session file, autosave and recovery |
-//! | `saved_binding` | a skeleton and weights bound in the studio, as a session file keeps them |
-//! | `rig_open` | opening a character (built-in demo, OBJ set, glTF, FBX) |
-//! | `unrigged` | opening a mesh with no skeleton: its cage and a placeholder rig |
 //! | `viewport` | a 3D view rendered by `cagerig-render` into its own textures |
 //! | `view_picking` | what the mouse hits in a view |
 //! | `picking` | projection, mouse rays, nearest visible point, occlusion |
@@ -56,45 +47,42 @@
 pub mod action;
 pub mod app;
 pub mod benchmark_drag;
-pub mod binding;
 pub mod diagnostics;
 pub mod dialogs;
 pub mod doc_commands;
-pub mod document;
-pub mod document_skeleton;
 pub mod export;
 pub mod frame_stats;
 pub mod gizmo;
-pub mod history;
 pub mod inspector;
 pub mod joint_placement;
-pub mod keys;
 pub mod menus;
 pub mod open_document;
 pub mod opening;
 pub mod overlay;
 pub mod picking;
 pub mod project;
-pub mod rig_open;
-pub mod saved_binding;
 pub mod scripted_run;
 pub mod selection;
-pub mod session_file;
 pub mod shortcuts;
-pub mod skeleton_draft;
 pub mod skeleton_panel;
 pub mod startup;
 pub mod status;
 pub mod timeline;
 pub mod tools;
 pub mod transform;
-pub mod unrigged;
 pub mod view_keys;
 pub mod view_mouse;
 pub mod view_picking;
 pub mod view_state;
 pub mod viewport;
 pub mod views;
+
+// The document model lives in `cagerig-document` (no GUI dependencies, so that the fuzz
+// targets build it); its modules keep their paths here.
+pub use cagerig_document::{
+    binding, document, document_skeleton, history, keys, rig_open, saved_binding, session_file,
+    session_restore, skeleton_draft, unrigged,
+};
 
 pub use app::StudioApp;
 pub use startup::StartupOptions;

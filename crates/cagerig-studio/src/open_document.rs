@@ -12,6 +12,7 @@ use crate::document::Document;
 use crate::opening::{AfterConfirm, NoThread, OpenRequest, PendingOpen};
 use crate::rig_open::{OpenError, OpenedRig, RigSource, open_rig};
 use crate::session_file::SessionFile;
+use crate::session_restore::restore_session;
 use crate::timeline::TimelineState;
 
 impl StudioApp {
@@ -222,29 +223,13 @@ impl StudioApp {
 
     /// A loaded session's rig with the session's state restored becomes the document.
     fn put_session(&mut self, path: &Path, file: SessionFile, opened: OpenedRig) {
-        let mut doc = Document::new(file.source.clone(), opened.session).with_rigged(opened.rigged);
-        if let Some(binding) = &file.binding {
-            match binding.bind(&doc.session) {
-                Ok(session) => doc.adopt_binding(session),
-                Err(e) => {
-                    self.diagnostics.log.error(format!(
-                        "{}: the skeleton bound in the studio cannot be rebuilt: {e}",
-                        path.display()
-                    ));
-                    return;
-                }
+        let doc = match restore_session(path, &file, opened) {
+            Ok(doc) => doc,
+            Err(e) => {
+                self.diagnostics.log.error(e.to_string());
+                return;
             }
-        }
-        let mut state = file.state.clone();
-        state.binding = doc.binding;
-        if let Err(e) = doc.restore(&state) {
-            self.diagnostics.log.error(format!(
-                "{}: the saved state does not fit the rig {}: {e}",
-                path.display(),
-                file.source.display_name()
-            ));
-            return;
-        }
+        };
         let edits = doc.edits;
         self.set_document(doc);
         self.project.saved_edits = edits;

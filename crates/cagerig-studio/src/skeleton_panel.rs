@@ -35,7 +35,7 @@ fn skeleton_section_ui(
     tools: &mut Tools,
     diag: &mut Diagnostics,
 ) {
-    let skeleton = doc.shown_skeleton(REST);
+    let skeleton = doc.shown_skeleton(true);
     let status = match (doc.draft.is_some(), doc.rigged()) {
         (_, false) if skeleton.positions.is_empty() => {
             "No skeleton yet: add joints by clicking on the mesh in the rest view, then Bind."

@@ -40,7 +40,7 @@ pub fn status_bar_ui(
                     }
                     if let Some(name) = selection
                         .joint
-                        .and_then(|j| doc.shown_skeleton(REST).names.get(j).cloned())
+                        .and_then(|j| doc.shown_skeleton(true).names.get(j).cloned())
                     {
                         ui.label(format!("| joint {name}"));
                     }

@@ -12,7 +12,7 @@ use crate::gizmo::{self, Axis, Constraint};
 use crate::picking::ViewProjection;
 use crate::selection::Selection;
 use crate::skeleton_draft::Mirror;
-use crate::view_state::CURRENT;
+use crate::view_state::{CURRENT, REST};
 
 /// Grab, rotate or scale.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -168,7 +168,7 @@ impl Transform {
             let Some(joint) = selection.joint else {
                 return Ok(None);
             };
-            let Some(&position) = doc.shown_skeleton(view).positions.get(joint) else {
+            let Some(&position) = doc.shown_skeleton(view == REST).positions.get(joint) else {
                 return Ok(None);
             };
             match (view == CURRENT, op) {

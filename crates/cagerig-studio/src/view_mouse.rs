@@ -186,7 +186,7 @@ fn add_joint_at(
             .warning("no joint added: click on the mesh (the joint goes inside the body)");
         return;
     };
-    let count = doc.shown_skeleton(REST).positions.len();
+    let count = doc.shown_skeleton(true).positions.len();
     let parent = tools.selection.joint.filter(|&j| j < count);
     let mirror = doc.mirror_x.then(|| doc.mirror());
     let command = Command::EditSkeleton(SkeletonEdit::Add {
@@ -221,7 +221,7 @@ fn start_drag(
         modal: false,
         trackball,
     };
-    let skeleton = doc.shown_skeleton(view);
+    let skeleton = doc.shown_skeleton(view == REST);
     if let Some((pivot, arrows, rings)) = tools.gizmo_pivot(&doc.session, &skeleton, view) {
         let handle = gizmo::hit_handle(
             &projection,

@@ -8,7 +8,7 @@ use glam::{DVec2, DVec3};
 use crate::document::Document;
 use crate::picking::{Occluder, ViewProjection, pick_box, pick_nearest};
 use crate::selection::Picked;
-use crate::view_state::{CURRENT, ViewState};
+use crate::view_state::{CURRENT, REST, ViewState};
 
 /// Pixels within which a click picks a cage vertex or a joint.
 pub const PICK_PIXELS: f64 = 12.0;
@@ -29,7 +29,7 @@ impl<'a> ViewPicker<'a> {
     pub fn new(doc: &'a Document, views: &ViewState, view: usize) -> Self {
         Self {
             session: &doc.session,
-            joints: doc.shown_skeleton(view).positions,
+            joints: doc.shown_skeleton(view == REST).positions,
             layers: views.layers,
             projection: views.projection(view),
             current: view == CURRENT,

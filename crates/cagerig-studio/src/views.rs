@@ -11,7 +11,7 @@ use crate::diagnostics::Diagnostics;
 use crate::document::Document;
 use crate::tools::Tools;
 use crate::view_mouse::{handle_mouse, navigate};
-use crate::view_state::{CURRENT, ViewState};
+use crate::view_state::{CURRENT, REST, ViewState};
 
 /// What draws the views: eframe's wgpu state and the rig renderer.
 #[derive(Clone, Copy)]
@@ -93,7 +93,7 @@ fn view_ui(
     );
     let color_by = views.color_by(&tools.selection);
     let layers = views.layers;
-    let skeleton = doc.shown_skeleton(view);
+    let skeleton = doc.shown_skeleton(view == REST);
     let texture = match gpu {
         Some(gpu) => {
             let v = &mut views.views[view];

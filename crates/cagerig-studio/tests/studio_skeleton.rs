@@ -72,7 +72,7 @@ fn a_mesh_with_no_rig_gets_a_clicked_skeleton_binds_and_poses() {
     h.run_steps(3);
     let doc = h.state().project.doc.as_ref().unwrap();
     assert!(!doc.rigged(), "{:?}", h.state().diagnostics.log);
-    assert!(doc.shown_skeleton(REST).positions.is_empty());
+    assert!(doc.shown_skeleton(true).positions.is_empty());
     let (lo, hi) = cagerig::mesh::bounding_box(doc.session.rest_mesh());
     let diagonal = (hi - lo).length();
     let axis = (hi - lo).max_position();

@@ -34,20 +34,56 @@ def _snapshot(rig: Rig) -> dict:
     }
 
 
+_STATE_FILES = ("mesh_rest", "mesh_posed", "cage_rest", "cage_posed")
+
+
+def _state_names(prefix: str) -> list[str]:
+    """The file names of one state, after checking that ``prefix`` is a plain name."""
+    if not prefix or prefix.startswith(".") or "/" in prefix or os.sep in prefix or "\0" in prefix:
+        raise ValueError(
+            f"prefix must be a plain file-name prefix (not empty, no path separator, not "
+            f"starting with '.'), got {prefix!r}"
+        )
+    return [f"{prefix}_{what}.obj" for what in _STATE_FILES] + [f"{prefix}_joints.json"]
+
+
 def _write_snapshot(snapshot: dict, directory: PathLike, prefix: str) -> list[Path]:
+    """Writes one state's five files into ``directory`` as a set.
+
+    Every file is first written in full to a temporary file beside its target; only when all
+    five are written are they renamed into place (each rename atomic), so a failure while
+    writing leaves the state of an earlier call with this prefix as it was and no temporary
+    file behind. Other files in ``directory`` are not touched.
+    """
     out = Path(directory)
+    names = _state_names(prefix)
+    for name in names:
+        target = out / name
+        if target.exists() and not target.is_file():
+            raise IsADirectoryError(
+                f"{target}: expected a file (or nothing) to write the state into, found a "
+                f"directory or special file; nothing was written"
+            )
     out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for what in ("mesh_rest", "mesh_posed", "cage_rest", "cage_posed"):
-        path = out / f"{prefix}_{what}.obj"
-        write_obj(path, *snapshot[what])
-        written.append(path)
-    path = out / f"{prefix}_joints.json"
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    tmp.write_text(json.dumps(snapshot["joints"], indent=2))
-    os.replace(tmp, path)
-    written.append(path)
-    return written
+    temps = [out / f".{name}.tmp{os.getpid()}" for name in names]
+    try:
+        for what, temp in zip(_STATE_FILES, temps):
+            write_obj(temp, *snapshot[what])
+        with open(temps[-1], "w", encoding="utf-8") as f:
+            f.write(json.dumps(snapshot["joints"], indent=2))
+            f.flush()
+            os.fsync(f.fileno())
+        written = []
+        for name, temp in zip(names, temps):
+            os.replace(temp, out / name)
+            written.append(out / name)
+        return written
+    finally:
+        for temp in temps:
+            try:
+                temp.unlink()
+            except FileNotFoundError:
+                pass
 
 
 def save_state(rig: Rig, directory: PathLike, prefix: str) -> list[Path]:
@@ -57,13 +93,20 @@ def save_state(rig: Rig, directory: PathLike, prefix: str) -> list[Path]:
     ``{prefix}_cage_rest.obj`` (C), ``{prefix}_cage_posed.obj`` (C') and
     ``{prefix}_joints.json`` (name, parent, rest and posed position of every joint).
 
+    ``directory`` may hold other files by design (call it once per state with its own prefix);
+    they are left alone. The five files are written as a set: each in full to a temporary
+    file first, then all renamed into place, so a failure (disk full, an exception) leaves the
+    files an earlier call wrote with this prefix as they were, never a mix of old and new.
+    For a folder that appears complete or not at all, use :func:`replay_script`,
+    :meth:`Rig.save` or :class:`OutputFolder`.
+
     Parameters
     ----------
     rig : Rig
     directory : str or os.PathLike
         Created if needed.
     prefix : str
-        E.g. ``"step3"``.
+        E.g. ``"step3"``: a plain name (no path separator, not starting with ``.``).
 
     Returns
     -------

@@ -52,6 +52,15 @@ pub enum DraftError {
     NotFinite(DVec3),
     #[error("the skeleton has no joint: add joints in the rest view (click on the mesh) first")]
     Empty,
+    #[error(
+        "joint {joint} ({name:?}): expected a parent below {count} (the joint count), found {parent}"
+    )]
+    ParentOutOfRange {
+        joint: usize,
+        name: String,
+        parent: usize,
+        count: usize,
+    },
 }
 
 /// `.L` / `.R` of a side-suffixed name, and the name without it.
@@ -292,6 +301,46 @@ impl SkeletonDraft {
         }
     }
 
+    /// Checks what the edits keep true, for a draft read from a file: every parent names a
+    /// joint of the draft, no joint is its own ancestor, positions are finite, names are
+    /// non-empty and unique. O(#J²) at worst (ancestor walks bounded by `#J`).
+    pub fn validate(&self) -> Result<(), DraftError> {
+        let count = self.joints.len();
+        let mut names = std::collections::HashSet::with_capacity(count);
+        for (j, joint) in self.joints.iter().enumerate() {
+            if let Some(parent) = joint.parent
+                && parent >= count
+            {
+                return Err(DraftError::ParentOutOfRange {
+                    joint: j,
+                    name: joint.name.clone(),
+                    parent,
+                    count,
+                });
+            }
+            if !joint.position.is_finite() {
+                return Err(DraftError::NotFinite(joint.position));
+            }
+            if joint.name.trim().is_empty() {
+                return Err(DraftError::EmptyName);
+            }
+            if !names.insert(joint.name.as_str()) {
+                return Err(DraftError::NameTaken(joint.name.clone()));
+            }
+        }
+        for (j, joint) in self.joints.iter().enumerate() {
+            if let Some(parent) = joint.parent
+                && self.is_above(j, parent)
+            {
+                return Err(DraftError::Cycle {
+                    joint: joint.name.clone(),
+                    parent: self.joints[parent].name.clone(),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// The rig skeleton S of this draft: a joint that stands for a bound joint keeps that
     /// joint's rest orientation and scale (`rest_frames`, `#J` of the session), a new joint is
     /// axis-aligned; positions are the draft's.
@@ -327,6 +376,61 @@ impl SkeletonDraft {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn joint(name: &str, parent: Option<usize>, position: DVec3) -> DraftJoint {
+        DraftJoint {
+            name: name.into(),
+            parent,
+            position,
+            bound: None,
+        }
+    }
+
+    #[test]
+    fn validate_accepts_what_edits_make_and_refuses_each_broken_rule() {
+        let good = SkeletonDraft {
+            joints: vec![
+                joint("a", None, DVec3::ZERO),
+                joint("b", Some(0), DVec3::X),
+                joint("c", Some(1), DVec3::Y),
+            ],
+        };
+        assert_eq!(good.validate(), Ok(()));
+        let broken = |f: &dyn Fn(&mut SkeletonDraft)| {
+            let mut d = good.clone();
+            f(&mut d);
+            d.validate().unwrap_err()
+        };
+        assert!(matches!(
+            broken(&|d| d.joints[1].parent = Some(3)),
+            DraftError::ParentOutOfRange {
+                joint: 1,
+                parent: 3,
+                count: 3,
+                ..
+            }
+        ));
+        assert!(matches!(
+            broken(&|d| d.joints[0].parent = Some(2)),
+            DraftError::Cycle { .. }
+        ));
+        assert!(matches!(
+            broken(&|d| d.joints[2].parent = Some(2)),
+            DraftError::Cycle { .. }
+        ));
+        assert!(matches!(
+            broken(&|d| d.joints[2].position.x = f64::NAN),
+            DraftError::NotFinite(_)
+        ));
+        assert_eq!(
+            broken(&|d| d.joints[2].name = " ".into()),
+            DraftError::EmptyName
+        );
+        assert_eq!(
+            broken(&|d| d.joints[2].name = "a".into()),
+            DraftError::NameTaken("a".into())
+        );
+    }
 
     const MIRROR: Mirror = Mirror {
         centre_x: 0.0,

@@ -11,7 +11,6 @@ use crate::keys::Keys;
 use crate::saved_binding::SavedBinding;
 use crate::session_file::SessionFile;
 use crate::skeleton_draft::{Mirror, SkeletonDraft};
-use crate::view_state::REST;
 
 /// The skeleton a view shows: positions (`#J`, world space), parents and names.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -27,7 +26,7 @@ const MIRROR_TOLERANCE: f64 = 0.02;
 
 impl Document {
     /// Posing needs a bound skeleton with no pending changes.
-    pub(crate) fn check_posable(&self) -> Result<(), DocError> {
+    pub fn check_posable(&self) -> Result<(), DocError> {
         if !self.rigged() {
             Err(DocError::NotRigged)
         } else if self.draft.is_some() {
@@ -85,12 +84,11 @@ impl Document {
         }
     }
 
-    /// The skeleton view `view` shows: in the rest view the draft when there is one; nothing
-    /// for a mesh with no skeleton; else the rig's (rest or current).
-    pub fn shown_skeleton(&self, view: usize) -> ShownSkeleton {
-        if view == REST
-            && let Some(d) = &self.draft
-        {
+    /// The skeleton a view shows (`rest`: the rest view, else the current one): in the rest
+    /// view the draft when there is one; nothing for a mesh with no skeleton; else the rig's
+    /// (rest or current).
+    pub fn shown_skeleton(&self, rest: bool) -> ShownSkeleton {
+        if rest && let Some(d) = &self.draft {
             return ShownSkeleton {
                 positions: d.positions(),
                 parents: d.parents(),
@@ -102,7 +100,7 @@ impl Document {
         }
         let s = &self.session;
         ShownSkeleton {
-            positions: if view == REST {
+            positions: if rest {
                 s.rest_joints().collect()
             } else {
                 s.posed_joints().collect()

@@ -225,11 +225,7 @@ mod skeleton_building {
         let opened = crate::rig_open::open_rig(&source).unwrap();
         assert!(!opened.rigged);
         let mut d = Document::new(source, opened.session).with_rigged(false);
-        assert!(
-            d.shown_skeleton(crate::view_state::REST)
-                .positions
-                .is_empty()
-        );
+        assert!(d.shown_skeleton(true).positions.is_empty());
         assert!(matches!(
             d.execute(&Command::RotateJoint {
                 joint: 0,
@@ -259,15 +255,6 @@ mod skeleton_building {
         .unwrap();
         let moved = cagerig::mesh::max_distance(&rest, d.session.posed_mesh());
         assert!(moved > 1e-3 * (hi - lo).length(), "the mesh did not deform");
-        // Export writes the new skeleton and weights: the file set and a glTF with its skin.
-        let out = dir.join("export");
-        crate::export::export_all(&d, &out).unwrap();
-        let rig = cagerig::rig_files::load_rig_files(&out.join("rig.obj"), None).unwrap();
-        assert_eq!(rig.parts.skeleton.len(), 3);
-        let glb =
-            cagerig_formats::import_character(&out.join("rig.glb"), &Default::default()).unwrap();
-        assert_eq!(glb.skeleton.len(), 3);
-        assert_eq!(glb.skin_weights.num_vertices(), d.session.num_vertices());
         // The session file keeps the binding and reopens it exactly.
         let file = d.session_file(0.0);
         assert_eq!(file.version, 2, "a studio binding needs version 2");
