@@ -42,7 +42,7 @@ pub enum RestoreError {
         path: PathBuf,
         rig: String,
         #[source]
-        source: DocError,
+        source: Box<DocError>,
     },
 }
 
@@ -75,7 +75,7 @@ pub fn restore_session(
     doc.restore(&state).map_err(|source| RestoreError::State {
         path: path.to_path_buf(),
         rig: file.source.display_name(),
-        source,
+        source: Box::new(source),
     })?;
     Ok(doc)
 }

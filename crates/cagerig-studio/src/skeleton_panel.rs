@@ -11,7 +11,6 @@ use crate::doc_commands::run_command;
 use crate::document::{Command, Document, SkeletonEdit};
 use crate::document_skeleton::ShownSkeleton;
 use crate::tools::Tools;
-use crate::view_state::REST;
 
 /// The Skeleton section of the inspector.
 pub fn skeleton_ui(

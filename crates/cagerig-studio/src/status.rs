@@ -4,7 +4,6 @@
 use crate::diagnostics::{Diagnostics, LogLevel};
 use crate::document::Document;
 use crate::selection::Selection;
-use crate::view_state::REST;
 
 /// The bottom status bar and, above it, the log panel (collapsible). The Shortcuts button
 /// sets `show_shortcuts`.
