@@ -1,10 +1,12 @@
 //! Barycentric coordinates: mean value (Φ), Green (φ, ψ), max-entropy (Ψ projection), MaxVol row selection.
 
 pub mod green;
+mod green_batch;
 mod green_triangle;
 pub(crate) mod local_mvc;
 pub mod maxvol;
 mod maxvol_dominance;
+mod lane_functions;
 mod maxvol_lu;
 mod maxvol_swaps;
 pub mod mec;
