@@ -25,7 +25,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
     let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
     let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
-    let (weights, _) = cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), skeleton.len())?;
+    let (weights, _) =
+        cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), skeleton.len())?;
     let cage = cagerig::io::read_obj(&dir.join("arm_cage.obj"))?;
     let mesh = cagerig::subdivide::subdivide_midpoint(&mesh, &weights, levels)?.mesh;
     let points = &mesh.positions;

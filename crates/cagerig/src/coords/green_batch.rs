@@ -137,12 +137,11 @@ impl<'a> GreenBatchPlan<'a> {
 /// Per-thread buffers of [`evaluate_green_rows`].
 #[derive(Debug, Clone)]
 pub(crate) struct GreenBatchScratch {
-    /// Per cage vertex: a_k = v_k − η (x, y, z), |a_k| and 1/|a_k|, per lane.
+    /// Per cage vertex: a_k = v_k − η (x, y, z) and |a_k|, per lane.
     to_x: Vec<Lanes>,
     to_y: Vec<Lanes>,
     to_z: Vec<Lanes>,
     length: Vec<Lanes>,
-    inv_length: Vec<Lanes>,
     /// Per cage vertex: φ being summed over the faces, per lane.
     vertex_sums: Vec<Lanes>,
     /// Per edge (plan order): ∫_edge ds/R, per lane.
@@ -160,7 +159,6 @@ impl GreenBatchScratch {
             to_y: per_vertex.clone(),
             to_z: per_vertex.clone(),
             length: per_vertex.clone(),
-            inv_length: per_vertex.clone(),
             vertex_sums: per_vertex,
             edge_integrals: vec![[0.0; LANES]; plan.edges.len()],
             row_vertex: vec![0.0; plan.positions.len()],
@@ -211,10 +209,10 @@ fn evaluate_green_rows_generic(
         for (k, sums) in scratch.vertex_sums.iter().enumerate() {
             let value = V8(*sums);
             check = check + (value - value);
-            vertex_out.write(start, k, &value.0[..count]);
+            write_lanes(vertex_out, start, k, &value.0, count);
         }
         for column in &plan.degenerate_columns {
-            face_out.write(start, *column as usize, &[0.0; LANES][..count]);
+            write_lanes(face_out, start, *column as usize, &[0.0; LANES], count);
         }
         let mut finite = Mask::from_fn(|l| check.0[l] == 0.0);
         for (l, &point) in chunk.iter().enumerate() {
@@ -234,6 +232,17 @@ fn evaluate_green_rows_generic(
         }
     }
     first_non_finite
+}
+
+/// The first `count` lanes of `values` into column `column` of `out` from row `start` on: a whole
+/// batch as one store of a fixed size (a slice of run-time length becomes a `memcpy` call).
+#[inline(always)]
+fn write_lanes(out: &mut RowBlock, start: usize, column: usize, values: &Lanes, count: usize) {
+    if count == LANES {
+        out.write(start, column, values);
+    } else {
+        out.write(start, column, &values[..count]);
+    }
 }
 
 /// One row of Green coordinates by the per-point closed forms into `scratch.row_vertex` and
@@ -276,7 +285,6 @@ fn evaluate_batch(
         scratch.to_y[k] = ay.0;
         scratch.to_z[k] = az.0;
         scratch.length[k] = length.0;
-        scratch.inv_length[k] = (splat(1.0) / length).0;
         scratch.vertex_sums[k] = [0.0; LANES];
     }
     let mut recompute = Mask([0; LANES]);
@@ -301,8 +309,7 @@ fn evaluate_batch(
             V8(scratch.length[idx[2]]),
         ];
         let dot = |u: &[V8; 3], v: &[V8; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-        let dot_constant =
-            |u: &[V8; 3], c: &[f64; 3]| u[0] * c[0] + u[1] * c[1] + u[2] * c[2];
+        let dot_constant = |u: &[V8; 3], c: &[f64; 3]| u[0] * c[0] + u[1] * c[1] + u[2] * c[2];
         // The per-point code's degenerate positions: at a corner, or on the face's plane.
         let size = lengths[0] + lengths[1] + lengths[2];
         let near_corner = or(
@@ -326,13 +333,11 @@ fn evaluate_batch(
             + dot(&a[1], &a[2]) * lengths[0];
         let on_plane = not(numerator.abs().gt(cube * ON_PLANE));
         recompute = or(recompute, or(near_corner, on_plane));
-        // Both divided by |a₀||a₁||a₂| (|numerator| ≤ 1, |denominator| ≤ 4) for the fraction's
+        // Both scaled (exactly) to |denominator| ≤ 8 and |numerator| ≤ 2, for the fraction's
         // powers.
-        let inv_cube = V8(scratch.inv_length[idx[0]])
-            * V8(scratch.inv_length[idx[1]])
-            * V8(scratch.inv_length[idx[2]]);
+        let scale = inverse_power_of_two(cube);
         let (angle_num, angle_den) =
-            angle_fraction::<PlainMath>(numerator.abs() * inv_cube, denominator * inv_cube);
+            angle_fraction::<PlainMath>(numerator.abs() * scale, denominator * scale);
         let half_solid_angle = angle_num / angle_den;
         let solid_angle = V8::select(
             splat(0.0).gt(numerator),
@@ -350,7 +355,7 @@ fn evaluate_batch(
             + dot_constant(&a[2], &face.edge_normals[2]) * integrals[2];
         let psi = (edge_sum - h.abs() * solid_angle.abs()) * INV_FOUR_PI;
         check = check + (psi - psi);
-        face_out.write(start, face.column as usize, &psi.0[..count]);
+        write_lanes(face_out, start, face.column as usize, &psi.0, count);
         for i in 0..3 {
             let next = (i + 1) % 3;
             let hat_at_foot = -dot_constant(&a[next], &face.hat_gradients[i]);
@@ -363,6 +368,17 @@ fn evaluate_batch(
         }
     }
     (recompute, check)
+}
+
+/// 2^−e per lane for x = m·2^e (m ∈ [1, 2)), x a positive normal number below 2¹⁰²³ (other
+/// lanes give garbage): bit operations only, so that scaling by it is exact.
+#[inline(always)]
+fn inverse_power_of_two(x: V8) -> V8 {
+    // The biased exponent of 2^−e is 2046 − (the biased exponent of x).
+    V8(std::array::from_fn(|l| {
+        let biased = (x.0[l].to_bits() >> 52) & 0x7ff;
+        f64::from_bits((2046u64.wrapping_sub(biased) & 0x7ff) << 52)
+    }))
 }
 
 /// `∫ ds/R` along `edge` for the lanes' points (see `edge_log_integral` in
@@ -509,11 +525,17 @@ mod tests {
             };
             for k in 0..c {
                 let (got, expected) = (phi[k * n + i], scratch.row_vertex[k]);
-                assert!((got - expected).abs() < tolerance, "φ row {i} col {k}: {got} vs {expected}");
+                assert!(
+                    (got - expected).abs() < tolerance,
+                    "φ row {i} col {k}: {got} vs {expected}"
+                );
             }
             for t in 0..f {
                 let (got, expected) = (psi[t * n + i], scratch.row_face[t]);
-                assert!((got - expected).abs() < tolerance, "ψ row {i} col {t}: {got} vs {expected}");
+                assert!(
+                    (got - expected).abs() < tolerance,
+                    "ψ row {i} col {t}: {got} vs {expected}"
+                );
             }
         }
     }

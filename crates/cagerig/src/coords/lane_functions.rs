@@ -72,7 +72,6 @@ pub(super) fn angle_fraction<M: LaneMath>(sin: V8, cos: V8) -> (V8, V8) {
     (theta_times_den_q, den_q)
 }
 
-
 /// fdlibm's minimax coefficients for `ln((1 + s)/(1 − s)) = 2s + s·R(z)`, z = s², |s| ≤ 0.1716
 /// (error of R below 2⁻⁵⁸·⁴⁵): `R(z) = Σ_j LN_COEFFICIENTS[j] z^(j+1)`.
 const LN_COEFFICIENTS: [f64; 7] = [

@@ -3,10 +3,10 @@
 pub mod green;
 mod green_batch;
 mod green_triangle;
+mod lane_functions;
 pub(crate) mod local_mvc;
 pub mod maxvol;
 mod maxvol_dominance;
-mod lane_functions;
 mod maxvol_lu;
 mod maxvol_swaps;
 pub mod mec;

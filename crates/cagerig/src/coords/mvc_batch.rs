@@ -22,11 +22,11 @@
 
 use glam::DVec3;
 
+use super::lane_functions::angle_fraction;
 use super::mvc::{EPS, MvcEvaluator, MvcScratch};
 pub(crate) use super::mvc_lanes::LANES;
 #[cfg(target_arch = "x86_64")]
 use super::mvc_lanes::{Avx512Math, FusedMath};
-use super::lane_functions::angle_fraction;
 use super::mvc_lanes::{LaneMath, Lanes, Mask, PlainMath, V8, not, or};
 use crate::row_blocks::RowBlock;
 use crate::simd_dispatch::simd_dispatch;
