@@ -204,11 +204,11 @@ fn evaluate_green_rows_generic(
         let pz = V8(std::array::from_fn(|l| lane_point(l).z));
         let (recompute, face_check) =
             evaluate_batch(plan, [px, py, pz], scratch, face_out, start, count);
-        // `x − x` is 0 for a finite x and NaN otherwise: the sums stay 0 iff all are finite.
+        // `0·x` is ±0 for a finite x and NaN otherwise: the sums stay 0 iff all are finite.
         let mut check = face_check;
         for (k, sums) in scratch.vertex_sums.iter().enumerate() {
             let value = V8(*sums);
-            check = check + (value - value);
+            check = check + value * 0.0;
             write_lanes(vertex_out, start, k, &value.0, count);
         }
         for column in &plan.degenerate_columns {
@@ -265,7 +265,7 @@ fn evaluate_point(plan: &GreenBatchPlan<'_>, eta: DVec3, scratch: &mut GreenBatc
 
 /// The lanes of one batch: φ summed into `scratch.vertex_sums`, ψ written into `face_out` (rows
 /// `start..start + count`, the columns of the non-degenerate faces). Returns the lanes to
-/// recompute per point and, per lane, the sum of `ψ − ψ` (0 iff every ψ is finite).
+/// recompute per point and, per lane, the sum of `0·ψ` (0 iff every ψ is finite).
 #[inline(always)]
 fn evaluate_batch(
     plan: &GreenBatchPlan<'_>,
@@ -354,16 +354,16 @@ fn evaluate_batch(
             + dot_constant(&a[1], &face.edge_normals[1]) * integrals[1]
             + dot_constant(&a[2], &face.edge_normals[2]) * integrals[2];
         let psi = (edge_sum - h.abs() * solid_angle.abs()) * INV_FOUR_PI;
-        check = check + (psi - psi);
+        check = check + psi * 0.0;
         write_lanes(face_out, start, face.column as usize, &psi.0, count);
-        for i in 0..3 {
+        for (i, &vertex) in idx.iter().enumerate() {
             let next = (i + 1) % 3;
             let hat_at_foot = -dot_constant(&a[next], &face.hat_gradients[i]);
             let slope = integrals[0] * face.hat_slopes[i][0]
                 + integrals[1] * face.hat_slopes[i][1]
                 + integrals[2] * face.hat_slopes[i][2];
             let part = (hat_at_foot * solid_angle - h * slope) * INV_FOUR_PI;
-            let sums = &mut scratch.vertex_sums[idx[i]];
+            let sums = &mut scratch.vertex_sums[vertex];
             *sums = (V8(*sums) + part).0;
         }
     }
