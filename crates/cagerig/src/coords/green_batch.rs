@@ -540,6 +540,57 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// On an icosphere cage with random radii at any scale, the batches reproduce every
+        /// interior point and sum φ to 1, and every tier gives the baseline's bits.
+        #[test]
+        fn batches_reproduce_and_sum_to_one_on_any_star_cage(
+            radii in proptest::collection::vec(0.8f64..1.6, 42),
+            scale in 0.01f64..100.0,
+            seed in 0u64..1000,
+        ) {
+            let (positions, triangles) = crate::coords::mvc::tests::icosphere(&radii);
+            let positions: Vec<DVec3> = positions.iter().map(|p| *p * scale).collect();
+            let frames: Vec<_> = triangles
+                .iter()
+                .map(|t| GreenTriangle::new(t.map(|v| positions[v as usize])))
+                .collect();
+            let plan = GreenBatchPlan::new(&positions, &triangles, &frames);
+            // Points within 0.4 of the centre (`random_inside` gives |x|₁ < 0.8): the face planes
+            // pass at ≥ 0.6 with corner radii in [0.8, 1.6] and 32–36° between neighbours.
+            let points: Vec<DVec3> =
+                random_inside(seed, 21).iter().map(|p| *p * (0.5 * scale)).collect();
+            let Some((phi, psi, bad)) = run_tier(0, &plan, &points) else {
+                unreachable!("the baseline always runs")
+            };
+            proptest::prop_assert_eq!(bad, None);
+            let mut normals = vec![DVec3::ZERO; triangles.len()];
+            crate::coords::green::face_normals(&positions, &triangles, &mut normals);
+            let n = points.len();
+            for (i, eta) in points.iter().enumerate() {
+                let sum: f64 = (0..positions.len()).map(|k| phi[k * n + i]).sum();
+                let image: DVec3 = positions
+                    .iter()
+                    .enumerate()
+                    .map(|(k, v)| phi[k * n + i] * *v)
+                    .chain(normals.iter().enumerate().map(|(t, m)| psi[t * n + i] * *m))
+                    .sum();
+                proptest::prop_assert!((sum - 1.0).abs() < 1e-13, "Σφ = {}", sum);
+                proptest::prop_assert!(
+                    image.distance(*eta) < 1e-13 * scale,
+                    "{} vs {}", image, eta
+                );
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            for tier in [1, 2] {
+                if let Some((tier_phi, tier_psi, _)) = run_tier(tier, &plan, &points) {
+                    proptest::prop_assert_eq!(bits(&tier_phi), bits(&phi));
+                    proptest::prop_assert_eq!(bits(&tier_psi), bits(&psi));
+                }
+            }
+        }
+    }
+
     #[test]
     fn degenerate_triangle_gets_a_zero_column_and_is_skipped() {
         let mut cage = test_cage();
