@@ -12,14 +12,18 @@
 //! way (negative signed volume) is used with every triangle reversed; [`GreenCoords::triangles`]
 //! holds the triangles as used, and every normal must be taken from them.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use faer::Mat;
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::green_batch::{GreenBatchPlan, GreenBatchScratch, evaluate_green_rows};
 use super::green_triangle::GreenTriangle;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::mesh::TriMesh;
+use crate::row_blocks::SharedColumns;
 
 /// Points per parallel task.
 const POINT_BLOCK: usize = 256;
@@ -52,7 +56,9 @@ pub fn outward_triangles(cage: &TriMesh) -> Vec<[u32; 3]> {
 }
 
 /// Green coordinates of `points` w.r.t. the closed triangle cage `cage`, computed in parallel
-/// blocks of points. `progress` (if any) is called from worker threads with the number of
+/// blocks of points, [`LANES`](super::mvc_batch::LANES) points at a time (SIMD across points,
+/// [`super::green_batch`]; the points on or within 1e-12 (relative) of a face's plane or a cage
+/// vertex go through the per-point closed forms of [`super::green_triangle`]). `progress` (if any) is called from worker threads with the number of
 /// points finished so far.
 ///
 /// Errors: an empty cage, a non-finite point, or coordinates too large to store.
@@ -74,51 +80,65 @@ pub fn compute_green_coords(
         .iter()
         .map(|t| GreenTriangle::new(t.map(|v| cage.positions[v as usize])))
         .collect();
-    let width = num_cage + num_faces;
-    // Row-major [φ | ψ] per point, filled in parallel blocks, then split into two column-major
-    // matrices.
-    let mut rows = vec![0.0; points.len() * width];
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    rows.par_chunks_mut(POINT_BLOCK * width)
-        .zip(points.par_chunks(POINT_BLOCK))
-        .for_each(|(block, block_points)| {
-            for (row, &eta) in block.chunks_mut(width).zip(block_points) {
-                let (phi, psi) = row.split_at_mut(num_cage);
-                for ((t, frame), psi_t) in triangles.iter().zip(&frames).zip(psi.iter_mut()) {
-                    if let Some(frame) = frame {
-                        let terms = frame.terms(eta);
-                        *psi_t = terms.face;
-                        for (v, part) in t.iter().zip(terms.vertices) {
-                            phi[*v as usize] += part;
-                        }
-                    }
+    let plan = GreenBatchPlan::new(&cage.positions, &triangles, &frames);
+    let num_points = points.len();
+    // φ and ψ are written straight into their column-major matrices by row blocks, without
+    // zero-filling them first (every entry is written), so the page faults of first touch are
+    // spread over the workers.
+    let mut vertex = Mat::<f64>::with_capacity(num_points, num_cage);
+    let mut face = Mat::<f64>::with_capacity(num_points, num_faces);
+    let vertex_storage = SharedColumns::of_capacity(&mut vertex, num_cage);
+    let face_storage = SharedColumns::of_capacity(&mut face, num_faces);
+    let done = AtomicUsize::new(0);
+    let first_non_finite = AtomicUsize::new(usize::MAX);
+    (0..num_points.div_ceil(POINT_BLOCK))
+        .into_par_iter()
+        .for_each_init(
+            || GreenBatchScratch::new(&plan),
+            |scratch, block| {
+                let start = block * POINT_BLOCK;
+                let count = POINT_BLOCK.min(num_points - start);
+                // SAFETY: each allocation holds `col_stride ≥ num_points` rows for each of its
+                // columns; row blocks are disjoint, so no two tasks write the same entry, and
+                // nothing reads the storage before the loop ends.
+                let (mut vertex_rows, mut face_rows) = unsafe {
+                    (
+                        vertex_storage.rows(start, count),
+                        face_storage.rows(start, count),
+                    )
+                };
+                if let Some(row) = evaluate_green_rows(
+                    &plan,
+                    &points[start..start + count],
+                    scratch,
+                    &mut vertex_rows,
+                    &mut face_rows,
+                ) {
+                    first_non_finite.fetch_min(start + row, Ordering::Relaxed);
                 }
-            }
-            if let Some(report) = progress {
-                let finished = done
-                    .fetch_add(block_points.len(), std::sync::atomic::Ordering::Relaxed)
-                    + block_points.len();
-                report(finished);
-            }
-        });
-    if let Some(index) = rows
-        .chunks(width)
-        .position(|r| r.iter().any(|w| !w.is_finite()))
-    {
-        return Err(RigError::NonFinite {
+                let finished = done.fetch_add(count, Ordering::Relaxed) + count;
+                if let Some(report) = progress {
+                    report(finished);
+                }
+            },
+        );
+    // SAFETY: the capacities are (num_points, num_cage) and (num_points, num_faces), and every
+    // entry was written above (`evaluate_green_rows` writes all rows × columns of its block).
+    unsafe {
+        vertex.set_dims(num_points, num_cage);
+        face.set_dims(num_points, num_faces);
+    }
+    match first_non_finite.into_inner() {
+        usize::MAX => Ok(GreenCoords {
+            vertex: CageCoords::from_checked_matrix(vertex),
+            face: CageCoords::from_checked_matrix(face),
+            triangles,
+        }),
+        index => Err(RigError::NonFinite {
             what: "Green coordinates of point",
             index,
-        });
+        }),
     }
-    let vertex = Mat::from_fn(points.len(), num_cage, |i, k| rows[i * width + k]);
-    let face = Mat::from_fn(points.len(), num_faces, |i, t| {
-        rows[i * width + num_cage + t]
-    });
-    Ok(GreenCoords {
-        vertex: CageCoords::from_checked_matrix(vertex),
-        face: CageCoords::from_checked_matrix(face),
-        triangles,
-    })
 }
 
 /// Unit normals of the cage triangles `triangles` at `positions` (`#F`); a degenerate triangle

@@ -27,7 +27,7 @@ use std::f64::consts::PI;
 use glam::DVec3;
 
 /// 1/(4π).
-const INV_FOUR_PI: f64 = 0.25 / PI;
+pub(super) const INV_FOUR_PI: f64 = 0.25 / PI;
 
 /// The contribution of one triangle (v₀, v₁, v₂), counter-clockwise seen from outside, to the
 /// Green coordinates of the point `eta`: the face coordinate ψ_t and the three vertex
@@ -47,11 +47,11 @@ pub struct TriangleGreenTerms {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GreenTriangle {
     corners: [DVec3; 3],
-    normal: DVec3,
+    pub(super) normal: DVec3,
     twice_area: f64,
     edge_directions: [DVec3; 3],
-    edge_normals: [DVec3; 3],
-    hat_gradients: [DVec3; 3],
+    pub(super) edge_normals: [DVec3; 3],
+    pub(super) hat_gradients: [DVec3; 3],
 }
 
 impl GreenTriangle {
@@ -126,7 +126,7 @@ pub fn triangle_green_terms(corners: [DVec3; 3], eta: DVec3) -> TriangleGreenTer
 
 /// Points closer to a face's plane than this fraction of their distances to its corners are
 /// taken to lie on it (and get the limits from behind the face, i.e. from inside the cage).
-const ON_PLANE: f64 = 1e-12;
+pub(super) const ON_PLANE: f64 = 1e-12;
 
 /// Solid angle of the triangle with corners `a` (relative to the point), signed like
 /// `a₀·(a₁×a₂)` (positive when the point is behind the face, i.e. inside a cage with outward

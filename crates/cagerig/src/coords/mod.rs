@@ -1,7 +1,9 @@
 //! Barycentric coordinates: mean value (Φ), Green (φ, ψ), max-entropy (Ψ projection), MaxVol row selection.
 
 pub mod green;
+mod green_batch;
 mod green_triangle;
+mod lane_functions;
 pub(crate) mod local_mvc;
 pub mod maxvol;
 mod maxvol_dominance;

@@ -22,6 +22,7 @@
 
 use glam::DVec3;
 
+use super::lane_functions::angle_fraction;
 use super::mvc::{EPS, MvcEvaluator, MvcScratch};
 pub(crate) use super::mvc_lanes::LANES;
 #[cfg(target_arch = "x86_64")]
@@ -292,71 +293,6 @@ fn evaluate_batch<M: LaneMath>(
     }
     let usable = Mask::from_fn(|l| total.0[l] != 0.0 && total.0[l].is_finite());
     (or(degenerate, not(usable)), M::recip(total).0)
-}
-
-/// Cephes `atan` coefficients: atan x = x + x·z·P(z)/Q(z), z = x², |x| ≤ 0.66.
-const ATAN_P: [f64; 5] = [
-    -8.750_608_600_031_904e-1,
-    -1.615_753_718_733_365e1,
-    -7.500_855_792_314_705e1,
-    -1.228_866_684_490_136e2,
-    -6.485_021_904_942_025e1,
-];
-const ATAN_Q: [f64; 5] = [
-    2.485_846_490_142_306e1,
-    1.650_270_098_316_988_5e2,
-    4.328_810_604_912_903e2,
-    4.853_903_996_359_137e2,
-    1.945_506_571_482_614e2,
-];
-/// Low part of π/2 (π/2 = FRAC_PI_2 + this, to ~1e-33).
-const FRAC_PI_2_LOW: f64 = 6.123_233_995_736_766e-17;
-
-/// θ = atan2(sin, cos) ∈ [0, π] as a fraction `(numerator, denominator)`, for the sine and
-/// cosine of the angle between two unit vectors (`sin ≥ 0`, `sin² + cos² ≈ 1`; other inputs give
-/// garbage, never a trap). Branch-free (selects only), no division: the Cephes reduction of
-/// t = sin/|cos| to x = num/den ∈ {t, (t−1)/(t+1), −1/t} (|x| ≤ 0.66, den ∈ [0.8, 2]) and the
-/// rational approximation atan x = x + x·z·P(z)/Q(z), z = x², written homogeneously in
-/// (num, den): atan x = num·(Q̃ + num²·P̃) / (den·Q̃) with P̃ = den⁸ P(z), Q̃ = den¹⁰ Q(z).
-/// Relative error a few ulp.
-#[inline(always)]
-fn angle_fraction<M: LaneMath>(sin: V8, cos: V8) -> (V8, V8) {
-    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
-    let abs_cos = cos.abs();
-    let big = sin.gt(abs_cos * 2.414_213_562_373_095);
-    let mid = sin.gt(abs_cos * 0.66);
-    let splat = V8::splat;
-    let num = V8::select(big, -abs_cos, V8::select(mid, sin - abs_cos, sin));
-    let den = V8::select(big, sin, V8::select(mid, sin + abs_cos, abs_cos));
-    let base = V8::select(
-        big,
-        splat(FRAC_PI_2),
-        V8::select(mid, splat(FRAC_PI_4), splat(0.0)),
-    );
-    let low = V8::select(
-        big,
-        splat(FRAC_PI_2_LOW),
-        V8::select(mid, splat(0.5 * FRAC_PI_2_LOW), splat(0.0)),
-    );
-    // θ = base + atan x (cos ≥ 0) or π − base − atan x (cos < 0).
-    let negative = splat(0.0).gt(cos);
-    let signed_num = V8::select(negative, -num, num);
-    let offset = V8::select(negative, (splat(PI) - base) - low, base + low);
-    let (n2, d2) = (num * num, den * den);
-    let d4 = d2 * d2;
-    let (d6, d8) = (d4 * d2, d4 * d4);
-    let p = M::mul_add(splat(ATAN_P[0]), n2, d2 * ATAN_P[1]);
-    let p = M::mul_add(p, n2, d4 * ATAN_P[2]);
-    let p = M::mul_add(p, n2, d6 * ATAN_P[3]);
-    let p = M::mul_add(p, n2, d8 * ATAN_P[4]);
-    let q = M::mul_add(splat(ATAN_Q[0]), d2, n2);
-    let q = M::mul_add(q, n2, d4 * ATAN_Q[1]);
-    let q = M::mul_add(q, n2, d6 * ATAN_Q[2]);
-    let q = M::mul_add(q, n2, d8 * ATAN_Q[3]);
-    let q = M::mul_add(q, n2, (d8 * d2) * ATAN_Q[4]);
-    let den_q = den * q;
-    let theta_times_den_q = M::mul_add(offset, den_q, signed_num * M::mul_add(n2, p, q));
-    (theta_times_den_q, den_q)
 }
 
 /// `θ / (2 sin θ)` with θ = atan2(sin, cos) ∈ [0, π] (see [`angle_fraction`]), for the sine and

@@ -1,7 +1,8 @@
-//! The lane vectors of the batched MVC ([`super::mvc_batch`]): [`LANES`] f64 values per batch
-//! with element-wise operators, per-lane masks, and the arithmetic that differs per CPU
-//! ([`LaneMath`]: plain IEEE, FMA with IEEE division and square root, or AVX-512 estimates
-//! refined by Newton steps).
+//! The lane vectors of the batched coordinates kernels (MVC: [`super::mvc_batch`], Green:
+//! [`super::green_batch`]): [`LANES`] f64 values per batch with element-wise operators (IEEE,
+//! the same bits on every instruction set), per-lane masks, and the arithmetic that differs per
+//! CPU ([`LaneMath`]: plain IEEE, FMA with IEEE division and square root, or AVX-512 estimates
+//! refined by Newton steps; MVC's tiers each use their own).
 
 /// Points per batch.
 pub(crate) const LANES: usize = 8;
@@ -41,6 +42,11 @@ impl V8 {
     #[inline(always)]
     pub(super) fn zip(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         Self(std::array::from_fn(|l| f(self.0[l], other.0[l])))
+    }
+    /// IEEE square root per lane.
+    #[inline(always)]
+    pub(super) fn sqrt(self) -> Self {
+        self.map(f64::sqrt)
     }
     #[inline(always)]
     pub(super) fn abs(self) -> Self {
@@ -94,6 +100,14 @@ impl std::ops::Mul for V8 {
     #[inline(always)]
     fn mul(self, other: Self) -> Self {
         self.zip(other, |a, b| a * b)
+    }
+}
+
+impl std::ops::Div for V8 {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, other: Self) -> Self {
+        self.zip(other, |a, b| a / b)
     }
 }
 

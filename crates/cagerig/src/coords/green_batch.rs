@@ -1,0 +1,428 @@
+//! Batched Green coordinates: the closed forms of [`super::green_triangle`] for [`LANES`] points
+//! at a time, one point per lane, with everything that depends only on the cage computed once
+//! ([`GreenBatchPlan`]) and everything that depends on one point and one cage vertex or edge
+//! computed once per batch and shared by the faces around it.
+//!
+//! Per batch of 8 points η:
+//! - per cage vertex k: `a_k = v_k − η`, `|a_k|` and `1/|a_k|`;
+//! - per cage edge (a, b), just before the first face that uses it: the edge integral
+//!   `f = ∫_edge ds/R`, one logarithm ([`ln_of_quotient`]); it does not depend on the direction
+//!   of travel, so the two faces of an edge share it (the per-point code takes one per face and
+//!   edge). Beside the edge (foot of η on the segment) the distance² to its line is `|a_a × e|²`,
+//!   which has no cancellation (the per-point code's `(R − s)(R + s)` loses `(R/d)²` ulp);
+//! - per face t: the solid angle Ω (one arctangent fraction, [`angle_fraction`], one division),
+//!   `h = a₀·n`, `ψ_t = (Σ_l (a_l·m_l) f_l − |h||Ω|)/4π` written straight into ψ's column, and
+//!   `φ_i += (Γ_i(ρ) Ω − h Σ_l (∇Γ_i·m_l) f_l)/4π` with `Γ_i(ρ) = −∇Γ_i·a_{i+1}` (the foot ρ's
+//!   barycentric coordinate) and the 3 × 3 products `∇Γ_i·m_l` precomputed per face.
+//!
+//! The lane arithmetic is plain IEEE (no fused multiply-add, no estimates), and every tier runs
+//! the same body: the AVX-512, AVX2 and baseline builds give the same bits (tested).
+//!
+//! A lane is recomputed by the per-point closed forms ([`GreenTriangle::terms`], whole row) when
+//! its point lies within [`ON_PLANE`] (relative) of a face's plane or of a cage vertex, where
+//! those take their limits; lanes never mix, and flagged lanes may hold NaN before that.
+
+use glam::DVec3;
+
+use super::green_triangle::{GreenTriangle, INV_FOUR_PI, ON_PLANE};
+use super::lane_functions::{angle_fraction, ln_of_quotient};
+use super::mvc_lanes::{LANES, Lanes, Mask, PlainMath, V8, not, or};
+use crate::row_blocks::RowBlock;
+use crate::simd_dispatch::simd_dispatch;
+
+/// One cage edge as the batch kernel reads it.
+#[derive(Debug, Clone, Copy)]
+struct PlanEdge {
+    /// Cage vertices (a, b), a < b.
+    ends: [u32; 2],
+    /// Unit direction e = (v_b − v_a)/|v_b − v_a|.
+    direction: [f64; 3],
+}
+
+/// One non-degenerate cage face (outward, counter-clockwise seen from outside) as the batch
+/// kernel reads it; vectors as `[x, y, z]`.
+#[derive(Debug, Clone, Copy)]
+struct PlanFace {
+    /// Its column of ψ (its index among the outward triangles).
+    column: u32,
+    /// Cage vertices (i₀, i₁, i₂).
+    vertices: [u32; 3],
+    /// Per local edge l (from corner l to corner l+1): its index in [`GreenBatchPlan::edges`].
+    edges: [u32; 3],
+    /// Unit outward normal n.
+    normal: [f64; 3],
+    /// Per local edge l: the outward in-plane normal m_l.
+    edge_normals: [[f64; 3]; 3],
+    /// Per corner i: the in-plane gradient ∇Γ_i of its hat function.
+    hat_gradients: [[f64; 3]; 3],
+    /// `[i][l]`: ∇Γ_i · m_l.
+    hat_slopes: [[f64; 3]; 3],
+}
+
+/// What the batch kernel needs of a cage, computed once: the faces in cage order, each preceded
+/// by the edges it is the first to use (so that an edge's integral is computed right before its
+/// first face, while its lanes are in L1), and the per-point frames for the recomputed lanes.
+#[derive(Debug, Clone)]
+pub(crate) struct GreenBatchPlan<'a> {
+    positions: &'a [DVec3],
+    /// The outward triangles, `#F`.
+    triangles: &'a [[u32; 3]],
+    /// Per outward triangle: its frame (`None`: degenerate, contributes nothing), `#F`.
+    frames: &'a [Option<GreenTriangle>],
+    faces: Vec<PlanFace>,
+    /// Edges in first-use order.
+    edges: Vec<PlanEdge>,
+    /// `edges[edge_starts[f]..edge_starts[f + 1]]` are computed before `faces[f]`.
+    edge_starts: Vec<usize>,
+    /// The columns of ψ of the degenerate triangles (always 0).
+    degenerate_columns: Vec<u32>,
+}
+
+impl<'a> GreenBatchPlan<'a> {
+    /// The plan of the cage `positions` with the outward `triangles` and their `frames`
+    /// (`GreenTriangle::new` of each).
+    pub(crate) fn new(
+        positions: &'a [DVec3],
+        triangles: &'a [[u32; 3]],
+        frames: &'a [Option<GreenTriangle>],
+    ) -> Self {
+        let mut edge_index = std::collections::HashMap::<[u32; 2], u32>::new();
+        let mut edges = Vec::new();
+        let mut edge_starts = Vec::with_capacity(triangles.len() + 1);
+        let mut faces = Vec::with_capacity(triangles.len());
+        let mut degenerate_columns = Vec::new();
+        for (column, (tri, frame)) in triangles.iter().zip(frames).enumerate() {
+            let Some(frame) = frame else {
+                degenerate_columns.push(column as u32);
+                continue;
+            };
+            edge_starts.push(edges.len());
+            let local_edges = std::array::from_fn(|l| {
+                let (a, b) = (tri[l], tri[(l + 1) % 3]);
+                let ends = [a.min(b), a.max(b)];
+                *edge_index.entry(ends).or_insert_with(|| {
+                    let [pa, pb] = ends.map(|v| positions[v as usize]);
+                    edges.push(PlanEdge {
+                        ends,
+                        direction: (pb - pa).normalize_or_zero().to_array(),
+                    });
+                    (edges.len() - 1) as u32
+                })
+            });
+            faces.push(PlanFace {
+                column: column as u32,
+                vertices: *tri,
+                edges: local_edges,
+                normal: frame.normal.to_array(),
+                edge_normals: frame.edge_normals.map(|m| m.to_array()),
+                hat_gradients: frame.hat_gradients.map(|g| g.to_array()),
+                hat_slopes: frame
+                    .hat_gradients
+                    .map(|g| frame.edge_normals.map(|m| g.dot(m))),
+            });
+        }
+        edge_starts.push(edges.len());
+        Self {
+            positions,
+            triangles,
+            frames,
+            faces,
+            edges,
+            edge_starts,
+            degenerate_columns,
+        }
+    }
+}
+
+/// Per-thread buffers of [`evaluate_green_rows`].
+#[derive(Debug, Clone)]
+pub(crate) struct GreenBatchScratch {
+    /// Per cage vertex: a_k = v_k − η (x, y, z) and |a_k|, per lane.
+    to_x: Vec<Lanes>,
+    to_y: Vec<Lanes>,
+    to_z: Vec<Lanes>,
+    length: Vec<Lanes>,
+    /// Per cage vertex: φ being summed over the faces, per lane.
+    vertex_sums: Vec<Lanes>,
+    /// Per edge (plan order): ∫_edge ds/R, per lane.
+    edge_integrals: Vec<Lanes>,
+    /// One row of φ (`#C`) and of ψ (`#F`) for a recomputed lane.
+    row_vertex: Vec<f64>,
+    row_face: Vec<f64>,
+}
+
+impl GreenBatchScratch {
+    pub(crate) fn new(plan: &GreenBatchPlan<'_>) -> Self {
+        let per_vertex = vec![[0.0; LANES]; plan.positions.len()];
+        Self {
+            to_x: per_vertex.clone(),
+            to_y: per_vertex.clone(),
+            to_z: per_vertex.clone(),
+            length: per_vertex.clone(),
+            vertex_sums: per_vertex,
+            edge_integrals: vec![[0.0; LANES]; plan.edges.len()],
+            row_vertex: vec![0.0; plan.positions.len()],
+            row_face: vec![0.0; plan.triangles.len()],
+        }
+    }
+}
+
+simd_dispatch! {
+    /// Green coordinates of `points` (`n`): φ into the rows of `vertex_out` (`n × #C`) and ψ
+    /// into the rows of `face_out` (`n × #F`, the plan's triangle order). Every entry of both
+    /// is written. Returns the first row (index into `points`) holding a non-finite value, if
+    /// any.
+    pub(crate) fn evaluate_green_rows(
+        plan: &GreenBatchPlan<'_>,
+        points: &[DVec3],
+        scratch: &mut GreenBatchScratch,
+        vertex_out: &mut RowBlock,
+        face_out: &mut RowBlock,
+    ) -> Option<usize> => evaluate_green_rows_generic;
+    avx512f: evaluate_green_rows_avx512;
+    avx2: evaluate_green_rows_avx2;
+}
+
+#[inline(always)]
+fn evaluate_green_rows_generic(
+    plan: &GreenBatchPlan<'_>,
+    points: &[DVec3],
+    scratch: &mut GreenBatchScratch,
+    vertex_out: &mut RowBlock,
+    face_out: &mut RowBlock,
+) -> Option<usize> {
+    debug_assert_eq!(vertex_out.nrows(), points.len());
+    debug_assert_eq!(face_out.nrows(), points.len());
+    let mut first_non_finite = None;
+    for (batch, chunk) in points.chunks(LANES).enumerate() {
+        let start = batch * LANES;
+        let count = chunk.len();
+        // Pad a short last batch with its last point.
+        let lane_point = |l: usize| chunk[l.min(count - 1)];
+        let px = V8(std::array::from_fn(|l| lane_point(l).x));
+        let py = V8(std::array::from_fn(|l| lane_point(l).y));
+        let pz = V8(std::array::from_fn(|l| lane_point(l).z));
+        let (recompute, face_check) =
+            evaluate_batch(plan, [px, py, pz], scratch, face_out, start, count);
+        // `0·x` is ±0 for a finite x and NaN otherwise: the sums stay 0 iff all are finite.
+        let mut check = face_check;
+        for (k, sums) in scratch.vertex_sums.iter().enumerate() {
+            let value = V8(*sums);
+            check = check + value * 0.0;
+            write_lanes(vertex_out, start, k, &value.0, count);
+        }
+        for column in &plan.degenerate_columns {
+            write_lanes(face_out, start, *column as usize, &[0.0; LANES], count);
+        }
+        let mut finite = Mask::from_fn(|l| check.0[l] == 0.0);
+        for (l, &point) in chunk.iter().enumerate() {
+            if recompute.test(l) {
+                let all_finite = evaluate_point(plan, point, scratch);
+                for (k, &w) in scratch.row_vertex.iter().enumerate() {
+                    vertex_out.write(start + l, k, &[w]);
+                }
+                for (t, &w) in scratch.row_face.iter().enumerate() {
+                    face_out.write(start + l, t, &[w]);
+                }
+                finite.0[l] = if all_finite { u64::MAX } else { 0 };
+            }
+        }
+        if first_non_finite.is_none() {
+            first_non_finite = (0..count).find(|&l| !finite.test(l)).map(|l| start + l);
+        }
+    }
+    first_non_finite
+}
+
+/// The first `count` lanes of `values` into column `column` of `out` from row `start` on: a whole
+/// batch as one store of a fixed size (a slice of run-time length becomes a `memcpy` call).
+#[inline(always)]
+fn write_lanes(out: &mut RowBlock, start: usize, column: usize, values: &Lanes, count: usize) {
+    if count == LANES {
+        out.write(start, column, values);
+    } else {
+        out.write(start, column, &values[..count]);
+    }
+}
+
+/// One row of Green coordinates by the per-point closed forms into `scratch.row_vertex` and
+/// `scratch.row_face`; whether every value is finite.
+fn evaluate_point(plan: &GreenBatchPlan<'_>, eta: DVec3, scratch: &mut GreenBatchScratch) -> bool {
+    let (phi, psi) = (&mut scratch.row_vertex, &mut scratch.row_face);
+    phi.fill(0.0);
+    for ((t, frame), psi_t) in plan.triangles.iter().zip(plan.frames).zip(psi.iter_mut()) {
+        *psi_t = 0.0;
+        if let Some(frame) = frame {
+            let terms = frame.terms(eta);
+            *psi_t = terms.face;
+            for (v, part) in t.iter().zip(terms.vertices) {
+                phi[*v as usize] += part;
+            }
+        }
+    }
+    phi.iter().chain(psi.iter()).all(|w| w.is_finite())
+}
+
+/// The lanes of one batch: φ summed into `scratch.vertex_sums`, ψ written into `face_out` (rows
+/// `start..start + count`, the columns of the non-degenerate faces). Returns the lanes to
+/// recompute per point and, per lane, the sum of `0·ψ` (0 iff every ψ is finite).
+#[inline(always)]
+fn evaluate_batch(
+    plan: &GreenBatchPlan<'_>,
+    eta: [V8; 3],
+    scratch: &mut GreenBatchScratch,
+    face_out: &mut RowBlock,
+    start: usize,
+    count: usize,
+) -> (Mask, V8) {
+    let splat = V8::splat;
+    for (k, p) in plan.positions.iter().enumerate() {
+        let ax = splat(p.x) - eta[0];
+        let ay = splat(p.y) - eta[1];
+        let az = splat(p.z) - eta[2];
+        let length = (ax * ax + ay * ay + az * az).sqrt();
+        scratch.to_x[k] = ax.0;
+        scratch.to_y[k] = ay.0;
+        scratch.to_z[k] = az.0;
+        scratch.length[k] = length.0;
+        scratch.vertex_sums[k] = [0.0; LANES];
+    }
+    let mut recompute = Mask([0; LANES]);
+    let mut check = splat(0.0);
+    for (f, face) in plan.faces.iter().enumerate() {
+        for e in plan.edge_starts[f]..plan.edge_starts[f + 1] {
+            scratch.edge_integrals[e] = edge_integral(&plan.edges[e], scratch).0;
+        }
+        let idx = face.vertices.map(|v| v as usize);
+        let to = |k: usize| {
+            [
+                V8(scratch.to_x[k]),
+                V8(scratch.to_y[k]),
+                V8(scratch.to_z[k]),
+            ]
+        };
+        // Built element by element (an array `map` here may compile to a memmove).
+        let a = [to(idx[0]), to(idx[1]), to(idx[2])];
+        let lengths = [
+            V8(scratch.length[idx[0]]),
+            V8(scratch.length[idx[1]]),
+            V8(scratch.length[idx[2]]),
+        ];
+        let dot = |u: &[V8; 3], v: &[V8; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+        let dot_constant = |u: &[V8; 3], c: &[f64; 3]| u[0] * c[0] + u[1] * c[1] + u[2] * c[2];
+        // The per-point code's degenerate positions: at a corner, or on the face's plane.
+        let size = lengths[0] + lengths[1] + lengths[2];
+        let near_corner = or(
+            not(lengths[0].gt(size * ON_PLANE)),
+            or(
+                not(lengths[1].gt(size * ON_PLANE)),
+                not(lengths[2].gt(size * ON_PLANE)),
+            ),
+        );
+        let cube = lengths[0] * lengths[1] * lengths[2];
+        let cross = [
+            a[1][1] * a[2][2] - a[1][2] * a[2][1],
+            a[1][2] * a[2][0] - a[1][0] * a[2][2],
+            a[1][0] * a[2][1] - a[1][1] * a[2][0],
+        ];
+        // Van Oosterom & Strackee: tan(Ω/2) = numerator / denominator.
+        let numerator = dot(&a[0], &cross);
+        let denominator = cube
+            + dot(&a[0], &a[1]) * lengths[2]
+            + dot(&a[0], &a[2]) * lengths[1]
+            + dot(&a[1], &a[2]) * lengths[0];
+        let on_plane = not(numerator.abs().gt(cube * ON_PLANE));
+        recompute = or(recompute, or(near_corner, on_plane));
+        // Both scaled (exactly) to |denominator| ≤ 8 and |numerator| ≤ 2, for the fraction's
+        // powers.
+        let scale = inverse_power_of_two(cube);
+        let (angle_num, angle_den) =
+            angle_fraction::<PlainMath>(numerator.abs() * scale, denominator * scale);
+        let half_solid_angle = angle_num / angle_den;
+        let solid_angle = V8::select(
+            splat(0.0).gt(numerator),
+            -(half_solid_angle * 2.0),
+            half_solid_angle * 2.0,
+        );
+        let h = dot_constant(&a[0], &face.normal);
+        let integrals = [
+            V8(scratch.edge_integrals[face.edges[0] as usize]),
+            V8(scratch.edge_integrals[face.edges[1] as usize]),
+            V8(scratch.edge_integrals[face.edges[2] as usize]),
+        ];
+        let edge_sum = dot_constant(&a[0], &face.edge_normals[0]) * integrals[0]
+            + dot_constant(&a[1], &face.edge_normals[1]) * integrals[1]
+            + dot_constant(&a[2], &face.edge_normals[2]) * integrals[2];
+        let psi = (edge_sum - h.abs() * solid_angle.abs()) * INV_FOUR_PI;
+        check = check + psi * 0.0;
+        write_lanes(face_out, start, face.column as usize, &psi.0, count);
+        for (i, &vertex) in idx.iter().enumerate() {
+            let next = (i + 1) % 3;
+            let hat_at_foot = -dot_constant(&a[next], &face.hat_gradients[i]);
+            let slope = integrals[0] * face.hat_slopes[i][0]
+                + integrals[1] * face.hat_slopes[i][1]
+                + integrals[2] * face.hat_slopes[i][2];
+            let part = (hat_at_foot * solid_angle - h * slope) * INV_FOUR_PI;
+            let sums = &mut scratch.vertex_sums[vertex];
+            *sums = (V8(*sums) + part).0;
+        }
+    }
+    (recompute, check)
+}
+
+/// 2^−e per lane for x = m·2^e (m ∈ [1, 2)), x a positive normal number below 2¹⁰²³ (other
+/// lanes give garbage): bit operations only, so that scaling by it is exact.
+#[inline(always)]
+fn inverse_power_of_two(x: V8) -> V8 {
+    // The biased exponent of 2^−e is 2046 − (the biased exponent of x).
+    V8(std::array::from_fn(|l| {
+        let biased = (x.0[l].to_bits() >> 52) & 0x7ff;
+        f64::from_bits((2046u64.wrapping_sub(biased) & 0x7ff) << 52)
+    }))
+}
+
+/// `∫ ds/R` along `edge` for the lanes' points (see `edge_log_integral` in
+/// [`super::green_triangle`]): with s₀, s₁ the abscissae of its ends from the foot of η on its
+/// line and R₀, R₁ their distances, `ln((R₁ + s₁)/(R₀ + s₀))` if s₀ > 0, `ln((R₀ − s₀)/(R₁ − s₁))`
+/// if s₁ < 0, and beside the segment `ln((R₁ + s₁)(R₀ − s₀)/d²)` with d² = |a₀ × e|², the
+/// distance² to the line; 0 on the segment itself (d² ≤ the smallest normal).
+#[inline(always)]
+fn edge_integral(edge: &PlanEdge, scratch: &GreenBatchScratch) -> V8 {
+    let [a, b] = edge.ends.map(|v| v as usize);
+    let e = edge.direction;
+    let (ax, ay, az) = (
+        V8(scratch.to_x[a]),
+        V8(scratch.to_y[a]),
+        V8(scratch.to_z[a]),
+    );
+    let (bx, by, bz) = (
+        V8(scratch.to_x[b]),
+        V8(scratch.to_y[b]),
+        V8(scratch.to_z[b]),
+    );
+    let (r0, r1) = (V8(scratch.length[a]), V8(scratch.length[b]));
+    let s0 = ax * e[0] + ay * e[1] + az * e[2];
+    let s1 = bx * e[0] + by * e[1] + bz * e[2];
+    let cx = ay * e[2] - az * e[1];
+    let cy = az * e[0] - ax * e[2];
+    let cz = ax * e[1] - ay * e[0];
+    let distance_sq = cx * cx + cy * cy + cz * cz;
+    let zero = V8::splat(0.0);
+    let before = s0.gt(zero);
+    let after = zero.gt(s1);
+    let num = V8::select(
+        before,
+        r1 + s1,
+        V8::select(after, r0 - s0, (r1 + s1) * (r0 - s0)),
+    );
+    let den = V8::select(before, r0 + s0, V8::select(after, r1 - s1, distance_sq));
+    let on_segment = not(or(
+        or(before, after),
+        distance_sq.gt(V8::splat(f64::MIN_POSITIVE)),
+    ));
+    V8::select(on_segment, zero, ln_of_quotient(num, den))
+}
+
+#[cfg(test)]
+#[path = "green_batch_tests.rs"]
+mod tests;
