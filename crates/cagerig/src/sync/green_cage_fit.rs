@@ -23,7 +23,7 @@
 //! to round-off, which is what CageRev inverts exactly ([`super::green_cage_reverser`]). A large
 //! change of pose in one event is split into pieces (continuation) when the direct solve stalls.
 
-use faer::{Accum, Mat, Par};
+use faer::Mat;
 use glam::{DMat3, DVec3};
 
 use super::dense_lu::DenseLu;
@@ -121,21 +121,7 @@ impl GreenCageFit {
             });
         }
         let num_faces = normals.len();
-        let gram = |a: &Mat<f64>, b: &Mat<f64>| {
-            let mut out = Mat::<f64>::zeros(a.ncols(), b.ncols());
-            faer::linalg::matmul::matmul(
-                out.as_mut(),
-                Accum::Replace,
-                a.transpose(),
-                b.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            out
-        };
-        let vertex_gram = gram(&vertex_rows, &vertex_rows);
-        let vertex_face_gram = gram(&vertex_rows, &face_rows);
-        let face_gram = gram(&face_rows, &face_rows);
+        let (vertex_gram, vertex_face_gram, face_gram) = gram_matrices(&vertex_rows, &face_rows);
         Ok(Self {
             num_cage,
             vertex_rows,
@@ -359,72 +345,6 @@ impl GreenCageFit {
                 for (q, value) in row.iter().enumerate() {
                     let j = 3 * triangle[q / 3] as usize + q % 3;
                     self.normal_matrix[(i, j)] += value;
-                }
-            }
-        }
-    }
-
-    /// JᵀJ at x into `self.normal_matrix`, from the Gram matrices: with J = φ_R ⊗ I₃ + (ψ_R ⊗ I₃)·D
-    /// and D = ∂g/∂C (three 3×3 blocks B_{f,m} per face f, one per corner m),
-    /// JᵀJ = φ_Rᵀφ_R ⊗ I₃ + (φ_Rᵀψ_R ⊗ I₃)·D + its transpose + Dᵀ·(ψ_Rᵀψ_R ⊗ I₃)·D. No allocation.
-    fn gauss_newton_matrix_at(&mut self, x: &[DVec3]) {
-        let (num_cage, num_faces) = (self.num_cage, self.face_blocks.len());
-        for (f, blocks) in self.face_blocks.iter_mut().enumerate() {
-            *blocks = self.normals.face_jacobian(x, f);
-        }
-        let h = &mut self.normal_matrix;
-        for m in 0..num_cage {
-            for k in 0..num_cage {
-                let value = self.vertex_gram[(k, m)];
-                for a in 0..3 {
-                    for b in 0..3 {
-                        h[(3 * k + a, 3 * m + b)] = if a == b { value } else { 0.0 };
-                    }
-                }
-            }
-        }
-        let add_block = |h: &mut Mat<f64>, k: usize, m: usize, block: &DMat3| {
-            for b in 0..3 {
-                let column = block.col(b);
-                h[(3 * k, 3 * m + b)] += column.x;
-                h[(3 * k + 1, 3 * m + b)] += column.y;
-                h[(3 * k + 2, 3 * m + b)] += column.z;
-            }
-        };
-        let triangles = self.normals.triangles();
-        // The cross terms: block (k, m) += (φ_Rᵀψ_R)[k, f]·B_{f,m}, and block (m, k) its transpose.
-        for (f, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
-            for (&corner, block) in triangle.iter().zip(blocks) {
-                let m = corner as usize;
-                let transposed = block.transpose();
-                for k in 0..num_cage {
-                    let weight = self.vertex_face_gram[(k, f)];
-                    if weight != 0.0 {
-                        add_block(h, k, m, &(*block * weight));
-                        add_block(h, m, k, &(transposed * weight));
-                    }
-                }
-            }
-        }
-        // The face terms: T = (ψ_Rᵀψ_R ⊗ I₃)·D by blocks (f, m), then block (m, m') += B_{f,m}ᵀ·T(f, m').
-        self.face_gram_blocks.fill(DMat3::ZERO);
-        for f in 0..num_faces {
-            let row = &mut self.face_gram_blocks[f * num_cage..(f + 1) * num_cage];
-            for (g, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
-                let weight = self.face_gram[(f, g)];
-                if weight != 0.0 {
-                    for (&corner, block) in triangle.iter().zip(blocks) {
-                        row[corner as usize] += *block * weight;
-                    }
-                }
-            }
-        }
-        for (f, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
-            let row = &self.face_gram_blocks[f * num_cage..(f + 1) * num_cage];
-            for (&corner, block) in triangle.iter().zip(blocks) {
-                let transposed = block.transpose();
-                for (m, t) in row.iter().enumerate() {
-                    add_block(h, corner as usize, m, &(transposed * *t));
                 }
             }
         }
@@ -658,6 +578,10 @@ pub(crate) fn rows_of(
         }
     }
 }
+
+#[path = "green_cage_fit_gram.rs"]
+mod gram;
+use gram::gram_matrices;
 
 #[cfg(test)]
 #[path = "green_cage_fit_tests.rs"]

@@ -1,0 +1,100 @@
+//! The Gauss–Newton part JᵀJ of [`super::GreenCageFit`]'s Hessian, assembled from the fitting
+//! rows' Gram matrices and the block-sparse ∂g/∂C instead of multiplying J by itself.
+
+use faer::{Accum, Mat, Par};
+use glam::{DMat3, DVec3};
+
+use super::GreenCageFit;
+
+/// φ_Rᵀφ_R (`#C × #C`), φ_Rᵀψ_R (`#C × #F`) and ψ_Rᵀψ_R (`#F × #F`) for φ_R = `vertex_rows`
+/// (`#R × #C`) and ψ_R = `face_rows` (`#R × #F`).
+pub(super) fn gram_matrices(
+    vertex_rows: &Mat<f64>,
+    face_rows: &Mat<f64>,
+) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
+    let gram = |a: &Mat<f64>, b: &Mat<f64>| {
+        let mut out = Mat::<f64>::zeros(a.ncols(), b.ncols());
+        faer::linalg::matmul::matmul(
+            out.as_mut(),
+            Accum::Replace,
+            a.transpose(),
+            b.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        out
+    };
+    (
+        gram(vertex_rows, vertex_rows),
+        gram(vertex_rows, face_rows),
+        gram(face_rows, face_rows),
+    )
+}
+
+impl GreenCageFit {
+    /// JᵀJ at x into `self.normal_matrix`, from the Gram matrices: with J = φ_R ⊗ I₃ + (ψ_R ⊗ I₃)·D
+    /// and D = ∂g/∂C (three 3×3 blocks B_{f,m} per face f, one per corner m),
+    /// JᵀJ = φ_Rᵀφ_R ⊗ I₃ + (φ_Rᵀψ_R ⊗ I₃)·D + its transpose + Dᵀ·(ψ_Rᵀψ_R ⊗ I₃)·D. No allocation.
+    pub(super) fn gauss_newton_matrix_at(&mut self, x: &[DVec3]) {
+        let (num_cage, num_faces) = (self.num_cage, self.face_blocks.len());
+        for (f, blocks) in self.face_blocks.iter_mut().enumerate() {
+            *blocks = self.normals.face_jacobian(x, f);
+        }
+        let h = &mut self.normal_matrix;
+        for m in 0..num_cage {
+            for k in 0..num_cage {
+                let value = self.vertex_gram[(k, m)];
+                for a in 0..3 {
+                    for b in 0..3 {
+                        h[(3 * k + a, 3 * m + b)] = if a == b { value } else { 0.0 };
+                    }
+                }
+            }
+        }
+        let add_block = |h: &mut Mat<f64>, k: usize, m: usize, block: &DMat3| {
+            for b in 0..3 {
+                let column = block.col(b);
+                h[(3 * k, 3 * m + b)] += column.x;
+                h[(3 * k + 1, 3 * m + b)] += column.y;
+                h[(3 * k + 2, 3 * m + b)] += column.z;
+            }
+        };
+        let triangles = self.normals.triangles();
+        // The cross terms: block (k, m) += (φ_Rᵀψ_R)[k, f]·B_{f,m}, and block (m, k) its transpose.
+        for (f, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
+            for (&corner, block) in triangle.iter().zip(blocks) {
+                let m = corner as usize;
+                let transposed = block.transpose();
+                for k in 0..num_cage {
+                    let weight = self.vertex_face_gram[(k, f)];
+                    if weight != 0.0 {
+                        add_block(h, k, m, &(*block * weight));
+                        add_block(h, m, k, &(transposed * weight));
+                    }
+                }
+            }
+        }
+        // The face terms: T = (ψ_Rᵀψ_R ⊗ I₃)·D by blocks (f, m), then block (m, m') += B_{f,m}ᵀ·T(f, m').
+        self.face_gram_blocks.fill(DMat3::ZERO);
+        for f in 0..num_faces {
+            let row = &mut self.face_gram_blocks[f * num_cage..(f + 1) * num_cage];
+            for (g, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
+                let weight = self.face_gram[(f, g)];
+                if weight != 0.0 {
+                    for (&corner, block) in triangle.iter().zip(blocks) {
+                        row[corner as usize] += *block * weight;
+                    }
+                }
+            }
+        }
+        for (f, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
+            let row = &self.face_gram_blocks[f * num_cage..(f + 1) * num_cage];
+            for (&corner, block) in triangle.iter().zip(blocks) {
+                let transposed = block.transpose();
+                for (m, t) in row.iter().enumerate() {
+                    add_block(h, corner as usize, m, &(transposed * *t));
+                }
+            }
+        }
+    }
+}
