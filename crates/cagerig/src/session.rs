@@ -25,7 +25,8 @@ use crate::pose::{
 };
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
-use crate::skinning::SkinningMethod;
+use crate::skinning::blended::BlendedSkinning;
+use crate::skinning::{DqBlendWeights, SkinningMethod};
 use crate::skinning::cor::{CorScratch, CorSkinning};
 use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
@@ -99,6 +100,9 @@ pub struct RigSession {
     reverser: CageReverser,
     lbs: LinearBlendSkinning,
     dqs: DualQuaternionSkinning,
+    /// The blended LBS/DQS kernel with the rig's DQ blend weights b (`None`: the rig has none,
+    /// and [`SkinningMethod::Blended`] is refused).
+    blended: Option<BlendedSkinning>,
     ghost_lbs: LinearBlendSkinning,
     cor_rows: Option<SparseRows>,
     /// Λ given with the parts, used on the first switch to CoR.
@@ -175,6 +179,7 @@ impl RigSession {
             cor_rows,
             joint_coords,
             cor_centre_coords,
+            dq_blend_weights,
         } = parts;
         let nv = mesh.num_vertices();
         if skin_weights.num_vertices() != nv {
@@ -191,6 +196,9 @@ impl RigSession {
                 actual: skin_weights.num_joints(),
             });
         }
+        let blended = dq_blend_weights
+            .map(|b| BlendedSkinning::new(&skin_weights, &b))
+            .transpose()?;
         if mesh.triangles.is_empty() {
             return Err(RigError::Invalid(format!(
                 "the rest mesh has {nv} vertices and no triangle: expected a surface (the \
@@ -391,6 +399,7 @@ impl RigSession {
             cage_triangles: cage.triangles.clone(),
             lbs: LinearBlendSkinning::new(&skin_weights),
             dqs: DualQuaternionSkinning::new(&skin_weights),
+            blended,
             dqs_scratch: DqsScratch::new(nj),
             ghost_lbs,
             skeleton,
