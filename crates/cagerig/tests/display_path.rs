@@ -1,7 +1,7 @@
 //! The f32 display path (`DisplayPrecision::F32`): the drawn M' is within 2e-6 of the bounding-box
 //! diagonal of the exact one, and everything else — C', C, the joints, and the exact M' the
 //! session still hands out — is bit-identical to a session on the exact path given the same
-//! events, under LBS, DQS and CoR. The drawn rest mesh M (Φ̃·C after a current-cage edit, with
+//! events, under LBS, DQS, CoR and the LBS/DQS blend. The drawn rest mesh M (Φ̃·C after a current-cage edit, with
 //! Φ rounded to f32) is within 2e-6 of the diagonal of the exact M.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
@@ -12,10 +12,14 @@ use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use glam::{DQuat, DVec3};
 
+mod support;
+
 fn session() -> RigSession {
     // 20k vertices: three chunks of the count-sorted kernels.
     let rig = demo::builtin("snake", Some(20_000)).unwrap();
-    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+    let blend = support::spread_blend_weights(rig.mesh.num_vertices());
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage)
+        .with_dq_blend_weights(Some(blend));
     RigSession::new(parts, SessionOptions::default()).unwrap().0
 }
 
@@ -70,11 +74,7 @@ fn display_path_matches_the_exact_path() {
     assert_eq!(display.display_precision(), DisplayPrecision::F32);
     assert_same_state(&exact, &display, "switching the display path on");
     let offset = DVec3::new(0.02, -0.01, 0.015);
-    for method in [
-        SkinningMethod::Lbs,
-        SkinningMethod::Dqs,
-        SkinningMethod::Cor,
-    ] {
+    for method in SkinningMethod::ALL {
         for s in [&mut exact, &mut display] {
             s.set_skinning(method).unwrap();
         }
