@@ -26,10 +26,10 @@ use crate::pose::{
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::blended::BlendedSkinning;
-use crate::skinning::{DqBlendWeights, SkinningMethod};
 use crate::skinning::cor::{CorScratch, CorSkinning};
 use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
+use crate::skinning::{DqBlendWeights, SkinningMethod};
 use crate::sparse_rows::SparseRows;
 use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};

@@ -9,9 +9,9 @@ use std::path::Path;
 use cagerig::io::{read_cor_weights, read_obj, read_skt, read_skw};
 use cagerig::mesh::{bounding_box, max_distance};
 use cagerig::skinning::{
-    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch,
-    CorSkinning, DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32,
-    LbsF32Scratch, LinearBlendSkinning,
+    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch, CorSkinning,
+    DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32, LbsF32Scratch,
+    LinearBlendSkinning,
 };
 use cagerig::subdivide::subdivide_midpoint;
 use glam::{DAffine3, DVec3, Vec3};

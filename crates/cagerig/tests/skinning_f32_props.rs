@@ -6,9 +6,9 @@
 
 use cagerig::SkinWeights;
 use cagerig::skinning::{
-    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch,
-    CorSkinning, DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32,
-    LbsF32Scratch, LinearBlendSkinning,
+    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch, CorSkinning,
+    DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32, LbsF32Scratch,
+    LinearBlendSkinning,
 };
 use glam::{DAffine3, DVec3, Vec3};
 use proptest::prelude::*;

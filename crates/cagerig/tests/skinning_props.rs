@@ -4,8 +4,8 @@
 
 use cagerig::SkinWeights;
 use cagerig::skinning::{
-    BlendedSkinning, CorScratch, CorSkinning, DqBlendWeights, DqsScratch,
-    DualQuaternionSkinning, LinearBlendSkinning,
+    BlendedSkinning, CorScratch, CorSkinning, DqBlendWeights, DqsScratch, DualQuaternionSkinning,
+    LinearBlendSkinning,
 };
 use glam::{DAffine3, DVec3};
 use proptest::prelude::*;
@@ -29,7 +29,12 @@ fn skin_all(w: &SkinWeights, t: &[DAffine3], rest: &[DVec3], centres: &[DVec3]) 
 }
 
 /// The blended kernel with blend weights `blend` (`#V`).
-fn skin_blended(w: &SkinWeights, blend: &DqBlendWeights, t: &[DAffine3], rest: &[DVec3]) -> Vec<DVec3> {
+fn skin_blended(
+    w: &SkinWeights,
+    blend: &DqBlendWeights,
+    t: &[DAffine3],
+    rest: &[DVec3],
+) -> Vec<DVec3> {
     let mut out = vec![DVec3::ZERO; rest.len()];
     BlendedSkinning::new(w, blend)
         .unwrap()

@@ -26,9 +26,9 @@ use crate::cage_coords::{CageCoords, DisplayCageCoords};
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::{
-    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch,
-    CorSkinning, DqBlendWeights, DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning,
-    LbsF32, LbsF32Scratch, RestPoint, SkinningMethod,
+    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch, CorSkinning,
+    DqBlendWeights, DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32,
+    LbsF32Scratch, RestPoint, SkinningMethod,
 };
 
 /// Precision of the displayed current skin M'.

@@ -246,13 +246,12 @@ impl RigSession {
                 | SkinningMethod::Dqs
                 | SkinningMethod::Cor
                 | SkinningMethod::Blended,
-            ) => self
-                .skin_exact(
-                    &self.rest_mesh,
-                    &mut dqs_scratch,
-                    &mut CorScratch::new(0),
-                    &mut posed_mesh,
-                ),
+            ) => self.skin_exact(
+                &self.rest_mesh,
+                &mut dqs_scratch,
+                &mut CorScratch::new(0),
+                &mut posed_mesh,
+            ),
         }
         self.posed_mesh = posed_mesh;
         self.dqs_scratch = dqs_scratch;

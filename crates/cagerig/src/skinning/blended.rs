@@ -40,8 +40,8 @@ pub(crate) struct BlendedRule<'a, S: SkinReal, T: ?Sized, P, const TABLE: bool> 
     pub points: P,
 }
 
-impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bool>
-    VertexKernel<S> for BlendedRule<'_, S, T, P, TABLE>
+impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bool> VertexKernel<S>
+    for BlendedRule<'_, S, T, P, TABLE>
 {
     #[inline(always)]
     fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3 {

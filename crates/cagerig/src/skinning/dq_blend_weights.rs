@@ -79,7 +79,10 @@ mod tests {
                 "{err:?}"
             );
             let text = err.to_string();
-            assert!(text.contains("vertex 2") && text.contains("[0, 1]"), "{text}");
+            assert!(
+                text.contains("vertex 2") && text.contains("[0, 1]"),
+                "{text}"
+            );
         }
     }
 

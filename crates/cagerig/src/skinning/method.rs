@@ -147,7 +147,8 @@ mod tests {
         );
         let err = serde_json::from_str::<SkinningMethod>("\"lbx\"").unwrap_err();
         assert!(
-            err.to_string().contains("expected lbs, dqs, cor or blended"),
+            err.to_string()
+                .contains("expected lbs, dqs, cor or blended"),
             "{err}"
         );
     }
