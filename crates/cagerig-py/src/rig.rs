@@ -270,7 +270,6 @@ impl Rig {
         fit_source: &str,
         coords_precision: &str,
         coords: &str,
-        dq_blend_weights: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let options = options::session_options(
             skinning,
@@ -331,6 +330,7 @@ impl Rig {
         fit_source: &str,
         coords_precision: &str,
         coords: &str,
+        dq_blend_weights: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let options = options::session_options(
             skinning,
