@@ -82,11 +82,13 @@ pub fn load_interchange(
         morph_targets,
         warnings,
         skinning: file_skinning,
+        dq_blend_weights,
         ..
     } = character;
     Ok(LoadedRig {
         name: path.display().to_string(),
-        parts: RigParts::new(mesh, skeleton, skin_weights, cage_mesh),
+        parts: RigParts::new(mesh, skeleton, skin_weights, cage_mesh)
+            .with_dq_blend_weights(dq_blend_weights),
         files,
         warnings,
         maxvol_path: None,

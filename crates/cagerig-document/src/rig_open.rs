@@ -281,7 +281,8 @@ fn import_interchange(
             character.skeleton,
             character.skin_weights,
             cage_mesh,
-        ),
+        )
+        .with_dq_blend_weights(character.dq_blend_weights),
         warnings,
         files,
         (

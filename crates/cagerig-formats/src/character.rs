@@ -40,9 +40,15 @@ pub struct ImportedCharacter {
     /// What `cagerig info` lists about the file.
     pub summary: ImportSummary,
     /// The skinning method the file's authoring tool poses the character with, when the file
-    /// says (FBX skin deformers: linear, rigid, dual quaternion); front ends use it unless the
-    /// user chooses a method. `None`: the format's own (glTF: linear blend skinning).
+    /// says (FBX skin deformers: linear or rigid → LBS, dual quaternion → DQS, Maya's "weight
+    /// blended" → the LBS/DQS blend); front ends use it unless the user chooses a method.
+    /// `None`: the format's own (glTF: linear blend skinning).
     pub skinning: Option<cagerig::skinning::SkinningMethod>,
+    /// Per-vertex DQ blend weights b (`#V`) of the blended method, when the format has them
+    /// (FBX: the skin's per-vertex weights for "weight blended" skins, Maya's defaults — 0 for
+    /// linear skins, 1 for dual-quaternion skins — elsewhere). Give them to the rig with
+    /// [`cagerig::session::RigParts::with_dq_blend_weights`]. `None` for glTF.
+    pub dq_blend_weights: Option<cagerig::skinning::DqBlendWeights>,
     /// Validation and import warnings (weights renormalised, parts not imported, …).
     pub warnings: Vec<Warning>,
 }

@@ -111,6 +111,25 @@ fn check_finite(value: f64, name: &str, at: impl FnOnce() -> String) -> PyResult
     }
 }
 
+/// `(n,)` DQ blend weights of the blended skinning method, each a finite number in [0, 1].
+pub fn dq_blend_weights(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    num_vertices: usize,
+) -> PyResult<cagerig::skinning::DqBlendWeights> {
+    let a = float_array(obj, name)?;
+    let shape = a.shape().to_vec();
+    if shape != [num_vertices] {
+        return Err(PyValueError::new_err(format!(
+            "{name} has shape {}: expected ({num_vertices},), one weight per mesh vertex",
+            shape_str(&shape)
+        )));
+    }
+    let values: Vec<f64> = a.to_vec()?;
+    cagerig::skinning::DqBlendWeights::new(values)
+        .map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
+}
+
 /// `(n, 3)` float points, all finite.
 pub fn points(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<DVec3>> {
     let a = float_array(obj, name)?;

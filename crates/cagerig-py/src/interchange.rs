@@ -72,7 +72,8 @@ pub fn load_character(
             character.skeleton,
             character.skin_weights,
             cage_mesh,
-        ),
+        )
+        .with_dq_blend_weights(character.dq_blend_weights),
         warnings,
         character.skinning,
     ))

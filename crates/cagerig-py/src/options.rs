@@ -11,7 +11,7 @@ fn unknown(what: &str, value: &str, allowed: &str) -> PyErr {
     PyValueError::new_err(format!("{what} must be {allowed}, got {value:?}"))
 }
 
-/// A method name (`"lbs" | "dqs" | "cor"`, any case), read by `SkinningMethod: FromStr`.
+/// A method name (`"lbs" | "dqs" | "cor" | "blended"`, any case), read by `SkinningMethod: FromStr`.
 pub fn skinning_method(value: &str) -> PyResult<SkinningMethod> {
     value.parse().map_err(|_| {
         let names: Vec<String> = SkinningMethod::ALL

@@ -152,9 +152,10 @@ impl Rig {
     /// auto_cage : int, optional
     ///     When no cage is found, generate one with this many vertices (as ``cagerig cage``;
     ///     issued as a RigWarning) instead of failing.
-    /// skinning : {"lbs", "dqs", "cor"}, optional
-    ///     Default: the method the file says its authoring tool uses (FBX skin deformers),
-    ///     else "lbs".
+    /// skinning : {"lbs", "dqs", "cor", "blended"}, optional
+    ///     Default: the method the file says its authoring tool uses (FBX skin deformers; a
+    ///     Maya "weight blended" skin is "blended", with its per-vertex DQ blend weights),
+    ///     else "lbs". "blended" needs DQ blend weights: FBX characters carry them.
     /// fit_rows : {"maxvol", "all"}, default "maxvol"
     ///     Mesh rows used by CageUp/CageRev (MaxVol square system, or least squares on all rows).
     /// localisation : {"articulation", "reference_tool"}, default "articulation"
@@ -303,13 +304,15 @@ impl Rig {
     /// cage_triangles : (g, 3) int array
     /// joint_names : list of str, optional
     ///     Default ``"joint0"``, ``"joint1"``, …
+    /// dq_blend_weights : (n,) float64 array, optional
+    ///     Per-vertex blend b in [0, 1] of the ``"blended"`` method (0: LBS, 1: DQS).
     ///
     /// Other keyword options as for :meth:`load`.
     #[staticmethod]
     #[pyo3(signature = (vertices, triangles, skin_weights, joint_positions, joint_parents,
                         cage_vertices, cage_triangles, joint_names = None, *, skinning = "lbs",
                         fit_rows = "maxvol", localisation = "articulation", fit_source = "ghost",
-                        coords_precision = "f64", coords = "mvc"))]
+                        coords_precision = "f64", coords = "mvc", dq_blend_weights = None))]
     #[allow(clippy::too_many_arguments)]
     fn from_arrays(
         py: Python<'_>,
@@ -327,6 +330,7 @@ impl Rig {
         fit_source: &str,
         coords_precision: &str,
         coords: &str,
+        dq_blend_weights: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let options = options::session_options(
             skinning,
@@ -346,7 +350,10 @@ impl Rig {
         let cage_tris = convert::triangles(cage_triangles, "cage_triangles", cage_pos.len())?;
         let mesh = TriMesh::new(positions, tris).map_err(rig_error)?;
         let cage = TriMesh::new(cage_pos, cage_tris).map_err(rig_error)?;
-        let parts = RigParts::new(mesh, skeleton, weights, cage);
+        let blend = dq_blend_weights
+            .map(|b| convert::dq_blend_weights(b, "dq_blend_weights", mesh.num_vertices()))
+            .transpose()?;
+        let parts = RigParts::new(mesh, skeleton, weights, cage).with_dq_blend_weights(blend);
         Self::build(py, parts, options, warnings, "arrays".into())
     }
 
@@ -452,8 +459,9 @@ impl Rig {
             .map_err(rig_error)
     }
 
-    /// Switches the skinning method: ``"lbs"``, ``"dqs"`` or ``"cor"`` (CoR centres are
-    /// computed on the first switch to CoR).
+    /// Switches the skinning method: ``"lbs"``, ``"dqs"``, ``"cor"`` or ``"blended"`` (CoR
+    /// centres are computed on the first switch to CoR; "blended" needs the rig's DQ blend
+    /// weights, else a RigError).
     fn set_skinning(&mut self, py: Python<'_>, method: &str) -> PyResult<()> {
         let method = options::skinning_method(method)?;
         let session = &mut self.session;

@@ -198,10 +198,19 @@ impl Rig {
         PyArray1::from_vec(py, rows)
     }
 
-    /// The active skinning method: ``"lbs"``, ``"dqs"`` or ``"cor"``.
+    /// The active skinning method: ``"lbs"``, ``"dqs"``, ``"cor"`` or ``"blended"``.
     #[getter]
     fn skinning(&self) -> &'static str {
         self.session.skinning().name()
+    }
+
+    /// DQ blend weights b, (n,) float64 in [0, 1], of the ``"blended"`` method (vertex v is
+    /// skinned ``(1 - b[v]) * LBS + b[v] * DQS``), or None when the rig has none.
+    #[getter]
+    fn dq_blend_weights<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.session
+            .dq_blend_weights()
+            .map(|b| PyArray1::from_slice(py, b.values()))
     }
 
     /// Warnings gathered while loading and building the rig.

@@ -92,8 +92,18 @@ fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: 
     let locks = doc.session.sync_locks();
     ui.horizontal(|ui| {
         ui.label("Skinning");
+        let has_blend_weights = doc.session.dq_blend_weights().is_some();
         for m in SkinningMethod::ALL {
-            if ui.selectable_label(method == m, m.label()).clicked() && method != m {
+            // The blended method reads the rig's DQ blend weights (FBX skins carry them).
+            let available = !m.needs_dq_blend_weights() || has_blend_weights;
+            let clicked = ui
+                .add_enabled_ui(available, |ui| ui.selectable_label(method == m, m.label()))
+                .inner
+                .on_disabled_hover_text(
+                    "This rig has no per-vertex DQ blend weights (FBX characters carry them)",
+                )
+                .clicked();
+            if clicked && method != m {
                 run_command(doc, &Command::SetSkinning(m), diag);
             }
         }

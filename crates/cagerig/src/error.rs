@@ -174,6 +174,24 @@ pub enum RigError {
         /// The offending weight.
         weight: f64,
     },
+    /// A DQ blend weight (blended skinning, `b_v` of vertex v) is not a finite number in [0, 1].
+    #[error(
+        "DQ blend weight of vertex {vertex} is {weight}: expected a finite number in [0, 1] \
+         (0 skins the vertex with LBS, 1 with DQS)"
+    )]
+    InvalidDqBlendWeight {
+        /// The vertex index.
+        vertex: usize,
+        /// The offending weight.
+        weight: f64,
+    },
+    /// The blended skinning method was asked of a rig without DQ blend weights.
+    #[error(
+        "the rig has no per-vertex DQ blend weights: the blended (LBS/DQS blend) skinning method \
+         needs one weight in [0, 1] per mesh vertex (FBX skins carry them: Maya's \"weight \
+         blended\" skin clusters); expected a rig with DQ blend weights, or choose lbs, dqs or cor"
+    )]
+    NoDqBlendWeights,
     /// Two sizes that must agree (e.g. rows of Φ and vertices of M) differ.
     #[error("{what}: expected {expected} but got {actual}")]
     SizeMismatch {

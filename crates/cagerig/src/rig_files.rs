@@ -203,6 +203,8 @@ pub fn load_rig_files_with_weights(
         cor_rows,
         joint_coords: None,
         cor_centre_coords: None,
+        // The paper tool's file set has no per-vertex DQ blend weights.
+        dq_blend_weights: None,
     };
     let name = mesh.display().to_string();
     let (mut weight_warnings, weights_file) =

@@ -25,10 +25,11 @@ use crate::pose::{
 };
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
-use crate::skinning::SkinningMethod;
+use crate::skinning::blended::BlendedSkinning;
 use crate::skinning::cor::{CorScratch, CorSkinning};
 use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
+use crate::skinning::{DqBlendWeights, SkinningMethod};
 use crate::sparse_rows::SparseRows;
 use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
@@ -101,6 +102,9 @@ pub struct RigSession {
     reverser: CageReverser,
     lbs: LinearBlendSkinning,
     dqs: DualQuaternionSkinning,
+    /// The blended LBS/DQS kernel with the rig's DQ blend weights b (`None`: the rig has none,
+    /// and [`SkinningMethod::Blended`] is refused).
+    blended: Option<BlendedSkinning>,
     ghost_lbs: LinearBlendSkinning,
     cor_rows: Option<SparseRows>,
     /// Λ given with the parts, used on the first switch to CoR.
@@ -177,6 +181,7 @@ impl RigSession {
             cor_rows,
             joint_coords,
             cor_centre_coords,
+            dq_blend_weights,
         } = parts;
         let nv = mesh.num_vertices();
         if skin_weights.num_vertices() != nv {
@@ -193,6 +198,9 @@ impl RigSession {
                 actual: skin_weights.num_joints(),
             });
         }
+        let blended = dq_blend_weights
+            .map(|b| BlendedSkinning::new(&skin_weights, &b))
+            .transpose()?;
         if mesh.triangles.is_empty() {
             return Err(RigError::Invalid(format!(
                 "the rest mesh has {nv} vertices and no triangle: expected a surface (the \
@@ -291,6 +299,7 @@ impl RigSession {
             cage_triangles: cage.triangles.clone(),
             lbs: LinearBlendSkinning::new(&skin_weights),
             dqs: DualQuaternionSkinning::new(&skin_weights),
+            blended,
             dqs_scratch: DqsScratch::new(nj),
             ghost_lbs,
             skeleton,

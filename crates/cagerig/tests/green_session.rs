@@ -14,6 +14,8 @@ use cagerig::session::{RigParts, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use glam::{DQuat, DVec3};
 
+mod support;
+
 fn green() -> SessionOptions {
     SessionOptions {
         coords: CoordsKind::Green,
@@ -23,7 +25,9 @@ fn green() -> SessionOptions {
 
 fn builtin(name: &str, options: SessionOptions) -> RigSession {
     let rig = demo::builtin(name, None).unwrap();
-    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+    let blend = support::spread_blend_weights(rig.mesh.num_vertices());
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage)
+        .with_dq_blend_weights(Some(blend));
     RigSession::new(parts, options).unwrap().0
 }
 
@@ -31,7 +35,9 @@ fn arm(options: SessionOptions) -> (RigSession, Vec<DVec3>) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
     let files = load_rig_files(&dir.join("arm.obj"), None).unwrap();
     let loaded = files.parts.mesh.positions.clone();
-    (RigSession::new(files.parts, options).unwrap().0, loaded)
+    let blend = support::spread_blend_weights(loaded.len());
+    let parts = files.parts.with_dq_blend_weights(Some(blend));
+    (RigSession::new(parts, options).unwrap().0, loaded)
 }
 
 fn diagonal(points: &[DVec3]) -> f64 {
@@ -273,7 +279,7 @@ fn thousand_interleaved_events_keep_every_invariant_on_the_builtin_rigs() {
                     applied
                 }
                 _ => {
-                    let m = SkinningMethod::ALL[rng.index(3)];
+                    let m = SkinningMethod::ALL[rng.index(SkinningMethod::ALL.len())];
                     applied_or_refused_cleanly(&mut s, |s| s.set_skinning(m))
                 }
             };

@@ -16,6 +16,8 @@ use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use glam::DVec3;
 
+mod support;
+
 struct Counting;
 
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
@@ -57,7 +59,9 @@ fn per_event_work_does_not_allocate() {
 fn run_events() {
     // One test in this binary, so no other test thread allocates meanwhile.
     let rig = demo::builtin("snake", Some(20_000)).unwrap();
-    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+    let blend = support::spread_blend_weights(rig.mesh.num_vertices());
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage)
+        .with_dq_blend_weights(Some(blend));
     let (mut s, _) = RigSession::new(parts, SessionOptions::default()).unwrap();
     s.set_skinning(SkinningMethod::Cor).unwrap();
     s.set_skinning(SkinningMethod::Lbs).unwrap();
@@ -73,11 +77,7 @@ fn run_events() {
         s.rotate_joint(5, DVec3::Y, 0.02).unwrap();
     });
     assert_eq!(n, 0, "rotate_joint allocated {n} times");
-    for method in [
-        SkinningMethod::Lbs,
-        SkinningMethod::Dqs,
-        SkinningMethod::Cor,
-    ] {
+    for method in SkinningMethod::ALL {
         let n = allocations_during(|| s.set_skinning(method).unwrap());
         assert_eq!(n, 0, "set_skinning({method:?}) allocated {n} times");
         let n = allocations_during(|| s.move_rest_cage(&[0, 3, 7], &[offset]).unwrap());
@@ -90,11 +90,7 @@ fn run_events() {
     // The f32 display path: kernels are built on first use of each method, then events
     // allocate nothing either.
     s.set_display_precision(DisplayPrecision::F32).unwrap();
-    for method in [
-        SkinningMethod::Lbs,
-        SkinningMethod::Dqs,
-        SkinningMethod::Cor,
-    ] {
+    for method in SkinningMethod::ALL {
         s.set_skinning(method).unwrap();
         s.move_rest_cage(&[0, 3, 7], &[offset]).unwrap();
         let n = allocations_during(|| s.rotate_joint(5, DVec3::Y, 0.02).unwrap());

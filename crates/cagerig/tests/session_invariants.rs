@@ -1,6 +1,7 @@
 //! Invariants of the coupled rig on built-in rigs under interleaved events:
 //! identity pose gives the rest mesh, the loop C' → C → S → S' → C' is exact under LBS (and with
-//! the ghost fit for DQS/CoR), M = ΦC and A = ΨC hold after any number of events (no drift).
+//! the ghost fit for DQS/CoR/blended), M = ΦC and A = ΨC hold after any number of events (no
+//! drift). Every rig carries random DQ blend weights, so the blended method runs everywhere.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
@@ -8,7 +9,7 @@ use cagerig::cage_coords::CoordsPrecision;
 use cagerig::demo;
 use cagerig::mesh::max_distance;
 use cagerig::session::{CageFitSource, RigParts, RigSession, SessionOptions};
-use cagerig::skinning::SkinningMethod;
+use cagerig::skinning::{DqBlendWeights, SkinningMethod};
 use cagerig::sync::cage_reverser::ReverserMethod;
 use glam::DVec3;
 
@@ -18,8 +19,23 @@ fn session(name: &str) -> RigSession {
 
 fn session_with(name: &str, options: SessionOptions) -> RigSession {
     let rig = demo::builtin(name, None).unwrap();
-    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+    let blend = random_blend_weights(rig.mesh.num_vertices(), 11);
+    let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage)
+        .with_dq_blend_weights(Some(blend));
     RigSession::new(parts, options).unwrap().0
+}
+
+/// Random DQ blend weights (`#V`): uniform in [0, 1], with every fifth vertex at 0 or 1.
+fn random_blend_weights(num_vertices: usize, seed: u64) -> DqBlendWeights {
+    let mut rng = Lcg(seed);
+    let values = (0..num_vertices)
+        .map(|v| match v % 10 {
+            0 => 0.0,
+            5 => 1.0,
+            _ => rng.next(),
+        })
+        .collect();
+    DqBlendWeights::new(values).unwrap()
 }
 
 /// Scale of the rig, for relative tolerances.
@@ -94,11 +110,7 @@ fn grab_lands_exactly(s: &mut RigSession, vertices: &[usize], offset: DVec3, tol
 
 #[test]
 fn loop_is_exact_under_lbs_and_ghost_fit() {
-    for method in [
-        SkinningMethod::Lbs,
-        SkinningMethod::Dqs,
-        SkinningMethod::Cor,
-    ] {
+    for method in SkinningMethod::ALL {
         let mut s = session("bar");
         s.set_skinning(method).unwrap();
         assert_eq!(s.fit_source(), CageFitSource::GhostLbs);
@@ -171,11 +183,7 @@ fn interleaved_events_keep_consensus(mut s: RigSession, events: usize) {
                 grab_lands_exactly(&mut s, &v, rng.vec(0.02 * sc), tol);
             }
             _ => {
-                let m = [
-                    SkinningMethod::Lbs,
-                    SkinningMethod::Dqs,
-                    SkinningMethod::Cor,
-                ][rng.index(3)];
+                let m = SkinningMethod::ALL[rng.index(SkinningMethod::ALL.len())];
                 s.set_skinning(m).unwrap();
             }
         }

@@ -9,16 +9,18 @@ use std::path::Path;
 use cagerig::io::{read_cor_weights, read_obj, read_skt, read_skw};
 use cagerig::mesh::{bounding_box, max_distance};
 use cagerig::skinning::{
-    CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
-    DualQuaternionSkinning, LbsF32, LbsF32Scratch, LinearBlendSkinning,
+    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch, CorSkinning,
+    DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32, LbsF32Scratch,
+    LinearBlendSkinning,
 };
 use cagerig::subdivide::subdivide_midpoint;
 use glam::{DAffine3, DVec3, Vec3};
 
 mod support;
-use support::{ARM, step2_transforms};
+use support::{ARM, spread_blend_weights, step2_transforms};
 
-/// Tolerance on max |f32 − f64| / bbox diagonal (measured: LBS 3.1e-7, DQS 4.8e-7, CoR 2.9e-7).
+/// Tolerance on max |f32 − f64| / bbox diagonal (measured: LBS 3.1e-7, DQS 4.8e-7, CoR 2.9e-7,
+/// blended with `spread_blend_weights` 4.2e-7).
 const TOLERANCE: f64 = 2e-6;
 
 struct Rig {
@@ -114,13 +116,30 @@ fn f32_kernels_match_f64_on_subdivided_arm_step2() {
         );
     let cor_error = relative_error(&approx, &exact, diagonal);
 
+    let blend = spread_blend_weights(n);
+    BlendedSkinning::new(&rig.weights, &blend).unwrap().apply(
+        &rig.transforms,
+        &rig.rest,
+        &mut DqsScratch::new(num_joints),
+        &mut exact,
+    );
+    BlendedF32::new(&rig.weights, &blend, &rig.rest)
+        .unwrap()
+        .apply(
+            &rig.transforms,
+            &mut BlendedF32Scratch::new(num_joints),
+            &mut approx,
+        );
+    let blended_error = relative_error(&approx, &exact, diagonal);
+
     println!(
         "subdivided Arm ({n} v, bbox diagonal {diagonal:.3}), step ii, max |f32 - f64| / diagonal: \
-         LBS {lbs_error:.3e}, DQS {dqs_error:.3e}, CoR {cor_error:.3e}"
+         LBS {lbs_error:.3e}, DQS {dqs_error:.3e}, CoR {cor_error:.3e}, blended {blended_error:.3e}"
     );
     assert!(lbs_error <= TOLERANCE, "LBS {lbs_error:e}");
     assert!(dqs_error <= TOLERANCE, "DQS {dqs_error:e}");
     assert!(cor_error <= TOLERANCE, "CoR {cor_error:e}");
+    assert!(blended_error <= TOLERANCE, "blended {blended_error:e}");
 }
 
 #[test]

@@ -1,4 +1,4 @@
-//! Property tests of the f32 skinning kernels (LbsF32, DqsF32, CorF32): the properties of the f64
+//! Property tests of the f32 skinning kernels (LbsF32, DqsF32, CorF32, BlendedF32): the properties of the f64
 //! kernels within f32 tolerance, and agreement with the f64 kernels. Coordinates and translations
 //! are in [-10, 10]; the tolerance 1e-4 is ≈ 2e-6 of the scale (f32 ε ≈ 6e-8).
 
@@ -6,25 +6,27 @@
 
 use cagerig::SkinWeights;
 use cagerig::skinning::{
-    CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
-    DualQuaternionSkinning, LbsF32, LbsF32Scratch, LinearBlendSkinning,
+    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch, CorSkinning,
+    DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32, LbsF32Scratch,
+    LinearBlendSkinning,
 };
 use glam::{DAffine3, DVec3, Vec3};
 use proptest::prelude::*;
 
 mod support;
-use support::{point, rigid, skin_weights, weight_rows};
+use support::{point, rigid, skin_weights, spread_blend_weights, weight_rows};
 
 const NUM_JOINTS: usize = 6;
 const TOLERANCE: f64 = 1e-4;
 
-/// f32 LBS, DQS and CoR of the same input, widened to f64.
+/// f32 LBS, DQS, CoR and the blend (with [`spread_blend_weights`]) of the same input, widened
+/// to f64.
 fn skin_all_f32(
     w: &SkinWeights,
     t: &[DAffine3],
     rest: &[DVec3],
     centres: &[DVec3],
-) -> [Vec<DVec3>; 3] {
+) -> [Vec<DVec3>; 4] {
     let n = rest.len();
     let widen = |v: Vec<Vec3>| v.iter().map(|p| p.as_dvec3()).collect::<Vec<_>>();
     let mut lbs = vec![Vec3::ZERO; n];
@@ -39,7 +41,11 @@ fn skin_all_f32(
     CorF32::new(w, rest, centres)
         .unwrap()
         .apply(t, &mut CorF32Scratch::new(t.len()), &mut cor);
-    [widen(lbs), widen(dqs), widen(cor)]
+    let mut blended = vec![Vec3::ZERO; n];
+    BlendedF32::new(w, &spread_blend_weights(n), rest)
+        .unwrap()
+        .apply(t, &mut BlendedF32Scratch::new(t.len()), &mut blended);
+    [widen(lbs), widen(dqs), widen(cor), widen(blended)]
 }
 
 proptest! {
@@ -70,9 +76,10 @@ proptest! {
         let rows: Vec<Vec<(usize, f64)>> = rest.iter().map(|_| vec![(joint, 1.0)]).collect();
         let w = skin_weights(&rows, NUM_JOINTS);
         let centres = vec![centre; rest.len()];
-        let [lbs, dqs, cor] = skin_all_f32(&w, &transforms, &rest, &centres);
+        let [lbs, dqs, cor, blended] = skin_all_f32(&w, &transforms, &rest, &centres);
         for i in 0..rest.len() {
             let expected = transforms[joint].transform_point3(rest[i]);
+            prop_assert!(blended[i].abs_diff_eq(expected, TOLERANCE), "{} vs {}", blended[i], expected);
             prop_assert!(lbs[i].abs_diff_eq(expected, TOLERANCE), "{} vs {}", lbs[i], expected);
             prop_assert!(dqs[i].abs_diff_eq(expected, TOLERANCE), "{} vs {}", dqs[i], expected);
             prop_assert!(cor[i].abs_diff_eq(expected, TOLERANCE), "{} vs {}", cor[i], expected);
@@ -116,8 +123,12 @@ proptest! {
         DualQuaternionSkinning::new(&w).apply(&transforms, &rest, &mut DqsScratch::new(NUM_JOINTS), &mut dqs);
         let mut cor = vec![DVec3::ZERO; n];
         CorSkinning::new(&w).apply(&transforms, &rest, &centres, &mut CorScratch::new(NUM_JOINTS), &mut cor);
+        let mut blended = vec![DVec3::ZERO; n];
+        BlendedSkinning::new(&w, &spread_blend_weights(n))
+            .unwrap()
+            .apply(&transforms, &rest, &mut DqsScratch::new(NUM_JOINTS), &mut blended);
         let approx = skin_all_f32(&w, &transforms, &rest, &centres);
-        for (method, (exact, approx)) in [lbs, dqs, cor].iter().zip(&approx).enumerate() {
+        for (method, (exact, approx)) in [lbs, dqs, cor, blended].iter().zip(&approx).enumerate() {
             for (a, b) in approx.iter().zip(exact) {
                 // DQS/CoR normalise a blended quaternion; its conditioning is bounded because the
                 // pivot term has weight ≥ 1/#J, so the error stays at a few f32 ulps of the scale.

@@ -1,21 +1,22 @@
-//! Property tests shared by the three skinning kernels (LBS, DQS, CoR).
+//! Property tests shared by the four skinning kernels (LBS, DQS, CoR, the LBS/DQS blend).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::SkinWeights;
 use cagerig::skinning::{
-    CorScratch, CorSkinning, DqsScratch, DualQuaternionSkinning, LinearBlendSkinning,
+    BlendedSkinning, CorScratch, CorSkinning, DqBlendWeights, DqsScratch, DualQuaternionSkinning,
+    LinearBlendSkinning,
 };
 use glam::{DAffine3, DVec3};
 use proptest::prelude::*;
 
 mod support;
-use support::{point, rigid, skin_weights, weight_rows};
+use support::{point, rigid, skin_weights, spread_blend_weights, weight_rows};
 
 const NUM_JOINTS: usize = 6;
 
-/// LBS, DQS and CoR of the same input.
-fn skin_all(w: &SkinWeights, t: &[DAffine3], rest: &[DVec3], centres: &[DVec3]) -> [Vec<DVec3>; 3] {
+/// LBS, DQS, CoR and the blend (with [`spread_blend_weights`]) of the same input.
+fn skin_all(w: &SkinWeights, t: &[DAffine3], rest: &[DVec3], centres: &[DVec3]) -> [Vec<DVec3>; 4] {
     let n = rest.len();
     let mut lbs = vec![DVec3::ZERO; n];
     LinearBlendSkinning::new(w).apply(t, rest, &mut lbs);
@@ -23,7 +24,22 @@ fn skin_all(w: &SkinWeights, t: &[DAffine3], rest: &[DVec3], centres: &[DVec3]) 
     DualQuaternionSkinning::new(w).apply(t, rest, &mut DqsScratch::new(t.len()), &mut dqs);
     let mut cor = vec![DVec3::ZERO; n];
     CorSkinning::new(w).apply(t, rest, centres, &mut CorScratch::new(t.len()), &mut cor);
-    [lbs, dqs, cor]
+    let blend = spread_blend_weights(n);
+    [lbs, dqs, cor, skin_blended(w, &blend, t, rest)]
+}
+
+/// The blended kernel with blend weights `blend` (`#V`).
+fn skin_blended(
+    w: &SkinWeights,
+    blend: &DqBlendWeights,
+    t: &[DAffine3],
+    rest: &[DVec3],
+) -> Vec<DVec3> {
+    let mut out = vec![DVec3::ZERO; rest.len()];
+    BlendedSkinning::new(w, blend)
+        .unwrap()
+        .apply(t, rest, &mut DqsScratch::new(t.len()), &mut out);
+    out
 }
 
 proptest! {
@@ -54,10 +70,11 @@ proptest! {
         let rows: Vec<Vec<(usize, f64)>> = rest.iter().map(|_| vec![(joint, 1.0)]).collect();
         let w = skin_weights(&rows, NUM_JOINTS);
         let centres = vec![centre; rest.len()];
-        let [lbs, dqs, cor] = skin_all(&w, &transforms, &rest, &centres);
+        let [lbs, dqs, cor, blended] = skin_all(&w, &transforms, &rest, &centres);
         for i in 0..rest.len() {
             let expected = transforms[joint].transform_point3(rest[i]);
             prop_assert!(lbs[i].abs_diff_eq(expected, 1e-10));
+            prop_assert!(blended[i].abs_diff_eq(expected, 1e-10), "{} vs {}", blended[i], expected);
             prop_assert!(dqs[i].abs_diff_eq(expected, 1e-10), "{} vs {}", dqs[i], expected);
             prop_assert!(cor[i].abs_diff_eq(expected, 1e-10), "{} vs {}", cor[i], expected);
         }
@@ -79,6 +96,26 @@ proptest! {
                 let expected = transform.transform_point3(*b);
                 prop_assert!(a.abs_diff_eq(expected, 1e-10), "method {}: {} vs {}", method, a, expected);
             }
+        }
+    }
+
+    /// The blend is the convex combination `(1 − b)·LBS + b·DQS` of the two kernels' points,
+    /// for any blend weights in [0, 1].
+    #[test]
+    fn blended_is_the_convex_combination_of_lbs_and_dqs(
+        (rows, rest, blend) in (1..40usize).prop_flat_map(|n| (
+            weight_rows(n, NUM_JOINTS),
+            proptest::collection::vec(point(), n),
+            proptest::collection::vec(0.0..=1.0f64, n),
+        )),
+        transforms in proptest::collection::vec(rigid(), NUM_JOINTS),
+    ) {
+        let w = skin_weights(&rows, NUM_JOINTS);
+        let [lbs, dqs, ..] = skin_all(&w, &transforms, &rest, &rest);
+        let blended = skin_blended(&w, &DqBlendWeights::new(blend.clone()).unwrap(), &transforms, &rest);
+        for i in 0..rest.len() {
+            let expected = lbs[i] * (1.0 - blend[i]) + dqs[i] * blend[i];
+            prop_assert!(blended[i].abs_diff_eq(expected, 1e-10), "vertex {}: {} vs {}", i, blended[i], expected);
         }
     }
 

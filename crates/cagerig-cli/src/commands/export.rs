@@ -130,8 +130,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "note: --bake under LBS: viewers skin with LBS as cagerig does, nothing to bake (no \
              target added)"
         ),
-        (SkinningMethod::Lbs, false) | (SkinningMethod::Dqs | SkinningMethod::Cor, true) => {}
-        (SkinningMethod::Dqs | SkinningMethod::Cor, false) => eprintln!(
+        (SkinningMethod::Lbs, false)
+        | (SkinningMethod::Dqs | SkinningMethod::Cor | SkinningMethod::Blended, true) => {}
+        (SkinningMethod::Dqs | SkinningMethod::Cor | SkinningMethod::Blended, false) => eprintln!(
             "warning: glTF skins with LBS: viewers show the LBS result of this rig, not \
              cagerig's {label} skin (up to a few % of the diagonal apart){hint}",
             label = method.label(),

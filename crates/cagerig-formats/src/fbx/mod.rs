@@ -30,6 +30,7 @@ use crate::character::{
 };
 use crate::error::{FormatError, invalid};
 
+mod skinning_method;
 mod static_mesh;
 
 pub use static_mesh::{import_fbx_static, import_fbx_static_bytes};
@@ -98,64 +99,6 @@ fn fbx_error(path: &Path, e: &ufbx::Error) -> FormatError {
         path: path.to_path_buf(),
         message: format!("{:?}: {} {}", e.type_, &*e.description, e.info()),
     }
-}
-
-/// The skinning method of the scene's skin deformers (the method of the first skinned mesh;
-/// a note when meshes disagree). Maya's "weight blended" mode blends linear and dual-quaternion
-/// skinning per vertex, which cagerig does not have yet: the method of most of the skin's
-/// weight (DQS when the mean blend weight is at least ½, else LBS) is used, with a warning.
-fn skinning_method(
-    scene: &ufbx::Scene,
-    warnings: &mut Vec<Warning>,
-) -> Option<cagerig::skinning::SkinningMethod> {
-    use cagerig::skinning::SkinningMethod;
-    let deformers: Vec<&ufbx::SkinDeformer> = scene
-        .nodes
-        .iter()
-        .filter_map(|n| n.mesh.as_ref())
-        .filter_map(|m| m.skin_deformers.first())
-        .map(|d| &**d)
-        .collect();
-    let first = deformers.first()?;
-    if deformers
-        .iter()
-        .any(|d| d.skinning_method != first.skinning_method)
-    {
-        warnings.push(Warning::Note {
-            message: format!(
-                "the file's skinned meshes use different skinning methods; the first one's \
-                 ({:?}) is used for the whole character",
-                first.skinning_method
-            ),
-        });
-    }
-    Some(match first.skinning_method {
-        ufbx::SkinningMethod::Linear | ufbx::SkinningMethod::Rigid => SkinningMethod::Lbs,
-        ufbx::SkinningMethod::DualQuaternion => SkinningMethod::Dqs,
-        ufbx::SkinningMethod::BlendedDqLinear => {
-            let weights: Vec<f64> = first.dq_weights.iter().copied().collect();
-            let mean = if weights.is_empty() {
-                0.0
-            } else {
-                weights.iter().sum::<f64>() / weights.len() as f64
-            };
-            let method = if mean >= 0.5 {
-                SkinningMethod::Dqs
-            } else {
-                SkinningMethod::Lbs
-            };
-            warnings.push(Warning::Note {
-                message: format!(
-                    "the file's skin blends linear and dual-quaternion skinning per vertex \
-                     (Maya \"weight blended\", mean blend weight {mean:.2}); cagerig has no \
-                     blended method yet, so the character is posed with {}: vertices with \
-                     other blend weights differ from the authoring tool",
-                    method.label()
-                ),
-            });
-            method
-        }
-    })
 }
 
 /// Reads an FBX file (binary or ASCII).
@@ -446,7 +389,7 @@ pub fn import_fbx_bytes(
             message: format!("FBX animation stacks sampled at {fps} frames/s"),
         });
     }
-    let file_method = skinning_method(&scene, &mut warnings);
+    let (file_method, dq_blend_weights) = skinning_method::file_skinning(&scene, path, nv)?;
     let mut character = ImportedCharacter {
         mesh,
         skeleton,
@@ -468,6 +411,7 @@ pub fn import_fbx_bytes(
             ..Default::default()
         },
         skinning: file_method,
+        dq_blend_weights,
         warnings,
     };
     character.fill_influence_summary();

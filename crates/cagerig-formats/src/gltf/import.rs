@@ -413,6 +413,7 @@ pub fn import_gltf_bytes(
             ..Default::default()
         },
         skinning: None,
+        dq_blend_weights: None,
         warnings,
     };
     character.fill_influence_summary();

@@ -18,7 +18,7 @@ _F64Array = npt.NDArray[np.float64]
 _I64Array = npt.NDArray[np.int64]
 _ArrayLike = npt.ArrayLike
 _PathLike = Union[str, os.PathLike[str]]
-_Skinning = Literal["lbs", "dqs", "cor"]
+_Skinning = Literal["lbs", "dqs", "cor", "blended"]
 _FitRows = Literal["maxvol", "all"]
 _Localisation = Literal["articulation", "reference_tool"]
 _FitSource = Literal["ghost", "displayed"]
@@ -181,6 +181,7 @@ class Rig:
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
         coords: Literal["mvc", "green"] = "mvc",
+        dq_blend_weights: Optional[_ArrayLike] = None,
     ) -> Rig: ...
     def copy(self) -> Rig: ...
     @property
@@ -255,6 +256,8 @@ class Rig:
     def fit_rows(self) -> _I64Array: ...
     @property
     def skinning(self) -> _Skinning: ...
+    @property
+    def dq_blend_weights(self) -> Optional[_F64Array]: ...
     @property
     def warnings(self) -> list[str]: ...
     @property

@@ -57,6 +57,10 @@ impl RigSession {
     pub fn skin_weights(&self) -> &SkinWeights {
         &self.skin_weights
     }
+    /// DQ blend weights b (`#V`) of [`SkinningMethod::Blended`], when the rig has them.
+    pub fn dq_blend_weights(&self) -> Option<&DqBlendWeights> {
+        self.blended.as_ref().map(BlendedSkinning::dq_blend_weights)
+    }
     /// Φ.
     pub fn cage_coords(&self) -> &CageCoords {
         &self.cage_coords

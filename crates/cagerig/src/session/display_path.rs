@@ -2,7 +2,7 @@
 //! exact f64 state drives the sync operators.
 //!
 //! With [`DisplayPrecision::F32`] an event skins all of M' with [`LbsF32`] / [`DqsF32`] /
-//! [`CorF32`] into [`RigSession::display_mesh`] (max |f32 − f64| ≤ 2e-6 of the bounding-box
+//! [`CorF32`] / [`BlendedF32`] into [`RigSession::display_mesh`] (max |f32 − f64| ≤ 2e-6 of the bounding-box
 //! diagonal, asserted by `tests/display_path.rs`; measured 3e-7–5e-7 on the subdivided Arm), and
 //! CageUp reads the MaxVol rows of M' skinned **exactly** in f64 by row kernels of the same rule
 //! (bit-identical to the rows of the full f64 M'): C', C, S and S' are the same bits as on the
@@ -30,8 +30,9 @@ use crate::cage_coords::{CageCoords, DisplayCageCoords};
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::{
-    CorF32, CorF32Scratch, CorScratch, CorSkinning, DqsF32, DqsF32Scratch, DqsScratch,
-    DualQuaternionSkinning, LbsF32, LbsF32Scratch, RestPoint, SkinningMethod,
+    BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch, CorSkinning,
+    DqBlendWeights, DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32,
+    LbsF32Scratch, RestPoint, SkinningMethod,
 };
 
 /// Precision of the displayed current skin M'.
@@ -59,13 +60,17 @@ pub(super) struct DisplayPath {
     lbs: Option<Stored<LbsF32>>,
     dqs: Option<Stored<DqsF32>>,
     cor: Option<Stored<CorF32>>,
+    blended: Option<Stored<BlendedF32>>,
     lbs_scratch: LbsF32Scratch,
     dqs_scratch: DqsF32Scratch,
     cor_scratch: CorF32Scratch,
-    /// Ω restricted to the MaxVol rows, for the exact DQS/CoR rows (LBS rows use the
+    blended_scratch: BlendedF32Scratch,
+    /// Ω restricted to the MaxVol rows, for the exact DQS/CoR/blended rows (LBS rows use the
     /// session's ghost LBS).
     rows_dqs: DualQuaternionSkinning,
     rows_cor: CorSkinning,
+    /// The blended kernel of the MaxVol rows (`None` when the rig has no DQ blend weights).
+    rows_blended: Option<BlendedSkinning>,
     rows_dqs_scratch: DqsScratch,
     rows_cor_scratch: CorScratch,
     /// CoR centres of the MaxVol rows, `#rows`.
@@ -86,18 +91,29 @@ pub(super) struct DisplayPath {
 }
 
 impl DisplayPath {
-    pub fn new(skin_weights: &SkinWeights, rows: &[usize]) -> Self {
+    /// `blend`: the rig's DQ blend weights (`#V`), whose rows the blended row kernel reads.
+    pub fn new(
+        skin_weights: &SkinWeights,
+        rows: &[usize],
+        blend: Option<&DqBlendWeights>,
+    ) -> Result<Self, RigError> {
         let nj = skin_weights.num_joints();
         let row_weights = skin_weights.select_rows(rows);
-        Self {
+        let rows_blended = blend
+            .map(|b| BlendedSkinning::new(&row_weights, &b.select_rows(rows)))
+            .transpose()?;
+        Ok(Self {
             lbs: None,
             dqs: None,
             cor: None,
+            blended: None,
             lbs_scratch: LbsF32Scratch::new(nj),
             dqs_scratch: DqsF32Scratch::new(nj),
             cor_scratch: CorF32Scratch::new(nj),
+            blended_scratch: BlendedF32Scratch::new(nj),
             rows_dqs: DualQuaternionSkinning::new(&row_weights),
             rows_cor: CorSkinning::new(&row_weights),
+            rows_blended,
             rows_dqs_scratch: DqsScratch::new(nj),
             rows_cor_scratch: CorScratch::new(nj),
             rows_centres: vec![DVec3::ZERO; rows.len()],
@@ -107,7 +123,7 @@ impl DisplayPath {
             rest_positions: vec![Vec3::ZERO; skin_weights.num_vertices()],
             rest_positions_revision: None,
             exact_rest: OnceLock::new(),
-        }
+        })
     }
 }
 
@@ -142,7 +158,8 @@ impl RigSession {
             DisplayPrecision::F32 => Some(Box::new(DisplayPath::new(
                 &self.skin_weights,
                 self.cage_updater.rows(),
-            ))),
+                self.dq_blend_weights(),
+            )?)),
         };
         self.skin();
         if !self.locks.cage_up {
@@ -273,6 +290,7 @@ impl RigSession {
             transforms: &self.posed_from_rest,
             weights: &self.skin_weights,
             centres: self.cor.as_ref().map(|c| &c.centres[..]),
+            blend: self.blended.as_ref().map(BlendedSkinning::dq_blend_weights),
             revision,
         };
         let result = if self.rest_mesh_rows_only {
@@ -296,19 +314,27 @@ impl RigSession {
         }
         let transforms: &[DAffine3] = &self.posed_from_rest;
         let centres = self.cor.as_ref().map(|c| &c.centres[..]);
-        match (self.method, centres) {
-            (SkinningMethod::Lbs, _) | (SkinningMethod::Cor, None) => self.ghost_lbs.apply(
+        match (self.method, centres, &display.rows_blended) {
+            (SkinningMethod::Lbs, _, _)
+            | (SkinningMethod::Cor, None, _)
+            | (SkinningMethod::Blended, _, None) => self.ghost_lbs.apply(
                 transforms,
                 &self.scratch_rows_rest,
                 &mut self.scratch_rows_posed,
             ),
-            (SkinningMethod::Dqs, _) => display.rows_dqs.apply(
+            (SkinningMethod::Blended, _, Some(rows_blended)) => rows_blended.apply(
                 transforms,
                 &self.scratch_rows_rest,
                 &mut display.rows_dqs_scratch,
                 &mut self.scratch_rows_posed,
             ),
-            (SkinningMethod::Cor, Some(centres)) => {
+            (SkinningMethod::Dqs, _, _) => display.rows_dqs.apply(
+                transforms,
+                &self.scratch_rows_rest,
+                &mut display.rows_dqs_scratch,
+                &mut self.scratch_rows_posed,
+            ),
+            (SkinningMethod::Cor, Some(centres), _) => {
                 for (c, &row) in display.rows_centres.iter_mut().zip(rows) {
                     *c = centres[row];
                 }
@@ -346,6 +372,8 @@ struct SkinF32<'a> {
     weights: &'a SkinWeights,
     /// CoR centres (`#V`), once built.
     centres: Option<&'a [DVec3]>,
+    /// DQ blend weights (`#V`), when the rig has them.
+    blend: Option<&'a DqBlendWeights>,
     /// Rest revision of `rest`.
     revision: u64,
 }
@@ -354,8 +382,8 @@ impl SkinF32<'_> {
     /// Brings the method's f32 kernel to `rest` (`#V`) and skins into `display.positions`.
     fn apply<P: RestPoint>(&self, display: &mut DisplayPath, rest: &[P]) -> Result<(), RigError> {
         let (transforms, weights, revision) = (self.transforms, self.weights, self.revision);
-        match (self.method, self.centres) {
-            (SkinningMethod::Dqs, _) => {
+        match (self.method, self.centres, self.blend) {
+            (SkinningMethod::Dqs, _, _) => {
                 let dqs = refresh(
                     &mut display.dqs,
                     revision,
@@ -364,7 +392,20 @@ impl SkinF32<'_> {
                 )?;
                 dqs.apply(transforms, &mut display.dqs_scratch, &mut display.positions);
             }
-            (SkinningMethod::Cor, Some(centres)) => {
+            (SkinningMethod::Blended, _, Some(blend)) => {
+                let blended = refresh(
+                    &mut display.blended,
+                    revision,
+                    || BlendedF32::new(weights, blend, rest),
+                    |k| k.set_rest_positions(rest),
+                )?;
+                blended.apply(
+                    transforms,
+                    &mut display.blended_scratch,
+                    &mut display.positions,
+                );
+            }
+            (SkinningMethod::Cor, Some(centres), _) => {
                 let cor = refresh(
                     &mut display.cor,
                     revision,
@@ -373,7 +414,9 @@ impl SkinF32<'_> {
                 )?;
                 cor.apply(transforms, &mut display.cor_scratch, &mut display.positions);
             }
-            (SkinningMethod::Lbs, _) | (SkinningMethod::Cor, None) => {
+            (SkinningMethod::Lbs, _, _)
+            | (SkinningMethod::Cor, None, _)
+            | (SkinningMethod::Blended, _, None) => {
                 let lbs = refresh(
                     &mut display.lbs,
                     revision,

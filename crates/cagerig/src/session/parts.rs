@@ -154,6 +154,10 @@ pub struct RigParts {
     pub joint_coords: Option<Vec<Vec<f64>>>,
     /// Λ = S·Φ (`#V × #C`, Eq. 14), when already computed; takes precedence over `cor_rows`.
     pub cor_centre_coords: Option<CageCoords>,
+    /// DQ blend weights b (`#V`, in [0, 1]) for [`SkinningMethod::Blended`]: vertex v is skinned
+    /// `(1 − b_v)·LBS + b_v·DQS` (Maya's "weight blended" skin clusters, read from FBX). Without
+    /// them a session refuses the blended method ([`RigError::NoDqBlendWeights`]).
+    pub dq_blend_weights: Option<DqBlendWeights>,
 }
 
 impl RigParts {
@@ -175,6 +179,15 @@ impl RigParts {
             cor_rows: None,
             joint_coords: None,
             cor_centre_coords: None,
+            dq_blend_weights: None,
+        }
+    }
+
+    /// These parts with the DQ blend weights b (`#V`) of [`SkinningMethod::Blended`].
+    pub fn with_dq_blend_weights(self, dq_blend_weights: Option<DqBlendWeights>) -> Self {
+        Self {
+            dq_blend_weights,
+            ..self
         }
     }
 }

@@ -5,7 +5,8 @@
 use super::*;
 
 impl RigSession {
-    /// Switches the skinning method; computes CoR centres on the first switch to CoR.
+    /// Switches the skinning method; computes CoR centres on the first switch to CoR. The
+    /// blended method needs the rig's DQ blend weights ([`RigError::NoDqBlendWeights`]).
     pub fn set_skinning(&mut self, method: SkinningMethod) -> Result<(), RigError> {
         self.save_checkpoint();
         let result = self.set_skinning_event(method);
@@ -14,6 +15,9 @@ impl RigSession {
 
     /// [`RigSession::set_skinning`] without the checkpoint.
     fn set_skinning_event(&mut self, method: SkinningMethod) -> Result<(), RigError> {
+        if method.needs_dq_blend_weights() && self.blended.is_none() {
+            return Err(RigError::NoDqBlendWeights);
+        }
         if method == SkinningMethod::Cor && self.cor.is_none() {
             self.build_cor()?;
         }

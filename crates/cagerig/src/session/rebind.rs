@@ -12,6 +12,7 @@ impl RigSession {
     pub fn rebound(&self, coords: CoordsKind) -> Result<(RigSession, Vec<Warning>), RigError> {
         let mut binding_mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
         self.rest_mesh_of_cage(&self.original_rest_cage, &mut binding_mesh);
+        let dq_blend_weights = self.dq_blend_weights().cloned();
         let parts = RigParts::new(
             TriMesh {
                 positions: binding_mesh,
@@ -23,7 +24,8 @@ impl RigSession {
                 positions: self.original_rest_cage.clone(),
                 triangles: self.cage_triangles.clone(),
             },
-        );
+        )
+        .with_dq_blend_weights(dq_blend_weights);
         let options = SessionOptions {
             coords,
             skinning: self.method,

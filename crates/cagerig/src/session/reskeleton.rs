@@ -10,7 +10,8 @@ use super::*;
 impl RigSession {
     /// The parts of this character at its current rest pose — M exactly the map of C
     /// (`#V`), its triangles, C (`#C`) and its triangles — with the rest skeleton `skeleton`
-    /// (world-space rest frames at this pose) and Ω = `skin_weights` (`#V × #J`). With
+    /// (world-space rest frames at this pose) and Ω = `skin_weights` (`#V × #J`), and the DQ
+    /// blend weights of this rig (per vertex, so they carry over). With
     /// [`RigSession::rebinding_options`] they make the session [`RigSession::new`] builds.
     pub fn parts_with_skeleton(&self, skeleton: Skeleton, skin_weights: SkinWeights) -> RigParts {
         let mut rest_mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
@@ -27,6 +28,8 @@ impl RigSession {
                 triangles: self.cage_triangles.clone(),
             },
         )
+        // The DQ blend weights are per vertex, not per joint: they carry over.
+        .with_dq_blend_weights(self.dq_blend_weights().cloned())
     }
 
     /// M₀, the rest skin at the binding cage C₀ ([`RigSession::original_rest_cage`]), `#V`:

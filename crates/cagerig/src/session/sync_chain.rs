@@ -234,13 +234,18 @@ impl RigSession {
                     cor.scratch = scratch;
                 }
             }
-            (_, SkinningMethod::Lbs | SkinningMethod::Dqs | SkinningMethod::Cor) => self
-                .skin_exact(
-                    &self.rest_mesh,
-                    &mut dqs_scratch,
-                    &mut CorScratch::new(0),
-                    &mut posed_mesh,
-                ),
+            (
+                _,
+                SkinningMethod::Lbs
+                | SkinningMethod::Dqs
+                | SkinningMethod::Cor
+                | SkinningMethod::Blended,
+            ) => self.skin_exact(
+                &self.rest_mesh,
+                &mut dqs_scratch,
+                &mut CorScratch::new(0),
+                &mut posed_mesh,
+            ),
         }
         self.posed_mesh = posed_mesh;
         self.dqs_scratch = dqs_scratch;
@@ -254,17 +259,23 @@ impl RigSession {
         cor_scratch: &mut CorScratch,
         out: &mut [DVec3],
     ) {
-        // `set_skinning` builds the CoR state before it selects CoR, so `(Cor, None)` does not
-        // occur; were it to, LBS (the ghost fit's consensus) is the defined result.
-        match (self.method, &self.cor) {
-            (SkinningMethod::Lbs, _) | (SkinningMethod::Cor, None) => {
+        // `set_skinning` builds the CoR state before it selects CoR, and refuses Blended
+        // without blend weights, so `(Cor, None)` and `(Blended, None)` do not occur; were they
+        // to, LBS (the ghost fit's consensus) is the defined result.
+        match (self.method, &self.cor, &self.blended) {
+            (SkinningMethod::Lbs, _, _)
+            | (SkinningMethod::Cor, None, _)
+            | (SkinningMethod::Blended, _, None) => {
                 self.lbs.apply(&self.posed_from_rest, rest_mesh, out)
             }
-            (SkinningMethod::Dqs, _) => {
+            (SkinningMethod::Blended, _, Some(blended)) => {
+                blended.apply(&self.posed_from_rest, rest_mesh, dqs_scratch, out)
+            }
+            (SkinningMethod::Dqs, _, _) => {
                 self.dqs
                     .apply(&self.posed_from_rest, rest_mesh, dqs_scratch, out)
             }
-            (SkinningMethod::Cor, Some(cor)) => cor.skinning.apply(
+            (SkinningMethod::Cor, Some(cor), _) => cor.skinning.apply(
                 &self.posed_from_rest,
                 rest_mesh,
                 &cor.centres,

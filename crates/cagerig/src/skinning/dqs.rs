@@ -86,15 +86,14 @@ impl<S: SkinReal> DqsScratch<S> {
 
     /// Fills the joint dual quaternions of `T_j ∘ translate(origin)` (`#J`, built in f64, then
     /// rounded to `S`; DQS blending commutes with that right factor) and, where a mesh of
-    /// `num_vertices` gains from it, the sign table; then skins `out` with `sorted` and `points`.
-    pub(crate) fn skin<P: RestPoints<S>>(
+    /// `sorted`'s size gains from it, the sign table. Returns whether the table was filled (the
+    /// per-vertex rule then reads its signs, `TABLE = true`).
+    pub(crate) fn prepare(
         &mut self,
         transforms: &[DAffine3],
         origin: DVec3,
         sorted: &CountSortedWeights<S>,
-        points: P,
-        out: &mut [S::Out],
-    ) {
+    ) -> bool {
         assert_eq!(
             self.joint_dual_quats.len(),
             transforms.len(),
@@ -106,12 +105,24 @@ impl<S: SkinReal> DqsScratch<S> {
             *q = [S::quat(dq.real), S::quat(dq.dual)];
         }
         let dual_quats = &self.joint_dual_quats;
-        if self
-            .signs
+        self.signs
             .fill_if_worth_it(&sorted.sign_pairs, sorted.num_vertices(), |j| {
                 dual_quats[j][0]
             })
-        {
+    }
+
+    /// [`Self::prepare`], then skins `out` with `sorted` and `points`.
+    pub(crate) fn skin<P: RestPoints<S>>(
+        &mut self,
+        transforms: &[DAffine3],
+        origin: DVec3,
+        sorted: &CountSortedWeights<S>,
+        points: P,
+        out: &mut [S::Out],
+    ) {
+        let table = self.prepare(transforms, origin, sorted);
+        let dual_quats = &self.joint_dual_quats;
+        if table {
             let rule = DqsRule::<S, P, true> {
                 joint_dual_quats: dual_quats,
                 signs: &self.signs,

@@ -15,6 +15,10 @@ pub enum SkinningMethod {
     Dqs,
     /// Optimised centres of rotation (Eq. 5–6).
     Cor,
+    /// Per-vertex blend of LBS and DQS, `v' = (1 − b_v)·LBS(v) + b_v·DQS(v)` with the rig's DQ
+    /// blend weights `b` (`#V`, in [0, 1]): Maya's "weight blended" skin cluster (ufbx's
+    /// `UFBX_SKINNING_METHOD_BLENDED_DQ_LINEAR`). Needs [`super::DqBlendWeights`] in the rig.
+    Blended,
 }
 
 /// A method name that [`SkinningMethod::from_str`] does not know.
@@ -30,14 +34,15 @@ pub struct UnknownSkinningMethod {
 
 impl SkinningMethod {
     /// Every method, in the order front ends list them.
-    pub const ALL: [SkinningMethod; 3] = [Self::Lbs, Self::Dqs, Self::Cor];
+    pub const ALL: [SkinningMethod; 4] = [Self::Lbs, Self::Dqs, Self::Cor, Self::Blended];
 
-    /// The name in scripts, options and files: `"lbs"`, `"dqs"` or `"cor"`.
+    /// The name in scripts, options and files: `"lbs"`, `"dqs"`, `"cor"` or `"blended"`.
     pub const fn name(self) -> &'static str {
         match self {
             Self::Lbs => "lbs",
             Self::Dqs => "dqs",
             Self::Cor => "cor",
+            Self::Blended => "blended",
         }
     }
 
@@ -46,20 +51,31 @@ impl SkinningMethod {
     pub const fn is_linear(self) -> bool {
         match self {
             Self::Lbs => true,
-            Self::Dqs | Self::Cor => false,
+            Self::Dqs | Self::Cor | Self::Blended => false,
         }
     }
 
-    /// The name for people (menus, status lines): `"LBS"`, `"DQS"` or `"CoR"`.
+    /// The name for people (menus, status lines): `"LBS"`, `"DQS"`, `"CoR"` or
+    /// `"LBS/DQS blend"`.
     pub const fn label(self) -> &'static str {
         match self {
             Self::Lbs => "LBS",
             Self::Dqs => "DQS",
             Self::Cor => "CoR",
+            Self::Blended => "LBS/DQS blend",
         }
     }
 
-    /// The accepted names as a sentence: `"lbs, dqs or cor"`.
+    /// Whether the method reads per-vertex data the rig may lack: the DQ blend weights of
+    /// [`SkinningMethod::Blended`] (a session refuses the method without them).
+    pub const fn needs_dq_blend_weights(self) -> bool {
+        match self {
+            Self::Lbs | Self::Dqs | Self::Cor => false,
+            Self::Blended => true,
+        }
+    }
+
+    /// The accepted names as a sentence: `"lbs, dqs, cor or blended"`.
     pub fn names_text() -> String {
         crate::error::names_sentence(&Self::ALL.map(Self::name))
     }
@@ -75,7 +91,10 @@ mod tests {
     fn every_name_parses_back_to_its_method() {
         for m in SkinningMethod::ALL {
             assert_eq!(m.name().parse::<SkinningMethod>(), Ok(m));
-            assert_eq!(m.label().parse::<SkinningMethod>(), Ok(m));
+            if m != SkinningMethod::Blended {
+                // "LBS/DQS blend" is a label, not a name.
+                assert_eq!(m.label().parse::<SkinningMethod>(), Ok(m));
+            }
             assert_eq!(m.to_string(), m.name());
             let json = serde_json::to_string(&m).unwrap();
             assert_eq!(json, format!("\"{}\"", m.name()));
@@ -88,11 +107,12 @@ mod tests {
         let err = "quaternions".parse::<SkinningMethod>().unwrap_err();
         assert_eq!(
             err.to_string(),
-            "unknown skinning method \"quaternions\": expected lbs, dqs or cor"
+            "unknown skinning method \"quaternions\": expected lbs, dqs, cor or blended"
         );
         let err = serde_json::from_str::<SkinningMethod>("\"lbx\"").unwrap_err();
         assert!(
-            err.to_string().contains("expected lbs, dqs or cor"),
+            err.to_string()
+                .contains("expected lbs, dqs, cor or blended"),
             "{err}"
         );
     }

@@ -16,6 +16,7 @@ pub trait SkinReal:
     + Send
     + Sync
     + Default
+    + PartialEq
     + std::fmt::Debug
     + Add<Output = Self>
     + Sub<Output = Self>

@@ -117,3 +117,17 @@ pub fn skin_weights(rows: &[Vec<(usize, f64)>], num_joints: usize) -> SkinWeight
         .unwrap()
         .0
 }
+
+/// Deterministic DQ blend weights for `num_vertices` vertices (blended skinning): spread over
+/// [0, 1] by the golden ratio, with every tenth vertex at exactly 0 and every tenth (offset 5)
+/// at exactly 1, so both pure rules and the blend run.
+pub fn spread_blend_weights(num_vertices: usize) -> cagerig::skinning::DqBlendWeights {
+    let values = (0..num_vertices)
+        .map(|v| match v % 10 {
+            0 => 0.0,
+            5 => 1.0,
+            _ => (v as f64 * 0.618_033_988_749_895).fract(),
+        })
+        .collect();
+    cagerig::skinning::DqBlendWeights::new(values).unwrap()
+}
