@@ -5,32 +5,17 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::CoordsKind;
-use cagerig_studio::rig_open::RigSource;
-use cagerig_studio::{StartupOptions, StudioApp};
 use egui::Modifiers;
-use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+
+mod support;
 
 #[test]
 fn the_coordinates_switch_rebinds_in_one_undo_step() {
-    if std::env::var_os("CAGERIG_SKIP_GPU_TESTS").is_some_and(|v| v == "1") {
+    if support::skip() {
         return;
     }
-    let state = std::env::temp_dir().join(format!("cagerig-studio-green-{}", std::process::id()));
-    std::fs::create_dir_all(&state).unwrap();
-    let options = StartupOptions {
-        source: Some(RigSource::Builtin {
-            name: "bar".into(),
-            resolution: Some(10),
-        }),
-        state_dir: Some(state.clone()),
-        ..Default::default()
-    };
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .wgpu()
-        .build_eframe(move |cc| StudioApp::new(cc, options));
-    h.run_steps(3);
+    let (mut h, state) = support::open_bar("coordinates-switch");
     let doc = h.state().project.doc.as_ref().unwrap();
     assert_eq!(doc.session.coords_kind(), CoordsKind::Mvc);
     let before = doc.session.editable_state();

@@ -12,32 +12,12 @@ use std::time::{Duration, Instant};
 use cagerig_studio::rig_open::RigSource;
 use cagerig_studio::view_state::{CURRENT, REST};
 use cagerig_studio::{StartupOptions, StudioApp};
-use egui::{Event, Modifiers, PointerButton, Pos2};
+use egui::{Event, Modifiers};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use glam::DVec3;
 
-fn screen_of(h: &Harness<'_, StudioApp>, view: usize, p: DVec3) -> Pos2 {
-    let app = h.state();
-    let s = app.view.views[view].projection().project(p).unwrap();
-    let rect = app.tools.interaction.view_rects[view];
-    Pos2::new(rect.left() + s.x as f32, rect.top() + s.y as f32)
-}
-
-fn click(h: &mut Harness<'_, StudioApp>, pos: Pos2) {
-    h.hover_at(pos);
-    h.step();
-    for pressed in [true, false] {
-        h.event(Event::PointerButton {
-            pos,
-            button: PointerButton::Primary,
-            pressed,
-            modifiers: Modifiers::NONE,
-        });
-        h.step();
-    }
-    h.run_steps(2);
-}
+mod support;
+use support::{click, screen_of};
 
 #[test]
 fn a_mesh_with_no_rig_gets_a_clicked_skeleton_binds_and_poses() {
@@ -84,7 +64,7 @@ fn a_mesh_with_no_rig_gets_a_clicked_skeleton_binds_and_poses() {
         let mut p = 0.5 * (lo + hi);
         p[axis] = lo[axis] + (0.15 + 0.35 * k as f64) * (hi[axis] - lo[axis]);
         let at = screen_of(&h, REST, p);
-        click(&mut h, at);
+        click(&mut h, at, Modifiers::NONE);
     }
     let doc = h.state().project.doc.as_ref().unwrap();
     let draft = doc.draft.as_ref().expect("a skeleton being built");
@@ -158,7 +138,7 @@ fn a_mesh_with_no_rig_gets_a_clicked_skeleton_binds_and_poses() {
     let middle = doc.session.posed_world_from_joint()[1].translation;
     let rest_pose = doc.session.posed_mesh().to_vec();
     let at = screen_of(&h, CURRENT, middle);
-    click(&mut h, at);
+    click(&mut h, at, Modifiers::NONE);
     assert_eq!(h.state().tools.selection.joint, Some(1));
     h.hover_at(at + egui::vec2(40.0, 0.0));
     h.step();
