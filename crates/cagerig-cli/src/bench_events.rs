@@ -6,7 +6,7 @@ use std::time::Instant;
 use cagerig::session::RigSession;
 use glam::{DAffine3, DQuat, DVec3};
 
-use crate::commands::bench::{Stat, time};
+use crate::bench_report::{Stat, time};
 
 /// A rest-cage drag of the 5 cage vertices nearest `bend_joint` (`drag_reps` events), then
 /// `grab_reps` current-cage grabs each right after a small skeleton edit (refactor + solve +

@@ -15,7 +15,7 @@ use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::commands::bench::Stat;
+use crate::bench_report::Stat;
 
 /// Newton work per event: medians and maxima over the events of a row.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -196,7 +196,7 @@ pub(crate) fn bench_green_model(
         joints: nj,
         cage_vertices: nc,
         cage_faces,
-        peak_memory_mb: crate::commands::bench::peak_memory_mb(),
+        peak_memory_mb: crate::bench_report::peak_memory_mb(),
         binding_over_mvc: binding.median_ms / mvc_binding.median_ms.max(f64::MIN_POSITIVE),
         binding,
         mvc_binding,

@@ -4,7 +4,7 @@
 //! the same run), and — when the model is the paper's Arm at a size its tool was
 //! measured on — the tool's single-threaded median and how many times faster each of ours is.
 
-use crate::commands::bench::{ModelReport, ModelRow, Stat};
+use crate::bench_report::{ModelReport, ModelRow, Stat};
 
 /// The paper tool's medians in ms (single thread, -O3 -march=native, this project's machine
 /// kind, as published with the paper tool's timings table) on the Arm (2,089 vertices) and its

@@ -4,6 +4,7 @@ mod animation_args;
 mod bench_bandwidth;
 mod bench_events;
 mod bench_green;
+mod bench_report;
 mod bench_table;
 mod commands;
 mod errors;
@@ -13,6 +14,7 @@ mod pictures;
 mod rig_source;
 mod session_args;
 mod state_files;
+mod weights_progress;
 
 use clap::{Parser, Subcommand};
 

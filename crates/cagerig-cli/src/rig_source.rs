@@ -181,7 +181,7 @@ pub fn load_rig_or_generate_cage(
     auto_cage: Option<CageOptions>,
 ) -> anyhow::Result<LoadedRig> {
     let weights = args.weights_source();
-    let bar = crate::commands::weights::DelayedBar::new();
+    let bar = crate::weights_progress::DelayedBar::new();
     let progress_bar = |p| {
         if progress {
             bar.update(p);

@@ -1,14 +1,12 @@
 //! `cagerig weights`: automatic skinning weights (geodesic voxel binding) written as `.skw`.
 
-use std::io::IsTerminal;
 use std::path::PathBuf;
-use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use anyhow::{Context, bail};
 use cagerig::auto_weights::{
     AutoWeights, AutoWeightsOptions, AutoWeightsReport, DEFAULT_EXPONENT, DEFAULT_MAX_INFLUENCES,
-    DEFAULT_RESOLUTION, Progress, Stage, TipJoints,
+    DEFAULT_RESOLUTION, TipJoints,
 };
 use cagerig::io::obj::read_obj;
 use cagerig::io::skt::read_skt;
@@ -18,8 +16,9 @@ use cagerig::{Skeleton, TriMesh};
 use cagerig_formats::{
     FormatError, ImportOptions, StaticMesh, import_character, import_static_mesh,
 };
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
+
+use crate::weights_progress::DelayedBar;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
@@ -154,56 +153,6 @@ fn tips(value: &str, skeleton: &Skeleton) -> anyhow::Result<TipJoints> {
                 .collect::<anyhow::Result<Vec<usize>>>()?,
         ),
     })
-}
-
-/// A progress bar that appears once the computation has run for a second (on a terminal).
-pub struct DelayedBar {
-    start: Instant,
-    bar: Mutex<Option<ProgressBar>>,
-    enabled: bool,
-}
-
-impl DelayedBar {
-    pub fn new() -> Self {
-        Self {
-            start: Instant::now(),
-            bar: Mutex::new(None),
-            enabled: std::io::stderr().is_terminal(),
-        }
-    }
-
-    pub fn update(&self, p: Progress) {
-        if !self.enabled || self.start.elapsed() < Duration::from_secs(1) {
-            return;
-        }
-        let Ok(mut guard) = self.bar.lock() else {
-            return;
-        };
-        let bar = guard.get_or_insert_with(|| {
-            let bar = ProgressBar::new(p.total as u64);
-            bar.set_style(
-                ProgressStyle::with_template("automatic weights: {msg} {bar:40} {pos}/{len}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
-            );
-            bar
-        });
-        let stage = match p.stage {
-            Stage::Voxelising => "voxelising",
-            Stage::Distances => "geodesic distances (joints)",
-            Stage::Weights => "weights",
-        };
-        bar.set_message(stage);
-        bar.set_length(p.total as u64);
-        bar.set_position(p.done as u64);
-    }
-
-    pub fn finish(&self) {
-        if let Ok(mut guard) = self.bar.lock()
-            && let Some(bar) = guard.take()
-        {
-            bar.finish_and_clear();
-        }
-    }
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
