@@ -146,7 +146,8 @@ pub(super) fn bind_cage_map(
         (Some((face_coords, _)), FitRows::MaxVol) => {
             Some(green_fit_rows(&cage_coords, face_coords)?)
         }
-        _ => None,
+        (Some(_), FitRows::AllRows | FitRows::Rows(_))
+        | (None, FitRows::MaxVol | FitRows::AllRows | FitRows::Rows(_)) => None,
     };
     let (rows, mode) = match (green_rows, options.fit_rows.clone()) {
         // Green: the MaxVol rows of [φ ψ], or the given rows, always least squares.
