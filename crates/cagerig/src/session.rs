@@ -78,12 +78,15 @@ struct CorState {
 
 /// The rest state induced by one cage-animation keyframe: C = C₀ + offsets, M = ΦC and the CoR
 /// centres Λ·C, precomputed so that playback between two keys is a lerp of two meshes instead of
-/// a full ΦC product (exact up to round-off: everything is linear in C).
+/// a full ΦC product (exact up to round-off: everything is linear in C). Green rigs keep g(C)
+/// too: M = φC + ψ·g(C) is the lerp plus ψ times what g adds beyond its own lerp.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RestKeyframe {
     cage: Vec<DVec3>,
     mesh: Vec<DVec3>,
     centres: Option<Vec<DVec3>>,
+    /// The coordinates kind's terms of `cage` (Green: g(C), `#F`; MVC: none).
+    terms: Vec<DVec3>,
 }
 
 /// A live coupled rig.

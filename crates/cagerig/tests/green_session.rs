@@ -194,6 +194,56 @@ fn the_arm_scenario_under_green_lands_grabs_exactly_under_every_method() {
     }
 }
 
+/// Playback between cage keyframes on a Green rig: M is the blend of the keys' meshes plus ψ
+/// times what g adds beyond the blend of the keys' g. It must equal φC + ψ·g(C) evaluated from
+/// scratch, for the Arm's own cage animation (keys that are not similarities: many faces get
+/// their term) and for keys that scale and move the whole cage (no face does), on the exact
+/// and the f32 display paths (the same bits for the exact M).
+#[test]
+fn cage_keyframes_of_a_green_rig_give_the_exact_rest_mesh_between_keys() {
+    use cagerig::animation::CageTrack;
+    use cagerig::playback::AnimationPlayer;
+    use cagerig::session::DisplayPrecision;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
+    let arm_track = cagerig::io::read_cage_animation(&dir.join("arm_cageAnim.txt"), 58).unwrap();
+    let (probe, _) = arm(green());
+    let rest = probe.original_rest_cage().to_vec();
+    let centre = rest.iter().copied().sum::<DVec3>() / rest.len() as f64;
+    let similarity = CageTrack::new(
+        vec![0.0, 1.0, 2.0],
+        (0..3)
+            .map(|k| {
+                rest.iter()
+                    .map(|c| (*c - centre) * 0.1 * k as f64 + DVec3::new(0.3, -0.2, 0.1) * k as f64)
+                    .collect()
+            })
+            .collect(),
+    )
+    .unwrap();
+    for track in [arm_track, similarity] {
+        let (mut exact, _) = arm(green());
+        let (mut display, _) = arm(green());
+        display
+            .set_display_precision(DisplayPrecision::F32)
+            .unwrap();
+        let d = diagonal(exact.rest_cage());
+        for s in [&mut exact, &mut display] {
+            s.rotate_joint(3, DVec3::X, 20f64.to_radians()).unwrap();
+        }
+        let mut exact_player = AnimationPlayer::new(&exact, None, Some(track.clone())).unwrap();
+        let mut display_player = AnimationPlayer::new(&display, None, Some(track.clone())).unwrap();
+        let end = *track.times().last().unwrap();
+        for t in [0.0, 0.3 * end, 0.5 * end, 0.77 * end, end] {
+            exact_player.apply(t, &mut exact).unwrap();
+            display_player.apply(t, &mut display).unwrap();
+            check_rest_mesh(&exact, 1e-12 * d);
+            assert_eq!(exact.rest_cage(), display.rest_cage());
+            assert_eq!(exact.rest_mesh(), display.rest_mesh());
+            assert_eq!(exact.posed_cage(), display.posed_cage());
+        }
+    }
+}
+
 /// Deterministic pseudo-random numbers (no extra dependency).
 struct Lcg(u64);
 impl Lcg {

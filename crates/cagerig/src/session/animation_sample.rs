@@ -67,6 +67,7 @@ impl RigSession {
             .collect();
         let mut mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
         self.rest_mesh_of_cage(&cage, &mut mesh);
+        let terms = self.cage_map.terms_of(&cage);
         let centres = self.cor.as_ref().map(|cor| {
             let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
             self.centres_of_cage(cor, &cage, &mut centres);
@@ -76,11 +77,14 @@ impl RigSession {
             cage,
             mesh,
             centres,
+            terms,
         })
     }
 
     /// Animation sample between two precomputed cage keyframes (weight `a` on `hi`): C, M and
-    /// the CoR centres are lerped (Green rigs: C is lerped and M = φC + ψ·g(C) evaluated), then pose, SkelUp, skinning and CageUp as in
+    /// the CoR centres are lerped (Green rigs: C and M are lerped and M corrected by
+    /// ψ·(g(C) − lerp of the keys' g) on the faces where g is not linear along the blend; the
+    /// CoR centres evaluated), then pose, SkelUp, skinning and CageUp as in
     /// [`RigSession::set_animation_sample`]. No allocation.
     pub fn set_animation_sample_between(
         &mut self,
@@ -135,9 +139,25 @@ impl RigSession {
         self.store_pose(pose)?;
         lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
         if !self.cage_map.is_linear() {
-            // M is not linear in C: evaluate it at the blended cage (the CoR centres too; on the
-            // display path M̃ and the exact fitting rows, as after a grab).
-            self.rest_from_cage_for_event();
+            // M is not linear in C: the exact M is the blend of the keys' meshes plus the kind's
+            // terms beyond the blend of the keys' terms (Green: ψ·(g(C) − lerp(g_lo, g_hi)), on
+            // the faces where that is above round-off), a few columns instead of the full
+            // product; the display path rounds it. The CoR centres in full.
+            lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
+            self.cage_map.add_keyframe_blend_terms(
+                &lo.terms,
+                &hi.terms,
+                a,
+                &self.rest_cage,
+                &mut self.rest_mesh,
+            );
+            if let Some(display) = self.display.as_deref_mut() {
+                display.forget_exact_rest();
+            }
+            self.rest_mesh_is_phi_c = true;
+            self.rest_mesh_rows_only = false;
+            self.rest_mesh_changed();
+            self.centres_from_cage_in_full();
             self.sync_from_rest_cage();
             return Ok(());
         }

@@ -298,6 +298,35 @@ impl CageMap {
         }
     }
 
+    /// The kind's terms of the rest cage `cage` (`#C`), kept with a cage keyframe: g(C) (`#F`)
+    /// for Green, none for MVC.
+    pub(super) fn terms_of(&self, cage: &[DVec3]) -> Vec<DVec3> {
+        match self {
+            CageMap::Mvc => Vec::new(),
+            CageMap::Green(green) => green.terms_of(cage),
+        }
+    }
+
+    /// Between two cage keyframes: `rest_cage` (`#C`) is the blend C = (1 − a)·C_lo + a·C_hi and
+    /// `rest_mesh` (`#V`) the blend of the keys' meshes. Adds what the kind's terms add beyond
+    /// the blend of the keys' terms `lo_terms`, `hi_terms` ([`CageMap::terms_of`]), refreshing
+    /// what it keeps of C. MVC adds nothing (M is linear in C). No allocation.
+    pub(super) fn add_keyframe_blend_terms(
+        &mut self,
+        lo_terms: &[DVec3],
+        hi_terms: &[DVec3],
+        a: f64,
+        rest_cage: &[DVec3],
+        rest_mesh: &mut [DVec3],
+    ) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => {
+                green.add_keyframe_blend_terms(lo_terms, hi_terms, a, rest_cage, rest_mesh)
+            }
+        }
+    }
+
     /// out (`#V`) += the kind's terms of the CoR centres at the current rest cage.
     pub(super) fn add_centre_terms(&self, out: &mut [DVec3]) {
         match self {

@@ -148,6 +148,13 @@ fn refresh<K>(
     Ok(&slot.insert(stored).kernel)
 }
 
+impl DisplayPath {
+    /// Forgets the exact M computed on demand (M was just set in full).
+    pub(super) fn forget_exact_rest(&mut self) {
+        self.exact_rest = OnceLock::new();
+    }
+}
+
 impl RigSession {
     /// Switches the precision of the displayed M' (see [`DisplayPrecision`]); the current state
     /// is re-skinned.

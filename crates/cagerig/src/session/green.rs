@@ -49,6 +49,8 @@ pub(super) struct GreenState {
     pub(super) start_from_posed_cage: bool,
     /// Λ_ψ = S·ψ (`#V × #F`) for the CoR centres, built with them.
     pub(super) face_centre_coords: Option<CageCoords>,
+    /// max_v Σ_f |ψ_vf|: bounds what a face term below a threshold can add to any vertex.
+    face_coords_norm: f64,
     /// Set when the last CageUp stopped above [`GREEN_FIT_LIMIT`] (the event is refused).
     pub(super) fit_failure: Option<RigError>,
     /// The cage's bounding-box diagonal.
@@ -59,6 +61,11 @@ pub(super) struct GreenState {
 
 /// A Green CageUp that stops above this fraction of the cage size refuses the event.
 pub const GREEN_FIT_LIMIT: f64 = 1e-10;
+
+/// Between two cage keyframes, the faces whose g departs from the blend of the keys' g by more
+/// than this fraction of the cage size over max_v Σ_f |ψ_vf| get their term ψ_f·e_f; the others
+/// together move no vertex by more than this fraction of the cage size (round-off).
+pub const KEYFRAME_TERM_TOLERANCE: f64 = 1e-14;
 
 impl GreenState {
     /// From the Green coordinates of the rest mesh (φ is the session's `cage_coords`, ψ is
@@ -109,6 +116,13 @@ impl GreenState {
                 fill[v as usize] += 1;
             }
         }
+        let mut row_sums = vec![0.0f64; face_coords.num_vertices()];
+        for f in 0..num_faces {
+            for (sum, w) in row_sums.iter_mut().zip(face_coords.column(f)) {
+                *sum += w.abs();
+            }
+        }
+        let face_coords_norm = row_sums.iter().fold(0.0f64, |m, s| m.max(*s));
         let mut rest_terms = vec![DVec3::ZERO; num_faces];
         normals.apply(rest_cage, &mut rest_terms);
         let fit = GreenCageFit::new(
@@ -136,6 +150,7 @@ impl GreenState {
             start_from_posed_cage: false,
             skinned_cage: rest_cage.to_vec(),
             face_centre_coords: None,
+            face_coords_norm,
             fit_failure: None,
             size,
             last_reverse: NewtonReport::default(),
@@ -169,6 +184,43 @@ impl GreenState {
         let normals = self.fit.normals();
         normals.apply(rest_cage, &mut self.rest_terms);
         self.add_face_terms(&self.rest_terms, rest_mesh);
+    }
+
+    /// Between two cage keyframes whose g are `lo_terms` and `hi_terms` (`#F`): `rest_cage` is
+    /// their blend with weight `a` on `hi` and `rest_mesh` the blend of their meshes. Sets g(C)
+    /// and adds ψ_f·e_f with e_f = g_f(C) − lerp(g_lo,f, g_hi,f, a) for the faces where e_f is
+    /// above round-off ([`KEYFRAME_TERM_TOLERANCE`]): none when the blend moves every face by a
+    /// similarity growing linearly along it (a translation, a uniform scaling), few when the
+    /// keys differ in one part of the cage. No allocation.
+    pub(super) fn add_keyframe_blend_terms(
+        &mut self,
+        lo_terms: &[DVec3],
+        hi_terms: &[DVec3],
+        a: f64,
+        rest_cage: &[DVec3],
+        rest_mesh: &mut [DVec3],
+    ) {
+        let normals = self.fit.normals();
+        normals.apply(rest_cage, &mut self.rest_terms);
+        let tolerance =
+            KEYFRAME_TERM_TOLERANCE * self.size / self.face_coords_norm.max(f64::MIN_POSITIVE);
+        self.touched_faces.clear();
+        self.face_changes.clear();
+        for (f, ((g, lo), hi)) in self
+            .rest_terms
+            .iter()
+            .zip(lo_terms)
+            .zip(hi_terms)
+            .enumerate()
+        {
+            let excess = *g - lo.lerp(*hi, a);
+            if excess.abs().max_element() > tolerance || !excess.is_finite() {
+                self.touched_faces.push(f);
+                self.face_changes.push(excess);
+            }
+        }
+        self.face_coords
+            .apply_delta(&self.touched_faces, &self.face_changes, rest_mesh);
     }
 
     /// After the rest-cage vertices `vertices` moved (`rest_cage` already updated, `rest_mesh`

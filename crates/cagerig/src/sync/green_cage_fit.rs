@@ -36,6 +36,9 @@ pub const GRADIENT_TOLERANCE: f64 = 1e-13;
 /// A chord step (stale Hessian) is kept only when it leaves at most this fraction of the
 /// gradient.
 pub const CHORD_RATE: f64 = 0.5;
+/// The last factors serve chord steps when their damping is at most this fraction of the
+/// Hessian's scale (a converged solve ends with a damping far below it).
+pub const CHORD_DAMPING: f64 = 1e-3;
 /// At most this many steps for the direct solve of an event.
 pub const MAX_STEPS: usize = 60;
 /// At most this many steps per piece of a continuation.
@@ -218,6 +221,7 @@ impl GreenCageFit {
             posed_cage.copy_from_slice(&self.binding_cage);
             self.has_last_target = false;
         }
+        self.predict_from_last_solution(target, posed_cage);
         let mut total = self.solve_for(target, posed_cage, MAX_STEPS)?;
         if total.residual > self.tolerance && self.has_last_target {
             let tolerance = self.tolerance;
@@ -241,6 +245,70 @@ impl GreenCageFit {
         }
         self.last = total;
         Ok(total)
+    }
+
+    /// Replaces the warm start `posed_cage` by the first-order prediction from the last converged
+    /// solution x₀ (fitted to the rows t₀), when the fit likes it better: by the implicit
+    /// function theorem the solution for the rows t moves by H⁻¹J(x₀)ᵀ(t − t₀) = −H⁻¹∇E(x₀; t),
+    /// one chord step from x₀ on the last factors (taken at x₀ to round-off when that solve
+    /// converged). It follows the fit's flat directions, which a warm start moved with the bones
+    /// does not know about. No allocation.
+    fn predict_from_last_solution(&mut self, target: &[DVec3], posed_cage: &mut [DVec3]) {
+        if !self.has_last_target
+            || !self.lu.is_factorised()
+            || self.factor_damping > CHORD_DAMPING * damping_scale(&self.normal_matrix)
+        {
+            return;
+        }
+        let mut g = std::mem::take(&mut self.g);
+        let mut face_sums = std::mem::take(&mut self.face_sums);
+        let mut residual = std::mem::take(&mut self.trial_residual);
+        let mut gradient = std::mem::take(&mut self.trial_gradient);
+        let mut trial = std::mem::take(&mut self.trial);
+        let (start_energy, start_norm) = self.evaluate(
+            posed_cage,
+            target,
+            &mut g,
+            &mut face_sums,
+            &mut residual,
+            &mut gradient,
+        );
+        // A warm start that is already the answer (after a grab: CageRev made it one) stays.
+        if start_norm > self.tolerance {
+            let _ = self.evaluate(
+                &self.last_solution,
+                target,
+                &mut g,
+                &mut face_sums,
+                &mut residual,
+                &mut gradient,
+            );
+            for (k, d) in gradient.iter().enumerate() {
+                self.step[3 * k] = -d.x;
+                self.step[3 * k + 1] = -d.y;
+                self.step[3 * k + 2] = -d.z;
+            }
+            self.lu.solve(&mut self.step);
+            for (k, (t, p)) in trial.iter_mut().zip(&self.last_solution).enumerate() {
+                *t = *p + DVec3::new(self.step[3 * k], self.step[3 * k + 1], self.step[3 * k + 2]);
+            }
+            let (predicted_energy, _) = self.evaluate(
+                &trial,
+                target,
+                &mut g,
+                &mut face_sums,
+                &mut residual,
+                &mut gradient,
+            );
+            if predicted_energy < start_energy {
+                posed_cage.copy_from_slice(&trial);
+            }
+        }
+        self.g = g;
+        self.face_sums = face_sums;
+        self.trial_residual = residual;
+        self.trial_gradient = gradient;
+        self.trial = trial;
     }
 
     /// ½‖r‖² and Jᵀr at x (r = F_R(x) − target into `residual`, Jᵀr into `gradient`); returns
@@ -392,7 +460,9 @@ impl GreenCageFit {
             );
             // Chord steps first: the last solve's undamped Hessian factors (the previous event's
             // solution is close), as long as each step at least halves the gradient.
-            if self.lu.is_factorised() && self.factor_damping == 0.0 {
+            if self.lu.is_factorised()
+                && self.factor_damping <= CHORD_DAMPING * damping_scale(&self.normal_matrix)
+            {
                 while norm > self.tolerance && report.iterations < max_steps {
                     for (k, d) in gradient.iter().enumerate() {
                         self.step[3 * k] = -d.x;

@@ -118,3 +118,48 @@ fn gauss_newton_matrix_from_the_gram_matrices_is_j_transpose_j() {
         }
     }
 }
+
+/// A sequence of nearby large-residual targets (an animation): after the first fit, each starts
+/// from the first-order prediction off the last solution (one chord step on its factors) and
+/// converges in a few steps; the warm start the caller passes in is a poor one on
+/// purpose (the binding cage), so the prediction is what makes them few (at most two Hessians
+/// per target, the other steps chord steps on the last factors). Each solution is the
+/// same stationary point a cold solve from the previous solution finds.
+#[test]
+fn nearby_targets_start_from_the_prediction_off_the_last_solution() {
+    let points = random_inside(13, 60);
+    let (mut fit, cage) = fit_of(&points);
+    let target_at = |t: f64| -> Vec<DVec3> {
+        let rotation = DQuat::from_axis_angle(DVec3::new(0.2, 1.0, 0.4).normalize(), t);
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                // Rows no Green cage reaches exactly: a point-dependent push.
+                rotation * *p + DVec3::new(0.02 * (i % 3) as f64, 0.01 * t, -0.015 * (i % 4) as f64)
+            })
+            .collect()
+    };
+    let mut solution = cage.positions.clone();
+    let first = fit.apply(&target_at(0.10), &mut solution).unwrap();
+    assert!(first.residual <= fit.tolerance(), "{first:?}");
+    for k in 1..6 {
+        let target = target_at(0.10 + 0.01 * k as f64);
+        let mut cold = solution.clone();
+        let mut reference = fit.clone();
+        reference.has_last_target = false;
+        let cold_report = reference.apply(&target, &mut cold).unwrap();
+        let mut warm = cage.positions.clone();
+        let report = fit.apply(&target, &mut warm).unwrap();
+        assert!(report.residual <= fit.tolerance(), "{report:?}");
+        assert!(cold_report.residual <= fit.tolerance(), "{cold_report:?}");
+        assert!(
+            report.factorisations <= 2 && report.iterations <= 8,
+            "target {k}: {report:?} (from the previous solution: {cold_report:?})"
+        );
+        for (a, b) in warm.iter().zip(&cold) {
+            assert!(a.distance(*b) < 1e-10, "{a} vs {b}");
+        }
+        solution = warm;
+    }
+}
