@@ -1,5 +1,6 @@
-//! `cagerig export --skinning dqs|cor --bake`: at every sample time an independent glTF viewer
-//! shows `cagerig animate --skinning dqs|cor`'s posed skin to 1e-5 of the diagonal.
+//! `cagerig export --skinning dqs|cor|blended --bake`: at every sample time an independent glTF
+//! viewer shows `cagerig animate --skinning dqs|cor|blended`'s posed skin to 1e-5 of the
+//! diagonal.
 //!
 //! The viewer is `reference_skinning` of cagerig-formats' tests (the `gltf` crate's loader and
 //! readers, skinning written from the specification: node TRS, morph targets at the animated
@@ -94,6 +95,26 @@ fn arm(method: &'static str) -> Case {
         method,
         samples: &[0.5, 2.0, 4.0],
         midpoints: &[0.5 + 1.0 / 60.0, 2.0 + 1.0 / 60.0],
+    }
+}
+
+/// Maya's "weight blended" skin cluster (ufbx's test file: per-vertex DQ blend weights), with a
+/// generated cage: `blended` is the file's own method.
+fn maya_blended() -> Case {
+    Case {
+        name: "maya",
+        rig: [
+            data("fbx/maya_dq_weights_7500_binary.fbx")
+                .display()
+                .to_string(),
+            "--auto-cage".into(),
+            "--animation".into(),
+            "Take 001".into(),
+        ]
+        .into(),
+        method: "blended",
+        samples: &[0.0, 0.4, 0.7],
+        midpoints: &[0.4 + 1.0 / 60.0, 0.7 + 1.0 / 60.0],
     }
 }
 
@@ -221,6 +242,11 @@ fn baked_cor_fox_walk_matches_animate_at_the_samples() {
 fn baked_dqs_and_cor_arm_match_animate_at_the_samples() {
     check(&arm("dqs"));
     check(&arm("cor"));
+}
+
+#[test]
+fn baked_maya_blended_skin_matches_animate_at_the_samples() {
+    check(&maya_blended());
 }
 
 /// As glTF text (.gltf + .bin): the same skin at a sample; cagerig reads the file back with
