@@ -186,9 +186,11 @@ pub(crate) fn bench_green_model(
     let nc = session.rest_cage().len();
     let cage_faces = session.green_triangles().map_or(0, <[[u32; 3]]>::len);
     let bend_joint = session.skeleton().find("lowerarm01.R").unwrap_or(nj / 2);
-    let exact = event_rows(&mut session, bend_joint, &reps)?;
+    // The same synthetic tracks on both paths (made before any edit moves the rest cage).
+    let tracks = crate::bench_events::synthetic_tracks(&session)?;
+    let exact = event_rows(&mut session, bend_joint, &tracks, &reps)?;
     session.set_display_precision(DisplayPrecision::F32)?;
-    let display_f32 = event_rows(&mut session, bend_joint, &reps)?;
+    let display_f32 = event_rows(&mut session, bend_joint, &tracks, &reps)?;
     Ok(GreenModelRow {
         model,
         coords: CoordsKind::Green.name(),
@@ -212,6 +214,10 @@ pub(crate) fn bench_green_model(
 fn event_rows(
     session: &mut RigSession,
     bend_joint: usize,
+    (skeleton_track, cage_track): &(
+        cagerig::animation::SkeletonTrack,
+        cagerig::animation::CageTrack,
+    ),
     reps: &impl Fn(usize) -> usize,
 ) -> anyhow::Result<GreenEventRows> {
     let nc = session.rest_cage().len();
@@ -220,8 +226,11 @@ fn event_rows(
     session.reset_pose();
 
     // Animation: the bench's synthetic tracks (skeleton keys and breathing cage keys).
-    let (skeleton_track, cage_track) = crate::bench_events::synthetic_tracks(session)?;
-    let mut player = AnimationPlayer::new(session, Some(skeleton_track), Some(cage_track))?;
+    let mut player = AnimationPlayer::new(
+        session,
+        Some(skeleton_track.clone()),
+        Some(cage_track.clone()),
+    )?;
     let duration = player.duration();
     let (animation_frame, animation_frame_iterations) =
         timed_events(session, reps(100), 3, refused, |s, i| {

@@ -103,11 +103,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         session.move_posed_cage(&[7], &[DVec3::new(0.0, 0.01, 0.0)])?;
         session.move_rest_cage(&[7], &[DVec3::new(0.0, 0.01, 0.0)])?;
     }
-    for (name, use_skeleton, use_cage) in [
-        ("skeleton keys", true, false),
-        ("cage keys", false, true),
-        ("both", true, true),
-    ] {
+    let sections: &[(&str, bool, bool)] = if std::env::args().any(|a| a == "grab-only") {
+        &[]
+    } else {
+        &[
+            ("skeleton keys", true, false),
+            ("cage keys", false, true),
+            ("both", true, true),
+        ]
+    };
+    for &(name, use_skeleton, use_cage) in sections {
         session.reset_pose();
         let (skeleton_track, cage_track) = tracks(&session);
         let mut player = AnimationPlayer::new(
@@ -151,5 +156,44 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             factors.last().copied().unwrap_or(0),
         );
     }
+    // A grab right after a small skeleton edit (the edit untimed), as `cagerig bench` times it.
+    session.reset_pose();
+    let joint = session.skeleton().find("lowerarm01.R").unwrap_or(3);
+    for _ in 0..6 {
+        session.rotate_joint(joint, DVec3::X, 10f64.to_radians())?;
+    }
+    let step = 1e-3 * {
+        let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
+        (hi - lo).length()
+    };
+    let (mut times, mut steps) = (Vec::new(), Vec::new());
+    let grabs = if std::env::args().any(|a| a == "grab-only") {
+        400
+    } else {
+        60
+    };
+    for i in 0..grabs {
+        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+        session.rotate_joint(joint, DVec3::Y, 0.01 * sign)?;
+        let t = Instant::now();
+        let result = session.move_posed_cage(&[7], &[DVec3::new(0.0, sign * step, 0.0)]);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        if result.is_ok() && i >= 3 {
+            times.push(ms);
+            steps.push(
+                session
+                    .green_newton_reports()
+                    .map_or(0, |(_, r)| r.iterations),
+            );
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    steps.sort_unstable();
+    println!(
+        "grab after a skeleton edit: median {:.2} ms (min {:.2}), CageRev steps median {}",
+        times.get(times.len() / 2).copied().unwrap_or(0.0),
+        times.first().copied().unwrap_or(0.0),
+        steps.get(steps.len() / 2).copied().unwrap_or(0),
+    );
     Ok(())
 }

@@ -67,9 +67,11 @@ pub struct GreenCageFit {
     vertex_gram: Mat<f64>,
     vertex_face_gram: Mat<f64>,
     face_gram: Mat<f64>,
-    /// Scratch: ∂g_f/∂(corners of f) (`#F`), and (ψ_Rᵀψ_R ⊗ I₃)·∂g/∂C as `#F × #C` blocks.
+    /// Scratch: ∂g_f/∂(corners of f) (`#F`), (ψ_Rᵀψ_R ⊗ I₃)·∂g/∂C as `#F × #C` blocks, and
+    /// JᵀJ as `#C × #C` blocks (row-major).
     face_blocks: Vec<[DMat3; 3]>,
     face_gram_blocks: Vec<DMat3>,
+    hessian_blocks: Vec<DMat3>,
     /// The Hessian of the fit (`3#C × 3#C`), refreshed with the factors.
     normal_matrix: Mat<f64>,
     g: Vec<DVec3>,
@@ -140,6 +142,7 @@ impl GreenCageFit {
             face_gram,
             face_blocks: vec![[DMat3::ZERO; 3]; num_faces],
             face_gram_blocks: vec![DMat3::ZERO; num_faces * num_cage],
+            hessian_blocks: vec![DMat3::ZERO; num_cage * num_cage],
             normal_matrix: Mat::zeros(3 * num_cage, 3 * num_cage),
             g: vec![DVec3::ZERO; num_faces],
             face_sums: vec![DVec3::ZERO; num_faces],

@@ -40,36 +40,21 @@ impl GreenCageFit {
         for (f, blocks) in self.face_blocks.iter_mut().enumerate() {
             *blocks = self.normals.face_jacobian(x, f);
         }
-        let h = &mut self.normal_matrix;
-        for m in 0..num_cage {
-            for k in 0..num_cage {
-                let value = self.vertex_gram[(k, m)];
-                for a in 0..3 {
-                    for b in 0..3 {
-                        h[(3 * k + a, 3 * m + b)] = if a == b { value } else { 0.0 };
-                    }
-                }
-            }
-        }
-        let add_block = |h: &mut Mat<f64>, k: usize, m: usize, block: &DMat3| {
-            for b in 0..3 {
-                let column = block.col(b);
-                h[(3 * k, 3 * m + b)] += column.x;
-                h[(3 * k + 1, 3 * m + b)] += column.y;
-                h[(3 * k + 2, 3 * m + b)] += column.z;
-            }
-        };
+        // Accumulated in 3×3 blocks (row-major `#C × #C`), written into the matrix once.
+        let blocks = &mut self.hessian_blocks;
+        blocks.fill(DMat3::ZERO);
         let triangles = self.normals.triangles();
         // The cross terms: block (k, m) += (φ_Rᵀψ_R)[k, f]·B_{f,m}, and block (m, k) its transpose.
-        for (f, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
-            for (&corner, block) in triangle.iter().zip(blocks) {
+        for (f, (triangle, face)) in triangles.iter().zip(&self.face_blocks).enumerate() {
+            let weights = self.vertex_face_gram.col(f);
+            for (&corner, block) in triangle.iter().zip(face) {
                 let m = corner as usize;
                 let transposed = block.transpose();
                 for k in 0..num_cage {
-                    let weight = self.vertex_face_gram[(k, f)];
+                    let weight = weights[k];
                     if weight != 0.0 {
-                        add_block(h, k, m, &(*block * weight));
-                        add_block(h, m, k, &(transposed * weight));
+                        blocks[k * num_cage + m] += *block * weight;
+                        blocks[m * num_cage + k] += transposed * weight;
                     }
                 }
             }
@@ -78,21 +63,40 @@ impl GreenCageFit {
         self.face_gram_blocks.fill(DMat3::ZERO);
         for f in 0..num_faces {
             let row = &mut self.face_gram_blocks[f * num_cage..(f + 1) * num_cage];
-            for (g, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
-                let weight = self.face_gram[(f, g)];
+            let weights = self.face_gram.col(f);
+            for (g, (triangle, face)) in triangles.iter().zip(&self.face_blocks).enumerate() {
+                // ψ_Rᵀψ_R is symmetric: column f holds row f.
+                let weight = weights[g];
                 if weight != 0.0 {
-                    for (&corner, block) in triangle.iter().zip(blocks) {
+                    for (&corner, block) in triangle.iter().zip(face) {
                         row[corner as usize] += *block * weight;
                     }
                 }
             }
         }
-        for (f, (triangle, blocks)) in triangles.iter().zip(&self.face_blocks).enumerate() {
+        for (f, (triangle, face)) in triangles.iter().zip(&self.face_blocks).enumerate() {
             let row = &self.face_gram_blocks[f * num_cage..(f + 1) * num_cage];
-            for (&corner, block) in triangle.iter().zip(blocks) {
+            for (&corner, block) in triangle.iter().zip(face) {
                 let transposed = block.transpose();
-                for (m, t) in row.iter().enumerate() {
-                    add_block(h, corner as usize, m, &(transposed * *t));
+                let out = &mut blocks[corner as usize * num_cage..(corner as usize + 1) * num_cage];
+                for (o, t) in out.iter_mut().zip(row) {
+                    *o += transposed * *t;
+                }
+            }
+        }
+        // φ_Rᵀφ_R ⊗ I₃ on the blocks' diagonals, then the blocks into the matrix.
+        let h = &mut self.normal_matrix;
+        for m in 0..num_cage {
+            let gram = self.vertex_gram.col(m);
+            for b in 0..3 {
+                let mut column = h.col_mut(3 * m + b);
+                for k in 0..num_cage {
+                    let block = &blocks[k * num_cage + m];
+                    let mut value = block.col(b);
+                    value[b] += gram[k];
+                    column[3 * k] = value.x;
+                    column[3 * k + 1] = value.y;
+                    column[3 * k + 2] = value.z;
                 }
             }
         }
