@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use cagerig::session::RigSession;
-use glam::{DAffine3, DQuat, DVec3};
+use glam::DVec3;
 
 use crate::bench_report::{Stat, time};
 
@@ -62,49 +62,16 @@ pub(crate) fn bench_cage_events(
     Ok((drag_stat, grab_stat))
 }
 
-/// A 5-key skeleton track bending every joint a little about alternating axes, and a 3-key
-/// cage track breathing the rest cage, with unrelated key times (asynchronous tracks).
+/// The bench's synthetic tracks ([`cagerig::demo::bench_tracks::synthetic_tracks`]) for the
+/// session's skeleton and rest cage.
 pub(crate) fn synthetic_tracks(
     session: &RigSession,
 ) -> anyhow::Result<(
     cagerig::animation::SkeletonTrack,
     cagerig::animation::CageTrack,
 )> {
-    let skeleton = session.skeleton();
-    let rest = skeleton.rest_world_from_joint();
-    let mut rest_locals = vec![DAffine3::IDENTITY; skeleton.len()];
-    skeleton.locals_from_worlds(&rest, &mut rest_locals);
-    let times = vec![0.0, 3.0, 6.5, 9.0, 10.0];
-    let keys = times
-        .iter()
-        .enumerate()
-        .map(|(k, _)| {
-            rest_locals
-                .iter()
-                .enumerate()
-                .map(|(j, l)| {
-                    let axis = [DVec3::X, DVec3::Y, DVec3::Z][(j + k) % 3];
-                    *l * DAffine3::from_quat(DQuat::from_axis_angle(axis, 0.2 * k as f64))
-                })
-                .collect()
-        })
-        .collect();
-    let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
-    let centre = (lo + hi) * 0.5;
-    let cage_times = vec![0.0, 1.5, 3.0];
-    let offsets = cage_times
-        .iter()
-        .enumerate()
-        .map(|(k, _)| {
-            session
-                .rest_cage()
-                .iter()
-                .map(|c| (*c - centre) * 0.05 * k as f64)
-                .collect()
-        })
-        .collect();
-    Ok((
-        cagerig::animation::SkeletonTrack::new(times, keys)?,
-        cagerig::animation::CageTrack::new(cage_times, offsets)?,
-    ))
+    Ok(cagerig::demo::bench_tracks::synthetic_tracks(
+        session.skeleton(),
+        session.rest_cage(),
+    )?)
 }

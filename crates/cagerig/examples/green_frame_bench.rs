@@ -12,48 +12,10 @@ use std::path::Path;
 use std::time::Instant;
 
 use cagerig::CoordsKind;
-use cagerig::animation::{CageTrack, SkeletonTrack};
 use cagerig::playback::AnimationPlayer;
 use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::subdivide::subdivide_midpoint;
-use glam::{DAffine3, DQuat, DVec3};
-
-/// The bench's synthetic tracks: every joint turning 0.2 rad per key about a rotating axis, and
-/// the rest cage breathing by 5 % per key about its centre.
-fn tracks(session: &RigSession) -> (SkeletonTrack, CageTrack) {
-    let skeleton = session.skeleton();
-    let rest = skeleton.rest_world_from_joint();
-    let mut rest_locals = vec![DAffine3::IDENTITY; skeleton.len()];
-    skeleton.locals_from_worlds(&rest, &mut rest_locals);
-    let times = vec![0.0, 3.0, 6.5, 9.0, 10.0];
-    let keys = (0..times.len())
-        .map(|k| {
-            rest_locals
-                .iter()
-                .enumerate()
-                .map(|(j, l)| {
-                    let axis = [DVec3::X, DVec3::Y, DVec3::Z][(j + k) % 3];
-                    *l * DAffine3::from_quat(DQuat::from_axis_angle(axis, 0.2 * k as f64))
-                })
-                .collect()
-        })
-        .collect();
-    let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
-    let centre = (lo + hi) * 0.5;
-    let offsets = (0..3)
-        .map(|k| {
-            session
-                .rest_cage()
-                .iter()
-                .map(|c| (*c - centre) * 0.05 * k as f64)
-                .collect()
-        })
-        .collect();
-    (
-        SkeletonTrack::new(times, keys).unwrap(),
-        CageTrack::new(vec![0.0, 1.5, 3.0], offsets).unwrap(),
-    )
-}
+use glam::DVec3;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let levels: usize = std::env::args().nth(1).map_or(Ok(3), |a| a.parse())?;
@@ -114,7 +76,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     for &(name, use_skeleton, use_cage) in sections {
         session.reset_pose();
-        let (skeleton_track, cage_track) = tracks(&session);
+        let (skeleton_track, cage_track) =
+            cagerig::demo::bench_tracks::synthetic_tracks(session.skeleton(), session.rest_cage())?;
         let mut player = AnimationPlayer::new(
             &session,
             use_skeleton.then_some(skeleton_track),

@@ -12,6 +12,7 @@
 //! All rigs lie along +X with joint rest frames that have identity rotation.
 
 pub mod bar;
+pub mod bench_tracks;
 pub mod snake;
 mod tube;
 

@@ -286,15 +286,9 @@ impl GreenCageFit {
                 &mut residual,
                 &mut gradient,
             );
-            for (k, d) in gradient.iter().enumerate() {
-                self.step[3 * k] = -d.x;
-                self.step[3 * k + 1] = -d.y;
-                self.step[3 * k + 2] = -d.z;
-            }
-            self.lu.solve(&mut self.step);
-            for (k, (t, p)) in trial.iter_mut().zip(&self.last_solution).enumerate() {
-                *t = *p + DVec3::new(self.step[3 * k], self.step[3 * k + 1], self.step[3 * k + 2]);
-            }
+            let from = std::mem::take(&mut self.last_solution);
+            self.newton_step(&gradient, &from, &mut trial);
+            self.last_solution = from;
             let (predicted_energy, _) = self.evaluate(
                 &trial,
                 target,
@@ -312,6 +306,20 @@ impl GreenCageFit {
         self.trial_residual = residual;
         self.trial_gradient = gradient;
         self.trial = trial;
+    }
+
+    /// The step −H⁻¹·`gradient` on the current factors into `self.step` (`3#C`), and
+    /// `trial` = `from` + step (`#C`).
+    fn newton_step(&mut self, gradient: &[DVec3], from: &[DVec3], trial: &mut [DVec3]) {
+        for (k, d) in gradient.iter().enumerate() {
+            self.step[3 * k] = -d.x;
+            self.step[3 * k + 1] = -d.y;
+            self.step[3 * k + 2] = -d.z;
+        }
+        self.lu.solve(&mut self.step);
+        for (k, (t, p)) in trial.iter_mut().zip(from).enumerate() {
+            *t = *p + DVec3::new(self.step[3 * k], self.step[3 * k + 1], self.step[3 * k + 2]);
+        }
     }
 
     /// ½‖r‖² and Jᵀr at x (r = F_R(x) − target into `residual`, Jᵀr into `gradient`); returns
@@ -467,20 +475,7 @@ impl GreenCageFit {
                 && self.factor_damping <= CHORD_DAMPING * damping_scale(&self.normal_matrix)
             {
                 while norm > self.tolerance && report.iterations < max_steps {
-                    for (k, d) in gradient.iter().enumerate() {
-                        self.step[3 * k] = -d.x;
-                        self.step[3 * k + 1] = -d.y;
-                        self.step[3 * k + 2] = -d.z;
-                    }
-                    self.lu.solve(&mut self.step);
-                    for (k, (t, p)) in trial.iter_mut().zip(posed_cage.iter()).enumerate() {
-                        *t = *p
-                            + DVec3::new(
-                                self.step[3 * k],
-                                self.step[3 * k + 1],
-                                self.step[3 * k + 2],
-                            );
-                    }
+                    self.newton_step(&gradient, posed_cage, &mut trial);
                     let (trial_energy, trial_norm) = self.evaluate(
                         &trial,
                         target,
@@ -517,12 +512,7 @@ impl GreenCageFit {
                     }
                     continue;
                 }
-                for (k, d) in gradient.iter().enumerate() {
-                    self.step[3 * k] = -d.x;
-                    self.step[3 * k + 1] = -d.y;
-                    self.step[3 * k + 2] = -d.z;
-                }
-                self.lu.solve(&mut self.step);
+                self.newton_step(&gradient, posed_cage, &mut trial);
                 let slope: f64 = gradient
                     .iter()
                     .enumerate()
@@ -543,10 +533,6 @@ impl GreenCageFit {
                 }
                 let step_squared: f64 = self.step.iter().map(|v| v * v).sum();
                 let predicted = -0.5 * slope + 0.5 * damping * step_squared;
-                for (k, (t, p)) in trial.iter_mut().zip(posed_cage.iter()).enumerate() {
-                    *t = *p
-                        + DVec3::new(self.step[3 * k], self.step[3 * k + 1], self.step[3 * k + 2]);
-                }
                 let (trial_energy, trial_norm) = self.evaluate(
                     &trial,
                     target,
