@@ -16,12 +16,14 @@ mkdir -p logs
 seed() { mkdir -p "corpus/$1"; cp -n "$2" "corpus/$1/$3" 2>/dev/null || true; }
 k=0
 for f in "$DATA"/arm/arm.obj "$DATA"/arm/arm.skt "$DATA"/arm/arm.skw "$DATA"/arm/arm_cage_cageWeights.txt \
-         "$DATA"/arm/arm_corWeights.txt "$DATA"/arm/arm_cage.maxvol "$DATA"/arm/arm_skelAnim.txt \
-         "$DATA"/arm/arm_cageAnim.txt; do
+         "$DATA"/arm/arm_corWeights.txt "$DATA"/arm/arm_cage.maxvol "$DATA"/arm/arm_skelAnim.txt; do
   mkdir -p corpus/parsers
   { printf "\\x$(printf %02x "$k")"; head -c 3000 "$f"; } > "corpus/parsers/seed$k"
   k=$((k + 1))
 done
+# Reader 7: DQ blend weights (`<vertex> <b>` lines); reader 8: cage animation.
+printf '\x07# b\n0 0.25\n2 1\n' > corpus/parsers/seed7
+{ printf '\x08'; head -c 3000 "$DATA"/arm/arm_cageAnim.txt; } > corpus/parsers/seed8
 for f in "$DATA"/gltf/*/*.gl* "$DATA"/fox/Fox.glb; do seed gltf_import "$f" "$(basename "$f")"; done
 for f in "$DATA"/fbx/*.fbx; do seed fbx_import "$f" "$(basename "$f")"; done
 mkdir -p corpus/rig_assembly

@@ -1,6 +1,7 @@
 //! Every text reader on arbitrary bytes: the first byte picks the reader, the rest is the file.
 //! Beyond "no panic": whatever a reader accepts holds only finite numbers within the input
-//! bound, and an accepted OBJ survives a write/read round trip bit for bit.
+//! bound, an accepted OBJ survives a write/read round trip bit for bit, and accepted DQ blend
+//! weights lie in [0, 1] and survive a write/read round trip.
 #![no_main]
 
 use std::path::Path;
@@ -36,7 +37,7 @@ fuzz_target!(|input: &[u8]| {
         return;
     };
     let src = Path::new("fuzz");
-    match which % 8 {
+    match which % 9 {
         0 => {
             if let Ok(m) = io::parse_obj(data, src) {
                 assert!(m.positions.iter().all(|p| finite(*p)));
@@ -76,6 +77,15 @@ fuzz_target!(|input: &[u8]| {
         }
         6 => {
             let _ = io::parse_skeleton_animation(data, src, &skeleton());
+        }
+        7 => {
+            if let Ok(b) = io::parse_dq_blend_weights(data, src, 3) {
+                assert!(b.values().iter().all(|x| (0.0..=1.0).contains(x)));
+                let mut bytes = Vec::new();
+                io::dq_blend_weights::write_dq_blend_weights_to(&mut bytes, &b, io::FloatFormat::RoundTrip)
+                    .unwrap();
+                assert_eq!(io::parse_dq_blend_weights(&bytes, src, 3).unwrap(), b);
+            }
         }
         _ => {
             let _ = io::parse_cage_animation(data, src, 2);

@@ -26,8 +26,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 pub struct RigArgs {
     /// Character mesh (OBJ), or a skinned character in glTF 2.0 (`.glb`/`.gltf`) or FBX (`.fbx`).
     /// OBJ companions are discovered beside it: `<stem>.skt`, `<stem>.skw`,
-    /// `<stem>_corWeights.txt`, `<stem>_cage.obj`; beside the cage `<cage>_cageWeights.txt`,
-    /// `<cage>.maxvol` (or `<stem>_maxvol.txt`).
+    /// `<stem>_corWeights.txt`, `<stem>_dqBlendWeights.txt`, `<stem>_cage.obj`; beside the cage
+    /// `<cage>_cageWeights.txt`, `<cage>.maxvol` (or `<stem>_maxvol.txt`).
     pub mesh: Option<PathBuf>,
     /// Cage (OBJ); default `<stem>_cage.obj` beside the mesh (glTF/FBX: a cage node in the file).
     #[arg(long)]

@@ -31,8 +31,9 @@ impl Rig {
 
     /// Writes the current REST state as a rig file set that :meth:`load` reads back, as the
     /// folder ``directory``: ``<name>.obj`` (M), ``.skt`` (S), ``.skw`` (Ω), ``<name>_cage.obj``
-    /// (C), ``<name>_cage_cageWeights.txt`` (Φ, with M = ΦC) and ``<name>_cage.maxvol``
-    /// (CageUp's rows). The folder appears complete or not at all (see :class:`OutputFolder`):
+    /// (C), ``<name>_cage_cageWeights.txt`` (Φ, with M = ΦC), ``<name>_cage.maxvol``
+    /// (CageUp's rows) and, when the rig has them, ``<name>_dqBlendWeights.txt`` (the per-vertex
+    /// DQ blend weights of the ``"blended"`` method). The folder appears complete or not at all (see :class:`OutputFolder`):
     /// it must be new or empty, or, with ``overwrite=True``, an earlier cagerig output, which is
     /// replaced as a whole; a folder holding other files raises ``FileExistsError``.
     #[pyo3(signature = (directory, name = "rig", overwrite = false))]
@@ -55,7 +56,8 @@ impl Rig {
                 positions: s.rest_cage().to_vec(),
                 triangles: s.cage_triangles().to_vec(),
             },
-        );
+        )
+        .with_dq_blend_weights(s.dq_blend_weights().cloned());
         py.detach(|| -> Result<(), SaveError> {
             let mut staged = StagedDir::create(&directory, overwrite, DIRECTORY)?;
             staged.write_into(|dir| {

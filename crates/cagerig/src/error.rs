@@ -189,7 +189,8 @@ pub enum RigError {
     #[error(
         "the rig has no per-vertex DQ blend weights: the blended (LBS/DQS blend) skinning method \
          needs one weight in [0, 1] per mesh vertex (FBX skins carry them: Maya's \"weight \
-         blended\" skin clusters); expected a rig with DQ blend weights, or choose lbs, dqs or cor"
+         blended\" skin clusters; an OBJ rig reads them from <stem>_dqBlendWeights.txt beside \
+         its mesh); expected a rig with DQ blend weights, or choose lbs, dqs or cor"
     )]
     NoDqBlendWeights,
     /// Two sizes that must agree (e.g. rows of Φ and vertices of M) differ.

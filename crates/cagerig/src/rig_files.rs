@@ -43,7 +43,8 @@ pub enum MissingCage {
 }
 
 /// Reads `mesh` (OBJ) and its companions. The skeleton (`.skt`), the skinning weights (`.skw`)
-/// and the cage are required; Φ, MaxVol rows and CoR weights are optional (computed later).
+/// and the cage are required; Φ, MaxVol rows and CoR weights are optional (computed later), and
+/// so are the DQ blend weights (`<stem>_dqBlendWeights.txt`, for the blended method).
 pub fn load_rig_files(mesh: &Path, cage: Option<&Path>) -> Result<RigFiles, ParseError> {
     load_rig_files_or_generate(mesh, cage, MissingCage::Fail)
 }
@@ -193,6 +194,14 @@ pub fn load_rig_files_with_weights(
         }
         None => None,
     };
+    let dq_blend_weights = match &found.dq_blend_weights {
+        Some(p) => {
+            let weights = crate::io::dq_blend_weights::read_dq_blend_weights(p, nv)?;
+            files.push(("dq_blend_weights", p.clone()));
+            Some(weights)
+        }
+        None => None,
+    };
     let mut parts = RigParts {
         mesh: mesh_data,
         skeleton,
@@ -203,8 +212,7 @@ pub fn load_rig_files_with_weights(
         cor_rows,
         joint_coords: None,
         cor_centre_coords: None,
-        // The paper tool's file set has no per-vertex DQ blend weights.
-        dq_blend_weights: None,
+        dq_blend_weights,
     };
     let name = mesh.display().to_string();
     let (mut weight_warnings, weights_file) =
@@ -268,7 +276,8 @@ pub fn check_character_mesh(
 
 /// Writes a rig as `<name>.obj`, `.skt`, `.skw`, `<name>_cage.obj`,
 /// `<name>_cage_cageWeights.txt`, `<name>_cage.maxvol` and, when present,
-/// `<name>_corWeights.txt` into `dir` (each file replaced atomically). Round-trip floats.
+/// `<name>_corWeights.txt` and `<name>_dqBlendWeights.txt` into `dir` (each file replaced
+/// atomically). Round-trip floats.
 pub fn write_rig_files(
     dir: &Path,
     name: &str,
@@ -290,6 +299,13 @@ pub fn write_rig_files(
     crate::io::maxvol::write_maxvol(&p("_cage.maxvol"), maxvol_rows)?;
     if let Some(rows) = &parts.cor_rows {
         crate::io::cor_weights::write_cor_weights(&p("_corWeights.txt"), rows, fmt)?;
+    }
+    if let Some(weights) = &parts.dq_blend_weights {
+        crate::io::dq_blend_weights::write_dq_blend_weights(
+            &p("_dqBlendWeights.txt"),
+            weights,
+            fmt,
+        )?;
     }
     Ok(())
 }

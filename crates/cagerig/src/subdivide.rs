@@ -15,6 +15,7 @@
 //! the Euler characteristic is unchanged. The Arm (2089 v, 6244 e, 4156 f) gives 8333, 33 289 and
 //! 133 073 vertices after 1, 2 and 3 levels.
 
+use crate::skinning::DqBlendWeights;
 use std::collections::HashMap;
 
 use crate::error::RigError;
@@ -318,15 +319,29 @@ pub struct SubdividedRig {
     pub skin_weights: SkinWeights,
     /// CoR rows S (`#V' × #V`: new rows averaged, columns still address the original vertices).
     pub cor_rows: Option<crate::sparse_rows::SparseRows>,
+    /// DQ blend weights b (`#V'`): a new vertex takes the mean of its edge's endpoints (in
+    /// [0, 1] when they are).
+    pub dq_blend_weights: Option<DqBlendWeights>,
 }
 
-/// [`subdivide_midpoint`] plus the CoR rows (`#V × #V`) when the rig has them.
+/// [`subdivide_midpoint`] plus the CoR rows (`#V × #V`) and the DQ blend weights (`#V`) when the
+/// rig has them.
 pub fn subdivide_rig(
     mesh: &TriMesh,
     skin_weights: &SkinWeights,
     cor_rows: Option<&crate::sparse_rows::SparseRows>,
+    dq_blend_weights: Option<&DqBlendWeights>,
     levels: usize,
 ) -> Result<SubdividedRig, RigError> {
+    if let Some(b) = dq_blend_weights
+        && b.len() != mesh.num_vertices()
+    {
+        return Err(RigError::SizeMismatch {
+            what: "DQ blend weights vs. mesh vertices",
+            expected: mesh.num_vertices(),
+            actual: b.len(),
+        });
+    }
     if let Some(rows) = cor_rows
         && rows.nrows() != mesh.num_vertices()
     {
@@ -342,9 +357,20 @@ pub fn subdivide_rig(
         let (row_start, cols, values) = midpoint_rows(row_start, cols, values, &sub.edge_parents);
         crate::sparse_rows::SparseRows::from_csr_unchecked(row_start, cols, values, rows.ncols())
     });
+    let dq_blend_weights = dq_blend_weights
+        .map(|b| {
+            let mut values = b.values().to_vec();
+            values.reserve(sub.edge_parents.len());
+            for [a, c] in &sub.edge_parents {
+                values.push(0.5 * (values[*a as usize] + values[*c as usize]));
+            }
+            DqBlendWeights::new(values)
+        })
+        .transpose()?;
     Ok(SubdividedRig {
         mesh: sub.mesh,
         skin_weights: sub.skin_weights,
         cor_rows,
+        dq_blend_weights,
     })
 }

@@ -140,7 +140,8 @@ fn model_parts(name: &str, base: &RigParts, levels: usize) -> anyhow::Result<(St
     if levels == 0 {
         return Ok((name.to_string(), base.clone()));
     }
-    let sub = cagerig::subdivide::subdivide_rig(&base.mesh, &base.skin_weights, None, levels)?;
+    let sub =
+        cagerig::subdivide::subdivide_rig(&base.mesh, &base.skin_weights, None, None, levels)?;
     Ok((
         format!("{name} N={levels}"),
         RigParts::new(

@@ -1,5 +1,6 @@
 //! `cagerig subdivide`: N levels of midpoint subdivision of a rig, written as the paper tool's
-//! file set (mesh, `.skt`, `.skw`, cage, Φ, MaxVol rows, CoR weights when present). The files
+//! file set (mesh, `.skt`, `.skw`, cage, Φ, MaxVol rows, CoR weights when present) and cagerig's
+//! DQ blend weights when the rig has them (`<name>_dqBlendWeights.txt`). The files
 //! appear in `--out` all at once, or not at all.
 
 use std::path::PathBuf;
@@ -8,13 +9,17 @@ use anyhow::bail;
 use cagerig::session::RigParts;
 
 use crate::output_dir::StagedDir;
-use crate::rig_source::{RigArgs, compute_coords_with_progress, load_rig};
+use crate::rig_source::{
+    AutoCageArgs, RigArgs, compute_coords_with_progress, load_rig_or_generate_cage,
+};
 
 /// `cagerig subdivide`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
     pub rig: RigArgs,
+    #[command(flatten)]
+    pub auto_cage: AutoCageArgs,
     /// Rounds of midpoint subdivision (each multiplies the triangles by 4).
     #[arg(long, default_value_t = 1)]
     pub levels: usize,
@@ -49,7 +54,7 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
         );
     }
     let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
-    let loaded = load_rig(args, true, false)?;
+    let loaded = load_rig_or_generate_cage(args, true, false, cli.auto_cage.options())?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
@@ -65,8 +70,13 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
         p.cage.num_vertices() as u64,
     )?;
     let t = std::time::Instant::now();
-    let sub =
-        cagerig::subdivide::subdivide_rig(&p.mesh, &p.skin_weights, p.cor_rows.as_ref(), levels)?;
+    let sub = cagerig::subdivide::subdivide_rig(
+        &p.mesh,
+        &p.skin_weights,
+        p.cor_rows.as_ref(),
+        p.dq_blend_weights.as_ref(),
+        levels,
+    )?;
     println!(
         "subdivided {} → {} vertices, {} triangles in {:.1} ms",
         p.mesh.num_vertices(),
@@ -76,6 +86,7 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
     );
     let sub_parts = RigParts {
         cor_rows: sub.cor_rows,
+        dq_blend_weights: sub.dq_blend_weights,
         ..RigParts::new(
             sub.mesh,
             p.skeleton.clone(),

@@ -1,6 +1,6 @@
 //! Finding a rig's companion files beside the mesh and cage, named like the paper tool's
 //! examples: for `dir/arm.obj` → `arm.skt`, `arm.skw`, `arm_corWeights.txt`,
-//! `arm_skelAnim.txt`, `arm_cageAnim.txt`; for the cage `dir/arm_cage.obj` →
+//! `arm_skelAnim.txt`, `arm_cageAnim.txt` (and cagerig's `arm_dqBlendWeights.txt`); for the cage `dir/arm_cage.obj` →
 //! `arm_cage_cageWeights.txt` and the MaxVol rows `arm_cage.maxvol` (or, the name the tool's
 //! loader actually looks for, `arm_maxvol.txt` beside the mesh).
 
@@ -19,6 +19,8 @@ pub struct DiscoveredFiles {
     pub skin_weights: Option<PathBuf>,
     /// `<stem>_corWeights.txt`
     pub cor_weights: Option<PathBuf>,
+    /// `<stem>_dqBlendWeights.txt` (cagerig's, for the blended skinning method).
+    pub dq_blend_weights: Option<PathBuf>,
     /// `<cage stem>_cageWeights.txt` beside the cage.
     pub cage_coords: Option<PathBuf>,
     /// `<cage stem>.maxvol` beside the cage, else `<stem>_maxvol.txt` beside the mesh.
@@ -38,6 +40,7 @@ impl DiscoveredFiles {
             ("skeleton", self.skeleton.as_deref()),
             ("skin_weights", self.skin_weights.as_deref()),
             ("cor_weights", self.cor_weights.as_deref()),
+            ("dq_blend_weights", self.dq_blend_weights.as_deref()),
             ("cage_coords", self.cage_coords.as_deref()),
             ("maxvol", self.maxvol.as_deref()),
             ("skeleton_animation", self.skeleton_animation.as_deref()),
@@ -76,6 +79,7 @@ pub fn discover(mesh: &Path, cage: Option<&Path>) -> DiscoveredFiles {
         skeleton: first_existing(&dir, &stem, &[".skt"]),
         skin_weights: first_existing(&dir, &stem, &[".skw"]),
         cor_weights: first_existing(&dir, &stem, &["_corWeights.txt"]),
+        dq_blend_weights: first_existing(&dir, &stem, &["_dqBlendWeights.txt"]),
         skeleton_animation: first_existing(
             &dir,
             &stem,
@@ -113,6 +117,7 @@ mod tests {
             "m_cage.obj",
             "m_cage_cageWeights.txt",
             "m_maxvol.txt",
+            "m_dqBlendWeights.txt",
         ] {
             std::fs::write(dir.join(name), b"").unwrap();
         }
@@ -122,6 +127,7 @@ mod tests {
         assert_eq!(d.skin_weights, None);
         assert_eq!(d.cage_coords, Some(dir.join("m_cage_cageWeights.txt")));
         assert_eq!(d.maxvol, Some(dir.join("m_maxvol.txt")));
+        assert_eq!(d.dq_blend_weights, Some(dir.join("m_dqBlendWeights.txt")));
         std::fs::write(dir.join("m_cage.maxvol"), b"").unwrap();
         let d = discover(&dir.join("m.obj"), Some(&dir.join("m_cage.obj")));
         assert_eq!(d.maxvol, Some(dir.join("m_cage.maxvol")));

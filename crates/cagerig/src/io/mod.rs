@@ -13,6 +13,7 @@ pub mod cage_animation;
 pub mod cage_weights;
 pub mod cor_weights;
 pub mod discovery;
+pub mod dq_blend_weights;
 pub mod error;
 pub mod euler;
 mod keyframes;
@@ -29,6 +30,7 @@ pub use cage_animation::{parse_cage_animation, read_cage_animation, write_cage_a
 pub use cage_weights::{parse_cage_weights, read_cage_weights, write_cage_weights};
 pub use cor_weights::{parse_cor_weights, read_cor_weights, write_cor_weights};
 pub use discovery::{DiscoveredFiles, discover};
+pub use dq_blend_weights::{parse_dq_blend_weights, read_dq_blend_weights, write_dq_blend_weights};
 pub use error::ParseError;
 pub use maxvol::{parse_maxvol, read_maxvol, write_maxvol};
 pub use obj::{parse_obj, read_obj, write_obj};
