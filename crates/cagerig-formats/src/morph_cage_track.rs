@@ -10,6 +10,13 @@
 //! rest cage (the default weights are already in M); lerping the keys is lerping the weights,
 //! which is what a viewer does with LINEAR weights.
 //!
+//! A Green-coordinates rig (M = φC + ψ·g(C), not linear in C) fits each key's cage instead:
+//! C_k is CageUp's Gauss–Newton fit of the rest rows M₀[R] + Δ_k[R], exact when the target is a
+//! Green deformation (a cagerig export of a Green rig), and its reproduction is M(C_k) − M₀.
+//! Where that fit does not converge (a key that folds the cage, far from the rest cage), the
+//! key's cage is the vertex part's linear fit P·(M₀ + Δ_k)[R], and the residual says how far it
+//! is.
+//!
 //! Morph targets that are not cage deformations (face shapes, corrective shapes) are reproduced
 //! only through the cage; [`MorphCageTrack::worst_residual`] says how far, and callers report it.
 //!
@@ -17,9 +24,9 @@
 //! (node transforms `T_j(t)·B_j(0)`): play them with
 //! [`cagerig::playback::AnimationPlayer::holding_rest_skeleton`], or the joints move twice.
 
-use cagerig::RigError;
 use cagerig::animation::{CageTrack, SkeletonTrack};
 use cagerig::session::RigSession;
+use cagerig::{CoordsKind, RigError};
 use glam::DVec3;
 
 use crate::character::MorphTargets;
@@ -90,12 +97,42 @@ pub fn morph_cage_track(
     let mut reproduced = vec![DVec3::ZERO; nv];
     let mut cage_deltas = Vec::with_capacity(num_targets);
     let (mut worst_residual, mut worst_target) = (0.0f64, 0);
+    // Green rigs: M(C) is not linear in C, so each target's cage is fitted to the rows of
+    // M₀ + Δ_k (from the rest cage C₀) and its reproduction is M(C_k) − M₀.
+    let rest_cage = session.original_rest_cage();
+    let mut rest_mesh = vec![DVec3::ZERO; nv];
+    let mut cage = vec![DVec3::ZERO; nc];
+    match session.coords_kind() {
+        CoordsKind::Mvc => {}
+        CoordsKind::Green => session.rest_mesh_for_cage(rest_cage, &mut rest_mesh)?,
+    }
     for (k, target) in targets.iter().enumerate() {
         rows.clear();
-        rows.extend(updater.rows().iter().map(|&r| target[r]));
         let mut delta = vec![DVec3::ZERO; nc];
-        updater.apply_rows(&rows, &mut delta);
-        session.cage_coords().apply(&delta, &mut reproduced);
+        match session.coords_kind() {
+            CoordsKind::Mvc => {
+                rows.extend(updater.rows().iter().map(|&r| target[r]));
+                updater.apply_rows(&rows, &mut delta);
+                session.cage_coords().apply(&delta, &mut reproduced);
+            }
+            CoordsKind::Green => {
+                rows.extend(updater.rows().iter().map(|&r| rest_mesh[r] + target[r]));
+                cage.copy_from_slice(rest_cage);
+                if session.rest_cage_from_rows(&rows, &mut cage).is_err() {
+                    // No Green cage reproduces the target (or the fit did not reach it): the
+                    // vertex part's linear fit, reported through `worst_residual` like any
+                    // target the cage does not reproduce.
+                    updater.apply_rows(&rows, &mut cage);
+                }
+                for ((d, c), c0) in delta.iter_mut().zip(&cage).zip(rest_cage) {
+                    *d = *c - *c0;
+                }
+                session.rest_mesh_for_cage(&cage, &mut reproduced)?;
+                for (r, m0) in reproduced.iter_mut().zip(&rest_mesh) {
+                    *r -= *m0;
+                }
+            }
+        }
         let residual = reproduced
             .iter()
             .zip(target)

@@ -445,6 +445,63 @@ impl RigSession {
         self.cage_map.add_rest_terms_of(cage, out);
     }
 
+    /// The rest skin M(C) of the rest cage `cage` (`#C`) into `out` (`#V`): ΦC, plus ψ·g(C) for
+    /// Green coordinates. The session is not changed.
+    pub fn rest_mesh_for_cage(&self, cage: &[DVec3], out: &mut [DVec3]) -> Result<(), RigError> {
+        if cage.len() != self.rest_cage.len() || out.len() != self.rest_mesh.len() {
+            return Err(RigError::SizeMismatch {
+                what: "rest cage (#C) and rest skin (#V) for M(C)",
+                expected: self.rest_cage.len(),
+                actual: cage.len(),
+            });
+        }
+        self.rest_mesh_of_cage(cage, out);
+        Ok(())
+    }
+
+    /// The rest cage C (`out`, `#C`; on entry the start of a non-linear fit) whose rest skin
+    /// fits `rows`, the skin at CageUp's fitting rows ([`CageUpdater::rows`], `#R`): for mean
+    /// value coordinates C = P·rows (exact on MaxVol rows); for Green coordinates the
+    /// Gauss–Newton fit of φ_R C + ψ_R g(C) to `rows` (CageUp's solver, to a stationary point
+    /// to round-off), which recovers C exactly when the rows are a Green deformation of the
+    /// binding. Errors when the Green fit does not converge. The session is not changed.
+    pub fn rest_cage_from_rows(&self, rows: &[DVec3], out: &mut [DVec3]) -> Result<(), RigError> {
+        if rows.len() != self.cage_updater.rows().len() || out.len() != self.rest_cage.len() {
+            return Err(RigError::SizeMismatch {
+                what: "fitting rows (#R) for a rest cage",
+                expected: self.cage_updater.rows().len(),
+                actual: rows.len(),
+            });
+        }
+        match &self.cage_map {
+            CageMap::Mvc => {
+                self.cage_updater.apply_rows(rows, out);
+                Ok(())
+            }
+            CageMap::Green(green) => {
+                let mut fit = green.fit.clone();
+                // Start from the better of the given cage and the linear map's cage P·rows (the
+                // vertex part's fit, which ignores ψ·g but follows large deformations).
+                let mut linear = vec![DVec3::ZERO; out.len()];
+                self.cage_updater.apply_rows(rows, &mut linear);
+                if fit.energy(rows, &linear) < fit.energy(rows, out) {
+                    out.copy_from_slice(&linear);
+                }
+                let report = fit.apply(rows, out)?;
+                if report.residual <= GREEN_FIT_LIMIT * green.size() {
+                    Ok(())
+                } else {
+                    Err(RigError::Invalid(format!(
+                        "no rest cage reproduces the given skin rows through Green coordinates: \
+                         the fit stopped with a gradient of {:.3e}, expected at most {:.3e}",
+                        report.residual,
+                        GREEN_FIT_LIMIT * green.size()
+                    )))
+                }
+            }
+        }
+    }
+
     /// The CoR centres Λ·C (+ the kind's terms) into `out` (`#V`) for the rest cage `cage`.
     pub(super) fn centres_of_cage(&self, cor: &CorState, cage: &[DVec3], out: &mut [DVec3]) {
         cor.centre_coords.apply(cage, out);

@@ -157,6 +157,11 @@ impl GreenState {
         })
     }
 
+    /// The cage's bounding-box diagonal.
+    pub(super) fn size(&self) -> f64 {
+        self.size
+    }
+
     /// out += ψ·g for face terms `g` (`#F`) and `out` (`#V`).
     pub(super) fn add_face_terms(&self, g: &[DVec3], out: &mut [DVec3]) {
         self.face_coords.apply_delta(&self.all_faces, g, out);
