@@ -404,3 +404,30 @@ fn rebinding_keeps_the_edits_and_a_restored_state_rebinds_back() {
     let old: cagerig::session::EditableState = serde_json::from_value(json).unwrap();
     assert_eq!(old.coords, CoordsKind::Mvc);
 }
+
+/// The rest cage whose Green rest skin gives some rows (what an imported morph target asks):
+/// from the rest cage, CageUp's Gauss–Newton — continued in pieces when the direct solve
+/// stalls — recovers each key of the Arm's own cage animation (offsets up to 34 units on an
+/// 86-unit cage) from the rows of its rest skin.
+#[test]
+fn rest_cage_from_rows_recovers_the_arms_cage_keys() {
+    let (s, _) = arm(green());
+    let d = diagonal(s.rest_cage());
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
+    let track = cagerig::io::read_cage_animation(&dir.join("arm_cageAnim.txt"), 58).unwrap();
+    for offsets in track.offsets() {
+        let cage: Vec<DVec3> = s
+            .original_rest_cage()
+            .iter()
+            .zip(offsets)
+            .map(|(c, o)| *c + *o)
+            .collect();
+        let mut m = vec![DVec3::ZERO; s.num_vertices()];
+        s.rest_mesh_for_cage(&cage, &mut m).unwrap();
+        let rows: Vec<DVec3> = s.cage_updater().rows().iter().map(|&r| m[r]).collect();
+        let mut found = s.original_rest_cage().to_vec();
+        s.rest_cage_from_rows(&rows, &mut found).unwrap();
+        let off = max_distance(&found, &cage);
+        assert!(off <= 1e-9 * d, "{off:e}");
+    }
+}

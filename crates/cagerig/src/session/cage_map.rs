@@ -487,6 +487,8 @@ impl RigSession {
                 if fit.energy(rows, &linear) < fit.energy(rows, out) {
                     out.copy_from_slice(&linear);
                 }
+                // A stalled solve continues from the start to `rows` in pieces.
+                fit.restart_from(out);
                 let report = fit.apply(rows, out)?;
                 if report.residual <= GREEN_FIT_LIMIT * green.size() {
                     Ok(())

@@ -175,6 +175,22 @@ impl GreenCageFit {
         &self.face_rows
     }
 
+    /// Forgets what earlier solves left (their factors and solution) and takes `cage` (`#C`) as
+    /// the last converged solution, for its own rows F_R(cage): the next [`GreenCageFit::apply`]
+    /// that stalls continues from there to its rows in pieces. No allocation.
+    pub fn restart_from(&mut self, cage: &[DVec3]) {
+        let mut g = std::mem::take(&mut self.g);
+        let mut rows = std::mem::take(&mut self.last_target);
+        self.rows_of(cage, &mut g, &mut rows);
+        self.g = g;
+        self.last_target = rows;
+        self.last_solution.copy_from_slice(cage);
+        self.has_last_target = true;
+        self.lu.invalidate();
+        self.factor_damping = f64::INFINITY;
+        self.damping = 0.0;
+    }
+
     /// The report of the last [`GreenCageFit::apply`] (`residual` is max |Jᵀr|).
     pub fn last_report(&self) -> NewtonReport {
         self.last
