@@ -82,6 +82,31 @@ impl CharacterFormat {
 /// shape, the current pose in the nodes) as a character file in the format of `path`'s
 /// extension, replacing it atomically; `name` names the mesh and the skin.
 pub fn export_character(session: &RigSession, path: &Path, name: &str) -> Result<(), FormatError> {
+    writable_format(path)?;
+    crate::gltf::export::export_glb(session, path, name)
+}
+
+/// [`export_character`] with the skinning result baked: under DQS, CoR or the blended method
+/// the file carries one morph target (default weight 1) that turns a viewer's LBS of the
+/// current pose into cagerig's M' ([`crate::gltf::export_bake::baked_state_to_gltf`]); under
+/// LBS it is the plain export. Returns what the baking measured.
+pub fn export_character_baked(
+    session: &RigSession,
+    path: &Path,
+    name: &str,
+) -> Result<crate::gltf::export_bake::BakeReport, FormatError> {
+    writable_format(path)?;
+    let (document, bin, report) = crate::gltf::export_bake::baked_state_to_gltf(session, name)
+        .map_err(|message| FormatError::Io {
+            path: path.to_path_buf(),
+            message,
+        })?;
+    crate::gltf::export::write_gltf_or_glb(path, &document, &bin)?;
+    Ok(report)
+}
+
+/// Refuses a path whose extension is not a format cagerig writes.
+fn writable_format(path: &Path) -> Result<(), FormatError> {
     let unsupported = |found: String| FormatError::Io {
         path: path.to_path_buf(),
         message: format!(
@@ -90,7 +115,7 @@ pub fn export_character(session: &RigSession, path: &Path, name: &str) -> Result
         ),
     };
     match CharacterFormat::of(path) {
-        Some(CharacterFormat::Gltf) => crate::gltf::export::export_glb(session, path, name),
+        Some(CharacterFormat::Gltf) => Ok(()),
         Some(format @ CharacterFormat::Fbx) => {
             Err(unsupported(format!("{} (reading only)", format.name())))
         }

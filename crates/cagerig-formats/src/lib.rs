@@ -18,7 +18,7 @@ use std::path::Path;
 pub use character::{
     ImportSummary, ImportedAnimation, ImportedCharacter, MorphTargets, SpaceSummary,
 };
-pub use character_format::{CharacterFormat, export_character};
+pub use character_format::{CharacterFormat, export_character, export_character_baked};
 pub use error::FormatError;
 pub use morph_cage_track::{MorphCageTrack, morph_cage_track};
 pub use static_mesh::StaticMesh;

@@ -91,8 +91,14 @@ impl Rig {
     ///     Ending in ``.glb`` or ``.gltf``.
     /// name : str, default "cagerig"
     ///     Name of the mesh and the skin in the file.
-    #[pyo3(signature = (path, name = "cagerig"))]
-    fn export_gltf(&self, py: Python<'_>, path: PathBuf, name: &str) -> PyResult<()> {
+    /// bake : bool, default False
+    ///     glTF skins with LBS only, so under ``"dqs"``, ``"cor"`` or ``"blended"`` a viewer
+    ///     shows the LBS result of the pose (up to a few % of the diagonal off). With
+    ///     ``bake=True`` the file also carries one morph target, at default weight 1, that turns
+    ///     the viewer's LBS into this rig's posed skin (to the f32 rounding of the file); cagerig
+    ///     reads the file back without it. Under ``"lbs"`` there is nothing to bake.
+    #[pyo3(signature = (path, name = "cagerig", bake = false))]
+    fn export_gltf(&self, py: Python<'_>, path: PathBuf, name: &str, bake: bool) -> PyResult<()> {
         let writable = cagerig_formats::CharacterFormat::of(&path).is_some_and(|f| f.can_export());
         if !writable {
             return Err(PyValueError::new_err(format!(
@@ -101,8 +107,14 @@ impl Rig {
             )));
         }
         let session = self.session();
-        py.detach(|| cagerig_formats::export_character(session, &path, name))
-            .map_err(format_error)
+        py.detach(|| {
+            if bake {
+                cagerig_formats::export_character_baked(session, &path, name).map(|_| ())
+            } else {
+                cagerig_formats::export_character(session, &path, name)
+            }
+        })
+        .map_err(format_error)
     }
 }
 

@@ -68,3 +68,27 @@ def test_fbx_loads_with_the_files_skinning_method_unless_one_is_chosen():
         chosen = cagerig.Rig.load(fbx, auto_cage=40, skinning="dqs")
     assert rig.skinning == "lbs"  # Blender skins linearly, and the file says so
     assert chosen.skinning == "dqs"
+
+
+def test_export_gltf_bakes_a_dqs_pose_and_reads_back_without_it(tmp_path):
+    arm = DATA / "arm"
+    rig = cagerig.Rig.load(arm / "arm.obj", skinning="dqs")
+    rig.rotate_joint("lowerarm01.R", [1.0, 0.0, 0.0], 90.0)
+    rig.export_gltf(tmp_path / "baked.gltf", bake=True)
+    rig.export_gltf(tmp_path / "plain.gltf")
+    baked = json.loads((tmp_path / "baked.gltf").read_text())["meshes"][0]
+    plain = json.loads((tmp_path / "plain.gltf").read_text())["meshes"][0]
+    # One target at default weight 1, marked as cagerig's baked DQS (the viewer-side check of
+    # the skin it gives is in cagerig-formats' tests); the plain export has none.
+    assert len(baked["primitives"][0]["targets"]) == 1 and baked["weights"] == [1.0]
+    assert baked["extras"]["cagerig_baked_skinning"]["method"] == "dqs"
+    assert "targets" not in plain["primitives"][0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", cagerig.RigWarning)
+        back = cagerig.Rig.load(tmp_path / "baked.gltf", arm / "arm_cage.obj")
+    diagonal = np.linalg.norm(rig.rest_mesh.max(0) - rig.rest_mesh.min(0))
+    assert np.abs(back.rest_mesh - rig.rest_mesh).max() < 1e-5 * diagonal
+    # Under LBS there is nothing to bake.
+    lbs = cagerig.Rig.load(arm / "arm.obj")
+    lbs.export_gltf(tmp_path / "lbs.gltf", bake=True)
+    assert "targets" not in json.loads((tmp_path / "lbs.gltf").read_text())["meshes"][0]["primitives"][0]

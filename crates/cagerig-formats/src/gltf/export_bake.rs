@@ -19,6 +19,9 @@
 
 use cagerig::session::RigSession;
 use glam::{DMat3, DVec3};
+use serde_json::{Value, json};
+
+use super::export::{Builder, position_accessor, session_to_gltf};
 
 /// A blended linear part whose `|det L| / (‖L‖_F / √3)³` is below this is treated as singular
 /// (1 for a rotation; the ratio is scale-free).
@@ -83,6 +86,41 @@ pub(crate) fn bake_target(
         out.push(correction);
     }
     report.samples += 1;
+}
+
+/// The glTF document (JSON and binary chunk) of the session's current state, as
+/// [`session_to_gltf`] writes it, with its skinning result baked: under DQS, CoR or the blended
+/// method one morph target (the correction [`bake_target`] computes for the current pose), whose
+/// default weight is 1, so that a viewer shows cagerig's M' without playing anything. The mesh's
+/// `extras` name the target and mark it baked (`cagerig_baked_skinning`), so cagerig's importer
+/// leaves it out. Under LBS nothing needs baking: the plain document and an empty report.
+pub fn baked_state_to_gltf(
+    session: &RigSession,
+    name: &str,
+) -> Result<(Value, Vec<u8>, BakeReport), String> {
+    let (mut document, bin) = session_to_gltf(session, name)?;
+    if session.skinning().is_linear() {
+        return Ok((document, bin, BakeReport::default()));
+    }
+    let mut b = Builder::from_document(&document, bin);
+    let bind_shape: Vec<DVec3> = session
+        .rest_mesh()
+        .iter()
+        .copied()
+        .map(f32_rounded)
+        .collect();
+    let (mut correction, mut report) = (Vec::new(), BakeReport::default());
+    bake_target(session, &bind_shape, &mut correction, &mut report);
+    let target = position_accessor(&mut b, &correction, true);
+    let mesh = &mut document["meshes"][0];
+    mesh["primitives"][0]["targets"] = json!([{ "POSITION": target }]);
+    mesh["weights"] = json!([1.0]);
+    mesh["extras"] = json!({
+        "targetNames": [format!("{} (current pose)", session.skinning().label())],
+        "cagerig_baked_skinning": {"method": session.skinning().name(), "first_target": 0},
+    });
+    let (document, bin) = b.finish(document);
+    Ok((document, bin, report))
 }
 
 /// `L⁻¹ δ`, or the damped least-squares `(LᵀL + λI)⁻¹ Lᵀ δ` (λ = 1e-12 · ‖L‖_F²) when `L` is

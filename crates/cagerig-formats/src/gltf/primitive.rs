@@ -11,7 +11,7 @@ use gltf::mesh::Mode;
 
 use super::buffers::Buffers;
 use super::import::to_vec3;
-use super::morph_targets::default_weights;
+use super::morph_targets::{baked_targets, default_weights};
 use crate::error::{FormatError, invalid};
 
 /// Triangles of a primitive (local vertex indices) from its mode and optional indices.
@@ -134,9 +134,19 @@ pub(super) fn read_geometry(
     let targets: Vec<_> = primitive.morph_targets().collect();
     if !targets.is_empty() {
         let weights = default_weights(node);
+        // Targets cagerig's export baked hold a skinning result, not a shape: never part of the
+        // bind shape (a one-state bake gives them default weight 1).
+        let baked_from = node
+            .mesh()
+            .and_then(|m| baked_targets(&m))
+            .map_or(usize::MAX, |(first, _)| first);
         let mut applied = 0;
         for (k, target) in targets.iter().enumerate() {
-            let w = weights.get(k).copied().unwrap_or(0.0);
+            let w = if k < baked_from {
+                weights.get(k).copied().unwrap_or(0.0)
+            } else {
+                0.0
+            };
             if w == 0.0 && targets_out.is_none() {
                 continue;
             }
