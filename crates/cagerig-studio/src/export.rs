@@ -1,7 +1,8 @@
 //! File ▸ Export: the rest and current skin and cage as OBJ, the joints as JSON, the keys as the
 //! paper tool's animation files, the rig as the paper tool's file set (`rig.obj`, `rig.skt`,
 //! `rig.skw`, `rig_cage.obj`: `cagerig edit rig.obj` opens it) and as glTF 2.0 (`.glb`, with
-//! its skin). Nothing non-finite is written. A mesh with no skeleton bound yet exports no
+//! its skin; under DQS, CoR or the blended method with the skin baked in, so that a viewer
+//! shows what the editor shows). Nothing non-finite is written. A mesh with no skeleton bound yet exports no
 //! skeleton, weights or glTF.
 //!
 //! The folder the user picks is the export: it appears complete or not at all (the library's
@@ -126,8 +127,11 @@ fn write_exports(doc: &Document, dir: &Path) -> Result<Vec<PathBuf>, ExportError
     let rig_cage = dir.join("rig_cage.obj");
     cagerig::io::write_obj(&rig_cage, s.rest_cage(), s.cage_triangles())?;
     written.extend([rig_mesh, skt, skw, rig_cage]);
+    // Under DQS, CoR or the blended method the skin a viewer shows is baked in (one morph
+    // target at default weight 1), so the file looks as the editor does; cagerig reads it back
+    // without it.
     let glb = dir.join("rig.glb");
-    cagerig_formats::export_character(s, &glb, "cagerig")?;
+    cagerig_formats::export_character_baked(s, &glb, "cagerig")?;
     written.push(glb);
     Ok(written)
 }
@@ -173,6 +177,46 @@ mod tests {
         let rig = cagerig::rig_files::load_rig_files(&dir.join("rig.obj"), None).unwrap();
         assert_eq!(rig.parts.skeleton.len(), doc.session.skeleton().len());
         assert_eq!(rig.parts.skin_weights, *doc.session.skin_weights());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// Under DQS the exported `rig.glb` carries the baked skin of the current pose (one morph
+    /// target at default weight 1, marked as cagerig's), and reads back with the same rest skin.
+    #[test]
+    fn export_bakes_the_dqs_skin_into_the_gltf() {
+        let mut doc = bar_document();
+        doc.execute(&crate::document::Command::SetSkinning(
+            cagerig::skinning::SkinningMethod::Dqs,
+        ))
+        .unwrap();
+        doc.execute(&crate::document::Command::RotateJoint {
+            joint: 1,
+            axis: glam::DVec3::X,
+            angle: 0.8,
+        })
+        .unwrap();
+        let dir = std::env::temp_dir().join(format!(
+            "cagerig-studio-export-baked-{}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        export_all(&doc, &dir).unwrap();
+        let glb = dir.join("rig.glb");
+        // The GLB's JSON chunk: 12-byte header, chunk length, chunk type, JSON.
+        let bytes = std::fs::read(&glb).unwrap();
+        let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+        let mesh = &json["meshes"][0];
+        assert_eq!(
+            mesh["primitives"][0]["targets"].as_array().unwrap().len(),
+            1
+        );
+        assert_eq!(mesh["weights"], serde_json::json!([1.0]));
+        assert_eq!(mesh["extras"]["cagerig_baked_skinning"]["method"], "dqs");
+        let back = cagerig_formats::import_character(&glb, &Default::default()).unwrap();
+        let (lo, hi) = cagerig::mesh::bounding_box(doc.session.rest_mesh());
+        let off = cagerig::mesh::max_distance(&back.mesh.positions, doc.session.rest_mesh());
+        assert!(off <= 1e-6 * (hi - lo).length(), "{off:e}");
         std::fs::remove_dir_all(dir).ok();
     }
 
