@@ -138,34 +138,28 @@ impl RigSession {
         }
         self.store_pose(pose)?;
         lerp_into(&lo.cage, &hi.cage, a, &mut self.rest_cage);
-        if !self.cage_map.is_linear() {
-            // M is not linear in C: the exact M is the blend of the keys' meshes plus the kind's
-            // terms beyond the blend of the keys' terms (Green: ψ·(g(C) − lerp(g_lo, g_hi)), on
-            // the faces where that is above round-off), a few columns instead of the full
-            // product; the display path rounds it. The CoR centres in full.
-            lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
-            self.cage_map.add_keyframe_blend_terms(
-                &lo.terms,
-                &hi.terms,
-                a,
-                &self.rest_cage,
-                &mut self.rest_mesh,
-            );
-            if let Some(display) = self.display.as_deref_mut() {
-                display.forget_exact_rest();
-            }
-            self.rest_mesh_is_phi_c = true;
-            self.rest_mesh_rows_only = false;
-            self.rest_mesh_changed();
-            self.centres_from_cage_in_full();
-            self.sync_from_rest_cage();
-            return Ok(());
-        }
+        // M is the blend of the keys' meshes (exact where M is linear in C), plus what the
+        // kind's terms add beyond the blend of the keys' terms (Green: ψ·(g(C) − lerp(g_lo,
+        // g_hi)) on the faces where that is above round-off; MVC: nothing). The display path
+        // rounds this exact M.
         lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
+        self.cage_map.add_keyframe_blend_terms(
+            &lo.terms,
+            &hi.terms,
+            a,
+            &self.rest_cage,
+            &mut self.rest_mesh,
+        );
+        if let Some(display) = self.display.as_deref_mut() {
+            display.forget_exact_rest();
+        }
         self.rest_mesh_is_phi_c = true;
         self.rest_mesh_rows_only = false;
         self.rest_mesh_changed();
-        if let Some(cor) = &mut self.cor {
+        if !self.cage_map.is_linear() {
+            // The centres' terms are not linear in C either: evaluated in full.
+            self.centres_from_cage_in_full();
+        } else if let Some(cor) = &mut self.cor {
             match (&lo.centres, &hi.centres, self.method) {
                 (_, _, m) if m != SkinningMethod::Cor => cor.stale = true,
                 (Some(l), Some(h), _) => {

@@ -303,7 +303,7 @@ impl CageMap {
     pub(super) fn terms_of(&self, cage: &[DVec3]) -> Vec<DVec3> {
         match self {
             CageMap::Mvc => Vec::new(),
-            CageMap::Green(green) => green.terms_of(cage),
+            CageMap::Green(green) => green.keyframe_terms_of(cage),
         }
     }
 

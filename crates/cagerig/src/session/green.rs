@@ -7,6 +7,8 @@
 //! CageRev into the Newton solves of [`crate::sync::green_cage_fit`] and
 //! [`crate::sync::green_cage_reverser`]. The derivation is in `docs/green-coordinates.md`.
 
+use std::sync::OnceLock;
+
 use faer::Mat;
 
 use super::*;
@@ -50,7 +52,9 @@ pub(super) struct GreenState {
     /// Λ_ψ = S·ψ (`#V × #F`) for the CoR centres, built with them.
     pub(super) face_centre_coords: Option<CageCoords>,
     /// max_v Σ_f |ψ_vf|: bounds what a face term below a threshold can add to any vertex.
-    face_coords_norm: f64,
+    /// Computed when the first cage keyframe is made ([`GreenState::keyframe_terms_of`]), not at
+    /// binding.
+    face_coords_norm: OnceLock<f64>,
     /// Set when the last CageUp stopped above [`GREEN_FIT_LIMIT`] (the event is refused).
     pub(super) fit_failure: Option<RigError>,
     /// The cage's bounding-box diagonal.
@@ -116,13 +120,6 @@ impl GreenState {
                 fill[v as usize] += 1;
             }
         }
-        let mut row_sums = vec![0.0f64; face_coords.num_vertices()];
-        for f in 0..num_faces {
-            for (sum, w) in row_sums.iter_mut().zip(face_coords.column(f)) {
-                *sum += w.abs();
-            }
-        }
-        let face_coords_norm = row_sums.iter().fold(0.0f64, |m, s| m.max(*s));
         let mut rest_terms = vec![DVec3::ZERO; num_faces];
         normals.apply(rest_cage, &mut rest_terms);
         let fit = GreenCageFit::new(
@@ -150,7 +147,7 @@ impl GreenState {
             start_from_posed_cage: false,
             skinned_cage: rest_cage.to_vec(),
             face_centre_coords: None,
-            face_coords_norm,
+            face_coords_norm: OnceLock::new(),
             fit_failure: None,
             size,
             last_reverse: NewtonReport::default(),
@@ -172,6 +169,26 @@ impl GreenState {
         if let Some(lambda) = &self.face_centre_coords {
             lambda.apply_delta(&self.all_faces, g, out);
         }
+    }
+
+    /// max_v Σ_f |ψ_vf| (one pass over ψ the first time).
+    fn face_coords_norm(&self) -> f64 {
+        *self.face_coords_norm.get_or_init(|| {
+            let mut row_sums = vec![0.0f64; self.face_coords.num_vertices()];
+            for f in 0..self.all_faces.len() {
+                for (sum, w) in row_sums.iter_mut().zip(self.face_coords.column(f)) {
+                    *sum += w.abs();
+                }
+            }
+            row_sums.iter().fold(0.0f64, |m, s| m.max(*s))
+        })
+    }
+
+    /// [`GreenState::terms_of`] for a cage keyframe, which also makes the bound
+    /// [`KEYFRAME_TERM_TOLERANCE`] uses, so that playing the keys allocates nothing.
+    pub(super) fn keyframe_terms_of(&self, cage: &[DVec3]) -> Vec<DVec3> {
+        self.face_coords_norm();
+        self.terms_of(cage)
     }
 
     /// g of `cage` into a new vector (`#F`).
@@ -208,7 +225,7 @@ impl GreenState {
         let normals = self.fit.normals();
         normals.apply(rest_cage, &mut self.rest_terms);
         let tolerance =
-            KEYFRAME_TERM_TOLERANCE * self.size / self.face_coords_norm.max(f64::MIN_POSITIVE);
+            KEYFRAME_TERM_TOLERANCE * self.size / self.face_coords_norm().max(f64::MIN_POSITIVE);
         self.touched_faces.clear();
         self.face_changes.clear();
         for (f, ((g, lo), hi)) in self
