@@ -287,3 +287,33 @@ fn bench_reports_both_thread_counts_the_display_path_and_the_maxvol_quality() {
         }
     }
 }
+
+/// `subdivide --auto-cage`: an OBJ rig without a cage is subdivided with a generated one, which
+/// the written rig carries; without the option the missing cage is an error.
+#[test]
+fn subdivide_generates_a_cage_with_auto_cage() {
+    let dir = temp_dir("subdivide-auto-cage");
+    for f in ["arm.obj", "arm.skt", "arm.skw"] {
+        std::fs::copy(support::arm_dir().join(f), dir.join(f)).unwrap();
+    }
+    let refused = cagerig()
+        .arg("subdivide")
+        .arg(dir.join("arm.obj"))
+        .arg("--out")
+        .arg(dir.join("none"))
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    assert!(!dir.join("none").exists());
+    succeed(
+        cagerig()
+            .arg("subdivide")
+            .arg(dir.join("arm.obj"))
+            .args(["--auto-cage", "--levels", "1", "--out"])
+            .arg(dir.join("sub")),
+    );
+    let cage = cagerig::io::read_obj(&dir.join("sub/rig_cage.obj")).unwrap();
+    assert!(cage.num_vertices() >= 50, "{}", cage.num_vertices());
+    let mesh = cagerig::io::read_obj(&dir.join("sub/rig.obj")).unwrap();
+    assert_eq!(mesh.num_triangles(), 4 * 4156);
+}
