@@ -86,6 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &skeleton,
             &weights,
             &phi,
+            None,
             &cage.positions,
             JointLocalisation::default(),
         )

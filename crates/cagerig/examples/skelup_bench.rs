@@ -33,6 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 &skeleton,
                 &sub.skin_weights,
                 &phi,
+                None,
                 &cage.positions,
                 localisation,
             )?;

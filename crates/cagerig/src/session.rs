@@ -33,7 +33,7 @@ use crate::skinning::{DqBlendWeights, SkinningMethod};
 use crate::sparse_rows::SparseRows;
 use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
-use crate::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
+use crate::sync::skeleton_updater::{JointFaceTerms, JointLocalisation, SkeletonUpdater};
 
 mod accessors;
 mod animation_sample;
@@ -220,7 +220,7 @@ impl RigSession {
         let BoundCageMap {
             cage_coords,
             cage_updater,
-            cage_map,
+            mut cage_map,
             precision,
             cor_centre_coords,
         } = bind_cage_map(
@@ -263,11 +263,16 @@ impl RigSession {
         let skeleton_updater = match joint_coords {
             Some(rows) => SkeletonUpdater::from_joint_coords(&rows, nc)?,
             None => {
+                let face_terms = cage_map.extra_coords().map(|face_coords| JointFaceTerms {
+                    face_coords,
+                    rest_terms: cage_map.terms(),
+                });
                 let (up, w) = SkeletonUpdater::new(
                     &mesh,
                     &skeleton,
                     &skin_weights,
                     &cage_coords,
+                    face_terms,
                     &rest_cage,
                     options.localisation,
                 )?;
@@ -275,6 +280,7 @@ impl RigSession {
                 up
             }
         };
+        cage_map.set_joint_coords(&skeleton_updater);
         let reverser = CageReverser::new(
             &cage_coords,
             cage_updater.rows(),

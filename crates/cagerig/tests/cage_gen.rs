@@ -176,7 +176,8 @@ fn arm_cage_passes_and_runs_the_paper_scenario_with_exact_invariants() {
         s.cage_coords().apply(s.rest_cage(), &mut m);
         assert!(max_distance(&m, s.rest_mesh()) < tol, "M != ΦC");
         let mut a = vec![DVec3::ZERO; s.skeleton().len()];
-        s.skeleton_updater().apply(s.rest_cage(), &mut a);
+        s.skeleton_updater()
+            .apply(s.rest_cage(), s.rest_cage_terms(), &mut a);
         let rest: Vec<DVec3> = s.rest_joints().collect();
         assert!(max_distance(&a, &rest) < tol, "A != ΨC");
     };

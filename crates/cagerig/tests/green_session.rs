@@ -10,7 +10,7 @@ use cagerig::CoordsKind;
 use cagerig::demo;
 use cagerig::mesh::max_distance;
 use cagerig::rig_files::load_rig_files;
-use cagerig::session::{RigParts, RigSession, SessionOptions};
+use cagerig::session::{RigParts, RigSession, SessionOptions, SyncLocks};
 use cagerig::skinning::SkinningMethod;
 use glam::{DQuat, DVec3};
 
@@ -62,7 +62,8 @@ fn check_rest_mesh(s: &RigSession, tol: f64) {
     let off = max_distance(&m, s.rest_mesh());
     assert!(off < tol, "M != φC + ψ·g(C): {off:e}");
     let mut a = vec![DVec3::ZERO; s.skeleton().len()];
-    s.skeleton_updater().apply(s.rest_cage(), &mut a);
+    s.skeleton_updater()
+        .apply(s.rest_cage(), s.rest_cage_terms(), &mut a);
     let joints: Vec<DVec3> = s.rest_joints().collect();
     assert!(max_distance(&a, &joints) < tol, "A != ΨC");
 }
@@ -99,6 +100,12 @@ fn identity_reproduces_the_rest_mesh_on_the_arm_and_the_builtin_rigs() {
         let d = diagonal(s.rest_cage());
         let off = max_distance(s.rest_mesh(), &loaded);
         assert!(off < 1e-9 * d, "{name}: {off:e}");
+        // SkelUp takes the face terms for every joint (none falls back to A = ΨC alone).
+        assert!(
+            s.skeleton_updater().reports().iter().all(|r| r.face_terms),
+            "{name}: {:?}",
+            s.skeleton_updater().reports()
+        );
         assert!(
             max_distance(s.posed_cage(), s.rest_cage()) < 1e-9 * d,
             "{name}"
@@ -114,6 +121,7 @@ fn a_similarity_of_the_rest_cage_moves_the_mesh_by_the_same_similarity() {
     let (scale, shift) = (1.3, DVec3::new(0.4, -0.2, 0.9));
     let similarity = |p: DVec3| rotation * (p * scale) + shift;
     let cage = s.rest_cage().to_vec();
+    let joints: Vec<DVec3> = s.rest_joints().collect();
     let vertices: Vec<usize> = (0..cage.len()).collect();
     let offsets: Vec<DVec3> = cage.iter().map(|c| similarity(*c) - *c).collect();
     s.move_rest_cage(&vertices, &offsets).unwrap();
@@ -121,6 +129,84 @@ fn a_similarity_of_the_rest_cage_moves_the_mesh_by_the_same_similarity() {
     let off = max_distance(s.rest_mesh(), &expected);
     assert!(off < 1e-9 * d * scale, "{off:e}");
     check_rest_mesh(&s, 1e-9 * d);
+    // SkelUp with its face terms follows the similarity too (g(sRC + t) = sR·g(C)).
+    let expected: Vec<DVec3> = joints.iter().map(|a| similarity(*a)).collect();
+    let moved: Vec<DVec3> = s.rest_joints().collect();
+    let off = max_distance(&moved, &expected);
+    assert!(off < 1e-9 * d * scale, "joints: {off:e}");
+}
+
+/// Where the skin carries joint positions: each joint at its rest mean value coordinates with
+/// respect to the rest skin `rest` (`#V`), evaluated on the skin `skin`.
+fn carried_by_the_skin(
+    s: &RigSession,
+    rest: &[DVec3],
+    joints: &[DVec3],
+    skin: &[DVec3],
+) -> Vec<DVec3> {
+    joints
+        .iter()
+        .map(|a| {
+            let mut w = vec![0.0; rest.len()];
+            cagerig::coords::mvc::mean_value_coordinates(rest, s.mesh_triangles(), *a, &mut w);
+            w.iter()
+                .zip(skin)
+                .fold(DVec3::ZERO, |acc, (w, p)| acc + *w * *p)
+        })
+        .collect()
+}
+
+#[test]
+fn green_skelup_keeps_the_joints_where_the_skin_carries_them() {
+    // The 1.6× stretch of the shape test: Green's skin is not the affine image, so joints that
+    // moved affinely (A = ΨC alone) would leave the places the skin carries them to; with the
+    // face terms (A = Ψ_φC + Ψ_ψ g(C)) they follow the skin.
+    let (mut s, loaded) = arm(green());
+    assert!(s.skeleton_updater().num_faces() > 0);
+    let faced = s
+        .skeleton_updater()
+        .reports()
+        .iter()
+        .filter(|r| r.face_terms)
+        .count();
+    assert_eq!(
+        faced,
+        s.skeleton().len(),
+        "every Arm joint follows the face terms"
+    );
+    let rest_joints: Vec<DVec3> = s.rest_joints().collect();
+    let d = diagonal(s.rest_cage());
+    let cage = s.rest_cage().to_vec();
+    let centre = cage.iter().copied().sum::<DVec3>() / cage.len() as f64;
+    let vertices: Vec<usize> = (0..cage.len()).collect();
+    let offsets: Vec<DVec3> = cage
+        .iter()
+        .map(|c| DVec3::new(0.6 * (c.x - centre.x), 0.0, 0.0))
+        .collect();
+    s.move_rest_cage(&vertices, &offsets).unwrap();
+    check_rest_mesh(&s, 1e-9 * d);
+    let carried = carried_by_the_skin(&s, &loaded, &rest_joints, s.rest_mesh());
+    let affine: Vec<DVec3> = rest_joints
+        .iter()
+        .map(|p| DVec3::new(centre.x + 1.6 * (p.x - centre.x), p.y, p.z))
+        .collect();
+    let joints: Vec<DVec3> = s.rest_joints().collect();
+    let mean = |a: &[DVec3]| {
+        a.iter()
+            .zip(&carried)
+            .map(|(p, q)| p.distance(*q))
+            .sum::<f64>()
+            / a.len() as f64
+    };
+    let (with_faces, affine_off) = (mean(&joints), mean(&affine));
+    eprintln!(
+        "joints off where the skin carries them: face terms {:.3e}, affine {:.3e} (of {d:.3})",
+        with_faces, affine_off
+    );
+    assert!(
+        with_faces < 0.6 * affine_off,
+        "face terms {with_faces:e}, affine {affine_off:e}"
+    );
 }
 
 /// Mean absolute change of the triangles' corner angles (radians) between two meshes.
@@ -429,5 +515,38 @@ fn rest_cage_from_rows_recovers_the_arms_cage_keys() {
         s.rest_cage_from_rows(&rows, &mut found).unwrap();
         let off = max_distance(&found, &cage);
         assert!(off <= 1e-9 * d, "{off:e}");
+    }
+}
+
+#[test]
+fn a_grab_with_skelup_locked_lands_exactly_and_moves_no_joint() {
+    // With SkelUp locked a rest-cage change moves no joint, so CageRev must not count on the
+    // joints' motion (the skeleton term of Eq. 19 / G4 is zero), under both coordinates kinds.
+    for options in [SessionOptions::default(), green()] {
+        let kind = options.coords;
+        let (mut s, _) = arm(options);
+        let d = diagonal(s.rest_cage());
+        s.rotate_joint(3, DVec3::X, 40f64.to_radians()).unwrap();
+        // A first grab factorises CageRev for the pose with SkelUp on.
+        grab_lands_exactly(&mut s, &[10], DVec3::new(0.05, 0.0, 0.1), 1e-9 * d);
+        s.set_sync_locks(SyncLocks {
+            skel_up: true,
+            cage_up: false,
+        });
+        let joints: Vec<DVec3> = s.rest_joints().collect();
+        grab_lands_exactly(
+            &mut s,
+            &[10, 13, 15],
+            DVec3::new(-0.15, 0.2, 0.05),
+            1e-9 * d,
+        );
+        let after: Vec<DVec3> = s.rest_joints().collect();
+        assert_eq!(
+            joints, after,
+            "{kind:?}: a joint moved while SkelUp was locked"
+        );
+        // Unlocked again: the joints follow the cage and grabs count on it again.
+        s.set_sync_locks(SyncLocks::default());
+        grab_lands_exactly(&mut s, &[13], DVec3::new(0.0, -0.1, 0.05), 1e-9 * d);
     }
 }

@@ -49,7 +49,8 @@ fn check_consensus(s: &RigSession, tol: f64) {
     s.cage_coords().apply(s.rest_cage(), &mut m);
     assert!(max_distance(&m, s.rest_mesh()) < tol, "M != ΦC");
     let mut a = vec![DVec3::ZERO; s.skeleton().len()];
-    s.skeleton_updater().apply(s.rest_cage(), &mut a);
+    s.skeleton_updater()
+        .apply(s.rest_cage(), s.rest_cage_terms(), &mut a);
     let rest: Vec<DVec3> = s.rest_joints().collect();
     assert!(max_distance(&a, &rest) < tol, "A != ΨC");
 }

@@ -236,6 +236,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
             &parts.skeleton,
             &parts.skin_weights,
             &phi,
+            None,
             &cage.positions,
             JointLocalisation::default(),
         ));

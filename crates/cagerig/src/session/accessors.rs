@@ -69,6 +69,13 @@ impl RigSession {
     pub fn skeleton_updater(&self) -> &SkeletonUpdater {
         &self.skeleton_updater
     }
+
+    /// The kind's terms of the current rest cage C, the second input of SkelUp and of the extra
+    /// coordinate columns: g(C) (`#F`) for Green rigs, empty for MVC rigs. A = Ψ·C + Ψ_ψ·g(C) is
+    /// `skeleton_updater().apply(rest_cage(), rest_cage_terms(), ..)`.
+    pub fn rest_cage_terms(&self) -> &[DVec3] {
+        self.cage_map.terms()
+    }
     /// The CageUp operator: C' fitted to the selected rows of M'.
     pub fn cage_updater(&self) -> &CageUpdater {
         &self.cage_updater

@@ -220,6 +220,20 @@ impl CageMap {
         }
     }
 
+    /// Hands SkelUp's coordinates to the kind's CageRev (Green: A(C) = Ψ_φ C + Ψ_ψ g(C) enters
+    /// its Newton system). MVC's Eq. 19 takes Ψ at its own construction.
+    pub(super) fn set_joint_coords(&mut self, skeleton_updater: &SkeletonUpdater) {
+        match self {
+            CageMap::Mvc => {}
+            CageMap::Green(green) => green.reverser.set_joint_coords(|j| {
+                (
+                    skeleton_updater.joint_row(j),
+                    skeleton_updater.joint_face_row(j),
+                )
+            }),
+        }
+    }
+
     /// After C changed everywhere and `rest_mesh` (`#V`) holds the vertex part ΦC: adds the
     /// kind's terms for `rest_cage` (`#C`), refreshing what it keeps of C.
     pub(super) fn refresh_rest_terms(&mut self, rest_cage: &[DVec3], rest_mesh: &mut [DVec3]) {
@@ -434,7 +448,9 @@ impl RigSession {
             *r = t.matrix3;
         }
         match self.cage_map {
-            CageMap::Mvc => self.reverser.refactor(&self.scratch_rotations),
+            CageMap::Mvc => self
+                .reverser
+                .refactor(&self.scratch_rotations, !self.locks.skel_up),
             CageMap::Green(_) => self.prepare_green_reverser(),
         }
     }

@@ -84,7 +84,7 @@ impl RigSession {
     pub fn set_sync_locks(&mut self, locks: SyncLocks) {
         let unlocked =
             (self.locks.skel_up && !locks.skel_up) || (self.locks.cage_up && !locks.cage_up);
-        self.locks = locks;
+        self.replace_locks(locks);
         if unlocked {
             self.sync_from_rest_cage();
         }
@@ -93,7 +93,19 @@ impl RigSession {
     /// Sets SkelUp's lock without the sync that unlocking runs: for an animation sample whose
     /// skeleton keys already contain the rest joints' motion ([`crate::playback`]).
     pub(crate) fn set_skel_up_lock_quietly(&mut self, locked: bool) {
-        self.locks.skel_up = locked;
+        self.replace_locks(SyncLocks {
+            skel_up: locked,
+            ..self.locks
+        });
+    }
+
+    /// Sets the locks; a change of SkelUp's drops Eq. 19's factors, whose skeleton term
+    /// depends on it (the Green CageRev keys its own on the lock).
+    fn replace_locks(&mut self, locks: SyncLocks) {
+        if locks.skel_up != self.locks.skel_up {
+            self.reverser.invalidate();
+        }
+        self.locks = locks;
     }
 
     /// The editable state now.
@@ -122,9 +134,10 @@ impl RigSession {
                 // SkelUp of the new binding places the joints (its Ψ differs), unless the
                 // state's joints already agree with it (then they are kept bit for bit: an undo
                 // restores the exact state).
+                let terms = rebound.cage_map.terms_of(&state.rest_cage);
                 rebound
                     .skeleton_updater
-                    .apply(&state.rest_cage, &mut adapted.rest_joints);
+                    .apply(&state.rest_cage, &terms, &mut adapted.rest_joints);
                 let (lo, hi) = crate::mesh::bounding_box(&state.rest_cage);
                 let agree = crate::mesh::max_distance(&adapted.rest_joints, &state.rest_joints)
                     <= PHI_C_TOLERANCE * (hi - lo).length();
@@ -183,7 +196,7 @@ impl RigSession {
                 *q = *s;
             }
         }
-        self.locks = state.locks;
+        self.replace_locks(state.locks);
         self.rest_cage.copy_from_slice(&state.rest_cage);
         self.rest_from_cage_in_full();
         for (frame, a) in self

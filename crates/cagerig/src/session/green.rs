@@ -23,7 +23,7 @@ pub(super) struct GreenState {
     /// ψ, `#V × #F`.
     pub(super) face_coords: CageCoords,
     pub(super) fit: GreenCageFit,
-    reverser: GreenCageReverser,
+    pub(super) reverser: GreenCageReverser,
     /// g(C) for the current rest cage C, `#F`.
     pub(super) rest_terms: Vec<DVec3>,
     /// 0..#F, to add ψ·g with `CageCoords::apply_delta`.
@@ -402,20 +402,21 @@ impl RigSession {
         Skeleton::skinning_transforms(rest_world, posed_world, out);
     }
 
-    /// Builds R̃ and K = Ω̃ ∂T/∂A Ψ of the Green CageRev for the current pose, unless they are
-    /// already built for it. K by exact differences: the translations are affine in the rest
-    /// joints for fixed rotations.
+    /// Builds R̃ and K_A = Ω̃ ∂T/∂A of the Green CageRev for the current pose and SkelUp lock,
+    /// unless they are already built for them. K_A by exact differences: the translations are
+    /// affine in the rest joints for fixed rotations. Zero while SkelUp is locked (a grab then
+    /// moves no joint).
     pub(super) fn prepare_green_reverser(&mut self) -> Result<(), RigError> {
         let CageMap::Green(green) = &self.cage_map else {
             return Ok(());
         };
         let pose = || self.posed_from_rest.iter().map(|t| t.matrix3);
-        if green.reverser.is_ready_for(pose()) {
+        let locked = self.locks.skel_up;
+        if green.reverser.is_ready_for(pose(), locked) {
             return Ok(());
         }
         let rows = self.cage_updater.rows();
         let nj = self.skeleton.len();
-        let nc = self.rest_cage.len();
         let row_linear: Vec<DMat3> = rows
             .iter()
             .map(|&row| {
@@ -449,14 +450,11 @@ impl RigSession {
         let step = green.size.max(f64::MIN_POSITIVE);
         let mut moved_joints = rest_joints.clone();
         let mut moved = vec![DAffine3::IDENTITY; nj];
-        let mut skeleton_rows = Mat::<f64>::zeros(3 * rows.len(), 3 * nc);
-        for k in 0..nc {
+        let mut skeleton_rows = Mat::<f64>::zeros(3 * rows.len(), 3 * nj);
+        for k in (0..nj).filter(|_| !locked) {
             for c in 0..3 {
-                let mut direction = DVec3::ZERO;
-                direction[c] = step;
-                for (j, a) in moved_joints.iter_mut().enumerate() {
-                    *a = rest_joints[j] + self.skeleton_updater.joint_row(j)[k] * direction;
-                }
+                moved_joints.copy_from_slice(&rest_joints);
+                moved_joints[k][c] += step;
                 self.posed_from_rest_for(
                     &moved_joints,
                     &mut rest_world,
@@ -483,11 +481,12 @@ impl RigSession {
         }
         let pose_linear: Vec<DMat3> = self.posed_from_rest.iter().map(|t| t.matrix3).collect();
         if let CageMap::Green(green) = &mut self.cage_map {
-            green
-                .reverser
-                .prepare(row_linear.into_iter(), pose_linear.into_iter(), |out| {
-                    *out = skeleton_rows
-                });
+            green.reverser.prepare(
+                row_linear.into_iter(),
+                pose_linear.into_iter(),
+                locked,
+                |out| *out = skeleton_rows,
+            );
         }
         Ok(())
     }

@@ -154,11 +154,14 @@ impl RigSession {
         }
     }
 
-    /// After C changed: SkelUp (A = ΨC, rest frames re-placed), FK, skinning, CageUp.
+    /// After C changed: SkelUp (A = ΨC, or Ψ_φC + Ψ_ψ g(C) for Green rigs; rest frames re-placed), FK, skinning, CageUp.
     pub(super) fn sync_from_rest_cage(&mut self) {
         if !self.locks.skel_up {
-            self.skeleton_updater
-                .apply(&self.rest_cage, &mut self.scratch_joints);
+            self.skeleton_updater.apply(
+                &self.rest_cage,
+                self.cage_map.terms(),
+                &mut self.scratch_joints,
+            );
             for (frame, a) in self
                 .rest_world_from_joint
                 .iter_mut()

@@ -218,30 +218,44 @@ impl CageReverser {
     }
 
     /// Builds and factorises the Eq. 19 system for the rotations `T_j^r` of the current pose
-    /// (`joint_rotations`, `#J`, the linear parts of posed_from_rest).
-    pub fn refactor(&mut self, joint_rotations: &[DMat3]) -> Result<(), RigError> {
-        let factored = self.factorise(joint_rotations);
+    /// (`joint_rotations`, `#J`, the linear parts of posed_from_rest). `joints_follow`: whether
+    /// SkelUp moves the joints with the rest cage; when it is locked the skeleton term
+    /// Ω̃ B_topo⁻¹ A_R Ψ is zero (a grab moves no joint) and the system is `P R̃ Φ̃`.
+    pub fn refactor(
+        &mut self,
+        joint_rotations: &[DMat3],
+        joints_follow: bool,
+    ) -> Result<(), RigError> {
+        let factored = self.factorise(joint_rotations, joints_follow);
         // The factorisations run faer on this thread.
         crate::vector_registers::clear_upper_halves();
         factored
     }
 
     /// The work of [`Self::refactor`].
-    fn factorise(&mut self, joint_rotations: &[DMat3]) -> Result<(), RigError> {
+    fn factorise(
+        &mut self,
+        joint_rotations: &[DMat3],
+        joints_follow: bool,
+    ) -> Result<(), RigError> {
         let square = self.row_weights.num_vertices() == self.num_cage;
         if self.method == ReverserMethod::Auto
             && square
-            && let Some(low_rank) = self.low_rank(joint_rotations)?
+            && let Some(low_rank) = self.low_rank(joint_rotations, joints_follow)?
         {
             self.factor = Some(Factor::LowRank(low_rank));
             return Ok(());
         }
-        self.factor = Some(Factor::Dense(self.dense(joint_rotations)?));
+        self.factor = Some(Factor::Dense(self.dense(joint_rotations, joints_follow)?));
         Ok(())
     }
 
     /// The Woodbury factorisation, or None if a blended rotation is singular.
-    fn low_rank(&self, joint_rotations: &[DMat3]) -> Result<Option<LowRank>, RigError> {
+    fn low_rank(
+        &self,
+        joint_rotations: &[DMat3],
+        joints_follow: bool,
+    ) -> Result<Option<LowRank>, RigError> {
         let nc = self.num_cage;
         let nr = self.row_weights.num_vertices();
         let nj = self.parents.len();
@@ -249,7 +263,7 @@ impl CageReverser {
         let mut slot = vec![usize::MAX; nj];
         let mut active = Vec::new();
         let mut d = Vec::new();
-        for k in 0..nj {
+        for k in (0..nj).filter(|_| joints_follow) {
             let dk = match self.parents[k] {
                 None => DMat3::IDENTITY - joint_rotations[k],
                 Some(f) => joint_rotations[f] - joint_rotations[k],
@@ -337,7 +351,7 @@ impl CageReverser {
     }
 
     /// The dense `3#C × 3#C` system and its LU.
-    fn dense(&self, joint_rotations: &[DMat3]) -> Result<DenseLu, RigError> {
+    fn dense(&self, joint_rotations: &[DMat3], joints_follow: bool) -> Result<DenseLu, RigError> {
         let nc = self.num_cage;
         let nj = self.parents.len();
         let nr = self.row_weights.num_vertices();
@@ -346,7 +360,11 @@ impl CageReverser {
         for &j in &self.order {
             let rot_j = joint_rotations[j];
             for k in 0..nc {
-                let psi = self.joint_coords[j * nc + k];
+                let psi = if joints_follow {
+                    self.joint_coords[j * nc + k]
+                } else {
+                    0.0
+                };
                 e[j * nc + k] = match self.parents[j] {
                     None => (DMat3::IDENTITY - rot_j) * psi,
                     Some(f) => e[f * nc + k] - (rot_j - joint_rotations[f]) * psi,

@@ -318,33 +318,7 @@ impl GreenCageFit {
 
     /// J = φ_R ⊗ I₃ + ψ_R ∂g/∂x at x into `out` (`3#R × 3#C`).
     pub fn jacobian_into(&self, x: &[DVec3], out: &mut Mat<f64>) {
-        let num_rows = self.vertex_rows.nrows();
-        out.fill(0.0);
-        for k in 0..self.num_cage {
-            let column = self.vertex_rows.col(k);
-            for i in 0..num_rows {
-                for a in 0..3 {
-                    out[(3 * i + a, 3 * k + a)] = column[i];
-                }
-            }
-        }
-        for (f, triangle) in self.normals.triangles().iter().enumerate() {
-            let blocks = self.normals.face_jacobian(x, f);
-            let column = self.face_rows.col(f);
-            for (corner, block) in triangle.iter().zip(blocks) {
-                let m = *corner as usize;
-                for c in 0..3 {
-                    let d = block.col(c);
-                    let mut target = out.col_mut(3 * m + c);
-                    for i in 0..num_rows {
-                        let w = column[i];
-                        target[3 * i] += w * d.x;
-                        target[3 * i + 1] += w * d.y;
-                        target[3 * i + 2] += w * d.z;
-                    }
-                }
-            }
-        }
+        rows_jacobian_into(&self.vertex_rows, &self.face_rows, &self.normals, x, out);
     }
 
     /// The Hessian of ½‖r‖² at x into `self.normal_matrix`: JᵀJ + Σ_f ∇²((ψ_Rᵀr)_f · g_f), with r
@@ -556,6 +530,44 @@ fn lower_damping(damping: f64, hessian: &Mat<f64>) -> f64 {
         0.0
     } else {
         lowered
+    }
+}
+
+/// The Jacobian of rows `φ x + ψ g(x)` (`vertex_rows` φ `#R × #C`, `face_rows` ψ `#R × #F`) at
+/// x (`#C`): `φ ⊗ I₃ + ψ ∂g/∂x` into `out` (`3#R × 3#C`, row 3i + a, column 3k + b).
+pub(crate) fn rows_jacobian_into(
+    vertex_rows: &Mat<f64>,
+    face_rows: &Mat<f64>,
+    normals: &StretchedNormals,
+    x: &[DVec3],
+    out: &mut Mat<f64>,
+) {
+    let num_rows = vertex_rows.nrows();
+    out.fill(0.0);
+    for k in 0..vertex_rows.ncols() {
+        let column = vertex_rows.col(k);
+        for i in 0..num_rows {
+            for a in 0..3 {
+                out[(3 * i + a, 3 * k + a)] = column[i];
+            }
+        }
+    }
+    for (f, triangle) in normals.triangles().iter().enumerate() {
+        let blocks = normals.face_jacobian(x, f);
+        let column = face_rows.col(f);
+        for (corner, block) in triangle.iter().zip(blocks) {
+            let m = *corner as usize;
+            for c in 0..3 {
+                let d = block.col(c);
+                let mut target = out.col_mut(3 * m + c);
+                for i in 0..num_rows {
+                    let w = column[i];
+                    target[3 * i] += w * d.x;
+                    target[3 * i + 1] += w * d.y;
+                    target[3 * i + 2] += w * d.z;
+                }
+            }
+        }
     }
 }
 

@@ -8,22 +8,24 @@
 //!
 //! `G(δ) = J_tᵀ (M'_R(C₀ + δ) − F_R(C'_t)) = 0`,  `J_t = J(C'_t)` (fixed for the grab).
 //!
-//! Under LBS with the pose's rotations fixed, the chain C → (M_R = F_R(C), A = ΨC) → M'_R is
-//! affine in M_R and A (Eq. 15–18), so
+//! Under LBS with the pose's rotations fixed, the chain C → (M_R = F_R(C), A(C)) → M'_R is
+//! affine in M_R and the rest joints A (Eq. 15–18), so
 //!
-//! `M'_R(C₀ + δ) = M'_R(C₀) + R̃ (F_R(C₀ + δ) − F_R(C₀)) + K δ`
+//! `M'_R(C₀ + δ) = M'_R(C₀) + R̃ (F_R(C₀ + δ) − F_R(C₀)) + K_A (A(C₀ + δ) − A(C₀))`
 //!
-//! with R̃ the blended linear parts of the rows' LBS transforms and `K = Ω̃ ∂T/∂A Ψ`
-//! (`3#R × 3#C`), the skeleton's part (SkelUp moves the joints, which moves the translations):
-//! both depend on the pose only and are built once per pose ([`GreenCageReverser::prepare`]).
-//! Newton's method ([`super::newton`]) solves G(δ) = 0 with its exact Jacobian
-//! `J_tᵀ (R̃ J(C₀ + δ) + K)` from δ = 0; a large grab that stalls is split into pieces. For MVC
-//! (ψ = 0, J = Φ̃) this is Eq. 19 in its least-squares form.
+//! with R̃ the blended linear parts of the rows' LBS transforms and `K_A = Ω̃ ∂T/∂A`
+//! (`3#R × 3#J`), the skeleton's part (SkelUp moves the joints, which moves the translations;
+//! zero while SkelUp is locked): both depend on the pose only and are built once per pose
+//! ([`GreenCageReverser::prepare`]). SkelUp is `A(C) = Ψ_φ C + Ψ_ψ g(C)` (G5), rows of the same
+//! form as F_R. Newton's method ([`super::newton`]) solves G(δ) = 0 with its exact Jacobian
+//! `J_tᵀ (R̃ J(C₀ + δ) + K_A J_A(C₀ + δ))` from δ = 0, J_A the Jacobian of A (`3#J × 3#C`); a
+//! large grab that stalls is split into pieces. For MVC (ψ = 0, Ψ_ψ = 0, J = Φ̃) this is Eq. 19
+//! in its least-squares form.
 
 use faer::{Accum, Mat, Par};
 use glam::{DMat3, DVec3};
 
-use super::green_cage_fit::{GRADIENT_TOLERANCE, GreenCageFit, rows_of};
+use super::green_cage_fit::{GRADIENT_TOLERANCE, GreenCageFit, rows_jacobian_into, rows_of};
 use super::newton::{NewtonReport, NewtonSolver, solve_by_continuation};
 use crate::error::RigError;
 
@@ -33,17 +35,27 @@ pub struct GreenCageReverser {
     num_cage: usize,
     /// R̃_r of every fitting row, `#R`.
     row_linear: Vec<DMat3>,
-    /// K = Ω̃ ∂T/∂A Ψ, `3#R × 3#C`.
+    /// K_A = Ω̃ ∂T/∂A, `3#R × 3#J` (zero while SkelUp is locked).
     skeleton_rows: Mat<f64>,
-    /// The skinning transforms' linear parts K and R̃ were built for, `#J`.
+    /// SkelUp's Ψ_φ (`#J × #C`) and Ψ_ψ (`#J × #F`): A(C) = Ψ_φ C + Ψ_ψ g(C).
+    joint_vertex_rows: Mat<f64>,
+    joint_face_rows: Mat<f64>,
+    /// The skinning transforms' linear parts K_A and R̃ were built for (`#J`), and whether
+    /// SkelUp was locked then.
     pose_key: Vec<DMat3>,
+    skel_up_locked: bool,
     ready: bool,
     solver: NewtonSolver,
     tolerance: f64,
-    /// J_t (`3#R × 3#C`), R̃ J + K (`3#R × 3#C`) and J_tᵀ(R̃ J + K) (`3#C × 3#C`).
+    /// J_t (`3#R × 3#C`), R̃ J + K_A J_A (`3#R × 3#C`), J_A (`3#J × 3#C`) and
+    /// J_tᵀ(R̃ J + K_A J_A) (`3#C × 3#C`).
     target_jacobian: Mat<f64>,
     chain_jacobian: Mat<f64>,
+    joint_jacobian: Mat<f64>,
     system: Mat<f64>,
+    /// A(C₀) and A(C₀ + δ), `#J`.
+    start_joints: Vec<DVec3>,
+    trial_joints: Vec<DVec3>,
     posed_target: Vec<DVec3>,
     rows_target: Vec<DVec3>,
     rows_trial: Vec<DVec3>,
@@ -79,14 +91,20 @@ impl GreenCageReverser {
         Self {
             num_cage,
             row_linear: vec![DMat3::IDENTITY; num_rows],
-            skeleton_rows: Mat::zeros(3 * num_rows, 3 * num_cage),
+            skeleton_rows: Mat::zeros(3 * num_rows, 3 * num_joints),
+            joint_vertex_rows: Mat::zeros(num_joints, num_cage),
+            joint_face_rows: Mat::zeros(num_joints, num_faces),
             pose_key: vec![DMat3::ZERO; num_joints],
+            skel_up_locked: false,
             ready: false,
             solver: NewtonSolver::new(num_cage),
             tolerance: GRADIENT_TOLERANCE * cage_size.max(f64::MIN_POSITIVE),
             target_jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
             chain_jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
+            joint_jacobian: Mat::zeros(3 * num_joints, 3 * num_cage),
             system: Mat::zeros(3 * num_cage, 3 * num_cage),
+            start_joints: vec![DVec3::ZERO; num_joints],
+            trial_joints: vec![DVec3::ZERO; num_joints],
             posed_target: vec![DVec3::ZERO; num_cage],
             rows_target: vec![DVec3::ZERO; num_rows],
             rows_trial: vec![DVec3::ZERO; num_rows],
@@ -97,17 +115,40 @@ impl GreenCageReverser {
         }
     }
 
-    /// Whether K and R̃ were built for the pose whose skinning transforms have these linear
-    /// parts (`#J`).
-    pub fn is_ready_for(&self, pose_linear: impl Iterator<Item = DMat3>) -> bool {
-        self.ready && self.pose_key.iter().copied().eq(pose_linear)
+    /// Takes SkelUp's coordinates: row j of Ψ_φ (`#C`) and of Ψ_ψ (`#F`, or empty for a SkelUp
+    /// without face part, A = Ψ_φ C) from `joint_row(j)`.
+    pub fn set_joint_coords<'a>(&mut self, joint_row: impl Fn(usize) -> (&'a [f64], &'a [f64])) {
+        for j in 0..self.joint_vertex_rows.nrows() {
+            let (vertex, face) = joint_row(j);
+            for (k, &w) in vertex.iter().enumerate().take(self.num_cage) {
+                self.joint_vertex_rows[(j, k)] = w;
+            }
+            for f in 0..self.joint_face_rows.ncols() {
+                self.joint_face_rows[(j, f)] = face.get(f).copied().unwrap_or(0.0);
+            }
+        }
+        self.ready = false;
     }
 
-    /// Stores R̃ (`#R`), K (`3#R × 3#C`, filled by `fill_skeleton_rows`) and the pose key (`#J`).
+    /// Whether K_A and R̃ were built for the pose whose skinning transforms have these linear
+    /// parts (`#J`) and for this SkelUp lock.
+    pub fn is_ready_for(
+        &self,
+        pose_linear: impl Iterator<Item = DMat3>,
+        skel_up_locked: bool,
+    ) -> bool {
+        self.ready
+            && self.skel_up_locked == skel_up_locked
+            && self.pose_key.iter().copied().eq(pose_linear)
+    }
+
+    /// Stores R̃ (`#R`), K_A (`3#R × 3#J`, filled by `fill_skeleton_rows`; left zero when
+    /// `skel_up_locked`) and the pose key (`#J`).
     pub fn prepare(
         &mut self,
         row_linear: impl Iterator<Item = DMat3>,
         pose_linear: impl Iterator<Item = DMat3>,
+        skel_up_locked: bool,
         fill_skeleton_rows: impl FnOnce(&mut Mat<f64>),
     ) {
         for (r, m) in self.row_linear.iter_mut().zip(row_linear) {
@@ -116,7 +157,11 @@ impl GreenCageReverser {
         for (k, m) in self.pose_key.iter_mut().zip(pose_linear) {
             *k = m;
         }
-        fill_skeleton_rows(&mut self.skeleton_rows);
+        self.skel_up_locked = skel_up_locked;
+        self.skeleton_rows.fill(0.0);
+        if !skel_up_locked {
+            fill_skeleton_rows(&mut self.skeleton_rows);
+        }
         self.ready = true;
         self.solver.invalidate();
     }
@@ -137,6 +182,14 @@ impl GreenCageReverser {
             ));
         }
         rest_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
+        fit.normals().apply(at.rest_cage, &mut self.g);
+        rows_of(
+            &self.joint_vertex_rows,
+            &self.joint_face_rows,
+            at.rest_cage,
+            &self.g,
+            &mut self.start_joints,
+        );
         let mut total = self.solve_piece(fit, &at, posed_delta, 1.0, rest_delta)?;
         if total.residual > self.tolerance {
             let tolerance = self.tolerance;
@@ -178,6 +231,9 @@ impl GreenCageReverser {
         let normals = fit.normals();
         let row_linear = &self.row_linear;
         let skeleton_rows = &self.skeleton_rows;
+        let (joint_vertex_rows, joint_face_rows) = (&self.joint_vertex_rows, &self.joint_face_rows);
+        let (start_joints, trial_joints) = (&self.start_joints, &mut self.trial_joints);
+        let joint_jacobian = &mut self.joint_jacobian;
         let target_jacobian = &self.target_jacobian;
         let chain_jacobian = &mut self.chain_jacobian;
         let system = &mut self.system;
@@ -191,18 +247,23 @@ impl GreenCageReverser {
             rest_delta,
             self.tolerance,
             |delta, out| {
-                // r = M'_R(C₀) + R̃ (F_R(C₀ + δ) − F_R(C₀)) + K δ − F_R(C'_t); out = J_tᵀ r.
+                // r = M'_R(C₀) + R̃ (F_R(C₀ + δ) − F_R(C₀)) + K_A (A(C₀ + δ) − A(C₀))
+                //     − F_R(C'_t); out = J_tᵀ r.
                 for ((m, c), d) in moved.iter_mut().zip(rest_cage).zip(delta) {
                     *m = *c + *d;
                 }
                 normals.apply(moved, g);
                 rows_of(vertex_rows, face_rows, moved, g, rows_trial);
+                rows_of(joint_vertex_rows, joint_face_rows, moved, g, trial_joints);
+                for (t, s) in trial_joints.iter_mut().zip(start_joints) {
+                    *t -= *s;
+                }
                 for (i, change) in row_change.iter_mut().enumerate() {
                     let mut skeleton = DVec3::ZERO;
-                    for (k, d) in delta.iter().enumerate() {
+                    for (j, d) in trial_joints.iter().enumerate() {
                         for (c, value) in d.to_array().into_iter().enumerate() {
                             if value != 0.0 {
-                                let column = skeleton_rows.col(3 * k + c);
+                                let column = skeleton_rows.col(3 * j + c);
                                 skeleton += value
                                     * DVec3::new(
                                         column[3 * i],
@@ -242,19 +303,32 @@ impl GreenCageReverser {
                     *m = *c + *d;
                 }
                 fit.jacobian_into(moved_for_jacobian, chain_jacobian);
-                // R̃ J + K, row block by row block.
+                // R̃ J, row block by row block, then + K_A J_A.
                 for col in 0..n {
-                    let skeleton = skeleton_rows.col(col);
                     let mut column = chain_jacobian.col_mut(col);
                     for (i, rotation) in row_linear.iter().enumerate() {
                         let v = DVec3::new(column[3 * i], column[3 * i + 1], column[3 * i + 2]);
-                        let w = *rotation * v
-                            + DVec3::new(skeleton[3 * i], skeleton[3 * i + 1], skeleton[3 * i + 2]);
+                        let w = *rotation * v;
                         column[3 * i] = w.x;
                         column[3 * i + 1] = w.y;
                         column[3 * i + 2] = w.z;
                     }
                 }
+                rows_jacobian_into(
+                    joint_vertex_rows,
+                    joint_face_rows,
+                    normals,
+                    moved_for_jacobian,
+                    joint_jacobian,
+                );
+                faer::linalg::matmul::matmul(
+                    chain_jacobian.as_mut(),
+                    Accum::Add,
+                    skeleton_rows.as_ref(),
+                    joint_jacobian.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
                 faer::linalg::matmul::matmul(
                     system.as_mut(),
                     Accum::Replace,

@@ -9,13 +9,21 @@
 //!    Σ_k ψ_jk c_k = a_j and Σ_k ψ_jk = 1 — so Ψ·C reproduces every rest joint (Eq. 12).
 //!
 //! Per frame: A = Ψ·C (Eq. 13), `#J × #C` by `#C × 3`.
+//!
+//! **Green rigs** (M = φC + ψ·g(C)): the joints follow the skin's face terms too,
+//! A = Ψ_φ·C + Ψ_ψ·g(C) (G5 in `docs/green-coordinates.md`). Ψ_ψ,j (`#F`) is the localised
+//! average of the ψ rows of the mesh, Σ_i π̂_ji ψ_i with π̂_j the prior of step 3 normalised to
+//! sum 1 (where the articulation ring's skin goes, its face part takes the joint along), and
+//! Ψ_φ,j is step 4's max-entropy projection onto the shifted target a_j − Ψ_ψ,j·g(C₀), so A
+//! still reproduces every rest joint. Σ_k Ψ_φ,jk = 1 and g(sRC + t) = sR·g(C), so A follows
+//! every similarity of the cage exactly, as the skin does.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::cage_coords::CageCoords;
 use crate::coords::local_mvc::{LocalMvc, LocalMvcScratch};
-use crate::coords::{mec, mec_signed, mvc};
+use crate::coords::{mec, mec_signed};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
 use crate::skeleton::Skeleton;
@@ -62,9 +70,6 @@ impl JointLocalisation {
     }
 }
 
-/// Cage columns accumulated together in [`project_prior`].
-const MASS_BLOCK: usize = 8;
-
 /// Positive masses are floored at this fraction of the largest one in `Articulation` mode.
 pub const MASS_FLOOR_RATIO: f64 = 1e-8;
 
@@ -77,27 +82,47 @@ pub struct JointCoordsReport {
     pub unlocalised: bool,
     /// The max-entropy solve outcome.
     pub method: String,
-    /// |Ψ_j·C − a_j| at rest.
+    /// |Ψ_j·C − a_j| at rest (with the face part for Green rigs).
     pub residual: f64,
+    /// Green rigs: whether the joint follows the face terms (false when the shifted target
+    /// left the max-entropy domain and the vertex-only coordinates were kept).
+    pub face_terms: bool,
 }
 
-/// The SkelUp operator: Ψ (`#J × #C`, row-major) with A = Ψ·C.
+/// A Green rig's face part for SkelUp: the face coordinates ψ of the rest skin (`#V × #F`) and
+/// the stretched normals g(C₀) of the rest cage (`#F`).
+#[derive(Debug, Clone, Copy)]
+pub struct JointFaceTerms<'a> {
+    /// ψ, `#V × #F`.
+    pub face_coords: &'a CageCoords,
+    /// g(C₀), `#F`.
+    pub rest_terms: &'a [DVec3],
+}
+
+/// The SkelUp operator: Ψ (`#J × #C`, row-major) with A = Ψ·C; for Green rigs also Ψ_ψ
+/// (`#J × #F`) with A = Ψ·C + Ψ_ψ·g(C).
 #[derive(Debug, Clone)]
 pub struct SkeletonUpdater {
     num_cage_vertices: usize,
-    /// Ψ, row-major `#J × #C`.
+    /// Ψ (Ψ_φ for Green rigs), row-major `#J × #C`.
     joint_coords: Vec<f64>,
+    /// Number of cage faces `#F` of the face part (0: none).
+    num_faces: usize,
+    /// Ψ_ψ, row-major `#J × #F` (empty: none).
+    joint_face_coords: Vec<f64>,
     reports: Vec<JointCoordsReport>,
 }
 
 impl SkeletonUpdater {
     /// Computes Ψ from the rest skin M (positions and triangles), the rest skeleton S, Ω, Φ and
-    /// the rest cage C (Eqs. 9–12). Parallel over joints.
+    /// the rest cage C (Eqs. 9–12), and for Green rigs (`face_terms`) the face part Ψ_ψ (see
+    /// the module docs). Parallel over joints.
     pub fn new(
         rest_mesh: &TriMesh,
         skeleton: &Skeleton,
         skin_weights: &SkinWeights,
         cage_coords: &CageCoords,
+        face_terms: Option<JointFaceTerms<'_>>,
         rest_cage: &[DVec3],
         localisation: JointLocalisation,
     ) -> Result<(Self, Vec<Warning>), RigError> {
@@ -105,7 +130,7 @@ impl SkeletonUpdater {
             rest_mesh,
             skeleton,
             skin_weights,
-            cage_coords,
+            (cage_coords, face_terms),
             rest_cage,
             localisation,
             true,
@@ -118,12 +143,22 @@ impl SkeletonUpdater {
         rest_mesh: &TriMesh,
         skeleton: &Skeleton,
         skin_weights: &SkinWeights,
-        cage_coords: &CageCoords,
+        (cage_coords, face_terms): (&CageCoords, Option<JointFaceTerms<'_>>),
         rest_cage: &[DVec3],
         localisation: JointLocalisation,
         use_local_mvc: bool,
     ) -> Result<(Self, Vec<Warning>), RigError> {
         let num_cage = cage_coords.num_cage_vertices();
+        if let Some(face) = face_terms
+            && (face.face_coords.num_vertices() != rest_mesh.num_vertices()
+                || face.face_coords.num_cage_vertices() != face.rest_terms.len())
+        {
+            return Err(RigError::SizeMismatch {
+                what: "SkelUp face terms: ψ (#V × #F) and g(C₀) (#F)",
+                expected: rest_mesh.num_vertices() * face.rest_terms.len(),
+                actual: face.face_coords.num_vertices() * face.face_coords.num_cage_vertices(),
+            });
+        }
         let num_vertices = rest_mesh.num_vertices();
         if cage_coords.num_vertices() != num_vertices || skin_weights.num_vertices() != num_vertices
         {
@@ -147,6 +182,7 @@ impl SkeletonUpdater {
             skeleton,
             skin_weights,
             cage_coords,
+            face_terms,
             rest_cage,
             localisation,
             reference_floor_power: match localisation {
@@ -161,18 +197,31 @@ impl SkeletonUpdater {
             local_mvc: articulation
                 .then(|| LocalMvc::new(&rest_mesh.positions, &rest_mesh.triangles)),
         };
-        let per_joint: Vec<(Vec<f64>, JointCoordsReport)> = (0..skeleton.len())
+        let per_joint: Vec<JointCoordinates> = (0..skeleton.len())
             .into_par_iter()
             .map_init(
                 || inputs.local_mvc.as_ref().map(LocalMvc::scratch),
                 |scratch, j| joint_coordinates(j, &inputs, scratch),
             )
             .collect();
+        let num_faces = face_terms.map_or(0, |f| f.rest_terms.len());
         let mut joint_coords = Vec::with_capacity(skeleton.len() * num_cage);
+        let mut joint_face_coords = Vec::with_capacity(skeleton.len() * num_faces);
         let mut reports = Vec::with_capacity(skeleton.len());
         let mut warnings = Vec::new();
-        for (psi, report) in per_joint {
-            joint_coords.extend_from_slice(&psi);
+        for JointCoordinates {
+            vertex_part,
+            face_part,
+            report,
+        } in per_joint
+        {
+            joint_coords.extend_from_slice(&vertex_part);
+            if num_faces > 0 {
+                match face_part {
+                    Some(face_part) => joint_face_coords.extend_from_slice(&face_part),
+                    None => joint_face_coords.extend(std::iter::repeat_n(0.0, num_faces)),
+                }
+            }
             if report.method != "max_entropy" {
                 warnings.push(Warning::MecFallback {
                     joint: report.joint,
@@ -186,6 +235,8 @@ impl SkeletonUpdater {
             Self {
                 num_cage_vertices: num_cage,
                 joint_coords,
+                num_faces,
+                joint_face_coords,
                 reports,
             },
             warnings,
@@ -217,6 +268,8 @@ impl SkeletonUpdater {
         Ok(Self {
             num_cage_vertices,
             joint_coords,
+            num_faces: 0,
+            joint_face_coords: Vec::new(),
             reports: Vec::new(),
         })
     }
@@ -226,9 +279,19 @@ impl SkeletonUpdater {
         self.joint_coords.len() / self.num_cage_vertices.max(1)
     }
 
-    /// Row j of Ψ (`#C`).
+    /// Row j of Ψ (`#C`; Ψ_φ for Green rigs).
     pub fn joint_row(&self, j: usize) -> &[f64] {
         &self.joint_coords[j * self.num_cage_vertices..(j + 1) * self.num_cage_vertices]
+    }
+
+    /// Number of cage faces `#F` of the face part Ψ_ψ (0 when A = Ψ·C).
+    pub fn num_faces(&self) -> usize {
+        self.num_faces
+    }
+
+    /// Row j of the face part Ψ_ψ (`#F`; empty when A = Ψ·C).
+    pub fn joint_face_row(&self, j: usize) -> &[f64] {
+        &self.joint_face_coords[j * self.num_faces..(j + 1) * self.num_faces]
     }
 
     /// Per-joint precomputation reports (empty when Ψ was given).
@@ -236,93 +299,25 @@ impl SkeletonUpdater {
         &self.reports
     }
 
-    /// Rest joints A = Ψ·C (Eq. 13): `rest_cage` is `#C`, `rest_joints` is `#J`. No allocation.
-    pub fn apply(&self, rest_cage: &[DVec3], rest_joints: &mut [DVec3]) {
+    /// Rest joints A = Ψ·C (Eq. 13), or A = Ψ_φ·C + Ψ_ψ·g(C) with a face part (G5):
+    /// `rest_cage` is `#C`, `face_terms` the stretched normals g(C) of that cage (`#F`, the
+    /// session's `rest_cage_terms`; ignored, and may be empty, without a face part),
+    /// `rest_joints` is `#J`. No allocation.
+    pub fn apply(&self, rest_cage: &[DVec3], face_terms: &[DVec3], rest_joints: &mut [DVec3]) {
+        debug_assert!(self.num_faces == 0 || face_terms.len() == self.num_faces);
         for (j, a) in rest_joints.iter_mut().enumerate() {
-            *a = self
+            let vertex_part = self
                 .joint_row(j)
                 .iter()
                 .zip(rest_cage)
                 .fold(DVec3::ZERO, |acc, (&w, c)| acc + w * *c);
-        }
-    }
-}
-
-/// Eq. 9 localisation value of vertex weights `own` (ω_ij) and `parent` (ω_if, if any).
-/// `reference_floor_power` is `ε^s` for [`JointLocalisation::ReferenceTool`] (unused otherwise):
-/// weights at most ε use it instead of a `powf` (same value).
-fn localisation_value(
-    loc: JointLocalisation,
-    own: f64,
-    parent: Option<f64>,
-    reference_floor_power: f64,
-) -> f64 {
-    match loc {
-        JointLocalisation::Articulation { exponent: s } => {
-            let other = parent.unwrap_or(1.0 - own).max(0.0);
-            (own.powf(s) + other.powf(s) - 1.0).max(0.0)
-        }
-        JointLocalisation::ReferenceTool {
-            exponent: s,
-            epsilon: eps,
-        } => {
-            let power = |w: f64| {
-                if w.abs() <= eps {
-                    reference_floor_power
-                } else {
-                    w.abs().powf(s)
-                }
-            };
-            let mut l = -1.0 + power(own);
-            if let Some(p) = parent {
-                l += power(p);
-            }
-            l.max(eps)
-        }
-    }
-}
-
-/// One vertex where the articulation localisation of a joint may be non-zero: its index and
-/// the weights (ω_ij, ω_if) of the joint and of its parent (`None` for a root).
-#[derive(Debug, Clone, Copy)]
-struct Candidate {
-    vertex: usize,
-    own: f64,
-    parent: Option<f64>,
-}
-
-/// For every joint j, the vertices with ω_ij ≠ 0 and (unless j is a root) ω_if ≠ 0 — the only
-/// ones where the [`JointLocalisation::Articulation`] L_j can be non-zero — in ascending vertex
-/// order, from one pass over the rows of Ω.
-fn articulation_candidates(skeleton: &Skeleton, skin_weights: &SkinWeights) -> Vec<Vec<Candidate>> {
-    let mut candidates = vec![Vec::new(); skeleton.len()];
-    for vertex in 0..skin_weights.num_vertices() {
-        let (joints, weights) = skin_weights.row(vertex);
-        // ω_vk as `SkinWeights::get` reads it (first entry of k).
-        let weight_of = |k: usize| {
-            joints
+            *a = self
+                .joint_face_row(j)
                 .iter()
-                .position(|&q| q as usize == k)
-                .map_or(0.0, |i| weights[i])
-        };
-        for (idx, &j) in joints.iter().enumerate() {
-            let j = j as usize;
-            if j >= skeleton.len() || joints[..idx].contains(&(j as u32)) {
-                continue;
-            }
-            let own = weights[idx];
-            let parent = skeleton.parent(j).map(weight_of);
-            if own == 0.0 || parent == Some(0.0) {
-                continue;
-            }
-            candidates[j].push(Candidate {
-                vertex,
-                own,
-                parent,
-            });
+                .zip(face_terms)
+                .fold(vertex_part, |acc, (&w, g)| acc + w * *g);
         }
     }
-    candidates
 }
 
 /// Shared, read-only inputs of the per-joint work.
@@ -331,6 +326,8 @@ struct JointInputs<'a> {
     skeleton: &'a Skeleton,
     skin_weights: &'a SkinWeights,
     cage_coords: &'a CageCoords,
+    /// Green rigs: ψ and g(C₀) for the face part.
+    face_terms: Option<JointFaceTerms<'a>>,
     rest_cage: &'a [DVec3],
     localisation: JointLocalisation,
     /// ε^s in `ReferenceTool` mode (see [`localisation_value`]).
@@ -341,125 +338,22 @@ struct JointInputs<'a> {
     local_mvc: Option<LocalMvc<'a>>,
 }
 
-/// The prior π_j of Eq. 10 (`mvc_ji · L_ji`, up to a positive factor) as a sparse list
-/// `(vertex, π_i)`, and whether it is the unlocalised fallback. Articulation mode goes through
-/// [`local_prior`] when a [`LocalMvc`] is available, else (and in ReferenceTool mode) through
-/// [`full_prior`].
-fn joint_prior(
-    j: usize,
-    inputs: &JointInputs,
-    scratch: &mut Option<LocalMvcScratch>,
-) -> (Vec<(usize, f64)>, bool) {
-    if let (Some(local_mvc), Some(scratch)) = (&inputs.local_mvc, scratch.as_mut())
-        && let Some(prior) = local_prior(j, inputs, local_mvc, scratch)
-    {
-        return (prior, false);
-    }
-    full_prior(j, inputs)
+/// One joint's coordinates: Ψ_j (`#C`), its face part Ψ_ψ,j (`#F`, Green rigs) and how they
+/// were obtained.
+struct JointCoordinates {
+    vertex_part: Vec<f64>,
+    face_part: Option<Vec<f64>>,
+    report: JointCoordsReport,
 }
 
-/// The reference computation of the prior: the full MVC `mvc_j` (`#V`) of joint j w.r.t. the
-/// whole rest mesh, times L_j (Eq. 9) at every vertex. In Articulation mode, L_j vanishes
-/// wherever ω_ij or ω_if is zero; if no prior value is positive, the unlocalised prior
-/// `π = mvc_j` is returned instead.
-fn full_prior(j: usize, inputs: &JointInputs) -> (Vec<(usize, f64)>, bool) {
-    let rest_mesh = inputs.rest_mesh;
-    let target = inputs.skeleton.joint(j).rest_world_from_joint.translation;
-    let parent = inputs.skeleton.parent(j);
-    let mut mesh_mvc = vec![0.0; rest_mesh.num_vertices()];
-    mvc::mean_value_coordinates(
-        &rest_mesh.positions,
-        &rest_mesh.triangles,
-        target,
-        &mut mesh_mvc,
-    );
-    let articulation = matches!(inputs.localisation, JointLocalisation::Articulation { .. });
-    let prior: Vec<(usize, f64)> = (0..rest_mesh.num_vertices())
-        .filter_map(|i| {
-            let own = inputs.skin_weights.get(i, j);
-            let par = parent.map(|p| inputs.skin_weights.get(i, p));
-            if articulation && (own == 0.0 || par == Some(0.0)) {
-                return None;
-            }
-            let l = localisation_value(inputs.localisation, own, par, inputs.reference_floor_power);
-            (l != 0.0).then(|| (i, mesh_mvc[i] * l))
-        })
-        .collect();
-    if articulation && prior.iter().all(|&(_, p)| p <= 0.0) {
-        return (mesh_mvc.into_iter().enumerate().collect(), true);
-    }
-    (prior, false)
-}
-
-/// The Articulation prior from the MVC weights at the candidate vertices only (L_j vanishes
-/// elsewhere): `π_i = w_i · sign(W) · L_ji`, i.e. [`full_prior`]'s `mvc_ji · L_ji` times the
-/// positive factor |W| (W = Σ_i w_i), to which the floored cage masses and the max-entropy
-/// solve (Eq. 11) are blind — the MEC objective changes by a constant times Σψ = 1. `None`
-/// when [`full_prior`] is needed: no localised vertex, uncertified sign or degenerate joint
-/// position (see [`LocalMvc::weights_at`]), or no positive prior value (unlocalised fallback).
-fn local_prior(
-    j: usize,
-    inputs: &JointInputs,
-    local_mvc: &LocalMvc,
-    scratch: &mut LocalMvcScratch,
-) -> Option<Vec<(usize, f64)>> {
-    let target = inputs.skeleton.joint(j).rest_world_from_joint.translation;
-    let (vertices, localisation): (Vec<usize>, Vec<f64>) = inputs.candidates[j]
-        .iter()
-        .filter_map(|c| {
-            let l = localisation_value(inputs.localisation, c.own, c.parent, 0.0);
-            (l != 0.0).then_some((c.vertex, l))
-        })
-        .unzip();
-    if vertices.is_empty() {
-        return None;
-    }
-    let mut weights = vec![0.0; vertices.len()];
-    let sign = local_mvc.weights_at(target, &vertices, scratch, &mut weights)?;
-    let prior: Vec<(usize, f64)> = vertices
-        .iter()
-        .zip(weights.iter().zip(&localisation))
-        .map(|(&i, (&w, &l))| (i, w * sign * l))
-        .collect();
-    prior.iter().any(|&(_, p)| p > 0.0).then_some(prior)
-}
-
-/// Cage masses μ_k = Σ_i π_i Φ_ik (Eq. 10), `#C`, for a sparse prior `(i, π_i)`. Each sum runs
-/// over the prior in order; [`MASS_BLOCK`] columns at a time, so that their chains of additions
-/// overlap.
-fn project_prior(prior: &[(usize, f64)], cage_coords: &CageCoords) -> Vec<f64> {
-    let num_cage = cage_coords.num_cage_vertices();
-    let mut masses = vec![0.0; num_cage];
-    for (block, block_masses) in masses.chunks_mut(MASS_BLOCK).enumerate() {
-        let first = block * MASS_BLOCK;
-        let mut columns = [&[][..]; MASS_BLOCK];
-        for (c, column) in columns.iter_mut().enumerate().take(block_masses.len()) {
-            *column = cage_coords.column(first + c);
-        }
-        let mut sums = [0.0; MASS_BLOCK];
-        if block_masses.len() == MASS_BLOCK {
-            for &(i, p) in prior {
-                for (sum, column) in sums.iter_mut().zip(&columns) {
-                    *sum += column[i] * p;
-                }
-            }
-        } else {
-            for &(i, p) in prior {
-                for (sum, column) in sums.iter_mut().zip(&columns).take(block_masses.len()) {
-                    *sum += column[i] * p;
-                }
-            }
-        }
-        block_masses.copy_from_slice(&sums[..block_masses.len()]);
-    }
-    masses
-}
-
+/// Ψ_j (Eqs. 9–12) and, for Green rigs, Ψ_ψ,j with the target shifted by Ψ_ψ,j·g(C₀) (module
+/// docs). Where the shifted target leaves the max-entropy domain (the least-squares fallback),
+/// the joint keeps the vertex-only coordinates of the unshifted target.
 fn joint_coordinates(
     j: usize,
     inputs: &JointInputs,
     scratch: &mut Option<LocalMvcScratch>,
-) -> (Vec<f64>, JointCoordsReport) {
+) -> JointCoordinates {
     let num_cage = inputs.cage_coords.num_cage_vertices();
     let rest_cage = inputs.rest_cage;
     let target = inputs.skeleton.joint(j).rest_world_from_joint.translation;
@@ -476,16 +370,39 @@ fn joint_coordinates(
                 .for_each(|m| *m = m.max(MASS_FLOOR_RATIO * max));
         }
     }
+    let solve = |shifted_target: DVec3, psi: &mut [f64]| {
+        if floor_masses {
+            mec::max_entropy_coordinates(rest_cage, &masses, shifted_target, psi)
+        } else {
+            mec_signed::max_entropy_coordinates_signed(rest_cage, &masses, shifted_target, psi)
+        }
+    };
     let mut psi = vec![0.0; num_cage];
-    let outcome = if floor_masses {
-        mec::max_entropy_coordinates(rest_cage, &masses, target, &mut psi)
-    } else {
-        mec_signed::max_entropy_coordinates_signed(rest_cage, &masses, target, &mut psi)
+    let mut face_part = inputs
+        .face_terms
+        .and_then(|face| localised_face_average(&prior, face));
+    let mut shift = DVec3::ZERO;
+    let outcome = match (&face_part, inputs.face_terms) {
+        (Some(weights), Some(face)) => {
+            shift = weights
+                .iter()
+                .zip(face.rest_terms)
+                .fold(DVec3::ZERO, |acc, (&w, g)| acc + w * *g);
+            let outcome = solve(target - shift, &mut psi);
+            if outcome.method == mec::MecMethod::MaxEntropy {
+                outcome
+            } else {
+                face_part = None;
+                shift = DVec3::ZERO;
+                solve(target, &mut psi)
+            }
+        }
+        _ => solve(target, &mut psi),
     };
     let reached = psi
         .iter()
         .zip(rest_cage)
-        .fold(DVec3::ZERO, |acc, (&w, c)| acc + w * *c);
+        .fold(shift, |acc, (&w, c)| acc + w * *c);
     let report = JointCoordsReport {
         joint: j,
         unlocalised,
@@ -500,9 +417,30 @@ fn joint_coordinates(
             ),
         },
         residual: reached.distance(target),
+        face_terms: face_part.is_some(),
     };
-    (psi, report)
+    JointCoordinates {
+        vertex_part: psi,
+        face_part,
+        report,
+    }
 }
+
+/// Ψ_ψ,j = Σ_i π̂_i ψ_i (`#F`): the face rows of the skin averaged with the prior `(i, π_i)`
+/// normalised to sum 1. `None` when the prior does not sum to a positive number.
+fn localised_face_average(prior: &[(usize, f64)], face: JointFaceTerms<'_>) -> Option<Vec<f64>> {
+    let total: f64 = prior.iter().map(|&(_, p)| p).sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return None;
+    }
+    let mut average = project_prior(prior, face.face_coords);
+    average.iter_mut().for_each(|w| *w /= total);
+    average.iter().all(|w| w.is_finite()).then_some(average)
+}
+
+#[path = "skeleton_updater_prior.rs"]
+mod prior;
+use prior::{Candidate, articulation_candidates, joint_prior, project_prior};
 
 #[cfg(test)]
 #[path = "skeleton_updater_tests.rs"]

@@ -1,5 +1,6 @@
 //! Tests of [`super`] (`skeleton_updater.rs`), kept beside it to hold that file under ~600 lines.
 
+use super::prior::{local_prior, localisation_value};
 use super::*;
 use crate::coords::mvc::compute_cage_coords;
 use crate::subdivide::subdivide_midpoint;
@@ -24,7 +25,7 @@ fn both_paths(
             &sub.mesh,
             &skeleton,
             &sub.skin_weights,
-            &phi,
+            (&phi, None),
             &cage.positions,
             localisation,
             local,
@@ -52,6 +53,7 @@ fn local_path_joints(levels: usize, localisation: JointLocalisation) -> usize {
         skeleton: &skeleton,
         skin_weights: &sub.skin_weights,
         cage_coords: &phi,
+        face_terms: None,
         rest_cage: &cage.positions,
         localisation,
         reference_floor_power: 0.0,
