@@ -86,3 +86,52 @@ fn info_reports_the_green_binding_and_unknown_kinds_are_refused() {
         "{stderr}"
     );
 }
+
+/// `bench --coords green` on the default built-in snake, whose Green cage folds before the MVC
+/// pass's 60° bend: the bench used to stop with the refusal; it now times the drag and grab at
+/// the last pose reached and says which, with every row and its Newton steps in the JSON.
+#[test]
+fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
+    let out = cagerig()
+        .args([
+            "bench",
+            "--coords",
+            "green",
+            "--json",
+            "--skip-one-thread",
+            "--repeat-scale",
+            "0.2",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let model = &v[0];
+    assert_eq!(model["coords"], "green");
+    assert!(model["binding_over_mvc"].as_f64().unwrap() > 0.0);
+    for rows in [model, &model["display_f32"]] {
+        for key in [
+            "animation_frame",
+            "rest_cage_drag",
+            "grab_after_skeleton_edit",
+        ] {
+            let ms = rows[key]["median_ms"].as_f64().unwrap();
+            assert!(ms.is_finite() && ms > 0.0, "{key}: {ms}");
+        }
+        assert!(
+            rows["rest_cage_drag_iterations"]["cageup_median"]
+                .as_u64()
+                .unwrap()
+                > 0
+        );
+        assert!(
+            rows["grab_after_skeleton_edit_iterations"]["cagerev_median"]
+                .as_u64()
+                .unwrap()
+                > 0
+        );
+        let bend = rows["bend_degrees"].as_f64().unwrap();
+        assert!((10.0..=60.0).contains(&bend), "bend {bend}°");
+    }
+}

@@ -47,11 +47,12 @@ pub struct GreenCageReverser {
     ready: bool,
     solver: NewtonSolver,
     tolerance: f64,
-    /// J_t (`3#R × 3#C`), R̃ J + K_A J_A (`3#R × 3#C`), J_A (`3#J × 3#C`) and
-    /// J_tᵀ(R̃ J + K_A J_A) (`3#C × 3#C`).
+    /// J_t (`3#R × 3#C`), R̃ J (`3#R × 3#C`), J_A (`3#J × 3#C`), J_tᵀ K_A (`3#C × 3#J`, once
+    /// per piece) and J_tᵀ(R̃ J + K_A J_A) (`3#C × 3#C`).
     target_jacobian: Mat<f64>,
     chain_jacobian: Mat<f64>,
     joint_jacobian: Mat<f64>,
+    projected_skeleton: Mat<f64>,
     system: Mat<f64>,
     /// A(C₀) and A(C₀ + δ), `#J`.
     start_joints: Vec<DVec3>,
@@ -102,6 +103,7 @@ impl GreenCageReverser {
             target_jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
             chain_jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
             joint_jacobian: Mat::zeros(3 * num_joints, 3 * num_cage),
+            projected_skeleton: Mat::zeros(3 * num_cage, 3 * num_joints),
             system: Mat::zeros(3 * num_cage, 3 * num_cage),
             start_joints: vec![DVec3::ZERO; num_joints],
             trial_joints: vec![DVec3::ZERO; num_joints],
@@ -222,6 +224,14 @@ impl GreenCageReverser {
         }
         fit.rows_of(&self.posed_target, &mut self.g, &mut self.rows_target);
         fit.jacobian_into(&self.posed_target, &mut self.target_jacobian);
+        faer::linalg::matmul::matmul(
+            self.projected_skeleton.as_mut(),
+            Accum::Replace,
+            self.target_jacobian.transpose(),
+            self.skeleton_rows.as_ref(),
+            1.0,
+            Par::Seq,
+        );
         // A new J_t: the factors of the previous piece or grab do not apply.
         self.solver.invalidate();
         let n = 3 * self.num_cage;
@@ -234,6 +244,7 @@ impl GreenCageReverser {
         let (joint_vertex_rows, joint_face_rows) = (&self.joint_vertex_rows, &self.joint_face_rows);
         let (start_joints, trial_joints) = (&self.start_joints, &mut self.trial_joints);
         let joint_jacobian = &mut self.joint_jacobian;
+        let projected_skeleton = &self.projected_skeleton;
         let target_jacobian = &self.target_jacobian;
         let chain_jacobian = &mut self.chain_jacobian;
         let system = &mut self.system;
@@ -303,7 +314,7 @@ impl GreenCageReverser {
                     *m = *c + *d;
                 }
                 fit.jacobian_into(moved_for_jacobian, chain_jacobian);
-                // R̃ J, row block by row block, then + K_A J_A.
+                // R̃ J, row block by row block; the system J_tᵀ R̃ J + (J_tᵀ K_A) J_A.
                 for col in 0..n {
                     let mut column = chain_jacobian.col_mut(col);
                     for (i, rotation) in row_linear.iter().enumerate() {
@@ -314,6 +325,14 @@ impl GreenCageReverser {
                         column[3 * i + 2] = w.z;
                     }
                 }
+                faer::linalg::matmul::matmul(
+                    system.as_mut(),
+                    Accum::Replace,
+                    target_jacobian.transpose(),
+                    chain_jacobian.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
                 rows_jacobian_into(
                     joint_vertex_rows,
                     joint_face_rows,
@@ -322,18 +341,10 @@ impl GreenCageReverser {
                     joint_jacobian,
                 );
                 faer::linalg::matmul::matmul(
-                    chain_jacobian.as_mut(),
-                    Accum::Add,
-                    skeleton_rows.as_ref(),
-                    joint_jacobian.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                faer::linalg::matmul::matmul(
                     system.as_mut(),
-                    Accum::Replace,
-                    target_jacobian.transpose(),
-                    chain_jacobian.as_ref(),
+                    Accum::Add,
+                    projected_skeleton.as_ref(),
+                    joint_jacobian.as_ref(),
                     1.0,
                     Par::Seq,
                 );
