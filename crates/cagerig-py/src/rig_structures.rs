@@ -148,7 +148,9 @@ impl Rig {
         Self::cage_coords(slf)
     }
 
-    /// Ψ, the joint coordinates (#J, #C) float64 with rest joints = ΨC (SkelUp, Eq. 11) (copy).
+    /// Ψ, the joint coordinates (#J, #C) float64 with rest joints = ΨC (SkelUp, Eq. 11); for
+    /// Green rigs the vertex part Ψ_φ, with rest joints = Ψ_φ C + Ψ_ψ g(C) (see
+    /// :attr:`joint_face_coords`) (copy).
     #[getter]
     fn joint_coords<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let up = self.session.skeleton_updater();
@@ -161,6 +163,25 @@ impl Rig {
     #[getter]
     fn psi<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         self.joint_coords(py)
+    }
+
+    /// Ψ_ψ, the joints' face coordinates (#J, #F) float64 of a Green rig's SkelUp (rest joints
+    /// = Ψ_φ C + Ψ_ψ g(C), docs/green-coordinates.md G5); (#J, 0) for mean value rigs (copy).
+    #[getter]
+    fn joint_face_coords<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let up = self.session.skeleton_updater();
+        let (nj, nf) = (up.num_joints(), up.num_faces());
+        let data: Vec<f64> = (0..nj)
+            .flat_map(|j| up.joint_face_row(j).to_vec())
+            .collect();
+        convert::matrix_to_py(py, nj, nf, data)
+    }
+
+    /// g(C), the stretched face normals of the current rest cage (#F, 3) float64 for a Green
+    /// rig (the inputs of ψ and Ψ_ψ); (0, 3) for mean value rigs (copy).
+    #[getter]
+    fn rest_cage_terms<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        convert::points_to_py(py, self.session.rest_cage_terms())
     }
 
     /// Ω, the skinning weights (#V, #J) float64, dense (copy; rows sum to 1).

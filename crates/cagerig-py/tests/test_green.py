@@ -51,6 +51,11 @@ def test_rig_load_green_reproduces_the_rest_mesh_and_grabs_land(arm_path):
     assert rig.coords == "green" and mvc.coords == "mvc"
     size = np.linalg.norm(np.ptp(rig.rest_cage, axis=0))
     np.testing.assert_allclose(rig.rest_mesh, mvc.rest_mesh, atol=1e-9 * size)
+    # SkelUp with the face terms (G5): rest joints = Ψ_φ C + Ψ_ψ g(C); MVC rigs have none.
+    assert rig.joint_face_coords.shape == (25, 112) and rig.rest_cage_terms.shape == (112, 3)
+    assert mvc.joint_face_coords.shape == (25, 0) and mvc.rest_cage_terms.shape == (0, 3)
+    joints = rig.joint_coords @ rig.rest_cage + rig.joint_face_coords @ rig.rest_cage_terms
+    np.testing.assert_allclose(joints, rig.rest_joints, atol=1e-9 * size)
     rig.rotate_joint("lowerarm01.R", [1, 0, 0], 60)
     before = rig.posed_cage.copy()
     rig.move_posed_cage([20, 23, 25], [-1.5, 2, 0.5])
@@ -58,6 +63,8 @@ def test_rig_load_green_reproduces_the_rest_mesh_and_grabs_land(arm_path):
     expected = before.copy()
     expected[[20, 23, 25]] += [-1.5, 2, 0.5]
     np.testing.assert_allclose(after, expected, atol=1e-9 * size)
+    joints = rig.joint_coords @ rig.rest_cage + rig.joint_face_coords @ rig.rest_cage_terms
+    np.testing.assert_allclose(joints, rig.rest_joints, atol=1e-9 * size)
 
 
 def test_unknown_coords_name_lists_the_accepted_ones(arm_path):

@@ -247,6 +247,12 @@ class Rig:
     @property
     def psi(self) -> _F64Array: ...
     @property
+    def joint_face_coords(self) -> _F64Array:
+        """Ψ_ψ (#J, #F) of a Green rig: rest joints = Ψ_φ C + Ψ_ψ g(C); (#J, 0) for MVC."""
+    @property
+    def rest_cage_terms(self) -> _F64Array:
+        """g(C) (#F, 3), the rest cage's stretched face normals (Green); (0, 3) for MVC."""
+    @property
     def skin_weights(self) -> _F64Array: ...
     @property
     def omega(self) -> _F64Array: ...
