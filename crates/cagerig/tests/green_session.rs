@@ -136,6 +136,19 @@ fn a_similarity_of_the_rest_cage_moves_the_mesh_by_the_same_similarity() {
     assert!(off < 1e-9 * d * scale, "joints: {off:e}");
 }
 
+/// Stretches the whole rest cage 1.6× along x about its vertices' centroid, which it returns.
+fn stretch_the_rest_cage(s: &mut RigSession) -> DVec3 {
+    let cage = s.rest_cage().to_vec();
+    let centre = cage.iter().copied().sum::<DVec3>() / cage.len() as f64;
+    let vertices: Vec<usize> = (0..cage.len()).collect();
+    let offsets: Vec<DVec3> = cage
+        .iter()
+        .map(|c| DVec3::new(0.6 * (c.x - centre.x), 0.0, 0.0))
+        .collect();
+    s.move_rest_cage(&vertices, &offsets).unwrap();
+    centre
+}
+
 /// Where the skin carries joint positions: each joint at its rest mean value coordinates with
 /// respect to the rest skin `rest` (`#V`), evaluated on the skin `skin`.
 fn carried_by_the_skin(
@@ -176,14 +189,7 @@ fn green_skelup_keeps_the_joints_where_the_skin_carries_them() {
     );
     let rest_joints: Vec<DVec3> = s.rest_joints().collect();
     let d = diagonal(s.rest_cage());
-    let cage = s.rest_cage().to_vec();
-    let centre = cage.iter().copied().sum::<DVec3>() / cage.len() as f64;
-    let vertices: Vec<usize> = (0..cage.len()).collect();
-    let offsets: Vec<DVec3> = cage
-        .iter()
-        .map(|c| DVec3::new(0.6 * (c.x - centre.x), 0.0, 0.0))
-        .collect();
-    s.move_rest_cage(&vertices, &offsets).unwrap();
+    let centre = stretch_the_rest_cage(&mut s);
     check_rest_mesh(&s, 1e-9 * d);
     let carried = carried_by_the_skin(&s, &loaded, &rest_joints, s.rest_mesh());
     let affine: Vec<DVec3> = rest_joints
@@ -229,20 +235,10 @@ fn mean_angle_change(triangles: &[[u32; 3]], a: &[DVec3], b: &[DVec3]) -> f64 {
 
 #[test]
 fn stretching_the_cage_preserves_shape_better_than_mean_value_coordinates() {
-    let stretched = |s: &mut RigSession| {
-        let cage = s.rest_cage().to_vec();
-        let centre = cage.iter().copied().sum::<DVec3>() / cage.len() as f64;
-        let vertices: Vec<usize> = (0..cage.len()).collect();
-        let offsets: Vec<DVec3> = cage
-            .iter()
-            .map(|c| DVec3::new(0.6 * (c.x - centre.x), 0.0, 0.0))
-            .collect();
-        s.move_rest_cage(&vertices, &offsets).unwrap();
-    };
     let (mut g, loaded) = arm(green());
     let (mut m, _) = arm(SessionOptions::default());
-    stretched(&mut g);
-    stretched(&mut m);
+    stretch_the_rest_cage(&mut g);
+    stretch_the_rest_cage(&mut m);
     let triangles = g.mesh_triangles().to_vec();
     let green_change = mean_angle_change(&triangles, &loaded, g.rest_mesh());
     let mvc_change = mean_angle_change(&triangles, &loaded, m.rest_mesh());
