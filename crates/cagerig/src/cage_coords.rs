@@ -178,6 +178,21 @@ impl CageCoords {
         );
     }
 
+    /// The rows `rows` of Φ as coordinates of their own (`rows.len() × #C`, kept in the same
+    /// precision), so that products over those rows read a few contiguous kilobytes instead of
+    /// one scattered entry per column: `selected.apply_rows(&[0, 1, ..], ..)` gives the same bits
+    /// as `self.apply_rows(rows, ..)`.
+    pub fn rows_as_coords(&self, rows: &[usize]) -> CageCoords {
+        let matrix = self.select_rows(rows);
+        let nv = self.num_vertices();
+        let compact = self.compact.as_ref().map(|compact| {
+            (0..self.num_cage_vertices())
+                .flat_map(|k| rows.iter().map(move |&r| compact[k * nv + r]))
+                .collect()
+        });
+        CageCoords { matrix, compact }
+    }
+
     /// Rows `rows` of M = Φ·C into `out` (`rows.len()`): the same bits as those rows of
     /// [`Self::apply`], in O(#rows · #C). The display path keeps the exact M on CageUp's MaxVol
     /// rows with it.
@@ -365,6 +380,16 @@ mod tests {
                 for (r, &row) in rows.iter().enumerate() {
                     assert_eq!(picked[r], full[row], "{nc} columns, row {row}, f32 {round}");
                 }
+                // The rows selected as coordinates of their own: the same bits again, and
+                // add_rows on top of them as on the full coordinates.
+                let selected = phi.rows_as_coords(&rows);
+                let identity: Vec<usize> = (0..rows.len()).collect();
+                let mut from_selected = vec![DVec3::NAN; rows.len()];
+                selected.apply_rows(&identity, &cage, &mut from_selected);
+                assert_eq!(from_selected, picked, "{nc} columns, f32 {round}");
+                phi.add_rows(&rows, &cage, &mut picked);
+                selected.add_rows(&identity, &cage, &mut from_selected);
+                assert_eq!(from_selected, picked, "{nc} columns, f32 {round}");
             }
         }
     }

@@ -279,15 +279,6 @@ impl CageMap {
         }
     }
 
-    /// Rows `rows` of [`CageMap::add_terms`] into `out` (`rows.len()`, holding those rows of ΦC),
-    /// the same bits.
-    pub(super) fn add_terms_rows(&self, rows: &[usize], out: &mut [DVec3]) {
-        match self {
-            CageMap::Mvc => {}
-            CageMap::Green(green) => green.face_coords.add_rows(rows, &green.rest_terms, out),
-        }
-    }
-
     /// After the rest-cage vertices `vertices` moved (`rest_cage` already updated and the
     /// vertex part's delta applied to `rest_mesh`): the kind's terms of the change. No
     /// allocation.
