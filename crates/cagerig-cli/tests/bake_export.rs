@@ -198,8 +198,9 @@ fn check(case: &Case) {
             "{} {} baked, midpoint t = {t:.4}: {e:.2e} of the diagonal",
             case.name, case.method
         );
+        // `--max-between` (default 1e-5) refines the samples against the baked skin too.
         assert!(
-            e <= 1e-3,
+            e <= 1e-5,
             "{} {} midpoint t = {t}: {e:e}",
             case.name,
             case.method

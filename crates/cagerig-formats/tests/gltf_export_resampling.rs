@@ -87,7 +87,8 @@ impl AnimatedRig {
         let grid = sample_times(player.duration(), 30.0, &self.key_times());
         let bound = 0.9e-5 * self.diagonal();
         let refined =
-            refine_sample_times(&mut self.session, &mut player, &grid, bound, 100_000).unwrap();
+            refine_sample_times(&mut self.session, &mut player, &grid, bound, 100_000, false)
+                .unwrap();
         (grid, refined)
     }
 

@@ -172,16 +172,17 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             &times,
             0.9 * args.max_between * diagonal,
             args.max_samples.max(times.len()),
+            bake,
         )
         .map_err(|e| anyhow::anyhow!("refining the samples: {e}"))?;
         refinement = format!(
             " ({} added so that a viewer{} stays within {:.1e} of the diagonal between samples, \
              {:.1e} at the worst midpoint)",
             refined.added,
-            if method.is_linear() {
-                ""
-            } else {
-                "'s LBS of the rig"
+            match (method.is_linear(), bake) {
+                (true, _) => "",
+                (false, true) => " of the baked skin",
+                (false, false) => "'s LBS of the rig",
             },
             args.max_between,
             refined.largest_checked / diagonal.max(f64::MIN_POSITIVE)

@@ -15,6 +15,7 @@ use cagerig::skinning::LinearBlendSkinning;
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::export_animation::node_trs;
+use super::export_bake::{BakeReport, bake_target};
 
 /// Node (translation, rotation, scale) per joint at one sample.
 type NodeTrs = Vec<(DVec3, DQuat, DVec3)>;
@@ -36,7 +37,10 @@ pub struct RefinedTimes {
 
 /// Refines `times` (sorted, e.g. from [`super::export_animation::sample_times`]) until at the
 /// midpoint of every interval a viewer's interpolation of the exported nodes is within
-/// `max_distance` (world units) of cagerig's LBS M', adding at most `max_samples − times.len()`
+/// `max_distance` (world units) of cagerig's LBS M' — or, `baked` (a `--bake` export under
+/// DQS/CoR/blended), a viewer's LBS of the bind shape plus the two bracketing samples' baked
+/// targets at their interpolated weights is within it of cagerig's M' under the session's
+/// method — adding at most `max_samples − times.len()`
 /// samples (intervals shorter than 1e-4 s, or whose midpoint rounds to an end in f32 as glTF
 /// stores times, are not split). The session is put back in the state it was given in: its rest frames are the
 /// bind frames [`super::export_animation::animation_to_gltf`] then writes, which the check
@@ -47,6 +51,7 @@ pub fn refine_sample_times(
     times: &[f64],
     max_distance: f64,
     max_samples: usize,
+    baked: bool,
 ) -> Result<RefinedTimes, String> {
     if !(max_distance.is_finite() && max_distance > 0.0) {
         return Err(format!(
@@ -60,6 +65,7 @@ pub fn refine_sample_times(
         lbs: LinearBlendSkinning::new(session.skin_weights()),
         bind,
         trs: HashMap::new(),
+        baked: baked.then(HashMap::new),
         world: Vec::new(),
         viewer_from_rest: Vec::new(),
         exact: Vec::new(),
@@ -70,6 +76,10 @@ pub fn refine_sample_times(
     pending.reverse();
     let (mut largest, mut capped) = (0.0f64, false);
     while let Some((t0, t1)) = pending.pop() {
+        // Intervals come in increasing t0: the baked targets of earlier samples are done with.
+        if let Some(targets) = &mut checker.baked {
+            targets.retain(|&bits, _| f64::from_bits(bits) >= t0);
+        }
         let mid = 0.5 * (t0 + t1);
         let distance = checker.distance_at(session, player, t0, t1, mid)?;
         // glTF stores times as f32, strictly increasing: a midpoint that rounds onto an end
@@ -105,6 +115,9 @@ struct Checker {
     bind: Vec<DAffine3>,
     /// Node TRS at the sample times evaluated so far (by the bits of the time).
     trs: HashMap<u64, NodeTrs>,
+    /// For a baked export: the baked targets (`#V`, bind space) of the samples still needed,
+    /// by the bits of the time.
+    baked: Option<HashMap<u64, Vec<DVec3>>>,
     world: Vec<DAffine3>,
     viewer_from_rest: Vec<DAffine3>,
     exact: Vec<DVec3>,
@@ -130,8 +143,33 @@ impl Checker {
         Ok(trs)
     }
 
-    /// Largest vertex distance at `mid` between cagerig's LBS M' and a viewer's, whose nodes
-    /// interpolate the samples at `t0` and `t1`.
+    /// The baked target of the export at sample time `t` ([`bake_target`] with the session's
+    /// rest mesh at `t` as the bind shape, which the file holds to its f32 rounding).
+    fn baked_target_at(
+        &mut self,
+        session: &mut RigSession,
+        player: &mut AnimationPlayer,
+        t: f64,
+    ) -> Result<Vec<DVec3>, String> {
+        if let Some(target) = self.baked.as_ref().and_then(|b| b.get(&t.to_bits())) {
+            return Ok(target.clone());
+        }
+        player.apply(t, session).map_err(|e| e.to_string())?;
+        let mut target = Vec::new();
+        bake_target(
+            session,
+            session.rest_mesh(),
+            &mut target,
+            &mut BakeReport::default(),
+        );
+        if let Some(baked) = &mut self.baked {
+            baked.insert(t.to_bits(), target.clone());
+        }
+        Ok(target)
+    }
+
+    /// Largest vertex distance at `mid` between cagerig's M' and a viewer's, whose nodes (and
+    /// baked target weights) interpolate the samples at `t0` and `t1`.
     fn distance_at(
         &mut self,
         session: &mut RigSession,
@@ -145,6 +183,14 @@ impl Checker {
             self.trs_at(session, player, t1)?,
         );
         let s = (mid - t0) / (t1 - t0);
+        let targets = if self.baked.is_some() {
+            Some((
+                self.baked_target_at(session, player, t0)?,
+                self.baked_target_at(session, player, t1)?,
+            ))
+        } else {
+            None
+        };
         player.apply(mid, session).map_err(|e| e.to_string())?;
         // The viewer's node worlds from the interpolated locals, parents before children.
         let nj = self.bind.len();
@@ -171,12 +217,32 @@ impl Checker {
                 .map(|(w, b)| *w * b.inverse()),
         );
         let rest = session.rest_mesh();
-        self.exact.resize(rest.len(), DVec3::ZERO);
         self.viewer.resize(rest.len(), DVec3::ZERO);
-        self.lbs
-            .apply(session.posed_from_rest(), rest, &mut self.exact);
-        self.lbs
-            .apply(&self.viewer_from_rest, rest, &mut self.viewer);
-        Ok(cagerig::mesh::max_distance(&self.exact, &self.viewer))
+        match targets {
+            None => {
+                self.exact.resize(rest.len(), DVec3::ZERO);
+                self.lbs
+                    .apply(session.posed_from_rest(), rest, &mut self.exact);
+                self.lbs
+                    .apply(&self.viewer_from_rest, rest, &mut self.viewer);
+                Ok(cagerig::mesh::max_distance(&self.exact, &self.viewer))
+            }
+            Some((a, b)) => {
+                // The viewer's bind shape: the rest mesh plus the baked targets at weights
+                // 1 − s and s; cagerig's M' is the session's method.
+                self.exact.clear();
+                self.exact.extend(
+                    rest.iter()
+                        .zip(a.iter().zip(&b))
+                        .map(|(x, (ba, bb))| *x + ba.lerp(*bb, s)),
+                );
+                self.lbs
+                    .apply(&self.viewer_from_rest, &self.exact, &mut self.viewer);
+                Ok(cagerig::mesh::max_distance(
+                    session.posed_mesh(),
+                    &self.viewer,
+                ))
+            }
+        }
     }
 }
