@@ -125,47 +125,36 @@ struct Checker {
 }
 
 impl Checker {
-    /// The node TRS of the export at sample time `t`.
-    fn trs_at(
+    /// Evaluates the export at sample time `t` once (one playback of `t`): the node TRS and,
+    /// for a baked export, the baked target ([`bake_target`] with the session's rest mesh at
+    /// `t` as the bind shape, which the file holds to its f32 rounding), into the caches.
+    fn sample_at(
         &mut self,
         session: &mut RigSession,
         player: &mut AnimationPlayer,
         t: f64,
-    ) -> Result<NodeTrs, String> {
-        if let Some(trs) = self.trs.get(&t.to_bits()) {
-            return Ok(trs.clone());
+    ) -> Result<(), String> {
+        let key = t.to_bits();
+        let baked_cached = self.baked.as_ref().is_none_or(|b| b.contains_key(&key));
+        if self.trs.contains_key(&key) && baked_cached {
+            return Ok(());
         }
         player.apply(t, session).map_err(|e| e.to_string())?;
         self.world.resize(self.bind.len(), DAffine3::IDENTITY);
         let mut trs = Vec::with_capacity(self.bind.len());
         node_trs(session, &self.bind, &mut self.world, &mut trs);
-        self.trs.insert(t.to_bits(), trs.clone());
-        Ok(trs)
-    }
-
-    /// The baked target of the export at sample time `t` ([`bake_target`] with the session's
-    /// rest mesh at `t` as the bind shape, which the file holds to its f32 rounding).
-    fn baked_target_at(
-        &mut self,
-        session: &mut RigSession,
-        player: &mut AnimationPlayer,
-        t: f64,
-    ) -> Result<Vec<DVec3>, String> {
-        if let Some(target) = self.baked.as_ref().and_then(|b| b.get(&t.to_bits())) {
-            return Ok(target.clone());
-        }
-        player.apply(t, session).map_err(|e| e.to_string())?;
-        let mut target = Vec::new();
-        bake_target(
-            session,
-            session.rest_mesh(),
-            &mut target,
-            &mut BakeReport::default(),
-        );
+        self.trs.insert(key, trs);
         if let Some(baked) = &mut self.baked {
-            baked.insert(t.to_bits(), target.clone());
+            let mut target = Vec::new();
+            bake_target(
+                session,
+                session.rest_mesh(),
+                &mut target,
+                &mut BakeReport::default(),
+            );
+            baked.insert(key, target);
         }
-        Ok(target)
+        Ok(())
     }
 
     /// Largest vertex distance at `mid` between cagerig's M' and a viewer's, whose nodes (and
@@ -178,19 +167,10 @@ impl Checker {
         t1: f64,
         mid: f64,
     ) -> Result<f64, String> {
-        let (a, b) = (
-            self.trs_at(session, player, t0)?,
-            self.trs_at(session, player, t1)?,
-        );
+        self.sample_at(session, player, t0)?;
+        self.sample_at(session, player, t1)?;
+        let (a, b) = (&self.trs[&t0.to_bits()], &self.trs[&t1.to_bits()]);
         let s = (mid - t0) / (t1 - t0);
-        let targets = if self.baked.is_some() {
-            Some((
-                self.baked_target_at(session, player, t0)?,
-                self.baked_target_at(session, player, t1)?,
-            ))
-        } else {
-            None
-        };
         player.apply(mid, session).map_err(|e| e.to_string())?;
         // The viewer's node worlds from the interpolated locals, parents before children.
         let nj = self.bind.len();
@@ -218,6 +198,10 @@ impl Checker {
         );
         let rest = session.rest_mesh();
         self.viewer.resize(rest.len(), DVec3::ZERO);
+        let targets = self
+            .baked
+            .as_ref()
+            .map(|baked| (&baked[&t0.to_bits()], &baked[&t1.to_bits()]));
         match targets {
             None => {
                 self.exact.resize(rest.len(), DVec3::ZERO);
@@ -233,7 +217,7 @@ impl Checker {
                 self.exact.clear();
                 self.exact.extend(
                     rest.iter()
-                        .zip(a.iter().zip(&b))
+                        .zip(a.iter().zip(b))
                         .map(|(x, (ba, bb))| *x + ba.lerp(*bb, s)),
                 );
                 self.lbs
