@@ -381,24 +381,19 @@ fn joint_coordinates(
     let mut face_part = inputs
         .face_terms
         .and_then(|face| localised_face_average(&prior, face));
-    let mut shift = DVec3::ZERO;
-    let outcome = match (&face_part, inputs.face_terms) {
-        (Some(weights), Some(face)) => {
-            shift = weights
-                .iter()
-                .zip(face.rest_terms)
-                .fold(DVec3::ZERO, |acc, (&w, g)| acc + w * *g);
-            let outcome = solve(target - shift, &mut psi);
+    let outcome = match &face_part {
+        Some((_, shift)) => {
+            let outcome = solve(target - *shift, &mut psi);
             if outcome.method == mec::MecMethod::MaxEntropy {
                 outcome
             } else {
                 face_part = None;
-                shift = DVec3::ZERO;
                 solve(target, &mut psi)
             }
         }
-        _ => solve(target, &mut psi),
+        None => solve(target, &mut psi),
     };
+    let shift = face_part.as_ref().map_or(DVec3::ZERO, |(_, shift)| *shift);
     let reached = psi
         .iter()
         .zip(rest_cage)
@@ -421,21 +416,29 @@ fn joint_coordinates(
     };
     JointCoordinates {
         vertex_part: psi,
-        face_part,
+        face_part: face_part.map(|(weights, _)| weights),
         report,
     }
 }
 
 /// Ψ_ψ,j = Σ_i π̂_i ψ_i (`#F`): the face rows of the skin averaged with the prior `(i, π_i)`
-/// normalised to sum 1. `None` when the prior does not sum to a positive number.
-fn localised_face_average(prior: &[(usize, f64)], face: JointFaceTerms<'_>) -> Option<Vec<f64>> {
+/// normalised to sum 1, and the shift of the target it brings at rest, Ψ_ψ,j·g(C₀). `None` when
+/// the prior does not sum to a positive number.
+fn localised_face_average(
+    prior: &[(usize, f64)],
+    face: JointFaceTerms<'_>,
+) -> Option<(Vec<f64>, DVec3)> {
     let total: f64 = prior.iter().map(|&(_, p)| p).sum();
     if !(total > 0.0 && total.is_finite()) {
         return None;
     }
     let mut average = project_prior(prior, face.face_coords);
     average.iter_mut().for_each(|w| *w /= total);
-    average.iter().all(|w| w.is_finite()).then_some(average)
+    let shift = average
+        .iter()
+        .zip(face.rest_terms)
+        .fold(DVec3::ZERO, |acc, (&w, g)| acc + w * *g);
+    (average.iter().all(|w| w.is_finite()) && shift.is_finite()).then_some((average, shift))
 }
 
 #[path = "skeleton_updater_prior.rs"]
