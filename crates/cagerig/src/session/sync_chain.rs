@@ -154,7 +154,8 @@ impl RigSession {
         }
     }
 
-    /// After C changed: SkelUp (A = ΨC, or Ψ_φC + Ψ_ψ g(C) for Green rigs; rest frames re-placed), FK, skinning, CageUp.
+    /// After C changed: SkelUp (A = ΨC, or Ψ_φC + Ψ_ψ g(C) for Green rigs; rest frames
+    /// re-placed), FK, skinning, CageUp.
     pub(super) fn sync_from_rest_cage(&mut self) {
         if !self.locks.skel_up {
             self.skeleton_updater.apply(
