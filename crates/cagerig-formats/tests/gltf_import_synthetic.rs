@@ -379,6 +379,41 @@ fn quantized_positions_are_read() {
     assert!(e.contains("KHR_draco_mesh_compression"), "{e}");
 }
 
+/// Required extensions that change only lighting or materials (a Blender level exported with
+/// its lamps requires KHR_lights_punctual) are read, with one warning naming them; geometry and
+/// animation extensions are still refused by name.
+#[test]
+fn appearance_only_required_extensions_are_read_with_a_warning() {
+    let original = import_character(
+        &data("gltf/SimpleSkin/SimpleSkin.gltf"),
+        &ImportOptions::default(),
+    )
+    .unwrap();
+    let mut j = simple_skin();
+    let required = ["KHR_lights_punctual", "KHR_materials_clearcoat"];
+    j["extensionsUsed"] = json!(required);
+    j["extensionsRequired"] = json!(required);
+    let c = import_character(&write_temp("lights.gltf", &j), &ImportOptions::default()).unwrap();
+    assert_eq!(c.mesh.positions, original.mesh.positions);
+    let notes: Vec<String> = c.warnings.iter().map(ToString::to_string).collect();
+    let named: Vec<&String> = notes
+        .iter()
+        .filter(|n| n.contains("KHR_lights_punctual, KHR_materials_clearcoat ignored"))
+        .collect();
+    assert_eq!(named.len(), 1, "{notes:?}");
+    for refused in [
+        "EXT_meshopt_compression",
+        "EXT_mesh_gpu_instancing",
+        "KHR_animation_pointer",
+    ] {
+        j["extensionsRequired"] = json!(["KHR_lights_punctual", refused]);
+        let e = import_character(&write_temp("refused.gltf", &j), &ImportOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(refused) && !e.contains("KHR_lights"), "{e}");
+    }
+}
+
 /// Two meshes, each with its own skin object over the same joints and bind pose (the second
 /// listing the joints in the other order, its JOINTS_0 indices to match): one rig of both
 /// meshes, the second mesh's weights on the same joints as the first's.

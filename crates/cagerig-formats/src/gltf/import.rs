@@ -50,11 +50,10 @@ pub fn import_gltf_bytes(
     path: &Path,
     options: &ImportOptions,
 ) -> Result<ImportedCharacter, FormatError> {
-    let gltf = parse_validated(bytes, path)?;
+    let (gltf, mut warnings) = parse_validated(bytes, path)?;
     let document = &gltf.document;
     let buffers = Buffers::load(document, gltf.blob.as_deref(), path)?;
     let tree = NodeTree::new(document, path)?;
-    let mut warnings = Vec::new();
 
     // ----- the skin ---------------------------------------------------------------------------
     let skins: Vec<SkinSummary> = document

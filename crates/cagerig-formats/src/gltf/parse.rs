@@ -3,12 +3,21 @@
 
 use std::path::Path;
 
+use cagerig::Warning;
+
 use crate::error::FormatError;
 
 /// Parses and validates glTF/GLB bytes. The `gltf` crate's validation (1.4) indexes the
 /// accessors with each primitive's POSITION index before checking it, and panics on an index
 /// out of range, and it does not check animation channel targets: both are checked here.
-pub(super) fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, FormatError> {
+///
+/// Required extensions that change only lighting, materials, textures or metadata
+/// ([`changes_appearance_only`]) are accepted and returned as one warning naming them; any
+/// other required extension but `KHR_mesh_quantization` is refused by name.
+pub(super) fn parse_validated(
+    bytes: &[u8],
+    path: &Path,
+) -> Result<(gltf::Gltf, Vec<Warning>), FormatError> {
     let gltf_error = |message: String| FormatError::Gltf {
         path: path.to_path_buf(),
         message,
@@ -21,6 +30,27 @@ pub(super) fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, F
     // `gltf` crate's validation would refuse it as unsupported.
     root.extensions_required
         .retain(|e| e != "KHR_mesh_quantization");
+    let (ignored, required): (Vec<String>, Vec<String>) =
+        std::mem::take(&mut root.extensions_required)
+            .into_iter()
+            .partition(|e| changes_appearance_only(e));
+    root.extensions_required = required;
+    let mut warnings = Vec::new();
+    if !ignored.is_empty() {
+        warnings.push(Warning::Note {
+            message: format!(
+                "required extension{} {} ignored: {} only lighting, materials, textures or \
+                 metadata, not the skinned geometry or its animation",
+                if ignored.len() == 1 { "" } else { "s" },
+                ignored.join(", "),
+                if ignored.len() == 1 {
+                    "it changes"
+                } else {
+                    "they change"
+                },
+            ),
+        });
+    }
     let accessors = root.accessors.len();
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
@@ -62,5 +92,23 @@ pub(super) fn parse_validated(bytes: &[u8], path: &Path) -> Result<gltf::Gltf, F
         }
     }
     let document = gltf::Document::from_json(root).map_err(|e| gltf_error(e.to_string()))?;
-    Ok(gltf::Gltf { document, blob })
+    Ok((gltf::Gltf { document, blob }, warnings))
+}
+
+/// Whether a glTF extension changes only how a file looks (lights, materials, textures) or
+/// what it says about itself (metadata), never its vertices, skin or animation: cagerig can
+/// read a file that requires it by ignoring it. Geometry extensions (Draco, meshopt, GPU
+/// instancing) and animation ones (`KHR_animation_pointer`) are not in this list.
+fn changes_appearance_only(extension: &str) -> bool {
+    extension.starts_with("KHR_materials_")
+        || matches!(
+            extension,
+            "KHR_lights_punctual"
+                | "KHR_texture_transform"
+                | "KHR_texture_basisu"
+                | "EXT_texture_webp"
+                | "EXT_texture_avif"
+                | "EXT_lights_image_based"
+                | "KHR_xmp_json_ld"
+        )
 }

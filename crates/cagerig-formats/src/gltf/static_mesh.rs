@@ -29,7 +29,7 @@ pub fn import_gltf_static(path: &Path) -> Result<StaticMesh, FormatError> {
 /// [`import_gltf_static`] on glTF/GLB bytes; `path` names the file in messages and locates
 /// external buffers.
 pub fn import_gltf_static_bytes(bytes: &[u8], path: &Path) -> Result<StaticMesh, FormatError> {
-    let gltf = parse_validated(bytes, path)?;
+    let (gltf, mut warnings) = parse_validated(bytes, path)?;
     let document = &gltf.document;
     let buffers = Buffers::load(document, gltf.blob.as_deref(), path)?;
     let tree = NodeTree::new(document, path)?;
@@ -37,7 +37,6 @@ pub fn import_gltf_static_bytes(bytes: &[u8], path: &Path) -> Result<StaticMesh,
     let mut world = vec![glam::DAffine3::IDENTITY; locals.len()];
     tree.globals(&locals, &mut world);
     let in_scene = default_scene_nodes(document);
-    let mut warnings = Vec::new();
     let mut merged = MergedParts::default();
     for node in document.nodes() {
         let Some(mesh) = node.mesh() else { continue };
