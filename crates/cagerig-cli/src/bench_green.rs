@@ -370,8 +370,8 @@ pub(crate) fn print_green_table(rows: &[GreenModelRow]) {
         for (precision, events) in [("exact", &row.exact), ("f32 display", &row.display_f32)] {
             if events.bend_degrees < 60.0 {
                 println!(
-                    "drag and grab rows ({precision}) at a {:.0}° bend, not 60°: the next 10° \
-                     step folds a Green cage",
+                    "drag and grab rows ({precision}) at a {:.0}° bend, not 60°: Green CageUp \
+                     refused the next 10° step",
                     events.bend_degrees
                 );
             }

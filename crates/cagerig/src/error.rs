@@ -289,18 +289,19 @@ pub enum RigError {
     #[error(
         "the event was refused and the rig left as it was: Green CageUp found no current cage \
          fitting it (the fit stopped with a gradient of {residual:.3e}, expected at most \
-         {limit:.3e}; the closest cage folds cage triangle {face}, whose area fell to \
-         {area_ratio:.2e} of its rest area — a Green cage cannot follow the skin past a folded \
-         triangle); try a smaller step, or mean value coordinates for this pose"
+         {limit:.3e}; {}); try a smaller step, or mean value coordinates for this pose",
+        green_fit_cause(*face, *area_ratio)
     )]
     GreenFitFailed {
         /// max |Jᵀr| where the fit stopped.
         residual: f64,
         /// The tolerance it had to reach.
         limit: f64,
-        /// The cage triangle with the smallest area ratio at the stopping point.
+        /// The cage triangle with the smallest signed area ratio at the stopping point.
         face: usize,
-        /// That triangle's area over its binding area.
+        /// That triangle's signed area over its binding area (negative: turned over). Below
+        /// [`GREEN_FOLD_AREA_RATIO`] the message blames the fold; above it, no triangle folded
+        /// and the message says so.
         area_ratio: f64,
     },
     /// Green coordinates: CageRev found no rest cage that makes CageUp return the grabbed
@@ -426,6 +427,26 @@ pub(crate) fn names_sentence(names: &[&str]) -> String {
     }
 }
 
+/// A fitted Green cage triangle whose signed area falls below this fraction of its binding area
+/// counts as folded in [`RigError::GreenFitFailed`]'s message.
+pub const GREEN_FOLD_AREA_RATIO: f64 = 0.05;
+
+/// The cause [`RigError::GreenFitFailed`] names: the folded triangle, or that none folded.
+fn green_fit_cause(face: usize, area_ratio: f64) -> String {
+    if area_ratio < GREEN_FOLD_AREA_RATIO {
+        format!(
+            "the closest cage folds cage triangle {face}, whose signed area fell to \
+             {area_ratio:.2e} of its rest area — a Green cage cannot follow the skin past a \
+             folded triangle"
+        )
+    } else {
+        format!(
+            "no cage triangle folded (the most squeezed, triangle {face}, kept {area_ratio:.2e} \
+             of its rest area): the fit stalled short of a stationary point for this pose"
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -445,5 +466,31 @@ mod tests {
             plain_serde_message("invalid type: floating point `1.5`, expected usize"),
             "invalid type: floating point `1.5`, expected an index (a whole number ≥ 0)"
         );
+    }
+
+    /// A Green fit that stalls blames a fold only when a triangle folded: the message used to
+    /// say "folds cage triangle 154, whose area fell to 8.61e-1" of a triangle that kept 86 % of
+    /// its area (an FBX character at its first animation sample).
+    #[test]
+    fn a_stalled_green_fit_blames_a_fold_only_when_a_triangle_folded() {
+        let failed = |area_ratio| {
+            RigError::GreenFitFailed {
+                residual: 4.3e-5,
+                limit: 7.3e-9,
+                face: 154,
+                area_ratio,
+            }
+            .to_string()
+        };
+        let squeezed = failed(0.861);
+        assert!(
+            squeezed.contains("no cage triangle folded") && squeezed.contains("triangle 154"),
+            "{squeezed}"
+        );
+        assert!(!squeezed.contains("folds cage triangle"), "{squeezed}");
+        for ratio in [0.01, -0.3] {
+            let folded = failed(ratio);
+            assert!(folded.contains("folds cage triangle 154"), "{folded}");
+        }
     }
 }

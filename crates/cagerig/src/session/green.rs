@@ -347,13 +347,13 @@ impl RigSession {
             .iter()
             .enumerate()
             .map(|(f, t)| {
+                // Signed: negative when the triangle turned over against its binding normal.
                 let [a, b, c] = t.map(|v| self.posed_cage[v as usize]);
                 let [a0, b0, c0] = t.map(|v| self.original_rest_cage[v as usize]);
-                let rest = (b0 - a0).cross(c0 - a0).length();
-                (
-                    f,
-                    (b - a).cross(c - a).length() / rest.max(f64::MIN_POSITIVE),
-                )
+                let rest = (b0 - a0).cross(c0 - a0);
+                let now = (b - a).cross(c - a);
+                let signed = now.length() * now.dot(rest).signum();
+                (f, signed / rest.length().max(f64::MIN_POSITIVE))
             })
             .fold(
                 (0, f64::INFINITY),
