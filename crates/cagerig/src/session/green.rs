@@ -63,8 +63,9 @@ pub(super) struct GreenState {
     pub(super) last_reverse: NewtonReport,
 }
 
-/// A Green CageUp that stops above this fraction of the cage size refuses the event.
-pub const GREEN_FIT_LIMIT: f64 = 1e-10;
+/// A Green CageUp that stops above this fraction of the cage size refuses the event (the fit's
+/// own acceptance, [`crate::sync::green_cage_fit::ACCEPTED_GRADIENT`]).
+pub const GREEN_FIT_LIMIT: f64 = crate::sync::green_cage_fit::ACCEPTED_GRADIENT;
 
 /// Between two cage keyframes, the faces whose g departs from the blend of the keys' g by more
 /// than this fraction of the cage size over max_v Σ_f |ψ_vf| get their term ψ_f·e_f; the others

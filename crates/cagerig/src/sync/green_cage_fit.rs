@@ -33,6 +33,16 @@ use crate::error::RigError;
 
 /// Converged when max |Jᵀr| is at most this fraction of the cage size.
 pub const GRADIENT_TOLERANCE: f64 = 1e-13;
+/// A fit whose gradient stops falling above [`GRADIENT_TOLERANCE`] (the round-off floor of
+/// Jᵀr: on cages with large face coordinates it lies near 1.4e-13 of the cage size) is accepted
+/// when max |Jᵀr| is at most this fraction of the cage size; a continuation piece too. The
+/// session refuses an event whose CageUp ends above it.
+pub const ACCEPTED_GRADIENT: f64 = 1e-10;
+/// At the round-off floor: the quadratic model predicts a decrease of the energy by at most
+/// this fraction of it.
+const FLOOR_ENERGY_CHANGE: f64 = 1e-12;
+/// Steps at the round-off floor that do not halve the gradient before the solve stops there.
+const FLOOR_STALLS: usize = 3;
 /// A chord step (stale Hessian) is kept only when it leaves at most this fraction of the
 /// gradient.
 pub const CHORD_RATE: f64 = 0.5;
@@ -61,6 +71,8 @@ pub struct GreenCageFit {
     /// The damping of the factors in `lu` (0: an undamped Hessian, usable for chord steps).
     factor_damping: f64,
     tolerance: f64,
+    /// [`ACCEPTED_GRADIENT`] × the cage size.
+    accepted: f64,
     /// The Gram matrices of the fitting rows, constant: φ_Rᵀφ_R (`#C × #C`), φ_Rᵀψ_R
     /// (`#C × #F`) and ψ_Rᵀψ_R (`#F × #F`). JᵀJ is assembled from them and the sparse ∂g/∂C in
     /// O(#F²) block operations per step instead of the O(#R·#C²) product of J with itself.
@@ -137,6 +149,7 @@ impl GreenCageFit {
             damping: 0.0,
             factor_damping: f64::INFINITY,
             tolerance: GRADIENT_TOLERANCE * cage_size.max(f64::MIN_POSITIVE),
+            accepted: ACCEPTED_GRADIENT * cage_size.max(f64::MIN_POSITIVE),
             vertex_gram,
             vertex_face_gram,
             face_gram,
@@ -242,9 +255,11 @@ impl GreenCageFit {
         }
         self.predict_from_last_solution(target, posed_cage);
         let mut total = self.solve_for(target, posed_cage, MAX_STEPS)?;
-        if total.residual > self.tolerance && self.has_last_target {
-            let tolerance = self.tolerance;
-            solve_by_continuation(tolerance, &mut total, |a, first| {
+        // A direct solve that stopped at the round-off floor below the accepted gradient is
+        // done; one that ran out of steps above it continues in pieces, each accepted there.
+        if total.residual > self.accepted && self.has_last_target {
+            let accepted = self.accepted;
+            solve_by_continuation(accepted, &mut total, |a, first| {
                 if first {
                     posed_cage.copy_from_slice(&self.last_solution);
                 }
@@ -257,7 +272,7 @@ impl GreenCageFit {
                 report
             })?;
         }
-        if total.residual <= self.tolerance {
+        if total.residual <= self.accepted {
             self.last_target.copy_from_slice(target);
             self.last_solution.copy_from_slice(posed_cage);
             self.has_last_target = true;
@@ -417,7 +432,15 @@ impl GreenCageFit {
             // the quadratic model predicts badly and shrinks (to 0: Newton) when it predicts well.
             let mut damping = self.damping;
             let mut hessian_current = false;
+            // Steps in a row at the round-off floor (the energy no longer changes measurably)
+            // that did not halve the gradient; at FLOOR_STALLS the solve stops there.
+            let mut floor_stalls = 0;
+            // The damping of the last step that made real progress (not at the floor).
+            let mut accepted_damping = damping;
             while norm > self.tolerance && report.iterations < max_steps {
+                if floor_stalls >= FLOOR_STALLS {
+                    break;
+                }
                 if !hessian_current {
                     self.hessian_at(posed_cage, &residual);
                     hessian_current = true;
@@ -460,9 +483,17 @@ impl GreenCageFit {
                     &mut trial_gradient,
                 );
                 let ratio = (energy - trial_energy) / predicted;
-                // At the round-off floor ½‖r‖² no longer changes measurably: accept a step that
-                // still reduces the gradient.
-                let floor = trial_energy <= energy * (1.0 + 1e-12) && trial_norm < norm;
+                // At the round-off floor the model predicts a change of ½‖r‖² below its
+                // resolution: accept a step that still reduces the gradient, and count the steps
+                // that do not halve it.
+                let at_floor = predicted <= FLOOR_ENERGY_CHANGE * energy;
+                if at_floor && trial_norm > 0.5 * norm {
+                    floor_stalls += 1;
+                } else {
+                    floor_stalls = 0;
+                }
+                let floor =
+                    trial_energy <= energy * (1.0 + FLOOR_ENERGY_CHANGE) && trial_norm < norm;
                 if !(ratio > 1e-4 || floor) {
                     damping = raise_damping(damping, &self.normal_matrix, 4.0);
                     if !damping.is_finite() {
@@ -471,6 +502,9 @@ impl GreenCageFit {
                     continue;
                 }
                 report.iterations += 1;
+                if !at_floor {
+                    accepted_damping = damping;
+                }
                 if ratio > 0.75 {
                     damping = lower_damping(damping, &self.normal_matrix);
                 } else if ratio < 0.25 {
@@ -482,6 +516,19 @@ impl GreenCageFit {
                 energy = trial_energy;
                 norm = trial_norm;
                 hessian_current = false;
+            }
+            if floor_stalls >= FLOOR_STALLS {
+                // Stopped at the round-off floor, where the damping was raised on noise: the
+                // next event starts from the damping of the last real progress, and its
+                // prediction and chord steps get undamped factors at this solution.
+                damping = accepted_damping;
+                if !hessian_current {
+                    self.hessian_at(posed_cage, &residual);
+                    report.factorisations += 1;
+                }
+                if self.factorise_damped(0.0).is_err() {
+                    self.lu.invalidate();
+                }
             }
             self.damping = if damping.is_finite() { damping } else { 0.0 };
             report.residual = norm;
@@ -533,66 +580,9 @@ fn lower_damping(damping: f64, hessian: &Mat<f64>) -> f64 {
     }
 }
 
-/// The Jacobian of rows `φ x + ψ g(x)` (`vertex_rows` φ `#R × #C`, `face_rows` ψ `#R × #F`) at
-/// x (`#C`): `φ ⊗ I₃ + ψ ∂g/∂x` into `out` (`3#R × 3#C`, row 3i + a, column 3k + b).
-pub(crate) fn rows_jacobian_into(
-    vertex_rows: &Mat<f64>,
-    face_rows: &Mat<f64>,
-    normals: &StretchedNormals,
-    x: &[DVec3],
-    out: &mut Mat<f64>,
-) {
-    let num_rows = vertex_rows.nrows();
-    out.fill(0.0);
-    for k in 0..vertex_rows.ncols() {
-        let column = vertex_rows.col(k);
-        for i in 0..num_rows {
-            for a in 0..3 {
-                out[(3 * i + a, 3 * k + a)] = column[i];
-            }
-        }
-    }
-    for (f, triangle) in normals.triangles().iter().enumerate() {
-        let blocks = normals.face_jacobian(x, f);
-        let column = face_rows.col(f);
-        for (corner, block) in triangle.iter().zip(blocks) {
-            let m = *corner as usize;
-            for c in 0..3 {
-                let d = block.col(c);
-                let mut target = out.col_mut(3 * m + c);
-                for i in 0..num_rows {
-                    let w = column[i];
-                    target[3 * i] += w * d.x;
-                    target[3 * i + 1] += w * d.y;
-                    target[3 * i + 2] += w * d.z;
-                }
-            }
-        }
-    }
-}
-
-/// out = φ_R x + ψ_R g (`#R`).
-pub(crate) fn rows_of(
-    vertex_rows: &Mat<f64>,
-    face_rows: &Mat<f64>,
-    x: &[DVec3],
-    g: &[DVec3],
-    out: &mut [DVec3],
-) {
-    out.iter_mut().for_each(|o| *o = DVec3::ZERO);
-    for (k, xk) in x.iter().enumerate() {
-        let column = vertex_rows.col(k);
-        for (i, o) in out.iter_mut().enumerate() {
-            *o += column[i] * *xk;
-        }
-    }
-    for (f, gf) in g.iter().enumerate() {
-        let column = face_rows.col(f);
-        for (i, o) in out.iter_mut().enumerate() {
-            *o += column[i] * *gf;
-        }
-    }
-}
+#[path = "green_cage_fit_rows.rs"]
+mod rows;
+pub(crate) use rows::{rows_jacobian_into, rows_of};
 
 #[path = "green_cage_fit_gram.rs"]
 mod gram;

@@ -163,3 +163,52 @@ fn nearby_targets_start_from_the_prediction_off_the_last_solution() {
         solution = warm;
     }
 }
+
+/// A cage far from the origin: the rounding of the rows (eps × |x|) puts the round-off floor of
+/// Jᵀr above GRADIENT_TOLERANCE × size. The fit stops at that floor (it used to spend all its
+/// steps there with the damping raised on noise, and hand the next event damped factors, so no
+/// prediction) and accepts it below ACCEPTED_GRADIENT; the next, nearby target then starts from
+/// the prediction on undamped factors.
+#[test]
+fn a_fit_whose_round_off_floor_is_above_the_tolerance_stops_there() {
+    let offset = DVec3::new(3.0e4, -2.0e4, 1.0e4);
+    let points: Vec<DVec3> = random_inside(9, 40).iter().map(|p| *p + offset).collect();
+    let mut cage = test_cage();
+    cage.positions.iter_mut().for_each(|c| *c += offset);
+    let coords = compute_green_coords(&cage, &points, None).unwrap();
+    let normals = StretchedNormals::new(&cage.positions, coords.triangles.clone());
+    let mut fit = GreenCageFit::new(
+        coords.vertex.matrix().clone(),
+        coords.face.matrix().clone(),
+        &cage.positions,
+        normals,
+    )
+    .unwrap();
+    // Unreachable rows (a large residual), then the same rows moved a little.
+    let target = |shift: f64| -> Vec<DVec3> {
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                offset
+                    + (*p - offset) * 1.1
+                    + DVec3::new(0.05 * (i % 3) as f64 + shift, 0.02, -0.04 * (i % 5) as f64)
+            })
+            .collect()
+    };
+    let mut solved = cage.positions.clone();
+    let first = fit.apply(&target(0.0), &mut solved).unwrap();
+    // The floor: 7.7e-12 against a tolerance of 3.6e-13 (1e-13 of the cage size).
+    assert!(
+        first.residual > fit.tolerance() && first.residual <= fit.accepted,
+        "{first:?}"
+    );
+    assert!(first.iterations < MAX_STEPS / 2, "{first:?}");
+    // Before: 3 steps and 4 Hessians, from damped factors.
+    let second = fit.apply(&target(1e-3), &mut solved).unwrap();
+    assert!(second.residual <= fit.accepted, "{second:?}");
+    assert!(
+        second.iterations <= 1 && second.factorisations <= 2,
+        "{second:?}"
+    );
+}
