@@ -91,6 +91,16 @@ pub struct SessionArgs {
 }
 
 impl SessionArgs {
+    /// Whether loading the rig should compute mean value coordinates Φ for the session: only a
+    /// rig bound with them uses Φ (a Green binding computes its own φ, ψ and would discard Φ,
+    /// with a note about coordinates nobody gave).
+    pub fn needs_mean_value_coords(&self) -> bool {
+        match self.coords {
+            CoordsKind::Mvc => true,
+            CoordsKind::Green => false,
+        }
+    }
+
     pub fn options(&self) -> SessionOptions {
         SessionOptions {
             coords: self.coords,

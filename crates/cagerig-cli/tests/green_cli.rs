@@ -135,3 +135,25 @@ fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
         assert!((10.0..=60.0).contains(&bend), "bend {bend}°");
     }
 }
+
+/// A Green rig does not compute mean value coordinates it would discard: `animate --auto-cage
+/// --coords green` used to compute Φ for the generated cage and then warn that "the given mean
+/// value coordinates … do not apply", of coordinates nobody gave.
+#[test]
+fn a_green_rig_with_a_generated_cage_computes_no_mean_value_coordinates() {
+    let dir = std::env::temp_dir().join(format!("cagerig-green-auto-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let output = cagerig()
+        .arg("animate")
+        .arg(repo().join("data/fbx/blender_279_sausage_7400_binary.fbx"))
+        .args(["--auto-cage", "--animation", "0", "--times", "0"])
+        .args(["--coords", "green", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("generated one"), "{stderr}");
+    assert!(!stderr.contains("mean value coordinates"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -85,7 +85,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.max_between
         );
     }
-    let mut loaded = load_rig_or_generate_cage(&args.rig, true, true, args.auto_cage.options())?;
+    let mut loaded = load_rig_or_generate_cage(
+        &args.rig,
+        true,
+        args.session.needs_mean_value_coords(),
+        args.auto_cage.options(),
+    )?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
     let name = loaded

@@ -253,7 +253,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .map(crate::commands::edit::read_script)
         .transpose()?;
     let mut pictures = open_pictures(args)?;
-    let mut loaded = load_rig_or_generate_cage(&args.rig, true, true, args.auto_cage.options())?;
+    let mut loaded = load_rig_or_generate_cage(
+        &args.rig,
+        true,
+        args.session.needs_mean_value_coords(),
+        args.auto_cage.options(),
+    )?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
     let mut options = args.session.options();
