@@ -157,3 +157,48 @@ fn a_green_rig_with_a_generated_cage_computes_no_mean_value_coordinates() {
     assert!(!stderr.contains("mean value coordinates"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The Fox under Green coordinates: its unindexed mesh has 290 distinct points for a cage of
+/// 102 vertices and 200 faces, so [φ ψ] has no MaxVol rows. Binding used to fail with "cage
+/// coordinates Φ (rank deficient: MaxVol needs rank #C)"; it now fits all rows, says so, and
+/// reproduces the rest mesh and follows a rest-cage edit.
+#[test]
+fn a_green_rig_whose_mesh_has_too_few_distinct_points_fits_all_rows() {
+    let dir = std::env::temp_dir().join(format!("cagerig-green-fox-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = dir.join("script.json");
+    std::fs::write(
+        &script,
+        r#"{"steps":[{"op":"move_rest_cage","vertices":[0,1,2],"offset":[0.5,1.0,-0.5]}]}"#,
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let output = cagerig()
+        .arg("edit")
+        .arg(repo().join("data/fox/Fox.glb"))
+        .arg("--cage")
+        .arg(repo().join("data/fox/Fox_cage.obj"))
+        .args(["--coords", "green", "--script"])
+        .arg(&script)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("Green CageUp fits all 1728 mesh vertices")
+            && stderr.contains("290 distinct positions"),
+        "{stderr}"
+    );
+    let rest = positions(&out.join("step0_mesh_rest.obj"));
+    let edited = positions(&out.join("step1_mesh_rest.obj"));
+    let (lo, hi) = cagerig::mesh::bounding_box(&rest);
+    let moved = cagerig::mesh::max_distance(&rest, &edited) / (hi - lo).length();
+    assert!(
+        moved > 1e-3,
+        "the rest-cage edit moved the skin by {moved:e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

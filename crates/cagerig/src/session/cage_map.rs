@@ -143,9 +143,12 @@ pub(super) fn bind_cage_map(
         cage_coords.round_to_f32();
     }
     let green_rows = match (&green_parts, &options.fit_rows) {
-        (Some((face_coords, _)), FitRows::MaxVol) => {
-            Some(green_fit_rows(&cage_coords, face_coords)?)
-        }
+        (Some((face_coords, _)), FitRows::MaxVol) => Some(green_fit_rows(
+            &cage_coords,
+            face_coords,
+            mesh_positions,
+            warnings,
+        )?),
         (Some(_), FitRows::AllRows | FitRows::Rows(_))
         | (None, FitRows::MaxVol | FitRows::AllRows | FitRows::Rows(_)) => None,
     };
@@ -553,9 +556,16 @@ fn compute_green_coords_for_mesh(
     Ok((coords, outside.len()))
 }
 
-/// CageUp's rows for a Green rig: MaxVol rows of [φ ψ] (`#V × (#C + #F)`), so that the
-/// least-squares fit sees the face terms too; all rows when the mesh has fewer vertices.
-fn green_fit_rows(vertex: &CageCoords, face: &CageCoords) -> Result<Vec<usize>, RigError> {
+/// Green CageUp's fitting rows: the MaxVol rows of [φ ψ] (`#V × (#C + #F)`), or every row
+/// when the mesh has no more rows than that or [φ ψ] is rank deficient — a mesh with fewer
+/// distinct points than #C + #F (an unindexed glTF repeats each corner: the Fox has 290
+/// distinct points of 1,728 for a cage of 102 vertices and 200 faces) — with a note saying so.
+fn green_fit_rows(
+    vertex: &CageCoords,
+    face: &CageCoords,
+    mesh_positions: &[DVec3],
+    warnings: &mut Vec<Warning>,
+) -> Result<Vec<usize>, RigError> {
     let (nv, nc, nf) = (
         vertex.num_vertices(),
         vertex.num_cage_vertices(),
@@ -571,5 +581,25 @@ fn green_fit_rows(vertex: &CageCoords, face: &CageCoords) -> Result<Vec<usize>, 
             face.get(i, k - nc)
         }
     });
-    Ok(maxvol::select_maxvol_rows(&CageCoords::from_matrix(combined)?)?.rows)
+    match maxvol::select_maxvol_rows(&CageCoords::from_matrix(combined)?) {
+        Ok(selection) => Ok(selection.rows),
+        Err(RigError::Singular { .. }) => {
+            let mut distinct: Vec<[u64; 3]> = mesh_positions
+                .iter()
+                .map(|p| p.to_array().map(f64::to_bits))
+                .collect();
+            distinct.sort_unstable();
+            distinct.dedup();
+            warnings.push(Warning::Note {
+                message: format!(
+                    "Green CageUp fits all {nv} mesh vertices: [φ ψ] has no {} independent rows \
+                     for MaxVol (#C + #F = {nc} + {nf}; the mesh has {} distinct positions)",
+                    nc + nf,
+                    distinct.len()
+                ),
+            });
+            Ok((0..nv).collect())
+        }
+        Err(e) => Err(e),
+    }
 }
