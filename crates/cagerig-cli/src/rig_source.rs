@@ -172,6 +172,23 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
     load_rig_or_generate_cage(args, progress, compute_coords, None)
 }
 
+/// The rig of a command that opens a session (`edit`, `animate`, `export`, `render`): loaded
+/// with a progress bar, its cage generated under `--auto-cage`, and mean value coordinates
+/// computed only when the session binds with them
+/// ([`crate::session_args::SessionArgs::needs_mean_value_coords`]).
+pub fn load_rig_for_session(
+    rig: &RigArgs,
+    auto_cage: &AutoCageArgs,
+    session: &crate::session_args::SessionArgs,
+) -> anyhow::Result<LoadedRig> {
+    load_rig_or_generate_cage(
+        rig,
+        true,
+        session.needs_mean_value_coords(),
+        auto_cage.options(),
+    )
+}
+
 /// [`load_rig`]; when the rig has no cage and `auto_cage` gives options, one is generated
 /// ([`LoadedRig::generated_cage`]) instead of failing.
 pub fn load_rig_or_generate_cage(

@@ -10,7 +10,7 @@ use cagerig::skinning::SkinningMethod;
 use crate::output_dir::{StagedDir, StateOutputArgs};
 use crate::pictures::PictureMaker;
 use crate::rig_source::{
-    AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_or_generate_cage, report_generated_cage,
+    AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_for_session, report_generated_cage,
     write_generated_cage,
 };
 use crate::session_args::{SessionArgs, skinning_parser, start_session};
@@ -74,12 +74,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let script = read_script(script_path)?;
     let mut pictures = PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
-    let loaded = load_rig_or_generate_cage(
-        rig,
-        true,
-        session_args.needs_mean_value_coords(),
-        auto_cage.options(),
-    )?;
+    let loaded = load_rig_for_session(rig, auto_cage, session_args)?;
     if let Some(g) = &loaded.generated_cage {
         report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
         write_generated_cage(&mut staged, &g.cage)?;

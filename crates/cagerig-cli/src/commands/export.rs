@@ -19,7 +19,7 @@ use cagerig_formats::gltf::export_animation;
 use cagerig_formats::gltf::export_bake::BakeReport;
 
 use crate::animation_args::AnimationSourceArgs;
-use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_or_generate_cage, note_generated_cage};
+use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_for_session, note_generated_cage};
 use crate::session_args::{SessionArgs, skinning_parser};
 
 #[derive(Debug, Clone, clap::Args)]
@@ -85,12 +85,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.max_between
         );
     }
-    let mut loaded = load_rig_or_generate_cage(
-        &args.rig,
-        true,
-        args.session.needs_mean_value_coords(),
-        args.auto_cage.options(),
-    )?;
+    let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage, &args.session)?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
     let name = loaded

@@ -15,7 +15,7 @@ use glam::DVec3;
 use crate::animation_args::{AnimationSourceArgs, NO_ANIMATION};
 use crate::output_dir::{OUT, StagedDir};
 use crate::pictures::{CameraChoice, PictureMaker, PictureOptions, ViewArg};
-use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_or_generate_cage, note_generated_cage};
+use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_for_session, note_generated_cage};
 use crate::session_args::{SessionArgs, start_session};
 
 #[derive(Debug, Clone, clap::Args)]
@@ -253,12 +253,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .map(crate::commands::edit::read_script)
         .transpose()?;
     let mut pictures = open_pictures(args)?;
-    let mut loaded = load_rig_or_generate_cage(
-        &args.rig,
-        true,
-        args.session.needs_mean_value_coords(),
-        args.auto_cage.options(),
-    )?;
+    let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage, &args.session)?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
     let mut options = args.session.options();

@@ -432,8 +432,9 @@ impl GreenCageFit {
             // the quadratic model predicts badly and shrinks (to 0: Newton) when it predicts well.
             let mut damping = self.damping;
             let mut hessian_current = false;
-            // Steps in a row at the round-off floor (the energy no longer changes measurably)
-            // that did not halve the gradient; at FLOOR_STALLS the solve stops there.
+            // Steps in a row at the round-off floor (the model predicts an energy change below
+            // FLOOR_ENERGY_CHANGE of it) that did not halve the gradient; at FLOOR_STALLS the
+            // solve stops there.
             let mut floor_stalls = 0;
             // The damping of the last step that made real progress (not at the floor).
             let mut accepted_damping = damping;
