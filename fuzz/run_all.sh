@@ -24,7 +24,10 @@ done
 # Reader 7: DQ blend weights (`<vertex> <b>` lines); reader 8: cage animation.
 printf '\x07# b\n0 0.25\n2 1\n' > corpus/parsers/seed7
 { printf '\x08'; head -c 3000 "$DATA"/arm/arm_cageAnim.txt; } > corpus/parsers/seed8
-for f in "$DATA"/gltf/*/*.gl* "$DATA"/fox/Fox.glb; do seed gltf_import "$f" "$(basename "$f")"; done
+# Files under 1 MB only: a multi-megabyte seed (BrainStem) slows every mutation.
+for f in "$DATA"/gltf/*/*.gl* "$DATA"/fox/Fox.glb; do
+  [ "$(wc -c < "$f")" -lt 1000000 ] && seed gltf_import "$f" "$(basename "$f")"
+done
 for f in "$DATA"/fbx/*.fbx; do seed fbx_import "$f" "$(basename "$f")"; done
 mkdir -p corpus/rig_assembly
 { cat "$DATA"/fbx/blender_279_sausage_base_0.obj; printf '\0'; cat "$DATA"/arm/arm_cage.obj; } \

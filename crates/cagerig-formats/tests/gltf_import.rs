@@ -137,3 +137,37 @@ fn simple_skin_embedded_buffers_match_the_file() {
         assert!(err < 1e-9, "t={t}: {err:e}");
     }
 }
+
+/// BrainStem (a three.js re-export of the Khronos sample): 59 skinned meshes, each with its own
+/// skin over the same 18 joints, import as one rig: every primitive's vertices, one skeleton.
+#[test]
+fn brainstem_59_skinned_meshes_on_one_skeleton_are_one_rig() {
+    let c = import_character(
+        &data("gltf/BrainStem/BrainStem.glb"),
+        &ImportOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(c.summary.primitives.len(), 59);
+    assert_eq!(c.mesh.num_vertices(), 34_159);
+    assert_eq!(c.summary.vertices, 34_159);
+    assert_eq!(c.skeleton.len(), 18);
+    assert_eq!(c.skin_weights.num_vertices(), 34_159);
+    assert_eq!(c.animations.len(), 1);
+}
+
+/// CesiumMan (Khronos sample, COLLADA2GLTF): 3,273 vertices, 19 joints, one 2 s walk.
+#[test]
+fn cesium_man_counts_match_the_file() {
+    let c = import_character(
+        &data("gltf/CesiumMan/CesiumMan.glb"),
+        &ImportOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(c.mesh.num_vertices(), 3_273);
+    assert_eq!(c.mesh.num_triangles(), 4_672);
+    assert_eq!(c.skeleton.len(), 19);
+    assert_eq!(c.summary.max_influences, 4);
+    assert_eq!(c.summary.renormalised_rows, 0);
+    assert_eq!(c.animations.len(), 1);
+    assert!(c.warnings.is_empty(), "{:?}", c.warnings);
+}
