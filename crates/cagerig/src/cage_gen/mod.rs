@@ -12,6 +12,8 @@
 //! 4. [`simplify`] — collapse edges in quadric-error order down to the target, rejecting every
 //!    collapse that would break manifoldness, flip a triangle, come within `margin` of the mesh
 //!    (mesh BVH), intersect the cage (triangle hash) or sweep over a piece of the mesh;
+//!    then flip the shared edge of nearly coplanar triangles where that lifts a poor one
+//!    ([`edge_flips`], under the same constraints: needles on flat parts become fair triangles);
 //! 5. [`offset_search`] — try increasing offsets, from a tight one whose surface is verified
 //!    exactly ([`surface_clearance`]) or else the tightest the grid guarantees, and keep the
 //!    first whose cage reaches the target and passes [`validate`].
@@ -25,6 +27,7 @@
 pub mod bvh;
 pub mod collapse_checks;
 pub mod distance_grid;
+pub mod edge_flips;
 pub mod geometry;
 pub mod marching_tets;
 pub mod offset_search;

@@ -57,6 +57,8 @@ pub struct GenerationStats {
     pub collapses: usize,
     /// Candidate collapse positions rejected by the geometric constraints.
     pub rejected_positions: usize,
+    /// Edge flips after the collapses (needles on flat parts replaced by fair triangles).
+    pub flips: usize,
     /// Connected pieces of the (welded) mesh.
     pub mesh_pieces: usize,
     /// One line per offset tried.
@@ -265,6 +267,7 @@ pub fn generate_guided_cage(
             surface_vertices,
             collapses: simplified.collapses,
             rejected_positions: simplified.rejections,
+            flips: simplified.flips,
             mesh_pieces: reps.len(),
             attempts,
             stage_seconds,

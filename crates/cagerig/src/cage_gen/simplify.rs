@@ -41,10 +41,15 @@ const MAX_SWEEPS: usize = 3;
 /// Least shape quality ([`shape_quality`]) a collapse may create, unless the star was already
 /// worse, while more than [`QUALITY_PHASE`] × the target count remain. Quadric error alone is
 /// zero along flat and cylindrical directions, where it grows slivers across the whole part:
-/// they slow every intersection query. Near the target the floor is dropped, so that it never
-/// keeps a cage from reaching its size.
+/// they slow every intersection query. Near the target the floor is lowered to
+/// [`FINAL_SHAPE_QUALITY`], and dropped only where no collapse above that is left, so that it
+/// never keeps a cage from reaching its size.
 const MIN_SHAPE_QUALITY: f64 = 0.1;
 const QUALITY_PHASE: usize = 3;
+/// The floor of the final phase: low enough to let the quadric order finish the cage, high
+/// enough to forbid needles (a 60 × 2 × 2 beam got angles of 0.04° without it, shape quality
+/// 1.2e-3; Green coordinates' stretched normals turn fast on such triangles).
+const FINAL_SHAPE_QUALITY: f64 = 0.02;
 
 /// 4√3·area / Σ squared edge lengths: 1 for an equilateral triangle, 0 for a degenerate one.
 pub(super) fn shape_quality(t: Triangle) -> f64 {
@@ -91,6 +96,8 @@ pub struct Simplified {
     pub collapses: usize,
     /// Candidate positions rejected by the geometric constraints.
     pub rejections: usize,
+    /// Edge flips after the collapses ([`super::edge_flips`]).
+    pub flips: usize,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -137,7 +144,8 @@ pub(super) struct State<'a> {
     pub(super) hash: TriangleHash,
     pub(super) constraints: CollapseConstraints<'a>,
     rejections: usize,
-    /// [`MIN_SHAPE_QUALITY`] while many vertices remain, then 0.
+    /// [`MIN_SHAPE_QUALITY`] while many vertices remain, then [`FINAL_SHAPE_QUALITY`], then 0
+    /// where that blocks the target.
     pub(super) quality_floor: f64,
     /// Buffers of one collapse attempt, reused.
     pub(super) scratch: Scratch,
@@ -283,9 +291,9 @@ pub fn simplify(
                 StopAt::Vertices(n) => num_alive_vertices > QUALITY_PHASE * n,
                 StopAt::Faces(n) => num_alive_faces > QUALITY_PHASE * n,
             };
-            if !remaining && state.quality_floor > 0.0 {
+            if !remaining && state.quality_floor > FINAL_SHAPE_QUALITY {
                 // Entering the final phase: edges blocked by the floor become candidates again.
-                state.quality_floor = 0.0;
+                state.quality_floor = FINAL_SHAPE_QUALITY;
                 for f in 0..state.faces.len() {
                     if state.face_alive[f] {
                         for k in 0..3 {
@@ -326,14 +334,20 @@ pub fn simplify(
             }
         }
         sweeps += 1;
-        if done(num_alive_vertices, num_alive_faces)
-            || collapses == collapses_before_sweep
-            || sweeps >= MAX_SWEEPS
-        {
+        let stalled = collapses == collapses_before_sweep || sweeps >= MAX_SWEEPS;
+        if !done(num_alive_vertices, num_alive_faces) && stalled && state.quality_floor > 0.0 {
+            // No collapse above the floor is left: drop it (the edges it blocked become
+            // candidates again) rather than stop short of the target.
+            state.quality_floor = 0.0;
+            sweeps = 0;
+            continue;
+        }
+        if done(num_alive_vertices, num_alive_faces) || stalled {
             break;
         }
     }
     let reached = done(num_alive_vertices, num_alive_faces);
+    let flips = state.improve_by_flips();
     // Compact.
     let mut new_index = vec![u32::MAX; state.positions.len()];
     let mut positions = Vec::with_capacity(num_alive_vertices);
@@ -356,6 +370,7 @@ pub fn simplify(
         reached,
         collapses,
         rejections: state.rejections,
+        flips,
     }
 }
 
