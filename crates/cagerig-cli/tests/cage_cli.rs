@@ -32,6 +32,8 @@ fn cage_writes_a_validated_cage_that_info_accepts() {
     assert_eq!(v["cage"]["cage_vertices"], 40);
     assert!(v["cage"]["min_distance_fraction"].as_f64().unwrap() >= 0.005);
     assert!(v["cage"]["maxvol_condition"].as_f64().unwrap().is_finite());
+    // The shape figure: no needle in a generated cage (radians).
+    assert!(v["cage"]["min_triangle_angle"].as_f64().unwrap() > 1f64.to_radians());
     let checks = v["cage"]["checks"].as_array().unwrap();
     assert!(checks.iter().any(|c| c["name"] == "coordinates"));
     let cage = cagerig::io::read_obj(&out_path).unwrap();

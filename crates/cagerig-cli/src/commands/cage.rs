@@ -140,6 +140,10 @@ fn print_report(o: &CageOutput) {
         100.0 * r.min_triangle_distance_fraction
     );
     println!("volume ratio   {:.3} (cage / mesh)", r.volume_ratio);
+    println!(
+        "shape          smallest triangle angle {:.2}°",
+        r.min_triangle_angle.to_degrees()
+    );
     if let Some(c) = r.maxvol_condition {
         println!("MaxVol cond.   {c:.3e}");
     }

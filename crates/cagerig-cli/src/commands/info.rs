@@ -139,9 +139,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
         if let Some(checks) = &report.cage_checks {
             println!(
-                "cage distance  min {:.3} %, mean {:.3} % of the diagonal",
+                "cage distance  min {:.3} %, mean {:.3} % of the diagonal; smallest triangle \
+                 angle {:.2}°",
                 100.0 * checks.min_distance_fraction,
-                100.0 * checks.mean_distance_fraction
+                100.0 * checks.mean_distance_fraction,
+                checks.min_triangle_angle.to_degrees()
             );
             crate::commands::cage::print_checks(checks);
         }

@@ -73,6 +73,9 @@ pub struct CageReport {
     pub min_triangle_distance_fraction: f64,
     /// Cage volume / |mesh signed volume| (the latter is approximate for an open mesh).
     pub volume_ratio: f64,
+    /// Smallest interior angle of any cage triangle, radians: needles (a few hundredths of a
+    /// degree) make Green coordinates' stretched normals turn fast and CageUp ill-conditioned.
+    pub min_triangle_angle: f64,
     /// ‖ΦC − M‖∞ × 1/diagonal, when coordinates were checked.
     pub reproduction_error_fraction: Option<f64>,
     /// 2-norm condition number of the MaxVol block Φ̃ (`#C × #C`), when computed.
@@ -406,9 +409,23 @@ pub fn validate_cage_geometry(
         } else {
             f64::INFINITY
         },
+        min_triangle_angle: min_triangle_angle(cage),
         reproduction_error_fraction: None,
         maxvol_condition: None,
     }
+}
+
+/// Smallest interior angle of the triangles of `cage`, radians (π for no triangle).
+fn min_triangle_angle(cage: &TriMesh) -> f64 {
+    (0..cage.num_triangles())
+        .flat_map(|t| {
+            let c = cage.corners(t);
+            (0..3).map(move |k| {
+                let (u, v) = (c[(k + 1) % 3] - c[k], c[(k + 2) % 3] - c[k]);
+                u.cross(v).length().atan2(u.dot(v))
+            })
+        })
+        .fold(std::f64::consts::PI, f64::min)
 }
 
 /// Adds the `coordinates` check to `report`: Φ = MVC of the mesh vertices w.r.t. the cage,
@@ -474,6 +491,8 @@ mod tests {
         assert!(report.passed(), "{:?}", report.failures());
         assert!((report.min_distance_fraction * report.mesh_diagonal - 0.5).abs() < 1e-12);
         assert!((report.volume_ratio - 3.375).abs() < 1e-12);
+        // A cube's triangles are right isosceles: 45° at the acute corners.
+        assert!((report.min_triangle_angle - std::f64::consts::FRAC_PI_4).abs() < 1e-12);
         assert!(report.maxvol_condition.unwrap() >= 1.0);
         // Too small: the mesh crosses it.
         let small = validate_cage_geometry(&cube(0.9), &mesh, &req);
