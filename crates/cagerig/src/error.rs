@@ -304,6 +304,14 @@ pub enum RigError {
         /// and the message says so.
         area_ratio: f64,
     },
+    /// Green coordinates: a grab of the current cage while it is not CageUp's fit of the pose
+    /// (kept under [`crate::session::UnfittedCagePolicy::KeepEvent`]).
+    #[error(
+        "the current cage C' cannot be grabbed in this pose: {0}; CageRev needs C' to be \
+         CageUp's fit of the skin, so go back to a pose the Green cage follows (an earlier step \
+         or the rest pose), or bind with mean value coordinates"
+    )]
+    PosedCageUnfitted(UnfittedCage),
     /// Green coordinates: CageRev found no rest cage that makes CageUp return the grabbed
     /// current cage.
     #[error(
@@ -430,6 +438,47 @@ pub(crate) fn names_sentence(names: &[&str]) -> String {
 /// A fitted Green cage triangle whose signed area falls below this fraction of its binding area
 /// counts as folded in [`RigError::GreenFitFailed`]'s message.
 pub const GREEN_FOLD_AREA_RATIO: f64 = 0.05;
+
+/// Why a Green CageUp found no current cage C' for a state: where the fit stopped. An event
+/// that ends so is refused ([`RigError::GreenFitFailed`]) or, under
+/// [`crate::session::UnfittedCagePolicy::KeepEvent`], kept with C' marked unfitted
+/// ([`crate::session::RigSession::posed_cage_unfitted`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnfittedCage {
+    /// max |Jᵀr| where the fit stopped.
+    pub residual: f64,
+    /// The tolerance it had to reach.
+    pub limit: f64,
+    /// The cage triangle with the smallest signed area ratio at the stopping point.
+    pub face: usize,
+    /// That triangle's signed area over its binding area (negative: turned over).
+    pub area_ratio: f64,
+}
+
+impl std::fmt::Display for UnfittedCage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "CageUp found no current cage fitting the skin (the fit stopped with a gradient of \
+             {:.3e}, expected at most {:.3e}; {})",
+            self.residual,
+            self.limit,
+            green_fit_cause(self.face, self.area_ratio)
+        )
+    }
+}
+
+impl UnfittedCage {
+    /// The refusal of an event that ended so ([`RigError::GreenFitFailed`]).
+    pub fn refusal(self) -> RigError {
+        RigError::GreenFitFailed {
+            residual: self.residual,
+            limit: self.limit,
+            face: self.face,
+            area_ratio: self.area_ratio,
+        }
+    }
+}
 
 /// The cause [`RigError::GreenFitFailed`] names: the folded triangle, or that none folded.
 fn green_fit_cause(face: usize, area_ratio: f64) -> String {

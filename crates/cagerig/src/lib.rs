@@ -46,7 +46,7 @@ pub mod weights_source;
 
 pub use cage_coords::CageCoords;
 pub use coords_kind::CoordsKind;
-pub use error::{RigError, Warning};
+pub use error::{RigError, UnfittedCage, Warning};
 pub use mesh::TriMesh;
 pub use skeleton::{Joint, Skeleton};
 pub use skin_weights::SkinWeights;

@@ -49,6 +49,7 @@ mod reskeleton;
 mod sync_chain;
 #[cfg(test)]
 mod test_rigs;
+mod unfitted_cage;
 use cage_map::{BoundCageMap, CageMap, GivenCoords, bind_cage_map};
 use checkpoint::Checkpoint;
 pub use checkpoint::MAX_STATE_MAGNITUDE;
@@ -63,6 +64,7 @@ pub use parts::{
     PHI_C_TOLERANCE_F32, RigParts, SessionOptions, centre_coords_method, compute_centre_coords,
 };
 use sync_chain::scatter_edit;
+pub use unfitted_cage::{UnfittedCagePolicy, UnknownUnfittedCagePolicy};
 
 /// CoR data: Λ = S·Φ (`#V × #C`, Eq. 14) and the current centres Λ·C.
 #[derive(Debug, Clone)]
@@ -419,6 +421,7 @@ impl RigSession {
         offsets: &[DVec3],
     ) -> Result<(), RigError> {
         self.check_cage_edit(vertices, offsets)?;
+        self.check_posed_cage_fitted()?;
         if self.locks.cage_up {
             return Err(RigError::Invalid(
                 "the current cage C' cannot be edited while CageUp is locked (CageRev assumes \

@@ -376,6 +376,14 @@ impl CageMap {
         }
     }
 
+    /// Where the last CageUp stopped when it found no current cage (none for linear maps).
+    pub(super) fn unfitted(&self) -> Option<crate::error::UnfittedCage> {
+        match self {
+            CageMap::Mvc => None,
+            CageMap::Green(green) => green.unfitted,
+        }
+    }
+
     /// The failure of the last CageUp that refuses the event, taken (none for linear maps).
     pub(super) fn take_fit_failure(&mut self) -> Option<RigError> {
         match self {

@@ -105,14 +105,19 @@ impl RigSession {
         let refused = match result {
             Err(e) if !changed => return Err(e),
             Err(e) => Some(e),
-            Ok(()) => self.cage_map.take_fit_failure().or_else(|| {
-                self.first_bad_state()
-                    .map(|(what, index, value)| RigError::EventRefused {
-                        what,
-                        index,
-                        value: value.to_array(),
-                    })
-            }),
+            Ok(()) => {
+                // A CageUp that found no current cage refuses the event unless the policy keeps
+                // it (`session/unfitted_cage.rs`).
+                let failure = self.cage_map.take_fit_failure();
+                self.refuses_unfitted(failure).or_else(|| {
+                    self.first_bad_state()
+                        .map(|(what, index, value)| RigError::EventRefused {
+                            what,
+                            index,
+                            value: value.to_array(),
+                        })
+                })
+            }
         };
         let Some(error) = refused else {
             return Ok(());

@@ -13,6 +13,7 @@ use faer::Mat;
 
 use super::*;
 use crate::coords::stretched_normals::StretchedNormals;
+use crate::error::UnfittedCage;
 use crate::sync::green_cage_fit::GreenCageFit;
 use crate::sync::green_cage_reverser::{GrabState, GreenCageReverser};
 use crate::sync::newton::NewtonReport;
@@ -55,8 +56,11 @@ pub(super) struct GreenState {
     /// Computed when the first cage keyframe is made ([`GreenState::keyframe_terms_of`]), not at
     /// binding.
     face_coords_norm: OnceLock<f64>,
-    /// Set when the last CageUp stopped above [`GREEN_FIT_LIMIT`] (the event is refused).
+    /// Set when the last CageUp stopped above [`GREEN_FIT_LIMIT`] (the event is refused),
+    /// taken by `finish_event`.
     pub(super) fit_failure: Option<RigError>,
+    /// Where the last CageUp stopped when it found no current cage (`None`: C' is its fit).
+    pub(super) unfitted: Option<UnfittedCage>,
     /// The cage's bounding-box diagonal.
     size: f64,
     /// Newton reports of the last CageUp and CageRev.
@@ -150,6 +154,7 @@ impl GreenState {
             face_centre_coords: None,
             face_coords_norm: OnceLock::new(),
             fit_failure: None,
+            unfitted: None,
             size,
             last_reverse: NewtonReport::default(),
         })
@@ -336,6 +341,7 @@ impl RigSession {
         let residual = match result {
             Ok(report) if report.residual <= limit => {
                 green.fit_failure = None;
+                green.unfitted = None;
                 return;
             }
             Ok(report) => report.residual,
@@ -360,12 +366,14 @@ impl RigSession {
                 (0, f64::INFINITY),
                 |best, x| if x.1 < best.1 { x } else { best },
             );
-        green.fit_failure = Some(RigError::GreenFitFailed {
+        let unfitted = UnfittedCage {
             residual,
             limit,
             face,
             area_ratio,
-        });
+        };
+        green.unfitted = Some(unfitted);
+        green.fit_failure = Some(unfitted.refusal());
     }
 
     /// The skinning transforms (`#J`) of the current pose on the rest skeleton whose joints are

@@ -130,6 +130,9 @@ pub struct SessionOptions {
     /// The cage coordinates to bind with: mean value (M = ΦC, the paper) or Green
     /// (M = φC + ψ·g(C); see `docs/green-coordinates.md`).
     pub coords: CoordsKind,
+    /// What an event does when a Green CageUp finds no current cage for it: refuse it (the
+    /// default) or keep it with C' unfitted ([`super::UnfittedCagePolicy`]).
+    pub unfitted_cage: super::UnfittedCagePolicy,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).
