@@ -3,7 +3,9 @@
 
 use anyhow::Context;
 use cagerig::cage_coords::CoordsPrecision;
-use cagerig::session::{CageFitSource, FitRows, GivenCageCoords, RigSession, SessionOptions};
+use cagerig::session::{
+    CageFitSource, FitRows, GivenCageCoords, RigSession, SessionOptions, UnfittedCagePolicy,
+};
 use cagerig::skinning::SkinningMethod;
 use cagerig::sync::skeleton_updater::JointLocalisation;
 use cagerig::{CoordsKind, Warning};
@@ -64,6 +66,14 @@ pub enum PrecisionArg {
     F32,
 }
 
+/// The `--unfitted-cage` value parser: the names of [`UnfittedCagePolicy::ALL`], read through
+/// `UnfittedCagePolicy: FromStr`, the one parser of these names.
+pub fn unfitted_cage_parser() -> impl clap::builder::TypedValueParser<Value = UnfittedCagePolicy> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(UnfittedCagePolicy::ALL.map(UnfittedCagePolicy::name))
+        .try_map(|name| name.parse::<UnfittedCagePolicy>())
+}
+
 /// Session options shared by `edit` and `animate`.
 #[derive(Debug, Clone, Args)]
 pub struct SessionArgs {
@@ -88,6 +98,11 @@ pub struct SessionArgs {
     /// the first cage edit moves only what it touches.
     #[arg(long)]
     pub keep_file_coords: bool,
+    /// Green rigs: when CageUp finds no current cage C' for a pose (past a fold), `refuse` the
+    /// event and stop, or `keep` it: the skin and skeletons exact, C' the fit's closest cage
+    /// (written with a warning), grabs of C' refused until a pose fits again.
+    #[arg(long, value_parser = unfitted_cage_parser(), default_value = "refuse")]
+    pub unfitted_cage: UnfittedCagePolicy,
 }
 
 impl SessionArgs {
@@ -125,9 +140,34 @@ impl SessionArgs {
             } else {
                 GivenCageCoords::RecomputeIfInexact
             },
+            unfitted_cage: self.unfitted_cage,
             ..SessionOptions::default()
         }
     }
+}
+
+/// Warns on stderr when the current cage C' that `what` shows is not CageUp's fit (kept under
+/// `--unfitted-cage keep`).
+pub fn warn_if_unfitted(what: &str, session: &RigSession) {
+    if let Some(unfitted) = session.posed_cage_unfitted() {
+        eprintln!("warning: {what}: {unfitted}; it shows the fit's closest cage");
+    }
+}
+
+/// The hint a refused Green event adds for this command line: the option that keeps such events.
+pub fn unfitted_cage_hint(error: &(dyn std::error::Error + 'static)) -> &'static str {
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(error);
+    while let Some(e) = cause {
+        if matches!(
+            e.downcast_ref::<cagerig::RigError>(),
+            Some(cagerig::RigError::GreenFitFailed { .. })
+        ) {
+            return " (`--unfitted-cage keep` keeps such events: the skin posed exactly, the \
+                    current cage left unfitted)";
+        }
+        cause = e.source();
+    }
+    ""
 }
 
 pub fn start_session(

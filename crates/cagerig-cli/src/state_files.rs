@@ -48,6 +48,7 @@ pub fn write_state(sink: &mut dyn StateSink, prefix: &str, s: &RigSession) -> an
         ("cage_rest", s.rest_cage(), s.cage_triangles()),
         ("cage_posed", s.posed_cage(), s.cage_triangles()),
     ];
+    crate::session_args::warn_if_unfitted(&format!("{prefix}_cage_posed.obj"), s);
     for (what, positions, triangles) in objs {
         sink.put(&format!("{prefix}_{what}.obj"), &|w| {
             write_obj_to(w, positions, triangles, FloatFormat::RoundTrip)

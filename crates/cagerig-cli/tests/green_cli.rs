@@ -1,5 +1,6 @@
-//! `--coords green` on the command line: the Arm scenario's grab lands exactly, `info` reports
-//! the Green binding, an unknown kind lists the accepted ones.
+//! `--coords green` on the command line: the Arm scenario's grab lands exactly, `--unfitted-cage
+//! keep` past the fold limit, `info` reports the Green binding, an unknown kind lists the
+//! accepted ones.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
@@ -199,6 +200,78 @@ fn a_green_rig_whose_mesh_has_too_few_distinct_points_fits_all_rows() {
     assert!(
         moved > 1e-3,
         "the rest-cage edit moved the skin by {moved:e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn past_the_fold_keep_poses_the_skin_exactly_and_refuses_the_grab() {
+    let dir = std::env::temp_dir().join(format!("cagerig-unfitted-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // 120° at the elbow in one event: past the Arm's Green fold limit (about 66°).
+    let bend = r#"{"op":"rotate_joint","joint":"lowerarm01.R","axis":[1,0,0],"degrees":120}"#;
+    let inflate = r#"{"op":"move_rest_cage","vertices":[0,2,4,5,6],"offset":[2,-1,1.5]}"#;
+    let grab = r#"{"op":"move_posed_cage","vertices":[20],"offset":[0,1,0]}"#;
+    let script = |name: &str, steps: &[&str]| {
+        let path = dir.join(name);
+        std::fs::write(&path, format!(r#"{{"steps":[{}]}}"#, steps.join(","))).unwrap();
+        path
+    };
+    let pose_and_inflate = script("bend.json", &[bend, inflate]);
+    let run = |coords: &str, policy: &str, script: &Path, out: &str| {
+        cagerig()
+            .arg("edit")
+            .arg(repo().join("data/arm/arm.obj"))
+            .args(["--coords", coords, "--unfitted-cage", policy, "--script"])
+            .arg(script)
+            .arg("--out")
+            .arg(dir.join(out))
+            .output()
+            .unwrap()
+    };
+    // The default refuses, and says which option keeps such events.
+    let refused = run("green", "refuse", &pose_and_inflate, "refused");
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(
+        stderr.contains("Green CageUp found no current cage")
+            && stderr.contains("--unfitted-cage keep"),
+        "{stderr}"
+    );
+    // `keep`: the posed skin is the mean value rig's (skinning never reads C'), the rest-cage
+    // edit moves the rest skin, and each unfitted C' written is named in a warning.
+    let kept = run("green", "keep", &pose_and_inflate, "kept");
+    let stderr = String::from_utf8_lossy(&kept.stderr);
+    assert!(kept.status.success(), "{stderr}");
+    for file in ["step1_cage_posed.obj", "step2_cage_posed.obj"] {
+        assert!(
+            stderr.contains(&format!("warning: {file}: CageUp found no current cage")),
+            "{stderr}"
+        );
+    }
+    let mvc = run("mvc", "keep", &pose_and_inflate, "mvc");
+    assert!(
+        mvc.status.success(),
+        "{}",
+        String::from_utf8_lossy(&mvc.stderr)
+    );
+    let green_posed = positions(&dir.join("kept/step1_mesh_posed.obj"));
+    let mvc_posed = positions(&dir.join("mvc/step1_mesh_posed.obj"));
+    let (lo, hi) = cagerig::mesh::bounding_box(&mvc_posed);
+    let tol = 1e-9 * (hi - lo).length();
+    assert!(cagerig::mesh::max_distance(&green_posed, &mvc_posed) < tol);
+    let before = positions(&dir.join("kept/step1_mesh_rest.obj"));
+    let after = positions(&dir.join("kept/step2_mesh_rest.obj"));
+    assert!(cagerig::mesh::max_distance(&before, &after) > 1e-3 * (hi - lo).length());
+    // A grab of the unfitted C' is refused with what to do.
+    let with_grab = script("grab.json", &[bend, grab]);
+    let grabbed = run("green", "keep", &with_grab, "grabbed");
+    let stderr = String::from_utf8_lossy(&grabbed.stderr);
+    assert!(!grabbed.status.success());
+    assert!(
+        stderr.contains("step 2") && stderr.contains("cannot be grabbed in this pose"),
+        "{stderr}"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

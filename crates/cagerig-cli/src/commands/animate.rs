@@ -94,9 +94,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut session = session;
     for &t in times {
         let start = Instant::now();
-        player
-            .apply(t, &mut session)
-            .map_err(|e| anyhow::anyhow!("sample t = {t}: {e}"))?;
+        player.apply(t, &mut session).map_err(|e| {
+            let hint = crate::session_args::unfitted_cage_hint(&e);
+            anyhow::anyhow!("sample t = {t}: {e}{hint}")
+        })?;
         eprintln!(
             "t = {t}: frame in {:.3} ms",
             start.elapsed().as_secs_f64() * 1e3

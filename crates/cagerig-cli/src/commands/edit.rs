@@ -95,9 +95,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     for k in 0..script.steps.len() {
         let t = Instant::now();
-        script
-            .run_step(k, &mut session)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", script_path.display()))?;
+        script.run_step(k, &mut session).map_err(|e| {
+            let hint = crate::session_args::unfitted_cage_hint(&e);
+            anyhow::anyhow!("{}: {e}{hint}", script_path.display())
+        })?;
         eprintln!(
             "step {}: {} ({:.3} ms)",
             k + 1,
