@@ -469,6 +469,18 @@ impl Rig {
             .map_err(rig_error)
     }
 
+    /// Green rigs: what an edit does when CageUp finds no current cage for it (past a fold):
+    /// ``"refuse"`` (the default: RigError, nothing moves) or ``"keep"`` (the skin and
+    /// skeletons exact, the current cage left at the fit's closest cage and reported by
+    /// :attr:`posed_cage_unfitted`; grabs of it refused until a pose fits again).
+    fn set_unfitted_cage(&mut self, policy: &str) -> PyResult<()> {
+        let policy = policy
+            .parse::<cagerig::session::UnfittedCagePolicy>()
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("unfitted_cage: {e}")))?;
+        self.session.set_unfitted_cage_policy(policy);
+        Ok(())
+    }
+
     /// Selects what CageUp fits under DQS/CoR: ``"ghost"`` (exact loop) or ``"displayed"``.
     fn set_fit_source(&mut self, py: Python<'_>, source: &str) -> PyResult<()> {
         let source = options::fit_source(source)?;

@@ -14,13 +14,27 @@ use crate::rig::{Rig, rest_joints};
 impl Rig {
     // ----- structures (copies unless said otherwise) -----------------------------------------
 
-    /// Rest skin M, (#V, 3) float64 (copy).
     /// The cage coordinates the rig is bound with: ``"mvc"`` or ``"green"``.
     #[getter]
     fn coords(&self) -> &'static str {
         self.session.coords_kind().name()
     }
 
+    /// What an edit does when a Green CageUp finds no current cage: ``"refuse"`` or ``"keep"``
+    /// (:meth:`set_unfitted_cage`).
+    #[getter]
+    fn unfitted_cage(&self) -> &'static str {
+        self.session.unfitted_cage_policy().name()
+    }
+
+    /// Why the current cage C' is not CageUp's fit of the pose (kept under
+    /// ``set_unfitted_cage("keep")``), or None while it is.
+    #[getter]
+    fn posed_cage_unfitted(&self) -> Option<String> {
+        self.session.posed_cage_unfitted().map(|u| u.to_string())
+    }
+
+    /// Rest skin M, (#V, 3) float64 (copy).
     #[getter]
     fn rest_mesh<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         convert::points_to_py(py, self.session.rest_mesh())

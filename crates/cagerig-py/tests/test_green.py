@@ -85,3 +85,26 @@ def test_edit_scenario_under_green_equals_the_cli(arm_path, cli, tmp_path):
             a = cagerig.read_obj(tmp_path / "cli" / name)
             b = cagerig.read_obj(tmp_path / "py" / name)
             np.testing.assert_array_equal(a[0], b[0], err_msg=name)
+
+
+def test_keep_poses_the_skin_past_the_fold_and_refuses_grabs_until_it_fits(arm_path):
+    rig = cagerig.Rig.load(arm_path, coords="green")
+    mvc = cagerig.Rig.load(arm_path)
+    assert rig.unfitted_cage == "refuse" and rig.posed_cage_unfitted is None
+    # 120° at the elbow in one edit is past the Green fold limit (about 66°): refused by default.
+    with pytest.raises(cagerig.RigError, match="Green CageUp found no current cage"):
+        rig.rotate_joint("lowerarm01.R", [1, 0, 0], 120)
+    rig.set_unfitted_cage("keep")
+    assert rig.unfitted_cage == "keep"
+    rig.rotate_joint("lowerarm01.R", [1, 0, 0], 120)
+    mvc.rotate_joint("lowerarm01.R", [1, 0, 0], 120)
+    assert "CageUp found no current cage" in rig.posed_cage_unfitted
+    size = np.linalg.norm(np.ptp(rig.rest_cage, axis=0))
+    np.testing.assert_allclose(rig.posed_mesh, mvc.posed_mesh, atol=1e-9 * size)
+    with pytest.raises(cagerig.RigError, match="cannot be grabbed in this pose"):
+        rig.move_posed_cage([20], [0, 1, 0])
+    rig.reset_pose()
+    assert rig.posed_cage_unfitted is None
+    rig.move_posed_cage([20], [0, 1, 0])
+    with pytest.raises(ValueError, match="expected refuse or keep"):
+        rig.set_unfitted_cage("sometimes")
