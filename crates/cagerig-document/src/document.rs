@@ -122,6 +122,9 @@ pub enum Command {
     SetCoords(cagerig::CoordsKind),
     ResetPose,
     SetLocks(SyncLocks),
+    /// Green rigs: refuse an edit whose CageUp finds no current cage, or keep it with C'
+    /// unfitted ([`cagerig::session::UnfittedCagePolicy`]).
+    SetUnfittedCage(cagerig::session::UnfittedCagePolicy),
     /// Key the current pose (skeleton track) or the current rest cage (cage track).
     SetKey {
         track: Track,
@@ -151,6 +154,11 @@ impl Command {
             Command::SetCoords(k) => format!("{} coordinates", k.label()),
             Command::ResetPose => "reset pose".into(),
             Command::SetLocks(_) => "sync locks".into(),
+            Command::SetUnfittedCage(policy) => match policy {
+                cagerig::session::UnfittedCagePolicy::Refuse => "refuse unfitted current cages",
+                cagerig::session::UnfittedCagePolicy::KeepEvent => "keep unfitted current cages",
+            }
+            .into(),
             Command::SetKey { track, .. } => format!("set {track:?} key").to_lowercase(),
             Command::DeleteKey { track, .. } => format!("delete {track:?} key").to_lowercase(),
             Command::MoveKey { track, .. } => format!("move {track:?} key").to_lowercase(),
@@ -383,6 +391,7 @@ impl Document {
             }
             Command::ResetPose => s.reset_pose(),
             Command::SetLocks(locks) => s.set_sync_locks(*locks),
+            Command::SetUnfittedCage(policy) => s.set_unfitted_cage_policy(*policy),
             Command::SetKey { track, time } => {
                 match track {
                     Track::Skeleton => self.keys.set_skeleton_key(*time, &self.session),

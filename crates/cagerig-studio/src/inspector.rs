@@ -129,6 +129,9 @@ fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: 
             }
         }
     });
+    if coords == cagerig::CoordsKind::Green {
+        unfitted_cage_ui(ui, doc, diag);
+    }
     let mut new_locks = locks;
     ui.checkbox(
         &mut new_locks.skel_up,
@@ -149,6 +152,34 @@ fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: 
     }
     if ui.button("Reset pose").clicked() {
         run_command(doc, &Command::ResetPose, diag);
+    }
+}
+
+/// Green rigs: the policy for poses the current cage cannot follow, and the state of C'.
+fn unfitted_cage_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
+    use cagerig::session::UnfittedCagePolicy;
+    let policy = doc.session.unfitted_cage_policy();
+    let mut keep = policy == UnfittedCagePolicy::KeepEvent;
+    ui.checkbox(&mut keep, "Keep poses the current cage cannot follow")
+        .on_hover_text(
+            "Past a fold the Green current cage C' has no fit. Off: such an edit is refused. \
+             On: it is kept (the skin and skeletons exact), C' is left unfitted and cannot be \
+             grabbed until a pose fits again.",
+        );
+    let wanted = if keep {
+        UnfittedCagePolicy::KeepEvent
+    } else {
+        UnfittedCagePolicy::Refuse
+    };
+    if wanted != policy {
+        run_command(doc, &Command::SetUnfittedCage(wanted), diag);
+    }
+    if let Some(unfitted) = doc.session.posed_cage_unfitted() {
+        ui.colored_label(
+            egui::Color32::from_rgb(200, 30, 30),
+            "The current cage is not fitted in this pose: it cannot be grabbed.",
+        )
+        .on_hover_text(unfitted.to_string());
     }
 }
 

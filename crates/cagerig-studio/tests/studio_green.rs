@@ -1,5 +1,6 @@
 //! The Rig panel's coordinates switch: clicking "Green" rebinds the open rig with Green
 //! coordinates in one undo step, keeping the edits; undo goes back to mean value coordinates.
+//! Green rigs' switch for poses the current cage cannot follow.
 //! `CAGERIG_SKIP_GPU_TESTS=1` skips it where no wgpu adapter exists.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
@@ -36,5 +37,61 @@ fn the_coordinates_switch_rebinds_in_one_undo_step() {
     let doc = h.state().project.doc.as_ref().unwrap();
     assert_eq!(doc.session.coords_kind(), CoordsKind::Mvc);
     assert_eq!(doc.session.editable_state(), before);
+    std::fs::remove_dir_all(state).ok();
+}
+
+/// Green rigs get a "Keep poses the current cage cannot follow" switch (one undo step); past
+/// the fold, a kept pose shows that the current cage is not fitted.
+#[test]
+fn the_unfitted_cage_switch_keeps_a_pose_past_the_fold() {
+    use cagerig::session::UnfittedCagePolicy;
+    use cagerig_studio::document::Command;
+    if support::skip() {
+        return;
+    }
+    let (mut h, state) = support::open_bar("unfitted-cage-switch");
+    h.get_by_label("Green").click();
+    h.run_steps(3);
+    let keep = "Keep poses the current cage cannot follow";
+    h.get_by_label(keep).click();
+    h.run_steps(3);
+    let doc = h.state().project.doc.as_ref().unwrap();
+    assert_eq!(
+        doc.session.unfitted_cage_policy(),
+        UnfittedCagePolicy::KeepEvent
+    );
+    assert_eq!(doc.history().undo_len(), 2, "rebind, then the switch");
+    let joint = doc.session.skeleton().len() / 2;
+    // Far past the bar's fold: a bend whose current cage has no fit from this state (found on
+    // a copy of the session; the studio's command computes the same).
+    let angle = [120.0f64, 150.0, 170.0, 200.0, 230.0]
+        .into_iter()
+        .map(f64::to_radians)
+        .find(|&angle| {
+            let mut probe = doc.session.clone();
+            probe.rotate_joint(joint, glam::DVec3::Z, angle).is_ok()
+                && probe.posed_cage_unfitted().is_some()
+        })
+        .expect("a bend past the fold");
+    assert!(h.state_mut().run_command(&Command::RotateJoint {
+        joint,
+        axis: glam::DVec3::Z,
+        angle,
+    }));
+    h.run_steps(3);
+    let doc = h.state().project.doc.as_ref().unwrap();
+    assert!(doc.session.posed_cage_unfitted().is_some());
+    h.get_by_label("The current cage is not fitted in this pose: it cannot be grabbed.");
+    // Undo the pose, then the switch: refusing again.
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(3);
+    h.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(3);
+    let doc = h.state().project.doc.as_ref().unwrap();
+    assert!(doc.session.posed_cage_unfitted().is_none());
+    assert_eq!(
+        doc.session.unfitted_cage_policy(),
+        UnfittedCagePolicy::Refuse
+    );
     std::fs::remove_dir_all(state).ok();
 }

@@ -184,3 +184,35 @@ fn policy_names_parse_and_print() {
     );
     assert_eq!(UnfittedCagePolicy::default(), UnfittedCagePolicy::Refuse);
 }
+
+#[test]
+fn an_unfitted_state_restores_exactly_with_its_policy() {
+    let mut kept = arm(CoordsKind::Green, UnfittedCagePolicy::KeepEvent);
+    kept.rotate_joint(3, DVec3::X, 120f64.to_radians()).unwrap();
+    assert!(kept.posed_cage_unfitted().is_some());
+    let state = kept.editable_state();
+    assert_eq!(state.unfitted_cage, UnfittedCagePolicy::KeepEvent);
+    assert_eq!(state.posed_cage.as_deref(), Some(kept.posed_cage()));
+    // A session with the default policy takes the state's (an undo, a session file).
+    let mut fresh = arm(CoordsKind::Green, UnfittedCagePolicy::Refuse);
+    fresh.restore_editable_state(&state).unwrap();
+    assert_eq!(fresh.unfitted_cage_policy(), UnfittedCagePolicy::KeepEvent);
+    assert!(fresh.posed_cage_unfitted().is_some());
+    assert_eq!(fresh.editable_state(), state);
+    let tol = 1e-12 * diagonal(kept.rest_mesh());
+    assert!(max_distance(fresh.posed_mesh(), kept.posed_mesh()) < tol);
+    // Back to the rest state, with its policy.
+    let rest = arm(CoordsKind::Green, UnfittedCagePolicy::Refuse).editable_state();
+    fresh.restore_editable_state(&rest).unwrap();
+    assert_eq!(fresh.unfitted_cage_policy(), UnfittedCagePolicy::Refuse);
+    assert!(fresh.posed_cage_unfitted().is_none());
+    // Under it, the unfitted state is refused: nothing changes.
+    let mut strict = state.clone();
+    strict.unfitted_cage = UnfittedCagePolicy::Refuse;
+    let error = fresh.restore_editable_state(&strict).unwrap_err();
+    assert!(
+        matches!(error, RigError::GreenFitFailed { .. }),
+        "{error:?}"
+    );
+    assert_eq!(fresh.editable_state(), rest);
+}

@@ -9,7 +9,7 @@
 use glam::{DAffine3, DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::{PHI_C_TOLERANCE, RigSession};
+use super::{PHI_C_TOLERANCE, RigSession, UnfittedCagePolicy};
 use crate::coords_kind::CoordsKind;
 use crate::error::RigError;
 use crate::pose::LocalPose;
@@ -40,8 +40,9 @@ pub struct EditableState {
     pub rest_cage: Vec<DVec3>,
     /// Rest joint positions A of S (`#J`, world space); ΨC unless SkelUp was locked.
     pub rest_joints: Vec<DVec3>,
-    /// C' (`#C`) while CageUp is locked (then it is state, not derived); `None` otherwise
-    /// (C' is CageUp's fit of M').
+    /// C' (`#C`) while CageUp is locked, or while it is unfitted (a Green CageUp found no
+    /// current cage: [`super::UnfittedCagePolicy`]): then it is state, not derived; `None`
+    /// otherwise (C' is CageUp's fit of M').
     pub posed_cage: Option<Vec<DVec3>>,
     /// Local rotations q_j of the current pose (`#J`).
     pub rotations: Vec<DQuat>,
@@ -56,6 +57,10 @@ pub struct EditableState {
     /// The cage coordinates the rig is bound with (absent in older files: mean value).
     #[serde(default)]
     pub coords: CoordsKind,
+    /// What an event does when a Green CageUp finds no current cage (absent in older files:
+    /// refuse it).
+    #[serde(default)]
+    pub unfitted_cage: UnfittedCagePolicy,
 }
 
 impl RigSession {
@@ -113,13 +118,15 @@ impl RigSession {
         EditableState {
             rest_cage: self.rest_cage.clone(),
             rest_joints: self.rest_joints().collect(),
-            posed_cage: self.locks.cage_up.then(|| self.posed_cage.clone()),
+            posed_cage: (self.locks.cage_up || self.posed_cage_unfitted().is_some())
+                .then(|| self.posed_cage.clone()),
             rotations: self.posed_local_rotation.clone(),
             scales: self.posed_local_scale.clone(),
             translation_offsets: self.translation_offset.clone(),
             skinning: self.method,
             locks: self.locks,
             coords: self.coords_kind(),
+            unfitted_cage: self.unfitted_cage_policy(),
         }
     }
 
@@ -177,9 +184,17 @@ impl RigSession {
         if state.skinning != self.method {
             self.set_skinning(state.skinning)?;
         }
+        // The state's policy decides whether its pose may leave C' unfitted; a refused restore
+        // keeps the session's.
+        let policy = self.unfitted_cage_policy();
+        self.set_unfitted_cage_policy(state.unfitted_cage);
         self.save_checkpoint();
         let result = self.restore_event(state);
-        self.finish_event(result)
+        let result = self.finish_event(result);
+        if result.is_err() {
+            self.set_unfitted_cage_policy(policy);
+        }
+        result
     }
 
     fn restore_event(&mut self, state: &EditableState) -> Result<(), RigError> {
@@ -207,7 +222,10 @@ impl RigSession {
             frame.translation = *a;
         }
         self.pose_and_fit();
-        if let (true, Some(posed)) = (self.locks.cage_up, &state.posed_cage) {
+        // A locked C' is the state's; so is an unfitted one (the closest cage the fit found
+        // then, which depends on where it started), unless this fit found the cage.
+        let unfitted = self.posed_cage_unfitted().is_some();
+        if let (true, Some(posed)) = (self.locks.cage_up || unfitted, &state.posed_cage) {
             self.posed_cage.copy_from_slice(posed);
         }
         Ok(())
