@@ -14,7 +14,7 @@ use faer::Mat;
 use super::*;
 use crate::coords::stretched_normals::StretchedNormals;
 use crate::error::UnfittedCage;
-use crate::sync::green_cage_fit::GreenCageFit;
+use crate::sync::green_cage_fit::{FitBudget, GreenCageFit};
 use crate::sync::green_cage_reverser::{GrabState, GreenCageReverser};
 use crate::sync::newton::NewtonReport;
 
@@ -337,7 +337,14 @@ impl RigSession {
         green.last_transforms.copy_from_slice(&self.posed_from_rest);
         green.last_rest_cage.copy_from_slice(&self.rest_cage);
         green.has_last_transforms = true;
-        let result = green.fit.apply(&green.target_rows, &mut self.posed_cage);
+        // A run of kept events past the fold tries a few steps each (`FitBudget`).
+        let budget = match (self.options.unfitted_cage, green.unfitted) {
+            (UnfittedCagePolicy::KeepEvent, Some(_)) => FitBudget::UNFITTED_STREAK,
+            (UnfittedCagePolicy::KeepEvent | UnfittedCagePolicy::Refuse, _) => FitBudget::FULL,
+        };
+        let result = green
+            .fit
+            .apply_within(&green.target_rows, &mut self.posed_cage, budget);
         let residual = match result {
             Ok(report) if report.residual <= limit => {
                 green.fit_failure = None;

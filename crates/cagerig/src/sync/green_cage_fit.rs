@@ -54,6 +54,46 @@ pub const MAX_STEPS: usize = 60;
 /// At most this many steps per piece of a continuation.
 pub const MAX_PIECE_STEPS: usize = 20;
 
+/// What a CageUp does when its direct solve stops above the accepted gradient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AfterDirectSolve {
+    /// Continue in pieces from the last accepted solution (every event's).
+    Continuation,
+    /// Solve once more, within the same steps, from the last accepted solution (and keep the
+    /// direct solve's cage when that fails too): cheap, and enough to find the cage again
+    /// when the pose comes back near the last one fitted.
+    RetryFromLastSolution,
+}
+
+/// How much work one CageUp may do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FitBudget {
+    /// Steps of the direct solve (and of a retry).
+    pub steps: usize,
+    /// What follows a direct solve that stops above the accepted gradient.
+    pub then: AfterDirectSolve,
+}
+
+impl FitBudget {
+    /// Every event's: [`MAX_STEPS`], then the continuation.
+    pub const FULL: Self = Self {
+        steps: MAX_STEPS,
+        then: AfterDirectSolve::Continuation,
+    };
+    /// After an event whose CageUp found no cage, kept with C' unfitted
+    /// ([`crate::session::UnfittedCagePolicy::KeepEvent`]): [`UNFITTED_STEPS`] steps from the
+    /// moved closest cage, then as many from the last accepted solution, so that a run of poses
+    /// past the fold costs a few steps each (with the full budget, 0.2–0.3 s a frame on a
+    /// 100-vertex cage).
+    pub const UNFITTED_STREAK: Self = Self {
+        steps: UNFITTED_STEPS,
+        then: AfterDirectSolve::RetryFromLastSolution,
+    };
+}
+
+/// Direct-solve steps of [`FitBudget::UNFITTED_STREAK`].
+pub const UNFITTED_STEPS: usize = 8;
+
 /// Precomputed Green CageUp (see the module docs).
 #[derive(Debug, Clone)]
 pub struct GreenCageFit {
@@ -100,6 +140,8 @@ pub struct GreenCageFit {
     has_last_target: bool,
     last_solution: Vec<DVec3>,
     piece_target: Vec<DVec3>,
+    /// The direct solve's cage while a retry runs (`#C`).
+    retry_cage: Vec<DVec3>,
     last: NewtonReport,
 }
 
@@ -169,6 +211,7 @@ impl GreenCageFit {
             has_last_target: false,
             last_solution: vec![DVec3::ZERO; num_cage],
             piece_target: vec![DVec3::ZERO; num_rows],
+            retry_cage: vec![DVec3::ZERO; num_cage],
             last: NewtonReport::default(),
         })
     }
@@ -248,16 +291,44 @@ impl GreenCageFit {
         target: &[DVec3],
         posed_cage: &mut [DVec3],
     ) -> Result<NewtonReport, RigError> {
+        self.apply_within(target, posed_cage, FitBudget::FULL)
+    }
+
+    /// [`GreenCageFit::apply`] within `budget`.
+    pub fn apply_within(
+        &mut self,
+        target: &[DVec3],
+        posed_cage: &mut [DVec3],
+        budget: FitBudget,
+    ) -> Result<NewtonReport, RigError> {
         debug_assert_eq!(target.len(), self.residual.len());
         if posed_cage.iter().any(|p| !p.is_finite()) {
             posed_cage.copy_from_slice(&self.binding_cage);
             self.has_last_target = false;
         }
         self.predict_from_last_solution(target, posed_cage);
-        let mut total = self.solve_for(target, posed_cage, MAX_STEPS)?;
+        let mut total = self.solve_for(target, posed_cage, budget.steps)?;
         // A direct solve that stopped at the round-off floor below the accepted gradient is
         // done; one that ran out of steps above it continues in pieces, each accepted there.
-        if total.residual > self.accepted && self.has_last_target {
+        if total.residual > self.accepted
+            && self.has_last_target
+            && budget.then == AfterDirectSolve::RetryFromLastSolution
+        {
+            self.retry_cage.copy_from_slice(posed_cage);
+            posed_cage.copy_from_slice(&self.last_solution);
+            let retry = self.solve_for(target, posed_cage, budget.steps)?;
+            total.iterations += retry.iterations;
+            total.factorisations += retry.factorisations;
+            if retry.residual <= self.accepted {
+                total.residual = retry.residual;
+            } else {
+                posed_cage.copy_from_slice(&self.retry_cage);
+            }
+        }
+        if total.residual > self.accepted
+            && self.has_last_target
+            && budget.then == AfterDirectSolve::Continuation
+        {
             let accepted = self.accepted;
             solve_by_continuation(accepted, &mut total, |a, first| {
                 if first {
