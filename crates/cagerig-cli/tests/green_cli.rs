@@ -275,3 +275,43 @@ fn past_the_fold_keep_poses_the_skin_exactly_and_refuses_the_grab() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn export_past_the_fold_names_the_option_and_keeps_the_animation_with_it() {
+    let dir = std::env::temp_dir().join(format!("cagerig-unfitted-export-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // The Arm's own skeleton animation folds the Green current cage at t ≈ 1.17 s.
+    let export = |policy: &str, out: &str| {
+        cagerig()
+            .arg("export")
+            .arg(repo().join("data/arm/arm.obj"))
+            .args([
+                "--coords",
+                "green",
+                "--unfitted-cage",
+                policy,
+                "--fps",
+                "10",
+            ])
+            .arg("--skeleton-anim")
+            .arg(repo().join("data/arm/arm_skelAnim.txt"))
+            .arg("--out")
+            .arg(dir.join(out))
+            .output()
+            .unwrap()
+    };
+    let refused = export("refuse", "refused.glb");
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(
+        stderr.contains("sample t = ") && stderr.contains("--unfitted-cage keep"),
+        "{stderr}"
+    );
+    assert!(!dir.join("refused.glb").exists());
+    let kept = export("keep", "kept.glb");
+    let stderr = String::from_utf8_lossy(&kept.stderr);
+    assert!(kept.status.success(), "{stderr}");
+    assert!(dir.join("kept.glb").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}

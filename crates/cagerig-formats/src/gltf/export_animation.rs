@@ -29,6 +29,7 @@ use glam::{DAffine3, DQuat, DVec3};
 use serde_json::{Value, json};
 
 use super::export::{Builder, f32_bytes, position_accessor, session_to_gltf};
+use super::export_animation_error::ExportAnimationError;
 use super::export_bake::{BakeReport, bake_target, f32_rounded};
 
 /// Sample times: a grid at `fps` over `[0, duration]` plus every key time, sorted, unique as f32.
@@ -92,7 +93,7 @@ pub fn animation_to_gltf(
     cage_track: Option<&CageTrack>,
     times: &[f64],
     name: &str,
-) -> Result<(Value, Vec<u8>), String> {
+) -> Result<(Value, Vec<u8>), ExportAnimationError> {
     write_animation(session, player, cage_track, times, name, false)
         .map(|(document, bin, _)| (document, bin))
 }
@@ -111,19 +112,17 @@ pub fn baked_animation_to_gltf(
     cage_track: Option<&CageTrack>,
     times: &[f64],
     name: &str,
-) -> Result<(Value, Vec<u8>, BakeReport), String> {
+) -> Result<(Value, Vec<u8>, BakeReport), ExportAnimationError> {
     let bake = !session.skinning().is_linear();
     if bake {
         let cage_keys = cage_track.map_or(0, |c| c.times().len());
         let bytes = baked_bytes(session.num_vertices(), cage_keys, times.len());
         if bytes > u64::from(u32::MAX) {
-            return Err(format!(
-                "baking {} samples of {} vertices takes {:.1} GiB, past glTF's 4 GiB binary \
-                 limit: export fewer samples (--fps, --max-samples) or leave --bake out",
-                times.len(),
-                session.num_vertices(),
-                bytes as f64 / f64::from(1u32 << 30)
-            ));
+            return Err(ExportAnimationError::TooLarge {
+                samples: times.len(),
+                vertices: session.num_vertices(),
+                gib: bytes as f64 / f64::from(1u32 << 30),
+            });
         }
     }
     write_animation(session, player, cage_track, times, name, bake)
@@ -146,13 +145,14 @@ fn write_animation(
     times: &[f64],
     name: &str,
     bake: bool,
-) -> Result<(Value, Vec<u8>, BakeReport), String> {
+) -> Result<(Value, Vec<u8>, BakeReport), ExportAnimationError> {
     if times.is_empty() {
-        return Err("no sample times".into());
+        return Err(ExportAnimationError::NoSamples);
     }
     let base: Vec<DVec3> = session.rest_mesh().to_vec();
     let bind: Vec<DAffine3> = session.rest_world_from_joint().to_vec();
-    let (mut document, bin) = session_to_gltf(session, name)?;
+    let (mut document, bin) =
+        session_to_gltf(session, name).map_err(ExportAnimationError::Document)?;
     let mut b = Builder::from_document(&document, bin);
     let nj = session.skeleton().len();
     // Morph targets: the rest mesh at each cage key.
@@ -162,7 +162,9 @@ fn write_animation(
     let mut cage_deltas: Vec<Vec<DVec3>> = Vec::new();
     if let Some(track) = cage_track {
         for (k, &t) in track.times().iter().enumerate() {
-            player.apply(t, session).map_err(|e| e.to_string())?;
+            player
+                .apply(t, session)
+                .map_err(|source| ExportAnimationError::Sample { time: t, source })?;
             let delta: Vec<DVec3> = session
                 .rest_mesh()
                 .iter()
@@ -189,7 +191,9 @@ fn write_animation(
     let mut world = vec![DAffine3::IDENTITY; nj];
     let mut trs = Vec::with_capacity(nj);
     for &t in times {
-        player.apply(t, session).map_err(|e| e.to_string())?;
+        player
+            .apply(t, session)
+            .map_err(|source| ExportAnimationError::Sample { time: t, source })?;
         node_trs(session, &bind, &mut world, &mut trs);
         for &(tr, r, s) in &trs {
             translations.push(tr);

@@ -15,6 +15,7 @@ use cagerig::skinning::LinearBlendSkinning;
 use glam::{DAffine3, DQuat, DVec3};
 
 use super::export_animation::node_trs;
+use super::export_animation_error::ExportAnimationError;
 use super::export_bake::{BakeReport, bake_target};
 
 /// Node (translation, rotation, scale) per joint at one sample.
@@ -52,11 +53,11 @@ pub fn refine_sample_times(
     max_distance: f64,
     max_samples: usize,
     baked: bool,
-) -> Result<RefinedTimes, String> {
+) -> Result<RefinedTimes, ExportAnimationError> {
     if !(max_distance.is_finite() && max_distance > 0.0) {
-        return Err(format!(
-            "the resampling bound {max_distance} must be positive"
-        ));
+        return Err(ExportAnimationError::InvalidBound {
+            bound: max_distance,
+        });
     }
     // The bind frames of the export are the rest frames when it starts.
     let bind: Vec<DAffine3> = session.rest_world_from_joint().to_vec();
@@ -100,7 +101,7 @@ pub fn refine_sample_times(
     out.sort_by(f64::total_cmp);
     session
         .restore_editable_state(&start)
-        .map_err(|e| e.to_string())?;
+        .map_err(|source| ExportAnimationError::Restore { source })?;
     Ok(RefinedTimes {
         added: out.len() - times.len(),
         times: out,
@@ -133,13 +134,15 @@ impl Checker {
         session: &mut RigSession,
         player: &mut AnimationPlayer,
         t: f64,
-    ) -> Result<(), String> {
+    ) -> Result<(), ExportAnimationError> {
         let key = t.to_bits();
         let baked_cached = self.baked.as_ref().is_none_or(|b| b.contains_key(&key));
         if self.trs.contains_key(&key) && baked_cached {
             return Ok(());
         }
-        player.apply(t, session).map_err(|e| e.to_string())?;
+        player
+            .apply(t, session)
+            .map_err(|source| ExportAnimationError::Sample { time: t, source })?;
         self.world.resize(self.bind.len(), DAffine3::IDENTITY);
         let mut trs = Vec::with_capacity(self.bind.len());
         node_trs(session, &self.bind, &mut self.world, &mut trs);
@@ -166,12 +169,14 @@ impl Checker {
         t0: f64,
         t1: f64,
         mid: f64,
-    ) -> Result<f64, String> {
+    ) -> Result<f64, ExportAnimationError> {
         self.sample_at(session, player, t0)?;
         self.sample_at(session, player, t1)?;
         let (a, b) = (&self.trs[&t0.to_bits()], &self.trs[&t1.to_bits()]);
         let s = (mid - t0) / (t1 - t0);
-        player.apply(mid, session).map_err(|e| e.to_string())?;
+        player
+            .apply(mid, session)
+            .map_err(|source| ExportAnimationError::Sample { time: mid, source })?;
         // The viewer's node worlds from the interpolated locals, parents before children.
         let nj = self.bind.len();
         self.world.resize(nj, DAffine3::IDENTITY);

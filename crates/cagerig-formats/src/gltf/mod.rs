@@ -15,5 +15,6 @@ pub use import::{import_gltf, import_gltf_bytes};
 pub use static_mesh::{import_gltf_static, import_gltf_static_bytes};
 pub mod export;
 pub mod export_animation;
+pub mod export_animation_error;
 pub mod export_bake;
 pub mod export_resampling;
