@@ -154,20 +154,26 @@ pub fn warn_if_unfitted(what: &str, session: &RigSession) {
     }
 }
 
-/// The hint a refused Green event adds for this command line: the option that keeps such events.
-pub fn unfitted_cage_hint(error: &(dyn std::error::Error + 'static)) -> &'static str {
-    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(error);
+/// `error` in `context` ("sample t = 0.5", a script's path, …), with the option that keeps such
+/// events when it is a refused Green event (its cause chain holds [`cagerig::RigError::GreenFitFailed`]).
+pub fn event_error(
+    context: impl std::fmt::Display,
+    error: impl std::error::Error + 'static,
+) -> anyhow::Error {
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(&error);
+    let mut hint = "";
     while let Some(e) = cause {
         if matches!(
             e.downcast_ref::<cagerig::RigError>(),
             Some(cagerig::RigError::GreenFitFailed { .. })
         ) {
-            return " (`--unfitted-cage keep` keeps such events: the skin posed exactly, the \
+            hint = " (`--unfitted-cage keep` keeps such events: the skin posed exactly, the \
                     current cage left unfitted)";
+            break;
         }
         cause = e.source();
     }
-    ""
+    anyhow::anyhow!("{context}: {error}{hint}")
 }
 
 pub fn start_session(

@@ -288,22 +288,13 @@ pub enum RigError {
     /// jumps, and the fit has no solution beyond the fold).
     #[error(
         "the event was refused and the rig left as it was: Green CageUp found no current cage \
-         fitting it (the fit stopped with a gradient of {residual:.3e}, expected at most \
-         {limit:.3e}; {}); try a smaller step, or mean value coordinates for this pose",
-        green_fit_cause(*face, *area_ratio)
+         fitting it (the fit stopped with a gradient of {:.3e}, expected at most {:.3e}; {}); \
+         try a smaller step, or mean value coordinates for this pose",
+        .0.residual,
+        .0.limit,
+        green_fit_cause(.0.face, .0.area_ratio)
     )]
-    GreenFitFailed {
-        /// max |Jᵀr| where the fit stopped.
-        residual: f64,
-        /// The tolerance it had to reach.
-        limit: f64,
-        /// The cage triangle with the smallest signed area ratio at the stopping point.
-        face: usize,
-        /// That triangle's signed area over its binding area (negative: turned over). Below
-        /// [`GREEN_FOLD_AREA_RATIO`] the message blames the fold; above it, no triangle folded
-        /// and the message says so.
-        area_ratio: f64,
-    },
+    GreenFitFailed(UnfittedCage),
     /// Green coordinates: a grab of the current cage while it is not CageUp's fit of the pose
     /// (kept under [`crate::session::UnfittedCagePolicy::KeepEvent`]).
     #[error(
@@ -451,7 +442,9 @@ pub struct UnfittedCage {
     pub limit: f64,
     /// The cage triangle with the smallest signed area ratio at the stopping point.
     pub face: usize,
-    /// That triangle's signed area over its binding area (negative: turned over).
+    /// That triangle's signed area over its binding area (negative: turned over). Below
+    /// [`GREEN_FOLD_AREA_RATIO`] the messages blame the fold; above it, no triangle folded and
+    /// the messages say so.
     pub area_ratio: f64,
 }
 
@@ -465,18 +458,6 @@ impl std::fmt::Display for UnfittedCage {
             self.limit,
             green_fit_cause(self.face, self.area_ratio)
         )
-    }
-}
-
-impl UnfittedCage {
-    /// The refusal of an event that ended so ([`RigError::GreenFitFailed`]).
-    pub fn refusal(self) -> RigError {
-        RigError::GreenFitFailed {
-            residual: self.residual,
-            limit: self.limit,
-            face: self.face,
-            area_ratio: self.area_ratio,
-        }
     }
 }
 
@@ -523,12 +504,12 @@ mod tests {
     #[test]
     fn a_stalled_green_fit_blames_a_fold_only_when_a_triangle_folded() {
         let failed = |area_ratio| {
-            RigError::GreenFitFailed {
+            RigError::GreenFitFailed(UnfittedCage {
                 residual: 4.3e-5,
                 limit: 7.3e-9,
                 face: 154,
                 area_ratio,
-            }
+            })
             .to_string()
         };
         let squeezed = failed(0.861);

@@ -94,10 +94,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut session = session;
     for &t in times {
         let start = Instant::now();
-        player.apply(t, &mut session).map_err(|e| {
-            let hint = crate::session_args::unfitted_cage_hint(&e);
-            anyhow::anyhow!("sample t = {t}: {e}{hint}")
-        })?;
+        player
+            .apply(t, &mut session)
+            .map_err(|e| crate::session_args::event_error(format!("sample t = {t}"), e))?;
         eprintln!(
             "t = {t}: frame in {:.3} ms",
             start.elapsed().as_secs_f64() * 1e3

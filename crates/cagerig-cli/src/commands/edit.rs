@@ -95,10 +95,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     for k in 0..script.steps.len() {
         let t = Instant::now();
-        script.run_step(k, &mut session).map_err(|e| {
-            let hint = crate::session_args::unfitted_cage_hint(&e);
-            anyhow::anyhow!("{}: {e}{hint}", script_path.display())
-        })?;
+        script
+            .run_step(k, &mut session)
+            .map_err(|e| crate::session_args::event_error(script_path.display(), e))?;
         eprintln!(
             "step {}: {} ({:.3} ms)",
             k + 1,

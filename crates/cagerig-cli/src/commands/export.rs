@@ -174,10 +174,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.max_samples.max(times.len()),
             bake,
         )
-        .map_err(|e| {
-            let hint = crate::session_args::unfitted_cage_hint(&e);
-            anyhow::anyhow!("refining the samples: {e}{hint}")
-        })?;
+        .map_err(|e| crate::session_args::event_error("refining the samples", e))?;
         refinement = format!(
             " ({} added so that a viewer{} stays within {:.1e} of the diagonal between samples, \
              {:.1e} at the worst midpoint)",
@@ -218,10 +215,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         )
         .map(|(document, bin)| (document, bin, BakeReport::default()))
     }
-    .map_err(|e| {
-        let hint = crate::session_args::unfitted_cage_hint(&e);
-        anyhow::anyhow!("exporting the animation: {e}{hint}")
-    })?;
+    .map_err(|e| crate::session_args::event_error("exporting the animation", e))?;
     cagerig_formats::gltf::export::write_gltf_or_glb(&args.out, &document, &bin)?;
     println!(
         "{} written: {} samples{refinement} over {:.3} s in {:.1} ms",

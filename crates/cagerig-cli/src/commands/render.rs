@@ -297,10 +297,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     } else {
         let mut player = tracks.resolve(&session)?.player(&session)?;
         for &t in &args.times {
-            player.apply(t, &mut session).map_err(|e| {
-                let hint = crate::session_args::unfitted_cage_hint(&e);
-                anyhow::anyhow!("sample t = {t}: {e}{hint}")
-            })?;
+            player
+                .apply(t, &mut session)
+                .map_err(|e| crate::session_args::event_error(format!("sample t = {t}"), e))?;
             crate::session_args::warn_if_unfitted(&format!("the picture at t = {t}"), &session);
             maker.caption = Some(format!("t = {t} s"));
             let name = if args.times.len() == 1 {

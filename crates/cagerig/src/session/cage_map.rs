@@ -388,7 +388,13 @@ impl CageMap {
     pub(super) fn take_fit_failure(&mut self) -> Option<RigError> {
         match self {
             CageMap::Mvc => None,
-            CageMap::Green(green) => green.fit_failure.take(),
+            CageMap::Green(green) => {
+                let unreported = std::mem::take(&mut green.failure_unreported);
+                green
+                    .unfitted
+                    .filter(|_| unreported)
+                    .map(RigError::GreenFitFailed)
+            }
         }
     }
 }

@@ -56,9 +56,9 @@ pub(super) struct GreenState {
     /// Computed when the first cage keyframe is made ([`GreenState::keyframe_terms_of`]), not at
     /// binding.
     face_coords_norm: OnceLock<f64>,
-    /// Set when the last CageUp stopped above [`GREEN_FIT_LIMIT`] (the event is refused),
-    /// taken by `finish_event`.
-    pub(super) fit_failure: Option<RigError>,
+    /// Whether the failure in `unfitted` is yet to be reported to `finish_event` (a fit
+    /// outside an event, e.g. a rollback's, is not that event's).
+    pub(super) failure_unreported: bool,
     /// Where the last CageUp stopped when it found no current cage (`None`: C' is its fit).
     pub(super) unfitted: Option<UnfittedCage>,
     /// The cage's bounding-box diagonal.
@@ -153,7 +153,7 @@ impl GreenState {
             skinned_cage: rest_cage.to_vec(),
             face_centre_coords: None,
             face_coords_norm: OnceLock::new(),
-            fit_failure: None,
+            failure_unreported: false,
             unfitted: None,
             size,
             last_reverse: NewtonReport::default(),
@@ -347,7 +347,7 @@ impl RigSession {
             .apply_within(&green.target_rows, &mut self.posed_cage, budget);
         let residual = match result {
             Ok(report) if report.residual <= limit => {
-                green.fit_failure = None;
+                green.failure_unreported = false;
                 green.unfitted = None;
                 return;
             }
@@ -373,14 +373,13 @@ impl RigSession {
                 (0, f64::INFINITY),
                 |best, x| if x.1 < best.1 { x } else { best },
             );
-        let unfitted = UnfittedCage {
+        green.unfitted = Some(UnfittedCage {
             residual,
             limit,
             face,
             area_ratio,
-        };
-        green.unfitted = Some(unfitted);
-        green.fit_failure = Some(unfitted.refusal());
+        });
+        green.failure_unreported = true;
     }
 
     /// The skinning transforms (`#J`) of the current pose on the rest skeleton whose joints are
