@@ -9,7 +9,12 @@
 //!
 //! Exactness: between two union keys the track lerps translation and scale and slerps rotation,
 //! which is exactly what LINEAR channels do (a sub-interval of a lerp/slerp is a lerp/slerp) when
-//! the composed ancestors are not animated with a scale. STEP channels get an extra key 1e-6 s
+//! one node of a joint's composed chain moves, or the nodes below a turning one are still and
+//! at its origin. Where a turning node carries another animated node or a translation (a
+//! skeleton hanging from the joints of another, an animated armature above an offset root), the
+//! composed origin moves on an arc: keys are added until the track is within
+//! [`COMPOSED_TOLERANCE`] of the skeleton's size of the file ([`super::composed_keys`]), and
+//! the animation is marked `exact = false` with a note. STEP channels get an extra key 1e-6 s
 //! (or less on tight keys) before each step; CUBICSPLINE channels are resampled at the
 //! `resample_fps` of [`ImportOptions`]; such animations are marked `exact = false` and reported.
 
@@ -22,10 +27,15 @@ use gltf::accessor::Dimensions;
 use gltf::animation::{Interpolation, Property};
 
 use super::buffers::Buffers;
+use super::composed_keys::{NodeMotion, composes_several_motions, refine_composed_keys};
 use super::scene::{NodeLocal, NodeTree};
 use crate::ImportOptions;
 use crate::character::ImportedAnimation;
 use crate::error::{FormatError, invalid};
+
+/// Keys are added where a joint's composed local leaves the track's interpolation by more than
+/// this fraction of the skeleton's size (`composed_keys.rs`).
+pub const COMPOSED_TOLERANCE: f64 = 1e-6;
 
 /// Seconds before a STEP key at which the previous value is held (the track ramps in between).
 const STEP_RAMP: f64 = 1e-6;
@@ -173,6 +183,7 @@ pub fn import_animations(
                 .fold(DAffine3::IDENTITY, |acc, &n| acc * rest_locals[n])
         })
         .collect();
+    let length_scale = skeleton_size(tree, &rest_locals, joint_nodes, &node_pose);
     let mut warnings = Vec::new();
     let mut animations = Vec::new();
     for animation in document.animations() {
@@ -311,14 +322,14 @@ pub fn import_animations(
                 ),
             });
         }
-        // Locals of every node at each key time.
+        // The composed locals of every joint at time t.
         let mut node_locals = vec![DAffine3::IDENTITY; nn];
-        let mut keys = Vec::with_capacity(times.len());
-        for &t in &times {
+        let mut trs: Vec<Option<(DVec3, DQuat, DVec3)>> = vec![None; nn];
+        let mut composed_at = |t: f64| -> Vec<DAffine3> {
             for (i, local) in node_locals.iter_mut().enumerate() {
                 *local = tree.rest_local[i].affine();
             }
-            let mut trs: Vec<Option<(DVec3, DQuat, DVec3)>> = vec![None; nn];
+            trs.iter_mut().for_each(|x| *x = None);
             for c in &channels {
                 let (mut tr, mut r, mut s) = match (trs[c.node], tree.rest_local[c.node]) {
                     (Some(x), _) => x,
@@ -347,16 +358,55 @@ pub fn import_animations(
                     node_locals[i] = DAffine3::from_scale_rotation_translation(*s, *r, *tr);
                 }
             }
-            let key: Vec<DAffine3> = chains
+            chains
                 .iter()
                 .map(|chain| {
                     chain
                         .iter()
                         .fold(DAffine3::IDENTITY, |acc, &n| acc * node_locals[n])
                 })
-                .collect();
-            keys.push(key);
-        }
+                .collect()
+        };
+        // Joints whose composed local the track's interpolation may not follow between keys.
+        let motion = node_motion(tree, &channels);
+        let suspects: Vec<usize> = chains
+            .iter()
+            .enumerate()
+            .filter(|(_, chain)| {
+                let chain: Vec<NodeMotion> = chain.iter().map(|&n| motion[n]).collect();
+                composes_several_motions(&chain)
+            })
+            .map(|(j, _)| j)
+            .collect();
+        let (times, keys) = if suspects.is_empty() {
+            let keys = times.iter().map(|&t| composed_at(t)).collect();
+            (times, keys)
+        } else {
+            let tolerance = COMPOSED_TOLERANCE * length_scale;
+            let refined =
+                refine_composed_keys(&times, &suspects, length_scale, tolerance, composed_at);
+            if refined.added > 0 || refined.capped {
+                exact = false;
+                let j = suspects[0];
+                let within = if refined.capped {
+                    format!(
+                        "the keys were capped, so between them it is up to {:.1e} of the skeleton's size off the file (target {COMPOSED_TOLERANCE:e})",
+                        refined.largest_checked / length_scale
+                    )
+                } else {
+                    format!("within {COMPOSED_TOLERANCE:e} of the skeleton's size of the file")
+                };
+                warnings.push(Warning::Note {
+                    message: format!(
+                        "{element}: {} joints (first: node {}) move with several animated nodes above them (a turning node carries another motion or a translation on an arc), which the track's interpolation between the file's keys does not follow; {} keys were added, {within}",
+                        suspects.len(),
+                        joint_nodes[j],
+                        refined.added
+                    ),
+                });
+            }
+            (refined.times, refined.keys)
+        };
         let morph_weights = weight_channel.as_ref().map(|c| {
             times
                 .iter()
@@ -375,4 +425,56 @@ pub fn import_animations(
         });
     }
     Ok((animations, node_pose, warnings))
+}
+
+/// How each node is animated by `channels`, and whether its rest translation is not zero.
+fn node_motion(tree: &NodeTree, channels: &[Channel]) -> Vec<NodeMotion> {
+    let mut motion: Vec<NodeMotion> = tree
+        .rest_local
+        .iter()
+        .map(|local| NodeMotion {
+            turns: false,
+            animated: false,
+            offset: local.affine().translation != DVec3::ZERO,
+        })
+        .collect();
+    for c in channels {
+        let m = &mut motion[c.node];
+        m.animated = true;
+        m.turns |= matches!(c.property, Property::Rotation | Property::Scale);
+    }
+    motion
+}
+
+/// The length that rotation and scale differences count by: the extent of the joints' rest
+/// positions (or of the composed rest translations for a skeleton of one point; 1 if nothing
+/// has a size).
+fn skeleton_size(
+    tree: &NodeTree,
+    rest_locals: &[DAffine3],
+    joint_nodes: &[usize],
+    node_pose: &[DAffine3],
+) -> f64 {
+    let mut world = vec![DAffine3::IDENTITY; rest_locals.len()];
+    tree.globals(rest_locals, &mut world);
+    let (lo, hi) = joint_nodes
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &n| {
+            (lo.min(world[n].translation), hi.max(world[n].translation))
+        });
+    let extent = (hi - lo).length();
+    let reach = node_pose
+        .iter()
+        .map(|p| p.translation.length())
+        .fold(0.0, f64::max);
+    let size = if extent.is_finite() {
+        extent.max(reach)
+    } else {
+        reach
+    };
+    if size.is_finite() && size > 0.0 {
+        size
+    } else {
+        1.0
+    }
 }

@@ -3,6 +3,7 @@
 pub mod animation;
 pub mod buffers;
 mod cage;
+pub mod composed_keys;
 pub mod import;
 mod morph_targets;
 mod parse;
