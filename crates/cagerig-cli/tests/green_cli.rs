@@ -56,6 +56,54 @@ fn edit_with_green_coordinates_lands_the_grab_exactly() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `demo` takes the session options (it took none): the paper's scenario on the bar with Green
+/// coordinates, the grab landing exactly and the other current-cage vertices still.
+#[test]
+fn demo_with_green_coordinates_lands_the_grab() {
+    let dir = std::env::temp_dir().join(format!("cagerig-green-demo-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = cagerig()
+        .args(["demo", "--coords", "green", "--no-pictures", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("Green coordinates"), "{stdout}");
+    let before = positions(&dir.join("2_inflate_cage_posed.obj"));
+    let after = positions(&dir.join("3_grab_cage_posed.obj"));
+    let (lo, hi) = cagerig::mesh::bounding_box(&before);
+    let tol = 1e-9 * (hi - lo).length();
+    let moved: Vec<usize> = (0..before.len())
+        .filter(|&k| after[k].distance(before[k]) > tol)
+        .collect();
+    assert_eq!(moved.len(), 1, "one grabbed vertex: {moved:?}");
+    let k = moved[0];
+    let offset = after[k] - before[k];
+    assert!(
+        (offset.y - 0.1 * (hi - lo).length()).abs() < 0.02 * (hi - lo).length()
+            && offset.x.abs() < tol,
+        "{offset}"
+    );
+    // Rebinding with mean value coordinates gives another rest skin for the same inflate.
+    let mvc = dir.with_extension("mvc");
+    let status = cagerig()
+        .args(["demo", "--coords", "mvc", "--no-pictures", "--out"])
+        .arg(&mvc)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let green_rest = positions(&dir.join("2_inflate_mesh_rest.obj"));
+    let mvc_rest = positions(&mvc.join("2_inflate_mesh_rest.obj"));
+    assert!(cagerig::mesh::max_distance(&green_rest, &mvc_rest) > 1e-4 * (hi - lo).length());
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&mvc);
+}
+
 #[test]
 fn info_reports_the_green_binding_and_unknown_kinds_are_refused() {
     let output = cagerig()

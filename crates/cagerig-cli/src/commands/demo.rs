@@ -4,12 +4,12 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use cagerig::session::{RigSession, SessionOptions};
+use cagerig::session::RigSession;
 use glam::DVec3;
 
 use crate::output_dir::StagedDir;
 use crate::rig_source::{RigArgs, load_rig};
-use crate::session_args::start_session;
+use crate::session_args::{SessionArgs, event_error, start_session};
 use crate::state_files::write_state;
 
 /// Pictures of the demo's steps, kept in memory until the run succeeded; `None` when pictures
@@ -96,14 +96,17 @@ pub struct Args {
     /// Do not render the PNG picture of each step (rest and current pose side by side).
     #[arg(long)]
     pub no_pictures: bool,
+    #[command(flatten)]
+    pub session: SessionArgs,
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (builtin, resolution, out, pictures) = (
+    let (builtin, resolution, out, pictures, session_args) = (
         args.builtin.as_str(),
         args.resolution,
         args.out.as_path(),
         !args.no_pictures,
+        &args.session,
     );
     let args = RigArgs {
         mesh: None,
@@ -116,13 +119,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         auto_weights: false,
     };
     let t = Instant::now();
-    let loaded = load_rig(&args, true, true)?;
-    let (mut s, warnings) = start_session(loaded, SessionOptions::default())?;
+    let loaded = load_rig(&args, true, session_args.needs_mean_value_coords())?;
+    let (mut s, warnings) = start_session(loaded, session_args.options())?;
     println!(
-        "loaded built-in rig {builtin:?}: {} vertices, {} joints, {} cage vertices ({:.1} ms incl. Φ, MaxVol, Ψ)",
+        "loaded built-in rig {builtin:?}: {} vertices, {} joints, {} cage vertices, {} coordinates ({:.1} ms incl. coordinates, MaxVol, Ψ)",
         s.rest_mesh().len(),
         s.skeleton().len(),
         s.rest_cage().len(),
+        s.coords_kind().label(),
         t.elapsed().as_secs_f64() * 1e3
     );
     for w in &warnings {
@@ -142,7 +146,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     // 1. Bend with the skeleton: rotate the middle joint.
     let joint = s.skeleton().len() / 2;
     let t = Instant::now();
-    s.rotate_joint(joint, DVec3::Z, 60f64.to_radians())?;
+    s.rotate_joint(joint, DVec3::Z, 60f64.to_radians())
+        .map_err(|e| event_error("1. skeleton edit", e))?;
     println!(
         "1. skeleton edit: joint {joint} ({}) +60° about Z → M', C' synced in {:.3} ms",
         s.skeleton().joint(joint).name,
@@ -164,7 +169,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         })
         .unzip();
     let t = Instant::now();
-    s.move_rest_cage(&verts, &offsets)?;
+    s.move_rest_cage(&verts, &offsets)
+        .map_err(|e| event_error("2. rest-cage edit", e))?;
     println!(
         "2. rest-cage edit: inflated {} cage vertices → M, S, S', M', C' synced in {:.3} ms",
         verts.len(),
@@ -183,7 +189,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .unwrap_or(0);
     let target = s.posed_cage()[far] + DVec3::new(0.0, 0.1 * size, 0.0);
     let t = Instant::now();
-    s.move_posed_cage(&[far], &[DVec3::new(0.0, 0.1 * size, 0.0)])?;
+    s.move_posed_cage(&[far], &[DVec3::new(0.0, 0.1 * size, 0.0)])
+        .map_err(|e| event_error("3. current-cage grab", e))?;
     println!(
         "3. current-cage grab: vertex {far} → C (CageRev refactor + solve), full loop synced in {:.3} ms; landed {:.2e} from target",
         t.elapsed().as_secs_f64() * 1e3,
