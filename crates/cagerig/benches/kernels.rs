@@ -79,7 +79,7 @@ fn skinning(c: &mut Criterion) {
 fn cage_ops(c: &mut Criterion) {
     let mut group = c.benchmark_group("cage");
     group.sample_size(10);
-    // #C varies with the rig: bar 20, bar_irregular 24, snake 74 cage vertices.
+    // #C varies with the rig: bar 20, bar_irregular 24, snake 70 cage vertices.
     for name in ["bar", "bar_irregular", "snake"] {
         let rig = demo::builtin(name, None).unwrap();
         let id = format!(

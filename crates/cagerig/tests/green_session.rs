@@ -429,11 +429,30 @@ fn thousand_interleaved_events_keep_every_invariant_on_the_builtin_rigs() {
         let off = max_distance(s.posed_cage(), s.rest_cage());
         assert!(off < tol, "{name}: C' != C at rest pose ({off:e})");
         eprintln!("{name}: {refused} of {events} events refused");
-        // Random walks of the joints reach strong bends, where the fitted cage folds.
+        // Random walks of the joints reach strong bends, where the fitted cage folds (measured:
+        // 11 of 1000 on the irregular bar; 0 of 200 on the snake, 21 with its earlier cage).
         assert!(
-            refused * 5 <= events,
+            refused * 50 <= events,
             "{name}: {refused} of {events} events refused"
         );
+    }
+}
+
+/// Regression: the snake's octagonal cage (rings at every second joint) folded under Green
+/// CageUp at 10–18° (the bench's second 10° step was refused). Its square cage with a ring at
+/// each joint follows each of two joints, one after the other, to 60° about every axis in 6°
+/// steps.
+#[test]
+fn the_snake_bends_two_joints_to_60_degrees_about_every_axis() {
+    for axis in [DVec3::X, DVec3::Y, DVec3::Z, DVec3::new(0.6, 0.8, 0.0)] {
+        let mut s = builtin("snake", green());
+        for joint in [8, 3] {
+            for step in 1..=10 {
+                if let Err(e) = s.rotate_joint(joint, axis, 6f64.to_radians()) {
+                    panic!("axis {axis}, joint {joint}, {}°: {e}", 6 * step);
+                }
+            }
+        }
     }
 }
 

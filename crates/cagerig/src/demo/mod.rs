@@ -1,10 +1,10 @@
 //! Built-in demo rigs generated procedurally: skin M, skeleton S, skinning weights Ω and cage C.
 //!
-//! | name            | what                                             | resolution                        |
-//! |-----------------|--------------------------------------------------|-----------------------------------|
-//! | `bar`           | Figure 5 bar, 4 joints, regular box cage (20 v)  | ring intervals along the bar (40) |
-//! | `bar_irregular` | same bar, jittered non-uniform box cage (24 v)   | ring intervals along the bar (40) |
-//! | `snake`         | tapered bulging tube, 16 joints, octagonal cage  | ≈ skin vertex count (8192)        |
+//! | name            | what                                               | resolution                        |
+//! |-----------------|----------------------------------------------------|-----------------------------------|
+//! | `bar`           | Figure 5 bar, 4 joints, regular box cage (20 v)    | ring intervals along the bar (40) |
+//! | `bar_irregular` | same bar, jittered non-uniform box cage (24 v)     | ring intervals along the bar (40) |
+//! | `snake`         | tapered bulging tube, 16 joints, square-tube cage (70 v) | ≈ skin vertex count (8192)  |
 //!
 //! Every rig's skin is closed, watertight and outward oriented; its cage passes
 //! [`validate_cage`](crate::cage::validate_cage) and encloses the skin strictly (margin ≥ 0.1);

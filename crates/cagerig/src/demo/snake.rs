@@ -9,11 +9,15 @@
 //!   `rings = max(2, round((n − 2)/around))`, so `#V = rings·around + 2 ≈ n` (within half a ring);
 //! - skeleton S: 16 joints `snake0`…`snake15` at x = 0.2, 2, 4, …, 30, chained from the head;
 //! - skinning weights Ω: joint j owns the bone starting at it, smoothstep blends over x_j ± 0.6;
-//! - cage C: a coarse octagonal tube with rings at x = −0.5, 4, 8, …, 28, 32.5 (every second
-//!   joint) and centre-fanned end caps: 74 vertices, 144 triangles. Each ring's inscribed radius is
-//!   1.3 × the largest skin radius over the two intervals next to it; since the cross-section of
-//!   the cage between two aligned regular rings is a regular octagon with linearly interpolated
-//!   radius, the cage clears the skin by at least 30 % of the local radius everywhere.
+//! - cage C: a coarse square tube (a diamond in cross-section: corners on ±Y and ±Z) with a
+//!   ring at every joint but the root, x = −0.5, 2, 4, …, 30, 32.5, and centre-fanned end caps:
+//!   70 vertices, 136 triangles. Each ring's inscribed radius is 1.15 × the largest skin radius
+//!   over the two intervals next to it; since the cross-section of the cage between two aligned
+//!   regular rings is a square with linearly interpolated radius, the cage clears the skin by at
+//!   least 15 % of the local radius everywhere. A ring at each joint lets every bend happen at a
+//!   ring, and four sides keep Green CageUp well conditioned: the snake's Green rig bends each
+//!   joint to 60° about any axis (the octagonal cage with rings at every second joint of earlier
+//!   versions folded at 10–18°; `docs/green-coordinates.md`).
 
 use std::f64::consts::{PI, TAU};
 
@@ -34,9 +38,9 @@ pub const SNAKE_MAX_VERTICES: usize = 50_000_000;
 /// Half-width of the smoothstep blend around each non-root joint.
 pub const SNAKE_BLEND_HALF_WIDTH: f64 = 0.6;
 /// Points per cage ring.
-pub const SNAKE_CAGE_AROUND: usize = 8;
+pub const SNAKE_CAGE_AROUND: usize = 4;
 /// Cage inscribed radius / largest nearby skin radius.
-pub const SNAKE_CAGE_RADIUS_FACTOR: f64 = 1.3;
+pub const SNAKE_CAGE_RADIUS_FACTOR: f64 = 1.15;
 /// How far the cage extends beyond each end of the snake.
 pub const SNAKE_CAGE_END_MARGIN: f64 = 0.5;
 
@@ -98,8 +102,8 @@ pub fn snake(vertices: Option<usize>) -> Result<DemoRig, RigError> {
     let skeleton = chain_skeleton("snake", &joint_x)?;
     let skin_weights = chain_weights(&mesh.positions, &joint_x, SNAKE_BLEND_HALF_WIDTH)?;
 
-    // Cage rings every second joint, plus one beyond each end.
-    let ring_step = 2.0 * SNAKE_LENGTH / SNAKE_JOINTS as f64;
+    // Cage rings at every joint but the root, plus one beyond each end.
+    let ring_step = SNAKE_LENGTH / SNAKE_JOINTS as f64;
     let inner = (SNAKE_LENGTH / ring_step).round() as usize;
     let mut cage_x = vec![-SNAKE_CAGE_END_MARGIN];
     cage_x.extend((1..inner).map(|i| ring_step * i as f64));
@@ -144,8 +148,8 @@ mod tests {
         let rig = snake(Some(2000)).unwrap();
         let (rings, around) = snake_grid(2000);
         assert_eq!(rig.mesh.num_vertices(), rings * around + 2);
-        assert_eq!(rig.cage.num_vertices(), 74);
-        assert_eq!(rig.cage.num_triangles(), 144);
+        assert_eq!(rig.cage.num_vertices(), 70);
+        assert_eq!(rig.cage.num_triangles(), 136);
         assert_eq!(rig.skeleton.len(), 16);
         assert!(snake(Some(0)).is_err());
         assert!(snake(Some(SNAKE_MAX_VERTICES + 1)).is_err());
