@@ -396,11 +396,16 @@ pub fn import_animations(
                 } else {
                     format!("within {COMPOSED_TOLERANCE:e} of the skeleton's size of the file")
                 };
+                let which = match suspects.len() {
+                    1 => format!("joint {j} (node {}) moves", joint_nodes[j]),
+                    n => format!(
+                        "{n} joints (first: joint {j}, node {}) move",
+                        joint_nodes[j]
+                    ),
+                };
                 warnings.push(Warning::Note {
                     message: format!(
-                        "{element}: {} joints (first: node {}) move with several animated nodes above them (a turning node carries another motion or a translation on an arc), which the track's interpolation between the file's keys does not follow; {} keys were added, {within}",
-                        suspects.len(),
-                        joint_nodes[j],
+                        "{element}: {which} with several animated nodes above (a turning node carries another motion or a translation on an arc), which the track's interpolation between the file's keys does not follow; {} keys were added, {within}",
                         refined.added
                     ),
                 });
