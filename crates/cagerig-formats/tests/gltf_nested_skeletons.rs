@@ -18,12 +18,9 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-
-use base64::Engine;
-use cagerig_formats::{ImportOptions, ImportedCharacter, import_character};
-use common::ReferenceGltf;
-use glam::{DAffine3, DQuat, DVec3};
+use cagerig_formats::{ImportOptions, import_character};
+use common::synthetic_gltf::{push_view, worst_distance, write_temp};
+use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
 
 /// Joints per chain (and rings of the column).
@@ -35,21 +32,7 @@ const TURN: f32 = 0.2;
 
 /// Appends `bytes` as an embedded buffer with one view and one accessor; returns the accessor.
 fn push_accessor(j: &mut Value, bytes: &[u8], mut accessor: Value) -> usize {
-    let uri = format!(
-        "data:application/octet-stream;base64,{}",
-        base64::engine::general_purpose::STANDARD.encode(bytes)
-    );
-    let buffer = j["buffers"].as_array().unwrap().len();
-    j["buffers"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({"uri": uri, "byteLength": bytes.len()}));
-    let view = j["bufferViews"].as_array().unwrap().len();
-    j["bufferViews"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({"buffer": buffer, "byteLength": bytes.len()}));
-    accessor["bufferView"] = view.into();
+    accessor["bufferView"] = push_view(j, bytes).into();
     let index = j["accessors"].as_array().unwrap().len();
     j["accessors"].as_array_mut().unwrap().push(accessor);
     index
@@ -251,39 +234,6 @@ fn nested_skeletons() -> Value {
     push_skin(&mut j, "C", &c, a[0]);
     push_twist_animation(&mut j, &[(&a, DVec3::X), (&b, DVec3::Z), (&c, DVec3::Y)]);
     j
-}
-
-fn write_temp(name: &str, document: &Value) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cagerig-nested-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::write(&path, serde_json::to_vec(document).unwrap()).unwrap();
-    path
-}
-
-/// Largest distance over `times` between the imported character posed by its animation 0 and
-/// the reference evaluation of skin `skin` of `path`, as a fraction of the rest diagonal.
-fn worst_distance(path: &Path, c: &ImportedCharacter, skin: usize, times: &[f64]) -> f64 {
-    let reference = ReferenceGltf::load(path).with_skin(skin);
-    let (lo, hi) = cagerig::mesh::bounding_box(&c.mesh.positions);
-    let diag = (hi - lo).length();
-    let rest_frames = c.skeleton.rest_world_from_joint();
-    let lbs = cagerig::skinning::lbs::LinearBlendSkinning::new(&c.skin_weights);
-    let nj = c.skeleton.len();
-    let mut locals = vec![DAffine3::IDENTITY; nj];
-    let mut world = vec![DAffine3::IDENTITY; nj];
-    let mut transforms = vec![DAffine3::IDENTITY; nj];
-    let mut posed = vec![DVec3::ZERO; c.mesh.num_vertices()];
-    times
-        .iter()
-        .map(|&t| {
-            c.animations[0].track.sample(t, &mut locals);
-            c.skeleton.forward_kinematics(&locals, &mut world);
-            cagerig::Skeleton::skinning_transforms(&rest_frames, &world, &mut transforms);
-            lbs.apply(&transforms, &c.mesh.positions, &mut posed);
-            cagerig::mesh::max_distance(&reference.skin(Some(0), t), &posed) / diag
-        })
-        .fold(0.0, f64::max)
 }
 
 #[test]
