@@ -7,7 +7,6 @@
 
 mod common;
 
-use base64::Engine;
 use cagerig_formats::{ImportOptions, import_character};
 use common::synthetic_gltf::{push_view, worst_distance, write_temp};
 use common::{ReferenceGltf, data};
@@ -78,20 +77,7 @@ fn cubic_spline_document() -> Value {
     }
     let bytes: Vec<u8> = floats.iter().flat_map(|x| x.to_le_bytes()).collect();
     let mut j = simple_skin();
-    let uri = format!(
-        "data:application/octet-stream;base64,{}",
-        base64::engine::general_purpose::STANDARD.encode(&bytes)
-    );
-    let buffer = j["buffers"].as_array().unwrap().len();
-    j["buffers"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({"uri": uri, "byteLength": bytes.len()}));
-    let view = j["bufferViews"].as_array().unwrap().len();
-    j["bufferViews"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({"buffer": buffer, "byteLength": bytes.len()}));
+    let view = push_view(&mut j, &bytes);
     let accessor = j["accessors"].as_array().unwrap().len();
     j["accessors"]
         .as_array_mut()
