@@ -28,6 +28,9 @@ printf '\x07# b\n0 0.25\n2 1\n' > corpus/parsers/seed7
 for f in "$DATA"/gltf/*/*.gl* "$DATA"/fox/Fox.glb; do
   [ "$(wc -c < "$f")" -lt 1000000 ] && seed gltf_import "$f" "$(basename "$f")"
 done
+# Skeletons hanging from other animated skeletons (crates/cagerig-formats/tests/
+# gltf_nested_skeletons.rs writes it and checks it is current).
+for f in seeds/gltf_import/*.gltf; do seed gltf_import "$f" "$(basename "$f")"; done
 for f in "$DATA"/fbx/*.fbx; do seed fbx_import "$f" "$(basename "$f")"; done
 mkdir -p corpus/rig_assembly
 { cat "$DATA"/fbx/blender_279_sausage_base_0.obj; printf '\0'; cat "$DATA"/arm/arm_cage.obj; } \

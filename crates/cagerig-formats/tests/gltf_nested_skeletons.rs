@@ -23,7 +23,7 @@ use common::synthetic_gltf::{push_view, worst_distance, write_temp};
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
 
-/// Joints per chain (and rings of the column).
+/// Joints per chain (and rings of the column), as in the sample.
 const CHAIN: usize = 10;
 /// Spacing of the rings and of the joints along a chain.
 const SPACING: f32 = 10.0;
@@ -42,46 +42,46 @@ fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
     values.into_iter().flat_map(f32::to_le_bytes).collect()
 }
 
-/// The column: ring k at y = 10k, corners (±5, ±5) in x and z, ring k bound to joint k.
-fn push_column_mesh(j: &mut Value) {
+/// The column of `n` rings: ring k at y = 10k, corners (±5, ±5) in x and z, bound to joint k.
+fn push_column_mesh(j: &mut Value, n: usize) {
     let corners = [(-5.0f32, -5.0f32), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)];
-    let positions: Vec<f32> = (0..CHAIN)
+    let positions: Vec<f32> = (0..n)
         .flat_map(|k| {
             corners
                 .iter()
                 .flat_map(move |&(x, z)| [x, SPACING * k as f32, z])
         })
         .collect();
-    let top = SPACING * (CHAIN - 1) as f32;
+    let top = SPACING * (n - 1) as f32;
     let position = push_accessor(
         j,
         &f32_bytes(positions),
-        json!({"componentType": 5126, "count": 4 * CHAIN, "type": "VEC3",
+        json!({"componentType": 5126, "count": 4 * n, "type": "VEC3",
                "min": [-5.0, 0.0, -5.0], "max": [5.0, top, 5.0]}),
     );
-    let joints: Vec<u8> = (0..CHAIN)
+    let joints: Vec<u8> = (0..n)
         .flat_map(|k| (0..4).flat_map(move |_| [k as u8, 0, 0, 0]))
         .collect();
     let joints = push_accessor(
         j,
         &joints,
-        json!({"componentType": 5121, "count": 4 * CHAIN, "type": "VEC4"}),
+        json!({"componentType": 5121, "count": 4 * n, "type": "VEC4"}),
     );
     let weights = push_accessor(
         j,
-        &f32_bytes((0..4 * CHAIN).flat_map(|_| [1.0, 0.0, 0.0, 0.0])),
-        json!({"componentType": 5126, "count": 4 * CHAIN, "type": "VEC4"}),
+        &f32_bytes((0..4 * n).flat_map(|_| [1.0, 0.0, 0.0, 0.0])),
+        json!({"componentType": 5126, "count": 4 * n, "type": "VEC4"}),
     );
     let mut triangles: Vec<u16> = vec![0, 2, 1, 0, 3, 2];
-    for k in 0..CHAIN - 1 {
+    for k in 0..n - 1 {
         for c in 0..4 {
             let (a, b) = ((4 * k + c) as u16, (4 * k + (c + 1) % 4) as u16);
             triangles.extend([a, b, b + 4, a, b + 4, a + 4]);
         }
     }
-    let last = (4 * (CHAIN - 1)) as u16;
+    let last = (4 * (n - 1)) as u16;
     triangles.extend([last, last + 1, last + 2, last, last + 2, last + 3]);
-    assert_eq!(triangles.len(), 228, "the sample's index count");
+    assert_eq!(triangles.len(), 24 * n - 12);
     let indices = push_accessor(
         j,
         &triangles
@@ -96,16 +96,17 @@ fn push_column_mesh(j: &mut Value) {
     }]}]);
 }
 
-/// A chain of [`CHAIN`] joint nodes under `parent` (or at the top), its root at `offset` from
-/// the parent turned by `root_rotation`; returns the joint nodes.
+/// A chain of `n` joint nodes under `parent` (or at the top), its root at `offset` from the
+/// parent turned by `root_rotation`; returns the joint nodes.
 fn push_chain(
     j: &mut Value,
+    n: usize,
     parent: Option<usize>,
     offset: [f32; 3],
     root_rotation: DQuat,
 ) -> Vec<usize> {
-    let mut nodes = Vec::with_capacity(CHAIN);
-    for k in 0..CHAIN {
+    let mut nodes = Vec::with_capacity(n);
+    for k in 0..n {
         let node = j["nodes"].as_array().unwrap().len();
         let mut n = if k == 0 {
             let q = root_rotation.as_quat();
@@ -208,10 +209,10 @@ fn push_twist_animation(j: &mut Value, chains: &[(&[usize], DVec3)]) {
     j["animations"] = json!([{"name": "twist", "samplers": samplers, "channels": channels}]);
 }
 
-/// The document: chains A (at the top, turning about x), B (under A's joint 5, 20 units off
-/// its axis, turned 90° about z, turning about z) and C (under B's joint 4, 20 units off its
-/// axis, turning about y), one skin each over the column.
-fn nested_skeletons() -> Value {
+/// The document with chains of `n` joints: A (at the top, turning about x), B (under A's joint
+/// n/2, 20 units off its axis, turned 90° about z, turning about z) and C (under B's joint
+/// (n − 1)/2, 20 units off its axis, turning about y), one skin each over the column.
+fn nested_skeletons(n: usize) -> Value {
     let mut j = json!({
         "asset": {"version": "2.0", "generator": "cagerig test"},
         "scene": 0,
@@ -219,18 +220,25 @@ fn nested_skeletons() -> Value {
         "nodes": [],
         "buffers": [], "bufferViews": [], "accessors": [], "skins": []
     });
-    push_column_mesh(&mut j);
-    let a = push_chain(&mut j, None, [0.0, 0.0, 0.0], DQuat::IDENTITY);
+    push_column_mesh(&mut j, n);
+    let a = push_chain(&mut j, n, None, [0.0, 0.0, 0.0], DQuat::IDENTITY);
     let b = push_chain(
         &mut j,
-        Some(a[5]),
+        n,
+        Some(a[n / 2]),
         [20.0, 0.0, 0.0],
         DQuat::from_rotation_z(-std::f64::consts::FRAC_PI_2),
     );
-    let c = push_chain(&mut j, Some(b[4]), [0.0, 0.0, 20.0], DQuat::IDENTITY);
+    let c = push_chain(
+        &mut j,
+        n,
+        Some(b[(n - 1) / 2]),
+        [0.0, 0.0, 20.0],
+        DQuat::IDENTITY,
+    );
     // Each skinned node under a joint of another skin (C's under A's root, A's under C's tip).
-    push_skin(&mut j, "A", &a, c[9]);
-    push_skin(&mut j, "B", &b, a[2]);
+    push_skin(&mut j, "A", &a, c[n - 1]);
+    push_skin(&mut j, "B", &b, a[n / 5]);
     push_skin(&mut j, "C", &c, a[0]);
     push_twist_animation(&mut j, &[(&a, DVec3::X), (&b, DVec3::Z), (&c, DVec3::Y)]);
     j
@@ -238,7 +246,9 @@ fn nested_skeletons() -> Value {
 
 #[test]
 fn skins_of_nested_skeletons_pose_as_a_viewer_shows_them() {
-    let document = nested_skeletons();
+    let document = nested_skeletons(CHAIN);
+    let indices = &document["accessors"][3];
+    assert_eq!(indices["count"], 228, "the sample's index count: {indices}");
     let path = write_temp("nested_skeletons.gltf", &document);
     // Between the keys (where an arc of the root is not a straight line) and at them.
     let times: Vec<f64> = (0..=40).map(|i| i as f64 * 0.05).collect();
@@ -268,4 +278,39 @@ fn skins_of_nested_skeletons_pose_as_a_viewer_shows_them() {
             assert!(!c.animations[0].exact && noted, "{notes:?}");
         }
     }
+}
+
+/// The `gltf_import` fuzz target's seed (`fuzz/seeds/gltf_import/nested_skeletons.gltf`): the
+/// document with chains of 3 joints, under the fuzzer's 8192-byte inputs, so that mutations
+/// start from skeletons carried by other animated skeletons. Its skins pose as a viewer shows
+/// them too. The test fails when the seed is not what this test builds;
+/// `CAGERIG_WRITE_FUZZ_SEEDS=1` rewrites it.
+#[test]
+fn the_fuzz_seed_of_nested_skeletons_is_current() {
+    let document = nested_skeletons(3);
+    let bytes = serde_json::to_vec(&document).unwrap();
+    assert!(bytes.len() <= 8192, "{} bytes", bytes.len());
+    let path = write_temp("nested_skeletons_3.gltf", &document);
+    let times: Vec<f64> = (0..=40).map(|i| i as f64 * 0.05).collect();
+    for (skin, name) in ["A", "B", "C"].iter().enumerate() {
+        let options = ImportOptions {
+            skin: Some((*name).into()),
+            ..ImportOptions::default()
+        };
+        let c = import_character(&path, &options).unwrap();
+        let err = worst_distance(&path, &c, skin, &times);
+        assert!(err <= 1e-5, "skin {name}: {err:e} of the diagonal");
+    }
+    let seed = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fuzz/seeds/gltf_import/nested_skeletons.gltf");
+    if std::env::var_os("CAGERIG_WRITE_FUZZ_SEEDS").is_some() {
+        std::fs::create_dir_all(seed.parent().unwrap()).unwrap();
+        std::fs::write(&seed, &bytes).unwrap();
+    }
+    let written = std::fs::read(&seed).unwrap_or_default();
+    assert!(
+        written == bytes,
+        "{} is not what this test builds: rerun with CAGERIG_WRITE_FUZZ_SEEDS=1",
+        seed.display()
+    );
 }
