@@ -383,8 +383,14 @@ pub fn import_animations(
             (times, keys)
         } else {
             let tolerance = COMPOSED_TOLERANCE * length_scale;
-            let refined =
-                refine_composed_keys(&times, &suspects, length_scale, tolerance, composed_at);
+            let refined = refine_composed_keys(
+                &times,
+                &suspects,
+                length_scale,
+                tolerance,
+                2.0 * STEP_RAMP,
+                composed_at,
+            );
             if refined.added > 0 || refined.capped {
                 exact = false;
                 let j = suspects[0];

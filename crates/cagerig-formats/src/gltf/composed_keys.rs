@@ -58,12 +58,14 @@ pub struct RefinedKeys {
 /// Adds keys between `times` (sorted) until the track's interpolation of the composed locals of
 /// the joints `suspects` is within `tolerance` of `evaluate(t)` (the exact composed locals,
 /// `#J`) at every check point. Rotation and scale differences count times `length_scale` (the
-/// size of the skeleton), so the tolerance is a distance.
+/// size of the skeleton), so the tolerance is a distance. Intervals no longer than
+/// `shortest` seconds are not checked: the ramps before STEP keys, which are inexact by design.
 pub fn refine_composed_keys(
     times: &[f64],
     suspects: &[usize],
     length_scale: f64,
     tolerance: f64,
+    shortest: f64,
     mut evaluate: impl FnMut(f64) -> Vec<DAffine3>,
 ) -> RefinedKeys {
     let first: Vec<Vec<DAffine3>> = times.iter().map(|&t| evaluate(t)).collect();
@@ -80,6 +82,7 @@ pub fn refine_composed_keys(
         suspects,
         length_scale,
         tolerance,
+        shortest,
         evaluate: &mut evaluate,
     };
     for (k, key) in first.iter().enumerate() {
@@ -103,6 +106,7 @@ struct Check<'a, F> {
     suspects: &'a [usize],
     length_scale: f64,
     tolerance: f64,
+    shortest: f64,
     evaluate: &'a mut F,
 }
 
@@ -116,6 +120,9 @@ impl<F: FnMut(f64) -> Vec<DAffine3>> Check<'_, F> {
         budget: &mut usize,
         out: &mut RefinedKeys,
     ) {
+        if t1 - t0 <= self.shortest {
+            return;
+        }
         let mut worst: f64 = 0.0;
         let mut middle = None;
         for a in [0.5, 0.25, 0.75] {
@@ -216,7 +223,7 @@ mod tests {
                     * DAffine3::from_translation(DVec3::new(10.0, 0.0, 0.0)),
             ]
         };
-        let refined = refine_composed_keys(&[0.0, 1.0, 2.0], &[0], 10.0, 1e-6, evaluate);
+        let refined = refine_composed_keys(&[0.0, 1.0, 2.0], &[0], 10.0, 1e-6, 0.0, evaluate);
         assert!(!refined.capped);
         assert_eq!(refined.times.first(), Some(&0.0));
         assert_eq!(refined.times.last(), Some(&2.0));
@@ -246,7 +253,7 @@ mod tests {
         let evaluate = |t: f64| {
             vec![DAffine3::from_translation(DVec3::new(t, 0.0, 0.0)) * DAffine3::from_rotation_z(t)]
         };
-        let refined = refine_composed_keys(&[0.0, 1.0], &[0], 1.0, 1e-9, evaluate);
+        let refined = refine_composed_keys(&[0.0, 1.0], &[0], 1.0, 1e-9, 0.0, evaluate);
         assert_eq!(refined.added, 0);
         assert_eq!(refined.times, vec![0.0, 1.0]);
         assert!(refined.largest_checked <= 1e-9);
@@ -255,8 +262,26 @@ mod tests {
     #[test]
     fn the_depth_cap_is_reported() {
         let evaluate = |t: f64| vec![DAffine3::from_translation(DVec3::new(t.sin(), 0.0, 0.0))];
-        let refined = refine_composed_keys(&[0.0, 1000.0], &[0], 1.0, 1e-12, evaluate);
+        let refined = refine_composed_keys(&[0.0, 1000.0], &[0], 1.0, 1e-12, 0.0, evaluate);
         assert!(refined.capped);
         assert!(refined.added < 1 << (MAX_DEPTH + 1));
+    }
+
+    /// A STEP channel's ramp (the key 1e-6 s before the step, where the track blends what the
+    /// file holds until the step) is left as it is: no key inside it, nothing capped.
+    #[test]
+    fn the_ramp_before_a_step_is_not_split() {
+        let evaluate = |t: f64| {
+            let x = if t < 1.0 { 0.0 } else { 1.0 };
+            vec![DAffine3::from_translation(DVec3::new(x, 0.0, 0.0))]
+        };
+        let times = [0.0, 1.0 - 1e-6, 1.0, 2.0];
+        let refined = refine_composed_keys(&times, &[0], 1.0, 1e-9, 2e-6, evaluate);
+        assert_eq!(refined.added, 0);
+        assert!(!refined.capped);
+        assert_eq!(refined.times, times.to_vec());
+        // Without the floor the ramp is split to the depth cap.
+        let split = refine_composed_keys(&times, &[0], 1.0, 1e-9, 0.0, evaluate);
+        assert!(split.capped && split.added == MAX_DEPTH, "{}", split.added);
     }
 }
