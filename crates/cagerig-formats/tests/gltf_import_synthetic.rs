@@ -6,12 +6,13 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 mod common;
+mod synthetic_gltf;
 
 use cagerig_formats::{ImportOptions, import_character};
-use common::synthetic_gltf::{push_view, worst_distance, write_temp};
 use common::{ReferenceGltf, data};
 use glam::DVec3;
 use serde_json::{Value, json};
+use synthetic_gltf::{push_view, worst_distance, write_temp};
 
 fn simple_skin() -> Value {
     serde_json::from_slice(&std::fs::read(data("gltf/SimpleSkin/SimpleSkin.gltf")).unwrap())

@@ -17,11 +17,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 mod common;
+mod synthetic_gltf;
 
 use cagerig_formats::{ImportOptions, import_character};
-use common::synthetic_gltf::{push_view, worst_distance, write_temp};
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
+use synthetic_gltf::{push_view, worst_distance, write_temp};
 
 /// Joints per chain (and rings of the column), as in the sample.
 const CHAIN: usize = 10;

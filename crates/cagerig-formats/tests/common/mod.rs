@@ -1,8 +1,6 @@
 //! Shared test helpers: data paths, a box cage, an independent glTF skinning evaluator.
 #![allow(dead_code)]
 
-pub mod synthetic_gltf;
-
 use std::path::PathBuf;
 
 use cagerig::TriMesh;

@@ -8,7 +8,7 @@ use cagerig_formats::ImportedCharacter;
 use glam::{DAffine3, DVec3};
 use serde_json::{Value, json};
 
-use super::ReferenceGltf;
+use crate::common::ReferenceGltf;
 
 /// Writes `document` as `name` in this process's temporary folder; returns its path.
 pub fn write_temp(name: &str, document: &Value) -> PathBuf {
