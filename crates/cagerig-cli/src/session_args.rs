@@ -160,19 +160,19 @@ pub fn event_error(
     context: impl std::fmt::Display,
     error: impl std::error::Error + 'static,
 ) -> anyhow::Error {
-    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(&error);
-    let mut hint = "";
-    while let Some(e) = cause {
-        if matches!(
+    let first: &(dyn std::error::Error + 'static) = &error;
+    let refused_fit = std::iter::successors(Some(first), |e| e.source()).any(|e| {
+        matches!(
             e.downcast_ref::<cagerig::RigError>(),
             Some(cagerig::RigError::GreenFitFailed { .. })
-        ) {
-            hint = " (`--unfitted-cage keep` keeps such events: the skin posed exactly, the \
-                    current cage left unfitted)";
-            break;
-        }
-        cause = e.source();
-    }
+        )
+    });
+    let hint = if refused_fit {
+        " (`--unfitted-cage keep` keeps such events: the skin posed exactly, the current cage \
+         left unfitted)"
+    } else {
+        ""
+    };
     anyhow::anyhow!("{context}: {error}{hint}")
 }
 

@@ -7,7 +7,7 @@
 mod support;
 
 use std::path::Path;
-use support::{cagerig, repo};
+use support::{cagerig, repo, run_ok, temp_dir};
 
 fn positions(path: &Path) -> Vec<glam::DVec3> {
     cagerig::io::read_obj(path).unwrap().positions
@@ -60,19 +60,13 @@ fn edit_with_green_coordinates_lands_the_grab_exactly() {
 /// coordinates, the grab landing exactly and the other current-cage vertices still.
 #[test]
 fn demo_with_green_coordinates_lands_the_grab() {
-    let dir = std::env::temp_dir().join(format!("cagerig-green-demo-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = cagerig()
-        .args(["demo", "--coords", "green", "--no-pictures", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let root = temp_dir("demo");
+    let (dir, mvc) = (root.join("green"), root.join("mvc"));
+    let stdout = run_ok(
+        cagerig()
+            .args(["demo", "--coords", "green", "--no-pictures", "--out"])
+            .arg(&dir),
     );
-    let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("Green coordinates"), "{stdout}");
     let before = positions(&dir.join("2_inflate_cage_posed.obj"));
     let after = positions(&dir.join("3_grab_cage_posed.obj"));
@@ -90,18 +84,15 @@ fn demo_with_green_coordinates_lands_the_grab() {
         "{offset}"
     );
     // Rebinding with mean value coordinates gives another rest skin for the same inflate.
-    let mvc = dir.with_extension("mvc");
-    let status = cagerig()
-        .args(["demo", "--coords", "mvc", "--no-pictures", "--out"])
-        .arg(&mvc)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    run_ok(
+        cagerig()
+            .args(["demo", "--coords", "mvc", "--no-pictures", "--out"])
+            .arg(&mvc),
+    );
     let green_rest = positions(&dir.join("2_inflate_mesh_rest.obj"));
     let mvc_rest = positions(&mvc.join("2_inflate_mesh_rest.obj"));
     assert!(cagerig::mesh::max_distance(&green_rest, &mvc_rest) > 1e-4 * (hi - lo).length());
-    let _ = std::fs::remove_dir_all(&dir);
-    let _ = std::fs::remove_dir_all(&mvc);
+    let _ = std::fs::remove_dir_all(&root);
 }
 
 #[test]

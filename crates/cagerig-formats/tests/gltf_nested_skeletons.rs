@@ -19,7 +19,9 @@
 mod common;
 mod synthetic_gltf;
 
-use cagerig_formats::{ImportOptions, import_character};
+use std::path::Path;
+
+use cagerig_formats::{ImportOptions, ImportedCharacter, import_character};
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
 use synthetic_gltf::{push_view, worst_distance, write_temp};
@@ -245,20 +247,33 @@ fn nested_skeletons(n: usize) -> Value {
     j
 }
 
+/// The skins' names, in the file's order.
+const SKINS: [&str; 3] = ["A", "B", "C"];
+
+/// 41 times over the animation: between the keys (where an arc of the root is not a straight
+/// line) and at them.
+fn probe_times() -> Vec<f64> {
+    (0..=40).map(|i| i as f64 * 0.05).collect()
+}
+
+/// Skin `name` of `path`, imported by name.
+fn import_skin(path: &Path, name: &str) -> ImportedCharacter {
+    let options = ImportOptions {
+        skin: Some(name.into()),
+        ..ImportOptions::default()
+    };
+    import_character(path, &options).unwrap()
+}
+
 #[test]
 fn skins_of_nested_skeletons_pose_as_a_viewer_shows_them() {
     let document = nested_skeletons(CHAIN);
     let indices = &document["accessors"][3];
     assert_eq!(indices["count"], 228, "the sample's index count: {indices}");
     let path = write_temp("nested_skeletons.gltf", &document);
-    // Between the keys (where an arc of the root is not a straight line) and at them.
-    let times: Vec<f64> = (0..=40).map(|i| i as f64 * 0.05).collect();
-    for (skin, name) in ["A", "B", "C"].iter().enumerate() {
-        let options = ImportOptions {
-            skin: Some((*name).into()),
-            ..ImportOptions::default()
-        };
-        let c = import_character(&path, &options).unwrap();
+    let times = probe_times();
+    for (skin, name) in SKINS.into_iter().enumerate() {
+        let c = import_skin(&path, name);
         assert_eq!(c.summary.chosen_skin, skin);
         assert_eq!(c.skeleton.len(), CHAIN, "skin {name}");
         assert_eq!(c.mesh.num_vertices(), 4 * CHAIN, "skin {name}");
@@ -292,17 +307,13 @@ fn the_fuzz_seed_of_nested_skeletons_is_current() {
     let bytes = serde_json::to_vec(&document).unwrap();
     assert!(bytes.len() <= 8192, "{} bytes", bytes.len());
     let path = write_temp("nested_skeletons_3.gltf", &document);
-    let times: Vec<f64> = (0..=40).map(|i| i as f64 * 0.05).collect();
-    for (skin, name) in ["A", "B", "C"].iter().enumerate() {
-        let options = ImportOptions {
-            skin: Some((*name).into()),
-            ..ImportOptions::default()
-        };
-        let c = import_character(&path, &options).unwrap();
+    let times = probe_times();
+    for (skin, name) in SKINS.into_iter().enumerate() {
+        let c = import_skin(&path, name);
         let err = worst_distance(&path, &c, skin, &times);
         assert!(err <= 1e-5, "skin {name}: {err:e} of the diagonal");
     }
-    let seed = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+    let seed = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../fuzz/seeds/gltf_import/nested_skeletons.gltf");
     if std::env::var_os("CAGERIG_WRITE_FUZZ_SEEDS").is_some() {
         std::fs::create_dir_all(seed.parent().unwrap()).unwrap();
