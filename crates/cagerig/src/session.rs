@@ -42,6 +42,7 @@ mod checkpoint;
 mod display_path;
 mod editable_state;
 mod green;
+mod green_binding;
 mod parts;
 mod pose_events;
 mod rebind;

@@ -54,47 +54,6 @@ pub const MAX_STEPS: usize = 60;
 /// At most this many steps per piece of a continuation.
 pub const MAX_PIECE_STEPS: usize = 20;
 
-/// What a CageUp does when its direct solve stops above the accepted gradient.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AfterDirectSolve {
-    /// Continue in pieces from the last accepted solution (every event's).
-    Continuation,
-    /// Solve once more, within the same steps, from the last accepted solution (and keep the
-    /// direct solve's cage when that fails too): cheap, and enough to find the cage again
-    /// when the pose comes back near the last one fitted.
-    RetryFromLastSolution,
-}
-
-/// How much work one CageUp may do.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FitBudget {
-    /// Steps of the direct solve (and of a retry).
-    pub steps: usize,
-    /// What follows a direct solve that stops above the accepted gradient.
-    pub then: AfterDirectSolve,
-}
-
-impl FitBudget {
-    /// Every event's: [`MAX_STEPS`], then the continuation.
-    pub const FULL: Self = Self {
-        steps: MAX_STEPS,
-        then: AfterDirectSolve::Continuation,
-    };
-    /// After an event whose CageUp found no cage, kept with C' unfitted
-    /// ([`crate::session::UnfittedCagePolicy::KeepEvent`]): [`UNFITTED_STEPS`] steps from the
-    /// moved closest cage, then as many from the last accepted solution, so that a run of poses
-    /// past the fold costs a few steps each (with the full budget, 0.2–0.3 s a frame on a
-    /// 100-vertex cage; with 2 + 2 steps about 17 ms on CesiumMan, which fits the same samples
-    /// as 8 + 8 on the measured characters: `docs/green-coordinates.md`).
-    pub const UNFITTED_STREAK: Self = Self {
-        steps: UNFITTED_STEPS,
-        then: AfterDirectSolve::RetryFromLastSolution,
-    };
-}
-
-/// Direct-solve steps of [`FitBudget::UNFITTED_STREAK`].
-pub const UNFITTED_STEPS: usize = 2;
-
 /// Precomputed Green CageUp (see the module docs).
 #[derive(Debug, Clone)]
 pub struct GreenCageFit {
@@ -618,40 +577,13 @@ impl GreenCageFit {
     }
 }
 
-/// The mean |diagonal| of the Hessian: the scale of the damping.
-fn damping_scale(hessian: &Mat<f64>) -> f64 {
-    let n = hessian.nrows().max(1);
-    let mean = (0..hessian.nrows())
-        .map(|i| hessian[(i, i)].abs())
-        .sum::<f64>()
-        / n as f64;
-    mean.max(f64::MIN_POSITIVE)
-}
+#[path = "green_cage_fit_budget.rs"]
+mod budget;
+pub use budget::{AfterDirectSolve, FitBudget, UNFITTED_STEPS};
 
-/// μ × `factor` (from 1e-9 of the Hessian's scale when μ = 0); infinite past 1e9 of the scale.
-fn raise_damping(damping: f64, hessian: &Mat<f64>, factor: f64) -> f64 {
-    let scale = damping_scale(hessian);
-    let raised = if damping == 0.0 {
-        1e-9 * scale
-    } else {
-        damping * factor
-    };
-    if raised > 1e9 * scale {
-        f64::INFINITY
-    } else {
-        raised
-    }
-}
-
-/// μ / 4, and 0 (Newton) below 1e-12 of the Hessian's scale.
-fn lower_damping(damping: f64, hessian: &Mat<f64>) -> f64 {
-    let lowered = damping / 4.0;
-    if lowered < 1e-12 * damping_scale(hessian) {
-        0.0
-    } else {
-        lowered
-    }
-}
+#[path = "green_cage_fit_damping.rs"]
+mod damping;
+use damping::{damping_scale, lower_damping, raise_damping};
 
 #[path = "green_cage_fit_rows.rs"]
 mod rows;
