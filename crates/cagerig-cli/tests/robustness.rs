@@ -500,3 +500,46 @@ fn usage_names_mesh_or_builtin_as_required() {
         .unwrap();
     assert!(!both.status.success());
 }
+
+/// File outputs create their missing folders, as folder outputs do (the weights page's
+/// `weights … --out out/arm5.skw` failed on a fresh clone without `out/`); a file standing where
+/// a folder must be is named once, for single files and folder outputs alike.
+#[test]
+fn missing_output_folders_are_created_and_a_file_in_the_way_is_named_once() {
+    let dir = temp_dir("output-folders");
+    for (args, written) in [
+        (
+            vec!["cage", "--builtin", "bar", "--faces", "40"],
+            "new/cage.obj",
+        ),
+        (vec!["export", "--builtin", "bar"], "new/deeper/bar.glb"),
+        (vec!["render", "--builtin", "bar"], "new/bar.png"),
+    ] {
+        let out = dir.join(written);
+        let o = run(&args, &[("--out", &out)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(out.is_file(), "{} not written", out.display());
+    }
+    let blocker = dir.join("blocker");
+    std::fs::write(&blocker, "a file").unwrap();
+    let expected = format!("{} is a file, not a folder", blocker.display());
+    for (args, out) in [
+        (
+            vec!["cage", "--builtin", "bar", "--faces", "40"],
+            "cage.obj",
+        ),
+        (vec!["export", "--builtin", "bar"], "bar.glb"),
+        (vec!["render", "--builtin", "bar"], "bar.png"),
+        (
+            vec!["render", "--builtin", "bar", "--turntable", "2"],
+            "spin",
+        ),
+    ] {
+        let out = blocker.join(out);
+        let o = run(&args, &[("--out", &out)]);
+        assert_error(&o, &[&expected]);
+        let e = stderr(&o);
+        assert_eq!(e.matches(&*out.to_string_lossy()).count(), 1, "{e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -179,16 +179,11 @@ impl SessionFile {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| SessionFileError::Write {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            })?;
-        }
+        // Creates a missing folder; the error names the path once.
         cagerig::io::write_atomically(path, |w| w.write_all(text.as_bytes())).map_err(|e| {
             SessionFileError::Write {
                 path: path.to_path_buf(),
-                message: e.to_string(),
+                message: e.reason(),
             }
         })
     }

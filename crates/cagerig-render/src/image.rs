@@ -119,7 +119,7 @@ fn write_error(path: &Path, e: impl std::fmt::Display) -> RenderError {
 
 fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), RenderError> {
     cagerig::io::atomic::write_atomically(path, |w| w.write_all(bytes))
-        .map_err(|e| write_error(path, e))
+        .map_err(|e| write_error(path, e.reason()))
 }
 
 /// Writes `frames` (all the same size, at least one) as an animated PNG looping forever, each

@@ -119,8 +119,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 }
 
 fn write_cage(out: &Path, cage: &TriMesh) -> anyhow::Result<()> {
-    write_obj(out, &cage.positions, &cage.triangles)
-        .with_context(|| format!("writing the cage to {}", out.display()))
+    write_obj(out, &cage.positions, &cage.triangles).context("writing the cage")
 }
 
 fn print_report(o: &CageOutput) {

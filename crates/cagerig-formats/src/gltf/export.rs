@@ -307,9 +307,9 @@ pub fn write_gltf_files(path: &Path, document: &Value, bin: &[u8]) -> Result<(),
     buffer["uri"] = Value::String(bin_name.clone());
     let text = serde_json::to_vec_pretty(&document).map_err(|e| io(path, e.to_string()))?;
     cagerig::io::atomic::write_atomically(&bin_path, |w| w.write_all(bin))
-        .map_err(|e| io(&bin_path, e.to_string()))?;
+        .map_err(|e| io(&bin_path, e.reason()))?;
     cagerig::io::atomic::write_atomically(path, |w| w.write_all(&text))
-        .map_err(|e| io(path, e.to_string()))?;
+        .map_err(|e| io(path, e.reason()))?;
     remove_earlier_buffers(path, &stem, &bin_name);
     Ok(())
 }
@@ -361,7 +361,7 @@ pub fn write_gltf_or_glb(path: &Path, document: &Value, bin: &[u8]) -> Result<()
     cagerig::io::atomic::write_atomically(path, |w| write_glb(w, document, bin)).map_err(|e| {
         FormatError::Io {
             path: path.to_path_buf(),
-            message: e.to_string(),
+            message: e.reason(),
         }
     })
 }

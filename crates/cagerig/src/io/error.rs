@@ -112,6 +112,15 @@ impl ParseError {
         }
     }
 
+    /// The message without the file it names, for a caller whose own error names the file: the
+    /// operating system's reason for [`ParseError::Io`], the whole message otherwise.
+    pub fn reason(&self) -> String {
+        match self {
+            ParseError::Io { message, .. } => message.clone(),
+            other => other.to_string(),
+        }
+    }
+
     /// The file the error refers to.
     pub fn path(&self) -> &Path {
         match self {

@@ -110,9 +110,9 @@ impl StagedDir {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        std::fs::create_dir_all(&parent).map_err(|e| {
+        crate::io::atomic::create_folder(&parent).map_err(|e| {
             StagedDirError::io(
-                format!("creating the folder {}", parent.display()),
+                format!("creating the folder of {}", target.display()),
                 &parent,
                 &e,
             )
