@@ -36,13 +36,17 @@ pub fn rig_error(e: cagerig::RigError) -> PyErr {
     RigError::new_err(e.to_string())
 }
 
-/// A file error: the OS's refusals as `OSError` subclasses, everything else as [`RigFileError`].
+/// A file error: the OS's refusals as `OSError` subclasses (a file standing where an output's
+/// folder must be as `NotADirectoryError`), everything else as [`RigFileError`].
 pub fn file_error(e: cagerig::io::ParseError) -> PyErr {
     use std::io::ErrorKind;
     match &e {
         cagerig::io::ParseError::Io { kind, .. } => match kind {
             ErrorKind::NotFound => PyFileNotFoundError::new_err(e.to_string()),
             ErrorKind::PermissionDenied => PyPermissionError::new_err(e.to_string()),
+            ErrorKind::NotADirectory => {
+                pyo3::exceptions::PyNotADirectoryError::new_err(e.to_string())
+            }
             _ => PyOSError::new_err(e.to_string()),
         },
         _ => RigFileError::new_err(e.to_string()),
@@ -66,6 +70,7 @@ pub fn folder_error(e: cagerig::io::StagedDirError) -> PyErr {
         E::Io { kind, .. } => match kind {
             ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
             ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+            ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
             _ => PyOSError::new_err(message),
         },
     }

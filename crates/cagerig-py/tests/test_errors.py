@@ -143,3 +143,17 @@ def test_bad_files(tmp_path):
         cagerig.Rig.load(lonely)
     with pytest.raises(ValueError, match="fit_rows must be"):
         cagerig.Rig.load(lonely, fit_rows="some")
+
+
+def test_outputs_create_missing_folders_and_name_a_file_in_the_way(tmp_path):
+    v, f = cube()
+    nested = tmp_path / "new" / "deeper" / "cube.obj"
+    cagerig.write_obj(nested, v, f)
+    assert nested.is_file()
+    blocker = tmp_path / "blocker"
+    blocker.write_text("a file")
+    with pytest.raises(NotADirectoryError, match=f"{blocker} is a file, not a folder"):
+        cagerig.write_obj(blocker / "cube.obj", v, f)
+    rig = cagerig.Rig.builtin("bar")
+    with pytest.raises(NotADirectoryError, match=f"{blocker} is a file, not a folder"):
+        rig.save(blocker / "out", "state")
