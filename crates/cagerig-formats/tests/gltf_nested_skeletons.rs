@@ -2,9 +2,17 @@
 //! RecursiveSkeletons (whose binary buffer could not be obtained here: its README describes one
 //! mesh reused by 84 skins over chains of 10 joints, chains attached to the joints of other
 //! chains, and an animation in which each column twists about its own axis, carrying the chains
-//! attached to it).
+//! attached to it). Two scenes:
 //!
-//! Here: one square column (10 rings of 4 vertices, each ring bound with weight 1 to one joint,
+//! - the sample's own scene ([`recursive_skeletons`]), rebuilt from the description of the
+//!   program that generated it (SharpGLTF's `InfiniteSkinnedTentacle` example, the generator
+//!   and licensor the sample names), with the counts and ranges of the sample's JSON accessors
+//!   (40 positions, 228 indices, 84 skins of 10 inverse bind matrices translating by 0 to −90
+//!   along y, rotation keys at 0, 1 and 2 s reaching 0.0998 = sin 0.1 in one component): every
+//!   one of its 84 skins;
+//! - a harder variant ([`nested_skeletons`]), described below.
+//!
+//! The variant: one square column (10 rings of 4 vertices, each ring bound with weight 1 to one joint,
 //! the sample's 40 vertices and 228 indices), three chains of 10 joints — B hangs from joint 5
 //! of A, C from joint 4 of B, each 20 units off its parent's axis — and one skin per chain over
 //! that same mesh, with the sample's inverse bind matrices (pure translations along y), so the
@@ -100,20 +108,25 @@ fn push_column_mesh(j: &mut Value, n: usize) {
 }
 
 /// A chain of `n` joint nodes under `parent` (or at the top), its root at `offset` from the
-/// parent turned by `root_rotation`; returns the joint nodes.
+/// parent turned by `root_rotation` and scaled by `root_scale`; returns the joint nodes.
 fn push_chain(
     j: &mut Value,
     n: usize,
     parent: Option<usize>,
     offset: [f32; 3],
     root_rotation: DQuat,
+    root_scale: f32,
 ) -> Vec<usize> {
     let mut nodes = Vec::with_capacity(n);
     for k in 0..n {
         let node = j["nodes"].as_array().unwrap().len();
         let mut n = if k == 0 {
             let q = root_rotation.as_quat();
-            json!({"translation": offset, "rotation": [q.x, q.y, q.z, q.w]})
+            let mut root = json!({"translation": offset, "rotation": [q.x, q.y, q.z, q.w]});
+            if root_scale != 1.0 {
+                root["scale"] = json!([root_scale, root_scale, root_scale]);
+            }
+            root
         } else {
             json!({"translation": [0.0, SPACING, 0.0]})
         };
@@ -140,8 +153,9 @@ fn push_chain(
 }
 
 /// One skin over `joints` with the sample's inverse bind matrices (translations by −10k along
-/// y), and a node of the column mesh with that skin under `parent`.
-fn push_skin(j: &mut Value, name: &str, joints: &[usize], parent: usize) {
+/// y), and a node of the column mesh with that skin: under `parent` with a transform a viewer
+/// must ignore, or at the top of the scene without one (as the sample's).
+fn push_skin(j: &mut Value, name: Option<&str>, joints: &[usize], parent: Option<usize>) {
     let matrices = f32_bytes((0..joints.len()).flat_map(|k| {
         let mut m = [0.0f32; 16];
         (m[0], m[5], m[10], m[15]) = (1.0, 1.0, 1.0, 1.0);
@@ -154,14 +168,26 @@ fn push_skin(j: &mut Value, name: &str, joints: &[usize], parent: usize) {
         json!({"componentType": 5126, "count": joints.len(), "type": "MAT4"}),
     );
     let skin = j["skins"].as_array().unwrap().len();
-    j["skins"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({"name": name, "joints": joints, "inverseBindMatrices": ibm}));
+    let mut entry = json!({"joints": joints, "inverseBindMatrices": ibm});
+    if let Some(name) = name {
+        entry["name"] = name.into();
+    }
+    j["skins"].as_array_mut().unwrap().push(entry);
     let node = j["nodes"].as_array().unwrap().len();
+    let Some(parent) = parent else {
+        j["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"mesh": 0, "skin": skin}));
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(node.into());
+        return;
+    };
     // A transform the viewer must ignore: the node of a skinned mesh does not place it.
     j["nodes"].as_array_mut().unwrap().push(
-        json!({"name": format!("{name} mesh"), "mesh": 0, "skin": skin, "translation": [3.0, 7.0, -2.0]}),
+        json!({"name": format!("{} mesh", name.unwrap_or("skin")), "mesh": 0, "skin": skin, "translation": [3.0, 7.0, -2.0]}),
     );
     j["nodes"][parent]
         .as_object_mut()
@@ -224,13 +250,14 @@ fn nested_skeletons(n: usize) -> Value {
         "buffers": [], "bufferViews": [], "accessors": [], "skins": []
     });
     push_column_mesh(&mut j, n);
-    let a = push_chain(&mut j, n, None, [0.0, 0.0, 0.0], DQuat::IDENTITY);
+    let a = push_chain(&mut j, n, None, [0.0, 0.0, 0.0], DQuat::IDENTITY, 1.0);
     let b = push_chain(
         &mut j,
         n,
         Some(a[n / 2]),
         [20.0, 0.0, 0.0],
         DQuat::from_rotation_z(-std::f64::consts::FRAC_PI_2),
+        1.0,
     );
     let c = push_chain(
         &mut j,
@@ -238,12 +265,70 @@ fn nested_skeletons(n: usize) -> Value {
         Some(b[(n - 1) / 2]),
         [0.0, 0.0, 20.0],
         DQuat::IDENTITY,
+        1.0,
     );
     // Each skinned node under a joint of another skin (C's under A's root, A's under C's tip).
-    push_skin(&mut j, "A", &a, c[n - 1]);
-    push_skin(&mut j, "B", &b, a[n / 5]);
-    push_skin(&mut j, "C", &c, a[0]);
+    push_skin(&mut j, Some("A"), &a, Some(c[n - 1]));
+    push_skin(&mut j, Some("B"), &b, Some(a[n / 5]));
+    push_skin(&mut j, Some("C"), &c, Some(a[0]));
     push_twist_animation(&mut j, &[(&a, DVec3::X), (&b, DVec3::Z), (&c, DVec3::Y)]);
+    j
+}
+
+/// The four chains the scene's top and every chain's last joint carry: where each root sits
+/// (signs of its x and z offsets) and the axis its joints turn about — the generator's pitch,
+/// yaw, roll and yaw of 0.2 rad, about x, y, z and y.
+const TENTACLES: [([f32; 2], DVec3); 4] = [
+    ([1.0, 1.0], DVec3::X),
+    ([-1.0, 1.0], DVec3::Y),
+    ([-1.0, -1.0], DVec3::Z),
+    ([1.0, -1.0], DVec3::Y),
+];
+
+/// Skins per chain at the top of [`recursive_skeletons`]: itself, 4 children, 16 grandchildren.
+const SKINS_PER_TOP_CHAIN: usize = 21;
+
+/// The scene of RecursiveSkeletons as its generator describes it (SharpGLTF's
+/// `InfiniteSkinnedTentacle` example; the sample's README credits SharpGLTF): four chains of 10
+/// joints with their roots at (±25, 0, ±25) at the top of the scene; on the last joint of every
+/// chain four more, their roots 3 units off its axis in x and z and scaled by 0.2 (the
+/// generator's translation by 15 followed by a scaling by 0.2), two levels deep — 4 + 16 + 64 =
+/// 84 chains. Each chain has its own skin over the one column mesh, whose node sits at the top
+/// of the scene, with the sample's inverse bind matrices; every joint turns LINEAR to 0.2 rad
+/// about its chain's axis and back over 0, 1 and 2 s. Chains and skins in the generator's
+/// depth-first order.
+fn recursive_skeletons() -> Value {
+    fn tentacle(
+        j: &mut Value,
+        parent: Option<usize>,
+        (offset, scale, axis): ([f32; 3], f32, DVec3),
+        depth: usize,
+        chains: &mut Vec<(Vec<usize>, DVec3)>,
+    ) {
+        let joints = push_chain(j, CHAIN, parent, offset, DQuat::IDENTITY, scale);
+        push_skin(j, None, &joints, None);
+        let tip = joints[CHAIN - 1];
+        chains.push((joints, axis));
+        for ([x, z], axis) in TENTACLES.into_iter().filter(|_| depth > 0) {
+            let placement = ([3.0 * x, 0.0, 3.0 * z], 0.2, axis);
+            tentacle(j, Some(tip), placement, depth - 1, chains);
+        }
+    }
+    let mut j = json!({
+        "asset": {"version": "2.0", "generator": "cagerig test"},
+        "scene": 0,
+        "scenes": [{"nodes": []}],
+        "nodes": [],
+        "buffers": [], "bufferViews": [], "accessors": [], "skins": []
+    });
+    push_column_mesh(&mut j, CHAIN);
+    let mut chains = Vec::new();
+    for ([x, z], axis) in TENTACLES {
+        let placement = ([25.0 * x, 0.0, 25.0 * z], 1.0, axis);
+        tentacle(&mut j, None, placement, 2, &mut chains);
+    }
+    let chains: Vec<(&[usize], DVec3)> = chains.iter().map(|(c, a)| (&c[..], *a)).collect();
+    push_twist_animation(&mut j, &chains);
     j
 }
 
@@ -324,5 +409,52 @@ fn the_fuzz_seed_of_nested_skeletons_is_current() {
         written == bytes,
         "{} is not what this test builds: rerun with CAGERIG_WRITE_FUZZ_SEEDS=1",
         seed.display()
+    );
+}
+
+/// Every one of the 84 skins of the RecursiveSkeletons scene (the sample's hierarchy, scales,
+/// skins and animation: [`recursive_skeletons`]) imports by its index and animates as a viewer
+/// shows it. The four chains at the top hang from nothing that moves and keep the file's three
+/// keys; the others are carried by 10 or 20 turning joints above them, scaled by 0.2 or 0.04.
+#[test]
+fn the_recursive_skeletons_scene_poses_as_a_viewer_shows_it() {
+    let document = recursive_skeletons();
+    assert_eq!(document["accessors"][0]["count"], 40);
+    assert_eq!(document["accessors"][3]["count"], 228);
+    let skins = document["skins"].as_array().unwrap().len();
+    assert_eq!(skins, 4 * SKINS_PER_TOP_CHAIN);
+    assert_eq!(
+        document["nodes"].as_array().unwrap().len(),
+        skins * (CHAIN + 1)
+    );
+    let path = write_temp("recursive_skeletons.gltf", &document);
+    let times: Vec<f64> = (0..=20).map(|i| i as f64 * 0.1).collect();
+    let (mut worst, mut most_keys) = (0.0f64, 0);
+    for skin in 0..skins {
+        let c = import_skin(&path, &skin.to_string());
+        assert_eq!(c.summary.chosen_skin, skin);
+        assert_eq!(c.skeleton.len(), CHAIN, "skin {skin}");
+        let err = worst_distance(&path, &c, skin, &times);
+        assert!(err <= 1e-5, "skin {skin}: {err:e} of the diagonal");
+        let keys = c.animations[0].track.num_keyframes();
+        let at_top = skin % SKINS_PER_TOP_CHAIN == 0;
+        assert_eq!(c.animations[0].exact, at_top, "skin {skin}");
+        assert_eq!(keys == 3, at_top, "skin {skin}: {keys} keys");
+        worst = worst.max(err);
+        most_keys = most_keys.max(keys);
+    }
+    eprintln!("{skins} skins: worst {worst:e} of the diagonal, at most {most_keys} keys");
+    // Without --skin: skin 0, and a warning naming the first 8 skins, not all 84.
+    let c = import_character(&path, &ImportOptions::default()).unwrap();
+    assert_eq!(c.summary.chosen_skin, 0);
+    let warning = c
+        .warnings
+        .iter()
+        .map(|w| w.to_string())
+        .find(|w| w.contains("84 skins"))
+        .unwrap();
+    assert!(
+        warning.contains(r#"7 "" (10 joints), and 76 more"#) && !warning.contains(r#"8 """#),
+        "{warning}"
     );
 }

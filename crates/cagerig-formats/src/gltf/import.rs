@@ -35,6 +35,9 @@ use crate::error::{FormatError, invalid};
 /// pose is reported as different from its bind pose.
 const BIND_POSE_TOLERANCE: f64 = 1e-4;
 
+/// Skins named in a warning or error that lists a file's skins (`info` lists every one).
+const LISTED_SKINS: usize = 8;
+
 /// Reads a `.gltf` or `.glb` file.
 pub fn import_gltf(path: &Path, options: &ImportOptions) -> Result<ImportedCharacter, FormatError> {
     let bytes = std::fs::read(path).map_err(|e| FormatError::Io {
@@ -64,9 +67,11 @@ pub fn import_gltf_bytes(
             joints: s.joints().count(),
         })
         .collect();
+    // The first few skins (a file may have dozens: RecursiveSkeletons has 84); `info` lists all.
     let listing = || {
-        skins
+        let mut shown: Vec<String> = skins
             .iter()
+            .take(LISTED_SKINS)
             .map(|s| {
                 format!(
                     "{} {:?} ({} joints)",
@@ -75,8 +80,14 @@ pub fn import_gltf_bytes(
                     s.joints
                 )
             })
-            .collect::<Vec<_>>()
-            .join(", ")
+            .collect();
+        if skins.len() > LISTED_SKINS {
+            shown.push(format!(
+                "and {} more (`cagerig info` lists every skin)",
+                skins.len() - LISTED_SKINS
+            ));
+        }
+        shown.join(", ")
     };
     let skin = match &options.skin {
         Some(sel) => document
