@@ -6,8 +6,8 @@
 //!
 //! - the sample's own scene ([`recursive_skeletons`]), rebuilt from the description of the
 //!   program that generated it (SharpGLTF's `InfiniteSkinnedTentacle` example, the generator
-//!   and licensor the sample names), with the counts and ranges of the sample's JSON accessors
-//!   (40 positions, 228 indices, 84 skins of 10 inverse bind matrices translating by 0 to −90
+//!   and licensor the sample names), with the layout, counts and ranges of the sample's JSON
+//!   accessors (40 vertices interleaved with a 36-byte stride, 228 indices, 84 skins of 10 inverse bind matrices translating by 0 to −90
 //!   along y, rotation keys at 0, 1 and 2 s reaching 0.0998 = sin 0.1 in one component): every
 //!   one of its 84 skins;
 //! - a harder variant ([`nested_skeletons`]), described below.
@@ -54,35 +54,62 @@ fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
 }
 
 /// The column of `n` rings: ring k at y = 10k, corners (±5, ±5) in x and z, bound to joint k.
-fn push_column_mesh(j: &mut Value, n: usize) {
+/// Its vertex attributes in one buffer view each, or, `interleaved`, as the sample's generator
+/// writes them: one view with a 36-byte stride holding POSITION, a white COLOR_0 (normalised
+/// bytes), JOINTS_0 (bytes) and WEIGHTS_0 at offsets 0, 12, 16 and 20.
+fn push_column_mesh(j: &mut Value, n: usize, interleaved: bool) {
     let corners = [(-5.0f32, -5.0f32), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)];
-    let positions: Vec<f32> = (0..n)
+    let positions: Vec<[f32; 3]> = (0..n)
         .flat_map(|k| {
             corners
                 .iter()
-                .flat_map(move |&(x, z)| [x, SPACING * k as f32, z])
+                .map(move |&(x, z)| [x, SPACING * k as f32, z])
         })
         .collect();
+    let joint_bytes: Vec<[u8; 4]> = (0..4 * n).map(|v| [(v / 4) as u8, 0, 0, 0]).collect();
+    let weights = [1.0f32, 0.0, 0.0, 0.0];
     let top = SPACING * (n - 1) as f32;
-    let position = push_accessor(
-        j,
-        &f32_bytes(positions),
-        json!({"componentType": 5126, "count": 4 * n, "type": "VEC3",
-               "min": [-5.0, 0.0, -5.0], "max": [5.0, top, 5.0]}),
-    );
-    let joints: Vec<u8> = (0..n)
-        .flat_map(|k| (0..4).flat_map(move |_| [k as u8, 0, 0, 0]))
-        .collect();
-    let joints = push_accessor(
-        j,
-        &joints,
-        json!({"componentType": 5121, "count": 4 * n, "type": "VEC4"}),
-    );
-    let weights = push_accessor(
-        j,
-        &f32_bytes((0..4 * n).flat_map(|_| [1.0, 0.0, 0.0, 0.0])),
-        json!({"componentType": 5126, "count": 4 * n, "type": "VEC4"}),
-    );
+    let position_accessor = json!({"componentType": 5126, "count": 4 * n, "type": "VEC3",
+                                   "min": [-5.0, 0.0, -5.0], "max": [5.0, top, 5.0]});
+    let joints_accessor = json!({"componentType": 5121, "count": 4 * n, "type": "VEC4"});
+    let weights_accessor = json!({"componentType": 5126, "count": 4 * n, "type": "VEC4"});
+    let mut attributes = json!({});
+    if interleaved {
+        let bytes: Vec<u8> = positions
+            .iter()
+            .zip(&joint_bytes)
+            .flat_map(|(p, joints)| {
+                let mut vertex = f32_bytes(*p);
+                vertex.extend([255u8; 4]);
+                vertex.extend(joints);
+                vertex.extend(f32_bytes(weights));
+                vertex
+            })
+            .collect();
+        assert_eq!(bytes.len(), 36 * 4 * n);
+        let view = push_view(j, &bytes);
+        j["bufferViews"][view]["byteStride"] = 36.into();
+        let color_accessor = json!({"componentType": 5121, "normalized": true,
+                                    "count": 4 * n, "type": "VEC4"});
+        for (name, mut accessor, offset) in [
+            ("POSITION", position_accessor, 0),
+            ("COLOR_0", color_accessor, 12),
+            ("JOINTS_0", joints_accessor, 16),
+            ("WEIGHTS_0", weights_accessor, 20),
+        ] {
+            accessor["bufferView"] = view.into();
+            accessor["byteOffset"] = offset.into();
+            attributes[name] = j["accessors"].as_array().unwrap().len().into();
+            j["accessors"].as_array_mut().unwrap().push(accessor);
+        }
+    } else {
+        let position = f32_bytes(positions.into_iter().flatten());
+        attributes["POSITION"] = push_accessor(j, &position, position_accessor).into();
+        let joints: Vec<u8> = joint_bytes.into_iter().flatten().collect();
+        attributes["JOINTS_0"] = push_accessor(j, &joints, joints_accessor).into();
+        let weights = f32_bytes((0..4 * n).flat_map(|_| weights));
+        attributes["WEIGHTS_0"] = push_accessor(j, &weights, weights_accessor).into();
+    }
     let mut triangles: Vec<u16> = vec![0, 2, 1, 0, 3, 2];
     for k in 0..n - 1 {
         for c in 0..4 {
@@ -101,10 +128,7 @@ fn push_column_mesh(j: &mut Value, n: usize) {
             .collect::<Vec<u8>>(),
         json!({"componentType": 5123, "count": triangles.len(), "type": "SCALAR"}),
     );
-    j["meshes"] = json!([{"primitives": [{
-        "attributes": {"POSITION": position, "JOINTS_0": joints, "WEIGHTS_0": weights},
-        "indices": indices
-    }]}]);
+    j["meshes"] = json!([{"primitives": [{"attributes": attributes, "indices": indices}]}]);
 }
 
 /// A chain of `n` joint nodes under `parent` (or at the top), its root at `offset` from the
@@ -249,7 +273,7 @@ fn nested_skeletons(n: usize) -> Value {
         "nodes": [],
         "buffers": [], "bufferViews": [], "accessors": [], "skins": []
     });
-    push_column_mesh(&mut j, n);
+    push_column_mesh(&mut j, n, false);
     let a = push_chain(&mut j, n, None, [0.0, 0.0, 0.0], DQuat::IDENTITY, 1.0);
     let b = push_chain(
         &mut j,
@@ -321,7 +345,7 @@ fn recursive_skeletons() -> Value {
         "nodes": [],
         "buffers": [], "bufferViews": [], "accessors": [], "skins": []
     });
-    push_column_mesh(&mut j, CHAIN);
+    push_column_mesh(&mut j, CHAIN, true);
     let mut chains = Vec::new();
     for ([x, z], axis) in TENTACLES {
         let placement = ([25.0 * x, 0.0, 25.0 * z], 1.0, axis);
@@ -420,7 +444,8 @@ fn the_fuzz_seed_of_nested_skeletons_is_current() {
 fn the_recursive_skeletons_scene_poses_as_a_viewer_shows_it() {
     let document = recursive_skeletons();
     assert_eq!(document["accessors"][0]["count"], 40);
-    assert_eq!(document["accessors"][3]["count"], 228);
+    assert_eq!(document["accessors"][4]["count"], 228);
+    assert_eq!(document["bufferViews"][0]["byteStride"], 36);
     let skins = document["skins"].as_array().unwrap().len();
     assert_eq!(skins, 4 * SKINS_PER_TOP_CHAIN);
     assert_eq!(
