@@ -40,11 +40,14 @@ pub fn load_character(
     path: &Path,
     cage: Option<&Path>,
     auto_cage: Option<usize>,
+    skin: Option<String>,
 ) -> PyResult<(RigParts, Vec<Warning>, Option<SkinningMethod>)> {
+    let options = cagerig_formats::ImportOptions {
+        skin,
+        ..cagerig_formats::ImportOptions::default()
+    };
     let character = py
-        .detach(|| {
-            cagerig_formats::import_character(path, &cagerig_formats::ImportOptions::default())
-        })
+        .detach(|| cagerig_formats::import_character(path, &options))
         .map_err(format_error)?;
     let mut warnings = character.warnings;
     let request = CageRequest {

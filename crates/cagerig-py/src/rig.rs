@@ -152,6 +152,9 @@ impl Rig {
     /// auto_cage : int, optional
     ///     When no cage is found, generate one with this many vertices (as ``cagerig cage``;
     ///     issued as a RigWarning) instead of failing.
+    /// skin : str, optional
+    ///     glTF / FBX: the skin to import, by name or index (``"0"``, ``"1"``, …; as
+    ///     ``cagerig --skin``). Default: the first, with the skins that share its skeleton.
     /// skinning : {"lbs", "dqs", "cor", "blended"}, optional
     ///     Default: the method the file says its authoring tool uses (FBX skin deformers; a
     ///     Maya "weight blended" skin is "blended", with its per-vertex DQ blend weights),
@@ -181,7 +184,7 @@ impl Rig {
     #[pyo3(signature = (path, cage = None, *, skinning = None, fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
                         keep_file_coords = false, auto_cage = None, auto_weights = false,
-                        coords = "mvc"))]
+                        coords = "mvc", skin = None))]
     #[allow(clippy::too_many_arguments)]
     fn load(
         py: Python<'_>,
@@ -196,6 +199,7 @@ impl Rig {
         auto_cage: Option<usize>,
         auto_weights: bool,
         coords: &str,
+        skin: Option<String>,
     ) -> PyResult<Self> {
         let weights_source = if auto_weights {
             WeightsSource::Automatic(AutoWeightsOptions::default())
@@ -215,7 +219,7 @@ impl Rig {
         }
         let (parts, warnings) = if cagerig_formats::CharacterFormat::of(&path).is_some() {
             let (parts, warnings, file_skinning) =
-                crate::interchange::load_character(py, &path, cage.as_deref(), auto_cage)?;
+                crate::interchange::load_character(py, &path, cage.as_deref(), auto_cage, skin)?;
             // The file's own method (FBX skin deformers) unless the caller chose one.
             if let (None, Some(method)) = (skinning, file_skinning) {
                 options.skinning = method;
@@ -228,6 +232,13 @@ impl Rig {
             warnings.extend(more);
             (parts, warnings)
         } else {
+            if let Some(skin) = skin {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "skin={skin:?} chooses a skin of a glTF or FBX character; {} is a rig of \
+                     files (OBJ with companions), which has one",
+                    path.display()
+                )));
+            }
             let missing = match auto_cage {
                 Some(n) => MissingCage::Generate(crate::interchange::cage_options(n, None)?),
                 None => MissingCage::Fail,

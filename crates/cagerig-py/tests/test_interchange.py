@@ -92,3 +92,15 @@ def test_export_gltf_bakes_a_dqs_pose_and_reads_back_without_it(tmp_path):
     lbs = cagerig.Rig.load(arm / "arm.obj")
     lbs.export_gltf(tmp_path / "lbs.gltf", bake=True)
     assert "targets" not in json.loads((tmp_path / "lbs.gltf").read_text())["meshes"][0]["primitives"][0]
+
+
+def test_a_skin_of_a_file_with_several_is_chosen_by_name_or_index():
+    brainstem = DATA / "gltf" / "BrainStem" / "BrainStem.glb"
+    # BrainStem's 59 skins share one skeleton: by default they are one rig of 34,159 vertices;
+    # skin="3" imports that skin's mesh alone.
+    one = cagerig.Rig.load(brainstem, auto_cage=40, skin="3")
+    assert one.num_vertices == 1064 and len(one.joint_names) == 18
+    with pytest.raises(cagerig.RigFileError, match=r'no skin named or numbered "nope".*and 51 more'):
+        cagerig.Rig.load(brainstem, auto_cage=40, skin="nope")
+    with pytest.raises(ValueError, match="chooses a skin of a glTF or FBX character"):
+        cagerig.Rig.load(DATA / "arm" / "arm.obj", skin="0")

@@ -22,6 +22,9 @@ pub struct Dialogs {
     /// File > Open: generate a cage (of `cage_vertices` vertices) when the character has none.
     pub generate_cage: bool,
     pub cage_vertices: usize,
+    /// File > Open: the skin of a file with several (a name or an index; empty: the first, with
+    /// the skins that share its skeleton).
+    pub skin: String,
     /// Unsaved edits would be lost (by closing, or by opening something else): Save / Don't
     /// save / Cancel, then this.
     pub confirm: Option<AfterConfirm>,
@@ -231,6 +234,10 @@ pub fn dialogs_ui(ctx: &egui::Context, dialogs: &mut Dialogs) -> Vec<Action> {
                             .range(8..=5000)
                             .suffix(" vertices"),
                     );
+                });
+                ui.horizontal(|ui| {
+                    ui.label("Skin (name or index; empty: the first)");
+                    ui.add(egui::TextEdit::singleline(&mut dialogs.skin).desired_width(120.0));
                 });
             },
         );

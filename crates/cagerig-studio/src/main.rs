@@ -20,6 +20,9 @@ struct Args {
     /// The cage (OBJ) of the character, instead of the discovered or embedded one.
     #[arg(long, requires = "path")]
     cage: Option<PathBuf>,
+    /// glTF/FBX: the skin to import, by name or index (default: the first), as `cagerig --skin`.
+    #[arg(long, requires = "path")]
+    skin: Option<String>,
     /// When the character has no cage, generate one (as `cagerig cage`).
     #[arg(long, requires = "path")]
     auto_cage: bool,
@@ -132,7 +135,7 @@ fn run(args: Args) -> anyhow::Result<()> {
             Some(RigSource::File {
                 path: p.clone(),
                 cage: args.cage.clone(),
-                skin: None,
+                skin: args.skin.clone(),
                 auto_cage: args.auto_cage.then_some(args.cage_vertices),
             }),
             None,

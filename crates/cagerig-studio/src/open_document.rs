@@ -34,7 +34,9 @@ impl StudioApp {
                 path: path.to_path_buf(),
                 cage: None,
                 auto_cage: self.dialogs.generate_cage.then_some(vertices),
-                skin: None,
+                skin: Some(self.dialogs.skin.trim())
+                    .filter(|s| !s.is_empty())
+                    .map(str::to_owned),
             })
         };
         self.request_open(request);

@@ -445,3 +445,31 @@ fn keys_are_set_deleted_and_played_from_the_timeline() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// File > Open takes the skin of a file with several (BrainStem's 59 skins share one skeleton
+/// and open as one rig by default): the dialog's skin field, by index, opens that skin alone.
+#[test]
+fn the_open_dialog_chooses_a_skin_of_a_file_with_several() {
+    if skip() {
+        return;
+    }
+    let (mut h, dir) = open_bar("skin");
+    let brainstem =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/gltf/BrainStem/BrainStem.glb");
+    let app = h.state_mut();
+    app.dialogs.skin = " 3 ".into();
+    app.dialogs.generate_cage = true;
+    app.dialogs.cage_vertices = 40;
+    app.open_path(&brainstem);
+    wait_for_open(&mut h);
+    let app = h.state();
+    let doc = app.project.doc.as_ref().unwrap();
+    assert_eq!(
+        doc.session.num_vertices(),
+        1064,
+        "log: {:?}",
+        app.diagnostics.log
+    );
+    assert_eq!(doc.session.skeleton().len(), 18);
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -238,7 +238,7 @@ pub fn import_gltf_bytes(
             )
         } else if merged.is_empty() {
             format!(
-                "the file has {} skins; imported skin {} (choose with --skin NAME|INDEX): {}",
+                "the file has {} skins; imported skin {} (choose with --skin NAME|INDEX, or skin= in Python): {}",
                 skins.len(),
                 skin.index(),
                 listing()
@@ -246,7 +246,7 @@ pub fn import_gltf_bytes(
         } else {
             format!(
                 "the file has {} skins; imported skin {} with skins {} (they share its skeleton) \
-                 (choose another with --skin NAME|INDEX): {}",
+                 (choose another with --skin NAME|INDEX, or skin= in Python): {}",
                 skins.len(),
                 skin.index(),
                 merged.join(", "),

@@ -151,6 +151,7 @@ class Rig:
         auto_cage: Optional[int] = None,
         auto_weights: bool = False,
         coords: Literal["mvc", "green"] = "mvc",
+        skin: Optional[str] = None,
     ) -> Rig: ...
     @staticmethod
     def builtin(
