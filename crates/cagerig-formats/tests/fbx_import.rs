@@ -213,3 +213,20 @@ fn truncated_fbx_files_are_errors_naming_the_file() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An FBX character is every skinned mesh as one rig: a skin choice is refused, not ignored.
+#[test]
+fn a_skin_choice_on_an_fbx_file_is_refused_with_the_reason() {
+    let path = data("fbx/blender_279_sausage_7400_binary.fbx");
+    let options = ImportOptions {
+        skin: Some("1".into()),
+        ..ImportOptions::default()
+    };
+    let message = import_character(&path, &options).unwrap_err().to_string();
+    assert!(
+        message.contains("blender_279_sausage_7400_binary.fbx")
+            && message.contains("--skin \"1\" chooses among a glTF file's skins"),
+        "{message}"
+    );
+    assert!(import_character(&path, &ImportOptions::default()).is_ok());
+}

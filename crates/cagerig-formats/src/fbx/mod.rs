@@ -116,7 +116,17 @@ pub fn import_fbx_bytes(
     path: &Path,
     options: &ImportOptions,
 ) -> Result<ImportedCharacter, FormatError> {
-    let _ = options;
+    // Every skinned mesh of an FBX file is one rig: a skin choice would be silently ignored.
+    if let Some(skin) = &options.skin {
+        return Err(invalid(
+            path,
+            "skins",
+            format!(
+                "--skin {skin:?} chooses among a glTF file's skins; an FBX character imports \
+                 every skinned mesh as one rig (leave --skin out)"
+            ),
+        ));
+    }
     let (scene, space) = load_scene(bytes, path)?;
     let mut warnings = Vec::new();
 
