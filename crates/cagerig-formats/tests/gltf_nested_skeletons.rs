@@ -262,17 +262,22 @@ fn push_twist_animation(j: &mut Value, chains: &[(&[usize], DVec3)]) {
     j["animations"] = json!([{"name": "twist", "samplers": samplers, "channels": channels}]);
 }
 
-/// The document with chains of `n` joints: A (at the top, turning about x), B (under A's joint
-/// n/2, 20 units off its axis, turned 90° about z, turning about z) and C (under B's joint
-/// (n − 1)/2, 20 units off its axis, turning about y), one skin each over the column.
-fn nested_skeletons(n: usize) -> Value {
-    let mut j = json!({
+/// A glTF document with one empty scene and empty lists to push into.
+fn empty_document() -> Value {
+    json!({
         "asset": {"version": "2.0", "generator": "cagerig test"},
         "scene": 0,
         "scenes": [{"nodes": []}],
         "nodes": [],
         "buffers": [], "bufferViews": [], "accessors": [], "skins": []
-    });
+    })
+}
+
+/// The document with chains of `n` joints: A (at the top, turning about x), B (under A's joint
+/// n/2, 20 units off its axis, turned 90° about z, turning about z) and C (under B's joint
+/// (n − 1)/2, 20 units off its axis, turning about y), one skin each over the column.
+fn nested_skeletons(n: usize) -> Value {
+    let mut j = empty_document();
     push_column_mesh(&mut j, n, false);
     let a = push_chain(&mut j, n, None, [0.0, 0.0, 0.0], DQuat::IDENTITY, 1.0);
     let b = push_chain(
@@ -338,13 +343,7 @@ fn recursive_skeletons() -> Value {
             tentacle(j, Some(tip), placement, depth - 1, chains);
         }
     }
-    let mut j = json!({
-        "asset": {"version": "2.0", "generator": "cagerig test"},
-        "scene": 0,
-        "scenes": [{"nodes": []}],
-        "nodes": [],
-        "buffers": [], "bufferViews": [], "accessors": [], "skins": []
-    });
+    let mut j = empty_document();
     push_column_mesh(&mut j, CHAIN, true);
     let mut chains = Vec::new();
     for ([x, z], axis) in TENTACLES {
