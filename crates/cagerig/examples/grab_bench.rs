@@ -1,8 +1,8 @@
 //! Times a current-cage grab right after a skeleton edit on the Arm subdivided N times, with Φ
 //! in f64 and in f32, next to its two big parts (M = ΦC and LBS), and on the f32 display path
 //! (what the editor runs) next to its product M̃ = Φ̃C:
-//! `cargo run --release -p cagerig --example grab_bench -- [N] [display]` (`display`: only the
-//! display path, e.g. under a profiler).
+//! `cargo run --release -p cagerig --example grab_bench -- [N] [display] [green]` (`display`: only
+//! the display path, e.g. under a profiler; `green`: a Green-coordinates rig, bent in 10° steps).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
@@ -37,9 +37,23 @@ fn grab_after_skeleton_edit(
     Ok(t.elapsed().as_secs_f64() * 1e3)
 }
 
+/// The elbow bent by 60° about +X, in 10° steps (a Green CageUp follows a large bend better in
+/// steps).
+fn bend(session: &mut RigSession, joint: usize) -> Result<(), cagerig::RigError> {
+    for _ in 0..6 {
+        session.rotate_joint(joint, DVec3::X, 10f64.to_radians())?;
+    }
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let levels: usize = std::env::args().nth(1).map_or(Ok(3), |a| a.parse())?;
     let display_only = std::env::args().any(|a| a == "display");
+    let coords = if std::env::args().any(|a| a == "green") {
+        cagerig::CoordsKind::Green
+    } else {
+        cagerig::CoordsKind::Mvc
+    };
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
     let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
     let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
@@ -62,11 +76,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         let options = SessionOptions {
             cage_coords_precision: precision,
+            coords,
             ..SessionOptions::default()
         };
         let (mut session, _) = RigSession::new(parts, options)?;
         let joint = session.skeleton().find("lowerarm01.R").unwrap_or(3);
-        session.rotate_joint(joint, DVec3::X, 60f64.to_radians())?;
+        bend(&mut session, joint)?;
         let (mut grab, mut product, mut skin) = (Vec::new(), Vec::new(), Vec::new());
         let mut m = vec![DVec3::ZERO; nv];
         let mut out = vec![DVec3::ZERO; nv];
@@ -87,10 +102,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     // The display path: M̃ = Φ̃C and the f32 M' for display, exact MaxVol rows.
     let parts = RigParts::new(sub.mesh, skeleton, sub.skin_weights, cage);
-    let (mut session, _) = RigSession::new(parts, SessionOptions::default())?;
+    let options = SessionOptions {
+        coords,
+        ..SessionOptions::default()
+    };
+    let (mut session, _) = RigSession::new(parts, options)?;
     session.set_display_precision(cagerig::session::DisplayPrecision::F32)?;
     let joint = session.skeleton().find("lowerarm01.R").unwrap_or(3);
-    session.rotate_joint(joint, DVec3::X, 60f64.to_radians())?;
+    bend(&mut session, joint)?;
     let display_coords = cagerig::cage_coords::DisplayCageCoords::try_new(session.cage_coords())
         .ok_or("Φ̃ does not fit")?;
     let mut m = vec![glam::Vec3::ZERO; nv];

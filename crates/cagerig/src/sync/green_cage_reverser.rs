@@ -47,8 +47,8 @@ pub struct GreenCageReverser {
     ready: bool,
     solver: NewtonSolver,
     tolerance: f64,
-    /// J_t (`3#R × 3#C`), R̃ J (`3#R × 3#C`), J_A (`3#J × 3#C`), J_tᵀ K_A (`3#C × 3#J`, once
-    /// per piece) and J_tᵀ(R̃ J + K_A J_A) (`3#C × 3#C`).
+    /// J_t (`3#R × 3#C`), R̃ J (`3#R × 3#C`), J_A (`3#J × 3#C`), J_tᵀ K_A (`3#C × 3#J`, at each
+    /// factorisation) and J_tᵀ(R̃ J + K_A J_A) (`3#C × 3#C`).
     target_jacobian: Mat<f64>,
     chain_jacobian: Mat<f64>,
     joint_jacobian: Mat<f64>,
@@ -61,6 +61,11 @@ pub struct GreenCageReverser {
     rows_target: Vec<DVec3>,
     rows_trial: Vec<DVec3>,
     row_change: Vec<DVec3>,
+    /// K_A ΔA per fitting row, `#R`.
+    row_skeleton: Vec<DVec3>,
+    /// The residual rows r (`3#R`) and J_tᵀ r (`3#C`) as columns for the product.
+    flat_rows: faer::Col<f64>,
+    flat_gradient: faer::Col<f64>,
     g: Vec<DVec3>,
     moved: Vec<DVec3>,
     moved_for_jacobian: Vec<DVec3>,
@@ -111,6 +116,9 @@ impl GreenCageReverser {
             rows_target: vec![DVec3::ZERO; num_rows],
             rows_trial: vec![DVec3::ZERO; num_rows],
             row_change: vec![DVec3::ZERO; num_rows],
+            row_skeleton: vec![DVec3::ZERO; num_rows],
+            flat_rows: faer::Col::zeros(3 * num_rows),
+            flat_gradient: faer::Col::zeros(3 * num_cage),
             g: vec![DVec3::ZERO; num_faces],
             moved: vec![DVec3::ZERO; num_cage],
             moved_for_jacobian: vec![DVec3::ZERO; num_cage],
@@ -165,7 +173,7 @@ impl GreenCageReverser {
             fill_skeleton_rows(&mut self.skeleton_rows);
         }
         self.ready = true;
-        self.solver.invalidate();
+        // The factors of the previous grab stay: see `solve_piece`.
     }
 
     /// The rest-cage change δ (`rest_delta`, `#C`) that makes CageUp return C'_0 + `posed_delta`
@@ -224,16 +232,12 @@ impl GreenCageReverser {
         }
         fit.rows_of(&self.posed_target, &mut self.g, &mut self.rows_target);
         fit.jacobian_into(&self.posed_target, &mut self.target_jacobian);
-        faer::linalg::matmul::matmul(
-            self.projected_skeleton.as_mut(),
-            Accum::Replace,
-            self.target_jacobian.transpose(),
-            self.skeleton_rows.as_ref(),
-            1.0,
-            Par::Seq,
-        );
-        // A new J_t: the factors of the previous piece or grab do not apply.
-        self.solver.invalidate();
+        // The factors of the previous piece or grab stay. They are those of a nearby G (J_t, R̃,
+        // K_A and C move a little between the grabs of a drag, or across a small skeleton edit),
+        // so chord steps from them converge, and far cheaper than a new Jacobian (`3#C × 3#R ×
+        // 3#C` products); the solver refactors by itself when a step leaves more than
+        // `CHORD_RATE` of the residual. The residual is exact, so the answer is the same to the
+        // tolerance either way.
         let n = 3 * self.num_cage;
         let rest_cage = at.rest_cage;
         let vertex_rows = fit.vertex_rows();
@@ -241,10 +245,12 @@ impl GreenCageReverser {
         let normals = fit.normals();
         let row_linear = &self.row_linear;
         let skeleton_rows = &self.skeleton_rows;
+        let row_skeleton = &mut self.row_skeleton;
+        let (flat_rows, flat_gradient) = (&mut self.flat_rows, &mut self.flat_gradient);
         let (joint_vertex_rows, joint_face_rows) = (&self.joint_vertex_rows, &self.joint_face_rows);
         let (start_joints, trial_joints) = (&self.start_joints, &mut self.trial_joints);
         let joint_jacobian = &mut self.joint_jacobian;
-        let projected_skeleton = &self.projected_skeleton;
+        let projected_skeleton = &mut self.projected_skeleton;
         let target_jacobian = &self.target_jacobian;
         let chain_jacobian = &mut self.chain_jacobian;
         let system = &mut self.system;
@@ -269,13 +275,15 @@ impl GreenCageReverser {
                 for (t, s) in trial_joints.iter_mut().zip(start_joints) {
                     *t -= *s;
                 }
-                for (i, change) in row_change.iter_mut().enumerate() {
-                    let mut skeleton = DVec3::ZERO;
-                    for (j, d) in trial_joints.iter().enumerate() {
-                        for (c, value) in d.to_array().into_iter().enumerate() {
-                            if value != 0.0 {
-                                let column = skeleton_rows.col(3 * j + c);
-                                skeleton += value
+                // K_A ΔA, column by column (the columns are contiguous; each row sums the
+                // joints in the same order as row by row would).
+                row_skeleton.iter_mut().for_each(|s| *s = DVec3::ZERO);
+                for (j, d) in trial_joints.iter().enumerate() {
+                    for (c, value) in d.to_array().into_iter().enumerate() {
+                        if value != 0.0 {
+                            let column = skeleton_rows.col(3 * j + c);
+                            for (i, s) in row_skeleton.iter_mut().enumerate() {
+                                *s += value
                                     * DVec3::new(
                                         column[3 * i],
                                         column[3 * i + 1],
@@ -284,23 +292,33 @@ impl GreenCageReverser {
                             }
                         }
                     }
+                }
+                for (i, change) in row_change.iter_mut().enumerate() {
                     *change = at.posed_rows[i]
                         + row_linear[i] * (rows_trial[i] - at.rest_rows[i])
-                        + skeleton
+                        + row_skeleton[i]
                         - rows_target[i];
+                    flat_rows[3 * i] = change.x;
+                    flat_rows[3 * i + 1] = change.y;
+                    flat_rows[3 * i + 2] = change.z;
                 }
+                // J_tᵀ r as one product (a row-by-row dot product is one long dependency
+                // chain per entry).
+                faer::linalg::matmul::matmul(
+                    flat_gradient.as_mut(),
+                    Accum::Replace,
+                    target_jacobian.transpose(),
+                    flat_rows.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
                 let mut largest: f64 = 0.0;
                 for (k, o) in out.iter_mut().enumerate() {
-                    let mut sum = [0.0; 3];
-                    for (c, s) in sum.iter_mut().enumerate() {
-                        let column = target_jacobian.col(3 * k + c);
-                        *s = row_change.iter().enumerate().fold(0.0, |acc, (i, r)| {
-                            acc + column[3 * i] * r.x
-                                + column[3 * i + 1] * r.y
-                                + column[3 * i + 2] * r.z
-                        });
-                    }
-                    *o = DVec3::from_array(sum);
+                    *o = DVec3::new(
+                        flat_gradient[3 * k],
+                        flat_gradient[3 * k + 1],
+                        flat_gradient[3 * k + 2],
+                    );
                     largest = largest.max(o.abs().max_element());
                 }
                 if largest.is_finite() {
@@ -314,6 +332,15 @@ impl GreenCageReverser {
                     *m = *c + *d;
                 }
                 fit.jacobian_into(moved_for_jacobian, chain_jacobian);
+                // J_tᵀ K_A (`3#C × 3#J`), only when the solver refactors.
+                faer::linalg::matmul::matmul(
+                    projected_skeleton.as_mut(),
+                    Accum::Replace,
+                    target_jacobian.transpose(),
+                    skeleton_rows.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
                 // R̃ J, row block by row block; the system J_tᵀ R̃ J + (J_tᵀ K_A) J_A.
                 for col in 0..n {
                     let mut column = chain_jacobian.col_mut(col);

@@ -1,9 +1,11 @@
 //! The Newton driver shared by the Green-coordinates sync operators (CageUp, CageRev): solves a
 //! square system H(x) = 0 over `#C` points with a caller-supplied residual and Jacobian.
 //!
-//! - **Chord steps.** The factorisation survives between solves (the Jacobian changes little
-//!   from one event to the next); it is recomputed only when a step from stale factors reduces
-//!   max|H| by less than [`CHORD_RATE`], or fails to reduce it.
+//! - **Chord steps.** The factorisation survives between solves, and between the changes of
+//!   the caller's system (the Jacobian changes little from one event to the next); it is
+//!   recomputed only when a step from stale factors reduces max|H| by less than [`CHORD_RATE`],
+//!   or fails to reduce it. The residual is exact, so stale factors change the cost, never the
+//!   answer.
 //! - **Step halving.** A step that does not reduce max|H| is halved (at most [`MAX_HALVINGS`]
 //!   times).
 //! - **Stop.** At `tolerance`, after [`MAX_NEWTON_STEPS`] steps, or when a step from fresh
@@ -15,7 +17,12 @@ use super::dense_lu::DenseLu;
 use crate::error::RigError;
 
 /// A chord step that leaves more than this fraction of the residual triggers a refactorisation.
-pub const CHORD_RATE: f64 = 0.1;
+///
+/// A new Jacobian costs CageRev `3#C × 3#R × 3#C` products (1.3 ms on the Arm's 58-vertex cage,
+/// where a residual costs about 0.1 ms), so chord steps that each cut the residual 4× are the
+/// cheaper way to round-off: the factors of the previous grab of a drag, or from across a small
+/// skeleton edit, cut it 8–20× (measured, `docs/green-coordinates.md`).
+pub const CHORD_RATE: f64 = 0.25;
 /// At most this many Newton steps per solve.
 pub const MAX_NEWTON_STEPS: usize = 40;
 /// At most this many step halvings.
