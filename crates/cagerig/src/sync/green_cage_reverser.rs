@@ -22,7 +22,7 @@
 //! large grab that stalls is split into pieces. For MVC (ψ = 0, Ψ_ψ = 0, J = Φ̃) this is Eq. 19
 //! in its least-squares form.
 
-use faer::{Accum, Mat, Par};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 use glam::{DMat3, DVec3};
 
 use super::green_cage_fit::{GRADIENT_TOLERANCE, GreenCageFit, rows_jacobian_into, rows_of};
@@ -60,7 +60,6 @@ pub struct GreenCageReverser {
     posed_target: Vec<DVec3>,
     rows_target: Vec<DVec3>,
     rows_trial: Vec<DVec3>,
-    row_change: Vec<DVec3>,
     /// K_A ΔA per fitting row, `#R`.
     row_skeleton: Vec<DVec3>,
     /// The residual rows r (`3#R`) and J_tᵀ r (`3#C`) as columns for the product.
@@ -115,7 +114,6 @@ impl GreenCageReverser {
             posed_target: vec![DVec3::ZERO; num_cage],
             rows_target: vec![DVec3::ZERO; num_rows],
             rows_trial: vec![DVec3::ZERO; num_rows],
-            row_change: vec![DVec3::ZERO; num_rows],
             row_skeleton: vec![DVec3::ZERO; num_rows],
             flat_rows: faer::Col::zeros(3 * num_rows),
             flat_gradient: faer::Col::zeros(3 * num_cage),
@@ -256,7 +254,6 @@ impl GreenCageReverser {
         let system = &mut self.system;
         let rows_target = &self.rows_target;
         let rows_trial = &mut self.rows_trial;
-        let row_change = &mut self.row_change;
         let g = &mut self.g;
         let moved = &mut self.moved;
         let moved_for_jacobian = &mut self.moved_for_jacobian;
@@ -293,10 +290,10 @@ impl GreenCageReverser {
                         }
                     }
                 }
-                for (i, change) in row_change.iter_mut().enumerate() {
-                    *change = at.posed_rows[i]
+                for (i, skeleton) in row_skeleton.iter().enumerate() {
+                    let change = at.posed_rows[i]
                         + row_linear[i] * (rows_trial[i] - at.rest_rows[i])
-                        + row_skeleton[i]
+                        + *skeleton
                         - rows_target[i];
                     flat_rows[3 * i] = change.x;
                     flat_rows[3 * i + 1] = change.y;
@@ -304,13 +301,10 @@ impl GreenCageReverser {
                 }
                 // J_tᵀ r as one product (a row-by-row dot product is one long dependency
                 // chain per entry).
-                faer::linalg::matmul::matmul(
-                    flat_gradient.as_mut(),
-                    Accum::Replace,
-                    target_jacobian.transpose(),
-                    flat_rows.as_ref(),
-                    1.0,
-                    Par::Seq,
+                target_transpose_times(
+                    target_jacobian,
+                    flat_rows.as_mat(),
+                    flat_gradient.as_mat_mut(),
                 );
                 let mut largest: f64 = 0.0;
                 for (k, o) in out.iter_mut().enumerate() {
@@ -333,13 +327,10 @@ impl GreenCageReverser {
                 }
                 fit.jacobian_into(moved_for_jacobian, chain_jacobian);
                 // J_tᵀ K_A (`3#C × 3#J`), only when the solver refactors.
-                faer::linalg::matmul::matmul(
-                    projected_skeleton.as_mut(),
-                    Accum::Replace,
-                    target_jacobian.transpose(),
+                target_transpose_times(
+                    target_jacobian,
                     skeleton_rows.as_ref(),
-                    1.0,
-                    Par::Seq,
+                    projected_skeleton.as_mut(),
                 );
                 // R̃ J, row block by row block; the system J_tᵀ R̃ J + (J_tᵀ K_A) J_A.
                 for col in 0..n {
@@ -352,14 +343,7 @@ impl GreenCageReverser {
                         column[3 * i + 2] = w.z;
                     }
                 }
-                faer::linalg::matmul::matmul(
-                    system.as_mut(),
-                    Accum::Replace,
-                    target_jacobian.transpose(),
-                    chain_jacobian.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
+                target_transpose_times(target_jacobian, chain_jacobian.as_ref(), system.as_mut());
                 rows_jacobian_into(
                     joint_vertex_rows,
                     joint_face_rows,
@@ -384,4 +368,18 @@ impl GreenCageReverser {
             },
         )
     }
+}
+
+/// `out = J_tᵀ · rhs`: J_t is `target_jacobian` (`3#R × 3#C`),
+/// `rhs` has `3#R` rows. Sequential: the sizes (at most `3#C × 3#R × 3#C`) are too small for
+/// threads to pay.
+fn target_transpose_times(target_jacobian: &Mat<f64>, rhs: MatRef<'_, f64>, out: MatMut<'_, f64>) {
+    faer::linalg::matmul::matmul(
+        out,
+        Accum::Replace,
+        target_jacobian.transpose(),
+        rhs,
+        1.0,
+        Par::Seq,
+    );
 }
