@@ -4,19 +4,26 @@
 //! computed once per batch and shared by the faces around it.
 //!
 //! Per batch of 8 points η:
-//! - per cage vertex k: `a_k = v_k − η`, `|a_k|` and `1/|a_k|`;
-//! - per cage edge (a, b), just before the first face that uses it: the edge integral
+//! - per cage vertex k: `a_k = v_k − η` and `|a_k|`;
+//! - per cage edge (a, b), all of them before the faces (independent iterations, which the
+//!   processor overlaps; their lanes, 64 bytes per edge, stay in L1): the edge integral
 //!   `f = ∫_edge ds/R`, one logarithm ([`ln_of_quotient`]); it does not depend on the direction
 //!   of travel, so the two faces of an edge share it (the per-point code takes one per face and
 //!   edge). Beside the edge (foot of η on the segment) the distance² to its line is `|a_a × e|²`,
 //!   which has no cancellation (the per-point code's `(R − s)(R + s)` loses `(R/d)²` ulp);
-//! - per face t: the solid angle Ω (one arctangent fraction, [`angle_fraction`], one division),
+//! - per face t: the solid angle Ω (one arctangent fraction, [`angle_fraction`], one reciprocal),
 //!   `h = a₀·n`, `ψ_t = (Σ_l (a_l·m_l) f_l − |h||Ω|)/4π` written straight into ψ's column, and
 //!   `φ_i += (Γ_i(ρ) Ω − h Σ_l (∇Γ_i·m_l) f_l)/4π` with `Γ_i(ρ) = −∇Γ_i·a_{i+1}` (the foot ρ's
 //!   barycentric coordinate) and the 3 × 3 products `∇Γ_i·m_l` precomputed per face.
 //!
-//! The lane arithmetic is plain IEEE (no fused multiply-add, no estimates), and every tier runs
-//! the same body: the AVX-512, AVX2 and baseline builds give the same bits (tested).
+//! The lane arithmetic is a type parameter ([`LaneMath`]), as in MVC's kernel: the baseline is
+//! plain IEEE; the AVX2 + FMA tier fuses multiplies and adds; the AVX-512 tier also takes its
+//! reciprocals from `vrcp14pd` refined by two Newton steps (about an ulp) instead of dividing.
+//! The tiers agree to rounding (1e-13 relative to `1 + |entry|`, tested; a point 1e-7 of an
+//! edge's length from an edge, where a solid angle is conditioned to ~ε·size/d, to 1e-9). One
+//! machine always runs one tier, so its results are reproducible there. Fusing and the
+//! reciprocal took the binding at 133k from 151 to 142 ms, and the edges computed ahead of the
+//! faces to 137–139 ms (`green_bind_bench 3`, 2026-12-03).
 //!
 //! A lane is recomputed by the per-point closed forms ([`GreenTriangle::terms`], whole row) when
 //! its point lies within [`ON_PLANE`] (relative) of a face's plane or of a cage vertex, where
@@ -26,7 +33,9 @@ use glam::DVec3;
 
 use super::green_triangle::{GreenTriangle, INV_FOUR_PI, ON_PLANE};
 use super::lane_functions::{angle_fraction, ln_of_quotient};
-use super::mvc_lanes::{LANES, Lanes, Mask, PlainMath, V8, not, or};
+#[cfg(target_arch = "x86_64")]
+use super::mvc_lanes::{Avx512Math, FusedMath};
+use super::mvc_lanes::{LANES, LaneMath, Lanes, Mask, PlainMath, V8, not, or};
 use crate::row_blocks::RowBlock;
 use crate::simd_dispatch::simd_dispatch;
 
@@ -59,9 +68,8 @@ struct PlanFace {
     hat_slopes: [[f64; 3]; 3],
 }
 
-/// What the batch kernel needs of a cage, computed once: the faces in cage order, each preceded
-/// by the edges it is the first to use (so that an edge's integral is computed right before its
-/// first face, while its lanes are in L1), and the per-point frames for the recomputed lanes.
+/// What the batch kernel needs of a cage, computed once: the faces in cage order, the edges in
+/// the order of their first use, and the per-point frames for the recomputed lanes.
 #[derive(Debug, Clone)]
 pub(crate) struct GreenBatchPlan<'a> {
     positions: &'a [DVec3],
@@ -72,8 +80,6 @@ pub(crate) struct GreenBatchPlan<'a> {
     faces: Vec<PlanFace>,
     /// Edges in first-use order.
     edges: Vec<PlanEdge>,
-    /// `edges[edge_starts[f]..edge_starts[f + 1]]` are computed before `faces[f]`.
-    edge_starts: Vec<usize>,
     /// The columns of ψ of the degenerate triangles (always 0).
     degenerate_columns: Vec<u32>,
 }
@@ -88,7 +94,6 @@ impl<'a> GreenBatchPlan<'a> {
     ) -> Self {
         let mut edge_index = std::collections::HashMap::<[u32; 2], u32>::new();
         let mut edges = Vec::new();
-        let mut edge_starts = Vec::with_capacity(triangles.len() + 1);
         let mut faces = Vec::with_capacity(triangles.len());
         let mut degenerate_columns = Vec::new();
         for (column, (tri, frame)) in triangles.iter().zip(frames).enumerate() {
@@ -96,7 +101,6 @@ impl<'a> GreenBatchPlan<'a> {
                 degenerate_columns.push(column as u32);
                 continue;
             };
-            edge_starts.push(edges.len());
             let local_edges = std::array::from_fn(|l| {
                 let (a, b) = (tri[l], tri[(l + 1) % 3]);
                 let ends = [a.min(b), a.max(b)];
@@ -121,14 +125,12 @@ impl<'a> GreenBatchPlan<'a> {
                     .map(|g| frame.edge_normals.map(|m| g.dot(m))),
             });
         }
-        edge_starts.push(edges.len());
         Self {
             positions,
             triangles,
             frames,
             faces,
             edges,
-            edge_starts,
             degenerate_columns,
         }
     }
@@ -178,13 +180,13 @@ simd_dispatch! {
         scratch: &mut GreenBatchScratch,
         vertex_out: &mut RowBlock,
         face_out: &mut RowBlock,
-    ) -> Option<usize> => evaluate_green_rows_generic;
-    avx512f: evaluate_green_rows_avx512;
-    avx2: evaluate_green_rows_avx2;
+    ) -> Option<usize> => evaluate_green_rows_generic::<PlainMath>;
+    avx512f: evaluate_green_rows_avx512 => evaluate_green_rows_generic::<Avx512Math>;
+    avx2_fma: evaluate_green_rows_avx2 => evaluate_green_rows_generic::<FusedMath>;
 }
 
 #[inline(always)]
-fn evaluate_green_rows_generic(
+fn evaluate_green_rows_generic<M: LaneMath>(
     plan: &GreenBatchPlan<'_>,
     points: &[DVec3],
     scratch: &mut GreenBatchScratch,
@@ -203,7 +205,7 @@ fn evaluate_green_rows_generic(
         let py = V8(std::array::from_fn(|l| lane_point(l).y));
         let pz = V8(std::array::from_fn(|l| lane_point(l).z));
         let (recompute, face_check) =
-            evaluate_batch(plan, [px, py, pz], scratch, face_out, start, count);
+            evaluate_batch::<M>(plan, [px, py, pz], scratch, face_out, start, count);
         // `0·x` is ±0 for a finite x and NaN otherwise: the sums stay 0 iff all are finite.
         let mut check = face_check;
         for (k, sums) in scratch.vertex_sums.iter().enumerate() {
@@ -267,7 +269,7 @@ fn evaluate_point(plan: &GreenBatchPlan<'_>, eta: DVec3, scratch: &mut GreenBatc
 /// `start..start + count`, the columns of the non-degenerate faces). Returns the lanes to
 /// recompute per point and, per lane, the sum of `0·ψ` (0 iff every ψ is finite).
 #[inline(always)]
-fn evaluate_batch(
+fn evaluate_batch<M: LaneMath>(
     plan: &GreenBatchPlan<'_>,
     eta: [V8; 3],
     scratch: &mut GreenBatchScratch,
@@ -280,7 +282,7 @@ fn evaluate_batch(
         let ax = splat(p.x) - eta[0];
         let ay = splat(p.y) - eta[1];
         let az = splat(p.z) - eta[2];
-        let length = (ax * ax + ay * ay + az * az).sqrt();
+        let length = M::mul_add(ax, ax, M::mul_add(ay, ay, az * az)).sqrt();
         scratch.to_x[k] = ax.0;
         scratch.to_y[k] = ay.0;
         scratch.to_z[k] = az.0;
@@ -289,10 +291,10 @@ fn evaluate_batch(
     }
     let mut recompute = Mask([0; LANES]);
     let mut check = splat(0.0);
-    for (f, face) in plan.faces.iter().enumerate() {
-        for e in plan.edge_starts[f]..plan.edge_starts[f + 1] {
-            scratch.edge_integrals[e] = edge_integral(&plan.edges[e], scratch).0;
-        }
+    for (e, edge) in plan.edges.iter().enumerate() {
+        scratch.edge_integrals[e] = edge_integral::<M>(edge, scratch).0;
+    }
+    for face in &plan.faces {
         let idx = face.vertices.map(|v| v as usize);
         let to = |k: usize| {
             [
@@ -308,8 +310,15 @@ fn evaluate_batch(
             V8(scratch.length[idx[1]]),
             V8(scratch.length[idx[2]]),
         ];
-        let dot = |u: &[V8; 3], v: &[V8; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-        let dot_constant = |u: &[V8; 3], c: &[f64; 3]| u[0] * c[0] + u[1] * c[1] + u[2] * c[2];
+        let dot =
+            |u: &[V8; 3], v: &[V8; 3]| M::mul_add(u[0], v[0], M::mul_add(u[1], v[1], u[2] * v[2]));
+        let dot_constant = |u: &[V8; 3], c: &[f64; 3]| {
+            M::mul_add(
+                u[0],
+                splat(c[0]),
+                M::mul_add(u[1], splat(c[1]), u[2] * c[2]),
+            )
+        };
         // The per-point code's degenerate positions: at a corner, or on the face's plane.
         let size = lengths[0] + lengths[1] + lengths[2];
         let near_corner = or(
@@ -321,24 +330,29 @@ fn evaluate_batch(
         );
         let cube = lengths[0] * lengths[1] * lengths[2];
         let cross = [
-            a[1][1] * a[2][2] - a[1][2] * a[2][1],
-            a[1][2] * a[2][0] - a[1][0] * a[2][2],
-            a[1][0] * a[2][1] - a[1][1] * a[2][0],
+            M::mul_add(a[1][1], a[2][2], -(a[1][2] * a[2][1])),
+            M::mul_add(a[1][2], a[2][0], -(a[1][0] * a[2][2])),
+            M::mul_add(a[1][0], a[2][1], -(a[1][1] * a[2][0])),
         ];
         // Van Oosterom & Strackee: tan(Ω/2) = numerator / denominator.
         let numerator = dot(&a[0], &cross);
-        let denominator = cube
-            + dot(&a[0], &a[1]) * lengths[2]
-            + dot(&a[0], &a[2]) * lengths[1]
-            + dot(&a[1], &a[2]) * lengths[0];
+        let denominator = M::mul_add(
+            dot(&a[0], &a[1]),
+            lengths[2],
+            M::mul_add(
+                dot(&a[0], &a[2]),
+                lengths[1],
+                M::mul_add(dot(&a[1], &a[2]), lengths[0], cube),
+            ),
+        );
         let on_plane = not(numerator.abs().gt(cube * ON_PLANE));
         recompute = or(recompute, or(near_corner, on_plane));
         // Both scaled (exactly) to |denominator| ≤ 8 and |numerator| ≤ 2, for the fraction's
         // powers.
         let scale = inverse_power_of_two(cube);
         let (angle_num, angle_den) =
-            angle_fraction::<PlainMath>(numerator.abs() * scale, denominator * scale);
-        let half_solid_angle = angle_num / angle_den;
+            angle_fraction::<M>(numerator.abs() * scale, denominator * scale);
+        let half_solid_angle = angle_num * M::recip(angle_den);
         let solid_angle = V8::select(
             splat(0.0).gt(numerator),
             -(half_solid_angle * 2.0),
@@ -350,21 +364,25 @@ fn evaluate_batch(
             V8(scratch.edge_integrals[face.edges[1] as usize]),
             V8(scratch.edge_integrals[face.edges[2] as usize]),
         ];
-        let edge_sum = dot_constant(&a[0], &face.edge_normals[0]) * integrals[0]
-            + dot_constant(&a[1], &face.edge_normals[1]) * integrals[1]
-            + dot_constant(&a[2], &face.edge_normals[2]) * integrals[2];
-        let psi = (edge_sum - h.abs() * solid_angle.abs()) * INV_FOUR_PI;
+        let edge_sum = M::mul_add(
+            dot_constant(&a[0], &face.edge_normals[0]),
+            integrals[0],
+            M::mul_add(
+                dot_constant(&a[1], &face.edge_normals[1]),
+                integrals[1],
+                dot_constant(&a[2], &face.edge_normals[2]) * integrals[2],
+            ),
+        );
+        let psi = M::mul_add(-h.abs(), solid_angle.abs(), edge_sum) * INV_FOUR_PI;
         check = check + psi * 0.0;
         write_lanes(face_out, start, face.column as usize, &psi.0, count);
         for (i, &vertex) in idx.iter().enumerate() {
             let next = (i + 1) % 3;
             let hat_at_foot = -dot_constant(&a[next], &face.hat_gradients[i]);
-            let slope = integrals[0] * face.hat_slopes[i][0]
-                + integrals[1] * face.hat_slopes[i][1]
-                + integrals[2] * face.hat_slopes[i][2];
-            let part = (hat_at_foot * solid_angle - h * slope) * INV_FOUR_PI;
+            let slope = dot_constant(&integrals, &face.hat_slopes[i]);
+            let part = M::mul_add(hat_at_foot, solid_angle, -(h * slope));
             let sums = &mut scratch.vertex_sums[vertex];
-            *sums = (V8(*sums) + part).0;
+            *sums = M::mul_add(part, splat(INV_FOUR_PI), V8(*sums)).0;
         }
     }
     (recompute, check)
@@ -387,7 +405,7 @@ fn inverse_power_of_two(x: V8) -> V8 {
 /// if s₁ < 0, and beside the segment `ln((R₁ + s₁)(R₀ − s₀)/d²)` with d² = |a₀ × e|², the
 /// distance² to the line; 0 on the segment itself (d² ≤ the smallest normal).
 #[inline(always)]
-fn edge_integral(edge: &PlanEdge, scratch: &GreenBatchScratch) -> V8 {
+fn edge_integral<M: LaneMath>(edge: &PlanEdge, scratch: &GreenBatchScratch) -> V8 {
     let [a, b] = edge.ends.map(|v| v as usize);
     let e = edge.direction;
     let (ax, ay, az) = (
@@ -401,12 +419,13 @@ fn edge_integral(edge: &PlanEdge, scratch: &GreenBatchScratch) -> V8 {
         V8(scratch.to_z[b]),
     );
     let (r0, r1) = (V8(scratch.length[a]), V8(scratch.length[b]));
-    let s0 = ax * e[0] + ay * e[1] + az * e[2];
-    let s1 = bx * e[0] + by * e[1] + bz * e[2];
-    let cx = ay * e[2] - az * e[1];
-    let cy = az * e[0] - ax * e[2];
-    let cz = ax * e[1] - ay * e[0];
-    let distance_sq = cx * cx + cy * cy + cz * cz;
+    let splat = V8::splat;
+    let s0 = M::mul_add(ax, splat(e[0]), M::mul_add(ay, splat(e[1]), az * e[2]));
+    let s1 = M::mul_add(bx, splat(e[0]), M::mul_add(by, splat(e[1]), bz * e[2]));
+    let cx = M::mul_add(ay, splat(e[2]), -(az * e[1]));
+    let cy = M::mul_add(az, splat(e[0]), -(ax * e[2]));
+    let cz = M::mul_add(ax, splat(e[1]), -(ay * e[0]));
+    let distance_sq = M::mul_add(cx, cx, M::mul_add(cy, cy, cz * cz));
     let zero = V8::splat(0.0);
     let before = s0.gt(zero);
     let after = zero.gt(s1);
@@ -420,7 +439,7 @@ fn edge_integral(edge: &PlanEdge, scratch: &GreenBatchScratch) -> V8 {
         or(before, after),
         distance_sq.gt(V8::splat(f64::MIN_POSITIVE)),
     ));
-    V8::select(on_segment, zero, ln_of_quotient(num, den))
+    V8::select(on_segment, zero, ln_of_quotient::<M>(num, den))
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@ fn run_tier(
     };
     let (v, o) = (&mut vertex_out, &mut face_out);
     let bad = match tier {
-        0 => evaluate_green_rows_generic(plan, points, &mut scratch, v, o),
+        0 => evaluate_green_rows_generic::<PlainMath>(plan, points, &mut scratch, v, o),
         #[cfg(target_arch = "x86_64")]
         1 if crate::simd_dispatch::cpu().avx2() =>
         // SAFETY: feature checked.
@@ -50,8 +50,21 @@ fn mixed_points(cage: &crate::mesh::TriMesh) -> Vec<DVec3> {
     points
 }
 
+/// The largest difference between two tiers' entries, relative to `1 + |entry|`.
+fn tier_difference(tier: &[f64], baseline: &[f64]) -> f64 {
+    tier.iter()
+        .zip(baseline)
+        .map(|(a, b)| (a - b).abs() / (1.0 + b.abs()))
+        .fold(0.0, f64::max)
+}
+
+/// The wide tiers fuse multiplies and adds and take the AVX-512 reciprocal estimate refined to
+/// about an ulp, so they agree with the plain IEEE baseline to rounding: within 1e-13 (relative
+/// to 1 + |entry|) everywhere but the point 1e-7 of an edge's length from an edge (row 17), where
+/// a face's solid angle is only conditioned to ~ε·size/d (the recomputed lanes, on a face, an edge
+/// or a corner, take the same per-point code on every tier).
 #[test]
-fn every_tier_gives_the_baseline_bits() {
+fn every_tier_agrees_with_the_baseline_to_rounding() {
     let cage = test_cage();
     let triangles = outward_triangles(&cage);
     let frames: Vec<_> = triangles
@@ -64,12 +77,23 @@ fn every_tier_gives_the_baseline_bits() {
         unreachable!("the baseline always runs")
     };
     assert_eq!(bad, None);
-    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let n = points.len();
+    let without_row_17 = |v: &[f64]| -> Vec<f64> {
+        v.iter()
+            .enumerate()
+            .filter(|(k, _)| k % n != 17)
+            .map(|(_, &w)| w)
+            .collect()
+    };
     for tier in [1, 2] {
         if let Some((tier_phi, tier_psi, tier_bad)) = run_tier(tier, &plan, &points) {
             assert_eq!(tier_bad, None);
-            assert_eq!(bits(&tier_phi), bits(&phi), "φ of tier {tier}");
-            assert_eq!(bits(&tier_psi), bits(&psi), "ψ of tier {tier}");
+            for (name, got, expected) in [("φ", &tier_phi, &phi), ("ψ", &tier_psi, &psi)] {
+                let all = tier_difference(got, expected);
+                let regular = tier_difference(&without_row_17(got), &without_row_17(expected));
+                assert!(regular < 1e-13, "{name} of tier {tier}: {regular:e}");
+                assert!(all < 1e-9, "{name} of tier {tier} beside an edge: {all:e}");
+            }
         }
     }
 }
@@ -117,7 +141,7 @@ fn batches_match_the_per_point_closed_forms() {
 
 proptest::proptest! {
     /// On an icosphere cage with random radii at any scale, the batches reproduce every
-    /// interior point and sum φ to 1, and every tier gives the baseline's bits.
+    /// interior point and sum φ to 1, and every tier agrees with the baseline to rounding.
     #[test]
     fn batches_reproduce_and_sum_to_one_on_any_star_cage(
         radii in proptest::collection::vec(0.8f64..1.6, 42),
@@ -156,11 +180,14 @@ proptest::proptest! {
                 "{} vs {}", image, eta
             );
         }
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         for tier in [1, 2] {
             if let Some((tier_phi, tier_psi, _)) = run_tier(tier, &plan, &points) {
-                proptest::prop_assert_eq!(bits(&tier_phi), bits(&phi));
-                proptest::prop_assert_eq!(bits(&tier_psi), bits(&psi));
+                // ψ has the units of length: compared at the cage's scale.
+                let unit_psi = |v: &[f64]| v.iter().map(|w| w / scale).collect::<Vec<_>>();
+                let phi_difference = tier_difference(&tier_phi, &phi);
+                let psi_difference = tier_difference(&unit_psi(&tier_psi), &unit_psi(&psi));
+                proptest::prop_assert!(phi_difference < 1e-13, "φ: {:e}", phi_difference);
+                proptest::prop_assert!(psi_difference < 1e-13, "ψ: {:e}", psi_difference);
             }
         }
     }

@@ -2,7 +2,7 @@
 //! as a fraction ([`angle_fraction`]: MVC's edge angles, Green's solid angles) and the natural
 //! logarithm of a quotient ([`ln_of_quotient`]: Green's edge integrals). Branch-free (selects
 //! only), so that every lane of a batch runs the same instructions, and with no division of
-//! their own beyond the one in [`ln_of_quotient`].
+//! their own beyond the one reciprocal in [`ln_of_quotient`].
 
 use super::mvc_lanes::{LaneMath, V8};
 
@@ -110,10 +110,12 @@ fn significand_and_exponent(x: V8) -> (V8, V8) {
 /// NaN, never a trap), without forming the quotient (so it cannot overflow): with
 /// `num = a·2^p`, `den = b·2^q` (a, b ∈ [1, 2)) scaled by 2 so that a/b ∈ [1/√2, √2], and
 /// `s = (a − b)/(a + b)` (a − b exact), `ln(num/den) = (p − q) ln 2 + 2s + s·R(s²)` (fdlibm's
-/// polynomial). One division; error within about 2 ulp of the result plus 2 ulp of
-/// `|p − q| ln 2`.
+/// polynomial, by Horner's rule: Estrin's scheme measured slower in Green's kernel). One
+/// reciprocal (`M::recip`: a division, or AVX-512's estimate refined to about an ulp) and the
+/// products fused where `M` fuses; error within about 2 ulp of the result plus 2 ulp of
+/// `|p − q| ln 2` (tested with plain IEEE; the kernels' tier tests bound the others).
 #[inline(always)]
-pub(super) fn ln_of_quotient(num: V8, den: V8) -> V8 {
+pub(super) fn ln_of_quotient<M: LaneMath>(num: V8, den: V8) -> V8 {
     use std::f64::consts::SQRT_2;
     let (a, p) = significand_and_exponent(num);
     let (b, q) = significand_and_exponent(den);
@@ -127,14 +129,18 @@ pub(super) fn ln_of_quotient(num: V8, den: V8) -> V8 {
         exponent + V8::splat(1.0),
         V8::select(low, exponent - V8::splat(1.0), exponent),
     );
-    let s = (a - b) / (a + b);
+    let s = (a - b) * M::recip(a + b);
     let z = s * s;
     let mut r = V8::splat(LN_COEFFICIENTS[6]);
     for &c in LN_COEFFICIENTS[..6].iter().rev() {
-        r = r * z + V8::splat(c);
+        r = M::mul_add(r, z, V8::splat(c));
     }
     let r = r * z;
-    exponent * LN_2_HIGH + ((s * 2.0 + s * r) + exponent * LN_2_LOW)
+    M::mul_add(
+        exponent,
+        V8::splat(LN_2_HIGH),
+        M::mul_add(s, r, s * 2.0) + exponent * LN_2_LOW,
+    )
 }
 
 #[cfg(test)]
@@ -143,11 +149,27 @@ mod tests {
     use super::*;
 
     fn ln_lanes(num: [f64; 8], den: [f64; 8]) -> [f64; 8] {
-        ln_of_quotient(V8(num), V8(den)).0
+        ln_of_quotient::<PlainMath>(V8(num), V8(den)).0
     }
 
     #[test]
     fn ln_of_quotient_matches_libm() {
+        check_ln_of_quotient(ln_lanes);
+    }
+
+    /// The fused arithmetic and AVX-512's refined reciprocal (where the CPU has it) keep the
+    /// same error bound.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn ln_of_quotient_matches_libm_with_every_lane_arithmetic() {
+        use super::super::mvc_lanes::{Avx512Math, FusedMath};
+        check_ln_of_quotient(|num, den| ln_of_quotient::<FusedMath>(V8(num), V8(den)).0);
+        if crate::simd_dispatch::cpu().avx512f() {
+            check_ln_of_quotient(|num, den| ln_of_quotient::<Avx512Math>(V8(num), V8(den)).0);
+        }
+    }
+
+    fn check_ln_of_quotient(ln_lanes: impl Fn([f64; 8], [f64; 8]) -> [f64; 8]) {
         let mut worst = 0.0f64;
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         let mut next = || {
