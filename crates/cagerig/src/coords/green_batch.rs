@@ -35,7 +35,7 @@ use super::green_triangle::{GreenTriangle, INV_FOUR_PI, ON_PLANE};
 use super::lane_functions::{angle_fraction, ln_of_quotient};
 #[cfg(target_arch = "x86_64")]
 use super::mvc_lanes::{Avx512Math, FusedMath};
-use super::mvc_lanes::{LANES, LaneMath, Lanes, Mask, PlainMath, V8, not, or};
+use super::mvc_lanes::{LANES, LaneMath, Lanes, Mask, PlainMath, V8, not, or, per_lane};
 use crate::row_blocks::RowBlock;
 use crate::simd_dispatch::simd_dispatch;
 
@@ -154,6 +154,12 @@ pub(crate) struct GreenBatchScratch {
 }
 
 impl GreenBatchScratch {
+    /// a_k = v_k − η per lane, as (x, y, z).
+    #[inline(always)]
+    fn to_vertex(&self, k: usize) -> [V8; 3] {
+        [V8(self.to_x[k]), V8(self.to_y[k]), V8(self.to_z[k])]
+    }
+
     pub(crate) fn new(plan: &GreenBatchPlan<'_>) -> Self {
         let per_vertex = vec![[0.0; LANES]; plan.positions.len()];
         Self {
@@ -295,30 +301,19 @@ fn evaluate_batch<M: LaneMath>(
         scratch.edge_integrals[e] = edge_integral::<M>(edge, scratch).0;
     }
     for face in &plan.faces {
-        let idx = face.vertices.map(|v| v as usize);
-        let to = |k: usize| {
-            [
-                V8(scratch.to_x[k]),
-                V8(scratch.to_y[k]),
-                V8(scratch.to_z[k]),
-            ]
-        };
+        let v = face.vertices;
+        let idx = [v[0] as usize, v[1] as usize, v[2] as usize];
         // Built element by element (an array `map` here may compile to a memmove).
-        let a = [to(idx[0]), to(idx[1]), to(idx[2])];
+        let a = [
+            scratch.to_vertex(idx[0]),
+            scratch.to_vertex(idx[1]),
+            scratch.to_vertex(idx[2]),
+        ];
         let lengths = [
             V8(scratch.length[idx[0]]),
             V8(scratch.length[idx[1]]),
             V8(scratch.length[idx[2]]),
         ];
-        let dot =
-            |u: &[V8; 3], v: &[V8; 3]| M::mul_add(u[0], v[0], M::mul_add(u[1], v[1], u[2] * v[2]));
-        let dot_constant = |u: &[V8; 3], c: &[f64; 3]| {
-            M::mul_add(
-                u[0],
-                splat(c[0]),
-                M::mul_add(u[1], splat(c[1]), u[2] * c[2]),
-            )
-        };
         // The per-point code's degenerate positions: at a corner, or on the face's plane.
         let size = lengths[0] + lengths[1] + lengths[2];
         let near_corner = or(
@@ -335,14 +330,14 @@ fn evaluate_batch<M: LaneMath>(
             M::mul_add(a[1][0], a[2][1], -(a[1][1] * a[2][0])),
         ];
         // Van Oosterom & Strackee: tan(Ω/2) = numerator / denominator.
-        let numerator = dot(&a[0], &cross);
+        let numerator = dot::<M>(&a[0], &cross);
         let denominator = M::mul_add(
-            dot(&a[0], &a[1]),
+            dot::<M>(&a[0], &a[1]),
             lengths[2],
             M::mul_add(
-                dot(&a[0], &a[2]),
+                dot::<M>(&a[0], &a[2]),
                 lengths[1],
-                M::mul_add(dot(&a[1], &a[2]), lengths[0], cube),
+                M::mul_add(dot::<M>(&a[1], &a[2]), lengths[0], cube),
             ),
         );
         let on_plane = not(numerator.abs().gt(cube * ON_PLANE));
@@ -358,19 +353,19 @@ fn evaluate_batch<M: LaneMath>(
             -(half_solid_angle * 2.0),
             half_solid_angle * 2.0,
         );
-        let h = dot_constant(&a[0], &face.normal);
+        let h = dot_constant::<M>(&a[0], &face.normal);
         let integrals = [
             V8(scratch.edge_integrals[face.edges[0] as usize]),
             V8(scratch.edge_integrals[face.edges[1] as usize]),
             V8(scratch.edge_integrals[face.edges[2] as usize]),
         ];
         let edge_sum = M::mul_add(
-            dot_constant(&a[0], &face.edge_normals[0]),
+            dot_constant::<M>(&a[0], &face.edge_normals[0]),
             integrals[0],
             M::mul_add(
-                dot_constant(&a[1], &face.edge_normals[1]),
+                dot_constant::<M>(&a[1], &face.edge_normals[1]),
                 integrals[1],
-                dot_constant(&a[2], &face.edge_normals[2]) * integrals[2],
+                dot_constant::<M>(&a[2], &face.edge_normals[2]) * integrals[2],
             ),
         );
         let psi = M::mul_add(-h.abs(), solid_angle.abs(), edge_sum) * INV_FOUR_PI;
@@ -378,8 +373,8 @@ fn evaluate_batch<M: LaneMath>(
         write_lanes(face_out, start, face.column as usize, &psi.0, count);
         for (i, &vertex) in idx.iter().enumerate() {
             let next = (i + 1) % 3;
-            let hat_at_foot = -dot_constant(&a[next], &face.hat_gradients[i]);
-            let slope = dot_constant(&integrals, &face.hat_slopes[i]);
+            let hat_at_foot = -dot_constant::<M>(&a[next], &face.hat_gradients[i]);
+            let slope = dot_constant::<M>(&integrals, &face.hat_slopes[i]);
             let part = M::mul_add(hat_at_foot, solid_angle, -(h * slope));
             let sums = &mut scratch.vertex_sums[vertex];
             *sums = M::mul_add(part, splat(INV_FOUR_PI), V8(*sums)).0;
@@ -388,15 +383,30 @@ fn evaluate_batch<M: LaneMath>(
     (recompute, check)
 }
 
+/// `u · v` per lane (a function, not a closure: see `per_lane`).
+#[inline(always)]
+fn dot<M: LaneMath>(u: &[V8; 3], v: &[V8; 3]) -> V8 {
+    M::mul_add(u[0], v[0], M::mul_add(u[1], v[1], u[2] * v[2]))
+}
+
+/// `u · c` per lane for a constant vector `c`.
+#[inline(always)]
+fn dot_constant<M: LaneMath>(u: &[V8; 3], c: &[f64; 3]) -> V8 {
+    M::mul_add(
+        u[0],
+        V8::splat(c[0]),
+        M::mul_add(u[1], V8::splat(c[1]), u[2] * c[2]),
+    )
+}
+
 /// 2^−e per lane for x = m·2^e (m ∈ [1, 2)), x a positive normal number below 2¹⁰²³ (other
 /// lanes give garbage): bit operations only, so that scaling by it is exact.
 #[inline(always)]
 fn inverse_power_of_two(x: V8) -> V8 {
     // The biased exponent of 2^−e is 2046 − (the biased exponent of x).
-    V8(std::array::from_fn(|l| {
-        let biased = (x.0[l].to_bits() >> 52) & 0x7ff;
-        f64::from_bits((2046u64.wrapping_sub(biased) & 0x7ff) << 52)
-    }))
+    V8(per_lane!(0.0, |l| f64::from_bits(
+        (2046u64.wrapping_sub((x.0[l].to_bits() >> 52) & 0x7ff) & 0x7ff) << 52
+    )))
 }
 
 /// `∫ ds/R` along `edge` for the lanes' points (see `edge_log_integral` in
@@ -406,7 +416,7 @@ fn inverse_power_of_two(x: V8) -> V8 {
 /// distance² to the line; 0 on the segment itself (d² ≤ the smallest normal).
 #[inline(always)]
 fn edge_integral<M: LaneMath>(edge: &PlanEdge, scratch: &GreenBatchScratch) -> V8 {
-    let [a, b] = edge.ends.map(|v| v as usize);
+    let [a, b] = [edge.ends[0] as usize, edge.ends[1] as usize];
     let e = edge.direction;
     let (ax, ay, az) = (
         V8(scratch.to_x[a]),

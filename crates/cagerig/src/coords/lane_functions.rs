@@ -4,7 +4,7 @@
 //! only), so that every lane of a batch runs the same instructions, and with no division of
 //! their own beyond the one reciprocal in [`ln_of_quotient`].
 
-use super::mvc_lanes::{LaneMath, V8};
+use super::mvc_lanes::{LANES, LaneMath, V8, per_lane};
 
 /// Cephes `atan` coefficients: atan x = x + x·z·P(z)/Q(z), z = x², |x| ≤ 0.66.
 const ATAN_P: [f64; 5] = [
@@ -96,13 +96,13 @@ fn significand_and_exponent(x: V8) -> (V8, V8) {
     // 2⁵² + b as bits is the f64 2⁵² + b for b < 2⁵²: the biased exponent b without an
     // integer-to-float conversion (which AVX2 lacks for 64-bit lanes).
     const TWO_TO_52: u64 = 0x4330_0000_0000_0000;
-    let bits: [u64; 8] = std::array::from_fn(|l| x.0[l].to_bits());
-    let significand = V8(std::array::from_fn(|l| {
-        f64::from_bits((bits[l] & SIGNIFICAND) | ONE)
-    }));
-    let exponent = V8(std::array::from_fn(|l| {
-        f64::from_bits((bits[l] >> 52) | TWO_TO_52) - (4_503_599_627_370_496.0 + 1023.0)
-    }));
+    let bits: [u64; LANES] = per_lane!(0, |l| x.0[l].to_bits());
+    let significand = V8(per_lane!(0.0, |l| f64::from_bits(
+        (bits[l] & SIGNIFICAND) | ONE
+    )));
+    let exponent = V8(per_lane!(0.0, |l| f64::from_bits(
+        (bits[l] >> 52) | TWO_TO_52
+    ) - (4_503_599_627_370_496.0 + 1023.0)));
     (significand, exponent)
 }
 

@@ -27,7 +27,7 @@ use super::mvc::{EPS, MvcEvaluator, MvcScratch};
 pub(crate) use super::mvc_lanes::LANES;
 #[cfg(target_arch = "x86_64")]
 use super::mvc_lanes::{Avx512Math, FusedMath};
-use super::mvc_lanes::{LaneMath, Lanes, Mask, PlainMath, V8, not, or};
+use super::mvc_lanes::{LaneMath, Lanes, Mask, PlainMath, V8, not, or, per_lane};
 use crate::row_blocks::RowBlock;
 use crate::simd_dispatch::simd_dispatch;
 
@@ -110,6 +110,16 @@ pub(crate) struct BatchScratch {
 }
 
 impl BatchScratch {
+    /// c = u_a × u_b of plan edge `e`, per lane, as (x, y, z).
+    #[inline(always)]
+    fn cross_of(&self, e: usize) -> [V8; 3] {
+        [
+            V8(self.cross_x[e]),
+            V8(self.cross_y[e]),
+            V8(self.cross_z[e]),
+        ]
+    }
+
     pub(crate) fn new(evaluator: &MvcEvaluator) -> Self {
         let (num_vertices, num_edges) = (evaluator.num_vertices(), evaluator.edges.len());
         let per_vertex = vec![[0.0; LANES]; num_vertices];
@@ -167,7 +177,11 @@ fn evaluate_rows_generic<M: LaneMath>(
         let mut finite = Mask([u64::MAX; LANES]);
         for k in 0..num_cage {
             let normalised = V8(scratch.weights[k]) * inv_total;
-            finite = Mask::from_fn(|l| finite.test(l) & normalised.0[l].is_finite());
+            finite = Mask(per_lane!(0, |l| if normalised.0[l].is_finite() {
+                finite.0[l]
+            } else {
+                0
+            }));
             out.write(start, k, &normalised.0[..count]);
         }
         for (l, &point) in chunk.iter().enumerate() {
@@ -249,40 +263,38 @@ fn evaluate_batch<M: LaneMath>(
             scratch.cross_z[e] = cz.0;
             scratch.half_angle_over_sin[e] = (numerator * M::recip(denominator) * inv_sin * 0.5).0;
         }
-        let idx = tri.vertices.map(|i| i as usize);
-        let edges = tri.edges.map(|e| e as usize);
+        let (v, e) = (tri.vertices, tri.edges);
+        let idx = [v[0] as usize, v[1] as usize, v[2] as usize];
+        let edges = [e[0] as usize, e[1] as usize, e[2] as usize];
         // Built element by element: `edges.map(..)` here compiled to a 576-byte memmove per
-        // triangle (29 % of the kernel's time in a profile).
-        let cross_of = |e: usize| {
-            [
-                V8(scratch.cross_x[e]),
-                V8(scratch.cross_y[e]),
-                V8(scratch.cross_z[e]),
-            ]
-        };
-        let cross = [cross_of(edges[0]), cross_of(edges[1]), cross_of(edges[2])];
-        let k: [V8; 3] =
-            std::array::from_fn(|j| V8(scratch.half_angle_over_sin[edges[j]]) * tri.edge_sign[j]);
+        // triangle (29 % of the kernel's time in a profile); and with no closures (`per_lane`
+        // in `mvc_lanes.rs`).
+        let cross = [
+            scratch.cross_of(edges[0]),
+            scratch.cross_of(edges[1]),
+            scratch.cross_of(edges[2]),
+        ];
+        let k: [V8; 3] = [
+            V8(scratch.half_angle_over_sin[edges[0]]) * tri.edge_sign[0],
+            V8(scratch.half_angle_over_sin[edges[1]]) * tri.edge_sign[1],
+            V8(scratch.half_angle_over_sin[edges[2]]) * tri.edge_sign[2],
+        ];
         let u0 = [
             V8(scratch.unit_x[idx[0]]),
             V8(scratch.unit_y[idx[0]]),
             V8(scratch.unit_z[idx[0]]),
         ];
-        let dot =
-            |a: &[V8; 3], b: &[V8; 3]| M::mul_add(a[0], b[0], M::mul_add(a[1], b[1], a[2] * b[2]));
         // det(u_i0, u_i1, u_i2) = s0 · (u_i0 · c_e0); the sign s0 is in corner_factor.
-        let det = dot(&u0, &cross[0]);
+        let det = dot::<M>(&u0, &cross[0]);
         degenerate = or(degenerate, not(det.abs().ge(V8::splat(EPS))));
-        let mean: [V8; 3] = std::array::from_fn(|i| {
-            M::mul_add(
-                k[0],
-                cross[0][i],
-                M::mul_add(k[1], cross[1][i], k[2] * cross[2][i]),
-            )
-        });
+        let mean: [V8; 3] = [
+            weighted_sum::<M>(&k, [cross[0][0], cross[1][0], cross[2][0]]),
+            weighted_sum::<M>(&k, [cross[0][1], cross[1][1], cross[2][1]]),
+            weighted_sum::<M>(&k, [cross[0][2], cross[1][2], cross[2][2]]),
+        ];
         let inv_det = M::recip(det);
         for j in 0..3 {
-            let scaled = dot(&cross[j], &mean) * inv_det * tri.corner_factor[j];
+            let scaled = dot::<M>(&cross[j], &mean) * inv_det * tri.corner_factor[j];
             let target = &mut scratch.weights[idx[j]];
             *target = M::mul_add(scaled, V8(scratch.inv_dist[idx[j]]), V8(*target)).0;
         }
@@ -291,8 +303,27 @@ fn evaluate_batch<M: LaneMath>(
     for w in &scratch.weights {
         total = total + V8(*w);
     }
-    let usable = Mask::from_fn(|l| total.0[l] != 0.0 && total.0[l].is_finite());
+    let usable = Mask(per_lane!(
+        0,
+        |l| if total.0[l] != 0.0 && total.0[l].is_finite() {
+            u64::MAX
+        } else {
+            0
+        }
+    ));
     (or(degenerate, not(usable)), M::recip(total).0)
+}
+
+/// `a · b` per lane (a function, not a closure: see `per_lane` in `mvc_lanes.rs`).
+#[inline(always)]
+fn dot<M: LaneMath>(a: &[V8; 3], b: &[V8; 3]) -> V8 {
+    M::mul_add(a[0], b[0], M::mul_add(a[1], b[1], a[2] * b[2]))
+}
+
+/// `Σ_j k_j x_j` per lane.
+#[inline(always)]
+fn weighted_sum<M: LaneMath>(k: &[V8; 3], x: [V8; 3]) -> V8 {
+    M::mul_add(k[0], x[0], M::mul_add(k[1], x[1], k[2] * x[2]))
 }
 
 /// `θ / (2 sin θ)` with θ = atan2(sin, cos) ∈ [0, π] (see [`angle_fraction`]), for the sine and
