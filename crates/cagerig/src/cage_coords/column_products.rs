@@ -119,13 +119,24 @@ fn for_each_group<I: Iterator<Item = (usize, DVec3)>>(mut terms: I, mut f: impl 
 /// operations of [`TileSums::add_columns`]).
 #[inline(always)]
 fn group_sum<const N: usize>(w: [f64; N], d: [DVec3; N]) -> DVec3 {
-    let coordinate =
-        |a: fn(DVec3) -> f64| pairwise_sum::<N>(std::array::from_fn(|c| w[c] * a(d[c])));
-    DVec3::new(
-        coordinate(|v| v.x),
-        coordinate(|v| v.y),
-        coordinate(|v| v.z),
-    )
+    let (x, y, z) = weighted_terms(w, d);
+    DVec3::new(pairwise_sum(x), pairwise_sum(y), pairwise_sum(z))
+}
+
+/// The terms `w_c d_c` per coordinate, as (x, y, z) arrays: a `while` loop with no closure, so
+/// that nothing of the kernels' inner loop is left for LLVM to keep out of line (where it did
+/// with closures elsewhere, their arithmetic lost the kernel's instruction set: `coords/mvc_lanes.rs`).
+#[inline(always)]
+fn weighted_terms<const N: usize>(w: [f64; N], d: [DVec3; N]) -> ([f64; N], [f64; N], [f64; N]) {
+    let (mut x, mut y, mut z) = ([0.0; N], [0.0; N], [0.0; N]);
+    let mut c = 0;
+    while c < N {
+        x[c] = w[c] * d[c].x;
+        y[c] = w[c] * d[c].y;
+        z[c] = w[c] * d[c].z;
+        c += 1;
+    }
+    (x, y, z)
 }
 
 /// Σ p as a pairwise tree, `((p0 + p1) + (p2 + p3)) + …`; `N` is 1, 2, 4 or 8.
@@ -239,15 +250,25 @@ impl TileSums {
         d: [DVec3; N],
     ) {
         let n = columns[0].len().min(LANE_BLOCK);
-        let c = columns.map(|c| &c[..n]);
+        // Each column cut to the block (so the loop below has no bounds checks), no closure.
+        let mut c = columns;
+        let mut q = 0;
+        while q < N {
+            c[q] = &columns[q][..n];
+            q += 1;
+        }
         let (x, y, z) = (&mut self.x[..n], &mut self.y[..n], &mut self.z[..n]);
         for i in 0..n {
-            let w: [f64; N] = std::array::from_fn(|q| c[q][i].widen());
-            let coordinate =
-                |a: fn(DVec3) -> f64| pairwise_sum::<N>(std::array::from_fn(|q| w[q] * a(d[q])));
-            x[i] += coordinate(|v| v.x);
-            y[i] += coordinate(|v| v.y);
-            z[i] += coordinate(|v| v.z);
+            let mut w = [0.0; N];
+            let mut q = 0;
+            while q < N {
+                w[q] = c[q][i].widen();
+                q += 1;
+            }
+            let (terms_x, terms_y, terms_z) = weighted_terms(w, d);
+            x[i] += pairwise_sum(terms_x);
+            y[i] += pairwise_sum(terms_y);
+            z[i] += pairwise_sum(terms_z);
         }
     }
 }

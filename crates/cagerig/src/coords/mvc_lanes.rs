@@ -284,13 +284,23 @@ mod tests {
         &source[start..end]
     }
 
-    /// The kernels' per-batch and per-face code takes no closure, `array::from_fn` or array `map`
-    /// (see [`per_lane`](super::per_lane)): where LLVM left such a closure out of line, its
-    /// arithmetic lost the kernel's instruction set (a call of libm's `fma` per lane), and the
-    /// MVC binding at 133k took 196–206 ms instead of 66–69 ms.
+    /// The kernels' per-batch and per-face code (and the exact path's column products) takes no
+    /// closure, `array::from_fn` or array `map` (see [`per_lane`](super::per_lane)): where LLVM
+    /// left such a closure out of line, its arithmetic lost the kernel's instruction set (a call
+    /// of libm's `fma` per lane), and the MVC binding at 133k took 196–206 ms instead of 66–69 ms.
     #[test]
     fn the_kernels_hot_code_takes_no_closures() {
-        let kernels: [(&str, &str, &[&str]); 3] = [
+        let kernels: [(&str, &str, &[&str]); 4] = [
+            (
+                "cage_coords/column_products.rs",
+                include_str!("../cage_coords/column_products.rs"),
+                &[
+                    "add_columns_generic",
+                    "group_sum",
+                    "weighted_terms",
+                    "pairwise_sum",
+                ],
+            ),
             (
                 "mvc_batch.rs",
                 include_str!("mvc_batch.rs"),
