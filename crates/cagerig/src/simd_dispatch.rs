@@ -35,6 +35,13 @@
 //! tier's arithmetic differs it says so with a body of its own. The macro only chooses how the
 //! body is compiled; it adds no arithmetic.
 //!
+//! **No closures in the body's hot loops.** A closure (also the one inside `array::from_fn` or
+//! an array's `map`) is a function of its own; where LLVM does not inline it into the wrapper,
+//! it is compiled without the tier's features, and a `mul_add` in it becomes a libm call per
+//! lane. Whether it is inlined depends on the build (the MVC kernel was 3× slower in the CLI
+//! than in an example from the same source): write lane loops with `per_lane!`
+//! (`coords/mvc_lanes.rs`) and helpers as `#[inline(always)]` functions.
+//!
 //! The one `unsafe` of every dispatch is in the macro, justified once: a wrapper is called only
 //! after [`cpu`] reported its tier's features.
 
