@@ -40,6 +40,30 @@ pub(crate) struct BlendedRule<'a, S: SkinReal, T: ?Sized, P, const TABLE: bool> 
     pub points: P,
 }
 
+impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bool>
+    BlendedRule<'_, S, T, P, TABLE>
+{
+    /// The LBS part at the rest point `p`.
+    #[inline(always)]
+    fn lbs_point(&self, joints: &[u16], weights: &[S], p: S::V3) -> S::V3 {
+        transform_point::<S>(&blend_columns(joints, weights, self.transforms), p)
+    }
+
+    /// The DQS part at the rest point `p` (signs aligned with the influence `pivot`).
+    #[inline(always)]
+    fn dqs_point(&self, joints: &[u16], weights: &[S], pivot: u16, p: S::V3) -> S::V3 {
+        let pivot = usize::from(pivot);
+        dqs_point::<S, TABLE>(
+            joints,
+            weights,
+            pivot,
+            if TABLE { self.signs.row(pivot) } else { &[] },
+            self.joint_dual_quats,
+            p,
+        )
+    }
+}
+
 impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bool> VertexKernel<S>
     for BlendedRule<'_, S, T, P, TABLE>
 {
@@ -47,24 +71,16 @@ impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bo
     fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3 {
         let b = self.blend[vertex];
         let p = self.points.point(slot, vertex);
-        let lbs = || transform_point::<S>(&blend_columns(joints, weights, self.transforms), p);
-        let dqs = || {
-            let pivot = usize::from(pivot);
-            dqs_point::<S, TABLE>(
-                joints,
-                weights,
-                pivot,
-                if TABLE { self.signs.row(pivot) } else { &[] },
-                self.joint_dual_quats,
-                p,
-            )
-        };
+        // Methods, not closures: a closure the inliner leaves out of line loses the skinning
+        // tier's instruction set (`simd_dispatch.rs`); these two were out of line in a build
+        // of the CLI.
         if b == S::ZERO {
-            lbs()
+            self.lbs_point(joints, weights, p)
         } else if b == S::ONE {
-            dqs()
+            self.dqs_point(joints, weights, pivot, p)
         } else {
-            lbs() * (S::ONE - b) + dqs() * b
+            self.lbs_point(joints, weights, p) * (S::ONE - b)
+                + self.dqs_point(joints, weights, pivot, p) * b
         }
     }
 
