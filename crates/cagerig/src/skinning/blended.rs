@@ -25,7 +25,7 @@ use super::compact_weights::{
     CountSortedWeights, JointColumns, RestPoints, VertexKernel, WorldPoints,
 };
 use super::dq_blend_weights::DqBlendWeights;
-use super::dqs::{DqsScratch, dqs_point};
+use super::dqs::{DqsScratch, dqs_point_at_pivot};
 use super::lbs::{blend_columns, transform_point};
 use super::precision::SkinReal;
 use crate::{RigError, SkinWeights};
@@ -52,15 +52,7 @@ impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bo
     /// The DQS part at the rest point `p` (signs aligned with the influence `pivot`).
     #[inline(always)]
     fn dqs_point(&self, joints: &[u16], weights: &[S], pivot: u16, p: S::V3) -> S::V3 {
-        let pivot = usize::from(pivot);
-        dqs_point::<S, TABLE>(
-            joints,
-            weights,
-            pivot,
-            if TABLE { self.signs.row(pivot) } else { &[] },
-            self.joint_dual_quats,
-            p,
-        )
+        dqs_point_at_pivot::<S, TABLE>(joints, weights, pivot, self.signs, self.joint_dual_quats, p)
     }
 }
 

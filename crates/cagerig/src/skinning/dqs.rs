@@ -180,6 +180,23 @@ pub(crate) fn dqs_point<S: SkinReal, const TABLE: bool>(
     (rotated + translation) * (S::length_squared(v) + w * w).recip()
 }
 
+/// [`dqs_point`] of a count-sorted vertex whose heaviest influence is `pivot`: with `TABLE` the
+/// signs are that joint's row of `signs`, otherwise computed (the rule of [`DqsRule`] and of the
+/// DQS part of blended skinning).
+#[inline(always)]
+pub(crate) fn dqs_point_at_pivot<S: SkinReal, const TABLE: bool>(
+    joints: &[u16],
+    weights: &[S],
+    pivot: u16,
+    signs: &AntipodalSigns<S>,
+    joint_dual_quats: &[[S::Quat; 2]],
+    p: S::V3,
+) -> S::V3 {
+    let pivot = usize::from(pivot);
+    let row = if TABLE { signs.row(pivot) } else { &[] };
+    dqs_point::<S, TABLE>(joints, weights, pivot, row, joint_dual_quats, p)
+}
+
 /// `|q|² R(q) p` for a quaternion `q = (v, w)` of any non-zero length (R(q) the rotation of
 /// `q / |q|`): `(w² − v·v) p + 2 (v·p) v + 2 w v × p`.
 #[inline(always)]
@@ -199,12 +216,11 @@ impl<S: SkinReal, P: RestPoints<S>, const TABLE: bool> VertexKernel<S>
 {
     #[inline(always)]
     fn skin(&self, joints: &[u16], weights: &[S], pivot: u16, slot: usize, vertex: usize) -> S::V3 {
-        let pivot = usize::from(pivot);
-        dqs_point::<S, TABLE>(
+        dqs_point_at_pivot::<S, TABLE>(
             joints,
             weights,
             pivot,
-            if TABLE { self.signs.row(pivot) } else { &[] },
+            self.signs,
             self.joint_dual_quats,
             self.points.point(slot, vertex),
         )
