@@ -35,7 +35,7 @@ use super::green_triangle::{GreenTriangle, INV_FOUR_PI, ON_PLANE};
 use super::lane_functions::{angle_fraction, ln_of_quotient};
 #[cfg(target_arch = "x86_64")]
 use super::mvc_lanes::{Avx512Math, FusedMath};
-use super::mvc_lanes::{LANES, LaneMath, Lanes, Mask, PlainMath, V8, not, or, per_lane};
+use super::mvc_lanes::{LANES, LaneMath, Lanes, Mask, PlainMath, V8, dot, not, or, per_lane};
 use crate::row_blocks::RowBlock;
 use crate::simd_dispatch::simd_dispatch;
 
@@ -381,12 +381,6 @@ fn evaluate_batch<M: LaneMath>(
         }
     }
     (recompute, check)
-}
-
-/// `u · v` per lane (a function, not a closure: see `per_lane`).
-#[inline(always)]
-fn dot<M: LaneMath>(u: &[V8; 3], v: &[V8; 3]) -> V8 {
-    M::mul_add(u[0], v[0], M::mul_add(u[1], v[1], u[2] * v[2]))
 }
 
 /// `u · c` per lane for a constant vector `c`.

@@ -27,7 +27,7 @@ use super::mvc::{EPS, MvcEvaluator, MvcScratch};
 pub(crate) use super::mvc_lanes::LANES;
 #[cfg(target_arch = "x86_64")]
 use super::mvc_lanes::{Avx512Math, FusedMath};
-use super::mvc_lanes::{LaneMath, Lanes, Mask, PlainMath, V8, not, or, per_lane};
+use super::mvc_lanes::{LaneMath, Lanes, Mask, PlainMath, V8, dot, not, or, per_lane};
 use crate::row_blocks::RowBlock;
 use crate::simd_dispatch::simd_dispatch;
 
@@ -288,9 +288,9 @@ fn evaluate_batch<M: LaneMath>(
         let det = dot::<M>(&u0, &cross[0]);
         degenerate = or(degenerate, not(det.abs().ge(V8::splat(EPS))));
         let mean: [V8; 3] = [
-            weighted_sum::<M>(&k, [cross[0][0], cross[1][0], cross[2][0]]),
-            weighted_sum::<M>(&k, [cross[0][1], cross[1][1], cross[2][1]]),
-            weighted_sum::<M>(&k, [cross[0][2], cross[1][2], cross[2][2]]),
+            dot::<M>(&k, &[cross[0][0], cross[1][0], cross[2][0]]),
+            dot::<M>(&k, &[cross[0][1], cross[1][1], cross[2][1]]),
+            dot::<M>(&k, &[cross[0][2], cross[1][2], cross[2][2]]),
         ];
         let inv_det = M::recip(det);
         for j in 0..3 {
@@ -312,18 +312,6 @@ fn evaluate_batch<M: LaneMath>(
         }
     ));
     (or(degenerate, not(usable)), M::recip(total).0)
-}
-
-/// `a · b` per lane (a function, not a closure: see `per_lane` in `mvc_lanes.rs`).
-#[inline(always)]
-fn dot<M: LaneMath>(a: &[V8; 3], b: &[V8; 3]) -> V8 {
-    M::mul_add(a[0], b[0], M::mul_add(a[1], b[1], a[2] * b[2]))
-}
-
-/// `Σ_j k_j x_j` per lane.
-#[inline(always)]
-fn weighted_sum<M: LaneMath>(k: &[V8; 3], x: [V8; 3]) -> V8 {
-    M::mul_add(k[0], x[0], M::mul_add(k[1], x[1], k[2] * x[2]))
 }
 
 /// `θ / (2 sin θ)` with θ = atan2(sin, cos) ∈ [0, π] (see [`angle_fraction`]), for the sine and
