@@ -1,8 +1,9 @@
 //! Times a current-cage grab right after a skeleton edit on the Arm subdivided N times, with Φ
-//! in f64 and in f32, next to its two big parts (M = ΦC and LBS), and on the f32 display path
+//! in f64 and in f32, next to its two big parts (M(C), ΦC or ΦC + ψ·g(C), and LBS), and on the f32 display path
 //! (what the editor runs) next to its product M̃ = Φ̃C:
-//! `cargo run --release -p cagerig --example grab_bench -- [N] [display] [green]` (`display`: only
-//! the display path, e.g. under a profiler; `green`: a Green-coordinates rig, bent in 10° steps).
+//! `cargo run --release -p cagerig --example grab_bench -- [N] [display|exact] [green]` (`display`:
+//! only the display path, `exact`: only the f64 path, each 400 grabs, e.g. under a profiler;
+//! `green`: a Green-coordinates rig, bent in 10° steps).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
@@ -49,6 +50,7 @@ fn bend(session: &mut RigSession, joint: usize) -> Result<(), cagerig::RigError>
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let levels: usize = std::env::args().nth(1).map_or(Ok(3), |a| a.parse())?;
     let display_only = std::env::args().any(|a| a == "display");
+    let exact_only = std::env::args().any(|a| a == "exact");
     let coords = if std::env::args().any(|a| a == "green") {
         cagerig::CoordsKind::Green
     } else {
@@ -64,6 +66,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("Arm N={levels}: {nv} vertices");
     let precisions: &[CoordsPrecision] = if display_only {
         &[]
+    } else if exact_only {
+        &[CoordsPrecision::F64]
     } else {
         &[CoordsPrecision::F64, CoordsPrecision::F32]
     };
@@ -86,10 +90,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut m = vec![DVec3::ZERO; nv];
         let mut out = vec![DVec3::ZERO; nv];
         let lbs = LinearBlendSkinning::new(session.skin_weights());
-        for i in 0..60 {
+        for i in 0..if exact_only { 400 } else { 60 } {
             grab.push(grab_after_skeleton_edit(&mut session, joint, i)?);
             let t = Instant::now();
-            session.cage_coords().apply(session.rest_cage(), &mut m);
+            session.rest_mesh_for_cage(session.rest_cage(), &mut m)?;
             product.push(t.elapsed().as_secs_f64() * 1e3);
             let t = Instant::now();
             lbs.apply(session.posed_from_rest(), &m, &mut out);
@@ -97,8 +101,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         println!("Φ {precision:?}:");
         println!("  grab after skeleton edit: {}", stats(grab));
-        println!("  M = ΦC alone:             {}", stats(product));
+        println!("  M(C) alone:               {}", stats(product));
         println!("  LBS alone:                {}", stats(skin));
+    }
+    if exact_only {
+        return Ok(());
     }
     // The display path: M̃ = Φ̃C and the f32 M' for display, exact MaxVol rows.
     let parts = RigParts::new(sub.mesh, skeleton, sub.skin_weights, cage);

@@ -20,7 +20,9 @@ pub use display_coords::DisplayCageCoords;
 use crate::error::RigError;
 #[cfg(test)]
 use column_products::{LANE_BLOCK, ROW_BLOCK};
-use column_products::{accumulate_columns, rows_of_columns};
+use column_products::{
+    OffsetTerms, accumulate_columns, accumulate_columns_then, call_on_tiles, rows_of_columns,
+};
 
 /// How the per-frame products M = ΦC and M += Φ[:, k]·ΔC_k read Φ.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -165,14 +167,96 @@ impl CageCoords {
     pub fn apply(&self, cage: &[DVec3], out: &mut [DVec3]) {
         debug_assert_eq!(cage.len(), self.num_cage_vertices());
         debug_assert_eq!(out.len(), self.num_vertices());
-        self.accumulate(cage.iter().enumerate().map(|(k, c)| (k, *c)), false, out);
+        self.accumulate(&[OffsetTerms::new(0, cage)], false, out);
+    }
+
+    /// M = Φ·C + Ψ·g in one pass over the rows, for coordinates `extra` = Ψ (`#V × #F`) whose
+    /// column f multiplies `extra_terms[f]` (`#F`): the Green rest skin φC + ψ·g(C) (G1). The
+    /// same bits as [`Self::apply`] followed by `extra.apply_delta` over every column of Ψ in
+    /// order, without writing M and reading it back between the two (at 133k × (58 + 112) that
+    /// is a second pass over the output and its tiles). Parallel over row blocks, no
+    /// allocation.
+    pub fn apply_with_extra(
+        &self,
+        cage: &[DVec3],
+        extra: &CageCoords,
+        extra_terms: &[DVec3],
+        out: &mut [DVec3],
+    ) {
+        // A second output of zero-sized points: no allocation.
+        let mut no_second = vec![(); out.len()];
+        self.apply_then(
+            cage,
+            Some((extra, extra_terms)),
+            out,
+            &mut no_second,
+            |_, _, _| {},
+        );
+    }
+
+    /// M = Φ·C [+ Ψ·g] as [`Self::apply`] / [`Self::apply_with_extra`] (the same bits), calling
+    /// `then(first_row, rows_of_m, rows_of_second)` from the thread that computed them on each
+    /// finished tile of M (a few thousand rows, still in the core's cache) with the same rows
+    /// of `second` (`#V`; of zero-sized points where there is none): the rest skin and its
+    /// skinning in one pass (`RigSession`'s exact path under LBS).
+    ///
+    /// # Panics
+    /// If `second` is not `#V` long.
+    pub fn apply_then<Q: Send>(
+        &self,
+        cage: &[DVec3],
+        extra: Option<(&CageCoords, &[DVec3])>,
+        out: &mut [DVec3],
+        second: &mut [Q],
+        then: impl Fn(usize, &[DVec3], &mut [Q]) + Send + Sync,
+    ) {
+        let nc = self.num_cage_vertices();
+        let nv = self.num_vertices();
+        debug_assert_eq!(cage.len(), nc);
+        debug_assert_eq!(out.len(), nv);
+        let (extra, extra_terms) = match extra {
+            Some((extra, terms)) => (Some(extra), terms),
+            None => (None, &[][..]),
+        };
+        debug_assert!(
+            extra.is_none_or(
+                |e| e.num_vertices() == nv && e.num_cage_vertices() == extra_terms.len()
+            )
+        );
+        let parts = [OffsetTerms::new(0, cage), OffsetTerms::new(nc, extra_terms)];
+        if extra.is_some_and(|e| e.compact.is_some() != self.compact.is_some()) {
+            // Φ and Ψ stored in different precisions: the two products one after the other.
+            self.accumulate(&parts[..1], false, out);
+            if let Some(extra) = extra {
+                extra.accumulate(&[OffsetTerms::new(0, extra_terms)], true, out);
+            }
+            call_on_tiles(out, second, then);
+            return;
+        }
+        match &self.compact {
+            None => {
+                let column = |k: usize| match (k.checked_sub(nc), extra) {
+                    (Some(f), Some(extra)) => extra.column(f),
+                    (None, _) | (Some(_), None) => self.column(k),
+                };
+                accumulate_columns_then(column, &parts, out, second, then);
+            }
+            Some(compact) => {
+                let extra_compact = extra.and_then(|e| e.compact.as_deref()).unwrap_or(&[]);
+                let column = |k: usize| match k.checked_sub(nc) {
+                    Some(f) => &extra_compact[f * nv..(f + 1) * nv],
+                    None => &compact[k * nv..(k + 1) * nv],
+                };
+                accumulate_columns_then(column, &parts, out, second, then);
+            }
+        }
     }
 
     /// M += Φ[:, k]·ΔC_k for the edited cage vertices only: O(#V · k). No allocation.
     pub fn apply_delta(&self, cage_vertices: &[usize], deltas: &[DVec3], out: &mut [DVec3]) {
         debug_assert_eq!(cage_vertices.len(), deltas.len());
         self.accumulate(
-            cage_vertices.iter().copied().zip(deltas.iter().copied()),
+            &[cage_vertices.iter().copied().zip(deltas.iter().copied())],
             true,
             out,
         );
@@ -228,7 +312,8 @@ impl CageCoords {
         }
     }
 
-    /// `out = [out +] Σ Φ[:, k]·d_k` over the given (k, d_k), `out` being `#V`.
+    /// `out = [out +] Σ Φ[:, k]·d_k` over the terms (k, d_k) of every part in turn (each grouped
+    /// on its own, the sums carrying over), `out` being `#V`.
     ///
     /// Each thread takes [`column_products::ROW_BLOCK`] rows and splits them into
     /// [`column_products::LANE_BLOCK`]-row tiles whose x, y and z sums live in three
@@ -238,16 +323,16 @@ impl CageCoords {
     /// the project machine (its two cores read 72 GB/s): eight columns per pass instead of four
     /// took the f64 product at 532k × 58 from 7.4 to ≈ 6 ms; the point-by-point `DVec3` loop
     /// took 7.3 ms at 133k × 58.
-    fn accumulate<I>(&self, terms: I, add_to_out: bool, out: &mut [DVec3])
+    fn accumulate<I>(&self, parts: &[I], add_to_out: bool, out: &mut [DVec3])
     where
         I: Iterator<Item = (usize, DVec3)> + Clone + Send + Sync,
     {
         match &self.compact {
             Some(compact) => {
                 let nv = self.num_vertices();
-                accumulate_columns(|k| &compact[k * nv..(k + 1) * nv], terms, add_to_out, out)
+                accumulate_columns(|k| &compact[k * nv..(k + 1) * nv], parts, add_to_out, out)
             }
-            None => accumulate_columns(|k| self.column(k), terms, add_to_out, out),
+            None => accumulate_columns(|k| self.column(k), parts, add_to_out, out),
         }
     }
 
@@ -392,5 +477,76 @@ mod tests {
                 assert_eq!(from_selected, picked, "{nc} columns, f32 {round}");
             }
         }
+    }
+
+    /// A test matrix whose entries differ from column to column and row to row.
+    fn varied(nv: usize, nc: usize, seed: usize) -> CageCoords {
+        CageCoords::from_matrix(Mat::from_fn(nv, nc, |i, k| {
+            (((i * 7919 + k * 104_729 + seed * 31) % 1013) as f64 / 1013.0 - 0.3)
+                * 1.07f64.powi(k as i32)
+        }))
+        .unwrap()
+    }
+
+    #[test]
+    fn the_one_pass_product_with_extra_columns_gives_the_bits_of_two_passes() {
+        // Φ with a partial group at its end (58 = 7 × 8 + 2) and Ψ of 112 and 5 columns, over
+        // a row count that ends in a partial tile and a partial row block; each of Φ and Ψ in
+        // f64 or rounded to f32 (the mixed cases take the two passes).
+        let nv = 2 * ROW_BLOCK + LANE_BLOCK + 37;
+        for (nc, nf) in [(58, 112), (9, 5)] {
+            for (round_phi, round_psi) in
+                [(false, false), (true, true), (true, false), (false, true)]
+            {
+                let mut phi = varied(nv, nc, 1);
+                let mut psi = varied(nv, nf, 2);
+                if round_phi {
+                    phi.round_to_f32();
+                }
+                if round_psi {
+                    psi.round_to_f32();
+                }
+                let cage: Vec<DVec3> = (0..nc)
+                    .map(|k| DVec3::new(0.1 * k as f64 + 0.37, 1.3 - k as f64 / 7.0, 2.9))
+                    .collect();
+                let terms: Vec<DVec3> = (0..nf)
+                    .map(|f| DVec3::new(-0.2 * f as f64, 0.03 * f as f64 + 1.0, 0.7))
+                    .collect();
+                let mut two_passes = vec![DVec3::ZERO; nv];
+                phi.apply(&cage, &mut two_passes);
+                let all: Vec<usize> = (0..nf).collect();
+                psi.apply_delta(&all, &terms, &mut two_passes);
+                let mut one_pass = vec![DVec3::NAN; nv];
+                phi.apply_with_extra(&cage, &psi, &terms, &mut one_pass);
+                let case = format!("{nc} + {nf} columns, f32 {round_phi}/{round_psi}");
+                assert_eq!(one_pass, two_passes, "{case}");
+                // The tiles handed on: every row once, holding its final value.
+                let mut seen = vec![DVec3::NAN; nv];
+                let mut again = vec![DVec3::NAN; nv];
+                phi.apply_then(
+                    &cage,
+                    Some((&psi, &terms)),
+                    &mut again,
+                    &mut seen,
+                    |first, rows, copy| {
+                        assert!(rows.len() <= LANE_BLOCK && first % LANE_BLOCK == 0);
+                        assert!(copy.iter().all(|p| p.is_nan()), "{first}: a row twice");
+                        copy.copy_from_slice(rows);
+                    },
+                );
+                assert_eq!(again, two_passes, "{case}");
+                assert_eq!(seen, two_passes, "{case}");
+            }
+        }
+        // Without extra columns: the bits of apply.
+        let phi = varied(nv, 58, 3);
+        let cage = vec![DVec3::new(1.0, -2.0, 0.5); 58];
+        let mut plain = vec![DVec3::ZERO; nv];
+        phi.apply(&cage, &mut plain);
+        let (mut out, mut seen) = (vec![DVec3::NAN; nv], vec![DVec3::NAN; nv]);
+        phi.apply_then(&cage, None, &mut out, &mut seen, |_, rows, copy| {
+            copy.copy_from_slice(rows)
+        });
+        assert_eq!((&out, &seen), (&plain, &plain));
     }
 }

@@ -439,12 +439,11 @@ impl RigSession {
                 *c += *d;
             }
             self.start_fit_from_grab(&posed_delta);
-            self.rest_from_cage_for_event();
         }
         self.scratch_cage_a = posed_delta;
         self.scratch_cage_b = rest_delta;
         solved?;
-        self.sync_from_rest_cage();
+        self.rest_and_sync_from_cage();
         Ok(())
     }
 }

@@ -14,12 +14,14 @@ pub(super) const ROW_BLOCK: usize = 8192;
 /// 512-row tiles measured 15–30 % slower at 133k × 74 on the project machine.
 pub(super) const LANE_BLOCK: usize = 2048;
 
-/// `out = [out +] Σ column(k)·d_k` over `terms` = (k, d_k), `out` being `#V` and `column(k)`
-/// the `#V` weights of cage vertex k; see [`super::CageCoords::apply`]. Sums are f64 whatever
-/// the storage of the weights and of `out`.
+/// `out = [out +] Σ column(k)·d_k` over the terms (k, d_k) of every part in turn, `out` being
+/// `#V` and `column(k)` the `#V` weights of column k; see [`super::CageCoords::apply`]. Each part
+/// is grouped on its own ([`for_each_group`]) and the sums carry over from one part to the next
+/// in f64, so the parts `[a, b]` give the bits of `a` alone followed by `b` with `add_to_out`,
+/// in one pass over the rows. Sums are f64 whatever the storage of the weights and of `out`.
 pub(super) fn accumulate_columns<'a, W, P, I>(
     column: impl Fn(usize) -> &'a [W] + Send + Sync,
-    terms: I,
+    parts: &[I],
     add_to_out: bool,
     out: &mut [P],
 ) where
@@ -30,23 +32,120 @@ pub(super) fn accumulate_columns<'a, W, P, I>(
     out.par_chunks_mut(ROW_BLOCK)
         .enumerate()
         .for_each(|(block, chunk)| {
-            let block_start = block * ROW_BLOCK;
             for (tile, tile_out) in chunk.chunks_mut(LANE_BLOCK).enumerate() {
-                let start = block_start + tile * LANE_BLOCK;
-                let len = tile_out.len();
-                let mut sums = TileSums::default();
-                if add_to_out {
-                    sums.load(tile_out);
-                }
-                let columns = |k: usize| &column(k)[start..start + len];
-                for_each_group(terms.clone(), |group| match group {
-                    Group::Eight(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
-                    Group::Four(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
-                    Group::One((k, d)) => sums.add_columns([columns(k)], [d]),
-                });
-                sums.store(tile_out);
+                let start = block * ROW_BLOCK + tile * LANE_BLOCK;
+                tile_product(&column, parts, add_to_out, start, tile_out);
             }
         });
+}
+
+/// [`accumulate_columns`] into `out` (with `add_to_out` false), then `then(first_row, tile,
+/// second_tile)` on each finished tile of `out` while it is still in the core's cache, with
+/// the same rows of `second` (`#V`): a consumer of M, such as skinning into M', reads it there
+/// instead of from memory after the whole product.
+pub(super) fn accumulate_columns_then<'a, W, P, Q, I>(
+    column: impl Fn(usize) -> &'a [W] + Send + Sync,
+    parts: &[I],
+    out: &mut [P],
+    second: &mut [Q],
+    then: impl Fn(usize, &[P], &mut [Q]) + Send + Sync,
+) where
+    W: Weight + 'a,
+    P: TilePoint,
+    Q: Send,
+    I: Iterator<Item = (usize, DVec3)> + Clone + Send + Sync,
+{
+    assert_eq!(
+        out.len(),
+        second.len(),
+        "the two outputs of a tiled product"
+    );
+    out.par_chunks_mut(ROW_BLOCK)
+        .zip(second.par_chunks_mut(ROW_BLOCK))
+        .enumerate()
+        .for_each(|(block, (chunk, second_chunk))| {
+            let tiles = chunk
+                .chunks_mut(LANE_BLOCK)
+                .zip(second_chunk.chunks_mut(LANE_BLOCK));
+            for (tile, (tile_out, second_tile)) in tiles.enumerate() {
+                let start = block * ROW_BLOCK + tile * LANE_BLOCK;
+                tile_product(&column, parts, false, start, tile_out);
+                then(start, tile_out, second_tile);
+            }
+        });
+}
+
+/// `then(first_row, tile, second_tile)` on the [`LANE_BLOCK`]-row tiles of a finished `out`
+/// and the same rows of `second`, as [`accumulate_columns_then`] calls it.
+pub(super) fn call_on_tiles<P: Sync, Q: Send>(
+    out: &[P],
+    second: &mut [Q],
+    then: impl Fn(usize, &[P], &mut [Q]) + Send + Sync,
+) {
+    assert_eq!(
+        out.len(),
+        second.len(),
+        "the two outputs of a tiled product"
+    );
+    out.par_chunks(LANE_BLOCK)
+        .zip(second.par_chunks_mut(LANE_BLOCK))
+        .enumerate()
+        .for_each(|(tile, (rows, second_rows))| then(tile * LANE_BLOCK, rows, second_rows));
+}
+
+/// One tile of [`accumulate_columns`]: rows `start..start + tile_out.len()`.
+#[inline(always)]
+fn tile_product<'a, W, P, I>(
+    column: &(impl Fn(usize) -> &'a [W] + Send + Sync),
+    parts: &[I],
+    add_to_out: bool,
+    start: usize,
+    tile_out: &mut [P],
+) where
+    W: Weight + 'a,
+    P: TilePoint,
+    I: Iterator<Item = (usize, DVec3)> + Clone + Send + Sync,
+{
+    let len = tile_out.len();
+    let mut sums = TileSums::default();
+    if add_to_out {
+        sums.load(tile_out);
+    }
+    let columns = |k: usize| &column(k)[start..start + len];
+    for terms in parts {
+        for_each_group(terms.clone(), |group| match group {
+            Group::Eight(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
+            Group::Four(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
+            Group::One((k, d)) => sums.add_columns([columns(k)], [d]),
+        });
+    }
+    sums.store(tile_out);
+}
+
+/// The terms (`first + j`, `values[j]`) of one part of [`accumulate_columns`]: the columns
+/// `first..first + values.len()` of a concatenation, with their `d`.
+#[derive(Clone)]
+pub(super) struct OffsetTerms<'a> {
+    first: usize,
+    values: std::iter::Enumerate<std::slice::Iter<'a, DVec3>>,
+}
+
+impl<'a> OffsetTerms<'a> {
+    pub(super) fn new(first: usize, values: &'a [DVec3]) -> Self {
+        Self {
+            first,
+            values: values.iter().enumerate(),
+        }
+    }
+}
+
+impl Iterator for OffsetTerms<'_> {
+    type Item = (usize, DVec3);
+
+    #[inline]
+    fn next(&mut self) -> Option<(usize, DVec3)> {
+        self.values.next().map(|(j, d)| (self.first + j, *d))
+    }
 }
 
 /// Rows `rows` of `[out +] Σ column(k)·d_k` over `terms` into `out` (`rows.len()`, holding

@@ -84,7 +84,7 @@ impl DisplayCageCoords {
         let nv = self.num_vertices;
         accumulate_columns(
             |k| &self.columns[k * nv..(k + 1) * nv],
-            head.iter().chain(tail).enumerate().map(|(k, c)| (k, *c)),
+            &[head.iter().chain(tail).enumerate().map(|(k, c)| (k, *c))],
             false,
             out,
         );

@@ -49,10 +49,12 @@ impl RigSession {
                 *c = *c0 + *o;
             }
             // On the display path: M̃ for display and the exact MaxVol rows (see
-            // `display_path`), as for a current-cage grab.
-            self.rest_from_cage_for_event();
+            // `display_path`), as for a current-cage grab; on the exact path under LBS, M and
+            // M' in one pass.
+            self.rest_and_sync_from_cage();
+        } else {
+            self.sync_from_rest_cage();
         }
-        self.sync_from_rest_cage();
         Ok(())
     }
 

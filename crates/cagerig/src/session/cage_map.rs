@@ -238,12 +238,18 @@ impl CageMap {
         }
     }
 
-    /// After C changed everywhere and `rest_mesh` (`#V`) holds the vertex part ΦC: adds the
-    /// kind's terms for `rest_cage` (`#C`), refreshing what it keeps of C.
-    pub(super) fn refresh_rest_terms(&mut self, rest_cage: &[DVec3], rest_mesh: &mut [DVec3]) {
+    /// After C changed everywhere: M = ΦC + the kind's terms for `rest_cage` (`#C`) into
+    /// `rest_mesh` (`#V`), refreshing what the kind keeps of C. Green rigs take φC + ψ·g(C) in
+    /// one pass over the rows ([`CageCoords::apply_with_extra`]).
+    pub(super) fn rest_mesh_in_full(
+        &mut self,
+        cage_coords: &CageCoords,
+        rest_cage: &[DVec3],
+        rest_mesh: &mut [DVec3],
+    ) {
         match self {
-            CageMap::Mvc => {}
-            CageMap::Green(green) => green.refresh_rest_terms(rest_cage, rest_mesh),
+            CageMap::Mvc => cage_coords.apply(rest_cage, rest_mesh),
+            CageMap::Green(green) => green.rest_mesh_in_full(cage_coords, rest_cage, rest_mesh),
         }
     }
 
@@ -275,7 +281,7 @@ impl CageMap {
     }
 
     /// `out` (`#V`, holding ΦC) += the kind's terms at the current C: the bits of
-    /// [`CageMap::refresh_rest_terms`] when the terms are current.
+    /// [`CageMap::rest_mesh_in_full`] when the terms are current.
     pub(super) fn add_terms(&self, out: &mut [DVec3]) {
         match self {
             CageMap::Mvc => {}

@@ -206,12 +206,16 @@ impl GreenState {
 }
 
 impl GreenState {
-    /// After C changed everywhere: g(C) for `rest_cage` (`#C`) and `rest_mesh` += ψ·g(C)
-    /// (`#V`, holding φC).
-    pub(super) fn refresh_rest_terms(&mut self, rest_cage: &[DVec3], rest_mesh: &mut [DVec3]) {
-        let normals = self.fit.normals();
-        normals.apply(rest_cage, &mut self.rest_terms);
-        self.add_face_terms(&self.rest_terms, rest_mesh);
+    /// After C changed everywhere: g(C) for `rest_cage` (`#C`) and `rest_mesh` = φC + ψ·g(C)
+    /// (`#V`) in one pass, `cage_coords` being φ.
+    pub(super) fn rest_mesh_in_full(
+        &mut self,
+        cage_coords: &CageCoords,
+        rest_cage: &[DVec3],
+        rest_mesh: &mut [DVec3],
+    ) {
+        self.fit.normals().apply(rest_cage, &mut self.rest_terms);
+        cage_coords.apply_with_extra(rest_cage, &self.face_coords, &self.rest_terms, rest_mesh);
     }
 
     /// Between two cage keyframes whose g are `lo_terms` and `hi_terms` (`#F`): `rest_cage` is

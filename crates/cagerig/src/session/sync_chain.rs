@@ -103,9 +103,8 @@ impl RigSession {
     /// After C changed everywhere: M = ΦC, and the CoR centres Λ·C (or marked stale when CoR
     /// skinning is not active).
     pub(super) fn rest_from_cage_in_full(&mut self) {
-        self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
         self.cage_map
-            .refresh_rest_terms(&self.rest_cage, &mut self.rest_mesh);
+            .rest_mesh_in_full(&self.cage_coords, &self.rest_cage, &mut self.rest_mesh);
         self.rest_mesh_is_phi_c = true;
         self.rest_mesh_rows_only = false;
         self.rest_mesh_changed();
@@ -133,9 +132,11 @@ impl RigSession {
             self.rest_cage[k] += *d;
         }
         if !self.rest_mesh_is_phi_c {
-            self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
-            self.cage_map
-                .refresh_rest_terms(&self.rest_cage, &mut self.rest_mesh);
+            self.cage_map.rest_mesh_in_full(
+                &self.cage_coords,
+                &self.rest_cage,
+                &mut self.rest_mesh,
+            );
             self.rest_mesh_is_phi_c = true;
         } else {
             self.cage_coords
@@ -157,6 +158,12 @@ impl RigSession {
     /// After C changed: SkelUp (A = ΨC, or Ψ_φC + Ψ_ψ g(C) for Green rigs; rest frames
     /// re-placed), FK, skinning, CageUp.
     pub(super) fn sync_from_rest_cage(&mut self) {
+        self.skeleton_from_cage();
+        self.pose_and_fit();
+    }
+
+    /// SkelUp: the rest joints A = ΨC (+ Ψ_ψ g(C)) placed in the rest frames, unless locked.
+    fn skeleton_from_cage(&mut self) {
         if !self.locks.skel_up {
             self.skeleton_updater.apply(
                 &self.rest_cage,
@@ -171,11 +178,55 @@ impl RigSession {
                 frame.translation = *a;
             }
         }
-        self.pose_and_fit();
+    }
+
+    /// After C changed everywhere: M, SkelUp, FK, skinning and CageUp, as
+    /// [`Self::rest_from_cage_for_event`] followed by [`Self::sync_from_rest_cage`] (the same
+    /// bits). On the exact path under LBS, M and M' come out of one pass over the rows: each
+    /// tile of M = ΦC (+ ψ·g) is skinned while it is in the core's cache
+    /// ([`CageCoords::apply_then`]), so M is not read back from memory (`tests/display_path.rs`
+    /// checks M and M' against the display path's exact ones, computed in two passes).
+    pub(super) fn rest_and_sync_from_cage(&mut self) {
+        if self.display.is_some() || self.method != SkinningMethod::Lbs {
+            self.rest_from_cage_for_event();
+            self.sync_from_rest_cage();
+            return;
+        }
+        self.cage_map.update_terms(&self.rest_cage);
+        self.skeleton_from_cage();
+        self.pose();
+        let lbs = &self.lbs;
+        let transforms = &self.posed_from_rest;
+        self.cage_coords.apply_then(
+            &self.rest_cage,
+            self.cage_map
+                .extra_coords()
+                .map(|e| (e, self.cage_map.terms())),
+            &mut self.rest_mesh,
+            &mut self.posed_mesh,
+            |first, rest, posed| lbs.apply_range(transforms, first, rest, posed),
+        );
+        self.rest_mesh_is_phi_c = true;
+        self.rest_mesh_rows_only = false;
+        self.rest_mesh_changed();
+        self.centres_from_cage_in_full();
+        if !self.locks.cage_up {
+            self.fit_cage();
+        }
     }
 
     /// FK of the current pose on the current rest skeleton, skinning, CageUp.
     pub(super) fn pose_and_fit(&mut self) {
+        self.pose();
+        self.skin();
+        if !self.locks.cage_up {
+            self.fit_cage();
+        }
+    }
+
+    /// FK of the current pose on the current rest skeleton: the current joints and the
+    /// skinning transforms.
+    fn pose(&mut self) {
         // Locals: rest bone offset o_j + offset d_j, current rotation and scale.
         for j in 0..self.skeleton.len() {
             let rest_offset = match self.skeleton.parent(j) {
@@ -197,10 +248,6 @@ impl RigSession {
             &self.posed_world_from_joint,
             &mut self.posed_from_rest,
         );
-        self.skin();
-        if !self.locks.cage_up {
-            self.fit_cage();
-        }
     }
 
     /// M' from M under the current method: the exact f64 M', or on the display path the f32

@@ -139,6 +139,29 @@ impl LinearBlendSkinning {
         }
     }
 
+    /// M' = LBS(T, Ω, M) on the vertices `first..first + out.len()` (`rest_positions` holding
+    /// their M): the bits of those rows of [`Self::apply`], serial. A tiled product of M calls
+    /// it on each tile while the tile is in cache (`CageCoords::apply_then`).
+    ///
+    /// # Panics
+    /// If `transforms` is not `#J` long, the two slices differ in length or the range passes
+    /// `#V`.
+    pub fn apply_range(
+        &self,
+        transforms: &[DAffine3],
+        first: usize,
+        rest_positions: &[DVec3],
+        out: &mut [DVec3],
+    ) {
+        assert_eq!(transforms.len(), self.num_joints, "LBS: transforms");
+        assert_eq!(rest_positions.len(), out.len(), "LBS: rest rows");
+        assert!(
+            first + out.len() <= self.num_vertices(),
+            "LBS: rows past #V"
+        );
+        self.skin_range(first, transforms, rest_positions, out);
+    }
+
     simd_dispatch! {
         /// `out[i] = LBS(first + i)` at rest position `rest[i]`, compiled for AVX2 where the CPU
         /// has it (wider registers and three-operand forms for the glam arithmetic; no fused
@@ -273,6 +296,18 @@ mod tests {
         let mut by_rows = vec![DVec3::ZERO; nv];
         lbs.apply_rows(&rows, &t, &rest, &mut by_rows);
         assert_eq!(all, by_rows);
+        // By ranges of any length, as a tiled product hands them on: the same bits.
+        let mut by_ranges = vec![DVec3::NAN; nv];
+        let mut first = 0;
+        for len in [1, 7, 1000, VERTEX_GRAIN_F32 + 3].into_iter().cycle() {
+            let end = (first + len).min(nv);
+            lbs.apply_range(&t, first, &rest[first..end], &mut by_ranges[first..end]);
+            first = end;
+            if first == nv {
+                break;
+            }
+        }
+        assert_eq!(all, by_ranges);
     }
 
     #[test]
