@@ -242,8 +242,7 @@ impl RigSession {
         )?;
         let rest_cage = cage.positions.clone();
         let mut phi_c = vec![DVec3::ZERO; nv];
-        cage_coords.apply(&rest_cage, &mut phi_c);
-        cage_map.add_rest_terms_of(&rest_cage, &mut phi_c);
+        cage_map.rest_mesh_of(&cage_coords, &rest_cage, &mut phi_c);
         let residual = crate::mesh::max_distance(&phi_c, &mesh.positions);
         let mut rest_mesh_is_phi_c = residual <= phi_c_tolerance;
         if precision == CoordsPrecision::F32

@@ -10,7 +10,7 @@
 //! | hook | [`CageMap::Mvc`] (M = ΦC) | [`CageMap::Green`] (M = φC + ψ·g(C)) |
 //! |---|---|---|
 //! | [`bind_cage_map`] | Φ (given or computed), MaxVol rows of Φ | φ, ψ, MaxVol rows of [φ ψ] |
-//! | [`CageMap::refresh_rest_terms`], [`CageMap::apply_rest_delta`] | nothing | M += ψ·g(C), by face |
+//! | [`CageMap::rest_mesh_in_full`], [`CageMap::rest_mesh_of`], [`CageMap::apply_rest_delta`] | M = ΦC | M = φC + ψ·g(C) in one pass; M += ψ·g(C) by face |
 //! | [`CageMap::is_linear`] (keyframe lerp, centre deltas) | yes | no |
 //! | the f32 display path's M̃ ([`CageMap::extra_coords`], [`CageMap::terms`]) | Φ̃·C | [φ̃ ψ̃]·[C; g(C)] |
 //! | CageUp ([`RigSession::fit_cage`]) | C' = P·M'_R | Gauss–Newton on the rows |
@@ -239,17 +239,31 @@ impl CageMap {
     }
 
     /// After C changed everywhere: M = ΦC + the kind's terms for `rest_cage` (`#C`) into
-    /// `rest_mesh` (`#V`), refreshing what the kind keeps of C. Green rigs take φC + ψ·g(C) in
-    /// one pass over the rows ([`CageCoords::apply_with_extra`]).
+    /// `rest_mesh` (`#V`), refreshing what the kind keeps of C.
     pub(super) fn rest_mesh_in_full(
         &mut self,
         cage_coords: &CageCoords,
         rest_cage: &[DVec3],
         rest_mesh: &mut [DVec3],
     ) {
+        self.update_terms(rest_cage);
+        self.rest_mesh_at_terms(cage_coords, rest_cage, rest_mesh);
+    }
+
+    /// M = ΦC + the kind's terms as they are (current for `rest_cage`, `#C`) into `out` (`#V`).
+    /// Green rigs take φC + ψ·g(C) in one pass over the rows
+    /// ([`CageCoords::apply_with_extra`], the bits of φC followed by ψ·g).
+    pub(super) fn rest_mesh_at_terms(
+        &self,
+        cage_coords: &CageCoords,
+        rest_cage: &[DVec3],
+        out: &mut [DVec3],
+    ) {
         match self {
-            CageMap::Mvc => cage_coords.apply(rest_cage, rest_mesh),
-            CageMap::Green(green) => green.rest_mesh_in_full(cage_coords, rest_cage, rest_mesh),
+            CageMap::Mvc => cage_coords.apply(rest_cage, out),
+            CageMap::Green(green) => {
+                cage_coords.apply_with_extra(rest_cage, &green.face_coords, &green.rest_terms, out)
+            }
         }
     }
 
@@ -280,15 +294,6 @@ impl CageMap {
         }
     }
 
-    /// `out` (`#V`, holding ΦC) += the kind's terms at the current C: the bits of
-    /// [`CageMap::rest_mesh_in_full`] when the terms are current.
-    pub(super) fn add_terms(&self, out: &mut [DVec3]) {
-        match self {
-            CageMap::Mvc => {}
-            CageMap::Green(green) => green.add_face_terms(&green.rest_terms, out),
-        }
-    }
-
     /// After the rest-cage vertices `vertices` moved (`rest_cage` already updated and the
     /// vertex part's delta applied to `rest_mesh`): the kind's terms of the change. No
     /// allocation.
@@ -304,12 +309,14 @@ impl CageMap {
         }
     }
 
-    /// out (`#V`) += the kind's terms of M for the rest cage `cage` (`#C`), which need not be
-    /// the session's.
-    pub(super) fn add_rest_terms_of(&self, cage: &[DVec3], out: &mut [DVec3]) {
+    /// M(C) = ΦC + the kind's terms for the rest cage `cage` (`#C`), which need not be the
+    /// session's, into `out` (`#V`): one pass, as [`CageMap::rest_mesh_at_terms`].
+    pub(super) fn rest_mesh_of(&self, cage_coords: &CageCoords, cage: &[DVec3], out: &mut [DVec3]) {
         match self {
-            CageMap::Mvc => {}
-            CageMap::Green(green) => green.add_face_terms(&green.terms_of(cage), out),
+            CageMap::Mvc => cage_coords.apply(cage, out),
+            CageMap::Green(green) => {
+                cage_coords.apply_with_extra(cage, &green.face_coords, &green.terms_of(cage), out)
+            }
         }
     }
 
@@ -472,8 +479,7 @@ impl RigSession {
 
     /// M = ΦC (+ the kind's terms) for the rest cage `cage` (`#C`) into `out` (`#V`).
     pub(super) fn rest_mesh_of_cage(&self, cage: &[DVec3], out: &mut [DVec3]) {
-        self.cage_coords.apply(cage, out);
-        self.cage_map.add_rest_terms_of(cage, out);
+        self.cage_map.rest_mesh_of(&self.cage_coords, cage, out);
     }
 
     /// The rest skin M(C) of the rest cage `cage` (`#C`) into `out` (`#V`): ΦC, plus ψ·g(C) for

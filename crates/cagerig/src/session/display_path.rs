@@ -274,10 +274,11 @@ impl RigSession {
             .and_then(|d| d.exact_rest.take())
         {
             Some(exact) => self.rest_mesh = exact,
-            None => {
-                self.cage_coords.apply(&self.rest_cage, &mut self.rest_mesh);
-                self.cage_map.add_terms(&mut self.rest_mesh);
-            }
+            None => self.cage_map.rest_mesh_at_terms(
+                &self.cage_coords,
+                &self.rest_cage,
+                &mut self.rest_mesh,
+            ),
         }
         self.rest_mesh_rows_only = false;
     }
@@ -285,8 +286,9 @@ impl RigSession {
     /// The exact M while it is kept on the MaxVol rows only (computed on first use).
     pub(super) fn exact_rest_mesh<'a>(&'a self, display: &'a DisplayPath) -> &'a [DVec3] {
         display.exact_rest.get_or_init(|| {
-            let mut exact = full_product(&self.cage_coords, &self.rest_cage);
-            self.cage_map.add_terms(&mut exact);
+            let mut exact = vec![DVec3::ZERO; self.cage_coords.num_vertices()];
+            self.cage_map
+                .rest_mesh_at_terms(&self.cage_coords, &self.rest_cage, &mut exact);
             exact
         })
     }
@@ -460,11 +462,4 @@ impl SkinF32<'_> {
         }
         Ok(())
     }
-}
-
-/// M = Φ·C (`#V`), exact, into a new vector.
-fn full_product(cage_coords: &CageCoords, rest_cage: &[DVec3]) -> Vec<DVec3> {
-    let mut out = vec![DVec3::ZERO; cage_coords.num_vertices()];
-    cage_coords.apply(rest_cage, &mut out);
-    out
 }

@@ -165,11 +165,6 @@ impl GreenState {
         self.size
     }
 
-    /// out += ψ·g for face terms `g` (`#F`) and `out` (`#V`).
-    pub(super) fn add_face_terms(&self, g: &[DVec3], out: &mut [DVec3]) {
-        self.face_coords.apply_delta(&self.all_faces, g, out);
-    }
-
     /// out += Λ_ψ·g (the CoR centres' face part), when built.
     pub(super) fn add_centre_face_terms(&self, g: &[DVec3], out: &mut [DVec3]) {
         if let Some(lambda) = &self.face_centre_coords {
@@ -206,18 +201,6 @@ impl GreenState {
 }
 
 impl GreenState {
-    /// After C changed everywhere: g(C) for `rest_cage` (`#C`) and `rest_mesh` = φC + ψ·g(C)
-    /// (`#V`) in one pass, `cage_coords` being φ.
-    pub(super) fn rest_mesh_in_full(
-        &mut self,
-        cage_coords: &CageCoords,
-        rest_cage: &[DVec3],
-        rest_mesh: &mut [DVec3],
-    ) {
-        self.fit.normals().apply(rest_cage, &mut self.rest_terms);
-        cage_coords.apply_with_extra(rest_cage, &self.face_coords, &self.rest_terms, rest_mesh);
-    }
-
     /// Between two cage keyframes whose g are `lo_terms` and `hi_terms` (`#F`): `rest_cage` is
     /// their blend with weight `a` on `hi` and `rest_mesh` the blend of their meshes. Sets g(C)
     /// and adds ψ_f·e_f with e_f = g_f(C) − lerp(g_lo,f, g_hi,f, a) for the faces where e_f is
