@@ -239,7 +239,7 @@ impl CageCoords {
                     (Some(f), Some(extra)) => extra.column(f),
                     (None, _) | (Some(_), None) => self.column(k),
                 };
-                accumulate_columns_then(column, &parts, out, second, then);
+                accumulate_columns_then(column, &parts, false, out, second, then);
             }
             Some(compact) => {
                 let extra_compact = extra.and_then(|e| e.compact.as_deref()).unwrap_or(&[]);
@@ -247,7 +247,7 @@ impl CageCoords {
                     Some(f) => &extra_compact[f * nv..(f + 1) * nv],
                     None => &compact[k * nv..(k + 1) * nv],
                 };
-                accumulate_columns_then(column, &parts, out, second, then);
+                accumulate_columns_then(column, &parts, false, out, second, then);
             }
         }
     }

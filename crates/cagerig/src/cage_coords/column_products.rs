@@ -29,23 +29,19 @@ pub(super) fn accumulate_columns<'a, W, P, I>(
     P: TilePoint,
     I: Iterator<Item = (usize, DVec3)> + Clone + Send + Sync,
 {
-    out.par_chunks_mut(ROW_BLOCK)
-        .enumerate()
-        .for_each(|(block, chunk)| {
-            for (tile, tile_out) in chunk.chunks_mut(LANE_BLOCK).enumerate() {
-                let start = block * ROW_BLOCK + tile * LANE_BLOCK;
-                tile_product(&column, parts, add_to_out, start, tile_out);
-            }
-        });
+    // A second output of zero-sized points: no allocation, nothing to call.
+    let mut no_second = vec![(); out.len()];
+    accumulate_columns_then(column, parts, add_to_out, out, &mut no_second, |_, _, _| {});
 }
 
-/// [`accumulate_columns`] into `out` (with `add_to_out` false), then `then(first_row, tile,
-/// second_tile)` on each finished tile of `out` while it is still in the core's cache, with
-/// the same rows of `second` (`#V`): a consumer of M, such as skinning into M', reads it there
-/// instead of from memory after the whole product.
+/// [`accumulate_columns`], then `then(first_row, tile, second_tile)` on each finished tile of
+/// `out` while it is still in the core's cache, with the same rows of `second` (`#V`; of
+/// zero-sized points where there is none): a consumer of M, such as skinning into M', reads it
+/// there instead of from memory after the whole product.
 pub(super) fn accumulate_columns_then<'a, W, P, Q, I>(
     column: impl Fn(usize) -> &'a [W] + Send + Sync,
     parts: &[I],
+    add_to_out: bool,
     out: &mut [P],
     second: &mut [Q],
     then: impl Fn(usize, &[P], &mut [Q]) + Send + Sync,
@@ -69,7 +65,7 @@ pub(super) fn accumulate_columns_then<'a, W, P, Q, I>(
                 .zip(second_chunk.chunks_mut(LANE_BLOCK));
             for (tile, (tile_out, second_tile)) in tiles.enumerate() {
                 let start = block * ROW_BLOCK + tile * LANE_BLOCK;
-                tile_product(&column, parts, false, start, tile_out);
+                tile_product(&column, parts, add_to_out, start, tile_out);
                 then(start, tile_out, second_tile);
             }
         });

@@ -105,6 +105,12 @@ impl RigSession {
     pub(super) fn rest_from_cage_in_full(&mut self) {
         self.cage_map
             .rest_mesh_in_full(&self.cage_coords, &self.rest_cage, &mut self.rest_mesh);
+        self.rest_mesh_computed_in_full();
+    }
+
+    /// After M was computed in full from C: M is ΦC (+ terms) on every row, its revision moves
+    /// on, and the CoR centres follow C.
+    fn rest_mesh_computed_in_full(&mut self) {
         self.rest_mesh_is_phi_c = true;
         self.rest_mesh_rows_only = false;
         self.rest_mesh_changed();
@@ -206,10 +212,7 @@ impl RigSession {
             &mut self.posed_mesh,
             |first, rest, posed| lbs.apply_range(transforms, first, rest, posed),
         );
-        self.rest_mesh_is_phi_c = true;
-        self.rest_mesh_rows_only = false;
-        self.rest_mesh_changed();
-        self.centres_from_cage_in_full();
+        self.rest_mesh_computed_in_full();
         if !self.locks.cage_up {
             self.fit_cage();
         }
