@@ -301,14 +301,14 @@ impl CageCoords {
             Some(compact) => {
                 let nv = self.num_vertices();
                 rows_of_columns(
-                    |k| &compact[k * nv..(k + 1) * nv],
+                    &|k| &compact[k * nv..(k + 1) * nv],
                     terms,
                     add_to_out,
                     rows,
                     out,
                 )
             }
-            None => rows_of_columns(|k| self.column(k), terms, add_to_out, rows, out),
+            None => rows_of_columns(&|k| self.column(k), terms, add_to_out, rows, out),
         }
     }
 
@@ -409,6 +409,52 @@ mod tests {
                 let expected = (0..nc).fold(DVec3::ZERO, |acc, k| acc + matrix[(i, k)] * cage[k]);
                 // Small integers times small integers: exact in any summation order.
                 assert_eq!(*o, expected, "row {i}, {nc} columns");
+            }
+        }
+    }
+
+    #[test]
+    fn every_product_is_one_fused_chain_per_coordinate_in_column_order() {
+        // The expected values come from `mul_add` in this test's baseline code (libm's
+        // correctly rounded fma); `apply` runs the widest tier this CPU has and `apply_rows` its
+        // own dispatch: the same bits prove every tier and both products compute the chain
+        // s ← fma(Φ[i, k], C_k, s) from s = 0 over k in order. 13 columns: a group of eight,
+        // one of four and a single column; f64 and f32 storage.
+        let (nv, nc) = (LANE_BLOCK + 77, 13);
+        let mut phi = varied(nv, nc, 5);
+        let cage: Vec<DVec3> = (0..nc)
+            .map(|k| {
+                DVec3::new(
+                    0.1 * k as f64 + 0.37,
+                    1.3 - k as f64 / 7.0,
+                    2.9 / (k + 1) as f64,
+                )
+            })
+            .collect();
+        for round in [false, true] {
+            if round {
+                phi.round_to_f32();
+            }
+            let expected: Vec<DVec3> = (0..nv)
+                .map(|i| {
+                    (0..nc).fold(DVec3::ZERO, |s, k| {
+                        let w = phi.get(i, k);
+                        DVec3::new(
+                            w.mul_add(cage[k].x, s.x),
+                            w.mul_add(cage[k].y, s.y),
+                            w.mul_add(cage[k].z, s.z),
+                        )
+                    })
+                })
+                .collect();
+            let mut out = vec![DVec3::NAN; nv];
+            phi.apply(&cage, &mut out);
+            assert_eq!(out, expected, "f32 storage {round}");
+            let rows = [0, 5, LANE_BLOCK, nv - 1];
+            let mut picked = vec![DVec3::NAN; rows.len()];
+            phi.apply_rows(&rows, &cage, &mut picked);
+            for (r, &row) in rows.iter().enumerate() {
+                assert_eq!(picked[r], expected[row], "row {row}, f32 storage {round}");
             }
         }
     }

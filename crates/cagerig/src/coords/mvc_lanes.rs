@@ -306,12 +306,7 @@ mod tests {
             (
                 "cage_coords/column_products.rs",
                 include_str!("../cage_coords/column_products.rs"),
-                &[
-                    "add_columns_generic",
-                    "group_sum",
-                    "weighted_terms",
-                    "pairwise_sum",
-                ],
+                &["add_columns_generic", "rows_of_columns_generic"],
             ),
             (
                 "mvc_batch.rs",
