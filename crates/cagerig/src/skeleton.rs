@@ -5,6 +5,8 @@
 //! forward kinematics composes them root-first. The skinning transform of Eq. 1–3 is
 //! `T_j = posed_from_rest[j] = posed_world_from_joint[j] · rest_world_from_joint[j]⁻¹`.
 
+mod translation_jacobian;
+
 use glam::{DAffine3, DVec3};
 
 use crate::error::RigError;

@@ -369,45 +369,10 @@ impl RigSession {
         green.failure_unreported = true;
     }
 
-    /// The skinning transforms (`#J`) of the current pose on the rest skeleton whose joints are
-    /// at `rest_joints` (`#J`): the first half of `pose_and_fit`, into caller scratch.
-    fn posed_from_rest_for(
-        &self,
-        rest_joints: &[DVec3],
-        rest_world: &mut [DAffine3],
-        locals: &mut [DAffine3],
-        posed_world: &mut [DAffine3],
-        out: &mut [DAffine3],
-    ) {
-        for ((frame, current), a) in rest_world
-            .iter_mut()
-            .zip(&self.rest_world_from_joint)
-            .zip(rest_joints)
-        {
-            *frame = *current;
-            frame.translation = *a;
-        }
-        for (j, local) in locals.iter_mut().enumerate() {
-            let rest_offset = match self.skeleton.parent(j) {
-                Some(p) => rest_world[p]
-                    .inverse()
-                    .transform_point3(rest_world[j].translation),
-                None => rest_world[j].translation,
-            };
-            *local = local_transform(
-                rest_offset + self.translation_offset[j],
-                self.posed_local_rotation[j],
-                self.posed_local_scale[j],
-            );
-        }
-        self.skeleton.forward_kinematics(locals, posed_world);
-        Skeleton::skinning_transforms(rest_world, posed_world, out);
-    }
-
     /// Builds R̃ and K_A = Ω̃ ∂T/∂A of the Green CageRev for the current pose and SkelUp lock,
-    /// unless they are already built for them. K_A by exact differences: the translations are
-    /// affine in the rest joints for fixed rotations. Zero while SkelUp is locked (a grab then
-    /// moves no joint).
+    /// unless they are already built for them. K_A in closed form: the translations are affine
+    /// in the rest joints for fixed rotations (0.27 ms by differences, 3#J forward kinematics,
+    /// at 133k on the Arm). Zero while SkelUp is locked (a grab then moves no joint).
     pub(super) fn prepare_green_reverser(&mut self) -> Result<(), RigError> {
         let CageMap::Green(green) = &self.cage_map else {
             return Ok(());
@@ -431,63 +396,38 @@ impl RigSession {
                     })
             })
             .collect();
-        let rest_joints: Vec<DVec3> = self
-            .rest_world_from_joint
-            .iter()
-            .map(|f| f.translation)
-            .collect();
-        let (mut rest_world, mut locals, mut posed_world) = (
-            vec![DAffine3::IDENTITY; nj],
-            vec![DAffine3::IDENTITY; nj],
-            vec![DAffine3::IDENTITY; nj],
-        );
-        let mut base = vec![DAffine3::IDENTITY; nj];
-        self.posed_from_rest_for(
-            &rest_joints,
-            &mut rest_world,
-            &mut locals,
-            &mut posed_world,
-            &mut base,
-        );
-        let step = green.size.max(f64::MIN_POSITIVE);
-        let mut moved_joints = rest_joints.clone();
-        let mut moved = vec![DAffine3::IDENTITY; nj];
-        let mut skeleton_rows = Mat::<f64>::zeros(3 * rows.len(), 3 * nj);
-        for k in (0..nj).filter(|_| !locked) {
-            for c in 0..3 {
-                moved_joints.copy_from_slice(&rest_joints);
-                moved_joints[k][c] += step;
-                self.posed_from_rest_for(
-                    &moved_joints,
-                    &mut rest_world,
-                    &mut locals,
-                    &mut posed_world,
-                    &mut moved,
-                );
-                let mut column = skeleton_rows.col_mut(3 * k + c);
-                for (i, &row) in rows.iter().enumerate() {
-                    let (joints, weights) = self.skin_weights.row(row);
-                    let change = joints
+        // ∂t_j/∂A_k in closed form (`Skeleton::skinning_translation_jacobian`), then
+        // K_A = Ω̃ ∂t/∂A row by row.
+        let mut translation_jacobian = vec![DMat3::ZERO; nj * nj];
+        self.skeleton
+            .skinning_translation_jacobian(&self.posed_from_rest, &mut translation_jacobian);
+        let skin_weights = &self.skin_weights;
+        let fill_skeleton_rows = |out: &mut Mat<f64>| {
+            for (i, &row) in rows.iter().enumerate() {
+                let (joints, weights) = skin_weights.row(row);
+                for k in 0..nj {
+                    let block = joints
                         .iter()
                         .zip(weights)
-                        .fold(DVec3::ZERO, |acc, (&j, &w)| {
-                            let j = j as usize;
-                            acc + w * (moved[j].translation - base[j].translation)
-                        })
-                        / step;
-                    column[3 * i] = change.x;
-                    column[3 * i + 1] = change.y;
-                    column[3 * i + 2] = change.z;
+                        .fold(DMat3::ZERO, |acc, (&j, &w)| {
+                            acc + translation_jacobian[j as usize * nj + k] * w
+                        });
+                    for c in 0..3 {
+                        let column = block.col(c);
+                        for a in 0..3 {
+                            out[(3 * i + a, 3 * k + c)] = column[a];
+                        }
+                    }
                 }
             }
-        }
-        let pose_linear: Vec<DMat3> = self.posed_from_rest.iter().map(|t| t.matrix3).collect();
+        };
+        let pose_linear = self.posed_from_rest.iter().map(|t| t.matrix3);
         if let CageMap::Green(green) = &mut self.cage_map {
             green.reverser.prepare(
                 row_linear.into_iter(),
-                pose_linear.into_iter(),
+                pose_linear,
                 locked,
-                |out| *out = skeleton_rows,
+                fill_skeleton_rows,
             );
         }
         Ok(())

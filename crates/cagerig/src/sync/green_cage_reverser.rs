@@ -47,24 +47,33 @@ pub struct GreenCageReverser {
     ready: bool,
     solver: NewtonSolver,
     tolerance: f64,
-    /// J_t (`3#R × 3#C`), R̃ J (`3#R × 3#C`), J_A (`3#J × 3#C`), J_tᵀ K_A (`3#C × 3#J`, at each
+    /// J_t (`3#R × 3#C`, built only when the solver refactors: the residual's J_tᵀ r is taken
+    /// without it), R̃ J (`3#R × 3#C`), J_A (`3#J × 3#C`), J_tᵀ K_A (`3#C × 3#J`, at each
     /// factorisation) and J_tᵀ(R̃ J + K_A J_A) (`3#C × 3#C`).
     target_jacobian: Mat<f64>,
+    /// ∂g_f/∂x at C'_t per face and corner (`#F`): J_t's face part, for J_tᵀ r.
+    target_blocks: Vec<[DMat3; 3]>,
+    /// φ_Rᵀ r (`#C × 3`) and ψ_Rᵀ r (`#F × 3`).
+    vertex_sums: Mat<f64>,
+    face_sums: Mat<f64>,
     chain_jacobian: Mat<f64>,
     joint_jacobian: Mat<f64>,
     projected_skeleton: Mat<f64>,
     system: Mat<f64>,
     /// A(C₀) and A(C₀ + δ), `#J`.
     start_joints: Vec<DVec3>,
-    trial_joints: Vec<DVec3>,
     posed_target: Vec<DVec3>,
     rows_target: Vec<DVec3>,
-    rows_trial: Vec<DVec3>,
-    /// K_A ΔA per fitting row, `#R`.
-    row_skeleton: Vec<DVec3>,
-    /// The residual rows r (`3#R`) and J_tᵀ r (`3#C`) as columns for the product.
-    flat_rows: faer::Col<f64>,
-    flat_gradient: faer::Col<f64>,
+    /// C₀ + δ and g(C₀ + δ) as `#C × 3` and `#F × 3` row-major tables, F_R(C₀ + δ) (`#R × 3`),
+    /// A(C₀ + δ) (`#J × 3`), ΔA (`3#J`) and K_A ΔA (`3#R`): the residual's products.
+    flat_moved: Vec<f64>,
+    flat_g: Vec<f64>,
+    trial_rows: Mat<f64>,
+    trial_joint_rows: Mat<f64>,
+    joint_change: Vec<f64>,
+    row_skeleton: faer::Col<f64>,
+    /// The residual rows r (`#R × 3`, row-major) for the products.
+    flat_rows: Vec<f64>,
     g: Vec<DVec3>,
     moved: Vec<DVec3>,
     moved_for_jacobian: Vec<DVec3>,
@@ -105,18 +114,23 @@ impl GreenCageReverser {
             solver: NewtonSolver::new(num_cage),
             tolerance: GRADIENT_TOLERANCE * cage_size.max(f64::MIN_POSITIVE),
             target_jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
+            target_blocks: vec![[DMat3::ZERO; 3]; num_faces],
+            vertex_sums: Mat::zeros(num_cage, 3),
+            face_sums: Mat::zeros(num_faces, 3),
             chain_jacobian: Mat::zeros(3 * num_rows, 3 * num_cage),
             joint_jacobian: Mat::zeros(3 * num_joints, 3 * num_cage),
             projected_skeleton: Mat::zeros(3 * num_cage, 3 * num_joints),
             system: Mat::zeros(3 * num_cage, 3 * num_cage),
             start_joints: vec![DVec3::ZERO; num_joints],
-            trial_joints: vec![DVec3::ZERO; num_joints],
             posed_target: vec![DVec3::ZERO; num_cage],
             rows_target: vec![DVec3::ZERO; num_rows],
-            rows_trial: vec![DVec3::ZERO; num_rows],
-            row_skeleton: vec![DVec3::ZERO; num_rows],
-            flat_rows: faer::Col::zeros(3 * num_rows),
-            flat_gradient: faer::Col::zeros(3 * num_cage),
+            flat_moved: vec![0.0; 3 * num_cage],
+            flat_g: vec![0.0; 3 * num_faces],
+            trial_rows: Mat::zeros(num_rows, 3),
+            trial_joint_rows: Mat::zeros(num_joints, 3),
+            joint_change: vec![0.0; 3 * num_joints],
+            row_skeleton: faer::Col::zeros(3 * num_rows),
+            flat_rows: vec![0.0; 3 * num_rows],
             g: vec![DVec3::ZERO; num_faces],
             moved: vec![DVec3::ZERO; num_cage],
             moved_for_jacobian: vec![DVec3::ZERO; num_cage],
@@ -229,7 +243,11 @@ impl GreenCageReverser {
             *t = *p + a * *d;
         }
         fit.rows_of(&self.posed_target, &mut self.g, &mut self.rows_target);
-        fit.jacobian_into(&self.posed_target, &mut self.target_jacobian);
+        for (f, blocks) in self.target_blocks.iter_mut().enumerate() {
+            *blocks = fit.normals().face_jacobian(&self.posed_target, f);
+        }
+        // J_t itself only if the solver refactors (below).
+        let mut target_jacobian_built = false;
         // The factors of the previous piece or grab stay. They are those of a nearby G (J_t, R̃,
         // K_A and C move a little between the grabs of a drag, or across a small skeleton edit),
         // so chord steps from them converge, and far cheaper than a new Jacobian (`3#C × 3#R ×
@@ -244,16 +262,20 @@ impl GreenCageReverser {
         let row_linear = &self.row_linear;
         let skeleton_rows = &self.skeleton_rows;
         let row_skeleton = &mut self.row_skeleton;
-        let (flat_rows, flat_gradient) = (&mut self.flat_rows, &mut self.flat_gradient);
+        let (flat_moved, flat_g) = (&mut self.flat_moved, &mut self.flat_g);
+        let (trial_rows, trial_joint_rows) = (&mut self.trial_rows, &mut self.trial_joint_rows);
+        let joint_change = &mut self.joint_change;
+        let flat_rows = &mut self.flat_rows;
         let (joint_vertex_rows, joint_face_rows) = (&self.joint_vertex_rows, &self.joint_face_rows);
-        let (start_joints, trial_joints) = (&self.start_joints, &mut self.trial_joints);
+        let start_joints = &self.start_joints;
         let joint_jacobian = &mut self.joint_jacobian;
         let projected_skeleton = &mut self.projected_skeleton;
-        let target_jacobian = &self.target_jacobian;
+        let target_jacobian = &mut self.target_jacobian;
+        let (target_blocks, posed_target) = (&self.target_blocks, &self.posed_target);
+        let (vertex_sums, face_sums) = (&mut self.vertex_sums, &mut self.face_sums);
         let chain_jacobian = &mut self.chain_jacobian;
         let system = &mut self.system;
         let rows_target = &self.rows_target;
-        let rows_trial = &mut self.rows_trial;
         let g = &mut self.g;
         let moved = &mut self.moved;
         let moved_for_jacobian = &mut self.moved_for_jacobian;
@@ -267,54 +289,70 @@ impl GreenCageReverser {
                     *m = *c + *d;
                 }
                 normals.apply(moved, g);
-                rows_of(vertex_rows, face_rows, moved, g, rows_trial);
-                rows_of(joint_vertex_rows, joint_face_rows, moved, g, trial_joints);
-                for (t, s) in trial_joints.iter_mut().zip(start_joints) {
-                    *t -= *s;
-                }
-                // K_A ΔA, column by column (the columns are contiguous; each row sums the
-                // joints in the same order as row by row would).
-                row_skeleton.iter_mut().for_each(|s| *s = DVec3::ZERO);
-                for (j, d) in trial_joints.iter().enumerate() {
-                    for (c, value) in d.to_array().into_iter().enumerate() {
-                        if value != 0.0 {
-                            let column = skeleton_rows.col(3 * j + c);
-                            for (i, s) in row_skeleton.iter_mut().enumerate() {
-                                *s += value
-                                    * DVec3::new(
-                                        column[3 * i],
-                                        column[3 * i + 1],
-                                        column[3 * i + 2],
-                                    );
-                            }
-                        }
+                // F_R(C₀ + δ) = φ_R C + ψ_R g and A(C₀ + δ) = Ψ_φ C + Ψ_ψ g as products over
+                // `#· × 3` tables, then K_A ΔA.
+                flatten(moved, flat_moved);
+                flatten(g, flat_g);
+                let x = MatRef::from_row_major_slice(flat_moved, moved.len(), 3);
+                let gx = MatRef::from_row_major_slice(flat_g, g.len(), 3);
+                rows_times(vertex_rows, face_rows, x, gx, trial_rows.as_mut());
+                rows_times(
+                    joint_vertex_rows,
+                    joint_face_rows,
+                    x,
+                    gx,
+                    trial_joint_rows.as_mut(),
+                );
+                for (j, start) in start_joints.iter().enumerate() {
+                    for c in 0..3 {
+                        joint_change[3 * j + c] = trial_joint_rows[(j, c)] - start[c];
                     }
                 }
-                for (i, skeleton) in row_skeleton.iter().enumerate() {
-                    let change = at.posed_rows[i]
-                        + row_linear[i] * (rows_trial[i] - at.rest_rows[i])
-                        + *skeleton
-                        - rows_target[i];
+                faer::linalg::matmul::matmul(
+                    row_skeleton.as_mat_mut(),
+                    Accum::Replace,
+                    skeleton_rows.as_ref(),
+                    MatRef::from_column_major_slice(joint_change, joint_change.len(), 1),
+                    1.0,
+                    Par::Seq,
+                );
+                for (i, rotation) in row_linear.iter().enumerate() {
+                    let trial =
+                        DVec3::new(trial_rows[(i, 0)], trial_rows[(i, 1)], trial_rows[(i, 2)]);
+                    let skeleton = DVec3::new(
+                        row_skeleton[3 * i],
+                        row_skeleton[3 * i + 1],
+                        row_skeleton[3 * i + 2],
+                    );
+                    let change =
+                        at.posed_rows[i] + *rotation * (trial - at.rest_rows[i]) + skeleton
+                            - rows_target[i];
                     flat_rows[3 * i] = change.x;
                     flat_rows[3 * i + 1] = change.y;
                     flat_rows[3 * i + 2] = change.z;
                 }
-                // J_tᵀ r as one product (a row-by-row dot product is one long dependency
-                // chain per entry).
-                target_transpose_times(
-                    target_jacobian,
-                    flat_rows.as_mat(),
-                    flat_gradient.as_mat_mut(),
-                );
-                let mut largest: f64 = 0.0;
+                // J_tᵀ r = φ_Rᵀ r + Σ_f (∂g_f/∂x)ᵀ (ψ_Rᵀ r)_f at C'_t, as two products (a
+                // row-by-row dot product is one long dependency chain per entry) and the faces'
+                // 3 × 3 blocks: the dense J_t would take 0.3 ms to build at every grab.
+                let r = MatRef::from_row_major_slice(flat_rows, row_linear.len(), 3);
+                transpose_times(vertex_rows, r, vertex_sums.as_mut());
+                transpose_times(face_rows, r, face_sums.as_mut());
                 for (k, o) in out.iter_mut().enumerate() {
                     *o = DVec3::new(
-                        flat_gradient[3 * k],
-                        flat_gradient[3 * k + 1],
-                        flat_gradient[3 * k + 2],
+                        vertex_sums[(k, 0)],
+                        vertex_sums[(k, 1)],
+                        vertex_sums[(k, 2)],
                     );
-                    largest = largest.max(o.abs().max_element());
                 }
+                for (f, (triangle, blocks)) in
+                    normals.triangles().iter().zip(target_blocks).enumerate()
+                {
+                    let sum = DVec3::new(face_sums[(f, 0)], face_sums[(f, 1)], face_sums[(f, 2)]);
+                    for (&corner, block) in triangle.iter().zip(blocks) {
+                        out[corner as usize] += block.transpose() * sum;
+                    }
+                }
+                let largest = out.iter().fold(0.0f64, |m, o| m.max(o.abs().max_element()));
                 if largest.is_finite() {
                     largest
                 } else {
@@ -324,6 +362,10 @@ impl GreenCageReverser {
             |delta, out| {
                 for ((m, c), d) in moved_for_jacobian.iter_mut().zip(rest_cage).zip(delta) {
                     *m = *c + *d;
+                }
+                if !target_jacobian_built {
+                    fit.jacobian_into(posed_target, target_jacobian);
+                    target_jacobian_built = true;
                 }
                 fit.jacobian_into(moved_for_jacobian, chain_jacobian);
                 // J_tᵀ K_A (`3#C × 3#J`), only when the solver refactors.
@@ -374,12 +416,30 @@ impl GreenCageReverser {
 /// `rhs` has `3#R` rows. Sequential: the sizes (at most `3#C × 3#R × 3#C`) are too small for
 /// threads to pay.
 fn target_transpose_times(target_jacobian: &Mat<f64>, rhs: MatRef<'_, f64>, out: MatMut<'_, f64>) {
-    faer::linalg::matmul::matmul(
-        out,
-        Accum::Replace,
-        target_jacobian.transpose(),
-        rhs,
-        1.0,
-        Par::Seq,
-    );
+    transpose_times(target_jacobian, rhs, out);
+}
+
+/// `points` (`n`) as an `n × 3` row-major table.
+fn flatten(points: &[DVec3], out: &mut [f64]) {
+    for (p, o) in points.iter().zip(out.chunks_exact_mut(3)) {
+        o.copy_from_slice(&p.to_array());
+    }
+}
+
+/// `out = vertex_rows · x + face_rows · g` (`#rows × 3`), sequential.
+fn rows_times(
+    vertex_rows: &Mat<f64>,
+    face_rows: &Mat<f64>,
+    x: MatRef<'_, f64>,
+    g: MatRef<'_, f64>,
+    mut out: MatMut<'_, f64>,
+) {
+    use faer::linalg::matmul::matmul;
+    matmul(out.as_mut(), Accum::Replace, vertex_rows, x, 1.0, Par::Seq);
+    matmul(out, Accum::Add, face_rows, g, 1.0, Par::Seq);
+}
+
+/// `out = aᵀ · rhs`, sequential.
+fn transpose_times(a: &Mat<f64>, rhs: MatRef<'_, f64>, out: MatMut<'_, f64>) {
+    faer::linalg::matmul::matmul(out, Accum::Replace, a.transpose(), rhs, 1.0, Par::Seq);
 }
