@@ -413,13 +413,20 @@ mod tests {
         }
     }
 
+    /// `s + Σ_c w_c d_c` over one group as the products add it: the group's own chain of fused
+    /// multiply-adds from `w₀·d₀`, added to `s`.
+    fn group_reference(s: f64, w: &[f64], d: &[f64]) -> f64 {
+        let t = (1..w.len()).fold(w[0] * d[0], |t, c| w[c].mul_add(d[c], t));
+        s + t
+    }
+
     #[test]
-    fn every_product_is_one_fused_chain_per_coordinate_in_column_order() {
+    fn every_product_adds_its_groups_as_fused_chains_in_column_order() {
         // The expected values come from `mul_add` in this test's baseline code (libm's
         // correctly rounded fma); `apply` runs the widest tier this CPU has and `apply_rows` its
-        // own dispatch: the same bits prove every tier and both products compute the chain
-        // s ← fma(Φ[i, k], C_k, s) from s = 0 over k in order. 13 columns: a group of eight,
-        // one of four and a single column; f64 and f32 storage.
+        // own dispatch: the same bits prove every tier and both products add the groups of
+        // eight, four and one columns (13 = 8 + 4 + 1) in order as `group_reference`; f64 and
+        // f32 storage.
         let (nv, nc) = (LANE_BLOCK + 77, 13);
         let mut phi = varied(nv, nc, 5);
         let cage: Vec<DVec3> = (0..nc)
@@ -437,14 +444,15 @@ mod tests {
             }
             let expected: Vec<DVec3> = (0..nv)
                 .map(|i| {
-                    (0..nc).fold(DVec3::ZERO, |s, k| {
-                        let w = phi.get(i, k);
-                        DVec3::new(
-                            w.mul_add(cage[k].x, s.x),
-                            w.mul_add(cage[k].y, s.y),
-                            w.mul_add(cage[k].z, s.z),
-                        )
-                    })
+                    let mut s = [0.0; 3];
+                    for group in [0..8, 8..12, 12..13] {
+                        let w: Vec<f64> = group.clone().map(|k| phi.get(i, k)).collect();
+                        for (a, sum) in s.iter_mut().enumerate() {
+                            let d: Vec<f64> = group.clone().map(|k| cage[k][a]).collect();
+                            *sum = group_reference(*sum, &w, &d);
+                        }
+                    }
+                    DVec3::from_array(s)
                 })
                 .collect();
             let mut out = vec![DVec3::NAN; nv];

@@ -1,14 +1,22 @@
 //! The per-frame column products of Φ: `out = [out +] Σ_k Φ[:, k]·d_k` over row tiles, and the
 //! same sums for chosen rows (bit for bit).
 //!
-//! **Arithmetic.** Each output coordinate is one chain of fused multiply-adds over the terms in
-//! order, `s ← fma(Φ[i, k], d_k, s)` from `s` = 0 (or the point given), in f64: `mul_add` is
-//! correctly rounded on every machine, so the tiled product, the rows and every instruction-set
-//! tier give the same bits, and each term adds one rounding instead of a product's and a sum's.
-//! On the tiers with fused multiply-add the chain also costs one instruction per term: the f64
-//! product at 133k × (58 + 112) took 6.6–6.8 ms with separate products and pairwise sums and
-//! 6.2–6.4 ms fused (`grab_bench 3 exact green`, alternating builds). A CPU without FMA (x86-64
-//! before 2013) runs the baseline body, where `mul_add` is a libm call per term: correct, slow.
+//! **Arithmetic.** The terms go in groups of eight columns (then four, then one at a time:
+//! [`Groups`]); each coordinate adds a group as `s + t`, `t` the group's own chain of fused
+//! multiply-adds `t = w₀·d₀`, `t ← fma(w_c, d_c, t)`, in f64 from `s` = 0 (or the point given):
+//! [`add_group`]. `mul_add` is correctly rounded on every machine, so the tiled product, the
+//! rows and every instruction-set tier give the same bits. Measured at 133k × (58 + 112)
+//! (`grab_bench 3 exact green`, alternating builds), M(C) took:
+//! - 6.4–6.5 ms with separate products and a pairwise sum per group (16 operations per group
+//!   of eight and coordinate);
+//! - 6.6–6.8 ms with fused pairs summed pairwise (12);
+//! - 5.9–6.1 ms with one chain of fused multiply-adds over all the columns (8), whose round-off
+//!   grows with the 170 terms of the chain;
+//! - 6.0–6.3 ms with a chain per group (9, kept): the round-off of a chain of eight per group,
+//!   then one addition per group as before.
+//!
+//! A CPU without FMA (x86-64 before 2013) runs the baseline body, where `mul_add` is a libm
+//! call: correct, slow.
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -118,11 +126,13 @@ fn tile_product<'a, W, P, I>(
     }
     let columns = |k: usize| &column(k)[start..start + len];
     for terms in parts {
-        for_each_group(terms.clone(), |group| match group {
-            Group::Eight(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
-            Group::Four(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
-            Group::One((k, d)) => sums.add_columns([columns(k)], [d]),
-        });
+        for group in Groups::new(terms.clone()) {
+            match group {
+                Group::Eight(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
+                Group::Four(g) => sums.add_columns(g.map(|(k, _)| columns(k)), g.map(|t| t.1)),
+                Group::One((k, d)) => sums.add_columns([columns(k)], [d]),
+            }
+        }
     }
     sums.store(tile_out);
 }
@@ -155,9 +165,9 @@ impl Iterator for OffsetTerms<'_> {
 
 simd_dispatch! {
     /// Rows `rows` of `[out +] Σ column(k)·d_k` over `terms` into `out` (`rows.len()`, holding
-    /// those rows of the `out` of [`accumulate_columns`] when `add_to_out`): the same chains of
-    /// fused multiply-adds in the same order as [`accumulate_columns`], so the same bits as those
-    /// rows of its output. Term by term over all the rows (independent chains side by side).
+    /// those rows of the `out` of [`accumulate_columns`] when `add_to_out`): the same groups and
+    /// operations in the same order as [`accumulate_columns`], so the same bits as those rows of
+    /// its output. Group by group over all the rows (independent sums side by side).
     /// O(#rows · #terms).
     pub(super) fn rows_of_columns['a, W: Weight + 'a, I: Iterator<Item = (usize, DVec3)> + Clone](
         column: &dyn Fn(usize) -> &'a [W],
@@ -182,56 +192,132 @@ fn rows_of_columns_generic<'a, W: Weight + 'a, I: Iterator<Item = (usize, DVec3)
     if !add_to_out {
         out.fill(DVec3::ZERO);
     }
-    for (k, d) in terms {
-        let weights = column(k);
-        for (o, &row) in out.iter_mut().zip(rows) {
-            let w = weights[row].widen();
-            *o = DVec3::new(
-                w.mul_add(d.x, o.x),
-                w.mul_add(d.y, o.y),
-                w.mul_add(d.z, o.z),
-            );
+    for group in Groups::new(terms) {
+        match group {
+            Group::Eight(g) => add_group_to_rows(column, g, rows, out),
+            Group::Four(g) => add_group_to_rows(column, g, rows, out),
+            Group::One(g) => add_group_to_rows(column, [g], rows, out),
         }
     }
 }
 
+/// One group of [`rows_of_columns`] over all its rows (independent sums side by side).
+#[inline(always)]
+fn add_group_to_rows<'a, W: Weight + 'a, const N: usize>(
+    column: &dyn Fn(usize) -> &'a [W],
+    group: [(usize, DVec3); N],
+    rows: &[usize],
+    out: &mut [DVec3],
+) {
+    let mut columns: [&[W]; N] = [&[]; N];
+    let (mut dx, mut dy, mut dz) = ([0.0; N], [0.0; N], [0.0; N]);
+    let mut c = 0;
+    while c < N {
+        columns[c] = column(group[c].0);
+        (dx[c], dy[c], dz[c]) = (group[c].1.x, group[c].1.y, group[c].1.z);
+        c += 1;
+    }
+    for (o, &row) in out.iter_mut().zip(rows) {
+        let mut w = [0.0; N];
+        let mut c = 0;
+        while c < N {
+            w[c] = columns[c][row].widen();
+            c += 1;
+        }
+        *o = DVec3::new(
+            add_group(o.x, &w, &dx),
+            add_group(o.y, &w, &dy),
+            add_group(o.z, &w, &dz),
+        );
+    }
+}
+
+/// `s` plus the group `Σ_c w_c d_c` (`N` = 1, 4 or 8): `s + t` with the group's own chain
+/// `t = w₀·d₀`, `t ← fma(w_c, d_c, t)` for c = 1..N (see the module docs). A `while` loop, no
+/// closure.
+#[inline(always)]
+fn add_group<const N: usize>(s: f64, w: &[f64; N], d: &[f64; N]) -> f64 {
+    let mut t = w[0] * d[0];
+    let mut c = 1;
+    while c < N {
+        t = w[c].mul_add(d[c], t);
+        c += 1;
+    }
+    s + t
+}
+
 /// Columns of one pass over the tile sums: eight while eight remain, then four if four remain,
-/// then one at a time (58 cage columns: 7 × 8 + 2). The grouping changes how often the sums are
-/// loaded and stored, not the chains: any grouping gives the same bits.
+/// then one at a time (58 cage columns: 7 × 8 + 2). Both products group the same way, which
+/// their bits depend on ([`add_group`]).
 enum Group {
     Eight([(usize, DVec3); 8]),
     Four([(usize, DVec3); 4]),
     One((usize, DVec3)),
 }
 
-/// Calls `f` on the groups of `terms` in order (the order both products follow).
-#[inline(always)]
-fn for_each_group<I: Iterator<Item = (usize, DVec3)>>(mut terms: I, mut f: impl FnMut(Group)) {
-    let mut pending = [(0usize, DVec3::ZERO); 8];
-    loop {
-        let mut n = 0;
-        while n < 8 {
-            match terms.next() {
-                Some(term) => {
-                    pending[n] = term;
-                    n += 1;
+/// The groups of `terms` in order (the order both products follow); an iterator, so that the
+/// dispatched bodies loop over it with no closure.
+struct Groups<I> {
+    terms: I,
+    /// The last, short read of the terms (fewer than eight), handed on from `next_left`.
+    left: [(usize, DVec3); 8],
+    left_len: usize,
+    next_left: usize,
+    done: bool,
+}
+
+impl<I: Iterator<Item = (usize, DVec3)>> Groups<I> {
+    #[inline(always)]
+    fn new(terms: I) -> Self {
+        Self {
+            terms,
+            left: [(0, DVec3::ZERO); 8],
+            left_len: 0,
+            next_left: 0,
+            done: false,
+        }
+    }
+}
+
+impl<I: Iterator<Item = (usize, DVec3)>> Iterator for Groups<I> {
+    type Item = Group;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<Group> {
+        if !self.done {
+            let mut pending = [(0usize, DVec3::ZERO); 8];
+            let mut n = 0;
+            while n < 8 {
+                match self.terms.next() {
+                    Some(term) => {
+                        pending[n] = term;
+                        n += 1;
+                    }
+                    None => break,
                 }
-                None => break,
+            }
+            if n == 8 {
+                return Some(Group::Eight(pending));
+            }
+            (self.done, self.left, self.left_len) = (true, pending, n);
+        }
+        let (left, i) = (&self.left, self.next_left);
+        match self.left_len - i {
+            0 => None,
+            4.. => {
+                self.next_left += 4;
+                Some(Group::Four([
+                    left[i],
+                    left[i + 1],
+                    left[i + 2],
+                    left[i + 3],
+                ]))
+            }
+            1..=3 => {
+                self.next_left += 1;
+                Some(Group::One(left[i]))
             }
         }
-        if n == 8 {
-            f(Group::Eight(pending));
-            continue;
-        }
-        let mut rest = &pending[..n];
-        if rest.len() >= 4 {
-            f(Group::Four([rest[0], rest[1], rest[2], rest[3]]));
-            rest = &rest[4..];
-        }
-        for &term in rest {
-            f(Group::One(term));
-        }
-        return;
     }
 }
 
@@ -315,17 +401,17 @@ impl TileSums {
     }
 
     simd_dispatch! {
-        /// `sums[i] ← fma(columns[c][i], d_c, sums[i])` for c in order, over a group of columns
-        /// of equal length (eight per pass: the traffic of the sums, not of Φ, bounds the
-        /// product; four then one at a time for the rest).
+        /// `sums[i] = add_group(sums[i], columns[·][i], d)` over a group of columns of equal
+        /// length (eight per pass: the traffic of the sums, not of Φ, bounds the product; four
+        /// then one at a time for the rest).
         fn add_columns[W: Weight, const N: usize](&mut self, columns: [&[W]; N], d: [DVec3; N])
             => Self::add_columns_generic;
         avx512f: add_columns_avx512;
         avx2_fma: add_columns_avx2;
     }
 
-    /// The chains of [`rows_of_columns`], vectorised over the points (a `while` loop with no
-    /// closure: `coords/mvc_lanes.rs`).
+    /// [`add_group`] vectorised over the points, as [`rows_of_columns`] adds it row by row (a
+    /// `while` loop with no closure: `coords/mvc_lanes.rs`).
     #[inline(always)]
     fn add_columns_generic<W: Weight, const N: usize>(
         &mut self,
@@ -340,18 +426,23 @@ impl TileSums {
             c[q] = &columns[q][..n];
             q += 1;
         }
+        let (mut dx, mut dy, mut dz) = ([0.0; N], [0.0; N], [0.0; N]);
+        let mut q = 0;
+        while q < N {
+            (dx[q], dy[q], dz[q]) = (d[q].x, d[q].y, d[q].z);
+            q += 1;
+        }
         let (x, y, z) = (&mut self.x[..n], &mut self.y[..n], &mut self.z[..n]);
         for i in 0..n {
-            let (mut sx, mut sy, mut sz) = (x[i], y[i], z[i]);
+            let mut w = [0.0; N];
             let mut q = 0;
             while q < N {
-                let w = c[q][i].widen();
-                sx = w.mul_add(d[q].x, sx);
-                sy = w.mul_add(d[q].y, sy);
-                sz = w.mul_add(d[q].z, sz);
+                w[q] = c[q][i].widen();
                 q += 1;
             }
-            (x[i], y[i], z[i]) = (sx, sy, sz);
+            x[i] = add_group(x[i], &w, &dx);
+            y[i] = add_group(y[i], &w, &dy);
+            z[i] = add_group(z[i], &w, &dz);
         }
     }
 }

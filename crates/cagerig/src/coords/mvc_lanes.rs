@@ -306,7 +306,12 @@ mod tests {
             (
                 "cage_coords/column_products.rs",
                 include_str!("../cage_coords/column_products.rs"),
-                &["add_columns_generic", "rows_of_columns_generic"],
+                &[
+                    "add_columns_generic",
+                    "rows_of_columns_generic",
+                    "add_group_to_rows",
+                    "add_group",
+                ],
             ),
             (
                 "mvc_batch.rs",
