@@ -317,12 +317,13 @@ impl CageCoords {
     ///
     /// Each thread takes [`column_products::ROW_BLOCK`] rows and splits them into
     /// [`column_products::LANE_BLOCK`]-row tiles whose x, y and z sums live in three
-    /// structure-of-arrays accumulators (in L1/L2), so the inner loop is vectorised
-    /// multiply-adds over rows; columns are taken eight per pass over the sums (an eighth of the
-    /// accumulator traffic). The sums' load and store traffic, not the reading of Φ, bounds it on
-    /// the project machine (its two cores read 72 GB/s): eight columns per pass instead of four
-    /// took the f64 product at 532k × 58 from 7.4 to ≈ 6 ms; the point-by-point `DVec3` loop
-    /// took 7.3 ms at 133k × 58.
+    /// structure-of-arrays accumulators (in L1/L2), so the inner loop is vectorised fused
+    /// multiply-adds over rows (the arithmetic: `column_products`); columns are taken eight per
+    /// pass over the sums (an eighth of the accumulator traffic). Eight columns per pass
+    /// instead of four took the f64 product at 532k × 58 from 7.4 to ≈ 6 ms on an earlier
+    /// machine; the point-by-point `DVec3` loop took 7.3 ms at 133k × 58. On today's 2-core
+    /// host each core reads about 15 GB/s (one thread takes twice as long as two): the product
+    /// is bound by the memory accesses each core keeps in flight.
     fn accumulate<I>(&self, parts: &[I], add_to_out: bool, out: &mut [DVec3])
     where
         I: Iterator<Item = (usize, DVec3)> + Clone + Send + Sync,

@@ -19,7 +19,7 @@ use crate::error::RigError;
 /// A chord step that leaves more than this fraction of the residual triggers a refactorisation.
 ///
 /// A new Jacobian costs CageRev `3#C × 3#R × 3#C` products (1.3 ms on the Arm's 58-vertex cage,
-/// where a residual costs about 0.1 ms), so chord steps that each cut the residual 4× are the
+/// where a residual costs about 25 µs), so chord steps that each cut the residual 4× are the
 /// cheaper way to round-off: the factors of the previous grab of a drag, or from across a small
 /// skeleton edit, cut it 8–20× (measured, `docs/green-coordinates.md`).
 pub const CHORD_RATE: f64 = 0.25;
