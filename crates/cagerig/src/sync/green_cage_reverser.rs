@@ -369,7 +369,7 @@ impl GreenCageReverser {
                 }
                 fit.jacobian_into(moved_for_jacobian, chain_jacobian);
                 // J_tᵀ K_A (`3#C × 3#J`), only when the solver refactors.
-                target_transpose_times(
+                transpose_times(
                     target_jacobian,
                     skeleton_rows.as_ref(),
                     projected_skeleton.as_mut(),
@@ -385,7 +385,7 @@ impl GreenCageReverser {
                         column[3 * i + 2] = w.z;
                     }
                 }
-                target_transpose_times(target_jacobian, chain_jacobian.as_ref(), system.as_mut());
+                transpose_times(target_jacobian, chain_jacobian.as_ref(), system.as_mut());
                 rows_jacobian_into(
                     joint_vertex_rows,
                     joint_face_rows,
@@ -412,13 +412,6 @@ impl GreenCageReverser {
     }
 }
 
-/// `out = J_tᵀ · rhs`: J_t is `target_jacobian` (`3#R × 3#C`),
-/// `rhs` has `3#R` rows. Sequential: the sizes (at most `3#C × 3#R × 3#C`) are too small for
-/// threads to pay.
-fn target_transpose_times(target_jacobian: &Mat<f64>, rhs: MatRef<'_, f64>, out: MatMut<'_, f64>) {
-    transpose_times(target_jacobian, rhs, out);
-}
-
 /// `points` (`n`) as an `n × 3` row-major table.
 fn flatten(points: &[DVec3], out: &mut [f64]) {
     for (p, o) in points.iter().zip(out.chunks_exact_mut(3)) {
@@ -439,7 +432,8 @@ fn rows_times(
     matmul(out, Accum::Add, face_rows, g, 1.0, Par::Seq);
 }
 
-/// `out = aᵀ · rhs`, sequential.
+/// `out = aᵀ · rhs`, sequential: the sizes (at most `3#C × 3#R × 3#C`) are too small for
+/// threads to pay.
 fn transpose_times(a: &Mat<f64>, rhs: MatRef<'_, f64>, out: MatMut<'_, f64>) {
     faer::linalg::matmul::matmul(out, Accum::Replace, a.transpose(), rhs, 1.0, Par::Seq);
 }
