@@ -51,9 +51,6 @@ pub(crate) struct RowBlock {
     ncols: usize,
 }
 
-/// A write of this many values is one vector store instead of a `memmove` call.
-const SHORT_WRITE: usize = 8;
-
 impl RowBlock {
     /// # Safety
     /// For every column `k < ncols`, the `nrows` values from `base + k · col_stride` must be
@@ -83,10 +80,29 @@ impl RowBlock {
         // SAFETY: in bounds (checked above) of memory the constructor's caller vouched for.
         unsafe {
             let target = self.base.add(col * self.col_stride + row);
-            if values.len() == SHORT_WRITE {
-                std::ptr::copy_nonoverlapping(values.as_ptr(), target, SHORT_WRITE);
+            std::ptr::copy_nonoverlapping(values.as_ptr(), target, values.len());
+        }
+    }
+
+    /// Writes the first `count` of a batch's `lanes` into column `col` from row `row` on: a
+    /// whole batch (`count == 8`, every batch but a block's last) as one fixed-size store.
+    ///
+    /// A short batch's values are stored one by one with volatile writes: with a copy of
+    /// run-time length in that branch, LLVM merged the two branches into one `memcpy` call per
+    /// column, a call in the kernels' hot loops (2026-12-04, `perf`).
+    #[inline(always)]
+    pub(crate) fn write_lanes(&mut self, row: usize, col: usize, lanes: &[f64; 8], count: usize) {
+        assert!(col < self.ncols && count <= 8 && row + count <= self.nrows);
+        // SAFETY: in bounds (checked above) of memory the constructor's caller vouched for;
+        // `write_unaligned` and `write_volatile` of f64s need no alignment beyond f64's.
+        unsafe {
+            let target = self.base.add(col * self.col_stride + row);
+            if count == 8 {
+                target.cast::<[f64; 8]>().write_unaligned(*lanes);
             } else {
-                std::ptr::copy_nonoverlapping(values.as_ptr(), target, values.len());
+                for (i, &value) in lanes[..count].iter().enumerate() {
+                    target.add(i).write_volatile(value);
+                }
             }
         }
     }

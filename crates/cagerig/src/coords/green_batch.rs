@@ -10,11 +10,16 @@
 //!   `f = ∫_edge ds/R`, one logarithm ([`ln_of_quotient`]); it does not depend on the direction
 //!   of travel, so the two faces of an edge share it (the per-point code takes one per face and
 //!   edge). Beside the edge (foot of η on the segment) the distance² to its line is `|a_a × e|²`,
-//!   which has no cancellation (the per-point code's `(R − s)(R + s)` loses `(R/d)²` ulp);
-//! - per face t: the solid angle Ω (one arctangent fraction, [`angle_fraction`], one reciprocal),
-//!   `h = a₀·n`, `ψ_t = (Σ_l (a_l·m_l) f_l − |h||Ω|)/4π` written straight into ψ's column, and
+//!   which has no cancellation (the per-point code's `(R − s)(R + s)` loses `(R/d)²` ulp). Also
+//!   `a_a·a_b`, which both faces' solid angles use;
+//! - per face t: `h = a₀·n`, the solid angle Ω (one arctangent fraction, [`angle_fraction`], one
+//!   reciprocal) with Van Oosterom & Strackee's triple product taken as `a₀·(a₁ × a₂) = 2A h`
+//!   (no cross product, and an error of ε·2A|a₀| instead of ε|a₀||a₁||a₂|),
+//!   `ψ_t = (Σ_l (a_l·m_l) f_l − |h||Ω|)/4π` written straight into ψ's column, and
 //!   `φ_i += (Γ_i(ρ) Ω − h Σ_l (∇Γ_i·m_l) f_l)/4π` with `Γ_i(ρ) = −∇Γ_i·a_{i+1}` (the foot ρ's
-//!   barycentric coordinate) and the 3 × 3 products `∇Γ_i·m_l` precomputed per face.
+//!   barycentric coordinate) and the products `∇Γ_i·m_l/4π` precomputed per face, for corners 0
+//!   and 1; corner 2's follow from the partition of unity (`Γ₂ = 1 − Γ₀ − Γ₁`,
+//!   `∇Γ₂ = −∇Γ₀ − ∇Γ₁`).
 //!
 //! The lane arithmetic is a type parameter ([`LaneMath`]), as in MVC's kernel: the baseline is
 //! plain IEEE; the AVX2 + FMA tier fuses multiplies and adds; the AVX-512 tier also takes its
@@ -23,7 +28,9 @@
 //! edge's length from an edge, where a solid angle is conditioned to ~ε·size/d, to 1e-9). One
 //! machine always runs one tier, so its results are reproducible there. Fusing and the
 //! reciprocal took the binding at 133k from 151 to 142 ms, and the edges computed ahead of the
-//! faces to 137–139 ms (`green_bind_bench 3`, 2026-12-03).
+//! faces to 137–139 ms (`green_bind_bench 3`, 2026-12-03); the triple product as 2A h, the
+//! dot products per edge, AVX-512's `vgetmantpd`/`vgetexppd` in the logarithm and corner 2 from
+//! the partition of unity from 121 to 107 ms (2026-12-04, fastest of four alternating runs).
 //!
 //! A lane is recomputed by the per-point closed forms ([`GreenTriangle::terms`], whole row) when
 //! its point lies within [`ON_PLANE`] (relative) of a face's plane or of a cage vertex, where
@@ -35,7 +42,7 @@ use super::green_triangle::{GreenTriangle, INV_FOUR_PI, ON_PLANE};
 use super::lane_functions::{angle_fraction, ln_of_quotient};
 #[cfg(target_arch = "x86_64")]
 use super::mvc_lanes::{Avx512Math, FusedMath};
-use super::mvc_lanes::{LANES, LaneMath, Lanes, Mask, PlainMath, V8, dot, not, or, per_lane};
+use super::mvc_lanes::{LANES, LaneMath, Lanes, Mask, PlainMath, V8, not, or, per_lane};
 use crate::row_blocks::RowBlock;
 use crate::simd_dispatch::simd_dispatch;
 
@@ -60,12 +67,15 @@ struct PlanFace {
     edges: [u32; 3],
     /// Unit outward normal n.
     normal: [f64; 3],
+    /// Twice its area, 2A = |(v₁ − v₀) × (v₂ − v₀)|.
+    twice_area: f64,
     /// Per local edge l: the outward in-plane normal m_l.
     edge_normals: [[f64; 3]; 3],
-    /// Per corner i: the in-plane gradient ∇Γ_i of its hat function.
-    hat_gradients: [[f64; 3]; 3],
-    /// `[i][l]`: ∇Γ_i · m_l.
-    hat_slopes: [[f64; 3]; 3],
+    /// Per corner i = 0, 1: −∇Γ_i/4π, with ∇Γ_i the in-plane gradient of its hat function
+    /// (corner 2's follows from Σ_i Γ_i = 1).
+    scaled_hat_gradients: [[f64; 3]; 2],
+    /// `[i][l]` for i = 0, 1: ∇Γ_i · m_l / 4π (corner 2's are minus their sum: Σ_i ∇Γ_i = 0).
+    scaled_hat_slopes: [[f64; 3]; 2],
 }
 
 /// What the batch kernel needs of a cage, computed once: the faces in cage order, the edges in
@@ -118,11 +128,15 @@ impl<'a> GreenBatchPlan<'a> {
                 vertices: *tri,
                 edges: local_edges,
                 normal: frame.normal.to_array(),
+                twice_area: frame.twice_area,
                 edge_normals: frame.edge_normals.map(|m| m.to_array()),
-                hat_gradients: frame.hat_gradients.map(|g| g.to_array()),
-                hat_slopes: frame
-                    .hat_gradients
-                    .map(|g| frame.edge_normals.map(|m| g.dot(m))),
+                scaled_hat_gradients: [0, 1]
+                    .map(|i| (-frame.hat_gradients[i] * INV_FOUR_PI).to_array()),
+                scaled_hat_slopes: [0, 1].map(|i| {
+                    frame
+                        .edge_normals
+                        .map(|m| frame.hat_gradients[i].dot(m) * INV_FOUR_PI)
+                }),
             });
         }
         Self {
@@ -148,6 +162,8 @@ pub(crate) struct GreenBatchScratch {
     vertex_sums: Vec<Lanes>,
     /// Per edge (plan order): ∫_edge ds/R, per lane.
     edge_integrals: Vec<Lanes>,
+    /// Per edge (a, b) (plan order): a_a · a_b, per lane.
+    edge_dots: Vec<Lanes>,
     /// One row of φ (`#C`) and of ψ (`#F`) for a recomputed lane.
     row_vertex: Vec<f64>,
     row_face: Vec<f64>,
@@ -169,6 +185,7 @@ impl GreenBatchScratch {
             length: per_vertex.clone(),
             vertex_sums: per_vertex,
             edge_integrals: vec![[0.0; LANES]; plan.edges.len()],
+            edge_dots: vec![[0.0; LANES]; plan.edges.len()],
             row_vertex: vec![0.0; plan.positions.len()],
             row_face: vec![0.0; plan.triangles.len()],
         }
@@ -217,10 +234,10 @@ fn evaluate_green_rows_generic<M: LaneMath>(
         for (k, sums) in scratch.vertex_sums.iter().enumerate() {
             let value = V8(*sums);
             check = check + value * 0.0;
-            write_lanes(vertex_out, start, k, &value.0, count);
+            vertex_out.write_lanes(start, k, &value.0, count);
         }
         for column in &plan.degenerate_columns {
-            write_lanes(face_out, start, *column as usize, &[0.0; LANES], count);
+            face_out.write_lanes(start, *column as usize, &[0.0; LANES], count);
         }
         let mut finite = Mask::from_fn(|l| check.0[l] == 0.0);
         for (l, &point) in chunk.iter().enumerate() {
@@ -240,17 +257,6 @@ fn evaluate_green_rows_generic<M: LaneMath>(
         }
     }
     first_non_finite
-}
-
-/// The first `count` lanes of `values` into column `column` of `out` from row `start` on: a whole
-/// batch as one store of a fixed size (a slice of run-time length becomes a `memcpy` call).
-#[inline(always)]
-fn write_lanes(out: &mut RowBlock, start: usize, column: usize, values: &Lanes, count: usize) {
-    if count == LANES {
-        out.write(start, column, values);
-    } else {
-        out.write(start, column, &values[..count]);
-    }
 }
 
 /// One row of Green coordinates by the per-point closed forms into `scratch.row_vertex` and
@@ -298,7 +304,9 @@ fn evaluate_batch<M: LaneMath>(
     let mut recompute = Mask([0; LANES]);
     let mut check = splat(0.0);
     for (e, edge) in plan.edges.iter().enumerate() {
-        scratch.edge_integrals[e] = edge_integral::<M>(edge, scratch).0;
+        let (integral, ends_dot) = edge_integral::<M>(edge, scratch);
+        scratch.edge_integrals[e] = integral.0;
+        scratch.edge_dots[e] = ends_dot.0;
     }
     for face in &plan.faces {
         let v = face.vertices;
@@ -324,21 +332,20 @@ fn evaluate_batch<M: LaneMath>(
             ),
         );
         let cube = lengths[0] * lengths[1] * lengths[2];
-        let cross = [
-            M::mul_add(a[1][1], a[2][2], -(a[1][2] * a[2][1])),
-            M::mul_add(a[1][2], a[2][0], -(a[1][0] * a[2][2])),
-            M::mul_add(a[1][0], a[2][1], -(a[1][1] * a[2][0])),
+        let h = dot_constant::<M>(&a[0], &face.normal);
+        // Van Oosterom & Strackee: tan(Ω/2) = numerator / denominator, with the triple product
+        // a₀·(a₁ × a₂) = a₀·((v₁ − v₀) × (v₂ − v₀)) = 2A h (its error ε·2A|a₀| instead of
+        // ε|a₀||a₁||a₂|) and the corners' dot products a_i·a_j from their edges.
+        let numerator = h * face.twice_area;
+        let dots = [
+            V8(scratch.edge_dots[face.edges[0] as usize]),
+            V8(scratch.edge_dots[face.edges[1] as usize]),
+            V8(scratch.edge_dots[face.edges[2] as usize]),
         ];
-        // Van Oosterom & Strackee: tan(Ω/2) = numerator / denominator.
-        let numerator = dot::<M>(&a[0], &cross);
         let denominator = M::mul_add(
-            dot::<M>(&a[0], &a[1]),
+            dots[0],
             lengths[2],
-            M::mul_add(
-                dot::<M>(&a[0], &a[2]),
-                lengths[1],
-                M::mul_add(dot::<M>(&a[1], &a[2]), lengths[0], cube),
-            ),
+            M::mul_add(dots[2], lengths[1], M::mul_add(dots[1], lengths[0], cube)),
         );
         let on_plane = not(numerator.abs().gt(cube * ON_PLANE));
         recompute = or(recompute, or(near_corner, on_plane));
@@ -353,7 +360,6 @@ fn evaluate_batch<M: LaneMath>(
             -(half_solid_angle * 2.0),
             half_solid_angle * 2.0,
         );
-        let h = dot_constant::<M>(&a[0], &face.normal);
         let integrals = [
             V8(scratch.edge_integrals[face.edges[0] as usize]),
             V8(scratch.edge_integrals[face.edges[1] as usize]),
@@ -370,15 +376,26 @@ fn evaluate_batch<M: LaneMath>(
         );
         let psi = M::mul_add(-h.abs(), solid_angle.abs(), edge_sum) * INV_FOUR_PI;
         check = check + psi * 0.0;
-        write_lanes(face_out, start, face.column as usize, &psi.0, count);
-        for (i, &vertex) in idx.iter().enumerate() {
-            let next = (i + 1) % 3;
-            let hat_at_foot = -dot_constant::<M>(&a[next], &face.hat_gradients[i]);
-            let slope = dot_constant::<M>(&integrals, &face.hat_slopes[i]);
-            let part = M::mul_add(hat_at_foot, solid_angle, -(h * slope));
-            let sums = &mut scratch.vertex_sums[vertex];
-            *sums = M::mul_add(part, splat(INV_FOUR_PI), V8(*sums)).0;
-        }
+        face_out.write_lanes(start, face.column as usize, &psi.0, count);
+        // φ_i += (Γ_i(ρ) Ω − h ∇Γ_i·Σ_l m_l f_l)/4π, with Γ_i(ρ) = −∇Γ_i·a_{i+1}; corner 2's
+        // terms from the partition of unity (Γ₂ = 1 − Γ₀ − Γ₁, ∇Γ₂ = −∇Γ₀ − ∇Γ₁).
+        let hats = [
+            dot_constant::<M>(&a[1], &face.scaled_hat_gradients[0]),
+            dot_constant::<M>(&a[2], &face.scaled_hat_gradients[1]),
+        ];
+        let slopes = [
+            dot_constant::<M>(&integrals, &face.scaled_hat_slopes[0]),
+            dot_constant::<M>(&integrals, &face.scaled_hat_slopes[1]),
+        ];
+        let minus_h = -h;
+        let sums = &mut scratch.vertex_sums;
+        let sum = M::mul_add(hats[0], solid_angle, V8(sums[idx[0]]));
+        sums[idx[0]] = M::mul_add(minus_h, slopes[0], sum).0;
+        let sum = M::mul_add(hats[1], solid_angle, V8(sums[idx[1]]));
+        sums[idx[1]] = M::mul_add(minus_h, slopes[1], sum).0;
+        let last_hat = (splat(INV_FOUR_PI) - hats[0]) - hats[1];
+        let sum = M::mul_add(last_hat, solid_angle, V8(sums[idx[2]]));
+        sums[idx[2]] = M::mul_add(h, slopes[0] + slopes[1], sum).0;
     }
     (recompute, check)
 }
@@ -409,7 +426,7 @@ fn inverse_power_of_two(x: V8) -> V8 {
 /// if s₁ < 0, and beside the segment `ln((R₁ + s₁)(R₀ − s₀)/d²)` with d² = |a₀ × e|², the
 /// distance² to the line; 0 on the segment itself (d² ≤ the smallest normal).
 #[inline(always)]
-fn edge_integral<M: LaneMath>(edge: &PlanEdge, scratch: &GreenBatchScratch) -> V8 {
+fn edge_integral<M: LaneMath>(edge: &PlanEdge, scratch: &GreenBatchScratch) -> (V8, V8) {
     let [a, b] = [edge.ends[0] as usize, edge.ends[1] as usize];
     let e = edge.direction;
     let (ax, ay, az) = (
@@ -443,7 +460,11 @@ fn edge_integral<M: LaneMath>(edge: &PlanEdge, scratch: &GreenBatchScratch) -> V
         or(before, after),
         distance_sq.gt(V8::splat(f64::MIN_POSITIVE)),
     ));
-    V8::select(on_segment, zero, ln_of_quotient::<M>(num, den))
+    let ends_dot = M::mul_add(ax, bx, M::mul_add(ay, by, az * bz));
+    (
+        V8::select(on_segment, zero, ln_of_quotient::<M>(num, den)),
+        ends_dot,
+    )
 }
 
 #[cfg(test)]

@@ -48,7 +48,7 @@ pub struct TriangleGreenTerms {
 pub struct GreenTriangle {
     corners: [DVec3; 3],
     pub(super) normal: DVec3,
-    twice_area: f64,
+    pub(super) twice_area: f64,
     edge_directions: [DVec3; 3],
     pub(super) edge_normals: [DVec3; 3],
     pub(super) hat_gradients: [DVec3; 3],

@@ -90,7 +90,7 @@ const LN_2_LOW: f64 = 1.908_214_929_270_587_7e-10;
 /// The significand in [1, 2) and the unbiased binary exponent (as an f64, exactly) of each lane
 /// of `x` (positive normal numbers; other lanes give garbage): bit operations only.
 #[inline(always)]
-fn significand_and_exponent(x: V8) -> (V8, V8) {
+pub(super) fn significand_and_exponent(x: V8) -> (V8, V8) {
     const SIGNIFICAND: u64 = (1 << 52) - 1;
     const ONE: u64 = 0x3ff0_0000_0000_0000;
     // 2⁵² + b as bits is the f64 2⁵² + b for b < 2⁵²: the biased exponent b without an
@@ -117,8 +117,8 @@ fn significand_and_exponent(x: V8) -> (V8, V8) {
 #[inline(always)]
 pub(super) fn ln_of_quotient<M: LaneMath>(num: V8, den: V8) -> V8 {
     use std::f64::consts::SQRT_2;
-    let (a, p) = significand_and_exponent(num);
-    let (b, q) = significand_and_exponent(den);
+    let (a, p) = M::significand_and_exponent(num);
+    let (b, q) = M::significand_and_exponent(den);
     let exponent = p - q;
     let high = a.gt(b * SQRT_2);
     let low = b.gt(a * SQRT_2);
@@ -145,7 +145,7 @@ pub(super) fn ln_of_quotient<M: LaneMath>(num: V8, den: V8) -> V8 {
 
 #[cfg(test)]
 mod tests {
-    use super::super::mvc_lanes::PlainMath;
+    use super::super::mvc_lanes::{LaneMath, PlainMath};
     use super::*;
 
     fn ln_lanes(num: [f64; 8], den: [f64; 8]) -> [f64; 8] {
@@ -203,6 +203,62 @@ mod tests {
         let big = ln_lanes([1e300; 8], [1e-300; 8])[0];
         assert!((big - 600.0 * 10f64.ln()).abs() < 1e-12, "{big}");
         assert!((ln_lanes([2.0; 8], [1.0; 8])[0] - std::f64::consts::LN_2).abs() < 2e-16);
+    }
+
+    /// Every tier splits a positive normal number into the same significand in [1, 2) and
+    /// exponent, exactly (AVX-512's `vgetmantpd` / `vgetexppd` against the bit operations).
+    #[test]
+    fn significand_and_exponent_are_exact_on_every_tier() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut values = vec![
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            1.0,
+            2.0,
+            0.5,
+            1.5,
+            std::f64::consts::SQRT_2,
+            1.0 - f64::EPSILON / 2.0,
+            3.0e-300,
+            7.0e250,
+        ];
+        for _ in 0..4000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            // Random bits with the sign cleared and a normal exponent.
+            let exponent = 1 + (state >> 52) % 2046;
+            values.push(f64::from_bits((exponent << 52) | (state & ((1 << 52) - 1))));
+        }
+        for chunk in values.chunks_exact(8) {
+            let x = V8(std::array::from_fn(|l| chunk[l]));
+            let (significand, exponent) = PlainMath::significand_and_exponent(x);
+            for l in 0..8 {
+                let (m, e) = (significand.0[l], exponent.0[l]);
+                assert!(
+                    (1.0..2.0).contains(&m) && e == e.round(),
+                    "{} -> {m}, {e}",
+                    x.0[l]
+                );
+                assert_eq!(m * 2f64.powi(e as i32), x.0[l]);
+            }
+            #[cfg(target_arch = "x86_64")]
+            if crate::simd_dispatch::cpu().avx512f() {
+                let tier = avx512_significand_and_exponent(x);
+                assert_eq!(tier, (significand, exponent), "{x:?}");
+            }
+        }
+    }
+
+    /// AVX-512's split of `x`, called from a function compiled for it.
+    #[cfg(target_arch = "x86_64")]
+    fn avx512_significand_and_exponent(x: V8) -> (V8, V8) {
+        #[target_feature(enable = "avx512f")]
+        fn split(x: V8) -> (V8, V8) {
+            super::super::mvc_lanes::Avx512Math::significand_and_exponent(x)
+        }
+        // SAFETY: only called after `avx512f` was detected.
+        unsafe { split(x) }
     }
 
     #[test]

@@ -182,7 +182,7 @@ fn evaluate_rows_generic<M: LaneMath>(
             } else {
                 0
             }));
-            out.write(start, k, &normalised.0[..count]);
+            out.write_lanes(start, k, &normalised.0, count);
         }
         for (l, &point) in chunk.iter().enumerate() {
             if needs_robust.test(l) {
