@@ -204,11 +204,21 @@ fn a_fit_whose_round_off_floor_is_above_the_tolerance_stops_there() {
         "{first:?}"
     );
     assert!(first.iterations < MAX_STEPS / 2, "{first:?}");
-    // Before: 3 steps and 4 Hessians, from damped factors.
+    // The fix itself: the kept factors are undamped (they serve the next event's prediction and
+    // chord steps), not damped on the floor's noise.
+    assert!(
+        fit.factor_damping <= CHORD_DAMPING * damping_scale(&fit.normal_matrix),
+        "kept damping {} of a scale {}",
+        fit.factor_damping,
+        damping_scale(&fit.normal_matrix)
+    );
+    // Before: 3 steps and 4 Hessians, from damped factors. Now 1 step and 2 Hessians, or 2 and
+    // 3 where the floor's round-off takes one more step to recognise (the coordinates' last bits
+    // decide: 1 / 2 with stop 40's binding kernel, 2 / 3 with stop 41's).
     let second = fit.apply(&target(1e-3), &mut solved).unwrap();
     assert!(second.residual <= fit.accepted, "{second:?}");
     assert!(
-        second.iterations <= 1 && second.factorisations <= 2,
+        second.iterations <= 2 && second.factorisations <= 3,
         "{second:?}"
     );
 }
