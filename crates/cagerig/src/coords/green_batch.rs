@@ -30,7 +30,8 @@
 //! reciprocal took the binding at 133k from 151 to 142 ms, and the edges computed ahead of the
 //! faces to 137–139 ms (`green_bind_bench 3`, 2026-12-03); the triple product as 2A h, the
 //! dot products per edge, AVX-512's `vgetmantpd`/`vgetexppd` in the logarithm and corner 2 from
-//! the partition of unity from 121 to 107 ms (2026-12-04, fastest of four alternating runs).
+//! the partition of unity from 116 to 98 ms (2026-12-04, the fastest of four alternating runs of
+//! each build; MVC 58–59 ms).
 //!
 //! A lane is recomputed by the per-point closed forms ([`GreenTriangle::terms`], whole row) when
 //! its point lies within [`ON_PLANE`] (relative) of a face's plane or of a cage vertex, where
