@@ -87,8 +87,9 @@ impl GreenTriangle {
         let n = self.normal;
         let a = [corners[0] - eta, corners[1] - eta, corners[2] - eta];
         let lengths = [a[0].length(), a[1].length(), a[2].length()];
-        let (omega, on_plane) = signed_solid_angle(a, lengths);
-        let h = if on_plane { 0.0 } else { a[0].dot(n) };
+        let height = a[0].dot(n);
+        let (omega, on_plane) = signed_solid_angle(a, lengths, self.twice_area * height);
+        let h = if on_plane { 0.0 } else { height };
         // Σ_l t_l f_l and Σ_l m_l f_l over the three edges.
         let mut edge_sum = 0.0;
         let mut normal_sum = DVec3::ZERO;
@@ -128,13 +129,15 @@ pub fn triangle_green_terms(corners: [DVec3; 3], eta: DVec3) -> TriangleGreenTer
 /// taken to lie on it (and get the limits from behind the face, i.e. from inside the cage).
 pub(super) const ON_PLANE: f64 = 1e-12;
 
-/// Solid angle of the triangle with corners `a` (relative to the point), signed like
-/// `a₀·(a₁×a₂)` (positive when the point is behind the face, i.e. inside a cage with outward
-/// normals; Van Oosterom & Strackee 1983), and whether the point lies on the face's plane. On
-/// the plane, the limit from behind: 0 outside the triangle, 2π inside, π on an edge, the
-/// corner's angle at a corner.
-fn signed_solid_angle(a: [DVec3; 3], lengths: [f64; 3]) -> (f64, bool) {
-    let numerator = a[0].dot(a[1].cross(a[2]));
+/// Solid angle of the triangle with corners `a` (relative to the point), signed like the triple
+/// product `numerator` = a₀·(a₁×a₂) (positive when the point is behind the face, i.e. inside a
+/// cage with outward normals; Van Oosterom & Strackee 1983), and whether the point lies on the
+/// face's plane. On the plane, the limit from behind: 0 outside the triangle, 2π inside, π on an
+/// edge, the corner's angle at a corner. The caller passes the triple product as 2A h (twice the
+/// area times the height a₀·n, equal to it since a₁ − a₀ and a₂ − a₀ are the triangle's edges),
+/// whose error is ε·2A|a₀| where the product's own is ε|a₀||a₁||a₂|; the batch kernel does the
+/// same.
+fn signed_solid_angle(a: [DVec3; 3], lengths: [f64; 3], numerator: f64) -> (f64, bool) {
     let denominator = lengths[0] * lengths[1] * lengths[2]
         + a[0].dot(a[1]) * lengths[2]
         + a[0].dot(a[2]) * lengths[1]
