@@ -56,6 +56,7 @@ def cage_of(skin: bpy.types.Object) -> bpy.types.Object:
 class Coupling:
     skin_name: str
     bind_id: str
+    cage_fit: str  # the stored binding's CageUp fit this rig was built with
     rig: object  # cagerig.Rig
     parents: np.ndarray
     rest_heads: np.ndarray  # S as last written into the bones (world)
@@ -70,15 +71,16 @@ class Coupling:
 def _base_rig(b: store.Binding) -> object:
     import cagerig
 
-    rig = _base_rigs.get(b.bind_id)
+    key = f"{b.bind_id}:{b.cage_fit}"
+    rig = _base_rigs.get(key)
     if rig is None:
         n, nj = len(b.mesh), len(b.joints)
         weights = convert.SparseWeights((n, nj), b.weight_rows, b.weight_cols, b.weight_values)
         rig = cagerig.Rig.from_arrays(
             b.mesh, b.triangles, weights, b.joints, b.parents, b.cage, b.cage_triangles,
-            b.names, skinning=b.skinning,
+            b.names, skinning=b.skinning, cage_fit=b.cage_fit,
         )
-        _base_rigs[b.bind_id] = rig
+        _base_rigs[key] = rig
     return rig.copy()
 
 
@@ -114,7 +116,7 @@ def coupling(skin: bpy.types.Object) -> Coupling:
     opened, undo). A rebuilt coupling takes the cage as Blender shows it for a user edit, so
     that the next sync brings everything into step."""
     c = _couplings.get(skin.name)
-    if c is not None and c.bind_id == store.bind_id(skin):
+    if c is not None and c.bind_id == store.bind_id(skin) and c.cage_fit == store.cage_fit(skin):
         return c
     b = store.load(skin)
     arm, _ = armature_of(skin)
@@ -132,6 +134,7 @@ def coupling(skin: bpy.types.Object) -> Coupling:
     c = Coupling(
         skin_name=skin.name,
         bind_id=b.bind_id,
+        cage_fit=b.cage_fit,
         rig=rig,
         parents=b.parents,
         rest_heads=rig.rest_joints,

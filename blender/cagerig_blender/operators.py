@@ -157,6 +157,7 @@ class CAGERIG_OT_couple(bpy.types.Operator):
             bind_id=bind_id, mesh=points, triangles=tris, weight_rows=rows, weight_cols=cols,
             weight_values=vals, joints=heads, parents=parents, names=names, cage=cage_points,
             cage_triangles=cage_tris, skinning=skinning, rest_cage=cage_points,
+            cage_fit=skin.cagerig.cage_fit,
         )
         try:
             engine.build_rig(binding)

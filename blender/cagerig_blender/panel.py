@@ -28,6 +28,8 @@ class CAGERIG_PT_main(bpy.types.Panel):
                 col.prop(obj.cagerig, "cage_vertices")
                 op = col.operator("cagerig.generate_cage", icon="MESH_ICOSPHERE")
                 op.vertices = obj.cagerig.cage_vertices
+            if obj is not None and obj.type == "MESH":
+                layout.prop(obj.cagerig, "cage_fit")
             layout.operator("cagerig.couple", icon="LINKED")
             return
         box = layout.box()
@@ -42,6 +44,7 @@ class CAGERIG_PT_main(bpy.types.Panel):
         except engine.SyncError as e:
             box.label(text=str(e), icon="ERROR")
         layout.prop(skin.cagerig, "live")
+        layout.prop(skin.cagerig, "cage_fit")
         row = layout.row(align=True)
         row.operator("cagerig.sync", icon="FILE_REFRESH")
         row.operator("cagerig.bake", icon="REC")

@@ -3,11 +3,30 @@
 from __future__ import annotations
 
 import bpy
-from bpy.props import BoolProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, IntProperty, PointerProperty
 
 
 def _is_mesh(_self: bpy.types.PropertyGroup, obj: bpy.types.Object) -> bool:
     return obj.type == "MESH"
+
+
+# How CageUp fits the current cage (cagerig's CageFitKind, `--cage-fit` on the command line).
+CAGE_FIT_ITEMS = [
+    ("regularised", "Regularised",
+     "The cage fits the skin and stays near the rest cage carried by the skeleton (default)"),
+    ("paper", "Paper", "The paper's Eq. 8: the cage interpolates the skin at the MaxVol rows"),
+]
+
+
+def _cage_fit_changed(self: bpy.types.PropertyGroup, _context: bpy.types.Context) -> None:
+    # A coupled skin keeps the fit in its stored binding; the run-time rig is rebuilt from it
+    # at the next sync.
+    from . import engine, store
+
+    skin = self.id_data
+    if store.is_coupled(skin) and store.cage_fit(skin) != self.cage_fit:
+        store.save_cage_fit(skin, self.cage_fit)
+        engine.forget(skin.name)
 
 
 class CagerigObjectSettings(bpy.types.PropertyGroup):
@@ -21,6 +40,13 @@ class CagerigObjectSettings(bpy.types.PropertyGroup):
         name="Live sync",
         description="Synchronise skin, bones and cage on every change (CageUp, CageRev, SkelUp)",
         default=True,
+    )
+    cage_fit: EnumProperty(  # type: ignore[valid-type]
+        name="Current cage fit",
+        description="How the current cage follows the pose",
+        items=CAGE_FIT_ITEMS,
+        default="regularised",
+        update=_cage_fit_changed,
     )
     cage_vertices: IntProperty(  # type: ignore[valid-type]
         name="Cage vertices",

@@ -35,6 +35,7 @@ class Binding:
     cage_triangles: np.ndarray
     skinning: str
     rest_cage: np.ndarray  # (c, 3) current rest cage C, world space
+    cage_fit: str = "regularised"  # CageUp's fit (absent in older files: the default)
 
 
 def _floats(a: np.ndarray) -> list[float]:
@@ -67,6 +68,7 @@ def save(skin: bpy.types.Object, b: Binding) -> None:
         "cage_triangles": _ints(b.cage_triangles),
         "skinning": b.skinning,
         "rest_cage": _floats(b.rest_cage),
+        "cage_fit": b.cage_fit,
     }
 
 
@@ -76,6 +78,15 @@ def new_bind_id() -> str:
 
 def save_rest_cage(skin: bpy.types.Object, rest_cage: np.ndarray) -> None:
     skin[KEY]["rest_cage"] = _floats(rest_cage)
+
+
+def cage_fit(skin: bpy.types.Object) -> str:
+    """The stored binding's CageUp fit (cheap: reads no array)."""
+    return str(skin[KEY].get("cage_fit", "regularised"))
+
+
+def save_cage_fit(skin: bpy.types.Object, fit: str) -> None:
+    skin[KEY]["cage_fit"] = fit
 
 
 def is_coupled(obj: bpy.types.Object) -> bool:
@@ -112,6 +123,7 @@ def load(skin: bpy.types.Object) -> Binding:
             cage_triangles=_array(g, "cage_triangles", np.int64, 3),
             skinning=str(g["skinning"]),
             rest_cage=_array(g, "rest_cage", np.float64, 3),
+            cage_fit=str(g.get("cage_fit", "regularised")),
         )
     except KeyError as e:
         raise ValueError(f"the cagerig binding of {skin.name!r} lacks {e}: couple again") from None

@@ -44,6 +44,11 @@ pub(crate) struct ModelRow {
     pub dqs: Stat,
     pub cor: Stat,
     pub animation_frame: Stat,
+    /// CageUp's fit in the timed session.
+    pub cage_fit: cagerig::CageFitKind,
+    /// How well C' follows the body along the synthetic animation: the worst spread, deviation
+    /// and flipped share over 20 evenly spaced frames (not timed).
+    pub animation_cage_quality: Option<cagerig::cage_quality::CageQuality>,
     pub rest_cage_drag: Stat,
     pub grab_after_skeleton_edit: Stat,
     /// The drag and the grab with Φ stored in f32 (`--coords-precision f32`).

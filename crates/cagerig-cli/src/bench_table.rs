@@ -192,6 +192,13 @@ pub(crate) fn print_table(reports: &[ModelReport]) {
             &|m| m.grab_after_skeleton_edit_display,
             Some(&TOOL.grab_after_skeleton_edit),
         );
+        match r.animation_cage_quality {
+            Some(q) => println!(
+                "  current cage along the animation ({} fit): {q}",
+                r.cage_fit
+            ),
+            None => println!("  current cage along the animation: every frame refused"),
+        }
     }
 }
 

@@ -8,7 +8,7 @@ use cagerig::session::{
 };
 use cagerig::skinning::SkinningMethod;
 use cagerig::sync::skeleton_updater::JointLocalisation;
-use cagerig::{CoordsKind, Warning};
+use cagerig::{CageFitKind, CoordsKind, Warning};
 use clap::{Args, ValueEnum};
 
 use crate::rig_source::LoadedRig;
@@ -27,6 +27,16 @@ pub fn coords_parser() -> impl clap::builder::TypedValueParser<Value = CoordsKin
     use clap::builder::TypedValueParser;
     clap::builder::PossibleValuesParser::new(CoordsKind::ALL.map(CoordsKind::name))
         .try_map(|name| name.parse::<CoordsKind>())
+}
+
+/// The `--cage-fit` value parser: the names and help of [`CageFitKind::ALL`], read through
+/// `CageFitKind: FromStr`, the one parser of cage-fit names.
+pub fn cage_fit_parser() -> impl clap::builder::TypedValueParser<Value = CageFitKind> {
+    use clap::builder::{PossibleValue, TypedValueParser};
+    clap::builder::PossibleValuesParser::new(
+        CageFitKind::ALL.map(|k| PossibleValue::new(k.name()).help(k.help())),
+    )
+    .try_map(|name| name.parse::<CageFitKind>())
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, Default)]
@@ -81,6 +91,10 @@ pub struct SessionArgs {
     /// edits; see docs/green-coordinates.md).
     #[arg(long, value_parser = coords_parser(), default_value = "mvc")]
     pub coords: CoordsKind,
+    /// How CageUp fits the current cage C' to the posed skin (mean value rigs; Green rigs fit
+    /// by Gauss–Newton on the rows). See docs/method.md.
+    #[arg(long, value_parser = cage_fit_parser(), default_value = CageFitKind::default().name())]
+    pub cage_fit: CageFitKind,
     /// Mesh rows used by CageUp/CageRev (Green: MaxVol rows of [φ ψ], least squares).
     #[arg(long, value_enum, default_value_t)]
     pub fit_rows: FitRowsArg,
@@ -141,6 +155,7 @@ impl SessionArgs {
                 GivenCageCoords::RecomputeIfInexact
             },
             unfitted_cage: self.unfitted_cage,
+            cage_fit: self.cage_fit,
             ..SessionOptions::default()
         }
     }

@@ -120,6 +120,8 @@ pub enum Command {
     SetSkinning(SkinningMethod),
     /// Rebind with other cage coordinates (MVC ↔ Green), keeping every edit.
     SetCoords(cagerig::CoordsKind),
+    /// Switch CageUp's fit of the current cage ([`cagerig::CageFitKind`]); C' is refitted.
+    SetCageFit(cagerig::CageFitKind),
     ResetPose,
     SetLocks(SyncLocks),
     /// Green rigs: refuse an edit whose CageUp finds no current cage, or keep it with C'
@@ -152,6 +154,7 @@ impl Command {
             Command::MovePosedCage { .. } => "move current cage".into(),
             Command::SetSkinning(m) => format!("skinning {}", m.label()),
             Command::SetCoords(k) => format!("{} coordinates", k.label()),
+            Command::SetCageFit(k) => format!("{} cage fit", k.name()),
             Command::ResetPose => "reset pose".into(),
             Command::SetLocks(_) => "sync locks".into(),
             Command::SetUnfittedCage(policy) => match policy {
@@ -389,6 +392,7 @@ impl Document {
                 // A new binding: the player's keyframes belong to the old one.
                 self.player = None;
             }
+            Command::SetCageFit(kind) => s.set_cage_fit(*kind)?,
             Command::ResetPose => s.reset_pose(),
             Command::SetLocks(locks) => s.set_sync_locks(*locks),
             Command::SetUnfittedCage(policy) => s.set_unfitted_cage_policy(*policy),

@@ -40,6 +40,29 @@ fn undo_and_redo_restore_the_exact_state() {
 }
 
 #[test]
+fn the_cage_fit_is_one_undo_step_that_refits_the_handle() {
+    let mut d = doc();
+    d.execute(&Command::RotateJoint {
+        joint: 1,
+        axis: DVec3::Z,
+        angle: 0.8,
+    })
+    .unwrap();
+    assert_eq!(d.session.cage_fit(), cagerig::CageFitKind::Regularised);
+    let regularised = d.session.posed_cage().to_vec();
+    let posed = d.session.posed_mesh().to_vec();
+    d.execute(&Command::SetCageFit(cagerig::CageFitKind::Paper))
+        .unwrap();
+    assert_eq!(d.session.cage_fit(), cagerig::CageFitKind::Paper);
+    assert_ne!(d.session.posed_cage(), &regularised[..]);
+    assert_eq!(d.session.posed_mesh(), &posed[..]);
+    assert!(d.undo().unwrap());
+    assert_eq!(d.session.cage_fit(), cagerig::CageFitKind::Regularised);
+    let tol = 1e-12;
+    assert!(cagerig::mesh::max_distance(d.session.posed_cage(), &regularised) < tol);
+}
+
+#[test]
 fn a_drag_is_one_undo_step_and_cancel_restores() {
     let mut d = doc();
     let s0 = d.snapshot();

@@ -43,8 +43,12 @@ pub fn session_options(
     fit_source_name: &str,
     coords_precision: &str,
     coords: &str,
+    cage_fit: &str,
 ) -> PyResult<SessionOptions> {
     Ok(SessionOptions {
+        cage_fit: cage_fit
+            .parse::<cagerig::CageFitKind>()
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("cage_fit: {e}")))?,
         coords: coords
             .parse::<cagerig::CoordsKind>()
             .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("coords: {e}")))?,

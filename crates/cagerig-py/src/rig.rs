@@ -170,6 +170,10 @@ impl Rig {
     /// auto_weights : bool, default False
     ///     Compute the skinning weights (as :func:`skin_weights`, the rig's cage bounding the
     ///     volume) instead of using the character's own; an OBJ then needs no ``.skw``.
+    /// cage_fit : {"regularised", "paper"}, default "regularised"
+    ///     How CageUp fits the current cage C' (as ``cagerig --cage-fit``): near the rest cage
+    ///     carried by the skeleton while fitting the skin, or the paper's interpolation of the
+    ///     MaxVol rows. Mean value rigs; Green rigs fit on the rows.
     /// keep_file_coords : bool, default False
     ///     Keep a cage-weights file's Φ even when it does not reproduce the mesh (the paper
     ///     tool's 6-decimal files; for conformance). By default such a Φ is recomputed, so that
@@ -184,7 +188,7 @@ impl Rig {
     #[pyo3(signature = (path, cage = None, *, skinning = None, fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
                         keep_file_coords = false, auto_cage = None, auto_weights = false,
-                        coords = "mvc", skin = None))]
+                        coords = "mvc", skin = None, cage_fit = "regularised"))]
     #[allow(clippy::too_many_arguments)]
     fn load(
         py: Python<'_>,
@@ -200,6 +204,7 @@ impl Rig {
         auto_weights: bool,
         coords: &str,
         skin: Option<String>,
+        cage_fit: &str,
     ) -> PyResult<Self> {
         let weights_source = if auto_weights {
             WeightsSource::Automatic(AutoWeightsOptions::default())
@@ -213,6 +218,7 @@ impl Rig {
             fit_source,
             coords_precision,
             coords,
+            cage_fit,
         )?;
         if keep_file_coords {
             options.given_cage_coords = cagerig::session::GivenCageCoords::Keep;
@@ -269,7 +275,7 @@ impl Rig {
     #[staticmethod]
     #[pyo3(signature = (name, resolution = None, *, skinning = "lbs", fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
-                        coords = "mvc"))]
+                        coords = "mvc", cage_fit = "regularised"))]
     #[allow(clippy::too_many_arguments)]
     fn builtin(
         py: Python<'_>,
@@ -281,6 +287,7 @@ impl Rig {
         fit_source: &str,
         coords_precision: &str,
         coords: &str,
+        cage_fit: &str,
     ) -> PyResult<Self> {
         let options = options::session_options(
             skinning,
@@ -289,6 +296,7 @@ impl Rig {
             fit_source,
             coords_precision,
             coords,
+            cage_fit,
         )?;
         let rig = py
             .detach(|| cagerig::demo::builtin(name, resolution))
@@ -323,7 +331,8 @@ impl Rig {
     #[pyo3(signature = (vertices, triangles, skin_weights, joint_positions, joint_parents,
                         cage_vertices, cage_triangles, joint_names = None, *, skinning = "lbs",
                         fit_rows = "maxvol", localisation = "articulation", fit_source = "ghost",
-                        coords_precision = "f64", coords = "mvc", dq_blend_weights = None))]
+                        coords_precision = "f64", coords = "mvc", dq_blend_weights = None,
+                        cage_fit = "regularised"))]
     #[allow(clippy::too_many_arguments)]
     fn from_arrays(
         py: Python<'_>,
@@ -342,6 +351,7 @@ impl Rig {
         coords_precision: &str,
         coords: &str,
         dq_blend_weights: Option<&Bound<'_, PyAny>>,
+        cage_fit: &str,
     ) -> PyResult<Self> {
         let options = options::session_options(
             skinning,
@@ -350,6 +360,7 @@ impl Rig {
             fit_source,
             coords_precision,
             coords,
+            cage_fit,
         )?;
         let positions = convert::points(vertices, "vertices")?;
         let tris = convert::triangles(triangles, "triangles", positions.len())?;

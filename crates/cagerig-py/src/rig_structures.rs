@@ -20,6 +20,13 @@ impl Rig {
         self.session.coords_kind().name()
     }
 
+    /// How CageUp fits the current cage C': ``"regularised"`` or ``"paper"`` (Green rigs:
+    /// ``"paper"``, their Gauss–Newton fit on the rows).
+    #[getter]
+    fn cage_fit(&self) -> &'static str {
+        self.session.cage_fit().name()
+    }
+
     /// What an edit does when a Green CageUp finds no current cage: ``"refuse"`` or ``"keep"``
     /// (:meth:`set_unfitted_cage`).
     #[getter]

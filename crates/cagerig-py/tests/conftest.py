@@ -48,9 +48,10 @@ def arm_base(arm_path):
 
 @pytest.fixture(scope="session")
 def arm_file_coords_base(arm_path):
-    """The Arm with the shipped (6-decimal) Φ kept, as the paper tool and `cagerig maxvol` use it."""
+    """The Arm with the shipped (6-decimal) Φ kept and the paper's CageUp, as the paper tool and
+    `cagerig maxvol` use them."""
     with pytest.warns(cagerig.RigWarning):
-        return cagerig.Rig.load(arm_path, keep_file_coords=True)
+        return cagerig.Rig.load(arm_path, keep_file_coords=True, cage_fit="paper")
 
 
 @pytest.fixture

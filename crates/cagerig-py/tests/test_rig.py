@@ -262,3 +262,22 @@ def test_replay_output_folder_abandoned_on_error_leaves_nothing(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == [".cagerig-output", "t.obj"]
     with pytest.raises(ValueError, match="already finished"):
         folder.write_text("late.txt", "x")
+
+
+def test_cage_fit_is_chosen_by_name_and_keeps_the_skin(arm_path):
+    with pytest.warns(cagerig.RigWarning):
+        regularised = cagerig.Rig.load(arm_path)
+        paper = cagerig.Rig.load(arm_path, cage_fit="paper")
+    assert regularised.cage_fit == "regularised" and paper.cage_fit == "paper"
+    for rig in (regularised, paper):
+        rig.rotate_joint("lowerarm01.R", [1, 0, 0], 60)
+    # The skin does not depend on the fit; the handle does.
+    np.testing.assert_array_equal(regularised.posed_mesh, paper.posed_mesh)
+    assert np.abs(regularised.posed_cage - paper.posed_cage).max() > 1e-6
+    # A grab still lands exactly under the regularised fit.
+    target = regularised.posed_cage
+    target[[10, 13]] += [0.5, -0.25, 0.75]
+    regularised.move_posed_cage([10, 13], [0.5, -0.25, 0.75])
+    np.testing.assert_allclose(regularised.posed_cage, target, atol=1e-8)
+    with pytest.raises(ValueError, match="regularised or paper"):
+        cagerig.Rig.builtin("bar", cage_fit="exact")

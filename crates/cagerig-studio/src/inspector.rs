@@ -129,8 +129,9 @@ fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: 
             }
         }
     });
-    if coords == cagerig::CoordsKind::Green {
-        unfitted_cage_ui(ui, doc, diag);
+    match coords {
+        cagerig::CoordsKind::Mvc => cage_fit_ui(ui, doc, diag),
+        cagerig::CoordsKind::Green => unfitted_cage_ui(ui, doc, diag),
     }
     let mut new_locks = locks;
     ui.checkbox(
@@ -153,6 +154,24 @@ fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: 
     if ui.button("Reset pose").clicked() {
         run_command(doc, &Command::ResetPose, diag);
     }
+}
+
+/// Mean value rigs: how CageUp fits the current cage C' ([`cagerig::CageFitKind`]).
+fn cage_fit_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
+    let fit = doc.session.requested_cage_fit();
+    ui.horizontal(|ui| {
+        ui.label("Current cage fit");
+        for k in cagerig::CageFitKind::ALL {
+            if ui
+                .selectable_label(fit == k, k.name())
+                .on_hover_text(k.help())
+                .clicked()
+                && fit != k
+            {
+                run_command(doc, &Command::SetCageFit(k), diag);
+            }
+        }
+    });
 }
 
 /// Green rigs: the policy for poses the current cage cannot follow, and the state of C'.

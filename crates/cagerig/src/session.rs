@@ -31,12 +31,14 @@ use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
 use crate::skinning::lbs::LinearBlendSkinning;
 use crate::skinning::{DqBlendWeights, SkinningMethod};
 use crate::sparse_rows::SparseRows;
+use crate::sync::cage_fit_kind::CageFitKind;
 use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 use crate::sync::skeleton_updater::{JointFaceTerms, JointLocalisation, SkeletonUpdater};
 
 mod accessors;
 mod animation_sample;
+mod cage_fit;
 mod cage_map;
 mod checkpoint;
 mod display_path;
@@ -285,8 +287,7 @@ impl RigSession {
         cage_map.set_joint_coords(&skeleton_updater);
         let reverser = CageReverser::new(
             &cage_coords,
-            cage_updater.rows(),
-            cage_updater.cage_from_rows(),
+            &cage_updater,
             &skin_weights,
             |j| skeleton_updater.joint_row(j).to_vec(),
             &skeleton,

@@ -55,8 +55,10 @@ fn session(localisation: JointLocalisation) -> RigSession {
     assert!(files.parts.cage_coords.is_some() && files.parts.maxvol_rows.is_some());
     // The tool's own Φ (6 decimals), kept even though it reproduces M only to 9.6e-4: the
     // conformance is with the tool's numbers (the default recomputes such a Φ).
+    // The paper's CageUp (`--cage-fit paper`): the tool's C' interpolates the MaxVol rows.
     let options = SessionOptions {
         localisation,
+        cage_fit: cagerig::CageFitKind::Paper,
         given_cage_coords: GivenCageCoords::Keep,
         ..SessionOptions::default()
     };

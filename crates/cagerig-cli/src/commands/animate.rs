@@ -61,6 +61,29 @@ pub struct Args {
     pub skinning: Option<SkinningMethod>,
     #[command(flatten)]
     pub session: SessionArgs,
+    /// Print a JSON report on stdout: per sample time, the frame's time and how well the current
+    /// cage follows the body (spread, deviation, flipped; see docs/method.md).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One sample of `animate --json`.
+#[derive(serde::Serialize)]
+struct SampleReport {
+    time: f64,
+    frame_ms: f64,
+    #[serde(flatten)]
+    cage: cagerig::cage_quality::CageQuality,
+}
+
+/// `animate --json`.
+#[derive(serde::Serialize)]
+struct AnimateReport {
+    cage_fit: cagerig::CageFitKind,
+    coords: cagerig::CoordsKind,
+    samples: Vec<SampleReport>,
+    /// The worst of each measure over the samples.
+    worst: Option<cagerig::cage_quality::CageQuality>,
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
@@ -92,15 +115,36 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let mut player = tracks.resolve(&session)?.player(&session)?;
     let mut session = session;
+    let probe = cagerig::cage_quality::CageQualityProbe::new(
+        session.rest_mesh(),
+        session.rest_cage(),
+        session.cage_triangles(),
+    )?;
+    let mut report = AnimateReport {
+        cage_fit: session.cage_fit(),
+        coords: session.coords_kind(),
+        samples: Vec::with_capacity(times.len()),
+        worst: None,
+    };
     for &t in times {
         let start = Instant::now();
         player
             .apply(t, &mut session)
             .map_err(|e| crate::session_args::event_error(format!("sample t = {t}"), e))?;
-        eprintln!(
-            "t = {t}: frame in {:.3} ms",
-            start.elapsed().as_secs_f64() * 1e3
+        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        let cage = probe.measure(
+            session.rest_mesh(),
+            session.rest_cage(),
+            session.posed_mesh(),
+            session.posed_cage(),
         );
+        eprintln!("t = {t}: frame in {frame_ms:.3} ms; current cage: {cage}");
+        report.worst = Some(report.worst.map_or(cage, |w| w.worst(cage)));
+        report.samples.push(SampleReport {
+            time: t,
+            frame_ms,
+            cage,
+        });
         write_state(&mut staged, &format!("t{t}"), &session)?;
         if let Some(p) = &mut pictures {
             p.caption = Some(format!("t = {t} s"));
@@ -108,7 +152,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
     }
     let n = staged.finish()?;
-    println!("{n} files written to {}", out.display());
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!("{n} files written to {}", out.display());
+    }
     Ok(())
 }
 

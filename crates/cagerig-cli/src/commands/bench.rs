@@ -55,6 +55,9 @@ pub struct Args {
     /// per-event rows and their Newton iterations for a Green rig (docs/green-coordinates.md).
     #[arg(long, value_parser = crate::session_args::coords_parser(), default_value = "mvc")]
     pub coords: cagerig::CoordsKind,
+    /// CageUp's fit in the timed sessions (mean value rigs).
+    #[arg(long, value_parser = crate::session_args::cage_fit_parser(), default_value = cagerig::CageFitKind::default().name())]
+    pub cage_fit: cagerig::CageFitKind,
 }
 
 fn load_parts(args: &Args) -> anyhow::Result<(String, RigParts)> {
@@ -104,12 +107,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let one_thread = if args.skip_one_thread {
             None
         } else {
-            Some(
-                one_thread_pool()?
-                    .install(|| bench_model(model.clone(), parts.clone(), args.repeat_scale))?,
-            )
+            Some(one_thread_pool()?.install(|| {
+                bench_model(
+                    model.clone(),
+                    parts.clone(),
+                    args.repeat_scale,
+                    args.cage_fit,
+                )
+            })?)
         };
-        measured.push((bench_model(model, parts, args.repeat_scale)?, one_thread));
+        measured.push((
+            bench_model(model, parts, args.repeat_scale, args.cage_fit)?,
+            one_thread,
+        ));
     }
     // After the models, so that its buffer does not count in their peak memory.
     let bandwidth = crate::bench_bandwidth::read_bandwidth_gbs();
@@ -197,7 +207,12 @@ fn reps(base: usize, scale: f64, vertices: usize) -> usize {
     ((base as f64 * scale * factor).round() as usize).max(3)
 }
 
-fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<ModelRow> {
+fn bench_model(
+    model: String,
+    parts: RigParts,
+    scale: f64,
+    cage_fit: cagerig::CageFitKind,
+) -> anyhow::Result<ModelRow> {
     // Reset the peak-RSS counter (VmHWM) so the figure is this model's, not the process's.
     let _ = std::fs::write("/proc/self/clear_refs", "5");
     let nv = parts.mesh.num_vertices();
@@ -279,7 +294,12 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         cor_centre_coords: Some(lambda),
         ..parts
     };
-    let (mut session, _) = RigSession::new(session_parts, SessionOptions::default())?;
+    let session_options = SessionOptions {
+        cage_fit,
+        ..SessionOptions::default()
+    };
+    let (mut session, _) = RigSession::new(session_parts, session_options)?;
+    let cage_fit_used = session.cage_fit();
     let parts_weights = session.skin_weights().clone();
     // The pose of the paper tool's per-frame timings: one joint bent by 60° about +X.
     let bend_joint = session.skeleton().find("lowerarm01.R").unwrap_or(nj / 2);
@@ -352,6 +372,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     })
     // Cage keys are cached as ΦC_k: a frame lerps two meshes (2 reads, 1 write) then skins.
     .with_bytes(skin_bytes + nv as u64 * 72);
+    let animation_cage_quality = animation_cage_quality(&mut player, &mut session, duration)?;
     session.reset_pose();
     session.rotate_joint(bend_joint, DVec3::X, 60f64.to_radians())?;
 
@@ -389,6 +410,7 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
     };
     let f32_options = SessionOptions {
         cage_coords_precision: CoordsPrecision::F32,
+        cage_fit,
         ..SessionOptions::default()
     };
     let (mut session32, _) = RigSession::new(f32_parts, f32_options)?;
@@ -421,6 +443,8 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         dqs: dqs_stat,
         cor: cor_stat,
         animation_frame: anim_stat,
+        cage_fit: cage_fit_used,
+        animation_cage_quality,
         rest_cage_drag: drag_stat,
         grab_after_skeleton_edit: grab_stat,
         rest_cage_drag_f32_coords: drag32_stat,
@@ -431,4 +455,32 @@ fn bench_model(model: String, parts: RigParts, scale: f64) -> anyhow::Result<Mod
         dqs_f32: dqs32_stat,
         cor_f32: cor32_stat,
     })
+}
+
+/// The worst cage quality over 20 evenly spaced frames of the animation `player` (of length
+/// `duration`) on `session`; frames the rig refuses are skipped. `None` when every frame was.
+fn animation_cage_quality(
+    player: &mut AnimationPlayer,
+    session: &mut RigSession,
+    duration: f64,
+) -> anyhow::Result<Option<cagerig::cage_quality::CageQuality>> {
+    let probe = cagerig::cage_quality::CageQualityProbe::new(
+        session.rest_mesh(),
+        session.rest_cage(),
+        session.cage_triangles(),
+    )?;
+    let mut worst: Option<cagerig::cage_quality::CageQuality> = None;
+    for i in 0..20 {
+        let t = duration * i as f64 / 20.0;
+        if player.apply(t, session).is_ok() {
+            let q = probe.measure(
+                session.rest_mesh(),
+                session.rest_cage(),
+                session.posed_mesh(),
+                session.posed_cage(),
+            );
+            worst = Some(worst.map_or(q, |w| w.worst(q)));
+        }
+    }
+    Ok(worst)
 }

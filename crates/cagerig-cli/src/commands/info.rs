@@ -20,6 +20,9 @@ struct InfoReport {
     /// With `--coords green`: the Green binding of this mesh.
     #[serde(skip_serializing_if = "Option::is_none")]
     green: Option<GreenReport>,
+    /// With `--bend-joints`: each joint's standard bend and the current cage's quality.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    joint_bends: Option<BendReport>,
 }
 
 /// What a Green binding of the rig gives (`--coords green`).
@@ -81,6 +84,53 @@ pub struct Args {
     /// reproduction error, vertices outside the cage, binding time).
     #[arg(long, value_parser = crate::session_args::coords_parser(), default_value = "mvc")]
     pub coords: cagerig::CoordsKind,
+    /// Also bind the rig (with --coords and --cage-fit) and report how well the current cage
+    /// follows the body when each joint is bent by this many degrees about the world x, y and z
+    /// axes in turn, from the rest pose: spread, deviation and flipped (see docs/method.md).
+    #[arg(long, value_name = "DEGREES")]
+    pub bend_joints: Option<f64>,
+    /// The CageUp fit for --bend-joints.
+    #[arg(long, value_parser = crate::session_args::cage_fit_parser(), default_value = cagerig::CageFitKind::default().name())]
+    pub cage_fit: cagerig::CageFitKind,
+}
+
+/// `info --bend-joints`: the bend and each joint's worst cage quality.
+#[derive(serde::Serialize)]
+struct BendReport {
+    degrees: f64,
+    cage_fit: cagerig::CageFitKind,
+    joints: Vec<cagerig::cage_quality::JointBendQuality>,
+    /// The worst of each measure over every joint.
+    worst: Option<cagerig::cage_quality::CageQuality>,
+}
+
+/// Binds `loaded` with `coords` and `cage_fit` and bends each joint by `degrees`.
+fn bend_report(
+    loaded: &crate::rig_source::LoadedRig,
+    coords: cagerig::CoordsKind,
+    cage_fit: cagerig::CageFitKind,
+    degrees: f64,
+) -> anyhow::Result<BendReport> {
+    if !(degrees.is_finite() && degrees.abs() <= 360.0) {
+        anyhow::bail!("--bend-joints {degrees}: expected an angle in degrees between -360 and 360");
+    }
+    let options = cagerig::session::SessionOptions {
+        coords,
+        cage_fit,
+        ..Default::default()
+    };
+    let (mut session, _) = cagerig::session::RigSession::new(loaded.parts.clone(), options)?;
+    let joints = cagerig::cage_quality::joint_bends(&mut session, degrees.to_radians())?;
+    let worst = joints
+        .iter()
+        .filter_map(|j| j.quality)
+        .reduce(cagerig::cage_quality::CageQuality::worst);
+    Ok(BendReport {
+        degrees,
+        cage_fit: session.cage_fit(),
+        joints,
+        worst,
+    })
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
@@ -90,6 +140,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .as_deref()
         .filter(|m| crate::interchange::is_interchange(m))
     {
+        if args.bend_joints.is_some() {
+            anyhow::bail!(
+                "--bend-joints binds a rig of files (OBJ with its skeleton, weights and cage); \
+                 for {}, measure the current cage along an animation with `cagerig animate \
+                 --json` (add --auto-cage when the file has no cage)",
+                m.display()
+            );
+        }
         return crate::interchange::info(m, rig.skin.as_deref(), json);
     }
     let loaded = load_rig(rig, !json, false)?;
@@ -117,6 +175,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             cagerig::CoordsKind::Mvc => None,
             cagerig::CoordsKind::Green => Some(green_report(p)?),
         },
+        joint_bends: args
+            .bend_joints
+            .map(|degrees| bend_report(&loaded, args.coords, args.cage_fit, degrees))
+            .transpose()?,
     };
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -156,6 +218,24 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 green.outside_cage,
                 green.binding_seconds
             );
+        }
+        if let Some(bends) = &report.joint_bends {
+            println!(
+                "joint bends    {}° about x, y and z from rest, {} cage fit:",
+                bends.degrees, bends.cage_fit
+            );
+            for j in &bends.joints {
+                match j.quality {
+                    Some(q) => println!("  {:>3} {:<24} {q}", j.joint, j.name),
+                    None => println!("  {:>3} {:<24} every bend refused", j.joint, j.name),
+                }
+                if j.refused > 0 && j.quality.is_some() {
+                    println!("      {} of 3 bends refused", j.refused);
+                }
+            }
+            if let Some(w) = bends.worst {
+                println!("  worst                            {w}");
+            }
         }
         if report.warnings.is_empty() {
             println!("warnings       none");

@@ -151,6 +151,7 @@ class Rig:
         auto_cage: Optional[int] = None,
         auto_weights: bool = False,
         coords: Literal["mvc", "green"] = "mvc",
+        cage_fit: Literal["regularised", "paper"] = "regularised",
         skin: Optional[str] = None,
     ) -> Rig: ...
     @staticmethod
@@ -164,6 +165,7 @@ class Rig:
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
         coords: Literal["mvc", "green"] = "mvc",
+        cage_fit: Literal["regularised", "paper"] = "regularised",
     ) -> Rig: ...
     @staticmethod
     def from_arrays(
@@ -182,11 +184,14 @@ class Rig:
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
         coords: Literal["mvc", "green"] = "mvc",
+        cage_fit: Literal["regularised", "paper"] = "regularised",
         dq_blend_weights: Optional[_ArrayLike] = None,
     ) -> Rig: ...
     def copy(self) -> Rig: ...
     @property
     def coords(self) -> Literal["mvc", "green"]: ...
+    @property
+    def cage_fit(self) -> Literal["regularised", "paper"]: ...
     def __copy__(self) -> Rig: ...
     def __deepcopy__(self, memo: Any) -> Rig: ...
     # Edits.

@@ -80,6 +80,13 @@ impl RigSession {
     pub fn cage_updater(&self) -> &CageUpdater {
         &self.cage_updater
     }
+
+    /// The CageUp fit in use: the options' [`CageFitKind`] for mean value rigs, the paper's
+    /// (Gauss–Newton on the rows) for Green rigs.
+    pub fn cage_fit(&self) -> CageFitKind {
+        self.cage_updater.fit_kind()
+    }
+
     /// Current rest frames of the joints (S).
     pub fn rest_world_from_joint(&self) -> &[DAffine3] {
         &self.rest_world_from_joint

@@ -182,7 +182,7 @@ pub(super) fn bind_cage_map(
             (rows, mode)
         }
     };
-    let cage_updater = CageUpdater::new(&cage_coords, rows, mode)?;
+    let mut cage_updater = CageUpdater::new(&cage_coords, rows, mode)?;
     let cage_map = match green_parts {
         Some((face_coords, triangles)) => CageMap::Green(Box::new(GreenState::new(
             &cage_coords,
@@ -194,7 +194,16 @@ pub(super) fn bind_cage_map(
             &cage.positions,
             num_joints,
         )?)),
-        None => CageMap::Mvc,
+        None => {
+            cage_updater = with_cage_fit(
+                cage_updater,
+                options.cage_fit,
+                &cage_coords,
+                cage,
+                skin_weights,
+            )?;
+            CageMap::Mvc
+        }
     };
     Ok(BoundCageMap {
         cage_coords,
@@ -203,6 +212,32 @@ pub(super) fn bind_cage_map(
         precision,
         cor_centre_coords,
     })
+}
+
+/// The paper's CageUp `paper` (on Φ `cage_coords`, `#V × #C`) as the fit `kind` for the
+/// binding cage `cage` (C₀) and Ω `skin_weights`: itself, or regularised with the prior of the
+/// binding (neighbourhoods found on M₀ = ΦC₀, so a rig switched to it later gets the same fit).
+pub(super) fn with_cage_fit(
+    paper: CageUpdater,
+    kind: CageFitKind,
+    cage_coords: &CageCoords,
+    cage: &TriMesh,
+    skin_weights: &SkinWeights,
+) -> Result<CageUpdater, RigError> {
+    match kind {
+        CageFitKind::Paper => Ok(paper),
+        CageFitKind::Regularised => {
+            let mut binding_mesh = vec![DVec3::ZERO; cage_coords.num_vertices()];
+            cage_coords.apply(&cage.positions, &mut binding_mesh);
+            paper.regularised(
+                cage_coords,
+                &cage.positions,
+                &cage.triangles,
+                &binding_mesh,
+                skin_weights,
+            )
+        }
+    }
 }
 
 impl CageMap {

@@ -14,6 +14,7 @@ use crate::coords_kind::CoordsKind;
 use crate::error::RigError;
 use crate::pose::LocalPose;
 use crate::skinning::SkinningMethod;
+use crate::sync::cage_fit_kind::CageFitKind;
 
 /// Sync operators the user has switched off (the paper tool's locks). While a lock is on the
 /// structures are deliberately out of consensus; switching it off runs the full sync again.
@@ -61,6 +62,10 @@ pub struct EditableState {
     /// refuse it).
     #[serde(default)]
     pub unfitted_cage: UnfittedCagePolicy,
+    /// CageUp's fit (absent in older files: the default, regularised; C' is derived, so an
+    /// older file opens with the same C, S and S').
+    #[serde(default)]
+    pub cage_fit: CageFitKind,
 }
 
 impl RigSession {
@@ -127,6 +132,7 @@ impl RigSession {
             locks: self.locks,
             coords: self.coords_kind(),
             unfitted_cage: self.unfitted_cage_policy(),
+            cage_fit: self.requested_cage_fit(),
         }
     }
 
@@ -154,6 +160,14 @@ impl RigSession {
             }
             rebound.restore_editable_state(&adapted)?;
             *self = rebound;
+            return Ok(());
+        }
+        if state.cage_fit != self.requested_cage_fit() {
+            // All or nothing: switch a copy, restore into it, keep it only if both succeed.
+            let mut switched = self.clone();
+            switched.set_cage_fit(state.cage_fit)?;
+            switched.restore_editable_state(state)?;
+            *self = switched;
             return Ok(());
         }
         let nc = self.rest_cage.len();

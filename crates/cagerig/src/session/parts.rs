@@ -133,6 +133,10 @@ pub struct SessionOptions {
     /// What an event does when a Green CageUp finds no current cage for it: refuse it (the
     /// default) or keep it with C' unfitted ([`super::UnfittedCagePolicy`]).
     pub unfitted_cage: super::UnfittedCagePolicy,
+    /// How CageUp fits C' ([`CageFitKind`]): regularised towards the rest cage carried by the
+    /// skeleton (the default), or the paper's interpolation of the MaxVol rows. Mean value
+    /// rigs only: Green rigs fit by Gauss–Newton on the rows ([`RigSession::cage_fit`]).
+    pub cage_fit: CageFitKind,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).

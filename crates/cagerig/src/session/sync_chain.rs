@@ -368,11 +368,16 @@ impl RigSession {
         }
     }
 
-    /// MVC CageUp: C' = P·M'_R (Sec. 4.1, Eq. 8).
+    /// MVC CageUp: C' = P·M'_R (Sec. 4.1, Eq. 8), or the regularised C' = K·M'_R + Q·P(C, S')
+    /// ([`crate::sync::cage_prior`]).
     pub(super) fn fit_linear_cage(&mut self, ghost: bool) {
         self.posed_fit_rows(ghost);
-        self.cage_updater
-            .apply_rows(&self.scratch_rows_posed, &mut self.posed_cage);
+        self.cage_updater.fit(
+            &self.scratch_rows_posed,
+            &self.posed_from_rest,
+            &self.rest_cage,
+            &mut self.posed_cage,
+        );
     }
 
     /// Green CageUp: M'_R, then the Gauss–Newton fit.

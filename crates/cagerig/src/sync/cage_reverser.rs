@@ -24,6 +24,10 @@
 //! `3#active × 3#active` capacitance matrix `I + V A₀⁻¹ U`: O(#C²·#active) work instead of
 //! O((3#C)³). The dense `3#C × 3#C` LU is used when the rows are not square (least-squares
 //! CageUp), when a blended rotation R_i is singular, or on request ([`ReverserMethod::Dense`]).
+//!
+//! **Regularised CageUp.** With C' = K M̃' + Q P(C, S') ([`crate::sync::cage_prior`]) the system
+//! is `(K G_rows + Q G_prior) ∂C = ∂C'`, with G_rows the matrix above and G_prior the Jacobian
+//! of the prior, also linear for a fixed pose; it is factorised densely.
 
 use faer::Mat;
 use glam::{DMat3, DVec3};
@@ -58,8 +62,11 @@ pub struct CageReverser {
     row_weights: SkinWeights,
     /// Ψ, `#J × #C` row-major.
     joint_coords: Vec<f64>,
-    /// P, `#C × #R` (column-major faer matrix, from the CageUpdater).
+    /// P (the paper's fit) or K (the regularised one), `#C × #R` (column-major faer matrix,
+    /// from the CageUpdater).
     cage_from_rows: Mat<f64>,
+    /// The regularised CageUp's prior (C' = K·M̃' + Q·P); `None` for the paper's fit.
+    prior: Option<crate::sync::cage_prior::CagePrior>,
     parents: Vec<Option<usize>>,
     order: Vec<usize>,
     factor: Option<Factor>,
@@ -145,22 +152,25 @@ impl DenseLu {
 }
 
 impl CageReverser {
-    /// Gathers the pose-independent parts. `rows` are the CageUp rows, `cage_from_rows` its P
-    /// (`#C × #R`), `joint_coords` is Ψ (`#J` rows of `#C`).
+    /// Gathers the pose-independent parts of CageUp `cage_updater` on Φ `cage_coords`
+    /// (`#V × #C`): its rows and map, Ω `skin_weights`, Ψ `joint_coords` (`#J` rows of `#C`).
+    /// A regularised CageUp adds its prior's Jacobian, mapped by Q, to Eq. 19
+    /// ([`crate::sync::cage_prior`]); it is always factorised densely.
     pub fn new(
         cage_coords: &crate::cage_coords::CageCoords,
-        rows: &[usize],
-        cage_from_rows: &Mat<f64>,
+        cage_updater: &crate::sync::cage_updater::CageUpdater,
         skin_weights: &SkinWeights,
         joint_coords: impl Fn(usize) -> Vec<f64>,
         skeleton: &Skeleton,
     ) -> Result<Self, RigError> {
         let num_cage = cage_coords.num_cage_vertices();
-        if cage_from_rows.nrows() != num_cage || cage_from_rows.ncols() != rows.len() {
+        let rows = cage_updater.rows();
+        let rows_map = cage_updater.cage_from_rows();
+        if rows_map.nrows() != num_cage || rows_map.ncols() != rows.len() {
             return Err(RigError::SizeMismatch {
                 what: "CageUp map columns",
                 expected: rows.len(),
-                actual: cage_from_rows.ncols(),
+                actual: rows_map.ncols(),
             });
         }
         let mut row_coords = Vec::with_capacity(rows.len() * num_cage);
@@ -184,7 +194,8 @@ impl CageReverser {
             row_coords,
             row_weights: skin_weights.select_rows(rows),
             joint_coords: psi,
-            cage_from_rows: cage_from_rows.clone(),
+            cage_from_rows: rows_map.clone(),
+            prior: cage_updater.prior().cloned(),
             parents: (0..skeleton.len()).map(|j| skeleton.parent(j)).collect(),
             order: skeleton.topological_order().to_vec(),
             factor: None,
@@ -204,6 +215,11 @@ impl CageReverser {
     /// Whether a factorisation for the current pose is held.
     pub fn is_factorised(&self) -> bool {
         self.factor.is_some()
+    }
+
+    /// The factorisation method selected.
+    pub fn method(&self) -> ReverserMethod {
+        self.method
     }
 
     /// Selects the factorisation method (drops the current factorisation).
@@ -238,7 +254,7 @@ impl CageReverser {
         joint_rotations: &[DMat3],
         joints_follow: bool,
     ) -> Result<(), RigError> {
-        let square = self.row_weights.num_vertices() == self.num_cage;
+        let square = self.row_weights.num_vertices() == self.num_cage && self.prior.is_none();
         if self.method == ReverserMethod::Auto
             && square
             && let Some(low_rank) = self.low_rank(joint_rotations, joints_follow)?
@@ -392,7 +408,10 @@ impl CageReverser {
                 }
             }
         }
-        let pg = &self.cage_from_rows * &g; // #C × 9#C
+        let mut pg = &self.cage_from_rows * &g; // #C × 9#C
+        if let Some(prior) = &self.prior {
+            prior.add_jacobian(joint_rotations, &e, &mut pg);
+        }
         let n = 3 * nc;
         let system = Mat::<f64>::from_fn(n, n, |r, c| {
             let (kp, a) = (r / 3, r % 3);

@@ -4,12 +4,18 @@
 //! `P` computed once: `P = Φ̃⁻¹` for the square MaxVol system (exact interpolation of the selected
 //! vertices), or `P = Φ̃⁺` (least squares, `(Φ̃ᵀΦ̃)⁻¹Φ̃ᵀ` via QR) when more rows are used.
 //! Per frame, C' = P · M̃' is a small dense product (`#C × #R` by `#R × 3`), with no allocation.
+//!
+//! [`CageUpdater::regularised`] turns the paper's fit into the regularised one
+//! ([`super::cage_prior`]): C' = K·M̃' + Q·P(C, S'), still linear in both targets.
 
 use faer::Mat;
 use glam::DVec3;
 
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
+use crate::skin_weights::SkinWeights;
+use crate::sync::cage_fit_kind::CageFitKind;
+use crate::sync::cage_prior::{CagePrior, RegularisedMaps, regularised_maps};
 
 /// Reciprocal condition estimate below which a cage-fitting system is rejected as singular.
 pub const MIN_RECIPROCAL_CONDITION: f64 = 1e-13;
@@ -30,8 +36,14 @@ pub enum CageFitMode {
 pub struct CageUpdater {
     rows: Vec<usize>,
     mode: CageFitMode,
-    /// P, `#C × #R`, column-major: C' = P · M̃'.
+    /// The rows' map of CageUp, `#C × #R`, column-major: P = Φ̃⁻¹ or Φ̃⁺ for the paper's fit,
+    /// K = H⁻¹Φ̃ᵀ for the regularised one (C' = K·M̃' + Q·P).
     cage_from_rows: Mat<f64>,
+    /// The regularised fit's prior (Ω_c and Q); `None` for the paper's fit.
+    prior: Option<CagePrior>,
+    /// Φ̃⁻¹ or Φ̃⁺ (`#C × #R`) when `cage_from_rows` is K: the rest cage whose ΦC reproduces
+    /// given rows ([`Self::apply_rows`]).
+    interpolant: Option<Mat<f64>>,
 }
 
 impl CageUpdater {
@@ -93,7 +105,84 @@ impl CageUpdater {
             rows,
             mode,
             cage_from_rows,
+            prior: None,
+            interpolant: None,
         })
+    }
+
+    /// The regularised fit on the same rows ([`super::cage_prior`]): `cage_coords` is Φ
+    /// (`#V × #C`) of the rest skin `rest_mesh` (`#V`) in `rest_cage` (`#C`, with its
+    /// `cage_triangles`), `skin_weights` Ω (`#V × #J`). [`Self::apply_rows`] keeps the paper's
+    /// map.
+    pub fn regularised(
+        self,
+        cage_coords: &CageCoords,
+        rest_cage: &[DVec3],
+        cage_triangles: &[[u32; 3]],
+        rest_mesh: &[DVec3],
+        skin_weights: &SkinWeights,
+    ) -> Result<Self, RigError> {
+        let RegularisedMaps {
+            cage_from_rows,
+            prior,
+        } = regularised_maps(
+            cage_coords,
+            &self.rows,
+            rest_cage,
+            cage_triangles,
+            rest_mesh,
+            skin_weights,
+        )?;
+        Ok(Self {
+            rows: self.rows,
+            mode: self.mode,
+            cage_from_rows,
+            prior: Some(prior),
+            interpolant: Some(self.cage_from_rows),
+        })
+    }
+
+    /// The paper's fit on the same rows (a copy of this one when it is the paper's).
+    pub fn paper(&self) -> Self {
+        Self {
+            rows: self.rows.clone(),
+            mode: self.mode,
+            cage_from_rows: self.interpolant().clone(),
+            prior: None,
+            interpolant: None,
+        }
+    }
+
+    /// Which fit this is.
+    pub fn fit_kind(&self) -> CageFitKind {
+        match self.prior {
+            Some(_) => CageFitKind::Regularised,
+            None => CageFitKind::Paper,
+        }
+    }
+
+    /// The regularised fit's prior (Ω_c, Q); `None` for the paper's fit.
+    pub fn prior(&self) -> Option<&CagePrior> {
+        self.prior.as_ref()
+    }
+
+    /// CageUp: C' (`posed_cage`, `#C`) from the posed fitting rows `posed_rows` (`#R`): P·M̃'
+    /// for the paper's fit; K·M̃' + Q·P(C, S') for the regularised one, with the skinning
+    /// transforms `posed_from_rest` (`#J`) and the rest cage `rest_cage` (`#C`). No allocation.
+    pub fn fit(
+        &mut self,
+        posed_rows: &[DVec3],
+        posed_from_rest: &[glam::DAffine3],
+        rest_cage: &[DVec3],
+        posed_cage: &mut [DVec3],
+    ) {
+        posed_cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
+        for (r, p) in posed_rows.iter().enumerate() {
+            accumulate_column(&self.cage_from_rows, r, *p, posed_cage);
+        }
+        if let Some(prior) = &mut self.prior {
+            prior.add_to_fit(posed_from_rest, rest_cage, posed_cage);
+        }
     }
 
     /// The mesh rows the fit uses (`#R`).
@@ -106,33 +195,42 @@ impl CageUpdater {
         self.mode
     }
 
-    /// P = Φ̃⁻¹ or Φ̃⁺, `#C × #R`.
+    /// CageUp's map of the rows, `#C × #R`: P = Φ̃⁻¹ or Φ̃⁺ for the paper's fit, K for the
+    /// regularised one.
     pub fn cage_from_rows(&self) -> &Mat<f64> {
         &self.cage_from_rows
     }
 
-    /// C' = P · M̃' from the full posed mesh M' (`#V`): reads only the selected rows.
-    pub fn apply(&self, posed_mesh: &[DVec3], posed_cage: &mut [DVec3]) {
-        posed_cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
+    /// The cage whose ΦC reproduces the rows: Φ̃⁻¹ or Φ̃⁺ (`#C × #R`), whatever the fit.
+    pub fn interpolant(&self) -> &Mat<f64> {
+        self.interpolant.as_ref().unwrap_or(&self.cage_from_rows)
+    }
+
+    /// `cage` (`#C`) = [`Self::interpolant`] · `rows` (`#R`): for the paper's fit from the full
+    /// mesh (`#V`, reading only the selected rows) this is CageUp without a prior.
+    pub fn apply(&self, mesh: &[DVec3], cage: &mut [DVec3]) {
+        cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
         for (r, &row) in self.rows.iter().enumerate() {
-            self.accumulate_column(r, posed_mesh[row], posed_cage);
+            accumulate_column(self.interpolant(), r, mesh[row], cage);
         }
     }
 
-    /// C' = P · M̃' from the posed positions of the selected rows only (`#R`, e.g. a ghost mesh).
-    pub fn apply_rows(&self, posed_rows: &[DVec3], posed_cage: &mut [DVec3]) {
-        posed_cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
-        for (r, p) in posed_rows.iter().enumerate() {
-            self.accumulate_column(r, *p, posed_cage);
+    /// `cage` (`#C`) = [`Self::interpolant`] · `rows` (`#R`, e.g. a ghost mesh): the rest cage
+    /// whose ΦC interpolates (or fits) the rows; the paper's CageUp of posed rows.
+    pub fn apply_rows(&self, rows: &[DVec3], cage: &mut [DVec3]) {
+        cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
+        for (r, p) in rows.iter().enumerate() {
+            accumulate_column(self.interpolant(), r, *p, cage);
         }
     }
+}
 
-    #[inline]
-    fn accumulate_column(&self, r: usize, p: DVec3, posed_cage: &mut [DVec3]) {
-        let col = self.cage_from_rows.col(r);
-        for (k, c) in posed_cage.iter_mut().enumerate() {
-            *c += col[k] * p;
-        }
+/// `cage += map[:, r] · p`.
+#[inline]
+fn accumulate_column(map: &Mat<f64>, r: usize, p: DVec3, cage: &mut [DVec3]) {
+    let col = map.col(r);
+    for (k, c) in cage.iter_mut().enumerate() {
+        *c += col[k] * p;
     }
 }
 

@@ -1,6 +1,8 @@
 //! Sync operators of Section 4: CageUp (S'→C'), SkelUp (C→S), CageRev (C'→C); for
 //! Green coordinates, their Newton forms (`green_cage_fit`, `green_cage_reverser`).
 
+pub mod cage_fit_kind;
+pub mod cage_prior;
 pub mod cage_reverser;
 pub mod cage_updater;
 pub(crate) mod dense_lu;
@@ -8,3 +10,5 @@ pub mod green_cage_fit;
 pub mod green_cage_reverser;
 pub mod newton;
 pub mod skeleton_updater;
+
+pub use cage_fit_kind::CageFitKind;

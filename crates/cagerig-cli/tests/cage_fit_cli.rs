@@ -1,0 +1,65 @@
+//! `--cage-fit` on the command line: the regularised default keeps the Fox's current cage on
+//! its body during the Run, where the paper's fit throws vertices far off; `animate --json`
+//! reports the measures; an unknown fit lists the accepted ones.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+
+mod support;
+
+use support::{cagerig, data, run_ok, temp_dir};
+
+/// The worst spread, deviation and flipped of `animate --json` on the Fox's Run (shipped cage).
+fn fox_run(cage_fit: &str) -> serde_json::Value {
+    let out = temp_dir(&format!("cage-fit-{cage_fit}"));
+    let json = run_ok(
+        cagerig()
+            .arg("animate")
+            .arg(data("fox/Fox.glb"))
+            .arg("--cage")
+            .arg(data("fox/Fox_cage.obj"))
+            .args([
+                "--animation",
+                "Run",
+                "--times",
+                "0,0.1,0.2,0.3,0.4,0.5,0.6,0.7",
+            ])
+            .args(["--cage-fit", cage_fit, "--json", "--force", "--out"])
+            .arg(&out),
+    );
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(report["cage_fit"], cage_fit);
+    assert_eq!(report["samples"].as_array().unwrap().len(), 8);
+    report["worst"].clone()
+}
+
+#[test]
+fn the_regularised_fit_keeps_the_foxs_handle_on_its_body() {
+    let paper = fox_run("paper");
+    let regularised = fox_run("regularised");
+    let spread = |v: &serde_json::Value| v["spread"].as_f64().unwrap();
+    // The paper's fit: one C' vertex several body widths away.
+    assert!(spread(&paper) > 5.0, "{paper}");
+    assert!(spread(&regularised) <= 1.5, "{regularised}");
+    let deviation = |v: &serde_json::Value| v["deviation"].as_f64().unwrap();
+    assert!(
+        deviation(&regularised) < 0.2 * deviation(&paper),
+        "{regularised} {paper}"
+    );
+}
+
+#[test]
+fn an_unknown_cage_fit_lists_the_accepted_ones() {
+    let output = cagerig()
+        .arg("edit")
+        .arg(data("arm/arm.obj"))
+        .args(["--cage-fit", "exact", "--out"])
+        .arg(temp_dir("cage-fit-unknown"))
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("regularised") && stderr.contains("paper"),
+        "{stderr}"
+    );
+}

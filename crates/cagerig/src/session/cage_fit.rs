@@ -1,0 +1,52 @@
+//! Switching CageUp's fit ([`CageFitKind`]) on a live rig: CageUp and Eq. 19 are rebuilt on
+//! the same Φ and rows; C, S, S' and M' do not move, C' is refitted.
+
+use super::cage_map::with_cage_fit;
+use super::*;
+
+impl RigSession {
+    /// The CageUp fit the rig was asked for (its options; Green rigs fit on the rows whatever
+    /// this says, see [`RigSession::cage_fit`]).
+    pub fn requested_cage_fit(&self) -> CageFitKind {
+        self.options.cage_fit
+    }
+
+    /// Switches CageUp to the fit `kind` and refits C' (unless CageUp is locked). One
+    /// all-or-nothing step: on an error nothing changed. Green rigs record the choice only.
+    pub fn set_cage_fit(&mut self, kind: CageFitKind) -> Result<(), RigError> {
+        if kind == self.options.cage_fit {
+            return Ok(());
+        }
+        match self.cage_map {
+            CageMap::Green(_) => {}
+            CageMap::Mvc => {
+                let cage = TriMesh {
+                    positions: self.original_rest_cage.clone(),
+                    triangles: self.cage_triangles.clone(),
+                };
+                let updater = with_cage_fit(
+                    self.cage_updater.paper(),
+                    kind,
+                    &self.cage_coords,
+                    &cage,
+                    &self.skin_weights,
+                )?;
+                let mut reverser = CageReverser::new(
+                    &self.cage_coords,
+                    &updater,
+                    &self.skin_weights,
+                    |j| self.skeleton_updater.joint_row(j).to_vec(),
+                    &self.skeleton,
+                )?;
+                reverser.set_method(self.reverser.method());
+                self.cage_updater = updater;
+                self.reverser = reverser;
+            }
+        }
+        self.options.cage_fit = kind;
+        if !self.locks.cage_up {
+            self.fit_cage();
+        }
+        Ok(())
+    }
+}
