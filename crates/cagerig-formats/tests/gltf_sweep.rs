@@ -3,7 +3,7 @@
 //! The sweep finds each `.gltf`/`.glb` under `data/` whose JSON has a skin, imports it with the
 //! default options, and compares cagerig's posed skin with the independent evaluation of the
 //! file (tests/common: the `gltf` crate's readers and Σ w G IBM v) at rest and at several times
-//! of every animation, to 1e-5 of the bounding-box diagonal (issue 23's bar).
+//! of every animation, to 1e-5 of the bounding-box diagonal.
 //!
 //! Point it at a library of your own characters with `CAGERIG_GLTF_SWEEP=dir1:dir2` (searched
 //! recursively): files the repository cannot redistribute, such as the Khronos sample BrainStem
@@ -32,7 +32,7 @@ const SAMPLES: [&str; 5] = [
     "gltf/SimpleSkin/SimpleSkin.gltf",
 ];
 
-/// The bar of issue 23: a viewer and cagerig agree to 1e-5 of the diagonal.
+/// The bar: a viewer and cagerig agree to 1e-5 of the diagonal.
 const TOLERANCE: f64 = 1e-5;
 
 fn diagonal(p: &[DVec3]) -> f64 {
