@@ -1,4 +1,4 @@
-"""MVC and Green coordinates side by side on the same rest-cage edit (issue 24's picture).
+"""MVC and Green coordinates side by side on the same rest-cage edit (the README's picture).
 
 Stretches the Arm's rest cage 1.6x along x about its centre, in a mean value rig and a Green
 rig, prints the mean change of the triangles' corner angles of each (radians and degrees, with

@@ -24,7 +24,7 @@ done
 # Reader 7: DQ blend weights (`<vertex> <b>` lines); reader 8: cage animation.
 printf '\x07# b\n0 0.25\n2 1\n' > corpus/parsers/seed7
 { printf '\x08'; head -c 3000 "$DATA"/arm/arm_cageAnim.txt; } > corpus/parsers/seed8
-# Files under 1 MB only: a multi-megabyte seed (BrainStem) slows every mutation.
+# Files under 1 MB only: a multi-megabyte seed slows every mutation.
 for f in "$DATA"/gltf/*/*.gl* "$DATA"/fox/Fox.glb; do
   [ "$(wc -c < "$f")" -lt 1000000 ] && seed gltf_import "$f" "$(basename "$f")"
 done

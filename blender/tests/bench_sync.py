@@ -1,4 +1,4 @@
-"""Sync time of one interaction inside Blender (issue 26's speed check):
+"""Sync time of one interaction inside Blender (the add-on's speed check):
 
     blender -b --factory-startup --python blender/tests/bench_sync.py -- ZIP CHARACTER_GLB CAGE_OBJ [REPEATS]
 

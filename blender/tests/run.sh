@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Headless tests of the Blender add-on (issue 26): builds the add-on zip, exports the Arm as
+# Headless tests of the Blender add-on: builds the add-on zip, exports the Arm as
 # glTF, then runs test_addon.py inside Blender (install the zip, enable, couple, the three
 # interactions against Blender's own evaluation, save/reopen, undo, bake, errors, and the same
 # edits through the cagerig Python package).

@@ -216,8 +216,8 @@ fn demo_runs_and_lands_the_grab() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Regression (issue 11): the demo wrote its files one by one into `--out`; it now stages them
-/// and replaces the folder whole, so a run is complete or absent. Running it again replaces
+/// The demo stages its files and replaces `--out` whole (rather than writing them one by one
+/// into it), so a run is complete or absent. Running it again replaces
 /// an earlier demo's output; a folder holding anything else is refused and left as it was.
 #[test]
 fn demo_output_is_staged_rerunnable_and_never_replaces_foreign_files() {

@@ -128,8 +128,8 @@ fn info_reports_the_green_binding_and_unknown_kinds_are_refused() {
 }
 
 /// `bench --coords green` on the default built-in snake, whose Green cage folds before the MVC
-/// pass's 60° bend: the bench used to stop with the refusal; it now times the drag and grab at
-/// the last pose reached and says which, with every row and its Newton steps in the JSON.
+/// pass's 60° bend: the bench does not stop at the refusal; it times the drag and grab at the
+/// last pose reached and says which, with every row and its Newton steps in the JSON.
 #[test]
 fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
     let out = cagerig()
@@ -177,7 +177,7 @@ fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
 }
 
 /// A Green rig does not compute mean value coordinates it would discard: `animate --auto-cage
-/// --coords green` used to compute Φ for the generated cage and then warn that "the given mean
+/// --coords green` computes no Φ for the generated cage and does not warn that "the given mean
 /// value coordinates … do not apply", of coordinates nobody gave.
 #[test]
 fn a_green_rig_with_a_generated_cage_computes_no_mean_value_coordinates() {
@@ -199,8 +199,8 @@ fn a_green_rig_with_a_generated_cage_computes_no_mean_value_coordinates() {
 }
 
 /// The Fox under Green coordinates: its unindexed mesh has 290 distinct points for a cage of
-/// 102 vertices and 200 faces, so [φ ψ] has no MaxVol rows. Binding used to fail with "cage
-/// coordinates Φ (rank deficient: MaxVol needs rank #C)"; it now fits all rows, says so, and
+/// 102 vertices and 200 faces, so [φ ψ] has no MaxVol rows. Binding does not fail with "cage
+/// coordinates Φ (rank deficient: MaxVol needs rank #C)": it fits all rows, says so, and
 /// reproduces the rest mesh and follows a rest-cage edit.
 #[test]
 fn a_green_rig_whose_mesh_has_too_few_distinct_points_fits_all_rows() {

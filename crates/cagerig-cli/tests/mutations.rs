@@ -1,4 +1,4 @@
-//! Corpus-free structured mutations of the shared Arm data through the commands (issue 11):
+//! Corpus-free structured mutations of the shared Arm data through the commands:
 //! each mutation edits one file of a private copy of the rig (drop, repeat or swap lines, cut
 //! the file, replace a number by an extreme one, a BOM, an empty file, …) and runs `info`,
 //! `coords`, `edit` and `animate`. Every run must exit 0 or 1 (never a panic or a signal), an

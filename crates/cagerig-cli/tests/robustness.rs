@@ -1,6 +1,6 @@
-//! Issue 11, one test per defect: every case gives a correct result or a clear error (file,
-//! line or element, expected, found), never exit 0 with a non-finite number, stale or partial
-//! output.
+//! Malformed input through the commands, one test per defect: every case gives a correct result
+//! or a clear error (file, line or element, expected, found), never exit 0 with a non-finite
+//! number, stale or partial output.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 

@@ -1,5 +1,5 @@
 //! Quality of the automatic weights (`cagerig::auto_weights`) against the artists' weights of
-//! the Arm and the Fox, and the targets of issue 25 (Blender 3.4's bone heat measured the same
+//! the Arm and the Fox, and its targets (Blender 3.4's bone heat measured the same
 //! way): dominant-joint agreement (the fraction of vertices whose largest weight is on the
 //! same joint), and the mean vertex distance between the Fox's Walk pose at t = 0.45 s skinned
 //! (LBS) with the computed and with the artist's weights, as a fraction of the bounding-box

@@ -1,6 +1,6 @@
 //! Criterion bench of automatic cage generation (`generate_cage`, default options: 100
 //! vertices, margin 0.5 % of the diagonal) on the Arm (2 089 vertices) and on the Arm
-//! subdivided three times (133 073 vertices). Targets of issue 10: ≤ 0.3 s and ≤ 2 s on the
+//! subdivided three times (133 073 vertices). Targets: ≤ 0.3 s and ≤ 2 s on the
 //! project's 2-core machine. `cargo bench -p cagerig --bench cage_gen`; the example
 //! `cage_gen_timing` prints the same runs with their stage times and quality figures.
 

@@ -1,7 +1,7 @@
 //! Times the automatic weights (`cagerig::auto_weights`, default options) on the Arm and on the
 //! Arm subdivided 1–3 times (3 levels: 133,105 vertices).
 //! `cargo run --release -p cagerig --example auto_weights_bench -- [--levels N] [--reps R]`
-//! (issue 25's targets on the 2-core machine: ≤ 0.5 s on the Arm, ≤ 3 s at 133k vertices).
+//! (targets on a 2-core machine: ≤ 0.5 s on the Arm, ≤ 3 s at 133k vertices).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 

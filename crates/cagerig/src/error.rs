@@ -498,9 +498,9 @@ mod tests {
         );
     }
 
-    /// A Green fit that stalls blames a fold only when a triangle folded: the message used to
-    /// say "folds cage triangle 154, whose area fell to 8.61e-1" of a triangle that kept 86 % of
-    /// its area (an FBX character at its first animation sample).
+    /// A Green fit that stalls blames a fold only when a triangle folded: a triangle that keeps
+    /// 86 % of its area (an FBX character at its first animation sample) is not reported as
+    /// "folds cage triangle 154, whose area fell to 8.61e-1".
     #[test]
     fn a_stalled_green_fit_blames_a_fold_only_when_a_triangle_folded() {
         let failed = |area_ratio| {

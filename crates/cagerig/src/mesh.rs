@@ -187,7 +187,7 @@ mod tests {
             TriMesh::new(q, vec![[0, 1, 2]]),
             Err(RigError::ValueOutOfBounds { index: 1, .. })
         ));
-        // Finite but large enough to overflow the method's products (issue 11).
+        // Finite but large enough to overflow the method's products.
         let mut r = p.clone();
         r[2].x = 1e308;
         assert!(matches!(

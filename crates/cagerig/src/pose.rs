@@ -214,8 +214,8 @@ mod tests {
     }
 
     /// A chain under a non-uniformly scaled, rotated parent whose child frame carries float32
-    /// noise (as BrainStem's inverse bind matrices do): regularised, positions kept, one warning;
-    /// a real shear is refused.
+    /// noise (as some exporters' inverse bind matrices do): regularised, positions kept, one
+    /// warning; a real shear is refused.
     #[test]
     fn float_noise_shear_is_regularised_and_real_shear_refused() {
         use crate::skeleton::Joint;

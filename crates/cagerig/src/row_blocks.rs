@@ -89,7 +89,7 @@ impl RowBlock {
     ///
     /// A short batch's values are stored one by one with volatile writes: with a copy of
     /// run-time length in that branch, LLVM merged the two branches into one `memcpy` call per
-    /// column, a call in the kernels' hot loops (2026-12-04, `perf`).
+    /// column, a call in the kernels' hot loops (seen with `perf`).
     #[inline(always)]
     pub(crate) fn write_lanes(&mut self, row: usize, col: usize, lanes: &[f64; 8], count: usize) {
         assert!(col < self.ncols && count <= 8 && row + count <= self.nrows);

@@ -438,7 +438,7 @@ mod tests {
             EditScript::parse(r#"{"steps":[{"op":"move_rest_cage","vertices":[1]}]}"#),
             Err(ScriptError::Step { step: 1, .. })
         ));
-        // No serde internals in the message (issue 11).
+        // No serde internals in the message.
         let err = EditScript::parse(
             r#"{"steps":[{"op":"rotate_joint","joint":[1],"axis":[1,0,0],"degrees":1}]}"#,
         )

@@ -1,6 +1,6 @@
 //! `--auto-cage` on a small mesh: the generated cage adapts to the mesh, so that a rig can be
-//! built (regression: a 24-vertex mesh failed with "MaxVol needs at least #C mesh vertices:
-//! expected 100 but got 24").
+//! built (a 24-vertex mesh with the default 100-vertex target would fail with "MaxVol needs at
+//! least #C mesh vertices: expected 100 but got 24").
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 

@@ -1,4 +1,4 @@
-//! Green-coordinates rigs (issue 24): identity, similarity, shape preservation against MVC, and
+//! Green-coordinates rigs: identity, similarity, shape preservation against MVC, and
 //! the coupled loop (grabs land exactly, nothing else moves) under LBS, DQS and CoR, on the Arm
 //! and on the built-in rigs, with every structure in consensus after many interleaved events.
 

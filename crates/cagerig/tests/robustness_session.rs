@@ -1,5 +1,5 @@
-//! Issue 11, library side: events are all-or-nothing, and the constructors apply the one cage
-//! validation.
+//! Malformed input, library side: events are all-or-nothing, and the constructors apply the one
+//! cage validation.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 

@@ -10,6 +10,30 @@ pub fn data(rel: &str) -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/")).join(rel)
 }
 
+/// The first file named `name` under the folders of `CAGERIG_GLTF_SWEEP` (a path list, searched
+/// recursively in sorted order), for tests of characters the repository cannot ship; `None`
+/// when the variable is unset or no folder holds one.
+pub fn sweep_file(name: &str) -> Option<PathBuf> {
+    fn find(dir: &std::path::Path, name: &str) -> Option<PathBuf> {
+        let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
+            .ok()?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .collect();
+        paths.sort();
+        for p in &paths {
+            if p.is_file() && p.file_name().is_some_and(|f| f == name) {
+                return Some(p.clone());
+            }
+        }
+        paths
+            .iter()
+            .filter(|p| p.is_dir())
+            .find_map(|p| find(p, name))
+    }
+    let dirs = std::env::var_os("CAGERIG_GLTF_SWEEP")?;
+    std::env::split_paths(&dirs).find_map(|d| find(&d, name))
+}
+
 /// An outward-oriented box around `points`, padded by `pad` × its diagonal.
 pub fn box_cage(points: &[DVec3], pad: f64) -> TriMesh {
     let (mut lo, mut hi) = cagerig::mesh::bounding_box(points);

@@ -26,12 +26,11 @@
 //! reciprocals from `vrcp14pd` refined by two Newton steps (about an ulp) instead of dividing.
 //! The tiers agree to rounding (1e-13 relative to `1 + |entry|`, tested; a point 1e-7 of an
 //! edge's length from an edge, where a solid angle is conditioned to ~ε·size/d, to 1e-9). One
-//! machine always runs one tier, so its results are reproducible there. Fusing and the
-//! reciprocal took the binding at 133k from 151 to 142 ms, and the edges computed ahead of the
-//! faces to 137–139 ms (`green_bind_bench 3`, 2026-12-03); the triple product as 2A h, the
-//! dot products per edge, AVX-512's `vgetmantpd`/`vgetexppd` in the logarithm and corner 2 from
-//! the partition of unity from 116 to 98 ms (2026-12-04, the fastest of four alternating runs of
-//! each build; MVC 58–59 ms).
+//! machine always runs one tier, so its results are reproducible there. What each choice is
+//! worth (fused multiply-adds, the reciprocal, the edges computed ahead of the faces, the triple
+//! product as 2A h, the dot products per edge, AVX-512's `vgetmantpd`/`vgetexppd` in the
+//! logarithm, corner 2 from the partition of unity): docs/green-measurements.md; together they
+//! bind the Arm at 133k vertices in about 100 ms (`green_bind_bench 3`; MVC about 60 ms).
 //!
 //! A lane is recomputed by the per-point closed forms ([`GreenTriangle::terms`], whole row) when
 //! its point lies within [`ON_PLANE`] (relative) of a face's plane or of a cage vertex, where

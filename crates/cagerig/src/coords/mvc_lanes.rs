@@ -17,8 +17,8 @@ pub(super) type Lanes = [f64; LANES];
 /// closure is compiled without the kernel's `target_feature`s, so a fused multiply-add in it
 /// became a call of libm's `fma` per lane, and an intrinsic a call per vector: the same MVC
 /// kernel took 66–69 ms at 133k in one binary and 196–206 ms in another, Green's 133 or 284 ms,
-/// depending only on how the crate was partitioned and inlined in that build (2026-12-03,
-/// `perf`: `try_trait::Wrapped::call_mut`, `fma`, `_mm512_loadu_pd` as functions of their own).
+/// depending only on how the crate was partitioned and inlined in that build (`perf` showed
+/// `try_trait::Wrapped::call_mut`, `fma`, `_mm512_loadu_pd` as functions of their own).
 /// A loop in an `#[inline(always)]` function has nothing left for the inliner to decline.
 macro_rules! per_lane {
     ($zero:expr, |$l:ident| $e:expr) => {{

@@ -254,7 +254,7 @@ mod tests {
 
     #[test]
     fn index_column_is_honoured_and_checked() {
-        // Swapped lines (issue 11): the same rig as in order.
+        // Swapped lines: the same rig as in order.
         let ordered = parse("j 0 root -1 0 0 0\nj 1 mid 0 1 0 0\nj 2 tip 1 2 0 0\n").unwrap();
         let swapped = parse("j 0 root -1 0 0 0\nj 2 tip 1 2 0 0\nj 1 mid 0 1 0 0\n").unwrap();
         assert_eq!(ordered, swapped);
@@ -272,7 +272,7 @@ mod tests {
             matches!(&e, ParseError::Invalid { line: 2, message, .. } if message.contains("itself")),
             "{e}"
         );
-        // A joint at 1e308 (issue 11): rejected with the line and the value.
+        // A joint at 1e308: rejected with the line and the value.
         let e = parse("j 0 a -1 1e308 0 0\n").unwrap_err();
         assert!(
             matches!(&e, ParseError::Malformed { line: 1, found, .. } if found == "1e308"),
