@@ -543,3 +543,21 @@ fn missing_output_folders_are_created_and_a_file_in_the_way_is_named_once() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A skeleton file with no joint is refused when it is read, naming that file (not the weights
+/// read after it, whose joint indices then all look out of range).
+#[test]
+fn an_empty_skeleton_is_blamed_on_its_file() {
+    let dir = temp_dir("empty-skt");
+    let mesh = arm_copy(&dir, "arm.skt", |_| "# no joints\n".to_string());
+    let skt = mesh.with_extension("skt");
+    let o = run(&["info"], &[("", &mesh)]);
+    assert_error(
+        &o,
+        &[
+            &format!("{}: expected joint lines", skt.display()),
+            "found no joint",
+        ],
+    );
+    assert!(!stderr(&o).contains("arm.skw"), "{}", stderr(&o));
+}
