@@ -561,3 +561,110 @@ fn an_empty_skeleton_is_blamed_on_its_file() {
     );
     assert!(!stderr(&o).contains("arm.skw"), "{}", stderr(&o));
 }
+
+/// Weights made for another skeleton are refused (the 5-joint weights of the README on the
+/// 25-joint Arm), naming both files and both joint counts; `--skeleton` pairs them with the
+/// skeleton they were made for, for `edit` and `render` alike; a skeleton of as many joints
+/// with other names is refused at the first differing joint.
+#[test]
+fn weights_of_another_skeleton_are_refused_unless_paired_with_it() {
+    let dir = temp_dir("weights-skeleton");
+    let five = support::repo().join("examples/arm-5-joints.skt");
+    let skw = dir.join("arm5.skw");
+    let o = run(
+        &["weights"],
+        &[
+            ("", &support::arm()),
+            ("--skeleton", &five),
+            ("--out", &skw),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let header = std::fs::read_to_string(&skw).unwrap();
+    assert!(
+        header.starts_with("# joints (5): shoulder elbow wrist hand fingers\n"),
+        "{}",
+        &header[..80]
+    );
+    let script = edit_script(
+        &dir,
+        SMALL_SCRIPT.replace("\"joint\":3", "\"joint\":1").as_str(),
+    );
+    let arm_skt = support::arm().with_extension("skt");
+    let expected = [
+        format!(
+            "{}:1: the weights were made for a skeleton of 5 joints",
+            skw.display()
+        ),
+        format!("the rig's skeleton ({}) has 25 joints", arm_skt.display()),
+    ];
+    let expected: Vec<&str> = expected.iter().map(String::as_str).collect();
+    let o = edit(
+        &support::arm(),
+        &script,
+        &dir.join("refused"),
+        &["--weights", skw.to_str().unwrap()],
+    );
+    assert_error(&o, &expected);
+    assert!(!dir.join("refused").exists());
+    let picture = dir.join("refused.png");
+    let o = run(
+        &["render", "--size", "64x48"],
+        &[
+            ("", &support::arm()),
+            ("--weights", &skw),
+            ("--out", &picture),
+        ],
+    );
+    assert_error(&o, &expected);
+
+    let o = edit(
+        &support::arm(),
+        &script,
+        &dir.join("paired"),
+        &[
+            "--weights",
+            skw.to_str().unwrap(),
+            "--skeleton",
+            five.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let joints = std::fs::read_to_string(dir.join("paired/step1_joints.json")).unwrap();
+    assert_eq!(joints.matches("\"name\"").count(), 5, "{joints}");
+    assert!(joints.contains("\"fingers\""), "{joints}");
+    let picture = dir.join("paired.png");
+    let o = run(
+        &["render", "--size", "64x48"],
+        &[
+            ("", &support::arm()),
+            ("--weights", &skw),
+            ("--skeleton", &five),
+            ("--out", &picture),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(picture.is_file());
+
+    let renamed = dir.join("renamed.skt");
+    let text = std::fs::read_to_string(&five).unwrap();
+    std::fs::write(&renamed, text.replace(" wrist ", " carpus ")).unwrap();
+    let o = edit(
+        &support::arm(),
+        &script,
+        &dir.join("renamed"),
+        &[
+            "--weights",
+            skw.to_str().unwrap(),
+            "--skeleton",
+            renamed.to_str().unwrap(),
+        ],
+    );
+    assert_error(
+        &o,
+        &[&format!(
+            "their joint 2 is \"wrist\", joint 2 of the rig's skeleton ({}) is \"carpus\"",
+            renamed.display()
+        )],
+    );
+}
