@@ -14,9 +14,103 @@ use serde::Serialize;
 use crate::rig_source::FileUse;
 use crate::rig_source::LoadedRig;
 
-/// Whether `path` is read by `cagerig-formats` rather than as the paper tool's OBJ file set.
-pub fn is_interchange(path: &Path) -> bool {
-    cagerig_formats::CharacterFormat::of(path).is_some()
+/// Whether `path` is read by `cagerig-formats` rather than as the paper tool's OBJ file set: the
+/// one place the CLI decides how a mesh file is read. By its extension (any case), checked
+/// against its first bytes: a file whose content is another format than its extension says, or
+/// whose extension is not one cagerig reads, is refused with what it is, instead of being
+/// misread as OBJ text.
+pub fn is_interchange(path: &Path) -> anyhow::Result<bool> {
+    use cagerig_formats::CharacterFormat;
+    let content = Content::sniff(path);
+    if let Some(format) = CharacterFormat::of(path) {
+        if format != CharacterFormat::Gltf && content == Some(Content::GlbMagic) {
+            bail!(
+                "{}: the file is a binary glTF (it starts with `glTF`), not {}: rename it .glb",
+                path.display(),
+                format.name()
+            );
+        }
+        return Ok(true);
+    }
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let is_obj = extension.as_deref() == Some("obj");
+    if let (true, Some(content)) = (is_obj, content.and_then(Content::character_format)) {
+        bail!(
+            "{}: the file is {}, not OBJ text: rename it {}",
+            path.display(),
+            content.0,
+            content.1
+        );
+    }
+    if is_obj {
+        return Ok(false);
+    }
+    let mut read = vec!["OBJ (.obj)".to_string()];
+    read.extend(CharacterFormat::ALL.iter().map(|f| {
+        let extensions: Vec<String> = f.extensions().iter().map(|e| format!(".{e}")).collect();
+        format!("{} ({})", f.name(), extensions.join(", "))
+    }));
+    let hint = match content.and_then(Content::character_format) {
+        Some((what, rename)) => format!(" (the file is {what}: rename it {rename})"),
+        None => String::new(),
+    };
+    bail!(
+        "{}: expected a mesh in a format cagerig reads, {}; found {}{hint}",
+        path.display(),
+        read.join(", "),
+        match extension {
+            Some(e) => format!("the extension .{e}"),
+            None => "no extension".to_string(),
+        }
+    )
+}
+
+/// What the first bytes of a file say it is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Content {
+    /// `glTF`: a binary glTF (GLB).
+    GlbMagic,
+    /// `{` (after blanks): JSON, a `.gltf`.
+    Json,
+    /// `Kaydara FBX Binary`.
+    FbxBinary,
+    /// Anything else (OBJ text, …).
+    Other,
+}
+
+impl Content {
+    /// The start of the file at `path`; `None` when it cannot be read (its reader says why).
+    fn sniff(path: &Path) -> Option<Self> {
+        use std::io::Read;
+        let mut start = Vec::with_capacity(64);
+        std::fs::File::open(path)
+            .ok()?
+            .take(64)
+            .read_to_end(&mut start)
+            .ok()?;
+        let text = start.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&start);
+        Some(if start.starts_with(b"glTF") {
+            Self::GlbMagic
+        } else if start.starts_with(b"Kaydara FBX Binary") {
+            Self::FbxBinary
+        } else if text.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{') {
+            Self::Json
+        } else {
+            Self::Other
+        })
+    }
+
+    /// What the file is and the extension it should have, for a character format.
+    fn character_format(self) -> Option<(&'static str, &'static str)> {
+        match self {
+            Self::GlbMagic => Some(("a binary glTF (it starts with `glTF`)", ".glb")),
+            Self::Json => Some(("JSON, as a glTF is (it starts with `{`)", ".gltf")),
+            Self::FbxBinary => Some(("a binary FBX (it starts with `Kaydara FBX Binary`)", ".fbx")),
+            Self::Other => None,
+        }
+    }
 }
 
 /// Imports a character (its first skin unless `skin` names one).

@@ -213,11 +213,11 @@ pub fn load_rig_or_generate_cage(
         }
     };
     // OBJ rigs take the weights source in the loader (their `.skw` is then not needed).
-    let obj_files = args.builtin.is_none()
-        && args
-            .mesh
-            .as_deref()
-            .is_some_and(|m| !crate::interchange::is_interchange(m));
+    let interchange = match (&args.builtin, &args.mesh) {
+        (None, Some(mesh)) => crate::interchange::is_interchange(mesh)?,
+        _ => false,
+    };
+    let obj_files = args.builtin.is_none() && args.mesh.is_some() && !interchange;
     let mut loaded = match (&args.builtin, &args.mesh) {
         (Some(name), _) => {
             let (vertices, cage_vertices) =
@@ -245,7 +245,7 @@ pub fn load_rig_or_generate_cage(
                 file_skinning: None,
             }
         }
-        (None, Some(mesh)) if crate::interchange::is_interchange(mesh) => LoadedRig {
+        (None, Some(mesh)) if interchange => LoadedRig {
             allow_outside_cage: args.allow_outside_cage,
             ..crate::interchange::load_interchange(
                 mesh,

@@ -668,3 +668,65 @@ fn weights_of_another_skeleton_are_refused_unless_paired_with_it() {
         )],
     );
 }
+
+/// A mesh file is read by its extension, checked against its content: an unknown extension is
+/// refused with the formats that are read (OBJ text named `.stl` was read as OBJ, a `.ply` failed
+/// with "found no vertex (`v`) line"), and a binary glTF named `.obj` is refused as what it is
+/// (it failed with "line 1 is not valid UTF-8"), by every command that reads a mesh.
+#[test]
+fn a_mesh_file_is_refused_unless_its_extension_and_content_are_a_format_read() {
+    let dir = temp_dir("mesh-formats");
+    let formats = "expected a mesh in a format cagerig reads, OBJ (.obj), glTF (.glb, .gltf), \
+                   FBX (.fbx); found the extension";
+    let stl = dir.join("arm.stl");
+    std::fs::copy(support::arm(), &stl).unwrap();
+    let ply = dir.join("arm.ply");
+    std::fs::write(
+        &ply,
+        "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n",
+    )
+    .unwrap();
+    let bare = dir.join("arm");
+    std::fs::copy(support::arm(), &bare).unwrap();
+    for (path, found) in [(&stl, " .stl"), (&ply, " .ply")] {
+        let o = run(&["info"], &[("", path)]);
+        assert_error(&o, &[&format!("{}: {formats}{found}", path.display())]);
+    }
+    let o = run(&["info"], &[("", &bare)]);
+    assert_error(&o, &["found no extension"]);
+
+    let glb_as_obj = dir.join("fox.obj");
+    std::fs::copy(support::data("fox/Fox.glb"), &glb_as_obj).unwrap();
+    let gltf_as_txt = dir.join("fox.txt");
+    std::fs::write(&gltf_as_txt, "{\"asset\":{\"version\":\"2.0\"}}").unwrap();
+    let binary_gltf = format!(
+        "{}: the file is a binary glTF (it starts with `glTF`), not OBJ text: rename it .glb",
+        glb_as_obj.display()
+    );
+    let out = dir.join("out.obj");
+    for args in [
+        vec!["info"],
+        vec!["cage", "--out", out.to_str().unwrap()],
+        vec!["weights", "--out", out.to_str().unwrap()],
+    ] {
+        let o = run(&args, &[("", &glb_as_obj)]);
+        assert_error(&o, &[&binary_gltf]);
+        assert!(!stderr(&o).contains("UTF-8"), "{}", stderr(&o));
+    }
+    let o = run(&["info"], &[("", &gltf_as_txt)]);
+    assert_error(
+        &o,
+        &[
+            formats,
+            "(the file is JSON, as a glTF is (it starts with `{`): rename it .gltf)",
+        ],
+    );
+    // The formats read still open (OBJ named in capitals too).
+    let upper = dir.join("ARM.OBJ");
+    std::fs::copy(support::arm(), &upper).unwrap();
+    let o = run(
+        &["cage", "--faces", "40", "--out", out.to_str().unwrap()],
+        &[("", &upper)],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+}

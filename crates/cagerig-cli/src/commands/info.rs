@@ -85,10 +85,8 @@ pub struct Args {
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (rig, json) = (&args.rig, args.json);
-    if let Some(m) = rig
-        .mesh
-        .as_deref()
-        .filter(|m| crate::interchange::is_interchange(m))
+    if let Some(m) = rig.mesh.as_deref()
+        && crate::interchange::is_interchange(m)?
     {
         return crate::interchange::info(m, rig.skin.as_deref(), json);
     }

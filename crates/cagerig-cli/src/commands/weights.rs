@@ -82,7 +82,7 @@ struct WeightsOutput<'a> {
 
 /// The mesh, the skeleton and the import's notes.
 fn load(args: &Args) -> anyhow::Result<(TriMesh, Skeleton, Vec<String>)> {
-    if crate::interchange::is_interchange(&args.mesh) {
+    if crate::interchange::is_interchange(&args.mesh)? {
         let options = ImportOptions {
             skin: args.skin.clone(),
             ..ImportOptions::default()
