@@ -203,6 +203,9 @@ pub struct AnimationTracks {
     /// The chosen imported animation's morph weights (`#keys × #targets`) with the file's
     /// targets and default weights: a cage track once the session can solve for it.
     morph: Option<(Vec<f64>, MorphTargets)>,
+    /// Each track as people name it (`animation 'Walk'`, `the skeleton animation FILE`) and its
+    /// last key time.
+    ends: Vec<(String, f64)>,
 }
 
 /// The tracks of [`AnimationTracks`] for a session.
@@ -226,6 +229,27 @@ impl ResolvedTracks {
 }
 
 impl AnimationTracks {
+    /// Warns on stderr, once per track, when sample times lie past its last key: a sample there
+    /// shows the track's last frame.
+    pub fn warn_times_past_end(&self, times: &[f64]) {
+        for (label, end) in &self.ends {
+            let past: Vec<String> = times
+                .iter()
+                .filter(|&&t| t > *end)
+                .map(|t| t.to_string())
+                .collect();
+            if past.is_empty() {
+                continue;
+            }
+            eprintln!(
+                "warning: --times {} {} past the end of {label} ({end:.3} s): the last frame is \
+                 shown",
+                past.join(","),
+                if past.len() == 1 { "is" } else { "are" },
+            );
+        }
+    }
+
     /// The cage track of the morph weights, if any, solved on `session`'s rig (with a warning
     /// when the cage does not reproduce the targets to 1e-5 of the diagonal).
     pub fn resolve(self, session: &RigSession) -> anyhow::Result<ResolvedTracks> {
@@ -268,7 +292,17 @@ pub fn animation_tracks(
     animation: Option<&str>,
     cage_anim: Option<&Path>,
 ) -> anyhow::Result<AnimationTracks> {
-    let (skeleton, channels, morph_weights) = skeleton_track(loaded, skeleton_anim, animation)?;
+    let (skeleton, channels, morph_weights, skeleton_name) =
+        skeleton_track(loaded, skeleton_anim, animation)?;
+    let mut ends = Vec::new();
+    if let Some(track) = &skeleton {
+        let label = match (skeleton_anim, &skeleton_name) {
+            (Some(p), _) => format!("the skeleton animation {}", p.display()),
+            (None, Some(name)) => format!("animation '{name}'"),
+            (None, None) => "the animation".to_string(),
+        };
+        ends.push((label, track.times().last().copied().unwrap_or(0.0)));
+    }
     let cage = match cage_anim {
         Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
             p,
@@ -283,22 +317,38 @@ pub fn animation_tracks(
         Some(weights) => Some((weights, std::mem::take(&mut loaded.morph_targets))),
         None => None,
     };
+    if let (Some(track), Some(p)) = (&cage, cage_anim) {
+        ends.push((
+            format!("the cage animation {}", p.display()),
+            track.times().last().copied().unwrap_or(0.0),
+        ));
+    }
     Ok(AnimationTracks {
         skeleton,
         channels,
         cage,
         morph,
+        ends,
     })
 }
 
+/// The track and its name.
+type NamedSkeletonTrack = (
+    Option<SkeletonTrack>,
+    PoseChannels,
+    Option<Vec<f64>>,
+    Option<String>,
+);
+
 /// The skeleton track `animate` plays: `--animation NAME|INDEX` from the imported file (all
 /// channels, and its morph weights when it has some), or `--skeleton-anim` in the paper tool's
-/// format (rotations and root motion).
+/// format (rotations and root motion); with its name (the imported animation's, else the
+/// file's stem).
 pub fn skeleton_track(
     loaded: &LoadedRig,
     skeleton_anim: Option<&Path>,
     animation: Option<&str>,
-) -> anyhow::Result<(Option<SkeletonTrack>, PoseChannels, Option<Vec<f64>>)> {
+) -> anyhow::Result<NamedSkeletonTrack> {
     match (animation, skeleton_anim) {
         (Some(_), Some(_)) => bail!("give --animation or --skeleton-anim, not both"),
         (Some(sel), None) => {
@@ -316,6 +366,7 @@ pub fn skeleton_track(
                     Some(a.track.clone()),
                     PoseChannels::Full,
                     a.morph_weights.clone(),
+                    Some(a.name.clone()),
                 )),
                 None => {
                     let names: Vec<String> = loaded
@@ -346,8 +397,9 @@ pub fn skeleton_track(
             ),
             PoseChannels::RotationsAndRootMotion,
             None,
+            p.file_stem().map(|s| s.to_string_lossy().into_owned()),
         )),
-        (None, None) => Ok((None, PoseChannels::RotationsAndRootMotion, None)),
+        (None, None) => Ok((None, PoseChannels::RotationsAndRootMotion, None, None)),
     }
 }
 

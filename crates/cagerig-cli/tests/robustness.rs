@@ -730,3 +730,44 @@ fn a_mesh_file_is_refused_unless_its_extension_and_content_are_a_format_read() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+fn fox_walk(command: &str, times: &str, out: &Path) -> Output {
+    let fox = support::data("fox/Fox.glb");
+    let cage = support::data("fox/Fox_cage.obj");
+    let mut args = vec![command, "--animation", "Walk", "--times", times];
+    if command == "render" {
+        args.extend(["--size", "64x48"]);
+    }
+    run(&args, &[("", &fox), ("--cage", &cage), ("--out", out)])
+}
+
+/// Times past the end of an animation show its last frame: said once per command, naming the
+/// animation and its length (the Fox's Walk is 0.708 s); times within it say nothing.
+#[test]
+fn times_past_the_end_of_an_animation_are_warned_about_once() {
+    let dir = temp_dir("times-past-end");
+    let o = fox_walk("animate", "0.25,5,6", &dir.join("animated"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let warning = "warning: --times 5,6 are past the end of animation 'Walk' (0.708 s): the last \
+                   frame is shown";
+    assert_eq!(stderr(&o).matches(warning).count(), 1, "{}", stderr(&o));
+    assert_eq!(
+        stderr(&o).matches("past the end").count(),
+        1,
+        "{}",
+        stderr(&o)
+    );
+    let o = fox_walk("render", "5", &dir.join("late.png"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "warning: --times 5 is past the end of animation 'Walk' (0.708 s): the last frame \
+             is shown"
+        ),
+        "{}",
+        stderr(&o)
+    );
+    let o = fox_walk("animate", "0,0.7", &dir.join("within"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("past the end"), "{}", stderr(&o));
+}

@@ -256,6 +256,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage, &args.session)?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
+    tracks.warn_times_past_end(&args.times);
     let mut options = args.session.options();
     options.skinning = crate::session_args::choose_skinning(
         args.skinning,
