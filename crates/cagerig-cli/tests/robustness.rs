@@ -771,3 +771,26 @@ fn times_past_the_end_of_an_animation_are_warned_about_once() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("past the end"), "{}", stderr(&o));
 }
+
+/// One picture (one time of an animation) to an `--out` without `.png` is written with `.png`
+/// added (it was written without an extension), said on stderr, and the path printed is the one
+/// written.
+#[test]
+fn a_single_picture_gets_its_png_extension() {
+    let dir = temp_dir("render-png");
+    let out = dir.join("pose");
+    let o = fox_walk("render", "0.25", &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = dir.join("pose.png");
+    assert!(written.is_file() && !out.exists());
+    assert!(std::fs::read(&written).unwrap().starts_with(b"\x89PNG"));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        written.display().to_string()
+    );
+    assert!(
+        stderr(&o).contains("does not end in .png"),
+        "{}",
+        stderr(&o)
+    );
+}
