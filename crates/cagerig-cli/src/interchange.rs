@@ -206,6 +206,8 @@ pub struct AnimationTracks {
     /// Each track as people name it (`animation 'Walk'`, `the skeleton animation FILE`) and its
     /// last key time.
     ends: Vec<(String, f64)>,
+    /// The name of what is played: the imported animation's, else its file's stem.
+    name: Option<String>,
 }
 
 /// The tracks of [`AnimationTracks`] for a session.
@@ -216,6 +218,8 @@ pub struct ResolvedTracks {
     /// SkelUp held during playback: the skeleton keys already carry the rest joints' motion
     /// (a cagerig export with a cage track, see [`cagerig_formats::morph_cage_track`]).
     pub hold_rest_skeleton: bool,
+    /// The name of what is played: the imported animation's, else its file's stem.
+    pub name: Option<String>,
 }
 
 impl ResolvedTracks {
@@ -259,6 +263,7 @@ impl AnimationTracks {
                 channels: self.channels,
                 cage: self.cage,
                 hold_rest_skeleton: false,
+                name: self.name,
             });
         };
         let Some(skeleton) = &self.skeleton else {
@@ -279,6 +284,7 @@ impl AnimationTracks {
             channels: self.channels,
             cage: Some(fit.track),
             hold_rest_skeleton: true,
+            name: self.name,
         })
     }
 }
@@ -294,6 +300,11 @@ pub fn animation_tracks(
 ) -> anyhow::Result<AnimationTracks> {
     let (skeleton, channels, morph_weights, skeleton_name) =
         skeleton_track(loaded, skeleton_anim, animation)?;
+    let stem = |p: &Path| {
+        p.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .filter(|s| !s.is_empty())
+    };
     let mut ends = Vec::new();
     if let Some(track) = &skeleton {
         let label = match (skeleton_anim, &skeleton_name) {
@@ -303,6 +314,9 @@ pub fn animation_tracks(
         };
         ends.push((label, track.times().last().copied().unwrap_or(0.0)));
     }
+    let name = skeleton_name
+        .filter(|n| !n.is_empty())
+        .or_else(|| cage_anim.and_then(stem));
     let cage = match cage_anim {
         Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
             p,
@@ -329,6 +343,7 @@ pub fn animation_tracks(
         cage,
         morph,
         ends,
+        name,
     })
 }
 

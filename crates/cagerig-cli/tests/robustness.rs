@@ -794,3 +794,29 @@ fn a_single_picture_gets_its_png_extension() {
         stderr(&o)
     );
 }
+
+/// The exported animation keeps its source's name (it was named after the character, "Fox"),
+/// as the glTF reader reads it back.
+#[test]
+fn an_exported_animation_keeps_its_name() {
+    let dir = temp_dir("export-animation-name");
+    let out = dir.join("walk.glb");
+    let o = run(
+        &["export", "--animation", "Walk", "--max-between", "0"],
+        &[
+            ("", &support::data("fox/Fox.glb")),
+            ("--cage", &support::data("fox/Fox_cage.obj")),
+            ("--out", &out),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let exported =
+        cagerig_formats::import_character(&out, &cagerig_formats::ImportOptions::default())
+            .unwrap();
+    let names: Vec<&str> = exported
+        .animations
+        .iter()
+        .map(|a| a.name.as_str())
+        .collect();
+    assert_eq!(names, ["Walk"]);
+}
