@@ -227,9 +227,7 @@ impl Rig {
             let (mut parts, mut warnings) = (parts, warnings);
             let name = path.display().to_string();
             let applied = py
-                .detach(|| {
-                    apply_weights_source(&weights_source, &mut parts, &name, &name, &|_| {})
-                })
+                .detach(|| apply_weights_source(&weights_source, &mut parts, &name, &name, &|_| {}))
                 .map_err(crate::auto_weights::weights_source_error)?;
             warnings.extend(applied.warnings);
             (parts, warnings)

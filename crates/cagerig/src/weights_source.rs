@@ -97,20 +97,29 @@ pub fn apply_weights_source(
     let (weights, warnings) = match source {
         WeightsSource::Character => return Ok(AppliedWeights::default()),
         WeightsSource::File { weights, skeleton } => {
-            let skeleton_source = match skeleton {
-                Some(p) => {
-                    parts.skeleton = crate::io::skt::read_skt(p)?;
-                    files.push(("skeleton", p.clone()));
-                    p.display().to_string()
-                }
-                None => skeleton_source.to_string(),
+            // `parts` changes only once both files are read.
+            let paired = match skeleton {
+                Some(p) => Some((crate::io::skt::read_skt(p)?, p)),
+                None => None,
             };
-            let read = crate::io::skw::read_skw_for_skeleton(
-                weights,
-                parts.mesh.num_vertices(),
-                &parts.skeleton,
-                &skeleton_source,
-            )?;
+            let read = match &paired {
+                Some((paired_skeleton, p)) => crate::io::skw::read_skw_for_skeleton(
+                    weights,
+                    parts.mesh.num_vertices(),
+                    paired_skeleton,
+                    &p.display().to_string(),
+                )?,
+                None => crate::io::skw::read_skw_for_skeleton(
+                    weights,
+                    parts.mesh.num_vertices(),
+                    &parts.skeleton,
+                    skeleton_source,
+                )?,
+            };
+            if let Some((paired_skeleton, p)) = paired {
+                parts.skeleton = paired_skeleton;
+                files.push(("skeleton", p.clone()));
+            }
             files.push(("skin_weights", weights.clone()));
             read
         }

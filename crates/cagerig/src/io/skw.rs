@@ -153,12 +153,13 @@ fn some_names(names: &[&str]) -> String {
     text
 }
 
-/// Refuses a header whose joint count is not `num_joints`; `skeleton` names the rig's skeleton.
+/// Refuses a header whose joint count is not `num_joints`; `skeleton` names the rig's skeleton
+/// (its file), when known.
 fn check_joint_count(
     header: &SkwJoints,
     source: &Path,
     num_joints: usize,
-    skeleton: &str,
+    skeleton: Option<&str>,
 ) -> Result<(), ParseError> {
     if header.names.len() == num_joints {
         return Ok(());
@@ -168,11 +169,12 @@ fn check_joint_count(
         path: source.to_path_buf(),
         line: header.line,
         message: format!(
-            "the weights were made for a skeleton of {} joints ({}), but the rig's skeleton \
-             ({skeleton}) has {num_joints} joints: give the skeleton the weights were made for \
-             (--skeleton FILE.skt), or compute weights for this skeleton (cagerig weights)",
+            "the weights were made for a skeleton of {} joints ({}), but the rig's skeleton{} \
+             has {num_joints} joints: give the skeleton the weights were made for (--skeleton \
+             FILE.skt), or compute weights for this skeleton (cagerig weights)",
             names.len(),
             some_names(&names),
+            skeleton.map(|s| format!(" ({s})")).unwrap_or_default(),
         ),
     })
 }
@@ -186,7 +188,7 @@ pub fn parse_skw_for_skeleton(
     skeleton_source: &str,
 ) -> Result<(SkinWeights, Vec<Warning>), ParseError> {
     if let Some(header) = skw_joints(data, source)? {
-        check_joint_count(&header, source, skeleton.len(), skeleton_source)?;
+        check_joint_count(&header, source, skeleton.len(), Some(skeleton_source))?;
         let differing = header
             .names
             .iter()
@@ -251,7 +253,7 @@ pub fn parse_skw(
     num_joints: usize,
 ) -> Result<(SkinWeights, Vec<Warning>), ParseError> {
     if let Some(header) = skw_joints(data, source)? {
-        check_joint_count(&header, source, num_joints, &format!("{num_joints} joints"))?;
+        check_joint_count(&header, source, num_joints, None)?;
     }
     parse_skw_unchecked_header(data, source, num_vertices, num_joints)
 }
