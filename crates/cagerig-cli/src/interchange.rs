@@ -14,9 +14,103 @@ use serde::Serialize;
 use crate::rig_source::FileUse;
 use crate::rig_source::LoadedRig;
 
-/// Whether `path` is read by `cagerig-formats` rather than as the paper tool's OBJ file set.
-pub fn is_interchange(path: &Path) -> bool {
-    cagerig_formats::CharacterFormat::of(path).is_some()
+/// Whether `path` is read by `cagerig-formats` rather than as the paper tool's OBJ file set: the
+/// one place the CLI decides how a mesh file is read. By its extension (any case), checked
+/// against its first bytes: a file whose content is another format than its extension says, or
+/// whose extension is not one cagerig reads, is refused with what it is, instead of being
+/// misread as OBJ text.
+pub fn is_interchange(path: &Path) -> anyhow::Result<bool> {
+    use cagerig_formats::CharacterFormat;
+    let content = Content::sniff(path);
+    if let Some(format) = CharacterFormat::of(path) {
+        if format != CharacterFormat::Gltf && content == Some(Content::GlbMagic) {
+            bail!(
+                "{}: the file is a binary glTF (it starts with `glTF`), not {}: rename it .glb",
+                path.display(),
+                format.name()
+            );
+        }
+        return Ok(true);
+    }
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let is_obj = extension.as_deref() == Some("obj");
+    if let (true, Some(content)) = (is_obj, content.and_then(Content::character_format)) {
+        bail!(
+            "{}: the file is {}, not OBJ text: rename it {}",
+            path.display(),
+            content.0,
+            content.1
+        );
+    }
+    if is_obj {
+        return Ok(false);
+    }
+    let mut read = vec!["OBJ (.obj)".to_string()];
+    read.extend(CharacterFormat::ALL.iter().map(|f| {
+        let extensions: Vec<String> = f.extensions().iter().map(|e| format!(".{e}")).collect();
+        format!("{} ({})", f.name(), extensions.join(", "))
+    }));
+    let hint = match content.and_then(Content::character_format) {
+        Some((what, rename)) => format!(" (the file is {what}: rename it {rename})"),
+        None => String::new(),
+    };
+    bail!(
+        "{}: expected a mesh in a format cagerig reads, {}; found {}{hint}",
+        path.display(),
+        read.join(", "),
+        match extension {
+            Some(e) => format!("the extension .{e}"),
+            None => "no extension".to_string(),
+        }
+    )
+}
+
+/// What the first bytes of a file say it is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Content {
+    /// `glTF`: a binary glTF (GLB).
+    GlbMagic,
+    /// `{` (after blanks): JSON, a `.gltf`.
+    Json,
+    /// `Kaydara FBX Binary`.
+    FbxBinary,
+    /// Anything else (OBJ text, …).
+    Other,
+}
+
+impl Content {
+    /// The start of the file at `path`; `None` when it cannot be read (its reader says why).
+    fn sniff(path: &Path) -> Option<Self> {
+        use std::io::Read;
+        let mut start = Vec::with_capacity(64);
+        std::fs::File::open(path)
+            .ok()?
+            .take(64)
+            .read_to_end(&mut start)
+            .ok()?;
+        let text = start.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&start);
+        Some(if start.starts_with(b"glTF") {
+            Self::GlbMagic
+        } else if start.starts_with(b"Kaydara FBX Binary") {
+            Self::FbxBinary
+        } else if text.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{') {
+            Self::Json
+        } else {
+            Self::Other
+        })
+    }
+
+    /// What the file is and the extension it should have, for a character format.
+    fn character_format(self) -> Option<(&'static str, &'static str)> {
+        match self {
+            Self::GlbMagic => Some(("a binary glTF (it starts with `glTF`)", ".glb")),
+            Self::Json => Some(("JSON, as a glTF is (it starts with `{`)", ".gltf")),
+            Self::FbxBinary => Some(("a binary FBX (it starts with `Kaydara FBX Binary`)", ".fbx")),
+            Self::Other => None,
+        }
+    }
 }
 
 /// Imports a character (its first skin unless `skin` names one).
@@ -109,6 +203,11 @@ pub struct AnimationTracks {
     /// The chosen imported animation's morph weights (`#keys × #targets`) with the file's
     /// targets and default weights: a cage track once the session can solve for it.
     morph: Option<(Vec<f64>, MorphTargets)>,
+    /// Each track as people name it (`animation 'Walk'`, `the skeleton animation FILE`) and its
+    /// last key time.
+    ends: Vec<(String, f64)>,
+    /// The name of what is played: the imported animation's, else its file's stem.
+    name: Option<String>,
 }
 
 /// The tracks of [`AnimationTracks`] for a session.
@@ -119,6 +218,8 @@ pub struct ResolvedTracks {
     /// SkelUp held during playback: the skeleton keys already carry the rest joints' motion
     /// (a cagerig export with a cage track, see [`cagerig_formats::morph_cage_track`]).
     pub hold_rest_skeleton: bool,
+    /// The name of what is played: the imported animation's, else its file's stem.
+    pub name: Option<String>,
 }
 
 impl ResolvedTracks {
@@ -132,6 +233,27 @@ impl ResolvedTracks {
 }
 
 impl AnimationTracks {
+    /// Warns on stderr, once per track, when sample times lie past its last key: a sample there
+    /// shows the track's last frame.
+    pub fn warn_times_past_end(&self, times: &[f64]) {
+        for (label, end) in &self.ends {
+            let past: Vec<String> = times
+                .iter()
+                .filter(|&&t| t > *end)
+                .map(|t| t.to_string())
+                .collect();
+            if past.is_empty() {
+                continue;
+            }
+            eprintln!(
+                "warning: --times {} {} past the end of {label} ({end:.3} s): the last frame is \
+                 shown",
+                past.join(","),
+                if past.len() == 1 { "is" } else { "are" },
+            );
+        }
+    }
+
     /// The cage track of the morph weights, if any, solved on `session`'s rig (with a warning
     /// when the cage does not reproduce the targets to 1e-5 of the diagonal).
     pub fn resolve(self, session: &RigSession) -> anyhow::Result<ResolvedTracks> {
@@ -141,6 +263,7 @@ impl AnimationTracks {
                 channels: self.channels,
                 cage: self.cage,
                 hold_rest_skeleton: false,
+                name: self.name,
             });
         };
         let Some(skeleton) = &self.skeleton else {
@@ -161,6 +284,7 @@ impl AnimationTracks {
             channels: self.channels,
             cage: Some(fit.track),
             hold_rest_skeleton: true,
+            name: self.name,
         })
     }
 }
@@ -174,7 +298,25 @@ pub fn animation_tracks(
     animation: Option<&str>,
     cage_anim: Option<&Path>,
 ) -> anyhow::Result<AnimationTracks> {
-    let (skeleton, channels, morph_weights) = skeleton_track(loaded, skeleton_anim, animation)?;
+    let (skeleton, channels, morph_weights, skeleton_name) =
+        skeleton_track(loaded, skeleton_anim, animation)?;
+    let stem = |p: &Path| {
+        p.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .filter(|s| !s.is_empty())
+    };
+    let mut ends = Vec::new();
+    if let Some(track) = &skeleton {
+        let label = match (skeleton_anim, &skeleton_name) {
+            (Some(p), _) => format!("the skeleton animation {}", p.display()),
+            (None, Some(name)) => format!("animation '{name}'"),
+            (None, None) => "the animation".to_string(),
+        };
+        ends.push((label, track.times().last().copied().unwrap_or(0.0)));
+    }
+    let name = skeleton_name
+        .filter(|n| !n.is_empty())
+        .or_else(|| cage_anim.and_then(stem));
     let cage = match cage_anim {
         Some(p) => Some(cagerig::io::cage_animation::read_cage_animation(
             p,
@@ -189,22 +331,39 @@ pub fn animation_tracks(
         Some(weights) => Some((weights, std::mem::take(&mut loaded.morph_targets))),
         None => None,
     };
+    if let (Some(track), Some(p)) = (&cage, cage_anim) {
+        ends.push((
+            format!("the cage animation {}", p.display()),
+            track.times().last().copied().unwrap_or(0.0),
+        ));
+    }
     Ok(AnimationTracks {
         skeleton,
         channels,
         cage,
         morph,
+        ends,
+        name,
     })
 }
 
+/// The track and its name.
+type NamedSkeletonTrack = (
+    Option<SkeletonTrack>,
+    PoseChannels,
+    Option<Vec<f64>>,
+    Option<String>,
+);
+
 /// The skeleton track `animate` plays: `--animation NAME|INDEX` from the imported file (all
 /// channels, and its morph weights when it has some), or `--skeleton-anim` in the paper tool's
-/// format (rotations and root motion).
+/// format (rotations and root motion); with its name (the imported animation's, else the
+/// file's stem).
 pub fn skeleton_track(
     loaded: &LoadedRig,
     skeleton_anim: Option<&Path>,
     animation: Option<&str>,
-) -> anyhow::Result<(Option<SkeletonTrack>, PoseChannels, Option<Vec<f64>>)> {
+) -> anyhow::Result<NamedSkeletonTrack> {
     match (animation, skeleton_anim) {
         (Some(_), Some(_)) => bail!("give --animation or --skeleton-anim, not both"),
         (Some(sel), None) => {
@@ -222,6 +381,7 @@ pub fn skeleton_track(
                     Some(a.track.clone()),
                     PoseChannels::Full,
                     a.morph_weights.clone(),
+                    Some(a.name.clone()),
                 )),
                 None => {
                     let names: Vec<String> = loaded
@@ -252,8 +412,9 @@ pub fn skeleton_track(
             ),
             PoseChannels::RotationsAndRootMotion,
             None,
+            p.file_stem().map(|s| s.to_string_lossy().into_owned()),
         )),
-        (None, None) => Ok((None, PoseChannels::RotationsAndRootMotion, None)),
+        (None, None) => Ok((None, PoseChannels::RotationsAndRootMotion, None, None)),
     }
 }
 

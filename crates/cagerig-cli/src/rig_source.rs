@@ -50,6 +50,11 @@ pub struct RigArgs {
     /// writes them) instead of the character's own.
     #[arg(long, conflicts_with = "auto_weights")]
     pub weights: Option<PathBuf>,
+    /// The skeleton (`.skt`) the `--weights` were made for (as given to `cagerig weights
+    /// --skeleton`): it replaces the rig's skeleton (an OBJ then needs no `<stem>.skt`). Without
+    /// it, `--weights` must fit the rig's own skeleton.
+    #[arg(long, requires = "weights")]
+    pub skeleton: Option<PathBuf>,
     /// Compute skinning weights (as `cagerig weights` does with its default options, the rig's
     /// cage bounding the volume) instead of using the character's own; an OBJ then needs no
     /// `.skw`.
@@ -61,7 +66,10 @@ impl RigArgs {
     /// Where the weights come from (`--weights`, `--auto-weights`, else the character's).
     pub fn weights_source(&self) -> WeightsSource {
         match (&self.weights, self.auto_weights) {
-            (Some(p), _) => WeightsSource::File(p.clone()),
+            (Some(p), _) => WeightsSource::File {
+                weights: p.clone(),
+                skeleton: self.skeleton.clone(),
+            },
             (None, true) => WeightsSource::Automatic(AutoWeightsOptions::default()),
             (None, false) => WeightsSource::Character,
         }
@@ -205,11 +213,11 @@ pub fn load_rig_or_generate_cage(
         }
     };
     // OBJ rigs take the weights source in the loader (their `.skw` is then not needed).
-    let obj_files = args.builtin.is_none()
-        && args
-            .mesh
-            .as_deref()
-            .is_some_and(|m| !crate::interchange::is_interchange(m));
+    let interchange = match (&args.builtin, &args.mesh) {
+        (None, Some(mesh)) => crate::interchange::is_interchange(mesh)?,
+        _ => false,
+    };
+    let obj_files = args.builtin.is_none() && args.mesh.is_some() && !interchange;
     let mut loaded = match (&args.builtin, &args.mesh) {
         (Some(name), _) => {
             let (vertices, cage_vertices) =
@@ -237,7 +245,7 @@ pub fn load_rig_or_generate_cage(
                 file_skinning: None,
             }
         }
-        (None, Some(mesh)) if crate::interchange::is_interchange(mesh) => LoadedRig {
+        (None, Some(mesh)) if interchange => LoadedRig {
             allow_outside_cage: args.allow_outside_cage,
             ..crate::interchange::load_interchange(
                 mesh,
@@ -257,15 +265,28 @@ pub fn load_rig_or_generate_cage(
         (None, None) => bail!("give a mesh file or --builtin NAME"),
     };
     if !obj_files {
-        let (warnings, file) =
-            apply_weights_source(&weights, &mut loaded.parts, &loaded.name, &progress_bar)?;
-        loaded.warnings.extend(warnings);
-        if let Some(path) = file {
-            loaded.files.push(FileUse {
-                role: "skin_weights".into(),
+        let file_skeleton: Vec<String> = loaded
+            .parts
+            .skeleton
+            .joints()
+            .iter()
+            .map(|j| j.name.clone())
+            .collect();
+        let applied = apply_weights_source(
+            &weights,
+            &mut loaded.parts,
+            &loaded.name,
+            &loaded.name,
+            &progress_bar,
+        )?;
+        loaded.warnings.extend(applied.warnings);
+        loaded
+            .files
+            .extend(applied.files.into_iter().map(|(role, path)| FileUse {
+                role: role.into(),
                 path,
-            });
-        }
+            }));
+        drop_animations_of_another_skeleton(&mut loaded, &file_skeleton, &weights);
     }
     bar.finish();
     // The one cage validation, the same for every command (and again in the session).
@@ -285,6 +306,41 @@ pub fn load_rig_or_generate_cage(
         loaded.parts.cage_coords = Some(compute_coords_with_progress(&loaded.parts, progress)?);
     }
     Ok(loaded)
+}
+
+/// The file's animations animate its own skeleton (`file_skeleton`, joint names): when the
+/// skeleton paired with `--weights` has other joints, they are left out, with a note.
+fn drop_animations_of_another_skeleton(
+    loaded: &mut LoadedRig,
+    file_skeleton: &[String],
+    weights: &WeightsSource,
+) {
+    let Some(paired) = weights.paired_skeleton() else {
+        return;
+    };
+    let same = loaded.parts.skeleton.len() == file_skeleton.len()
+        && loaded
+            .parts
+            .skeleton
+            .joints()
+            .iter()
+            .zip(file_skeleton)
+            .all(|(j, name)| j.name == *name);
+    if same || loaded.animations.is_empty() {
+        return;
+    }
+    loaded.warnings.push(Warning::Note {
+        message: format!(
+            "{}: its {} animations animate its own skeleton ({} joints), not {} ({} joints): \
+             they are left out",
+            loaded.name,
+            loaded.animations.len(),
+            file_skeleton.len(),
+            paired.display(),
+            loaded.parts.skeleton.len()
+        ),
+    });
+    loaded.animations.clear();
 }
 
 fn load_files(

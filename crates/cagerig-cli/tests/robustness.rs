@@ -543,3 +543,280 @@ fn missing_output_folders_are_created_and_a_file_in_the_way_is_named_once() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A skeleton file with no joint is refused when it is read, naming that file (not the weights
+/// read after it, whose joint indices then all look out of range).
+#[test]
+fn an_empty_skeleton_is_blamed_on_its_file() {
+    let dir = temp_dir("empty-skt");
+    let mesh = arm_copy(&dir, "arm.skt", |_| "# no joints\n".to_string());
+    let skt = mesh.with_extension("skt");
+    let o = run(&["info"], &[("", &mesh)]);
+    assert_error(
+        &o,
+        &[
+            &format!("{}: expected joint lines", skt.display()),
+            "found no joint",
+        ],
+    );
+    assert!(!stderr(&o).contains("arm.skw"), "{}", stderr(&o));
+}
+
+/// Weights made for another skeleton are refused (the 5-joint weights of the README on the
+/// 25-joint Arm), naming both files and both joint counts; `--skeleton` pairs them with the
+/// skeleton they were made for, for `edit` and `render` alike; a skeleton of as many joints
+/// with other names is refused at the first differing joint.
+#[test]
+fn weights_of_another_skeleton_are_refused_unless_paired_with_it() {
+    let dir = temp_dir("weights-skeleton");
+    let five = support::repo().join("examples/arm-5-joints.skt");
+    let skw = dir.join("arm5.skw");
+    let o = run(
+        &["weights"],
+        &[
+            ("", &support::arm()),
+            ("--skeleton", &five),
+            ("--out", &skw),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let header = std::fs::read_to_string(&skw).unwrap();
+    assert!(
+        header.starts_with("# joints (5): shoulder elbow wrist hand fingers\n"),
+        "{}",
+        &header[..80]
+    );
+    let script = edit_script(
+        &dir,
+        SMALL_SCRIPT.replace("\"joint\":3", "\"joint\":1").as_str(),
+    );
+    let arm_skt = support::arm().with_extension("skt");
+    let expected = [
+        format!(
+            "{}:1: the weights were made for a skeleton of 5 joints",
+            skw.display()
+        ),
+        format!("the rig's skeleton ({}) has 25 joints", arm_skt.display()),
+    ];
+    let expected: Vec<&str> = expected.iter().map(String::as_str).collect();
+    let o = edit(
+        &support::arm(),
+        &script,
+        &dir.join("refused"),
+        &["--weights", skw.to_str().unwrap()],
+    );
+    assert_error(&o, &expected);
+    assert!(!dir.join("refused").exists());
+    let picture = dir.join("refused.png");
+    let o = run(
+        &["render", "--size", "64x48"],
+        &[
+            ("", &support::arm()),
+            ("--weights", &skw),
+            ("--out", &picture),
+        ],
+    );
+    assert_error(&o, &expected);
+
+    let o = edit(
+        &support::arm(),
+        &script,
+        &dir.join("paired"),
+        &[
+            "--weights",
+            skw.to_str().unwrap(),
+            "--skeleton",
+            five.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let joints = std::fs::read_to_string(dir.join("paired/step1_joints.json")).unwrap();
+    assert_eq!(joints.matches("\"name\"").count(), 5, "{joints}");
+    assert!(joints.contains("\"fingers\""), "{joints}");
+    let picture = dir.join("paired.png");
+    let o = run(
+        &["render", "--size", "64x48"],
+        &[
+            ("", &support::arm()),
+            ("--weights", &skw),
+            ("--skeleton", &five),
+            ("--out", &picture),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(picture.is_file());
+
+    let renamed = dir.join("renamed.skt");
+    let text = std::fs::read_to_string(&five).unwrap();
+    std::fs::write(&renamed, text.replace(" wrist ", " carpus ")).unwrap();
+    let o = edit(
+        &support::arm(),
+        &script,
+        &dir.join("renamed"),
+        &[
+            "--weights",
+            skw.to_str().unwrap(),
+            "--skeleton",
+            renamed.to_str().unwrap(),
+        ],
+    );
+    assert_error(
+        &o,
+        &[&format!(
+            "their joint 2 is \"wrist\", joint 2 of the rig's skeleton ({}) is \"carpus\"",
+            renamed.display()
+        )],
+    );
+}
+
+/// A mesh file is read by its extension, checked against its content: an unknown extension is
+/// refused with the formats that are read (OBJ text named `.stl` was read as OBJ, a `.ply` failed
+/// with "found no vertex (`v`) line"), and a binary glTF named `.obj` is refused as what it is
+/// (it failed with "line 1 is not valid UTF-8"), by every command that reads a mesh.
+#[test]
+fn a_mesh_file_is_refused_unless_its_extension_and_content_are_a_format_read() {
+    let dir = temp_dir("mesh-formats");
+    let formats = "expected a mesh in a format cagerig reads, OBJ (.obj), glTF (.glb, .gltf), \
+                   FBX (.fbx); found the extension";
+    let stl = dir.join("arm.stl");
+    std::fs::copy(support::arm(), &stl).unwrap();
+    let ply = dir.join("arm.ply");
+    std::fs::write(
+        &ply,
+        "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n",
+    )
+    .unwrap();
+    let bare = dir.join("arm");
+    std::fs::copy(support::arm(), &bare).unwrap();
+    for (path, found) in [(&stl, " .stl"), (&ply, " .ply")] {
+        let o = run(&["info"], &[("", path)]);
+        assert_error(&o, &[&format!("{}: {formats}{found}", path.display())]);
+    }
+    let o = run(&["info"], &[("", &bare)]);
+    assert_error(&o, &["found no extension"]);
+
+    let glb_as_obj = dir.join("fox.obj");
+    std::fs::copy(support::data("fox/Fox.glb"), &glb_as_obj).unwrap();
+    let gltf_as_txt = dir.join("fox.txt");
+    std::fs::write(&gltf_as_txt, "{\"asset\":{\"version\":\"2.0\"}}").unwrap();
+    let binary_gltf = format!(
+        "{}: the file is a binary glTF (it starts with `glTF`), not OBJ text: rename it .glb",
+        glb_as_obj.display()
+    );
+    let out = dir.join("out.obj");
+    for args in [
+        vec!["info"],
+        vec!["cage", "--out", out.to_str().unwrap()],
+        vec!["weights", "--out", out.to_str().unwrap()],
+    ] {
+        let o = run(&args, &[("", &glb_as_obj)]);
+        assert_error(&o, &[&binary_gltf]);
+        assert!(!stderr(&o).contains("UTF-8"), "{}", stderr(&o));
+    }
+    let o = run(&["info"], &[("", &gltf_as_txt)]);
+    assert_error(
+        &o,
+        &[
+            formats,
+            "(the file is JSON, as a glTF is (it starts with `{`): rename it .gltf)",
+        ],
+    );
+    // The formats read still open (OBJ named in capitals too).
+    let upper = dir.join("ARM.OBJ");
+    std::fs::copy(support::arm(), &upper).unwrap();
+    let o = run(
+        &["cage", "--faces", "40", "--out", out.to_str().unwrap()],
+        &[("", &upper)],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+fn fox_walk(command: &str, times: &str, out: &Path) -> Output {
+    let fox = support::data("fox/Fox.glb");
+    let cage = support::data("fox/Fox_cage.obj");
+    let mut args = vec![command, "--animation", "Walk", "--times", times];
+    if command == "render" {
+        args.extend(["--size", "64x48"]);
+    }
+    run(&args, &[("", &fox), ("--cage", &cage), ("--out", out)])
+}
+
+/// Times past the end of an animation show its last frame: said once per command, naming the
+/// animation and its length (the Fox's Walk is 0.708 s); times within it say nothing.
+#[test]
+fn times_past_the_end_of_an_animation_are_warned_about_once() {
+    let dir = temp_dir("times-past-end");
+    let o = fox_walk("animate", "0.25,5,6", &dir.join("animated"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let warning = "warning: --times 5,6 are past the end of animation 'Walk' (0.708 s): the last \
+                   frame is shown";
+    assert_eq!(stderr(&o).matches(warning).count(), 1, "{}", stderr(&o));
+    assert_eq!(
+        stderr(&o).matches("past the end").count(),
+        1,
+        "{}",
+        stderr(&o)
+    );
+    let o = fox_walk("render", "5", &dir.join("late.png"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "warning: --times 5 is past the end of animation 'Walk' (0.708 s): the last frame \
+             is shown"
+        ),
+        "{}",
+        stderr(&o)
+    );
+    let o = fox_walk("animate", "0,0.7", &dir.join("within"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("past the end"), "{}", stderr(&o));
+}
+
+/// One picture (one time of an animation) to an `--out` without `.png` is written with `.png`
+/// added (it was written without an extension), said on stderr, and the path printed is the one
+/// written.
+#[test]
+fn a_single_picture_gets_its_png_extension() {
+    let dir = temp_dir("render-png");
+    let out = dir.join("pose");
+    let o = fox_walk("render", "0.25", &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = dir.join("pose.png");
+    assert!(written.is_file() && !out.exists());
+    assert!(std::fs::read(&written).unwrap().starts_with(b"\x89PNG"));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        written.display().to_string()
+    );
+    assert!(
+        stderr(&o).contains("does not end in .png"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// The exported animation keeps its source's name (it was named after the character, "Fox"),
+/// as the glTF reader reads it back.
+#[test]
+fn an_exported_animation_keeps_its_name() {
+    let dir = temp_dir("export-animation-name");
+    let out = dir.join("walk.glb");
+    let o = run(
+        &["export", "--animation", "Walk", "--max-between", "0"],
+        &[
+            ("", &support::data("fox/Fox.glb")),
+            ("--cage", &support::data("fox/Fox_cage.obj")),
+            ("--out", &out),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let exported =
+        cagerig_formats::import_character(&out, &cagerig_formats::ImportOptions::default())
+            .unwrap();
+    let names: Vec<&str> = exported
+        .animations
+        .iter()
+        .map(|a| a.name.as_str())
+        .collect();
+    assert_eq!(names, ["Walk"]);
+}

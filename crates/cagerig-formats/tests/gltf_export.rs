@@ -217,8 +217,15 @@ fn hybrid_animation_exports_with_cage_keys_as_morph_targets() {
         .copied()
         .collect();
     let times = sample_times(player.duration(), 30.0, &keys);
-    let (doc, bin) =
-        animation_to_gltf(&mut s, &mut player, Some(&cage_track), &times, "walk").unwrap();
+    let (doc, bin) = animation_to_gltf(
+        &mut s,
+        &mut player,
+        Some(&cage_track),
+        &times,
+        "arm",
+        "walk",
+    )
+    .unwrap();
     let path = temp_file("fox_hybrid.glb");
     let mut bytes = Vec::new();
     write_glb(&mut bytes, &doc, &bin).unwrap();

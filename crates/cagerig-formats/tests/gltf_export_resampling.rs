@@ -109,6 +109,7 @@ impl AnimatedRig {
             self.cage_track.as_ref(),
             times,
             "anim",
+            "anim",
         )
         .unwrap();
         let mut bytes = Vec::new();

@@ -232,10 +232,10 @@ impl Rig {
             }
             let (mut parts, mut warnings) = (parts, warnings);
             let name = path.display().to_string();
-            let (more, _) = py
-                .detach(|| apply_weights_source(&weights_source, &mut parts, &name, &|_| {}))
+            let applied = py
+                .detach(|| apply_weights_source(&weights_source, &mut parts, &name, &name, &|_| {}))
                 .map_err(crate::auto_weights::weights_source_error)?;
-            warnings.extend(more);
+            warnings.extend(applied.warnings);
             (parts, warnings)
         } else {
             if let Some(skin) = skin {

@@ -123,7 +123,7 @@ fn write_exports(doc: &Document, dir: &Path) -> Result<Vec<PathBuf>, ExportError
     let skt = dir.join("rig.skt");
     cagerig::io::skt::write_skt(&skt, &skeleton)?;
     let skw = dir.join("rig.skw");
-    cagerig::io::skw::write_skw(&skw, s.skin_weights(), FloatFormat::RoundTrip)?;
+    cagerig::io::skw::write_skw(&skw, s.skin_weights(), &skeleton, FloatFormat::RoundTrip)?;
     let rig_cage = dir.join("rig_cage.obj");
     cagerig::io::write_obj(&rig_cage, s.rest_cage(), s.cage_triangles())?;
     written.extend([rig_mesh, skt, skw, rig_cage]);

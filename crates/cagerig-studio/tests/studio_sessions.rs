@@ -258,6 +258,7 @@ fn a_hybrid_export_reopens_with_its_cage_keys_and_plays_as_exported() {
         Some(&cage_track),
         &times,
         "arm",
+        "arm",
     )
     .unwrap();
     let dir = temp_dir("hybrid");

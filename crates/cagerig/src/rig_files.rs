@@ -90,11 +90,16 @@ pub fn load_rig_files_with_weights(
     let mesh_data = crate::io::obj::read_obj(mesh)?;
     let mut mesh_warnings = check_character_mesh(mesh, &mesh_data)?;
     files.push(("mesh", mesh.to_path_buf()));
-    let skeleton_path = found
-        .skeleton
-        .clone()
-        .ok_or_else(|| missing("skeleton", format!("{stem}.skt")))?;
+    // A skeleton paired with the weights replaces the one beside the mesh (read once, here).
+    let skeleton_path = match weights.paired_skeleton() {
+        Some(p) => p.to_path_buf(),
+        None => found
+            .skeleton
+            .clone()
+            .ok_or_else(|| missing("skeleton", format!("{stem}.skt")))?,
+    };
     let skeleton = crate::io::skt::read_skt(&skeleton_path)?;
+    let skeleton_source = skeleton_path.display().to_string();
     files.push(("skeleton", skeleton_path));
     let (skin_weights, mut warnings) = if weights.replaces_character_weights() {
         // Replaced below, once the cage is known; the CoR rows beside the mesh belong to the
@@ -111,8 +116,12 @@ pub fn load_rig_files_with_weights(
             .skin_weights
             .clone()
             .ok_or_else(|| missing("skinning weights", format!("{stem}.skw")))?;
-        let read =
-            crate::io::skw::read_skw(&weights_path, mesh_data.num_vertices(), skeleton.len())?;
+        let read = crate::io::skw::read_skw_for_skeleton(
+            &weights_path,
+            mesh_data.num_vertices(),
+            &skeleton,
+            &skeleton_source,
+        )?;
         files.push(("skin_weights", weights_path));
         read
     };
@@ -215,12 +224,18 @@ pub fn load_rig_files_with_weights(
         dq_blend_weights,
     };
     let name = mesh.display().to_string();
-    let (mut weight_warnings, weights_file) =
-        apply_weights_source(weights, &mut parts, &name, progress)?;
-    warnings.append(&mut weight_warnings);
-    if let Some(p) = weights_file {
-        files.push(("skin_weights", p));
-    }
+    // The paired skeleton is `parts.skeleton` already.
+    let unpaired = match weights {
+        WeightsSource::File { weights, .. } => WeightsSource::File {
+            weights: weights.clone(),
+            skeleton: None,
+        },
+        other => other.clone(),
+    };
+    let mut applied =
+        apply_weights_source(&unpaired, &mut parts, &name, &skeleton_source, progress)?;
+    warnings.append(&mut applied.warnings);
+    files.append(&mut applied.files);
     Ok(RigFiles {
         parts,
         files,
@@ -289,7 +304,7 @@ pub fn write_rig_files(
     let p = |suffix: &str| dir.join(format!("{name}{suffix}"));
     crate::io::obj::write_obj(&p(".obj"), &parts.mesh.positions, &parts.mesh.triangles)?;
     crate::io::skt::write_skt(&p(".skt"), &parts.skeleton)?;
-    crate::io::skw::write_skw(&p(".skw"), &parts.skin_weights, fmt)?;
+    crate::io::skw::write_skw(&p(".skw"), &parts.skin_weights, &parts.skeleton, fmt)?;
     crate::io::obj::write_obj(
         &p("_cage.obj"),
         &parts.cage.positions,

@@ -107,6 +107,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         write_generated_cage(&mut staged, &g.cage)?;
     }
     let tracks = args.animation.tracks(&mut loaded)?;
+    tracks.warn_times_past_end(times);
     let mut options = session_args.options();
     options.skinning = crate::session_args::choose_skinning(skinning, None, &loaded);
     let (session, warnings) = start_session(loaded, options)?;

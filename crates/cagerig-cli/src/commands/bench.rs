@@ -73,6 +73,7 @@ fn load_parts(args: &Args) -> anyhow::Result<(String, RigParts)> {
         skin: None,
         allow_outside_cage: false,
         weights: None,
+        skeleton: None,
         auto_weights: false,
     };
     let loaded = crate::rig_source::load_rig(&rig_args, false, false)?;

@@ -60,7 +60,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 .with_context(|| format!("building the built-in rig {name:?}"))?;
             (format!("builtin:{name}"), rig.mesh)
         }
-        (None, Some(path)) if crate::interchange::is_interchange(path) => {
+        (None, Some(path)) if crate::interchange::is_interchange(path)? => {
             let character = crate::interchange::import(path, None)?;
             (path.display().to_string(), character.mesh)
         }

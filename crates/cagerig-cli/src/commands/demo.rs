@@ -116,6 +116,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         skin: None,
         allow_outside_cage: false,
         weights: None,
+        skeleton: None,
         auto_weights: false,
     };
     let t = Instant::now();

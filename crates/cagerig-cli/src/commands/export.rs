@@ -148,6 +148,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if tracks.skeleton.is_none() && tracks.cage.is_none() {
         return export(&session, &args.out, &name);
     }
+    // The animation keeps its source's name (the file's animation, else the animation file's
+    // stem), not the character's.
+    let animation_name = tracks.name.clone().unwrap_or_else(|| name.clone());
     let t = std::time::Instant::now();
     let keys: Vec<f64> = tracks
         .skeleton
@@ -204,6 +207,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             cage_track.as_ref(),
             &times,
             &name,
+            &animation_name,
         )
     } else {
         export_animation::animation_to_gltf(
@@ -212,6 +216,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             cage_track.as_ref(),
             &times,
             &name,
+            &animation_name,
         )
         .map(|(document, bin)| (document, bin, BakeReport::default()))
     }

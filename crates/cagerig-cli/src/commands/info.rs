@@ -135,10 +135,8 @@ fn bend_report(
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (rig, json) = (&args.rig, args.json);
-    if let Some(m) = rig
-        .mesh
-        .as_deref()
-        .filter(|m| crate::interchange::is_interchange(m))
+    if let Some(m) = rig.mesh.as_deref()
+        && crate::interchange::is_interchange(m)?
     {
         if args.bend_joints.is_some() {
             anyhow::bail!(

@@ -195,17 +195,35 @@ enum Pictures {
 }
 
 /// The output of `args`: a folder when it asks for several pictures (refusing a `.png` name,
-/// which was the file prefix of older versions), else the file `--out`.
+/// which was the file prefix of older versions), else the file `--out`, with `.png` added when
+/// its name does not end in it (said on stderr; the path printed at the end is the one written).
 fn open_pictures(args: &Args) -> anyhow::Result<Pictures> {
-    let several = match (args.times.len(), args.turntable) {
-        (n, _) if n > 1 => format!("--times with {n} times"),
-        (_, Some(_)) => "--turntable".to_owned(),
-        _ => return Ok(Pictures::File(args.out.clone())),
-    };
     let is_png = args
         .out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let several = match (args.times.len(), args.turntable) {
+        (n, _) if n > 1 => format!("--times with {n} times"),
+        (_, Some(_)) => "--turntable".to_owned(),
+        _ if is_png => return Ok(Pictures::File(args.out.clone())),
+        _ => {
+            let Some(file_name) = args.out.file_name() else {
+                bail!(
+                    "--out {}: expected the name of a PNG file, e.g. picture.png",
+                    args.out.display()
+                );
+            };
+            let mut file_name = file_name.to_os_string();
+            file_name.push(".png");
+            let path = args.out.with_file_name(file_name);
+            eprintln!(
+                "note: --out {} does not end in .png: the picture is written to {}",
+                args.out.display(),
+                path.display()
+            );
+            return Ok(Pictures::File(path));
+        }
+    };
     if is_png {
         bail!(
             "--out {}: {several} writes a folder of pictures; expected a folder name, e.g. {}",
@@ -256,6 +274,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage, &args.session)?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
+    tracks.warn_times_past_end(&args.times);
     let mut options = args.session.options();
     options.skinning = crate::session_args::choose_skinning(
         args.skinning,

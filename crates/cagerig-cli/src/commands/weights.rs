@@ -82,7 +82,7 @@ struct WeightsOutput<'a> {
 
 /// The mesh, the skeleton and the import's notes.
 fn load(args: &Args) -> anyhow::Result<(TriMesh, Skeleton, Vec<String>)> {
-    if crate::interchange::is_interchange(&args.mesh) {
+    if crate::interchange::is_interchange(&args.mesh)? {
         let options = ImportOptions {
             skin: args.skin.clone(),
             ..ImportOptions::default()
@@ -176,7 +176,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .with_context(|| format!("computing automatic weights for {name}"))?;
     bar.finish();
     let seconds = start.elapsed().as_secs_f64();
-    write_skw(&args.out, &result.weights, FloatFormat::RoundTrip).context("writing the weights")?;
+    write_skw(
+        &args.out,
+        &result.weights,
+        &skeleton,
+        FloatFormat::RoundTrip,
+    )
+    .context("writing the weights")?;
     let w = &result.weights;
     let mut histogram = vec![0usize; w.max_influences() + 1];
     for v in 0..w.num_vertices() {

@@ -86,15 +86,17 @@ pub(crate) fn node_trs(
 
 /// Plays `player` at every time of `times` on `session` and writes the glTF document (JSON and
 /// binary chunk) of the animation. `cage_track` must be the player's cage track (its keys
-/// become the morph targets). The session is left at the last sample.
+/// become the morph targets). `name` names the mesh and the skin, `animation` the animation.
+/// The session is left at the last sample.
 pub fn animation_to_gltf(
     session: &mut RigSession,
     player: &mut AnimationPlayer,
     cage_track: Option<&CageTrack>,
     times: &[f64],
     name: &str,
+    animation: &str,
 ) -> Result<(Value, Vec<u8>), ExportAnimationError> {
-    write_animation(session, player, cage_track, times, name, false)
+    write_animation(session, player, cage_track, times, name, animation, false)
         .map(|(document, bin, _)| (document, bin))
 }
 
@@ -112,6 +114,7 @@ pub fn baked_animation_to_gltf(
     cage_track: Option<&CageTrack>,
     times: &[f64],
     name: &str,
+    animation: &str,
 ) -> Result<(Value, Vec<u8>, BakeReport), ExportAnimationError> {
     let bake = !session.skinning().is_linear();
     if bake {
@@ -125,7 +128,7 @@ pub fn baked_animation_to_gltf(
             });
         }
     }
-    write_animation(session, player, cage_track, times, name, bake)
+    write_animation(session, player, cage_track, times, name, animation, bake)
 }
 
 /// Bytes the baked targets add: 12 per vertex and sample (f32 VEC3), plus the weights of every
@@ -144,6 +147,7 @@ fn write_animation(
     cage_track: Option<&CageTrack>,
     times: &[f64],
     name: &str,
+    animation: &str,
     bake: bool,
 ) -> Result<(Value, Vec<u8>, BakeReport), ExportAnimationError> {
     if times.is_empty() {
@@ -298,7 +302,8 @@ fn write_animation(
             });
         }
     }
-    document["animations"] = json!([{"name": name, "channels": channels, "samplers": samplers}]);
+    document["animations"] =
+        json!([{"name": animation, "channels": channels, "samplers": samplers}]);
     let (document, bin) = b.finish(document);
     Ok((document, bin, report))
 }

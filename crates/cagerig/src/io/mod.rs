@@ -40,6 +40,6 @@ pub use skeleton_animation::{
     write_skeleton_animation,
 };
 pub use skt::{parse_skt, read_skt, write_skt};
-pub use skw::{parse_skw, read_skw, write_skw};
+pub use skw::{parse_skw, read_skw, read_skw_for_skeleton, write_skw};
 pub use staged_dir::{FolderNaming, StagedDir, StagedDirError};
 pub use text::FloatFormat;

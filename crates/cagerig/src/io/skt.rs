@@ -3,7 +3,7 @@
 //! (`Translate · Rz · Ry · Rx`, degrees). `<idx>` is honoured: joint `<idx>` is the joint of
 //! that line whatever the order of the lines, and `<father>` refers to these indices (`-1` =
 //! root); the indices must be exactly 0 … n−1, each once (a gap or a repeat is an error naming
-//! the line). Lines whose first token is not `j` are ignored.
+//! the line). Lines whose first token is not `j` are ignored; a file with no joint line is refused.
 
 use std::io::Write;
 use std::path::Path;
@@ -63,6 +63,16 @@ pub fn parse_skt(data: &[u8], source: &Path) -> Result<Skeleton, ParseError> {
         ));
     }
     let len = parsed.len();
+    if len == 0 {
+        return Err(ParseError::Rig {
+            path: source.to_path_buf(),
+            source: crate::error::RigError::Invalid(
+                "expected joint lines `j <index> <name> <parent index or -1> x y z`, found no \
+                 joint: a skeleton needs at least one"
+                    .to_string(),
+            ),
+        });
+    }
     // Line of the joint with each index, to place the joints by their index column.
     let mut line_of_index: Vec<Option<usize>> = vec![None; len];
     for (k, (idx, _, _, number)) in parsed.iter().enumerate() {
@@ -250,6 +260,18 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    #[test]
+    fn a_file_with_no_joint_is_refused_naming_the_file() {
+        for text in ["", "# only a comment\n\n", "x not a joint line\n"] {
+            let e = parse(text).unwrap_err();
+            let message = e.to_string();
+            assert!(
+                message.starts_with("test.skt: ") && message.contains("found no joint"),
+                "{message}"
+            );
+        }
     }
 
     #[test]
