@@ -180,40 +180,49 @@ impl CagePrior {
         self.carried = carried;
     }
 
-    /// `jacobian += Q · ∂P/∂C` for the pose with joint linear parts `joint_linear` (`#J`) and
-    /// the translation derivatives `translation_jacobian` (`∂t_j/∂c_m`, `#J × #C` blocks,
-    /// row-major by joint; zero when the joints do not follow the cage). `jacobian` is
-    /// `#C × 9#C`: entry (k', 9m + 3a + b) is entry (a, b) of block (k', m).
-    pub fn add_jacobian(
+    /// ∂P/∂C for the pose with joint linear parts `joint_linear` (`#J`) and the translation
+    /// derivatives `translation_jacobian` (`∂t_j/∂c_m`, `#J × #C` blocks, row-major by joint;
+    /// zero when the joints do not follow the cage), into `jacobian` (`#C × 9#C`, column-major
+    /// columns): entry (k, 9m + 3a + b) is entry (a, b) of block (k, m). CageRev multiplies it by
+    /// Q ([`Self::cage_from_prior`]).
+    pub fn jacobian(
         &self,
         joint_linear: &[DMat3],
         translation_jacobian: &[DMat3],
-        jacobian: &mut Mat<f64>,
+        mut jacobian: faer::MatMut<'_, f64>,
     ) {
         let nc = self.rest_centroids.len();
         let mut blended = vec![DMat3::ZERO; nc];
         self.blend_rotations(|j| joint_linear[j], &mut blended);
-        // ∂P_k/∂c_m = A_k (δ_km − ξ_km) + Σ_j (β_kj[m] L_j + a_kj ∂t_j/∂c_m).
+        // ∂P_k/∂c_m = A_k (δ_km − ξ_km) + Σ_j (β_kj[m] L_j + a_kj ∂t_j/∂c_m), as 3×3 blocks
+        // (k, m) in row-major order.
         let mut blocks = vec![DMat3::ZERO; nc * nc];
         for (k, a) in blended.iter().enumerate() {
-            for m in 0..nc {
+            let row = &mut blocks[k * nc..(k + 1) * nc];
+            for (m, block) in row.iter_mut().enumerate() {
                 let delta = if k == m { 1.0 } else { 0.0 };
-                blocks[k * nc + m] = *a * (delta - self.centroid_coords[k * nc + m]);
+                *block = *a * (delta - self.centroid_coords[k * nc + m]);
             }
         }
         for entry in &self.joints {
             let linear = joint_linear[entry.joint];
             let row = &mut blocks[entry.cage_vertex * nc..(entry.cage_vertex + 1) * nc];
-            for (m, block) in row.iter_mut().enumerate() {
-                *block += linear * entry.coords[m]
-                    + translation_jacobian[entry.joint * nc + m] * entry.share;
+            let translations = &translation_jacobian[entry.joint * nc..(entry.joint + 1) * nc];
+            for ((block, &beta), dt) in row.iter_mut().zip(&entry.coords).zip(translations) {
+                *block += linear * beta + *dt * entry.share;
             }
         }
-        let g = Mat::<f64>::from_fn(nc, 9 * nc, |k, col| {
-            let (m, a, b) = (col / 9, (col % 9) / 3, col % 3);
-            blocks[k * nc + m].col(b)[a]
-        });
-        *jacobian += &self.cage_from_prior * &g;
+        // Column 9m + 3a + b holds entry (a, b) of the blocks (·, m): written column by column.
+        for m in 0..nc {
+            for a in 0..3 {
+                for b in 0..3 {
+                    let mut column = jacobian.as_mut().col_mut(9 * m + 3 * a + b);
+                    for k in 0..nc {
+                        column[k] = blocks[k * nc + m].col(b)[a];
+                    }
+                }
+            }
+        }
     }
 }
 

@@ -65,8 +65,9 @@ pub struct CageReverser {
     /// P (the paper's fit) or K (the regularised one), `#C × #R` (column-major faer matrix,
     /// from the CageUpdater).
     cage_from_rows: Mat<f64>,
-    /// The regularised CageUp's prior (C' = K·M̃' + Q·P); `None` for the paper's fit.
-    prior: Option<crate::sync::cage_prior::CagePrior>,
+    /// The regularised CageUp's prior (C' = K·M̃' + Q·P) and [K Q] (`#C × (#R + #C)`); `None`
+    /// for the paper's fit.
+    prior: Option<(crate::sync::cage_prior::CagePrior, Mat<f64>)>,
     parents: Vec<Option<usize>>,
     order: Vec<usize>,
     factor: Option<Factor>,
@@ -195,7 +196,17 @@ impl CageReverser {
             row_weights: skin_weights.select_rows(rows),
             joint_coords: psi,
             cage_from_rows: rows_map.clone(),
-            prior: cage_updater.prior().cloned(),
+            prior: cage_updater.prior().map(|prior| {
+                let (nr, q) = (rows.len(), prior.cage_from_prior());
+                let stacked = Mat::from_fn(num_cage, nr + num_cage, |c, r| {
+                    if r < nr {
+                        rows_map[(c, r)]
+                    } else {
+                        q[(c, r - nr)]
+                    }
+                });
+                (prior.clone(), stacked)
+            }),
             parents: (0..skeleton.len()).map(|j| skeleton.parent(j)).collect(),
             order: skeleton.topological_order().to_vec(),
             factor: None,
@@ -387,8 +398,10 @@ impl CageReverser {
                 };
             }
         }
-        // G = R̃Φ̃ + Ω̃ E as #R × (9 #C): entry (i, 9k + 3a + b) = G_block(i,k)[a][b].
-        let mut g = Mat::<f64>::zeros(nr, 9 * nc);
+        // G = R̃Φ̃ + Ω̃ E as #R × (9 #C): entry (i, 9k + 3a + b) = G_block(i,k)[a][b]; for the
+        // regularised fit, the prior's Jacobian ∂P/∂C below it (#C more rows).
+        let prior_rows = self.prior.as_ref().map_or(0, |_| nc);
+        let mut g = Mat::<f64>::zeros(nr + prior_rows, 9 * nc);
         for i in 0..nr {
             let (joints, weights) = self.row_weights.row(i);
             let mut rot_i = DMat3::ZERO;
@@ -408,10 +421,24 @@ impl CageReverser {
                 }
             }
         }
-        let mut pg = &self.cage_from_rows * &g; // #C × 9#C
-        if let Some(prior) = &self.prior {
-            prior.add_jacobian(joint_rotations, &e, &mut pg);
-        }
+        // P G (#C × 9#C), or [K Q] [G; ∂P/∂C] for the regularised fit (on this thread: a small
+        // product, where the thread pool's dispatch cost more than it saved).
+        let pg = match &self.prior {
+            None => &self.cage_from_rows * &g,
+            Some((prior, stacked)) => {
+                prior.jacobian(joint_rotations, &e, g.as_mut().subrows_mut(nr, nc));
+                let mut pg = Mat::<f64>::zeros(nc, 9 * nc);
+                faer::linalg::matmul::matmul(
+                    pg.as_mut(),
+                    faer::Accum::Replace,
+                    stacked.as_ref(),
+                    g.as_ref(),
+                    1.0,
+                    faer::Par::Seq,
+                );
+                pg
+            }
+        };
         let n = 3 * nc;
         let system = Mat::<f64>::from_fn(n, n, |r, c| {
             let (kp, a) = (r / 3, r % 3);

@@ -212,9 +212,9 @@ fn a_fit_whose_round_off_floor_is_above_the_tolerance_stops_there() {
         fit.factor_damping,
         damping_scale(&fit.normal_matrix)
     );
-    // Before: 3 steps and 4 Hessians, from damped factors. Now 1 step and 2 Hessians, or 2 and
-    // 3 where the floor's round-off takes one more step to recognise (the coordinates' last bits
-    // decide: 1 / 2 with stop 40's binding kernel, 2 / 3 with stop 41's).
+    // Undamped kept factors: 1 step and 2 Hessians, or 2 and 3 where the floor's round-off takes
+    // one more step to recognise (the last bits of the binding kernel's coordinates decide);
+    // damped factors would take 3 steps and 4 Hessians.
     let second = fit.apply(&target(1e-3), &mut solved).unwrap();
     assert!(second.residual <= fit.accepted, "{second:?}");
     assert!(
