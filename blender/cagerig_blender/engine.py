@@ -146,6 +146,19 @@ def coupling(skin: bpy.types.Object) -> Coupling:
     return c
 
 
+def refit_cage(skin: bpy.types.Object) -> None:
+    """After the stored CageUp fit changed: rebuilds the coupling and writes its cage (C' in the
+    pose, C at rest) into the cage object, so that the switch refits the handle instead of the
+    old handle being read as a user's edit of it."""
+    forget(skin.name)
+    c = coupling(skin)
+    cage = cage_of(skin)
+    if cage.mode == "EDIT":
+        return  # the user is editing the cage: the next sync reads it as their edit
+    target = c.rig.posed_cage if c.last_mode == "POSE" else c.rig.rest_cage
+    c.last_cage = _write_cage(cage, target)
+
+
 _tolerances: dict[int, float] = {}
 
 

@@ -19,14 +19,18 @@ CAGE_FIT_ITEMS = [
 
 
 def _cage_fit_changed(self: bpy.types.PropertyGroup, _context: bpy.types.Context) -> None:
-    # A coupled skin keeps the fit in its stored binding; the run-time rig is rebuilt from it
-    # at the next sync.
+    # A coupled skin keeps the fit in its stored binding; the rig is rebuilt with it and the
+    # cage shows its new fit.
     from . import engine, store
 
     skin = self.id_data
     if store.is_coupled(skin) and store.cage_fit(skin) != self.cage_fit:
         store.save_cage_fit(skin, self.cage_fit)
-        engine.forget(skin.name)
+        try:
+            engine.refit_cage(skin)
+        except (engine.SyncError, ValueError) as e:
+            engine.forget(skin.name)
+            print(f"cagerig: {e}")
 
 
 class CagerigObjectSettings(bpy.types.PropertyGroup):

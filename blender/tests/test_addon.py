@@ -165,6 +165,11 @@ check("refusals keep the skin uncoupled", not store.is_coupled(skin), "no bindin
 bpy.data.objects.remove(small)
 
 # ---- couple --------------------------------------------------------------------------------------
+# The suite checks the paper's CageUp, which interpolates the skin at the fitting rows
+# (Φ_R·C' = M'_R); the regularised default is checked at the end.
+check("the current cage fit defaults to regularised", skin.cagerig.cage_fit == "regularised",
+      skin.cagerig.cage_fit)
+skin.cagerig.cage_fit = "paper"
 rest_skin0 = world(skin)
 couple(skin, cage)
 check("couple", store.is_coupled(skin) and skin.cagerig.cage == cage, "binding stored with the skin")
@@ -174,7 +179,7 @@ check("skin data untouched by couple", np.abs(world(skin) - rest_skin0).max() ==
 # ---- the same edits through the Python package (what `cagerig edit` computes), step by step ---
 # Blender's importers turn glTF/OBJ's +Y up into +Z up: (x, y, z)_file = (x, z, -y)_Blender.
 to_file = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
-ref = cagerig.Rig.load(ARM_GLB, cage=ARM_CAGE, skinning="lbs")
+ref = cagerig.Rig.load(ARM_GLB, cage=ARM_CAGE, skinning="lbs", cage_fit="paper")
 order = [ref.joint_names.index(n) for n in c.rig.joint_names]
 # Vertex order: the glTF importer keeps it when it does not split vertices; check it.
 e = float(np.abs(np.asarray(ref.rest_mesh) - rest_skin0 @ to_file.T).max())
@@ -418,5 +423,19 @@ rotate_bone(arm, JOINT, AXIS_BL, 45.0)
 update()
 err = fit_row_error(skin, generated, c)
 check("generated cage: Φ_R·C' = deformed skin after a pose", err <= TOL * diag, f"{err / diag:.2e}")
+
+# ---- the regularised current cage: switched on the coupled skin, stored with the binding -----------
+paper_cage = world(generated)
+skin.cagerig.cage_fit = "regularised"
+update()
+c = engine.coupling(skin)
+check("cage fit switch: the rig is rebuilt with it", c.rig.cage_fit == "regularised" and
+      store.cage_fit(skin) == "regularised", f"{c.rig.cage_fit}, stored {store.cage_fit(skin)}")
+e = float(np.abs(np.asarray(c.rig.posed_mesh) - deformed_skin(skin)).max())
+check("regularised: rig's M' = Blender's deformed skin", e <= TOL * diag, f"{e / diag:.2e}")
+e = float(np.abs(world(generated) - np.asarray(c.rig.posed_cage)).max())
+check("regularised: the cage shows the rig's C'", e <= TOL * diag, f"{e / diag:.2e}")
+moved = float(np.abs(world(generated) - paper_cage).max())
+check("regularised: C' differs from the paper's", moved > TOL * diag, f"{moved / diag:.2e}")
 
 print("\n".join(["", "summary:"] + results))
