@@ -63,3 +63,36 @@ fn an_unknown_cage_fit_lists_the_accepted_ones() {
         "{stderr}"
     );
 }
+
+#[test]
+fn info_bends_every_joint_and_reports_the_handle() {
+    let json = run_ok(
+        cagerig()
+            .arg("info")
+            .arg(data("arm/arm.obj"))
+            .args(["--bend-joints", "45", "--json"]),
+    );
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let bends = &report["joint_bends"];
+    assert_eq!(bends["cage_fit"], "regularised");
+    assert_eq!(bends["degrees"], 45.0);
+    let joints = bends["joints"].as_array().unwrap();
+    assert_eq!(joints.len(), 25);
+    assert!(joints.iter().all(|j| j["refused"] == 0), "{bends}");
+    let worst = &bends["worst"];
+    assert!(worst["deviation"].as_f64().unwrap() <= 0.06, "{worst}");
+    assert!(worst["spread"].as_f64().unwrap() <= 1.5, "{worst}");
+    // A glTF character is measured along its animations instead: said, not ignored.
+    let output = cagerig()
+        .arg("info")
+        .arg(data("fox/Fox.glb"))
+        .args(["--bend-joints", "45"])
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    assert!(
+        String::from_utf8_lossy(&output.stderr).contains("animate"),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
