@@ -66,12 +66,11 @@ fn an_unknown_cage_fit_lists_the_accepted_ones() {
 
 #[test]
 fn info_bends_every_joint_and_reports_the_handle() {
-    let json = run_ok(
-        cagerig()
-            .arg("info")
-            .arg(data("arm/arm.obj"))
-            .args(["--bend-joints", "45", "--json"]),
-    );
+    let json = run_ok(cagerig().arg("info").arg(data("arm/arm.obj")).args([
+        "--bend-joints",
+        "45",
+        "--json",
+    ]));
     let report: serde_json::Value = serde_json::from_str(&json).unwrap();
     let bends = &report["joint_bends"];
     assert_eq!(bends["cage_fit"], "regularised");
