@@ -30,6 +30,10 @@ pub enum ColorBy {
     CageCoords(usize),
     /// Joint coordinates Ψ[j, :] of joint `j` on the cage handles (diverging map).
     JointCageCoords(usize),
+    /// How far each cage handle is from the skin shown, over the largest distance of the rest
+    /// cage from the rest skin: the usual handle colour up to 1, turning red by
+    /// [`REACH_RED`] (the quality of the current cage as a handle; `docs/method.md`).
+    CageReach,
 }
 
 /// Which layers to draw.
@@ -130,9 +134,48 @@ impl ColorBy {
                 // bulk (90th percentile of |Φ|), the peak saturates.
                 Some(ColorMap::diverging_robust(out, PHI_MAP_QUANTILE))
             }
-            ColorBy::None | ColorBy::JointCageCoords(_) => None,
+            ColorBy::None | ColorBy::JointCageCoords(_) | ColorBy::CageReach => None,
         }
     }
+}
+
+/// The reach ratio at which a handle is drawn fully red ([`ColorBy::CageReach`]).
+pub const REACH_RED: f64 = 2.5;
+/// Skin vertices a handle's distance is measured against at most (a regular subsample).
+const REACH_SAMPLES: usize = 4096;
+/// The colour of a handle far from the skin.
+const FAR_HANDLE: [u8; 4] = [220, 30, 30, 255];
+
+/// The handle colour of a reach ratio: the usual colour up to 1, [`FAR_HANDLE`] from
+/// [`REACH_RED`], blended between.
+fn reach_color(ratio: f64) -> [u8; 4] {
+    let usual = crate::scene::Style::default().cage_handles;
+    let t = ((ratio - 1.0) / (REACH_RED - 1.0)).clamp(0.0, 1.0);
+    std::array::from_fn(|i| {
+        let (a, b) = (f64::from(usual[i]), f64::from(FAR_HANDLE[i]));
+        (a + t * (b - a)).round() as u8
+    })
+}
+
+/// Distance of each of `points` to the nearest of every `stride`-th skin vertex, into `out`.
+fn reach(points: &[DVec3], mesh: &MeshPositions<'_>, out: &mut Vec<f64>) {
+    let n = match mesh {
+        MeshPositions::F64(m) => m.len(),
+        MeshPositions::F32(m) => m.len(),
+    };
+    let stride = n.div_ceil(REACH_SAMPLES).max(1);
+    let at = |v: usize| match mesh {
+        MeshPositions::F64(m) => m[v],
+        MeshPositions::F32(m) => m[v].as_dvec3(),
+    };
+    out.clear();
+    out.extend(points.iter().map(|p| {
+        (0..n)
+            .step_by(stride)
+            .map(|v| at(v).distance_squared(*p))
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    }));
 }
 
 /// Quantile of |Φ[:, k]| that the Φ colour map's ends stand for.
@@ -157,7 +200,7 @@ impl RigSceneData {
         color_by.validate(session).ok()?;
         let joint_name = |j: usize| session.skeleton().joint(j).name.clone();
         match color_by {
-            ColorBy::None => None,
+            ColorBy::None | ColorBy::CageReach => None,
             ColorBy::JointWeights(j) => color_by
                 .mesh_scalars(session, &mut self.scalars)
                 .map(|m| (m, format!("Ω {}", joint_name(j)))),
@@ -250,6 +293,22 @@ impl RigSceneData {
                 self.handle_colors
                     .extend((0..cage.len()).map(|c| if c == k { CHOSEN_HANDLE } else { usual }));
             }
+            (true, ColorBy::CageReach) => {
+                reach(
+                    session.rest_cage(),
+                    &MeshPositions::F64(session.rest_mesh()),
+                    &mut self.scalars,
+                );
+                let rest_reach = self.scalars.iter().copied().fold(0.0, f64::max);
+                reach(cage, &mesh, &mut self.scalars);
+                self.handle_colors.extend(self.scalars.iter().map(|&d| {
+                    reach_color(if rest_reach > 0.0 {
+                        d / rest_reach
+                    } else {
+                        1.0
+                    })
+                }));
+            }
             (true, ColorBy::None | ColorBy::JointWeights(_)) | (false, _) => {}
         }
         Scene {
@@ -273,5 +332,54 @@ impl RigSceneData {
             }),
             ground: layers.ground,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use cagerig::session::{RigParts, SessionOptions};
+
+    fn bar() -> RigSession {
+        let rig = cagerig::demo::builtin("bar", None).unwrap();
+        let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+        RigSession::new(parts, SessionOptions::default()).unwrap().0
+    }
+
+    fn handle_colors(data: &mut RigSceneData, session: &RigSession) -> Vec<[u8; 4]> {
+        let scene = data.scene(
+            session,
+            Pose::Current,
+            Layers::default(),
+            ColorBy::CageReach,
+        );
+        scene.cage.unwrap().handle_colors.unwrap().to_vec()
+    }
+
+    #[test]
+    fn cage_reach_leaves_handles_at_rest_and_reddens_stray_ones() {
+        let mut session = bar();
+        let mut data = RigSceneData::new();
+        let usual = crate::scene::Style::default().cage_handles;
+        // No handle is further from the skin than the rest cage's furthest: at rest, and after
+        // a bend (the regularised C' stays on the bar).
+        assert!(
+            handle_colors(&mut data, &session)
+                .iter()
+                .all(|&c| c == usual)
+        );
+        session.rotate_joint(1, DVec3::Z, 0.8).unwrap();
+        let bent = handle_colors(&mut data, &session);
+        assert!(bent.iter().all(|c| c[1] >= 120), "{bent:?}");
+        assert!(ColorBy::CageReach.validate(&session).is_ok());
+        assert!(data.legend(&session, ColorBy::CageReach).is_none());
+        // The map: usual up to 1, red from REACH_RED, blended between.
+        assert_eq!(reach_color(0.3), usual);
+        assert_eq!(reach_color(1.0), usual);
+        assert_eq!(reach_color(REACH_RED), FAR_HANDLE);
+        assert_eq!(reach_color(10.0), FAR_HANDLE);
+        let mid = reach_color(0.5 * (1.0 + REACH_RED));
+        assert!(mid[1] < usual[1] && mid[1] > FAR_HANDLE[1], "{mid:?}");
     }
 }

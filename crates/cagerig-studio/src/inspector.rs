@@ -53,7 +53,18 @@ fn display_ui(ui: &mut egui::Ui, view: &mut ViewState, selection: &Selection) {
         ui.checkbox(&mut view.layers.ground, "Ground");
     });
     ui.label("Colour map");
-    ui.radio_value(&mut view.color_mode, ColorMode::None, "None");
+    ui.horizontal(|ui| {
+        ui.radio_value(&mut view.color_mode, ColorMode::None, "None");
+        ui.radio_value(
+            &mut view.color_mode,
+            ColorMode::CageReach,
+            "Cage handles far from the body",
+        )
+        .on_hover_text(
+            "Each cage handle's distance from the skin, over the rest cage's largest: the usual \
+             colour up to 1, red from 2.5",
+        );
+    });
     ui.radio_value(
         &mut view.color_mode,
         ColorMode::Weights,

@@ -25,6 +25,8 @@ pub enum ColorMode {
     CageCoords,
     /// Ψ of the selected joint.
     JointCoords,
+    /// The cage handles' distance from the skin (red where C' strays from the body).
+    CageReach,
 }
 
 /// How the two views share the window.
@@ -109,6 +111,7 @@ impl ViewState {
                 .cage
                 .first()
                 .map_or(ColorBy::None, |&k| ColorBy::CageCoords(k)),
+            ColorMode::CageReach => ColorBy::CageReach,
         }
     }
 }

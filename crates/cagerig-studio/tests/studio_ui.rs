@@ -500,3 +500,36 @@ fn the_open_dialog_chooses_a_skin_of_a_file_with_several() {
     assert_eq!(doc.session.skeleton().len(), 18);
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn the_cage_fit_and_the_reach_map_are_chosen_in_the_inspector() {
+    if skip() {
+        return;
+    }
+    let (mut h, dir) = open_bar("cage-fit");
+    let regularised = || cagerig::CageFitKind::Regularised;
+    assert_eq!(
+        h.state().project.doc.as_ref().unwrap().session.cage_fit(),
+        regularised()
+    );
+    h.get_by_label("paper").click();
+    h.run_steps(2);
+    assert_eq!(
+        h.state().project.doc.as_ref().unwrap().session.cage_fit(),
+        cagerig::CageFitKind::Paper
+    );
+    h.state_mut().undo();
+    h.run_steps(1);
+    assert_eq!(
+        h.state().project.doc.as_ref().unwrap().session.cage_fit(),
+        regularised()
+    );
+    h.get_by_label("Cage handles far from the body").click();
+    h.run_steps(2);
+    assert_eq!(
+        h.state().view.color_mode,
+        cagerig_studio::view_state::ColorMode::CageReach
+    );
+    assert!(h.state().view.render_error.is_none());
+    std::fs::remove_dir_all(dir).ok();
+}

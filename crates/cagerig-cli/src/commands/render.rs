@@ -61,7 +61,9 @@ pub struct Args {
     #[arg(long, default_value = "mesh,cage,skeleton,ground")]
     pub show: String,
     /// Colour map on the skin: joint:NAME|INDEX (skin weights Ω), cage-vertex:K (mean value
-    /// coordinates Φ, diverging), or on the cage handles: psi:NAME|INDEX (joint coordinates Ψ).
+    /// coordinates Φ, diverging), or on the cage handles: psi:NAME|INDEX (joint coordinates Ψ),
+    /// cage-reach (each handle's distance from the skin over the rest cage's largest: red from
+    /// 2.5, the usual colour up to 1).
     #[arg(long)]
     pub color_by: Option<String>,
     /// Leave out the pose labels.
@@ -171,8 +173,11 @@ fn parse_joint(session: &RigSession, text: &str) -> anyhow::Result<usize> {
 
 /// Parses `--color-by` against the rig.
 pub fn parse_color_by(session: &RigSession, text: &str) -> anyhow::Result<ColorBy> {
+    if text == "cage-reach" {
+        return Ok(ColorBy::CageReach);
+    }
     let Some((kind, value)) = text.split_once(':') else {
-        bail!("--color-by {text:?}: expected joint:NAME, cage-vertex:K or psi:NAME");
+        bail!("--color-by {text:?}: expected joint:NAME, cage-vertex:K, psi:NAME or cage-reach");
     };
     let color_by = match kind {
         "joint" => ColorBy::JointWeights(parse_joint(session, value)?),
@@ -180,7 +185,9 @@ pub fn parse_color_by(session: &RigSession, text: &str) -> anyhow::Result<ColorB
         "cage-vertex" => ColorBy::CageCoords(value.parse().map_err(|_| {
             anyhow::anyhow!("--color-by {text:?}: expected a cage vertex index after cage-vertex:")
         })?),
-        _ => bail!("--color-by {text:?}: expected joint:NAME, cage-vertex:K or psi:NAME"),
+        _ => {
+            bail!("--color-by {text:?}: expected joint:NAME, cage-vertex:K, psi:NAME or cage-reach")
+        }
     };
     color_by
         .validate(session)
