@@ -50,7 +50,7 @@ use crate::skin_weights::SkinWeights;
 pub const PRIOR_STRENGTH: f64 = 3.0;
 /// ε in R = LᵀL + εI, relative to the Laplacian's scale (tr(LᵀL) / #C).
 pub const PRIOR_EPSILON: f64 = 0.05;
-/// Skin vertices whose weights a cage vertex averages ([`cage_vertex_weights`]).
+/// Rest-skin vertices around a cage vertex whose mean motion carries it ([`neighbourhoods`]).
 pub const PRIOR_NEIGHBOURS: usize = 32;
 /// Skin vertices searched for neighbours at most (a regular subsample of larger skins).
 const PRIOR_SEARCH_VERTICES: usize = 16_384;
@@ -86,8 +86,8 @@ pub struct CagePrior {
     joint_moments: Vec<DVec3>,
     /// P of the last fit, `#C`.
     carried: Vec<DVec3>,
-    /// Σ_j a_kj L_j of the last fit, `#C`.
-    blended: Vec<DMat3>,
+    /// A_k of the last fit, `#C`.
+    rotations: Vec<DMat3>,
 }
 
 /// K and the prior of a regularised fit.
@@ -106,11 +106,6 @@ impl CagePrior {
     /// λ, chosen at binding.
     pub fn strength(&self) -> f64 {
         self.strength
-    }
-
-    /// P (`#C`) of the last [`Self::add_to_fit`]: the rest cage carried by the skin around it.
-    pub fn carried_cage(&self) -> &[DVec3] {
-        &self.carried
     }
 
     /// x̄_k and β_kj C for `rest_cage` (`#C`), when it changed since the last call.
@@ -149,35 +144,27 @@ impl CagePrior {
         }
     }
 
-    /// `posed_cage += Q · P`, P the rest cage `rest_cage` (`#C`) carried by the skin around
-    /// it under the skinning transforms `posed_from_rest` (`#J`). No allocation once the
-    /// moments are computed for `rest_cage`.
-    pub fn add_to_fit(
-        &mut self,
-        posed_from_rest: &[DAffine3],
-        rest_cage: &[DVec3],
-        posed_cage: &mut [DVec3],
-    ) {
+    /// P (`#C`, then read with [`Self::carried_cage`]): the rest cage `rest_cage` (`#C`)
+    /// carried by the skin around it under the skinning transforms `posed_from_rest` (`#J`).
+    /// CageUp adds Q·P to its fit. No allocation once the moments are computed for `rest_cage`.
+    pub fn carry(&mut self, posed_from_rest: &[DAffine3], rest_cage: &[DVec3]) {
         self.update_moments(rest_cage);
-        let mut blended = std::mem::take(&mut self.blended);
-        self.blend_rotations(|j| posed_from_rest[j].matrix3, &mut blended);
-        self.blended = blended;
-        let mut carried = std::mem::take(&mut self.carried);
-        carried.iter_mut().for_each(|p| *p = DVec3::ZERO);
+        let mut rotations = std::mem::take(&mut self.rotations);
+        self.blend_rotations(|j| posed_from_rest[j].matrix3, &mut rotations);
+        self.rotations = rotations;
+        self.carried.iter_mut().for_each(|p| *p = DVec3::ZERO);
         for (entry, m) in self.joints.iter().zip(&self.joint_moments) {
             let t = &posed_from_rest[entry.joint];
-            carried[entry.cage_vertex] += t.matrix3 * *m + entry.share * t.translation;
+            self.carried[entry.cage_vertex] += t.matrix3 * *m + entry.share * t.translation;
         }
-        for (k, p) in carried.iter_mut().enumerate() {
-            *p += self.blended[k] * (rest_cage[k] - self.rest_centroids[k]);
+        for (k, p) in self.carried.iter_mut().enumerate() {
+            *p += self.rotations[k] * (rest_cage[k] - self.rest_centroids[k]);
         }
-        for (k, p) in carried.iter().enumerate() {
-            let col = self.cage_from_prior.col(k);
-            for (c, out) in posed_cage.iter_mut().enumerate() {
-                *out += col[c] * *p;
-            }
-        }
-        self.carried = carried;
+    }
+
+    /// P (`#C`) of the last [`Self::carry`].
+    pub fn carried_cage(&self) -> &[DVec3] {
+        &self.carried
     }
 
     /// ∂P/∂C for the pose with joint linear parts `joint_linear` (`#J`) and the translation
@@ -311,7 +298,7 @@ pub(crate) fn regularised_maps(
         rest_centroids: vec![DVec3::ZERO; nc],
         joint_moments: vec![DVec3::ZERO; num_entries],
         carried: vec![DVec3::ZERO; nc],
-        blended: vec![DMat3::IDENTITY; nc],
+        rotations: vec![DMat3::IDENTITY; nc],
     };
     prior.update_moments(rest_cage);
     Ok(RegularisedMaps {
@@ -465,12 +452,11 @@ mod tests {
         (cage, points, phi, omega)
     }
 
-    #[test]
-    fn k_phi_plus_q_is_the_identity_and_the_rest_pose_is_kept() {
+    /// The cube rig's regularised maps on every third point as rows.
+    fn cube_maps() -> (TriMesh, CageCoords, Vec<usize>, RegularisedMaps) {
         let (cage, points, phi, omega) = cube_rig();
-        let nc = cage.num_vertices();
         let rows: Vec<usize> = (0..points.len()).step_by(3).collect();
-        let mut maps = regularised_maps(
+        let maps = regularised_maps(
             &phi,
             &rows,
             &cage.positions,
@@ -479,6 +465,13 @@ mod tests {
             &omega,
         )
         .unwrap();
+        (cage, phi, rows, maps)
+    }
+
+    #[test]
+    fn k_phi_plus_q_is_the_identity_and_the_rest_pose_is_kept() {
+        let (cage, phi, rows, mut maps) = cube_maps();
+        let nc = cage.num_vertices();
         let selected = phi.select_rows(&rows);
         let sum = &maps.cage_from_rows * &selected + maps.prior.cage_from_prior();
         for r in 0..nc {
@@ -492,41 +485,40 @@ mod tests {
             }
         }
         assert!(maps.prior.strength() > 0.0);
-        // At rest the prior is the rest cage (its centroids are ΦC's), and so is C'.
-        let rest = [DAffine3::IDENTITY; 2];
-        let mut fitted = vec![DVec3::ZERO; nc];
+        // At rest the prior is the rest cage (its centroids are ΦC's), and so is C' = K·M̃ + Q·P.
+        maps.prior.carry(&[DAffine3::IDENTITY; 2], &cage.positions);
         let mut posed_rows = vec![DVec3::ZERO; rows.len()];
         phi.apply_rows(&rows, &cage.positions, &mut posed_rows);
-        for (r, p) in posed_rows.iter().enumerate() {
-            for (k, c) in fitted.iter_mut().enumerate() {
-                *c += maps.cage_from_rows[(k, r)] * *p;
-            }
-        }
-        maps.prior.add_to_fit(&rest, &cage.positions, &mut fitted);
+        let q = maps.prior.cage_from_prior();
+        let fitted: Vec<DVec3> = (0..nc)
+            .map(|k| {
+                let rows_part = posed_rows
+                    .iter()
+                    .enumerate()
+                    .fold(DVec3::ZERO, |acc, (r, p)| {
+                        acc + maps.cage_from_rows[(k, r)] * *p
+                    });
+                let prior_part = maps
+                    .prior
+                    .carried_cage()
+                    .iter()
+                    .enumerate()
+                    .fold(DVec3::ZERO, |acc, (m, p)| acc + q[(k, m)] * *p);
+                rows_part + prior_part
+            })
+            .collect();
         assert!(crate::mesh::max_distance(&fitted, &cage.positions) < 1e-12);
         assert!(crate::mesh::max_distance(maps.prior.carried_cage(), &cage.positions) < 1e-12);
     }
 
     #[test]
     fn the_prior_moves_rigidly_with_a_rigid_skeleton() {
-        let (cage, points, phi, omega) = cube_rig();
-        let rows: Vec<usize> = (0..points.len()).step_by(3).collect();
-        let mut maps = regularised_maps(
-            &phi,
-            &rows,
-            &cage.positions,
-            &cage.triangles,
-            &points,
-            &omega,
-        )
-        .unwrap();
+        let (cage, _, _, mut maps) = cube_maps();
         let motion = DAffine3::from_rotation_translation(
             glam::DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.9),
             DVec3::new(3.0, -1.0, 2.0),
         );
-        let mut fitted = vec![DVec3::ZERO; cage.num_vertices()];
-        maps.prior
-            .add_to_fit(&[motion, motion], &cage.positions, &mut fitted);
+        maps.prior.carry(&[motion, motion], &cage.positions);
         let expected: Vec<DVec3> = cage
             .positions
             .iter()

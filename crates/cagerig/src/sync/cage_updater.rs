@@ -39,7 +39,7 @@ pub struct CageUpdater {
     /// The rows' map of CageUp, `#C × #R`, column-major: P = Φ̃⁻¹ or Φ̃⁺ for the paper's fit,
     /// K = H⁻¹Φ̃ᵀ for the regularised one (C' = K·M̃' + Q·P).
     cage_from_rows: Mat<f64>,
-    /// The regularised fit's prior (Ω_c and Q); `None` for the paper's fit.
+    /// The regularised fit's prior (P's neighbourhoods and Q); `None` for the paper's fit.
     prior: Option<CagePrior>,
     /// Φ̃⁻¹ or Φ̃⁺ (`#C × #R`) when `cage_from_rows` is K: the rest cage whose ΦC reproduces
     /// given rows ([`Self::apply_rows`]).
@@ -161,7 +161,7 @@ impl CageUpdater {
         }
     }
 
-    /// The regularised fit's prior (Ω_c, Q); `None` for the paper's fit.
+    /// The regularised fit's prior (P's neighbourhoods and Q); `None` for the paper's fit.
     pub fn prior(&self) -> Option<&CagePrior> {
         self.prior.as_ref()
     }
@@ -177,11 +177,10 @@ impl CageUpdater {
         posed_cage: &mut [DVec3],
     ) {
         posed_cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
-        for (r, p) in posed_rows.iter().enumerate() {
-            accumulate_column(&self.cage_from_rows, r, *p, posed_cage);
-        }
+        accumulate_product(&self.cage_from_rows, posed_rows, posed_cage);
         if let Some(prior) = &mut self.prior {
-            prior.add_to_fit(posed_from_rest, rest_cage, posed_cage);
+            prior.carry(posed_from_rest, rest_cage);
+            accumulate_product(prior.cage_from_prior(), prior.carried_cage(), posed_cage);
         }
     }
 
@@ -219,9 +218,14 @@ impl CageUpdater {
     /// whose ΦC interpolates (or fits) the rows; the paper's CageUp of posed rows.
     pub fn apply_rows(&self, rows: &[DVec3], cage: &mut [DVec3]) {
         cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
-        for (r, p) in rows.iter().enumerate() {
-            accumulate_column(self.interpolant(), r, *p, cage);
-        }
+        accumulate_product(self.interpolant(), rows, cage);
+    }
+}
+
+/// `cage += map · points` (`map` is `#C × points.len()`), column by column.
+fn accumulate_product(map: &Mat<f64>, points: &[DVec3], cage: &mut [DVec3]) {
+    for (r, p) in points.iter().enumerate() {
+        accumulate_column(map, r, *p, cage);
     }
 }
 
