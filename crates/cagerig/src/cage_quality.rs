@@ -199,11 +199,7 @@ pub fn joint_bends(
     session: &mut crate::session::RigSession,
     angle: f64,
 ) -> Result<Vec<JointBendQuality>, RigError> {
-    let probe = CageQualityProbe::new(
-        session.rest_mesh(),
-        session.rest_cage(),
-        session.cage_triangles(),
-    )?;
+    let probe = CageQualityProbe::of_session(session)?;
     let mut out = Vec::with_capacity(session.skeleton().len());
     for joint in 0..session.skeleton().len() {
         let mut worst: Option<CageQuality> = None;
@@ -211,12 +207,7 @@ pub fn joint_bends(
         for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
             match session.rotate_joint(joint, axis, angle) {
                 Ok(()) => {
-                    let q = probe.measure(
-                        session.rest_mesh(),
-                        session.rest_cage(),
-                        session.posed_mesh(),
-                        session.posed_cage(),
-                    );
+                    let q = probe.measure_session(session);
                     worst = Some(worst.map_or(q, |w| w.worst(q)));
                 }
                 Err(RigError::GreenFitFailed(_)) => refused += 1,
@@ -232,6 +223,27 @@ pub fn joint_bends(
         });
     }
     Ok(out)
+}
+
+impl CageQualityProbe {
+    /// [`Self::new`] on `session`'s rest state (M, C and the cage's faces).
+    pub fn of_session(session: &crate::session::RigSession) -> Result<Self, RigError> {
+        Self::new(
+            session.rest_mesh(),
+            session.rest_cage(),
+            session.cage_triangles(),
+        )
+    }
+
+    /// [`Self::measure`] of `session`'s state (M, C, M', C').
+    pub fn measure_session(&self, session: &crate::session::RigSession) -> CageQuality {
+        self.measure(
+            session.rest_mesh(),
+            session.rest_cage(),
+            session.posed_mesh(),
+            session.posed_cage(),
+        )
+    }
 }
 
 /// `point` moved by the best-fit rigid motion (Kabsch) of `near` from `from` to `to`.

@@ -144,12 +144,7 @@ fn the_handle_follows_large_bends() {
             _ => builtin(name, fit),
         };
         let (mut regularised, mut paper) = (rig(CageFitKind::Regularised), rig(CageFitKind::Paper));
-        let probe = CageQualityProbe::new(
-            regularised.rest_mesh(),
-            regularised.rest_cage(),
-            regularised.cage_triangles(),
-        )
-        .unwrap();
+        let probe = CageQualityProbe::of_session(&regularised).unwrap();
         let joint = match name {
             "arm" => regularised.skeleton().find("lowerarm01.R").unwrap(),
             _ => regularised.skeleton().len() / 2,
@@ -158,12 +153,7 @@ fn the_handle_follows_large_bends() {
             let mut quality = Vec::new();
             for s in [&mut regularised, &mut paper] {
                 s.rotate_joint(joint, DVec3::X, 15f64.to_radians()).unwrap();
-                quality.push(probe.measure(
-                    s.rest_mesh(),
-                    s.rest_cage(),
-                    s.posed_mesh(),
-                    s.posed_cage(),
-                ));
+                quality.push(probe.measure_session(s));
             }
             let (r, p) = (quality[0], quality[1]);
             let at = format!("{name} at {}°: {r} (paper: {p})", 15 * step);

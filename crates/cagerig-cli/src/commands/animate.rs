@@ -116,11 +116,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let mut player = tracks.resolve(&session)?.player(&session)?;
     let mut session = session;
-    let probe = cagerig::cage_quality::CageQualityProbe::new(
-        session.rest_mesh(),
-        session.rest_cage(),
-        session.cage_triangles(),
-    )?;
+    let probe = cagerig::cage_quality::CageQualityProbe::of_session(&session)?;
     let mut report = AnimateReport {
         cage_fit: session.cage_fit(),
         coords: session.coords_kind(),
@@ -133,12 +129,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .apply(t, &mut session)
             .map_err(|e| crate::session_args::event_error(format!("sample t = {t}"), e))?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        let cage = probe.measure(
-            session.rest_mesh(),
-            session.rest_cage(),
-            session.posed_mesh(),
-            session.posed_cage(),
-        );
+        let cage = probe.measure_session(&session);
         eprintln!("t = {t}: frame in {frame_ms:.3} ms; current cage: {cage}");
         report.worst = Some(report.worst.map_or(cage, |w| w.worst(cage)));
         report.samples.push(SampleReport {

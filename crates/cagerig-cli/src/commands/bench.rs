@@ -465,21 +465,12 @@ fn animation_cage_quality(
     session: &mut RigSession,
     duration: f64,
 ) -> anyhow::Result<Option<cagerig::cage_quality::CageQuality>> {
-    let probe = cagerig::cage_quality::CageQualityProbe::new(
-        session.rest_mesh(),
-        session.rest_cage(),
-        session.cage_triangles(),
-    )?;
+    let probe = cagerig::cage_quality::CageQualityProbe::of_session(session)?;
     let mut worst: Option<cagerig::cage_quality::CageQuality> = None;
     for i in 0..20 {
         let t = duration * i as f64 / 20.0;
         if player.apply(t, session).is_ok() {
-            let q = probe.measure(
-                session.rest_mesh(),
-                session.rest_cage(),
-                session.posed_mesh(),
-                session.posed_cage(),
-            );
+            let q = probe.measure_session(session);
             worst = Some(worst.map_or(q, |w| w.worst(q)));
         }
     }
