@@ -35,7 +35,8 @@ pub fn resolve_uri(
             ));
         }
     }
-    let decoded = percent_decode(uri).ok_or_else(|| refuse("malformed percent-encoding"))?;
+    let decoded = cagerig::io::text::percent_decode(uri)
+        .ok_or_else(|| refuse("malformed percent-encoding"))?;
     if decoded.starts_with('/') || decoded.starts_with('\\') || decoded.contains('\0') {
         return Err(refuse("absolute paths are not allowed"));
     }
@@ -58,23 +59,6 @@ pub fn resolve_uri(
         return Err(refuse("it leads outside the file's folder (symbolic link)"));
     }
     Ok(canon)
-}
-
-fn percent_decode(s: &str) -> Option<String> {
-    let bytes = s.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' {
-            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(bytes[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
 }
 
 impl Buffers {

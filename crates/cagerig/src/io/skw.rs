@@ -122,20 +122,7 @@ fn decode_name(token: &str) -> Option<String> {
     if token == "%" {
         return Some(String::new());
     }
-    let bytes = token.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut k = 0;
-    while k < bytes.len() {
-        if bytes[k] == b'%' {
-            let hex = std::str::from_utf8(bytes.get(k + 1..k + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            k += 3;
-        } else {
-            out.push(bytes[k]);
-            k += 1;
-        }
-    }
-    String::from_utf8(out).ok()
+    super::text::percent_decode(token)
 }
 
 /// The first names of a joint list, for messages.

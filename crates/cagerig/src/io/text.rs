@@ -5,6 +5,25 @@ use std::path::Path;
 
 use super::error::ParseError;
 
+/// `text` with every `%XX` (two hex digits) replaced by the byte XX, as UTF-8 (URI
+/// percent-decoding; `.skw` joint names); `None` for a malformed escape or invalid UTF-8.
+pub fn percent_decode(text: &str) -> Option<String> {
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut k = 0;
+    while k < bytes.len() {
+        if bytes[k] == b'%' {
+            let hex = std::str::from_utf8(bytes.get(k + 1..k + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            k += 3;
+        } else {
+            out.push(bytes[k]);
+            k += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
 /// How the writers print floating-point numbers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FloatFormat {
@@ -240,6 +259,16 @@ pub(crate) fn for_each_triplet(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn percent_decoding_reads_escapes_and_refuses_malformed_ones() {
+        assert_eq!(percent_decode("a%20b%25").as_deref(), Some("a b%"));
+        assert_eq!(percent_decode("%C3%A9t%C3%A9").as_deref(), Some("été"));
+        assert_eq!(percent_decode("plain").as_deref(), Some("plain"));
+        assert_eq!(percent_decode("50%"), None);
+        assert_eq!(percent_decode("%zz"), None);
+        assert_eq!(percent_decode("%FF"), None);
+    }
 
     #[test]
     fn round_trip_format_is_exact() {
