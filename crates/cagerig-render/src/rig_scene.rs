@@ -114,7 +114,10 @@ impl ColorBy {
                 index: k,
                 count: cage,
             }),
-            _ => Ok(()),
+            ColorBy::JointWeights(_)
+            | ColorBy::JointCageCoords(_)
+            | ColorBy::CageCoords(_)
+            | ColorBy::CageReach => Ok(()),
         }
     }
 

@@ -80,13 +80,16 @@ fn display_ui(ui: &mut egui::Ui, view: &mut ViewState, selection: &Selection) {
         ColorMode::JointCoords,
         "Ψ of the joint (cage)",
     );
-    if view.color_mode != ColorMode::None
-        && view.color_by(selection) == cagerig_render::rig_scene::ColorBy::None
-    {
-        ui.weak(match view.color_mode {
-            ColorMode::CageCoords => "select a cage vertex to see its map",
-            _ => "select a joint to see its map",
-        });
+    if view.color_by(selection) == cagerig_render::rig_scene::ColorBy::None {
+        // The maps of a selection say what to select; the others need none.
+        let hint = match view.color_mode {
+            ColorMode::CageCoords => Some("select a cage vertex to see its map"),
+            ColorMode::Weights | ColorMode::JointCoords => Some("select a joint to see its map"),
+            ColorMode::None | ColorMode::CageReach => None,
+        };
+        if let Some(hint) = hint {
+            ui.weak(hint);
+        }
     }
 }
 
