@@ -5,7 +5,7 @@
 //! is linear in C — the MaxVol rows, the linear CageUp map P, SkelUp's Ψ and the linear CageRev
 //! L — is built on φ unchanged; this module adds the face terms ψ·g(C) and turns CageUp and
 //! CageRev into the Newton solves of [`crate::sync::green_cage_fit`] and
-//! [`crate::sync::green_cage_reverser`]. The derivation is in `docs/green-coordinates.md`.
+//! [`crate::sync::green_cage_fit::reverser`]. The derivation is in `docs/green-coordinates.md`.
 
 use std::sync::OnceLock;
 
@@ -14,8 +14,8 @@ use faer::Mat;
 use super::*;
 use crate::coords::stretched_normals::StretchedNormals;
 use crate::error::UnfittedCage;
+use crate::sync::green_cage_fit::reverser::{GrabState, GreenCageReverser};
 use crate::sync::green_cage_fit::{FitBudget, GreenCageFit};
-use crate::sync::green_cage_reverser::{GrabState, GreenCageReverser};
 use crate::sync::newton::NewtonReport;
 
 /// The Green terms of a session.

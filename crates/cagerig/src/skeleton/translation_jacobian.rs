@@ -1,5 +1,5 @@
 //! How the translations of the skinning transforms move with the rest joint positions, the
-//! rotations and scales held fixed: the K_A of the Green CageRev (`sync/green_cage_reverser.rs`).
+//! rotations and scales held fixed: the K_A of the Green CageRev (`sync/green_cage_fit/reverser.rs`).
 
 use glam::{DAffine3, DMat3};
 

@@ -1,5 +1,5 @@
 //! Sync operators of Section 4: CageUp (S'→C'), SkelUp (C→S), CageRev (C'→C); for
-//! Green coordinates, their Newton forms (`green_cage_fit`, `green_cage_reverser`).
+//! Green coordinates, their Newton forms (`green_cage_fit`, with its reverser).
 
 pub mod cage_fit_kind;
 pub mod cage_prior;
@@ -7,7 +7,6 @@ pub mod cage_reverser;
 pub mod cage_updater;
 pub(crate) mod dense_lu;
 pub mod green_cage_fit;
-pub mod green_cage_reverser;
 pub mod newton;
 pub mod skeleton_updater;
 

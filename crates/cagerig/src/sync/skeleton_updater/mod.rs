@@ -29,6 +29,12 @@ use crate::mesh::TriMesh;
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 
+mod prior;
+#[cfg(test)]
+mod tests;
+
+use prior::{Candidate, articulation_candidates, joint_prior, project_prior};
+
 /// How the joint localisation function L of Eq. 9 is built from Ω.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -440,11 +446,3 @@ fn localised_face_average(
         .fold(DVec3::ZERO, |acc, (&w, g)| acc + w * *g);
     (average.iter().all(|w| w.is_finite()) && shift.is_finite()).then_some((average, shift))
 }
-
-#[path = "skeleton_updater_prior.rs"]
-mod prior;
-use prior::{Candidate, articulation_candidates, joint_prior, project_prior};
-
-#[cfg(test)]
-#[path = "skeleton_updater_tests.rs"]
-mod tests;

@@ -2,7 +2,7 @@
 //! grabbed current cage C'_t = C'_0 + ∂C' exactly (grabbed vertices on their targets, the others
 //! where they were).
 //!
-//! Green CageUp ([`super::green_cage_fit`]) returns a stationary point of ½‖F_R(C') − M'_R‖²,
+//! Green CageUp ([`super`]) returns a stationary point of ½‖F_R(C') − M'_R‖²,
 //! i.e. `J(C')ᵀ (F_R(C') − M'_R) = 0` with J the Jacobian of the fitting rows F_R. So C'_t is
 //! CageUp's answer exactly when the new skinned rows satisfy
 //!
@@ -17,7 +17,7 @@
 //! (`3#R × 3#J`), the skeleton's part (SkelUp moves the joints, which moves the translations;
 //! zero while SkelUp is locked): both depend on the pose only and are built once per pose
 //! ([`GreenCageReverser::prepare`]). SkelUp is `A(C) = Ψ_φ C + Ψ_ψ g(C)` (G5), rows of the same
-//! form as F_R. Newton's method ([`super::newton`]) solves G(δ) = 0 with its exact Jacobian
+//! form as F_R. Newton's method ([`crate::sync::newton`]) solves G(δ) = 0 with its exact Jacobian
 //! `J_tᵀ (R̃ J(C₀ + δ) + K_A J_A(C₀ + δ))` from δ = 0, J_A the Jacobian of A (`3#J × 3#C`); a
 //! large grab that stalls is split into pieces. For MVC (ψ = 0, Ψ_ψ = 0, J = Φ̃) this is Eq. 19
 //! in its least-squares form.
@@ -25,9 +25,9 @@
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use glam::{DMat3, DVec3};
 
-use super::green_cage_fit::{GRADIENT_TOLERANCE, GreenCageFit, rows_jacobian_into, rows_of};
-use super::newton::{NewtonReport, NewtonSolver, solve_by_continuation};
+use super::{GRADIENT_TOLERANCE, GreenCageFit, rows_jacobian_into, rows_of};
 use crate::error::RigError;
+use crate::sync::newton::{NewtonReport, NewtonSolver, solve_by_continuation};
 
 /// Precomputed Green CageRev for one pose (see the module docs).
 #[derive(Debug, Clone)]

@@ -1,5 +1,5 @@
 //! The fitting rows of a Green cage map, `F_R(x) = φ_R x + ψ_R g(x)`, and their Jacobian: shared
-//! by CageUp's fit ([`super::GreenCageFit`]), CageRev ([`super::super::green_cage_reverser`])
+//! by CageUp's fit ([`super::GreenCageFit`]), CageRev ([`super::reverser`])
 //! and SkelUp's joints (the same form with Ψ_φ, Ψ_ψ).
 
 use faer::Mat;

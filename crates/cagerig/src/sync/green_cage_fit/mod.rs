@@ -20,16 +20,31 @@
 //! event reuse the previous event's undamped Hessian factors (chord steps) while each halves the
 //! gradient. The fit is converged when the
 //! gradient Jᵀr is below [`GRADIENT_TOLERANCE`] of the cage size: C' is then a stationary point
-//! to round-off, which is what CageRev inverts exactly ([`super::green_cage_reverser`]). A large
+//! to round-off, which is what CageRev inverts exactly ([`reverser`]). A large
 //! change of pose in one event is split into pieces (continuation) when the direct solve stalls.
 
 use faer::Mat;
 use glam::{DMat3, DVec3};
 
-use super::dense_lu::DenseLu;
-use super::newton::{NewtonReport, solve_by_continuation};
 use crate::coords::stretched_normals::StretchedNormals;
 use crate::error::RigError;
+use crate::sync::dense_lu::DenseLu;
+use crate::sync::newton::{NewtonReport, solve_by_continuation};
+
+mod budget;
+mod damping;
+mod gram;
+mod objective;
+mod prediction;
+pub mod reverser;
+mod rows;
+#[cfg(test)]
+mod tests;
+
+pub use budget::{AfterDirectSolve, FitBudget, UNFITTED_STEPS};
+use damping::{damping_scale, lower_damping, raise_damping};
+use gram::gram_matrices;
+pub(crate) use rows::{rows_jacobian_into, rows_of};
 
 /// Converged when max |Jᵀr| is at most this fraction of the cage size.
 pub const GRADIENT_TOLERANCE: f64 = 1e-13;
@@ -500,29 +515,3 @@ impl GreenCageFit {
         outcome.map(|()| report)
     }
 }
-
-#[path = "green_cage_fit_budget.rs"]
-mod budget;
-pub use budget::{AfterDirectSolve, FitBudget, UNFITTED_STEPS};
-
-#[path = "green_cage_fit_damping.rs"]
-mod damping;
-use damping::{damping_scale, lower_damping, raise_damping};
-
-#[path = "green_cage_fit_rows.rs"]
-mod rows;
-pub(crate) use rows::{rows_jacobian_into, rows_of};
-
-#[path = "green_cage_fit_gram.rs"]
-mod gram;
-use gram::gram_matrices;
-
-#[path = "green_cage_fit_prediction.rs"]
-mod prediction;
-
-#[path = "green_cage_fit_objective.rs"]
-mod objective;
-
-#[cfg(test)]
-#[path = "green_cage_fit_tests.rs"]
-mod tests;
