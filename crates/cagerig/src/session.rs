@@ -26,8 +26,8 @@ use crate::pose::{
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::blended::BlendedSkinning;
-use crate::skinning::cor::{CorScratch, CorSkinning};
-use crate::skinning::dqs::{DqsScratch, DualQuaternionSkinning};
+use crate::skinning::cor::CorScratch;
+use crate::skinning::dqs::DqsScratch;
 use crate::skinning::lbs::LinearBlendSkinning;
 use crate::skinning::{DqBlendWeights, SkinningMethod};
 use crate::sparse_rows::SparseRows;
@@ -49,6 +49,7 @@ mod parts;
 mod pose_events;
 mod rebind;
 mod reskeleton;
+mod skinning;
 mod sync_chain;
 #[cfg(test)]
 mod test_rigs;
@@ -66,20 +67,9 @@ pub use parts::{
     CageFitSource, FitRows, GRID_COR_CENTRES_ABOVE, GivenCageCoords, PHI_C_TOLERANCE,
     PHI_C_TOLERANCE_F32, RigParts, SessionOptions, centre_coords_method, compute_centre_coords,
 };
+use skinning::{CorSource, CorState, RigSkinning};
 use sync_chain::scatter_edit;
 pub use unfitted_cage::{UnfittedCagePolicy, UnknownUnfittedCagePolicy};
-
-/// CoR data: Λ = S·Φ (`#V × #C`, Eq. 14) and the current centres Λ·C.
-#[derive(Debug, Clone)]
-struct CorState {
-    centre_coords: CageCoords,
-    centres: Vec<DVec3>,
-    /// The centres lag behind C while another skinning method is active (they are refreshed
-    /// in full when CoR skinning runs next), so cage edits under LBS/DQS do not pay for Λ·C.
-    stale: bool,
-    skinning: CorSkinning,
-    scratch: CorScratch,
-}
 
 /// The rest state induced by one cage-animation keyframe: C = C₀ + offsets, M = ΦC and the CoR
 /// centres Λ·C, precomputed so that playback between two keys is a lerp of two meshes instead of
@@ -108,19 +98,11 @@ pub struct RigSession {
     skeleton_updater: SkeletonUpdater,
     cage_updater: CageUpdater,
     reverser: CageReverser,
-    lbs: LinearBlendSkinning,
-    dqs: DualQuaternionSkinning,
-    /// The blended LBS/DQS kernel with the rig's DQ blend weights b (`None`: the rig has none,
-    /// and [`SkinningMethod::Blended`] is refused).
-    blended: Option<BlendedSkinning>,
+    /// The skinning component: M' from M under the method in use (see [`skinning`]).
+    skinning: RigSkinning,
+    /// LBS of CageUp's fitting rows: the ghost fit's target for DQS/CoR (Sec. 4.3).
     ghost_lbs: LinearBlendSkinning,
-    cor_rows: Option<SparseRows>,
-    /// Λ given with the parts, used on the first switch to CoR.
-    given_centre_coords: Option<CageCoords>,
-    cor: Option<CorState>,
-    cor_options: CorCentresOptions,
     options_fit_source: CageFitSource,
-    method: SkinningMethod,
     /// Original rest cage C₀ (cage-animation offsets are relative to it).
     original_rest_cage: Vec<DVec3>,
 
@@ -158,7 +140,6 @@ pub struct RigSession {
     scratch_touched: Vec<usize>,
     scratch_rows_rest: Vec<DVec3>,
     scratch_rows_posed: Vec<DVec3>,
-    dqs_scratch: DqsScratch,
     /// The small state saved before each event (see [`checkpoint`]).
     checkpoint: Checkpoint,
     /// The f32 display path, when on (see [`display_path`]).
@@ -309,10 +290,15 @@ impl RigSession {
             mesh_triangles: mesh.triangles.clone(),
             topology_id: next_topology_id(),
             cage_triangles: cage.triangles.clone(),
-            lbs: LinearBlendSkinning::new(&skin_weights),
-            dqs: DualQuaternionSkinning::new(&skin_weights),
-            blended,
-            dqs_scratch: DqsScratch::new(nj),
+            skinning: RigSkinning::new(
+                &skin_weights,
+                blended,
+                CorSource {
+                    rows: cor_rows,
+                    given: cor_centre_coords,
+                    options: options.cor_centres,
+                },
+            ),
             ghost_lbs,
             skeleton,
             skin_weights,
@@ -320,14 +306,9 @@ impl RigSession {
             skeleton_updater,
             cage_updater,
             reverser,
-            cor_rows,
-            given_centre_coords: cor_centre_coords,
             cage_map,
             options: stored_options,
-            cor: None,
-            cor_options: options.cor_centres,
             options_fit_source: options.fit_source,
-            method: SkinningMethod::Lbs,
             original_rest_cage: rest_cage.clone(),
             rest_mesh_is_phi_c,
             rest_mesh_rows_only: false,

@@ -59,7 +59,7 @@ impl RigSession {
     }
     /// DQ blend weights b (`#V`) of [`SkinningMethod::Blended`], when the rig has them.
     pub fn dq_blend_weights(&self) -> Option<&DqBlendWeights> {
-        self.blended.as_ref().map(BlendedSkinning::dq_blend_weights)
+        self.skinning.dq_blend_weights()
     }
     /// Φ.
     pub fn cage_coords(&self) -> &CageCoords {
@@ -109,7 +109,7 @@ impl RigSession {
     }
     /// The current skinning method.
     pub fn skinning(&self) -> SkinningMethod {
-        self.method
+        self.skinning.method()
     }
     /// Which mesh CageUp fits when the skinning method is not LBS.
     pub fn fit_source(&self) -> CageFitSource {
@@ -118,7 +118,7 @@ impl RigSession {
     /// CoR centres (`#V`), if CoR data exists. They follow the cage while CoR skinning is active
     /// and are refreshed when it next runs otherwise.
     pub fn cor_centres(&self) -> Option<&[DVec3]> {
-        self.cor.as_ref().map(|c| c.centres.as_slice())
+        self.skinning.cor().map(|c| c.centres.as_slice())
     }
     /// Chooses how CageRev factorises Eq. 19 (low-rank by default, see [`ReverserMethod`]).
     pub fn set_reverser_method(&mut self, method: ReverserMethod) {

@@ -70,7 +70,7 @@ impl RigSession {
         let mut mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
         self.rest_mesh_of_cage(&cage, &mut mesh);
         let terms = self.cage_map.terms_of(&cage);
-        let centres = self.cor.as_ref().map(|cor| {
+        let centres = self.skinning.cor().map(|cor| {
             let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
             self.centres_of_cage(cor, &cage, &mut centres);
             centres
@@ -161,15 +161,12 @@ impl RigSession {
         if !self.cage_map.is_linear() {
             // The centres' terms are not linear in C either: evaluated in full.
             self.centres_from_cage_in_full();
-        } else if let Some(cor) = &mut self.cor {
-            match (&lo.centres, &hi.centres, self.method) {
-                (_, _, m) if m != SkinningMethod::Cor => cor.stale = true,
-                (Some(l), Some(h), _) => {
-                    lerp_into(l, h, a, &mut cor.centres);
-                    cor.stale = false;
-                }
-                _ => cor.stale = true,
-            }
+        } else {
+            let blend = match (&lo.centres, &hi.centres) {
+                (Some(l), Some(h)) => Some(|centres: &mut [DVec3]| lerp_into(l, h, a, centres)),
+                (Some(_) | None, _) => None,
+            };
+            self.skinning.centres_follow_keyframes(blend);
         }
         self.sync_from_rest_cage();
         Ok(())

@@ -457,7 +457,8 @@ impl RigSession {
     /// CageUp: C' from the fitting rows of M' (or their ghost LBS, Sec. 4.3 for DQS/CoR): the
     /// linear map P for MVC rigs, the Gauss–Newton fit for Green rigs.
     pub(super) fn fit_cage(&mut self) {
-        let ghost = !self.method.is_linear() && self.options_fit_source == CageFitSource::GhostLbs;
+        let ghost = !self.skinning.method().is_linear()
+            && self.options_fit_source == CageFitSource::GhostLbs;
         match self.cage_map {
             CageMap::Mvc => self.fit_linear_cage(ghost),
             CageMap::Green(_) => self.fit_green_cage_rows(ghost),

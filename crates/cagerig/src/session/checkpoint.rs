@@ -72,7 +72,7 @@ impl RigSession {
         c.posed_local_scale.copy_from_slice(&self.posed_local_scale);
         c.translation_offset
             .copy_from_slice(&self.translation_offset);
-        c.method = self.method;
+        c.method = self.skinning.method();
     }
 
     /// After an event: the first structure that is not finite (or too large), if any.
@@ -101,7 +101,7 @@ impl RigSession {
             || self.posed_local_rotation != c.posed_local_rotation
             || self.posed_local_scale != c.posed_local_scale
             || self.translation_offset != c.translation_offset
-            || self.method != c.method;
+            || self.skinning.method() != c.method;
         let refused = match result {
             Err(e) if !changed => return Err(e),
             Err(e) => Some(e),
@@ -132,7 +132,7 @@ impl RigSession {
         self.posed_local_scale.copy_from_slice(&c.posed_local_scale);
         self.translation_offset
             .copy_from_slice(&c.translation_offset);
-        self.method = c.method;
+        self.skinning.restore(c.method);
         if rest_changed || !self.rest_mesh.iter().all(|p| p.is_finite()) {
             self.rest_from_cage_in_full();
         }

@@ -26,13 +26,14 @@ use glam::{DAffine3, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::RigSession;
+use super::skinning::ActiveSkinning;
 use crate::cage_coords::{CageCoords, DisplayCageCoords};
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::{
     BlendedF32, BlendedF32Scratch, BlendedSkinning, CorF32, CorF32Scratch, CorScratch, CorSkinning,
     DqBlendWeights, DqsF32, DqsF32Scratch, DqsScratch, DualQuaternionSkinning, LbsF32,
-    LbsF32Scratch, RestPoint, SkinningMethod,
+    LbsF32Scratch, RestPoint,
 };
 
 /// Precision of the displayed current skin M'.
@@ -320,11 +321,14 @@ impl RigSession {
         // differences, not absolute coordinates), else M̃.
         let rest_display = std::mem::take(&mut display.rest_positions);
         let skin = SkinF32 {
-            method: self.method,
+            method: match self.skinning.active() {
+                ActiveSkinning::Lbs => MethodF32::Lbs,
+                ActiveSkinning::Dqs => MethodF32::Dqs,
+                ActiveSkinning::Cor(cor) => MethodF32::Cor(&cor.centres),
+                ActiveSkinning::Blended(blended) => MethodF32::Blended(blended.dq_blend_weights()),
+            },
             transforms: &self.posed_from_rest,
             weights: &self.skin_weights,
-            centres: self.cor.as_ref().map(|c| &c.centres[..]),
-            blend: self.blended.as_ref().map(BlendedSkinning::dq_blend_weights),
             revision,
         };
         let result = if self.rest_mesh_rows_only {
@@ -347,30 +351,29 @@ impl RigSession {
             *r = self.rest_mesh[row];
         }
         let transforms: &[DAffine3] = &self.posed_from_rest;
-        let centres = self.cor.as_ref().map(|c| &c.centres[..]);
-        match (self.method, centres, &display.rows_blended) {
-            (SkinningMethod::Lbs, _, _)
-            | (SkinningMethod::Cor, None, _)
-            | (SkinningMethod::Blended, _, None) => self.ghost_lbs.apply(
+        match (self.skinning.active(), &display.rows_blended) {
+            // The rows' blended kernel exists whenever the rig has b (`DisplayPath::new`);
+            // were it missing, LBS (the ghost fit's consensus) is the defined result.
+            (ActiveSkinning::Lbs, _) | (ActiveSkinning::Blended(_), None) => self.ghost_lbs.apply(
                 transforms,
                 &self.scratch_rows_rest,
                 &mut self.scratch_rows_posed,
             ),
-            (SkinningMethod::Blended, _, Some(rows_blended)) => rows_blended.apply(
-                transforms,
-                &self.scratch_rows_rest,
-                &mut display.rows_dqs_scratch,
-                &mut self.scratch_rows_posed,
-            ),
-            (SkinningMethod::Dqs, _, _) => display.rows_dqs.apply(
+            (ActiveSkinning::Blended(_), Some(rows_blended)) => rows_blended.apply(
                 transforms,
                 &self.scratch_rows_rest,
                 &mut display.rows_dqs_scratch,
                 &mut self.scratch_rows_posed,
             ),
-            (SkinningMethod::Cor, Some(centres), _) => {
+            (ActiveSkinning::Dqs, _) => display.rows_dqs.apply(
+                transforms,
+                &self.scratch_rows_rest,
+                &mut display.rows_dqs_scratch,
+                &mut self.scratch_rows_posed,
+            ),
+            (ActiveSkinning::Cor(cor), _) => {
                 for (c, &row) in display.rows_centres.iter_mut().zip(rows) {
-                    *c = centres[row];
+                    *c = cor.centres[row];
                 }
                 display.rows_cor.apply(
                     transforms,
@@ -399,15 +402,22 @@ impl RigSession {
     }
 }
 
+/// The skinning method of the displayed M', with the data its f32 kernel is built from.
+#[derive(Debug, Clone, Copy)]
+enum MethodF32<'a> {
+    Lbs,
+    Dqs,
+    /// With the CoR centres (`#V`).
+    Cor(&'a [DVec3]),
+    /// With the DQ blend weights b (`#V`).
+    Blended(&'a DqBlendWeights),
+}
+
 /// The inputs of one f32 skinning of the displayed M'.
 struct SkinF32<'a> {
-    method: SkinningMethod,
+    method: MethodF32<'a>,
     transforms: &'a [DAffine3],
     weights: &'a SkinWeights,
-    /// CoR centres (`#V`), once built.
-    centres: Option<&'a [DVec3]>,
-    /// DQ blend weights (`#V`), when the rig has them.
-    blend: Option<&'a DqBlendWeights>,
     /// Rest revision of `rest`.
     revision: u64,
 }
@@ -416,8 +426,8 @@ impl SkinF32<'_> {
     /// Brings the method's f32 kernel to `rest` (`#V`) and skins into `display.positions`.
     fn apply<P: RestPoint>(&self, display: &mut DisplayPath, rest: &[P]) -> Result<(), RigError> {
         let (transforms, weights, revision) = (self.transforms, self.weights, self.revision);
-        match (self.method, self.centres, self.blend) {
-            (SkinningMethod::Dqs, _, _) => {
+        match self.method {
+            MethodF32::Dqs => {
                 let dqs = refresh(
                     &mut display.dqs,
                     revision,
@@ -426,7 +436,7 @@ impl SkinF32<'_> {
                 )?;
                 dqs.apply(transforms, &mut display.dqs_scratch, &mut display.positions);
             }
-            (SkinningMethod::Blended, _, Some(blend)) => {
+            MethodF32::Blended(blend) => {
                 let blended = refresh(
                     &mut display.blended,
                     revision,
@@ -439,7 +449,7 @@ impl SkinF32<'_> {
                     &mut display.positions,
                 );
             }
-            (SkinningMethod::Cor, Some(centres), _) => {
+            MethodF32::Cor(centres) => {
                 let cor = refresh(
                     &mut display.cor,
                     revision,
@@ -448,9 +458,7 @@ impl SkinF32<'_> {
                 )?;
                 cor.apply(transforms, &mut display.cor_scratch, &mut display.positions);
             }
-            (SkinningMethod::Lbs, _, _)
-            | (SkinningMethod::Cor, None, _)
-            | (SkinningMethod::Blended, _, None) => {
+            MethodF32::Lbs => {
                 let lbs = refresh(
                     &mut display.lbs,
                     revision,

@@ -128,7 +128,7 @@ impl RigSession {
             rotations: self.posed_local_rotation.clone(),
             scales: self.posed_local_scale.clone(),
             translation_offsets: self.translation_offset.clone(),
-            skinning: self.method,
+            skinning: self.skinning.method(),
             locks: self.locks,
             coords: self.coords_kind(),
             unfitted_cage: self.unfitted_cage_policy(),
@@ -195,7 +195,7 @@ impl RigSession {
                 return Err(RigError::NonFinite { what, index });
             }
         }
-        if state.skinning != self.method {
+        if state.skinning != self.skinning.method() {
             self.set_skinning(state.skinning)?;
         }
         // The state's policy decides whether its pose may leave C' unfitted; a refused restore

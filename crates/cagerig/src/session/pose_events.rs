@@ -15,13 +15,13 @@ impl RigSession {
 
     /// [`RigSession::set_skinning`] without the checkpoint.
     fn set_skinning_event(&mut self, method: SkinningMethod) -> Result<(), RigError> {
-        if method.needs_dq_blend_weights() && self.blended.is_none() {
+        if method.needs_dq_blend_weights() && self.skinning.dq_blend_weights().is_none() {
             return Err(RigError::NoDqBlendWeights);
         }
-        if method == SkinningMethod::Cor && self.cor.is_none() {
+        if method == SkinningMethod::Cor {
             self.build_cor()?;
         }
-        self.method = method;
+        self.skinning.select(method)?;
         self.pose_and_fit();
         Ok(())
     }

@@ -28,7 +28,7 @@ impl RigSession {
         .with_dq_blend_weights(dq_blend_weights);
         let options = SessionOptions {
             coords,
-            skinning: self.method,
+            skinning: self.skinning.method(),
             // The binding mesh is the map of C₀: nothing to recompute or keep.
             given_cage_coords: GivenCageCoords::RecomputeIfInexact,
             ..self.options.clone()

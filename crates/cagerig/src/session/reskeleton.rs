@@ -44,7 +44,7 @@ impl RigSession {
     /// coordinates kind: what a rebind to another skeleton uses.
     pub fn rebinding_options(&self) -> SessionOptions {
         SessionOptions {
-            skinning: self.method,
+            skinning: self.skinning.method(),
             coords: self.coords_kind(),
             // M is the exact map of C: nothing to recompute or keep.
             given_cage_coords: GivenCageCoords::RecomputeIfInexact,

@@ -43,61 +43,67 @@ impl RigSession {
         Ok(())
     }
 
+    /// Builds the CoR state (Λ and the centres Λ·C) unless it is built: from the Λ given with
+    /// the parts, the loaded centre rows (Λ = S·Φ) or computed (see [`compute_centre_coords`]).
     pub(super) fn build_cor(&mut self) -> Result<(), RigError> {
-        self.ensure_exact_rest_mesh();
-        let given = self.given_centre_coords.take();
-        let centre_coords = match (&self.cor_rows, given) {
-            (_, Some(lambda)) => {
-                if lambda.num_vertices() != self.rest_mesh.len()
-                    || lambda.num_cage_vertices() != self.rest_cage.len()
-                {
-                    return Err(RigError::SizeMismatch {
-                        what: "CoR cage coordinates Λ (#V × #C)",
-                        expected: self.rest_mesh.len() * self.rest_cage.len(),
-                        actual: lambda.num_vertices() * lambda.num_cage_vertices(),
-                    });
-                }
-                lambda
-            }
-            // Loaded rows: Λ = S·Φ (O(nnz(S)·#C); fine for the rows the tool writes, which
-            // address the original vertices, also after subdivision).
-            (Some(rows), None) => rows.compose_dense(&self.cage_coords)?,
-            (None, None) => compute_centre_coords(
-                &self.rest_mesh,
-                &self.mesh_triangles,
-                &self.skin_weights,
-                &self.cage_coords,
-                &self.cor_options,
-            )?,
-        };
-        let mut centre_coords = centre_coords;
-        if self.cage_coords.precision() == CoordsPrecision::F32 {
-            centre_coords.round_to_f32();
+        if self.skinning.has_cor() {
+            return Ok(());
         }
-        let (cor_rows, rest_mesh, mesh_triangles, skin_weights, cor_options) = (
-            &self.cor_rows,
-            &self.rest_mesh,
-            &self.mesh_triangles,
-            &self.skin_weights,
-            &self.cor_options,
-        );
-        self.cage_map.build_centre_terms(|coords| match cor_rows {
-            Some(rows) => rows.compose_dense(coords),
-            None => {
-                compute_centre_coords(rest_mesh, mesh_triangles, skin_weights, coords, cor_options)
+        self.ensure_exact_rest_mesh();
+        let Self {
+            skinning,
+            rest_mesh,
+            rest_cage,
+            mesh_triangles,
+            skin_weights,
+            cage_coords,
+            cage_map,
+            ..
+        } = self;
+        skinning.build_cor(|source| {
+            let centre_coords = match (&source.rows, source.given.take()) {
+                (_, Some(lambda)) => {
+                    if lambda.num_vertices() != rest_mesh.len()
+                        || lambda.num_cage_vertices() != rest_cage.len()
+                    {
+                        return Err(RigError::SizeMismatch {
+                            what: "CoR cage coordinates Λ (#V × #C)",
+                            expected: rest_mesh.len() * rest_cage.len(),
+                            actual: lambda.num_vertices() * lambda.num_cage_vertices(),
+                        });
+                    }
+                    lambda
+                }
+                // Loaded rows: Λ = S·Φ (O(nnz(S)·#C); fine for the rows the tool writes, which
+                // address the original vertices, also after subdivision).
+                (Some(rows), None) => rows.compose_dense(cage_coords)?,
+                (None, None) => compute_centre_coords(
+                    rest_mesh,
+                    mesh_triangles,
+                    skin_weights,
+                    cage_coords,
+                    &source.options,
+                )?,
+            };
+            let mut centre_coords = centre_coords;
+            if cage_coords.precision() == CoordsPrecision::F32 {
+                centre_coords.round_to_f32();
             }
-        })?;
-        let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
-        centre_coords.apply(&self.rest_cage, &mut centres);
-        self.cage_map.add_centre_terms(&mut centres);
-        self.cor = Some(CorState {
-            centre_coords,
-            centres,
-            stale: false,
-            skinning: CorSkinning::new(&self.skin_weights),
-            scratch: CorScratch::new(self.skeleton.len()),
-        });
-        Ok(())
+            cage_map.build_centre_terms(|coords| match &source.rows {
+                Some(rows) => rows.compose_dense(coords),
+                None => compute_centre_coords(
+                    rest_mesh,
+                    mesh_triangles,
+                    skin_weights,
+                    coords,
+                    &source.options,
+                ),
+            })?;
+            let mut centres = vec![DVec3::ZERO; rest_mesh.len()];
+            centre_coords.apply(rest_cage, &mut centres);
+            cage_map.add_centre_terms(&mut centres);
+            Ok(CorState::new(centre_coords, centres, skin_weights))
+        })
     }
 
     /// After C changed everywhere: M = ΦC, and the CoR centres Λ·C (or marked stale when CoR
@@ -120,14 +126,11 @@ impl RigSession {
     /// The CoR centres Λ·C after C changed everywhere (or marked stale when CoR skinning is not
     /// active).
     pub(super) fn centres_from_cage_in_full(&mut self) {
-        if let Some(cor) = &mut self.cor {
-            if self.method == SkinningMethod::Cor {
-                cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
-                self.cage_map.add_centre_terms(&mut cor.centres);
-            } else {
-                cor.stale = true;
-            }
-        }
+        let (rest_cage, cage_map) = (&self.rest_cage, &self.cage_map);
+        self.skinning.centres_follow_cage(|centre_coords, centres| {
+            centre_coords.apply(rest_cage, centres);
+            cage_map.add_centre_terms(centres);
+        });
     }
 
     /// Applies ΔC on a few rest-cage vertices to C, M and the CoR centres.
@@ -150,15 +153,9 @@ impl RigSession {
             self.cage_map
                 .apply_rest_delta(vertices, &self.rest_cage, &mut self.rest_mesh);
         }
-        if let Some(cor) = &mut self.cor {
-            // Non-linear maps refresh the centres in full (their terms changed too).
-            if self.method == SkinningMethod::Cor && !cor.stale && self.cage_map.is_linear() {
-                cor.centre_coords
-                    .apply_delta(vertices, deltas, &mut cor.centres);
-            } else {
-                cor.stale = true;
-            }
-        }
+        // Non-linear maps refresh the centres in full (their terms changed too).
+        self.skinning
+            .centres_follow_cage_delta(vertices, deltas, self.cage_map.is_linear());
     }
 
     /// After C changed: SkelUp (A = ΨC, or Ψ_φC + Ψ_ψ g(C) for Green rigs; rest frames
@@ -193,7 +190,7 @@ impl RigSession {
     /// ([`CageCoords::apply_then`]), so M is not read back from memory (`tests/display_path.rs`
     /// checks M and M' against the display path's exact ones, computed in two passes).
     pub(super) fn rest_and_sync_from_cage(&mut self) {
-        if self.display.is_some() || self.method != SkinningMethod::Lbs {
+        if self.display.is_some() || self.skinning.method() != SkinningMethod::Lbs {
             self.rest_from_cage_for_event();
             self.sync_from_rest_cage();
             return;
@@ -201,7 +198,7 @@ impl RigSession {
         self.cage_map.update_terms(&self.rest_cage);
         self.skeleton_from_cage();
         self.pose();
-        let lbs = &self.lbs;
+        let lbs = self.skinning.lbs();
         let transforms = &self.posed_from_rest;
         self.cage_coords.apply_then(
             &self.rest_cage,
@@ -256,14 +253,12 @@ impl RigSession {
     /// M' from M under the current method: the exact f64 M', or on the display path the f32
     /// display mesh (see [`super::display_path`]).
     pub(super) fn skin(&mut self) {
-        if let Some(cor) = &mut self.cor
-            && self.method == SkinningMethod::Cor
-            && cor.stale
-        {
-            cor.centre_coords.apply(&self.rest_cage, &mut cor.centres);
-            self.cage_map.add_centre_terms(&mut cor.centres);
-            cor.stale = false;
-        }
+        let (rest_cage, cage_map) = (&self.rest_cage, &self.cage_map);
+        self.skinning
+            .refresh_stale_centres(|centre_coords, centres| {
+                centre_coords.apply(rest_cage, centres);
+                cage_map.add_centre_terms(centres);
+            });
         if self.display.is_some() {
             if self.skin_display().is_ok() {
                 return;
@@ -273,36 +268,8 @@ impl RigSession {
             self.ensure_exact_rest_mesh();
             self.display = None;
         }
-        let mut posed_mesh = std::mem::take(&mut self.posed_mesh);
-        let mut dqs_scratch = std::mem::replace(&mut self.dqs_scratch, DqsScratch::new(0));
-        match (&mut self.cor, self.method) {
-            (Some(cor), SkinningMethod::Cor) => {
-                let mut scratch = std::mem::replace(&mut cor.scratch, CorScratch::new(0));
-                self.skin_exact(
-                    &self.rest_mesh,
-                    &mut dqs_scratch,
-                    &mut scratch,
-                    &mut posed_mesh,
-                );
-                if let Some(cor) = &mut self.cor {
-                    cor.scratch = scratch;
-                }
-            }
-            (
-                _,
-                SkinningMethod::Lbs
-                | SkinningMethod::Dqs
-                | SkinningMethod::Cor
-                | SkinningMethod::Blended,
-            ) => self.skin_exact(
-                &self.rest_mesh,
-                &mut dqs_scratch,
-                &mut CorScratch::new(0),
-                &mut posed_mesh,
-            ),
-        }
-        self.posed_mesh = posed_mesh;
-        self.dqs_scratch = dqs_scratch;
+        self.skinning
+            .apply(&self.posed_from_rest, &self.rest_mesh, &mut self.posed_mesh);
     }
 
     /// The exact M' (`#V`, f64) of the current state into `out`, from the exact `rest_mesh` M.
@@ -313,30 +280,13 @@ impl RigSession {
         cor_scratch: &mut CorScratch,
         out: &mut [DVec3],
     ) {
-        // `set_skinning` builds the CoR state before it selects CoR, and refuses Blended
-        // without blend weights, so `(Cor, None)` and `(Blended, None)` do not occur; were they
-        // to, LBS (the ghost fit's consensus) is the defined result.
-        match (self.method, &self.cor, &self.blended) {
-            (SkinningMethod::Lbs, _, _)
-            | (SkinningMethod::Cor, None, _)
-            | (SkinningMethod::Blended, _, None) => {
-                self.lbs.apply(&self.posed_from_rest, rest_mesh, out)
-            }
-            (SkinningMethod::Blended, _, Some(blended)) => {
-                blended.apply(&self.posed_from_rest, rest_mesh, dqs_scratch, out)
-            }
-            (SkinningMethod::Dqs, _, _) => {
-                self.dqs
-                    .apply(&self.posed_from_rest, rest_mesh, dqs_scratch, out)
-            }
-            (SkinningMethod::Cor, Some(cor), _) => cor.skinning.apply(
-                &self.posed_from_rest,
-                rest_mesh,
-                &cor.centres,
-                cor_scratch,
-                out,
-            ),
-        }
+        self.skinning.apply_with(
+            &self.posed_from_rest,
+            rest_mesh,
+            dqs_scratch,
+            cor_scratch,
+            out,
+        );
     }
 
     /// CageUp's target M'_R (`#R`) into `scratch_rows_posed`: the ghost LBS of the fitting
