@@ -39,7 +39,6 @@ use crate::sync::skeleton_updater::{JointFaceTerms, JointLocalisation, SkeletonU
 mod accessors;
 mod animation_sample;
 mod cage_fit;
-mod cage_map;
 mod checkpoint;
 mod display_path;
 mod editable_state;
@@ -49,12 +48,12 @@ mod parts;
 mod pose_events;
 mod rebind;
 mod reskeleton;
+mod rest_map;
 mod skinning;
 mod sync_chain;
 #[cfg(test)]
 mod test_rigs;
 mod unfitted_cage;
-use cage_map::{BoundCageMap, CageMap, GivenCoords, bind_cage_map};
 use checkpoint::Checkpoint;
 pub use checkpoint::MAX_STATE_MAGNITUDE;
 use display_path::DisplayPath;
@@ -67,6 +66,7 @@ pub use parts::{
     CageFitSource, FitRows, GRID_COR_CENTRES_ABOVE, GivenCageCoords, PHI_C_TOLERANCE,
     PHI_C_TOLERANCE_F32, RigParts, SessionOptions, centre_coords_method, compute_centre_coords,
 };
+use rest_map::{BoundRestMap, CageMap, GivenCoords, RestMap, RestMeshState};
 use skinning::{CorSource, CorState, RigSkinning};
 use sync_chain::scatter_edit;
 pub use unfitted_cage::{UnfittedCagePolicy, UnknownUnfittedCagePolicy};
@@ -94,10 +94,9 @@ pub struct RigSession {
     cage_triangles: Vec<[u32; 3]>,
     skeleton: Skeleton,
     skin_weights: SkinWeights,
-    cage_coords: CageCoords,
+    /// The rest map: M = f(C) with its CageUp and CageRev (see [`rest_map`]).
+    rest_map: RestMap,
     skeleton_updater: SkeletonUpdater,
-    cage_updater: CageUpdater,
-    reverser: CageReverser,
     /// The skinning component: M' from M under the method in use (see [`skinning`]).
     skinning: RigSkinning,
     /// LBS of CageUp's fitting rows: the ghost fit's target for DQS/CoR (Sec. 4.3).
@@ -107,12 +106,6 @@ pub struct RigSession {
     original_rest_cage: Vec<DVec3>,
 
     // Rest state.
-    /// False while M is still the mesh as loaded and differs from ΦC (e.g. Φ read from a file
-    /// with 6 decimals); the first cage edit then sets M = ΦC in full.
-    rest_mesh_is_phi_c: bool,
-    /// On the display path after a current-cage event: `rest_mesh` is exact on CageUp's MaxVol
-    /// rows only, and the whole exact M = ΦC is computed on demand.
-    rest_mesh_rows_only: bool,
     rest_cage: Vec<DVec3>,
     rest_mesh: Vec<DVec3>,
     rest_world_from_joint: Vec<DAffine3>,
@@ -148,9 +141,6 @@ pub struct RigSession {
     rest_revision: u64,
     /// SkelUp / CageUp switched off by the user (see [`SyncLocks`]).
     locks: SyncLocks,
-    /// The coordinates kind's map from C to M beyond the vertex part `cage_coords` (see
-    /// [`cage_map`]).
-    cage_map: CageMap,
     /// The options the session was built with (a rebind keeps them, see [`rebind`]).
     options: SessionOptions,
 }
@@ -201,81 +191,45 @@ impl RigSession {
         let (skeleton, shear_note) = regularise_rest_frames(&skeleton)?;
         warnings.extend(shear_note);
         let nc = cage.num_vertices();
-        let (lo, hi) = cage.bounding_box();
-        let phi_c_tolerance = PHI_C_TOLERANCE * (hi - lo).length();
-        let BoundCageMap {
-            cage_coords,
-            cage_updater,
-            mut cage_map,
-            precision,
+        let rest_cage = cage.positions.clone();
+        let localisation = options.localisation;
+        let skeleton_updater_of = Box::new(
+            |mesh: &TriMesh, coords: &CageCoords, face_terms: Option<JointFaceTerms<'_>>| {
+                match joint_coords {
+                    Some(rows) => Ok((SkeletonUpdater::from_joint_coords(&rows, nc)?, Vec::new())),
+                    None => SkeletonUpdater::new(
+                        mesh,
+                        &skeleton,
+                        &skin_weights,
+                        coords,
+                        face_terms,
+                        &rest_cage,
+                        localisation,
+                    ),
+                }
+            },
+        );
+        let BoundRestMap {
+            rest_map,
+            skeleton_updater,
             cor_centre_coords,
-        } = bind_cage_map(
+        } = RestMap::bind(
+            &mut mesh,
             &cage,
-            &mesh.positions,
             GivenCoords {
                 cage_coords,
                 maxvol_rows,
                 cor_centre_coords,
             },
             &options,
-            phi_c_tolerance,
             &skin_weights,
-            skeleton.len(),
+            &skeleton,
+            skeleton_updater_of,
             &mut warnings,
         )?;
-        let rest_cage = cage.positions.clone();
-        let mut phi_c = vec![DVec3::ZERO; nv];
-        cage_map.rest_mesh_of(&cage_coords, &rest_cage, &mut phi_c);
-        let residual = crate::mesh::max_distance(&phi_c, &mesh.positions);
-        let mut rest_mesh_is_phi_c = residual <= phi_c_tolerance;
-        if precision == CoordsPrecision::F32
-            && !rest_mesh_is_phi_c
-            && residual <= PHI_C_TOLERANCE_F32 * (hi - lo).length()
-        {
-            // Only the rounding of Φ separates M from ΦC: adopt ΦC now (documented in
-            // `SessionOptions::cage_coords_precision`).
-            mesh.positions.copy_from_slice(&phi_c);
-            rest_mesh_is_phi_c = true;
-        }
-        if !rest_mesh_is_phi_c {
-            warnings.push(Warning::Note {
-                message: format!(
-                    "the cage coordinates reproduce the rest mesh only to {residual:.3e} (M ≠ ΦC); \
-                     the rest mesh becomes ΦC at the first cage edit"
-                ),
-            });
-        }
-        let skeleton_updater = match joint_coords {
-            Some(rows) => SkeletonUpdater::from_joint_coords(&rows, nc)?,
-            None => {
-                let face_terms = cage_map.extra_coords().map(|face_coords| JointFaceTerms {
-                    face_coords,
-                    rest_terms: cage_map.terms(),
-                });
-                let (up, w) = SkeletonUpdater::new(
-                    &mesh,
-                    &skeleton,
-                    &skin_weights,
-                    &cage_coords,
-                    face_terms,
-                    &rest_cage,
-                    options.localisation,
-                )?;
-                warnings.extend(w);
-                up
-            }
-        };
-        cage_map.set_joint_coords(&skeleton_updater);
-        let reverser = CageReverser::new(
-            &cage_coords,
-            &cage_updater,
-            &skin_weights,
-            |j| skeleton_updater.joint_row(j).to_vec(),
-            &skeleton,
-        )?;
         let nj = skeleton.len();
-        let nr = cage_updater.rows().len();
-        let ghost_lbs = LinearBlendSkinning::new(&skin_weights.select_rows(cage_updater.rows()));
+        let nr = rest_map.rows().len();
+        let ghost_lbs = LinearBlendSkinning::new(&skin_weights.select_rows(rest_map.rows()));
         let rest_world_from_joint = skeleton.rest_world_from_joint();
         let mut locals = vec![DAffine3::IDENTITY; nj];
         skeleton.locals_from_worlds(&rest_world_from_joint, &mut locals);
@@ -302,16 +256,11 @@ impl RigSession {
             ghost_lbs,
             skeleton,
             skin_weights,
-            cage_coords,
+            rest_map,
             skeleton_updater,
-            cage_updater,
-            reverser,
-            cage_map,
             options: stored_options,
             options_fit_source: options.fit_source,
             original_rest_cage: rest_cage.clone(),
-            rest_mesh_is_phi_c,
-            rest_mesh_rows_only: false,
             rest_cage,
             rest_mesh: mesh.positions,
             rest_world_from_joint,

@@ -7,7 +7,9 @@ impl RigSession {
     /// computed in f64 on the first call; [`RigSession::display_rest_mesh`] is the drawn one).
     pub fn rest_mesh(&self) -> &[DVec3] {
         match self.display.as_deref() {
-            Some(display) if self.rest_mesh_rows_only => self.exact_rest_mesh(display),
+            Some(display) if self.rest_map.mesh_state() == RestMeshState::MapOnRows => {
+                self.exact_rest_mesh(display)
+            }
             _ => &self.rest_mesh,
         }
     }
@@ -63,7 +65,7 @@ impl RigSession {
     }
     /// Φ.
     pub fn cage_coords(&self) -> &CageCoords {
-        &self.cage_coords
+        self.rest_map.coords()
     }
     /// The SkelUp operator: Ψ (`#J × #C`) with A = ΨC.
     pub fn skeleton_updater(&self) -> &SkeletonUpdater {
@@ -74,17 +76,17 @@ impl RigSession {
     /// coordinate columns: g(C) (`#F`) for Green rigs, empty for MVC rigs. A = Ψ·C + Ψ_ψ·g(C) is
     /// `skeleton_updater().apply(rest_cage(), rest_cage_terms(), ..)`.
     pub fn rest_cage_terms(&self) -> &[DVec3] {
-        self.cage_map.terms()
+        self.rest_map.terms()
     }
     /// The CageUp operator: C' fitted to the selected rows of M'.
     pub fn cage_updater(&self) -> &CageUpdater {
-        &self.cage_updater
+        self.rest_map.linear_fit()
     }
 
     /// The CageUp fit in use: the options' [`CageFitKind`] for mean value rigs, the paper's
     /// (Gauss–Newton on the rows) for Green rigs.
     pub fn cage_fit(&self) -> CageFitKind {
-        self.cage_updater.fit_kind()
+        self.rest_map.fit_kind()
     }
 
     /// Current rest frames of the joints (S).
@@ -122,17 +124,17 @@ impl RigSession {
     }
     /// Chooses how CageRev factorises Eq. 19 (low-rank by default, see [`ReverserMethod`]).
     pub fn set_reverser_method(&mut self, method: ReverserMethod) {
-        self.reverser.set_method(method);
+        self.rest_map.set_reverser_method(method);
     }
 
     /// Whether the held CageRev factorisation is the low-rank (Woodbury) one.
     pub fn reverser_is_low_rank(&self) -> bool {
-        self.reverser.is_low_rank()
+        self.rest_map.reverser_is_low_rank()
     }
 
     /// Whether the reverse cage deformer currently holds a factorisation.
     pub fn reverser_is_factorised(&self) -> bool {
-        self.reverser.is_factorised()
+        self.rest_map.reverser_is_factorised()
     }
 }
 

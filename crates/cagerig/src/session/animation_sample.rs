@@ -69,7 +69,7 @@ impl RigSession {
             .collect();
         let mut mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
         self.rest_mesh_of_cage(&cage, &mut mesh);
-        let terms = self.cage_map.terms_of(&cage);
+        let terms = self.rest_map.terms_of(&cage);
         let centres = self.skinning.cor().map(|cor| {
             let mut centres = vec![DVec3::ZERO; self.rest_mesh.len()];
             self.centres_of_cage(cor, &cage, &mut centres);
@@ -145,7 +145,7 @@ impl RigSession {
         // g_hi)) on the faces where that is above round-off; MVC: nothing). The display path
         // rounds this exact M.
         lerp_into(&lo.mesh, &hi.mesh, a, &mut self.rest_mesh);
-        self.cage_map.add_keyframe_blend_terms(
+        self.rest_map.add_keyframe_blend_terms(
             &lo.terms,
             &hi.terms,
             a,
@@ -155,10 +155,9 @@ impl RigSession {
         if let Some(display) = self.display.as_deref_mut() {
             display.forget_exact_rest();
         }
-        self.rest_mesh_is_phi_c = true;
-        self.rest_mesh_rows_only = false;
+        self.rest_map.set_mesh_state(RestMeshState::Map);
         self.rest_mesh_changed();
-        if !self.cage_map.is_linear() {
+        if !self.rest_map.is_linear() {
             // The centres' terms are not linear in C either: evaluated in full.
             self.centres_from_cage_in_full();
         } else {

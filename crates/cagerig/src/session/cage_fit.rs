@@ -1,7 +1,6 @@
 //! Switching CageUp's fit ([`CageFitKind`]) on a live rig: CageUp and Eq. 19 are rebuilt on
 //! the same Φ and rows; C, S, S' and M' do not move, C' is refitted.
 
-use super::cage_map::with_cage_fit;
 use super::*;
 
 impl RigSession {
@@ -17,32 +16,17 @@ impl RigSession {
         if kind == self.options.cage_fit {
             return Ok(());
         }
-        match self.cage_map {
-            CageMap::Green(_) => {}
-            CageMap::Mvc => {
-                let cage = TriMesh {
-                    positions: self.original_rest_cage.clone(),
-                    triangles: self.cage_triangles.clone(),
-                };
-                let updater = with_cage_fit(
-                    self.cage_updater.paper(),
-                    kind,
-                    &self.cage_coords,
-                    &cage,
-                    &self.skin_weights,
-                )?;
-                let mut reverser = CageReverser::new(
-                    &self.cage_coords,
-                    &updater,
-                    &self.skin_weights,
-                    |j| self.skeleton_updater.joint_row(j).to_vec(),
-                    &self.skeleton,
-                )?;
-                reverser.set_method(self.reverser.method());
-                self.cage_updater = updater;
-                self.reverser = reverser;
-            }
-        }
+        let cage = TriMesh {
+            positions: self.original_rest_cage.clone(),
+            triangles: self.cage_triangles.clone(),
+        };
+        self.rest_map.set_fit_kind(
+            kind,
+            &cage,
+            &self.skin_weights,
+            &self.skeleton_updater,
+            &self.skeleton,
+        )?;
         self.options.cage_fit = kind;
         if !self.locks.cage_up {
             self.fit_cage();

@@ -108,7 +108,7 @@ impl RigSession {
             Ok(()) => {
                 // A CageUp that found no current cage refuses the event unless the policy keeps
                 // it (`session/unfitted_cage.rs`).
-                let failure = self.cage_map.take_fit_failure();
+                let failure = self.rest_map.take_fit_failure();
                 self.refuses_unfitted(failure).or_else(|| {
                     self.first_bad_state()
                         .map(|(what, index, value)| RigError::EventRefused {
@@ -136,14 +136,14 @@ impl RigSession {
         if rest_changed || !self.rest_mesh.iter().all(|p| p.is_finite()) {
             self.rest_from_cage_in_full();
         }
-        self.reverser.invalidate();
+        self.rest_map.invalidate_reverser();
         // The saved C' is CageUp's answer for the restored state: start there (Green).
         self.posed_cage.copy_from_slice(&self.checkpoint.posed_cage);
-        self.cage_map.start_next_fit_from_posed_cage();
+        self.rest_map.start_next_fit_from_posed_cage();
         self.pose_and_fit();
         self.posed_cage.copy_from_slice(&self.checkpoint.posed_cage);
         // The restored state's own fit is not this event's: its failure is not reported.
-        self.cage_map.take_fit_failure();
+        self.rest_map.take_fit_failure();
         Err(error)
     }
 }

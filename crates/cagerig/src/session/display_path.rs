@@ -26,6 +26,7 @@ use glam::{DAffine3, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::RigSession;
+use super::rest_map::RestMeshState;
 use super::skinning::ActiveSkinning;
 use crate::cage_coords::{CageCoords, DisplayCageCoords};
 use crate::error::RigError;
@@ -174,7 +175,7 @@ impl RigSession {
             DisplayPrecision::Exact => None,
             DisplayPrecision::F32 => Some(Box::new(DisplayPath::new(
                 &self.skin_weights,
-                self.cage_updater.rows(),
+                self.rest_map.rows(),
                 self.dq_blend_weights(),
             )?)),
         };
@@ -215,25 +216,26 @@ impl RigSession {
             return self.rest_from_cage_in_full();
         };
         if display.coords.is_none() {
-            display.coords = match self.cage_map.extra_coords() {
-                None => DisplayCageCoords::try_new(&self.cage_coords),
-                Some(extra) => DisplayCageCoords::try_new_concatenated(&[&self.cage_coords, extra]),
+            let coords = self.rest_map.coords();
+            display.coords = match self.rest_map.extra_coords() {
+                None => DisplayCageCoords::try_new(coords),
+                Some(extra) => DisplayCageCoords::try_new_concatenated(&[coords, extra]),
             };
         }
         let Some(coords) = &display.coords else {
             return self.rest_from_cage_in_full();
         };
-        self.cage_map.update_terms(&self.rest_cage);
+        self.rest_map.update_terms(&self.rest_cage);
         coords.apply_concatenated(
             &self.rest_cage,
-            self.cage_map.terms(),
+            self.rest_map.terms(),
             &mut display.rest_positions,
         );
-        let rows = self.cage_updater.rows();
+        let rows = self.rest_map.rows();
         let (vertex_rows, extra_rows) = display.row_coords.get_or_insert_with(|| {
             (
-                self.cage_coords.rows_as_coords(rows),
-                self.cage_map
+                self.rest_map.coords().rows_as_coords(rows),
+                self.rest_map
                     .extra_coords()
                     .map(|extra| extra.rows_as_coords(rows)),
             )
@@ -246,7 +248,7 @@ impl RigSession {
         if let Some(extra_rows) = extra_rows {
             extra_rows.add_rows(
                 &display.row_indices,
-                self.cage_map.terms(),
+                self.rest_map.terms(),
                 &mut self.scratch_rows_rest,
             );
         }
@@ -259,14 +261,13 @@ impl RigSession {
         if let Some(display) = self.display.as_deref_mut() {
             display.rest_positions_revision = Some(self.rest_revision);
         }
-        self.rest_mesh_is_phi_c = true;
-        self.rest_mesh_rows_only = true;
+        self.rest_map.set_mesh_state(RestMeshState::MapOnRows);
         self.centres_from_cage_in_full();
     }
 
     /// Makes `rest_mesh` the whole exact M again if it was kept on the MaxVol rows only.
     pub(super) fn ensure_exact_rest_mesh(&mut self) {
-        if !self.rest_mesh_rows_only {
+        if self.rest_map.mesh_state() != RestMeshState::MapOnRows {
             return;
         }
         match self
@@ -275,21 +276,19 @@ impl RigSession {
             .and_then(|d| d.exact_rest.take())
         {
             Some(exact) => self.rest_mesh = exact,
-            None => self.cage_map.rest_mesh_at_terms(
-                &self.cage_coords,
-                &self.rest_cage,
-                &mut self.rest_mesh,
-            ),
+            None => self
+                .rest_map
+                .rest_mesh_at_terms(&self.rest_cage, &mut self.rest_mesh),
         }
-        self.rest_mesh_rows_only = false;
+        self.rest_map.set_mesh_state(RestMeshState::Map);
     }
 
     /// The exact M while it is kept on the MaxVol rows only (computed on first use).
     pub(super) fn exact_rest_mesh<'a>(&'a self, display: &'a DisplayPath) -> &'a [DVec3] {
         display.exact_rest.get_or_init(|| {
-            let mut exact = vec![DVec3::ZERO; self.cage_coords.num_vertices()];
-            self.cage_map
-                .rest_mesh_at_terms(&self.cage_coords, &self.rest_cage, &mut exact);
+            let mut exact = vec![DVec3::ZERO; self.rest_map.coords().num_vertices()];
+            self.rest_map
+                .rest_mesh_at_terms(&self.rest_cage, &mut exact);
             exact
         })
     }
@@ -331,7 +330,7 @@ impl RigSession {
             weights: &self.skin_weights,
             revision,
         };
-        let result = if self.rest_mesh_rows_only {
+        let result = if self.rest_map.mesh_state() == RestMeshState::MapOnRows {
             skin.apply(display, &rest_display)
         } else {
             skin.apply(display, &self.rest_mesh)
@@ -346,7 +345,7 @@ impl RigSession {
         let Some(display) = self.display.as_deref_mut() else {
             return;
         };
-        let rows = self.cage_updater.rows();
+        let rows = self.rest_map.rows();
         for (r, &row) in self.scratch_rows_rest.iter_mut().zip(rows) {
             *r = self.rest_mesh[row];
         }

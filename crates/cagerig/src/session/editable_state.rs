@@ -113,7 +113,7 @@ impl RigSession {
     /// depends on it (the Green CageRev keys its own on the lock).
     fn replace_locks(&mut self, locks: SyncLocks) {
         if locks.skel_up != self.locks.skel_up {
-            self.reverser.invalidate();
+            self.rest_map.invalidate_reverser();
         }
         self.locks = locks;
     }
@@ -147,7 +147,7 @@ impl RigSession {
                 // SkelUp of the new binding places the joints (its Ψ differs), unless the
                 // state's joints already agree with it (then they are kept bit for bit: an undo
                 // restores the exact state).
-                let terms = rebound.cage_map.terms_of(&state.rest_cage);
+                let terms = rebound.rest_map.terms_of(&state.rest_cage);
                 rebound
                     .skeleton_updater
                     .apply(&state.rest_cage, &terms, &mut adapted.rest_joints);

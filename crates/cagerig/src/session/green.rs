@@ -23,6 +23,9 @@ use crate::sync::newton::NewtonReport;
 pub(super) struct GreenState {
     /// ψ, `#V × #F`.
     pub(super) face_coords: CageCoords,
+    /// The vertex part's linear fit on the rows of [φ ψ]: the fitting rows R, and P·M'_R as a
+    /// start for the Newton fit.
+    pub(super) linear: CageUpdater,
     pub(super) fit: GreenCageFit,
     pub(super) reverser: GreenCageReverser,
     /// g(C) for the current rest cage C, `#F`.
@@ -84,12 +87,12 @@ impl GreenState {
         vertex_coords: &CageCoords,
         face_coords: CageCoords,
         triangles: Vec<[u32; 3]>,
-        rows: &[usize],
-        cage_from_rows: &Mat<f64>,
+        linear: CageUpdater,
         skin_weights: &SkinWeights,
         rest_cage: &[DVec3],
         num_joints: usize,
     ) -> Result<Self, RigError> {
+        let (rows, cage_from_rows) = (linear.rows(), linear.cage_from_rows());
         let mut cage_weights = vec![0.0; rest_cage.len() * num_joints];
         for (r, &row) in rows.iter().enumerate() {
             let (joints, weights) = skin_weights.row(row);
@@ -145,6 +148,7 @@ impl GreenState {
             face_changes: Vec::with_capacity(num_faces),
             face_marked: vec![false; num_faces],
             target_rows: vec![DVec3::ZERO; rows.len()],
+            linear,
             cage_weights,
             last_transforms: vec![DAffine3::IDENTITY; num_joints],
             last_rest_cage: rest_cage.to_vec(),
@@ -274,7 +278,7 @@ impl RigSession {
     /// Gauss–Newton, warm-started from the current C'. Records a failure to converge for
     /// `finish_event`.
     pub(super) fn fit_green_cage(&mut self) {
-        let CageMap::Green(green) = &mut self.cage_map else {
+        let CageMap::Green(green) = self.rest_map.cage_map_mut() else {
             return;
         };
         let limit = GREEN_FIT_LIMIT * green.size;
@@ -374,7 +378,7 @@ impl RigSession {
     /// in the rest joints for fixed rotations (0.27 ms by differences, 3#J forward kinematics,
     /// at 133k on the Arm). Zero while SkelUp is locked (a grab then moves no joint).
     pub(super) fn prepare_green_reverser(&mut self) -> Result<(), RigError> {
-        let CageMap::Green(green) = &self.cage_map else {
+        let CageMap::Green(green) = self.rest_map.cage_map() else {
             return Ok(());
         };
         let pose = || self.posed_from_rest.iter().map(|t| t.matrix3);
@@ -382,7 +386,9 @@ impl RigSession {
         if green.reverser.is_ready_for(pose(), locked) {
             return Ok(());
         }
-        let rows = self.cage_updater.rows();
+        // Owned: `green` is updated below while the closure reads them.
+        let rows = green.linear.rows().to_vec();
+        let rows = &rows[..];
         let nj = self.skeleton.len();
         let row_linear: Vec<DMat3> = rows
             .iter()
@@ -422,7 +428,7 @@ impl RigSession {
             }
         };
         let pose_linear = self.posed_from_rest.iter().map(|t| t.matrix3);
-        if let CageMap::Green(green) = &mut self.cage_map {
+        if let CageMap::Green(green) = self.rest_map.cage_map_mut() {
             green.reverser.prepare(
                 row_linear.into_iter(),
                 pose_linear,
@@ -441,16 +447,12 @@ impl RigSession {
         rest_delta: &mut [DVec3],
     ) -> Result<(), RigError> {
         self.prepare_green_reverser()?;
-        let CageMap::Green(green) = &mut self.cage_map else {
+        let CageMap::Green(green) = self.rest_map.cage_map_mut() else {
             return Err(RigError::Invalid(
                 "the Green CageRev was asked of a rig bound with another coordinates kind".into(),
             ));
         };
-        for (r, &row) in self
-            .scratch_rows_rest
-            .iter_mut()
-            .zip(self.cage_updater.rows())
-        {
+        for (r, &row) in self.scratch_rows_rest.iter_mut().zip(green.linear.rows()) {
             *r = self.rest_mesh[row];
         }
         let at = GrabState {
@@ -476,24 +478,24 @@ impl RigSession {
     /// Green rigs: ψ (`#V × #F`, one column per cage triangle of
     /// [`RigSession::green_triangles`]); `None` for MVC rigs.
     pub fn green_face_coords(&self) -> Option<&CageCoords> {
-        match &self.cage_map {
-            CageMap::Mvc => None,
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(_) => None,
             CageMap::Green(green) => Some(&green.face_coords),
         }
     }
 
     /// Green rigs: the outward-oriented cage triangles the face coordinates refer to.
     pub fn green_triangles(&self) -> Option<&[[u32; 3]]> {
-        match &self.cage_map {
-            CageMap::Mvc => None,
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(_) => None,
             CageMap::Green(green) => Some(green.fit.normals().triangles()),
         }
     }
 
     /// Green rigs: the Newton reports of the last CageUp and the last CageRev.
     pub fn green_newton_reports(&self) -> Option<(NewtonReport, NewtonReport)> {
-        match &self.cage_map {
-            CageMap::Mvc => None,
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(_) => None,
             CageMap::Green(green) => Some((green.fit.last_report(), green.last_reverse)),
         }
     }

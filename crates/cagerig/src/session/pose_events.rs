@@ -64,7 +64,7 @@ impl RigSession {
         };
         self.posed_local_rotation[joint] =
             (parent_world.inverse() * world_rotation * joint_world).normalize();
-        self.reverser.invalidate();
+        self.rest_map.invalidate_reverser();
         self.pose_and_fit();
         Ok(())
     }
@@ -141,7 +141,7 @@ impl RigSession {
                 pose.translation_offsets[j]
             };
         }
-        self.reverser.invalidate();
+        self.rest_map.invalidate_reverser();
         Ok(())
     }
 
@@ -159,7 +159,7 @@ impl RigSession {
         self.translation_offset
             .iter_mut()
             .for_each(|m| *m = DVec3::ZERO);
-        self.reverser.invalidate();
+        self.rest_map.invalidate_reverser();
         self.pose_and_fit();
     }
 }

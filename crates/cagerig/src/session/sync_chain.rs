@@ -56,8 +56,7 @@ impl RigSession {
             rest_cage,
             mesh_triangles,
             skin_weights,
-            cage_coords,
-            cage_map,
+            rest_map,
             ..
         } = self;
         skinning.build_cor(|source| {
@@ -76,20 +75,20 @@ impl RigSession {
                 }
                 // Loaded rows: Λ = S·Φ (O(nnz(S)·#C); fine for the rows the tool writes, which
                 // address the original vertices, also after subdivision).
-                (Some(rows), None) => rows.compose_dense(cage_coords)?,
+                (Some(rows), None) => rows.compose_dense(rest_map.coords())?,
                 (None, None) => compute_centre_coords(
                     rest_mesh,
                     mesh_triangles,
                     skin_weights,
-                    cage_coords,
+                    rest_map.coords(),
                     &source.options,
                 )?,
             };
             let mut centre_coords = centre_coords;
-            if cage_coords.precision() == CoordsPrecision::F32 {
+            if rest_map.coords().precision() == CoordsPrecision::F32 {
                 centre_coords.round_to_f32();
             }
-            cage_map.build_centre_terms(|coords| match &source.rows {
+            rest_map.build_centre_terms(|coords| match &source.rows {
                 Some(rows) => rows.compose_dense(coords),
                 None => compute_centre_coords(
                     rest_mesh,
@@ -101,7 +100,7 @@ impl RigSession {
             })?;
             let mut centres = vec![DVec3::ZERO; rest_mesh.len()];
             centre_coords.apply(rest_cage, &mut centres);
-            cage_map.add_centre_terms(&mut centres);
+            rest_map.add_centre_terms(&mut centres);
             Ok(CorState::new(centre_coords, centres, skin_weights))
         })
     }
@@ -109,16 +108,15 @@ impl RigSession {
     /// After C changed everywhere: M = ΦC, and the CoR centres Λ·C (or marked stale when CoR
     /// skinning is not active).
     pub(super) fn rest_from_cage_in_full(&mut self) {
-        self.cage_map
-            .rest_mesh_in_full(&self.cage_coords, &self.rest_cage, &mut self.rest_mesh);
+        self.rest_map
+            .rest_mesh_in_full(&self.rest_cage, &mut self.rest_mesh);
         self.rest_mesh_computed_in_full();
     }
 
     /// After M was computed in full from C: M is ΦC (+ terms) on every row, its revision moves
     /// on, and the CoR centres follow C.
     fn rest_mesh_computed_in_full(&mut self) {
-        self.rest_mesh_is_phi_c = true;
-        self.rest_mesh_rows_only = false;
+        self.rest_map.set_mesh_state(RestMeshState::Map);
         self.rest_mesh_changed();
         self.centres_from_cage_in_full();
     }
@@ -126,10 +124,10 @@ impl RigSession {
     /// The CoR centres Λ·C after C changed everywhere (or marked stale when CoR skinning is not
     /// active).
     pub(super) fn centres_from_cage_in_full(&mut self) {
-        let (rest_cage, cage_map) = (&self.rest_cage, &self.cage_map);
+        let (rest_cage, rest_map) = (&self.rest_cage, &self.rest_map);
         self.skinning.centres_follow_cage(|centre_coords, centres| {
             centre_coords.apply(rest_cage, centres);
-            cage_map.add_centre_terms(centres);
+            rest_map.add_centre_terms(centres);
         });
     }
 
@@ -140,22 +138,23 @@ impl RigSession {
         for (&k, d) in vertices.iter().zip(deltas) {
             self.rest_cage[k] += *d;
         }
-        if !self.rest_mesh_is_phi_c {
-            self.cage_map.rest_mesh_in_full(
-                &self.cage_coords,
+        match self.rest_map.mesh_state() {
+            RestMeshState::AsLoaded => {
+                self.rest_map
+                    .rest_mesh_in_full(&self.rest_cage, &mut self.rest_mesh);
+                self.rest_map.set_mesh_state(RestMeshState::Map);
+            }
+            // `ensure_exact_rest_mesh` above made M whole.
+            RestMeshState::Map | RestMeshState::MapOnRows => self.rest_map.apply_rest_delta(
+                vertices,
+                deltas,
                 &self.rest_cage,
                 &mut self.rest_mesh,
-            );
-            self.rest_mesh_is_phi_c = true;
-        } else {
-            self.cage_coords
-                .apply_delta(vertices, deltas, &mut self.rest_mesh);
-            self.cage_map
-                .apply_rest_delta(vertices, &self.rest_cage, &mut self.rest_mesh);
+            ),
         }
         // Non-linear maps refresh the centres in full (their terms changed too).
         self.skinning
-            .centres_follow_cage_delta(vertices, deltas, self.cage_map.is_linear());
+            .centres_follow_cage_delta(vertices, deltas, self.rest_map.is_linear());
     }
 
     /// After C changed: SkelUp (A = ΨC, or Ψ_φC + Ψ_ψ g(C) for Green rigs; rest frames
@@ -170,7 +169,7 @@ impl RigSession {
         if !self.locks.skel_up {
             self.skeleton_updater.apply(
                 &self.rest_cage,
-                self.cage_map.terms(),
+                self.rest_map.terms(),
                 &mut self.scratch_joints,
             );
             for (frame, a) in self
@@ -195,16 +194,16 @@ impl RigSession {
             self.sync_from_rest_cage();
             return;
         }
-        self.cage_map.update_terms(&self.rest_cage);
+        self.rest_map.update_terms(&self.rest_cage);
         self.skeleton_from_cage();
         self.pose();
         let lbs = self.skinning.lbs();
         let transforms = &self.posed_from_rest;
-        self.cage_coords.apply_then(
+        self.rest_map.coords().apply_then(
             &self.rest_cage,
-            self.cage_map
+            self.rest_map
                 .extra_coords()
-                .map(|e| (e, self.cage_map.terms())),
+                .map(|e| (e, self.rest_map.terms())),
             &mut self.rest_mesh,
             &mut self.posed_mesh,
             |first, rest, posed| lbs.apply_range(transforms, first, rest, posed),
@@ -253,11 +252,11 @@ impl RigSession {
     /// M' from M under the current method: the exact f64 M', or on the display path the f32
     /// display mesh (see [`super::display_path`]).
     pub(super) fn skin(&mut self) {
-        let (rest_cage, cage_map) = (&self.rest_cage, &self.cage_map);
+        let (rest_cage, rest_map) = (&self.rest_cage, &self.rest_map);
         self.skinning
             .refresh_stale_centres(|centre_coords, centres| {
                 centre_coords.apply(rest_cage, centres);
-                cage_map.add_centre_terms(centres);
+                rest_map.add_centre_terms(centres);
             });
         if self.display.is_some() {
             if self.skin_display().is_ok() {
@@ -293,11 +292,7 @@ impl RigSession {
     /// rows (`ghost`, Sec. 4.3), else the exact skinned rows (skinned here on the display path).
     fn posed_fit_rows(&mut self, ghost: bool) {
         if ghost {
-            for (r, &row) in self
-                .scratch_rows_rest
-                .iter_mut()
-                .zip(self.cage_updater.rows())
-            {
+            for (r, &row) in self.scratch_rows_rest.iter_mut().zip(self.rest_map.rows()) {
                 *r = self.rest_mesh[row];
             }
             self.ghost_lbs.apply(
@@ -308,11 +303,7 @@ impl RigSession {
         } else if self.display.is_some() {
             self.skin_rows_exact();
         } else {
-            for (r, &row) in self
-                .scratch_rows_posed
-                .iter_mut()
-                .zip(self.cage_updater.rows())
-            {
+            for (r, &row) in self.scratch_rows_posed.iter_mut().zip(self.rest_map.rows()) {
                 *r = self.posed_mesh[row];
             }
         }
@@ -322,7 +313,7 @@ impl RigSession {
     /// ([`crate::sync::cage_prior`]).
     pub(super) fn fit_linear_cage(&mut self, ghost: bool) {
         self.posed_fit_rows(ghost);
-        self.cage_updater.fit(
+        self.rest_map.fit_linear(
             &self.scratch_rows_posed,
             &self.posed_from_rest,
             &self.rest_cage,
@@ -333,7 +324,7 @@ impl RigSession {
     /// Green CageUp: M'_R, then the Gauss–Newton fit.
     pub(super) fn fit_green_cage_rows(&mut self, ghost: bool) {
         self.posed_fit_rows(ghost);
-        if let CageMap::Green(green) = &mut self.cage_map {
+        if let CageMap::Green(green) = self.rest_map.cage_map_mut() {
             green.target_rows.copy_from_slice(&self.scratch_rows_posed);
         }
         self.fit_green_cage();

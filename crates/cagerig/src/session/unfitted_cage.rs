@@ -62,7 +62,7 @@ impl RigSession {
     /// [`UnfittedCagePolicy::KeepEvent`], after an event whose Green CageUp found no current
     /// cage); `None` while C' is the fit.
     pub fn posed_cage_unfitted(&self) -> Option<UnfittedCage> {
-        self.cage_map.unfitted()
+        self.rest_map.unfitted()
     }
 
     /// The session's [`UnfittedCagePolicy`].
