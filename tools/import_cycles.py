@@ -4,18 +4,18 @@
 Usage: tools/import_cycles.py CRATE/src [--max N]
 
 Builds the graph "file A uses a module of file B" from the paths in the crate's source
-(`crate::x`, `crate::x::y::z`, `super::x`, `self::x`, in `use` items and inline paths;
-comments and string literals are ignored; `#[cfg(test)]` modules are included) and prints
+(`crate::x`, `crate::x::y::z`, `super::x`, `super::*`, `self::x`, in `use` items and inline
+paths, and `use child::x` into the file's own child modules; comments and string literals are
+ignored; inline modules such as `#[cfg(test)] mod tests { use super::*; }` are read as the
+modules they are, so that one names its own file) and prints
 its strongly connected components of more than one file, largest first. With `--max N` the
 exit status is 1 when a component has more than N files (for CI).
 
 A path is resolved to the deepest module file that exists: `crate::a::b::C` is
 `src/a/b.rs` (or `src/a/b/mod.rs`) when that exists, else `src/a.rs` (or `src/a/mod.rs`).
 `main.rs` and files under `bin/` are crate roots of their own and are skipped, as is
-`lib.rs` (it only declares the modules). Inline `mod name { ... }` blocks are not tracked:
-their paths count as the file's (a `super::` inside one reads one level too high, which for a
-`#[cfg(test)] mod tests { use super::*; }` only drops a use of the file itself). Method calls
-on a type whose `impl` block is in another file are not imports and are not seen.
+`lib.rs` (it only declares the modules). Method calls on a type whose `impl` block is in
+another file are not imports and are not seen.
 """
 
 import argparse
@@ -100,21 +100,44 @@ def expand_use_tree(prefix, tree):
     return paths
 
 
+def inline_modules(text):
+    """(start, end, name) of every inline `mod name { ... }` block, outermost first."""
+    blocks = []
+    for m in re.finditer(r"\bmod\s+([A-Za-z_][A-Za-z0-9_]*)\s*\{", text):
+        depth, i = 1, m.end()
+        while i < len(text) and depth:
+            depth += text[i] == "{"
+            depth -= text[i] == "}"
+            i += 1
+        blocks.append((m.start(), i, m.group(1)))
+    return blocks
+
+
+def inline_prefix(blocks, position):
+    """The inline modules around `position`, outermost first."""
+    return [name for start, end, name in blocks if start < position < end]
+
+
 def referenced_paths(text):
-    """Every path starting with crate / super / self in the file."""
+    """Every path of the file's `use` items and every inline path starting with crate / super /
+    self, each with the inline modules it stands in (a `super::*` in a file's `mod tests { }`
+    names the file itself)."""
+    blocks = inline_modules(text)
     paths = []
     for m in re.finditer(r"\buse\s+([^;]+);", text):
-        tree = m.group(1)
-        if tree.split("::")[0].strip() in ("crate", "super", "self"):
-            paths.extend(expand_use_tree([], tree))
+        prefix = inline_prefix(blocks, m.start())
+        paths.extend((prefix, p) for p in expand_use_tree([], m.group(1)))
     # Inline paths (also catches the `use` ones again, harmlessly).
-    for m in re.finditer(r"\b((?:crate|super|self)(?:\s*::\s*[A-Za-z_][A-Za-z0-9_]*)+)", text):
-        paths.append([p.strip() for p in m.group(1).split("::")])
+    for m in re.finditer(r"\b((?:crate|super|self)(?:\s*::\s*[A-Za-z_*][A-Za-z0-9_]*)+)", text):
+        prefix = inline_prefix(blocks, m.start())
+        paths.append((prefix, [p.strip() for p in m.group(1).split("::")]))
     return paths
 
 
 def resolve(src, files_by_module, own_module, path):
-    """The file that `path`, used in the file of module `own_module`, points into."""
+    """The file that `path`, used in the file of module `own_module`, points into: `crate::`,
+    `super::` and `self::` paths, and relative paths into the file's own child modules
+    (`use child::Item`, as a module root declaring `mod child;` writes them)."""
     if not path:
         return None
     if path[0] == "crate":
@@ -126,6 +149,8 @@ def resolve(src, files_by_module, own_module, path):
             if rest[0] == "super" and base:
                 base = base[:-1]
             rest = rest[1:]
+    elif tuple(list(own_module) + [path[0]]) in files_by_module:
+        base, rest = list(own_module), list(path)
     else:
         return None
     best = None
@@ -190,8 +215,8 @@ def main():
     for module, rel in files_by_module.items():
         with open(os.path.join(src, rel), encoding="utf-8") as fh:
             text = strip_comments_and_strings(fh.read())
-        for p in referenced_paths(text):
-            target = resolve(src, files_by_module, list(module), p)
+        for prefix, p in referenced_paths(text):
+            target = resolve(src, files_by_module, list(module) + prefix, p)
             if target and target != rel:
                 edges.setdefault(rel, set()).add(target)
     nodes = set(files_by_module.values())

@@ -4,9 +4,51 @@
 //! workers instead of a serial zero fill (90 ms for Λ at 532k × 58).
 
 use faer::Mat;
+use rayon::prelude::*;
+
+/// Fills `N` column-major matrices of `num_rows` rows, matrix i with `num_cols[i]` columns, by
+/// disjoint blocks of `block_rows` rows on the worker threads, without zero-filling them first:
+/// `fill(scratch, start, blocks)` writes rows `start..start + blocks[i].nrows()` of every
+/// matrix, with a `scratch` per worker made by `init`.
+///
+/// # Safety
+/// `fill` must write every entry of every block it is given: the matrices are returned with
+/// whatever their storage held where it did not (uninitialised memory).
+pub(crate) unsafe fn fill_by_row_blocks<const N: usize, S>(
+    num_rows: usize,
+    num_cols: [usize; N],
+    block_rows: usize,
+    init: impl Fn() -> S + Sync + Send,
+    fill: impl Fn(&mut S, usize, &mut [RowBlock; N]) + Sync + Send,
+) -> [Mat<f64>; N] {
+    let mut matrices = num_cols.map(|cols| Mat::<f64>::with_capacity(num_rows, cols));
+    let storage: Vec<SharedColumns> = matrices
+        .iter_mut()
+        .zip(num_cols)
+        .map(|(matrix, cols)| SharedColumns::of_capacity(matrix, cols))
+        .collect();
+    (0..num_rows.div_ceil(block_rows.max(1)))
+        .into_par_iter()
+        .for_each_init(&init, |scratch, block| {
+            let start = block * block_rows;
+            let count = block_rows.min(num_rows - start);
+            // SAFETY: each allocation holds `col_stride ≥ num_rows` rows for each of its
+            // columns; row blocks are disjoint, so no two tasks write the same entry, and
+            // nothing reads the storage before the loop ends.
+            let mut blocks: [RowBlock; N] =
+                std::array::from_fn(|i| unsafe { storage[i].rows(start, count) });
+            fill(scratch, start, &mut blocks);
+        });
+    for (matrix, cols) in matrices.iter_mut().zip(num_cols) {
+        // SAFETY: the capacity is (num_rows, cols), and the caller's `fill` wrote every entry
+        // of every block (the function's contract).
+        unsafe { matrix.set_dims(num_rows, cols) };
+    }
+    matrices
+}
 
 /// The storage of a matrix being filled by row blocks.
-pub(crate) struct SharedColumns {
+struct SharedColumns {
     base: *mut f64,
     col_stride: usize,
     num_cols: usize,
@@ -18,7 +60,7 @@ unsafe impl Sync for SharedColumns {}
 impl SharedColumns {
     /// The storage of `matrix`, made by `Mat::with_capacity(rows, num_cols)` (its rows are
     /// `col_stride` apart, at least `rows`).
-    pub(crate) fn of_capacity(matrix: &mut Mat<f64>, num_cols: usize) -> Self {
+    fn of_capacity(matrix: &mut Mat<f64>, num_cols: usize) -> Self {
         Self {
             base: matrix.as_ptr_mut(),
             col_stride: matrix.col_stride().unsigned_abs(),
@@ -28,7 +70,7 @@ impl SharedColumns {
 
     /// # Safety
     /// Rows `start..start + count` must lie within the capacity and be written by no one else.
-    pub(crate) unsafe fn rows(&self, start: usize, count: usize) -> RowBlock {
+    unsafe fn rows(&self, start: usize, count: usize) -> RowBlock {
         // SAFETY: forwarded to the caller.
         unsafe {
             RowBlock::new(

@@ -11,45 +11,37 @@
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
-use crate::cage_coords::{CageCoords, CoordsPrecision};
+use crate::cage_coords::CageCoords;
 use crate::cage_enclosure::validate_cage_for_mesh;
-use crate::coords::{green::compute_green_coords, maxvol, mvc};
-use crate::coords_kind::CoordsKind;
-use crate::cor_centres::cage_coords::compute_cor_cage_coords;
-use crate::cor_centres::grid::{CorGridOptions, compute_cor_cage_coords_grid};
-use crate::cor_centres::{CorCentresMethod, CorCentresOptions};
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
-use crate::pose::{
-    LocalPose, decompose_rest_local, local_transform, regularise_rest_frames, rotation_of,
-};
+use crate::pose::{LocalPose, decompose_rest_local, regularise_rest_frames};
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::blended::BlendedSkinning;
-use crate::skinning::cor::CorScratch;
-use crate::skinning::dqs::DqsScratch;
 use crate::skinning::lbs::LinearBlendSkinning;
-use crate::skinning::{DqBlendWeights, SkinningMethod};
-use crate::sparse_rows::SparseRows;
-use crate::sync::cage_fit_kind::CageFitKind;
-use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
-use crate::sync::cage_updater::{CageFitMode, CageUpdater};
-use crate::sync::skeleton_updater::{JointFaceTerms, JointLocalisation, SkeletonUpdater};
+use crate::sync::skeleton_updater::{JointFaceTerms, SkeletonUpdater};
 
 mod accessors;
 mod animation_sample;
+mod cage_events;
 mod cage_fit;
+mod cage_sync;
 mod checkpoint;
+mod display_events;
 mod display_path;
 mod editable_state;
+mod events;
 mod green;
 mod green_binding;
+mod green_sync;
 mod parts;
 mod pose_events;
 mod rebind;
 mod reskeleton;
 mod rest_map;
 mod skinning;
+mod state_restore;
 mod sync_chain;
 #[cfg(test)]
 mod test_rigs;
@@ -60,15 +52,12 @@ use display_path::DisplayPath;
 pub use display_path::DisplayPrecision;
 pub use editable_state::{EditableState, SyncLocks};
 pub use green::GREEN_FIT_LIMIT;
-use green::GreenState;
-use parts::phi_c_residual;
 pub use parts::{
     CageFitSource, FitRows, GRID_COR_CENTRES_ABOVE, GivenCageCoords, PHI_C_TOLERANCE,
     PHI_C_TOLERANCE_F32, RigParts, SessionOptions, centre_coords_method, compute_centre_coords,
 };
-use rest_map::{BoundRestMap, CageMap, GivenCoords, RestMap, RestMeshState};
-use skinning::{CorSource, CorState, RigSkinning};
-use sync_chain::scatter_edit;
+use rest_map::{BoundRestMap, GivenCoords, RestMap};
+use skinning::{CorSource, RigSkinning};
 pub use unfitted_cage::{UnfittedCagePolicy, UnknownUnfittedCagePolicy};
 
 /// The rest state induced by one cage-animation keyframe: C = C₀ + offsets, M = ΦC and the CoR
@@ -289,92 +278,6 @@ impl RigSession {
         session.set_skinning(options.skinning)?;
         session.pose_and_fit();
         Ok((session, warnings))
-    }
-
-    // ----- user interactions on the cages (pose events: `session/pose_events.rs`) -------------
-
-    /// C edit: moves rest-cage vertices `vertices` by `offsets` (one per vertex, or one for all).
-    /// M follows incrementally (M += Φ[:, k]·ΔC_k), then SkelUp, skinning and CageUp.
-    pub fn move_rest_cage(
-        &mut self,
-        vertices: &[usize],
-        offsets: &[DVec3],
-    ) -> Result<(), RigError> {
-        self.save_checkpoint();
-        let result = self.move_rest_cage_event(vertices, offsets);
-        self.finish_event(result)
-    }
-
-    /// [`RigSession::move_rest_cage`] without the checkpoint.
-    fn move_rest_cage_event(
-        &mut self,
-        vertices: &[usize],
-        offsets: &[DVec3],
-    ) -> Result<(), RigError> {
-        self.check_cage_edit(vertices, offsets)?;
-        let mut dense = std::mem::take(&mut self.scratch_cage_a);
-        scatter_edit(vertices, offsets, &mut dense);
-        let mut touched = std::mem::take(&mut self.scratch_touched);
-        let mut compact = std::mem::take(&mut self.scratch_cage_b);
-        touched.clear();
-        for (k, d) in dense.iter().enumerate() {
-            if *d != DVec3::ZERO {
-                compact[touched.len()] = *d;
-                touched.push(k);
-            }
-        }
-        self.apply_rest_cage_delta_sparse(&touched, &compact[..touched.len()]);
-        self.scratch_cage_a = dense;
-        self.scratch_cage_b = compact;
-        self.scratch_touched = touched;
-        self.sync_from_rest_cage();
-        Ok(())
-    }
-
-    /// C' edit: moves current-cage vertices by `offsets`. CageRev (Eq. 19) turns the edit into a
-    /// rest-cage edit (refactorising first if the skeleton moved since the last grab); the full
-    /// chain then re-fits C', which lands on the requested positions (exactly under LBS, or with
-    /// the ghost fit for DQS/CoR).
-    pub fn move_posed_cage(
-        &mut self,
-        vertices: &[usize],
-        offsets: &[DVec3],
-    ) -> Result<(), RigError> {
-        self.save_checkpoint();
-        let result = self.move_posed_cage_event(vertices, offsets);
-        self.finish_event(result)
-    }
-
-    /// [`RigSession::move_posed_cage`] without the checkpoint.
-    fn move_posed_cage_event(
-        &mut self,
-        vertices: &[usize],
-        offsets: &[DVec3],
-    ) -> Result<(), RigError> {
-        self.check_cage_edit(vertices, offsets)?;
-        self.check_posed_cage_fitted()?;
-        if self.locks.cage_up {
-            return Err(RigError::Invalid(
-                "the current cage C' cannot be edited while CageUp is locked (CageRev assumes \
-                 C' is CageUp's fit of M'); unlock CageUp first"
-                    .into(),
-            ));
-        }
-        let mut posed_delta = std::mem::take(&mut self.scratch_cage_a);
-        scatter_edit(vertices, offsets, &mut posed_delta);
-        let mut rest_delta = std::mem::take(&mut self.scratch_cage_b);
-        let solved = self.reverse_cage(&posed_delta, &mut rest_delta);
-        if solved.is_ok() {
-            for (c, d) in self.rest_cage.iter_mut().zip(&rest_delta) {
-                *c += *d;
-            }
-            self.start_fit_from_grab(&posed_delta);
-        }
-        self.scratch_cage_a = posed_delta;
-        self.scratch_cage_b = rest_delta;
-        solved?;
-        self.rest_and_sync_from_cage();
-        Ok(())
     }
 }
 

@@ -14,16 +14,14 @@
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use faer::Mat;
 use glam::DVec3;
-use rayon::prelude::*;
 
 use super::green_batch::{GreenBatchPlan, GreenBatchScratch, evaluate_green_rows};
 use super::green_triangle::GreenTriangle;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::mesh::TriMesh;
-use crate::row_blocks::SharedColumns;
+use crate::row_blocks::fill_by_row_blocks;
 
 /// Points per parallel task.
 const POINT_BLOCK: usize = 256;
@@ -85,34 +83,23 @@ pub fn compute_green_coords(
     // φ and ψ are written straight into their column-major matrices by row blocks, without
     // zero-filling them first (every entry is written), so the page faults of first touch are
     // spread over the workers.
-    let mut vertex = Mat::<f64>::with_capacity(num_points, num_cage);
-    let mut face = Mat::<f64>::with_capacity(num_points, num_faces);
-    let vertex_storage = SharedColumns::of_capacity(&mut vertex, num_cage);
-    let face_storage = SharedColumns::of_capacity(&mut face, num_faces);
     let done = AtomicUsize::new(0);
     let first_non_finite = AtomicUsize::new(usize::MAX);
-    (0..num_points.div_ceil(POINT_BLOCK))
-        .into_par_iter()
-        .for_each_init(
+    // SAFETY: `evaluate_green_rows` writes all rows × columns of both blocks.
+    let [vertex, face] = unsafe {
+        fill_by_row_blocks(
+            num_points,
+            [num_cage, num_faces],
+            POINT_BLOCK,
             || GreenBatchScratch::new(&plan),
-            |scratch, block| {
-                let start = block * POINT_BLOCK;
-                let count = POINT_BLOCK.min(num_points - start);
-                // SAFETY: each allocation holds `col_stride ≥ num_points` rows for each of its
-                // columns; row blocks are disjoint, so no two tasks write the same entry, and
-                // nothing reads the storage before the loop ends.
-                let (mut vertex_rows, mut face_rows) = unsafe {
-                    (
-                        vertex_storage.rows(start, count),
-                        face_storage.rows(start, count),
-                    )
-                };
+            |scratch, start, [vertex_rows, face_rows]| {
+                let count = vertex_rows.nrows();
                 if let Some(row) = evaluate_green_rows(
                     &plan,
                     &points[start..start + count],
                     scratch,
-                    &mut vertex_rows,
-                    &mut face_rows,
+                    vertex_rows,
+                    face_rows,
                 ) {
                     first_non_finite.fetch_min(start + row, Ordering::Relaxed);
                 }
@@ -121,13 +108,8 @@ pub fn compute_green_coords(
                     report(finished);
                 }
             },
-        );
-    // SAFETY: the capacities are (num_points, num_cage) and (num_points, num_faces), and every
-    // entry was written above (`evaluate_green_rows` writes all rows × columns of its block).
-    unsafe {
-        vertex.set_dims(num_points, num_cage);
-        face.set_dims(num_points, num_faces);
-    }
+        )
+    };
     match first_non_finite.into_inner() {
         usize::MAX => Ok(GreenCoords {
             vertex: CageCoords::from_checked_matrix(vertex),

@@ -22,9 +22,7 @@
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use faer::Mat;
 use glam::DVec3;
-use rayon::prelude::*;
 
 use super::mvc_batch::{BatchScratch, evaluate_rows};
 use super::mvc_triangle::{
@@ -35,7 +33,7 @@ pub(crate) use super::mvc_triangle::{TriangleWeights, triangle_weights};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::mesh::TriMesh;
-use crate::row_blocks::SharedColumns;
+use crate::row_blocks::fill_by_row_blocks;
 
 /// Dimensionless tolerance for the degenerate cases (same value as Ju et al.'s reference code).
 pub(crate) const EPS: f64 = 1e-8;
@@ -250,27 +248,20 @@ pub fn compute_cage_coords(
     let (num_points, num_cage) = (points.len(), cage.num_vertices());
     // Φ is 8 · #V · #C bytes (62 MB at N = 3): not zero-filled first; the blocks below write every
     // entry, so the page faults of first touch are spread over the worker threads.
-    let mut matrix = Mat::<f64>::with_capacity(num_points, num_cage);
-    let storage = SharedColumns::of_capacity(&mut matrix, num_cage);
     let done = AtomicUsize::new(0);
     let first_non_finite = AtomicUsize::new(usize::MAX);
-    (0..num_points.div_ceil(POINT_BLOCK))
-        .into_par_iter()
-        .for_each_init(
+    // SAFETY: `evaluate_rows` writes all rows × columns of its block.
+    let [matrix] = unsafe {
+        fill_by_row_blocks(
+            num_points,
+            [num_cage],
+            POINT_BLOCK,
             || BatchScratch::new(&evaluator),
-            |scratch, block| {
-                let start = block * POINT_BLOCK;
-                let count = POINT_BLOCK.min(num_points - start);
-                // SAFETY: the allocation holds `col_stride ≥ num_points` rows for each of the
-                // `num_cage` columns; row blocks are disjoint, so no two tasks write the same entry,
-                // and nothing reads the storage before the loop ends.
-                let mut rows = unsafe { storage.rows(start, count) };
-                if let Some(row) = evaluate_rows(
-                    &evaluator,
-                    &points[start..start + count],
-                    scratch,
-                    &mut rows,
-                ) {
+            |scratch, start, [rows]| {
+                let count = rows.nrows();
+                if let Some(row) =
+                    evaluate_rows(&evaluator, &points[start..start + count], scratch, rows)
+                {
                     first_non_finite.fetch_min(start + row, Ordering::Relaxed);
                 }
                 let finished = done.fetch_add(count, Ordering::Relaxed) + count;
@@ -278,10 +269,8 @@ pub fn compute_cage_coords(
                     report(finished);
                 }
             },
-        );
-    // SAFETY: capacity is (num_points, num_cage) and every entry was written above
-    // (`evaluate_rows` writes all rows × columns of its block).
-    unsafe { matrix.set_dims(num_points, num_cage) };
+        )
+    };
     match first_non_finite.into_inner() {
         usize::MAX => Ok(CageCoords::from_checked_matrix(matrix)),
         index => Err(RigError::NonFinite {

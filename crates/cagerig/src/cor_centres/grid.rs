@@ -29,9 +29,7 @@
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use faer::Mat;
 use glam::DVec3;
-use rayon::prelude::*;
 
 use super::exact::{check_cage_coord_rows, validate_cor_inputs};
 use super::grid_bins::bin_triangles;
@@ -40,7 +38,7 @@ use super::grid_tables::similarity_tables;
 use crate::SkinWeights;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
-use crate::row_blocks::SharedColumns;
+use crate::row_blocks::fill_by_row_blocks;
 
 pub use super::grid_layout::GridInterpolation;
 use super::grid_layout::{Grid, NONE, PairLookup, for_each_pair};
@@ -162,37 +160,34 @@ pub fn compute_cor_cage_coords_grid(
         num_vertices,
         num_cage,
     )?;
-    // Not zero-filled first: the blocks below write every entry (see `fill_rows`).
-    let mut matrix = Mat::<f64>::with_capacity(num_vertices, num_cage);
     let num_blocks = num_vertices.div_ceil(VERTEX_BLOCK);
     let done = AtomicUsize::new(0);
-    if num_cage > 0 {
-        let tables = Tables {
-            grid,
-            values: &tables,
-            slot_of_node: &slot_of_node,
-            nodes_per_pair,
-            pair_of_key: &pair_of_key,
-            num_joints,
-            num_cage,
-        };
-        let storage = SharedColumns::of_capacity(&mut matrix, num_cage);
-        (0..num_blocks)
-            .into_par_iter()
-            .for_each_init(RowScratch::default, |scratch, block| {
-                let first = block * VERTEX_BLOCK;
-                let count = VERTEX_BLOCK.min(num_vertices - first);
-                // SAFETY: the capacity holds `num_vertices` rows of `num_cage` columns; the row
-                // blocks are disjoint and nothing reads the storage before the loop ends.
-                let mut out = unsafe { storage.rows(first, count) };
-                fill_rows(&mut out, first, weights, cage_coords, &tables, scratch);
-                let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
-                progress(finished, num_blocks);
-            });
-    }
-    // SAFETY: the capacity is (num_vertices, num_cage) and `fill_rows` wrote every entry of every
-    // block (no entries when num_cage = 0).
-    unsafe { matrix.set_dims(num_vertices, num_cage) };
+    let tables = Tables {
+        grid,
+        values: &tables,
+        slot_of_node: &slot_of_node,
+        nodes_per_pair,
+        pair_of_key: &pair_of_key,
+        num_joints,
+        num_cage,
+    };
+    // Not zero-filled first. SAFETY: `fill_rows` writes every entry of its block (none when
+    // num_cage = 0).
+    let [matrix] = unsafe {
+        fill_by_row_blocks(
+            num_vertices,
+            [num_cage],
+            VERTEX_BLOCK,
+            RowScratch::default,
+            |scratch, first, [out]| {
+                if num_cage > 0 {
+                    fill_rows(out, first, weights, cage_coords, &tables, scratch);
+                    let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
+                    progress(finished, num_blocks);
+                }
+            },
+        )
+    };
     CageCoords::from_matrix(matrix)
 }
 

@@ -1,6 +1,17 @@
 //! Read access to a session's structures and operators.
 
-use super::*;
+use super::RigSession;
+use super::parts::CageFitSource;
+use super::rest_map::RestMeshState;
+use crate::cage_coords::CageCoords;
+use crate::skeleton::Skeleton;
+use crate::skin_weights::SkinWeights;
+use crate::skinning::{DqBlendWeights, SkinningMethod};
+use crate::sync::cage_fit_kind::CageFitKind;
+use crate::sync::cage_reverser::ReverserMethod;
+use crate::sync::cage_updater::CageUpdater;
+use crate::sync::skeleton_updater::SkeletonUpdater;
+use glam::{DAffine3, DVec3};
 
 impl RigSession {
     /// Rest skin M (`#V`), exact (on the f32 display path, after a current-cage edit it is

@@ -1,7 +1,11 @@
 //! Animation samples: a pose and a rest cage (or a blend of two precomputed cage keyframes)
 //! set in one event, then SkelUp, skinning and CageUp.
 
-use super::*;
+use super::rest_map::RestMeshState;
+use super::{RestKeyframe, RigSession, roots_only};
+use crate::error::RigError;
+use crate::pose::LocalPose;
+use glam::{DQuat, DVec3};
 
 impl RigSession {
     /// Animation sample: rest-cage offsets from C₀ (`#C`), local rotations and root motions

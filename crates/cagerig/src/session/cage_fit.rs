@@ -1,7 +1,10 @@
 //! Switching CageUp's fit ([`CageFitKind`]) on a live rig: CageUp and Eq. 19 are rebuilt on
 //! the same Φ and rows; C, S, S' and M' do not move, C' is refitted.
 
-use super::*;
+use super::RigSession;
+use crate::error::RigError;
+use crate::mesh::TriMesh;
+use crate::sync::cage_fit_kind::CageFitKind;
 
 impl RigSession {
     /// The CageUp fit the rig was asked for (its options; Green rigs fit on the rows whatever

@@ -9,14 +9,16 @@
 
 use std::sync::OnceLock;
 
-use faer::Mat;
-
-use super::*;
+use crate::cage_coords::CageCoords;
 use crate::coords::stretched_normals::StretchedNormals;
+use crate::error::RigError;
 use crate::error::UnfittedCage;
-use crate::sync::green_cage_fit::reverser::{GrabState, GreenCageReverser};
-use crate::sync::green_cage_fit::{FitBudget, GreenCageFit};
+use crate::skin_weights::SkinWeights;
+use crate::sync::cage_updater::CageUpdater;
+use crate::sync::green_cage_fit::GreenCageFit;
+use crate::sync::green_cage_fit::reverser::GreenCageReverser;
 use crate::sync::newton::NewtonReport;
+use glam::{DAffine3, DVec3};
 
 /// The Green terms of a session.
 #[derive(Debug, Clone)]
@@ -31,26 +33,26 @@ pub(super) struct GreenState {
     /// g(C) for the current rest cage C, `#F`.
     pub(super) rest_terms: Vec<DVec3>,
     /// 0..#F, to add ψ·g with `CageCoords::apply_delta`.
-    all_faces: Vec<usize>,
+    pub(super) all_faces: Vec<usize>,
     /// Faces around each cage vertex (CSR: `vertex_face_start[k]..vertex_face_start[k+1]`).
-    vertex_face_start: Vec<usize>,
-    vertex_faces: Vec<usize>,
+    pub(super) vertex_face_start: Vec<usize>,
+    pub(super) vertex_faces: Vec<usize>,
     /// Scratch: faces touched by an edit, their g changes, a per-face mark.
-    touched_faces: Vec<usize>,
-    face_changes: Vec<DVec3>,
-    face_marked: Vec<bool>,
+    pub(super) touched_faces: Vec<usize>,
+    pub(super) face_changes: Vec<DVec3>,
+    pub(super) face_marked: Vec<bool>,
     /// The skinned fitting rows M'_R CageUp fitted last, `#R`.
     pub(super) target_rows: Vec<DVec3>,
     /// Skinning weights of the cage vertices, P·Ω̃ (`#C × #J`, row-major): the predictor of
     /// CageUp's warm start.
-    cage_weights: Vec<f64>,
+    pub(super) cage_weights: Vec<f64>,
     /// The skinning transforms (`#J`) and the rest cage (`#C`) of the last CageUp, for the
     /// predictor.
-    last_transforms: Vec<DAffine3>,
-    last_rest_cage: Vec<DVec3>,
-    has_last_transforms: bool,
+    pub(super) last_transforms: Vec<DAffine3>,
+    pub(super) last_rest_cage: Vec<DVec3>,
+    pub(super) has_last_transforms: bool,
     /// Scratch: the rest cage skinned with the cage weights, `#C`.
-    skinned_cage: Vec<DVec3>,
+    pub(super) skinned_cage: Vec<DVec3>,
     /// Set by a grab: the next CageUp starts from the grabbed C' (CageRev made it the answer).
     pub(super) start_from_posed_cage: bool,
     /// Λ_ψ = S·ψ (`#V × #F`) for the CoR centres, built with them.
@@ -58,14 +60,14 @@ pub(super) struct GreenState {
     /// max_v Σ_f |ψ_vf|: bounds what a face term below a threshold can add to any vertex.
     /// Computed when the first cage keyframe is made ([`GreenState::keyframe_terms_of`]), not at
     /// binding.
-    face_coords_norm: OnceLock<f64>,
+    pub(super) face_coords_norm: OnceLock<f64>,
     /// Whether the failure in `unfitted` is yet to be reported to `finish_event` (a fit
     /// outside an event, e.g. a rollback's, is not that event's).
     pub(super) failure_unreported: bool,
     /// Where the last CageUp stopped when it found no current cage (`None`: C' is its fit).
     pub(super) unfitted: Option<UnfittedCage>,
     /// The cage's bounding-box diagonal.
-    size: f64,
+    pub(super) size: f64,
     /// Newton reports of the last CageUp and CageRev.
     pub(super) last_reverse: NewtonReport,
 }
@@ -270,233 +272,5 @@ impl GreenState {
         }
         self.face_coords
             .apply_delta(&self.touched_faces, &self.face_changes, rest_mesh);
-    }
-}
-
-impl RigSession {
-    /// CageUp under Green coordinates: C' fitted to the rows M'_R (in `green.target_rows`) by
-    /// Gauss–Newton, warm-started from the current C'. Records a failure to converge for
-    /// `finish_event`.
-    pub(super) fn fit_green_cage(&mut self) {
-        let CageMap::Green(green) = self.rest_map.cage_map_mut() else {
-            return;
-        };
-        let limit = GREEN_FIT_LIMIT * green.size;
-        let predict = !green.start_from_posed_cage;
-        green.start_from_posed_cage = false;
-        if predict {
-            // Two warm starts, the one the fit likes better: the previous C' moved by the change
-            // of the skinning transforms and the skinned change of the rest cage, and the rest
-            // cage skinned outright — both blended with the cage vertices' weights P·Ω̃ (the
-            // normals turn with the bones; at the rest pose the second is C, the exact answer).
-            let nj = green.last_transforms.len();
-            let continuing =
-                green.has_last_transforms && self.posed_cage.iter().all(|p| p.is_finite());
-            for (k, (p, s)) in self
-                .posed_cage
-                .iter_mut()
-                .zip(green.skinned_cage.iter_mut())
-                .enumerate()
-            {
-                let weights = &green.cage_weights[k * nj..(k + 1) * nj];
-                let rest_change = self.rest_cage[k] - green.last_rest_cage[k];
-                let (mut moved, mut skinned) = (DVec3::ZERO, DVec3::ZERO);
-                for (j, &w) in weights.iter().enumerate() {
-                    if w != 0.0 {
-                        let transform = &self.posed_from_rest[j];
-                        skinned += w * transform.transform_point3(self.rest_cage[k]);
-                        if continuing {
-                            let back = green.last_transforms[j].inverse().transform_point3(*p);
-                            moved += w
-                                * (transform.transform_point3(back)
-                                    + transform.transform_vector3(rest_change));
-                        }
-                    }
-                }
-                *s = skinned;
-                if continuing {
-                    *p = moved;
-                }
-            }
-            let skinned_energy = green.fit.energy(&green.target_rows, &green.skinned_cage);
-            if !continuing
-                || skinned_energy < green.fit.energy(&green.target_rows, &self.posed_cage)
-            {
-                self.posed_cage.copy_from_slice(&green.skinned_cage);
-            }
-        }
-        green.last_transforms.copy_from_slice(&self.posed_from_rest);
-        green.last_rest_cage.copy_from_slice(&self.rest_cage);
-        green.has_last_transforms = true;
-        // A run of kept events past the fold tries a few steps each (`FitBudget`).
-        let budget = match (self.options.unfitted_cage, green.unfitted) {
-            (UnfittedCagePolicy::KeepEvent, Some(_)) => FitBudget::UNFITTED_STREAK,
-            (UnfittedCagePolicy::KeepEvent | UnfittedCagePolicy::Refuse, _) => FitBudget::FULL,
-        };
-        let result = green
-            .fit
-            .apply_within(&green.target_rows, &mut self.posed_cage, budget);
-        let residual = match result {
-            Ok(report) if report.residual <= limit => {
-                green.failure_unreported = false;
-                green.unfitted = None;
-                return;
-            }
-            Ok(report) => report.residual,
-            Err(_) => f64::INFINITY,
-        };
-        let (face, area_ratio) = green
-            .fit
-            .normals()
-            .triangles()
-            .iter()
-            .enumerate()
-            .map(|(f, t)| {
-                // Signed: negative when the triangle turned over against its binding normal.
-                let [a, b, c] = t.map(|v| self.posed_cage[v as usize]);
-                let [a0, b0, c0] = t.map(|v| self.original_rest_cage[v as usize]);
-                let rest = (b0 - a0).cross(c0 - a0);
-                let now = (b - a).cross(c - a);
-                let signed = now.length() * now.dot(rest).signum();
-                (f, signed / rest.length().max(f64::MIN_POSITIVE))
-            })
-            .fold(
-                (0, f64::INFINITY),
-                |best, x| if x.1 < best.1 { x } else { best },
-            );
-        green.unfitted = Some(UnfittedCage {
-            residual,
-            limit,
-            face,
-            area_ratio,
-        });
-        green.failure_unreported = true;
-    }
-
-    /// Builds R̃ and K_A = Ω̃ ∂T/∂A of the Green CageRev for the current pose and SkelUp lock,
-    /// unless they are already built for them. K_A in closed form: the translations are affine
-    /// in the rest joints for fixed rotations (0.27 ms by differences, 3#J forward kinematics,
-    /// at 133k on the Arm). Zero while SkelUp is locked (a grab then moves no joint).
-    pub(super) fn prepare_green_reverser(&mut self) -> Result<(), RigError> {
-        let CageMap::Green(green) = self.rest_map.cage_map() else {
-            return Ok(());
-        };
-        let pose = || self.posed_from_rest.iter().map(|t| t.matrix3);
-        let locked = self.locks.skel_up;
-        if green.reverser.is_ready_for(pose(), locked) {
-            return Ok(());
-        }
-        // Owned: `green` is updated below while the closure reads them.
-        let rows = green.linear.rows().to_vec();
-        let rows = &rows[..];
-        let nj = self.skeleton.len();
-        let row_linear: Vec<DMat3> = rows
-            .iter()
-            .map(|&row| {
-                let (joints, weights) = self.skin_weights.row(row);
-                joints
-                    .iter()
-                    .zip(weights)
-                    .fold(DMat3::ZERO, |acc, (&j, &w)| {
-                        acc + self.posed_from_rest[j as usize].matrix3 * w
-                    })
-            })
-            .collect();
-        // ∂t_j/∂A_k in closed form (`Skeleton::skinning_translation_jacobian`), then
-        // K_A = Ω̃ ∂t/∂A row by row.
-        let mut translation_jacobian = vec![DMat3::ZERO; nj * nj];
-        self.skeleton
-            .skinning_translation_jacobian(&self.posed_from_rest, &mut translation_jacobian);
-        let skin_weights = &self.skin_weights;
-        let fill_skeleton_rows = |out: &mut Mat<f64>| {
-            for (i, &row) in rows.iter().enumerate() {
-                let (joints, weights) = skin_weights.row(row);
-                for k in 0..nj {
-                    let block = joints
-                        .iter()
-                        .zip(weights)
-                        .fold(DMat3::ZERO, |acc, (&j, &w)| {
-                            acc + translation_jacobian[j as usize * nj + k] * w
-                        });
-                    for c in 0..3 {
-                        let column = block.col(c);
-                        for a in 0..3 {
-                            out[(3 * i + a, 3 * k + c)] = column[a];
-                        }
-                    }
-                }
-            }
-        };
-        let pose_linear = self.posed_from_rest.iter().map(|t| t.matrix3);
-        if let CageMap::Green(green) = self.rest_map.cage_map_mut() {
-            green.reverser.prepare(
-                row_linear.into_iter(),
-                pose_linear,
-                locked,
-                fill_skeleton_rows,
-            );
-        }
-        Ok(())
-    }
-
-    /// CageRev under Green coordinates: the rest-cage change `rest_delta` (`#C`) for the
-    /// current-cage change `posed_delta` (`#C`).
-    pub(super) fn reverse_green(
-        &mut self,
-        posed_delta: &[DVec3],
-        rest_delta: &mut [DVec3],
-    ) -> Result<(), RigError> {
-        self.prepare_green_reverser()?;
-        let CageMap::Green(green) = self.rest_map.cage_map_mut() else {
-            return Err(RigError::Invalid(
-                "the Green CageRev was asked of a rig bound with another coordinates kind".into(),
-            ));
-        };
-        for (r, &row) in self.scratch_rows_rest.iter_mut().zip(green.linear.rows()) {
-            *r = self.rest_mesh[row];
-        }
-        let at = GrabState {
-            rest_cage: &self.rest_cage,
-            rest_rows: &self.scratch_rows_rest,
-            posed_rows: &green.target_rows,
-            posed_cage: &self.posed_cage,
-        };
-        let report = green
-            .reverser
-            .solve(&green.fit, at, posed_delta, rest_delta)?;
-        green.last_reverse = report;
-        if report.residual > GREEN_FIT_LIMIT * green.size {
-            return Err(RigError::GreenGrabFailed {
-                residual: report.residual,
-                limit: GREEN_FIT_LIMIT * green.size,
-                iterations: report.iterations,
-            });
-        }
-        Ok(())
-    }
-
-    /// Green rigs: ψ (`#V × #F`, one column per cage triangle of
-    /// [`RigSession::green_triangles`]); `None` for MVC rigs.
-    pub fn green_face_coords(&self) -> Option<&CageCoords> {
-        match self.rest_map.cage_map() {
-            CageMap::Mvc(_) => None,
-            CageMap::Green(green) => Some(&green.face_coords),
-        }
-    }
-
-    /// Green rigs: the outward-oriented cage triangles the face coordinates refer to.
-    pub fn green_triangles(&self) -> Option<&[[u32; 3]]> {
-        match self.rest_map.cage_map() {
-            CageMap::Mvc(_) => None,
-            CageMap::Green(green) => Some(green.fit.normals().triangles()),
-        }
-    }
-
-    /// Green rigs: the Newton reports of the last CageUp and the last CageRev.
-    pub fn green_newton_reports(&self) -> Option<(NewtonReport, NewtonReport)> {
-        match self.rest_map.cage_map() {
-            CageMap::Mvc(_) => None,
-            CageMap::Green(green) => Some((green.fit.last_report(), green.last_reverse)),
-        }
     }
 }

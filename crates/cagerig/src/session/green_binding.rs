@@ -1,7 +1,12 @@
 //! Binding a mesh with Green coordinates: φ and ψ of its vertices (mean value coordinates for
 //! the few outside the cage) and CageUp's fitting rows of [φ ψ].
 
-use super::*;
+use crate::cage_coords::CageCoords;
+use crate::coords::green::compute_green_coords;
+use crate::coords::{maxvol, mvc};
+use crate::error::{RigError, Warning};
+use crate::mesh::TriMesh;
+use glam::DVec3;
 
 /// Green coordinates of the rest mesh's vertices, and how many lie outside the cage: those
 /// (where Σφ ≠ 1: Green coordinates reproduce only interior points) get their mean value

@@ -1,7 +1,21 @@
 //! What a session is assembled from: the rig parts, the options, and the constants and
 //! helpers of that assembly (CoR coordinates Λ, the ΦC = M check).
 
-use super::*;
+use super::unfitted_cage::UnfittedCagePolicy;
+use crate::cage_coords::{CageCoords, CoordsPrecision};
+use crate::coords_kind::CoordsKind;
+use crate::cor_centres::cage_coords::compute_cor_cage_coords;
+use crate::cor_centres::grid::{CorGridOptions, compute_cor_cage_coords_grid};
+use crate::cor_centres::{CorCentresMethod, CorCentresOptions};
+use crate::error::RigError;
+use crate::mesh::TriMesh;
+use crate::skeleton::Skeleton;
+use crate::skin_weights::SkinWeights;
+use crate::skinning::{DqBlendWeights, SkinningMethod};
+use crate::sparse_rows::SparseRows;
+use crate::sync::cage_fit_kind::CageFitKind;
+use crate::sync::skeleton_updater::JointLocalisation;
+use glam::DVec3;
 
 /// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
 /// the similarity tables of [`crate::cor_centres::grid`] (seconds, centre error ≈ 1e-4 × bbox
@@ -131,8 +145,8 @@ pub struct SessionOptions {
     /// (M = φC + ψ·g(C); see `docs/green-coordinates.md`).
     pub coords: CoordsKind,
     /// What an event does when a Green CageUp finds no current cage for it: refuse it (the
-    /// default) or keep it with C' unfitted ([`super::UnfittedCagePolicy`]).
-    pub unfitted_cage: super::UnfittedCagePolicy,
+    /// default) or keep it with C' unfitted ([`UnfittedCagePolicy`]).
+    pub unfitted_cage: UnfittedCagePolicy,
     /// How CageUp fits C' ([`CageFitKind`]): regularised towards the rest cage carried by the
     /// skeleton (the default), or the paper's interpolation of the MaxVol rows. Mean value
     /// rigs only: Green rigs fit by Gauss–Newton on the rows ([`RigSession::cage_fit`]).

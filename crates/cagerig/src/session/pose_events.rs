@@ -2,7 +2,12 @@
 //! poses from animation, and back to rest. Each public method is one event: checkpoint, the
 //! event, then `finish_event` (all-or-nothing).
 
-use super::*;
+use super::parts::CageFitSource;
+use super::{RigSession, roots_only};
+use crate::error::RigError;
+use crate::pose::{LocalPose, rotation_of};
+use crate::skinning::SkinningMethod;
+use glam::{DQuat, DVec3};
 
 impl RigSession {
     /// Switches the skinning method; computes CoR centres on the first switch to CoR. The

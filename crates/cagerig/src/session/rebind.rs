@@ -1,7 +1,12 @@
 //! Rebinding a rig with other cage coordinates (MVC ↔ Green), keeping every edit: what an
 //! editor's "coordinates" switch and the restore of a saved state with another kind do.
 
-use super::*;
+use super::RigSession;
+use super::parts::{GivenCageCoords, RigParts, SessionOptions};
+use crate::coords_kind::CoordsKind;
+use crate::error::{RigError, Warning};
+use crate::mesh::TriMesh;
+use glam::DVec3;
 
 impl RigSession {
     /// The same rig bound with `coords`: rebuilt from the rest skin at the binding cage C₀

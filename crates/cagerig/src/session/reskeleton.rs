@@ -5,7 +5,12 @@
 //! over; the new session computes its cage coordinates, MaxVol rows, Ψ and Λ afresh, and its
 //! binding cage C₀ is the current C. The pose is not carried: its joints may differ.
 
-use super::*;
+use super::RigSession;
+use super::parts::{GivenCageCoords, RigParts, SessionOptions};
+use crate::mesh::TriMesh;
+use crate::skeleton::Skeleton;
+use crate::skin_weights::SkinWeights;
+use glam::DVec3;
 
 impl RigSession {
     /// The parts of this character at its current rest pose — M exactly the map of C
@@ -57,6 +62,7 @@ impl RigSession {
 mod tests {
     use super::*;
     use crate::session::test_rigs::bar;
+    use crate::skinning::SkinningMethod;
 
     /// Rebinding to the same skeleton and weights after a rest-cage edit reproduces the
     /// edited rest mesh and keeps the method; the new binding cage is the edited cage.

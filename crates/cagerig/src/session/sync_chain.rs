@@ -1,7 +1,18 @@
 //! The sync chain behind every event: checks, M = ΦC (in full or incrementally), SkelUp,
 //! forward kinematics, skinning and CageUp, and the lazily built CoR state.
 
-use super::*;
+use super::RigSession;
+use super::parts::compute_centre_coords;
+use super::rest_map::{CageMap, RestMeshState};
+use super::skinning::CorState;
+use crate::cage_coords::CoordsPrecision;
+use crate::error::RigError;
+use crate::pose::local_transform;
+use crate::skeleton::Skeleton;
+use crate::skinning::SkinningMethod;
+use crate::skinning::cor::CorScratch;
+use crate::skinning::dqs::DqsScratch;
+use glam::DVec3;
 
 impl RigSession {
     pub(super) fn check_joint(&self, joint: usize) -> Result<(), RigError> {
@@ -328,14 +339,5 @@ impl RigSession {
             green.target_rows.copy_from_slice(&self.scratch_rows_posed);
         }
         self.fit_green_cage();
-    }
-}
-
-/// Per-cage-vertex offsets of an edit (`#C`): one offset per listed vertex, or one for all;
-/// a vertex listed twice moves by the sum. `vertices` and `offsets` are checked beforehand.
-pub(super) fn scatter_edit(vertices: &[usize], offsets: &[DVec3], dense: &mut [DVec3]) {
-    dense.iter_mut().for_each(|d| *d = DVec3::ZERO);
-    for (i, &v) in vertices.iter().enumerate() {
-        dense[v] += offsets[if offsets.len() == 1 { 0 } else { i }];
     }
 }

@@ -13,9 +13,6 @@
 //!
 //! Mean value rigs always fit C' (CageUp is linear); the policy only matters for Green rigs.
 
-use super::RigSession;
-use crate::error::{RigError, UnfittedCage};
-
 /// What an event does when a Green CageUp finds no current cage for it (module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum UnfittedCagePolicy {
@@ -56,39 +53,3 @@ impl UnfittedCagePolicy {
 }
 
 crate::named_kind::named_kind!(UnfittedCagePolicy, UnknownUnfittedCagePolicy);
-
-impl RigSession {
-    /// Why C' is not CageUp's fit of the current state, when it is not (only under
-    /// [`UnfittedCagePolicy::KeepEvent`], after an event whose Green CageUp found no current
-    /// cage); `None` while C' is the fit.
-    pub fn posed_cage_unfitted(&self) -> Option<UnfittedCage> {
-        self.rest_map.unfitted()
-    }
-
-    /// The session's [`UnfittedCagePolicy`].
-    pub fn unfitted_cage_policy(&self) -> UnfittedCagePolicy {
-        self.options.unfitted_cage
-    }
-
-    /// Sets the [`UnfittedCagePolicy`] of the next events (an unfitted C' stays so until an
-    /// event fits it).
-    pub fn set_unfitted_cage_policy(&mut self, policy: UnfittedCagePolicy) {
-        self.options.unfitted_cage = policy;
-    }
-
-    /// `Err` when C' is unfitted: grabs of it are refused then.
-    pub(super) fn check_posed_cage_fitted(&self) -> Result<(), RigError> {
-        match self.posed_cage_unfitted() {
-            Some(unfitted) => Err(RigError::PosedCageUnfitted(unfitted)),
-            None => Ok(()),
-        }
-    }
-
-    /// Whether an event whose CageUp ended as `failure` is refused under the policy.
-    pub(super) fn refuses_unfitted(&self, failure: Option<RigError>) -> Option<RigError> {
-        match self.options.unfitted_cage {
-            UnfittedCagePolicy::Refuse => failure,
-            UnfittedCagePolicy::KeepEvent => None,
-        }
-    }
-}

@@ -20,12 +20,15 @@
 use glam::{DAffine3, DVec3, Vec3A};
 use rayon::prelude::*;
 
-use super::VERTEX_GRAIN_F32;
 use super::precision::{RestPoint, SkinReal};
 use crate::simd_dispatch::simd_dispatch;
 use crate::{RigError, SkinWeights};
 
 // Sorted slots index vertices within a chunk as u16.
+/// Vertices per rayon task in the per-frame kernels (a mesh of at most this many vertices is
+/// skinned serially).
+pub(crate) const VERTEX_GRAIN_F32: usize = 8192;
+
 const _: () = assert!(VERTEX_GRAIN_F32 <= 1 << 16);
 
 /// A run of consecutive sorted slots of one chunk with the same influence count.

@@ -4,7 +4,7 @@ use glam::{DAffine3, DMat3, DVec3};
 
 use rayon::prelude::*;
 
-use super::VERTEX_GRAIN_F32;
+use super::compact_weights::VERTEX_GRAIN_F32;
 use super::compact_weights::{JointColumns, RestPoints, VertexKernel};
 use super::precision::SkinReal;
 use crate::SkinWeights;

@@ -39,7 +39,3 @@ pub use lbs::LinearBlendSkinning;
 pub use lbs_f32::{LbsF32, LbsF32Scratch};
 pub use method::{SkinningMethod, UnknownSkinningMethod};
 pub use precision::{RestPoint, SkinReal};
-
-/// Vertices per rayon task in the per-frame kernels (a mesh of at most this many vertices is
-/// skinned serially).
-pub(crate) const VERTEX_GRAIN_F32: usize = 8192;

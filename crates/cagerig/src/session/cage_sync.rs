@@ -1,0 +1,146 @@
+//! CageUp and CageRev of the session, through its rest map ([`super::rest_map`]): each kind's
+//! own fit and reverser, and M(C) of a cage that is not the session's.
+
+use super::RigSession;
+use super::green::GREEN_FIT_LIMIT;
+use super::parts::CageFitSource;
+use super::rest_map::CageMap;
+use super::skinning::CorState;
+use crate::coords_kind::CoordsKind;
+use crate::error::RigError;
+use glam::DVec3;
+
+impl RigSession {
+    /// The coordinates kind the rig is bound with.
+    pub fn coords_kind(&self) -> CoordsKind {
+        self.rest_map.kind()
+    }
+
+    /// CageUp: C' from the fitting rows of M' (or their ghost LBS, Sec. 4.3 for DQS/CoR): the
+    /// linear map P for MVC rigs, the Gauss–Newton fit for Green rigs.
+    pub(super) fn fit_cage(&mut self) {
+        let ghost = !self.skinning.method().is_linear()
+            && self.options_fit_source == CageFitSource::GhostLbs;
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(_) => self.fit_linear_cage(ghost),
+            CageMap::Green(_) => self.fit_green_cage_rows(ghost),
+        }
+    }
+
+    /// CageRev: the rest-cage change `rest_delta` (`#C`) for the current-cage change
+    /// `posed_delta` (`#C`): Eq. 19 (factorised for the pose first if needed) for MVC rigs, the
+    /// Newton solve for Green rigs.
+    pub(super) fn reverse_cage(
+        &mut self,
+        posed_delta: &[DVec3],
+        rest_delta: &mut [DVec3],
+    ) -> Result<(), RigError> {
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(mvc) => {
+                if !mvc.reverser.is_factorised() {
+                    self.refactor_reverser()?;
+                }
+                self.rest_map.solve_linear_reverse(posed_delta, rest_delta)
+            }
+            CageMap::Green(_) => self.reverse_green(posed_delta, rest_delta),
+        }
+    }
+
+    /// After a grab's CageRev moved C: a non-linear map's CageUp starts from the grabbed C'
+    /// (C' + `posed_delta`, `#C`), which CageRev made the answer. A linear map re-fits C' in
+    /// one product and needs nothing.
+    pub(super) fn start_fit_from_grab(&mut self, posed_delta: &[DVec3]) {
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(_) => {}
+            CageMap::Green(_) => {
+                for (p, d) in self.posed_cage.iter_mut().zip(posed_delta) {
+                    *p += *d;
+                }
+                self.rest_map.start_next_fit_from_posed_cage();
+            }
+        }
+    }
+
+    /// Factorises the reverse cage deformer (Eq. 19) for the current pose now. An editor calls
+    /// this when a cage grab starts; [`RigSession::move_posed_cage`] does it lazily otherwise.
+    pub fn refactor_reverser(&mut self) -> Result<(), RigError> {
+        for (r, t) in self.scratch_rotations.iter_mut().zip(&self.posed_from_rest) {
+            *r = t.matrix3;
+        }
+        let skel_up = !self.locks.skel_up;
+        match self.rest_map.cage_map_mut() {
+            CageMap::Mvc(mvc) => mvc.reverser.refactor(&self.scratch_rotations, skel_up),
+            CageMap::Green(_) => self.prepare_green_reverser(),
+        }
+    }
+
+    /// M = ΦC (+ the kind's terms) for the rest cage `cage` (`#C`) into `out` (`#V`).
+    pub(super) fn rest_mesh_of_cage(&self, cage: &[DVec3], out: &mut [DVec3]) {
+        self.rest_map.rest_mesh_of(cage, out);
+    }
+
+    /// The rest skin M(C) of the rest cage `cage` (`#C`) into `out` (`#V`): ΦC, plus ψ·g(C) for
+    /// Green coordinates. The session is not changed.
+    pub fn rest_mesh_for_cage(&self, cage: &[DVec3], out: &mut [DVec3]) -> Result<(), RigError> {
+        if cage.len() != self.rest_cage.len() || out.len() != self.rest_mesh.len() {
+            return Err(RigError::SizeMismatch {
+                what: "rest cage (#C) and rest skin (#V) for M(C)",
+                expected: self.rest_cage.len(),
+                actual: cage.len(),
+            });
+        }
+        self.rest_mesh_of_cage(cage, out);
+        Ok(())
+    }
+
+    /// The rest cage C (`out`, `#C`; on entry the start of a non-linear fit) whose rest skin
+    /// fits `rows`, the skin at CageUp's fitting rows ([`CageUpdater::rows`], `#R`): for mean
+    /// value coordinates C = P·rows (exact on MaxVol rows); for Green coordinates the
+    /// Gauss–Newton fit of φ_R C + ψ_R g(C) to `rows` (CageUp's solver, to a stationary point
+    /// to round-off), which recovers C exactly when the rows are a Green deformation of the
+    /// binding. Errors when the Green fit does not converge. The session is not changed.
+    pub fn rest_cage_from_rows(&self, rows: &[DVec3], out: &mut [DVec3]) -> Result<(), RigError> {
+        if rows.len() != self.rest_map.rows().len() || out.len() != self.rest_cage.len() {
+            return Err(RigError::SizeMismatch {
+                what: "fitting rows (#R) for a rest cage",
+                expected: self.rest_map.rows().len(),
+                actual: rows.len(),
+            });
+        }
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(mvc) => {
+                mvc.fit.apply_rows(rows, out);
+                Ok(())
+            }
+            CageMap::Green(green) => {
+                let mut fit = green.fit.clone();
+                // Start from the better of the given cage and the linear map's cage P·rows (the
+                // vertex part's fit, which ignores ψ·g but follows large deformations).
+                let mut linear = vec![DVec3::ZERO; out.len()];
+                green.linear.apply_rows(rows, &mut linear);
+                if fit.energy(rows, &linear) < fit.energy(rows, out) {
+                    out.copy_from_slice(&linear);
+                }
+                // A stalled solve continues from the start to `rows` in pieces.
+                fit.restart_from(out);
+                let report = fit.apply(rows, out)?;
+                if report.residual <= GREEN_FIT_LIMIT * green.size() {
+                    Ok(())
+                } else {
+                    Err(RigError::Invalid(format!(
+                        "no rest cage reproduces the given skin rows through Green coordinates: \
+                         the fit stopped with a gradient of {:.3e}, expected at most {:.3e}",
+                        report.residual,
+                        GREEN_FIT_LIMIT * green.size()
+                    )))
+                }
+            }
+        }
+    }
+
+    /// The CoR centres Λ·C (+ the kind's terms) into `out` (`#V`) for the rest cage `cage`.
+    pub(super) fn centres_of_cage(&self, cor: &CorState, cage: &[DVec3], out: &mut [DVec3]) {
+        cor.centre_coords.apply(cage, out);
+        self.rest_map.add_centre_terms_of(cage, out);
+    }
+}
