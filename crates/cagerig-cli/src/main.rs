@@ -104,6 +104,10 @@ impl Command {
 /// A closed pipe on stdout (`cagerig bench | head`) ends the process quietly, as for other
 /// command-line tools, instead of a panic in `println!` (Rust ignores SIGPIPE by default).
 #[cfg(unix)]
+#[expect(
+    unsafe_code,
+    reason = "libc::signal, the one way to restore SIGPIPE's default"
+)]
 fn quiet_on_closed_pipe() {
     // SAFETY: `signal` has no memory-safety preconditions; it runs first in `main`, before any
     // thread exists, and SIG_DFL installs no handler code.

@@ -9,11 +9,19 @@
 //! same skin, cagerig reads the baked file back (the baked targets left out), and without
 //! `--bake` the same viewer is far from DQS (the comparison can fail).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 #[path = "../../cagerig-formats/tests/common/mod.rs"]
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use std::path::{Path, PathBuf};

@@ -3,8 +3,12 @@
 //! glTF character in data/ gets a validated cage with the default options; `edit` and
 //! `animate` generate a cage with `--auto-cage` when the rig has none, and say so.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use support::{arm, cagerig, data, temp_dir};

@@ -2,8 +2,12 @@
 //! its body during the Run, where the paper's fit throws vertices far off; `animate --json`
 //! reports the measures; an unknown fit lists the accepted ones.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use support::{cagerig, data, run_ok, temp_dir};

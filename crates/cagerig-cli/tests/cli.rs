@@ -1,8 +1,12 @@
 //! End-to-end tests of the `cagerig` binary: outputs reload bit-exactly, bad scripts fail with a
 //! clear error naming the step and write nothing.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::path::{Path, PathBuf};

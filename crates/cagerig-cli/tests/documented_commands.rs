@@ -10,8 +10,12 @@
 //! `edit data/fox/Fox.glb --auto-weights` without a cage, which the command refuses, and the
 //! weights page's file outputs failed on a fresh clone without `out/`.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![expect(clippy::unwrap_used)]
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::path::{Path, PathBuf};

@@ -3,8 +3,12 @@
 //! new vertices (the mean of their edge's endpoints) and writes them with the rig, and the
 //! written rig poses with `--skinning blended` as the original does at its own vertices.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::path::Path;

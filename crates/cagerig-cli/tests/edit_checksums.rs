@@ -8,8 +8,6 @@
 //! may hold only some of the runs (those recorded on such a CPU); the runs it holds are
 //! checked, and the paper's runs must be among them.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)]
-
 use std::path::Path;
 use std::process::Command;
 

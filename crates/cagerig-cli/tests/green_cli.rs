@@ -2,8 +2,12 @@
 //! keep` past the fold limit, `info` reports the Green binding, an unknown kind lists the
 //! accepted ones.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::path::Path;

@@ -5,8 +5,12 @@
 //! complete new one — never a mix, never nothing — and the next run must succeed.
 
 #![cfg(unix)]
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![expect(clippy::unwrap_used)]
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::collections::BTreeMap;

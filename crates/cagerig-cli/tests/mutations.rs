@@ -5,8 +5,12 @@
 //! error must be one `error:` line, and a success must have written complete, finite output;
 //! a failure must have written nothing. Deterministic (fixed seed), a few hundred runs.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::path::{Path, PathBuf};

@@ -4,8 +4,12 @@
 //! The picture tests need a Vulkan or GL adapter (software ones are fine); set
 //! `CAGERIG_SKIP_GPU_TESTS=1` to skip them on a machine without one.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::path::Path;

@@ -2,8 +2,12 @@
 //! or a clear error (file, line or element, expected, found), never exit 0 with a non-finite
 //! number, stale or partial output.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::path::{Path, PathBuf};

@@ -3,8 +3,12 @@
 //! `--max-influences`), in the joint order `edit` writes in `step0_joints.json`; an OBJ needs
 //! `--skeleton`; a hand-written five-joint `.skt` (the README's) binds the Arm.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 use std::path::{Path, PathBuf};

@@ -4,7 +4,7 @@
 //! the target restores onto the bar). The test fails when a seed no longer equals what the
 //! document writes today (a format change); `CAGERIG_WRITE_FUZZ_SEEDS=1` rewrites them.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::{Path, PathBuf};
 

@@ -2,7 +2,7 @@
 //! prints the median, min and max wall time of `import_character` (a 100k-vertex file:
 //! `cagerig export --builtin snake --resolution 100000 --out snake100k.glb`).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::time::Instant;
 

@@ -9,8 +9,12 @@
 //! The ignored `tune` test reads `AW_RESOLUTION`, `AW_EXPONENT` and `AW_TIP_LENGTH` from the
 //! environment and prints the figures, to explore the options.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use cagerig::auto_weights::{AutoWeights, AutoWeightsOptions};

@@ -1,8 +1,12 @@
 //! FBX import against the reference meshes of ufbx's own test suite (Blender 2.79 sausage: the
 //! skin at given takes and times).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use cagerig::playback::{AnimationPlayer, PoseChannels};

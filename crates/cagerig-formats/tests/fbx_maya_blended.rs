@@ -3,8 +3,12 @@
 //! frames 10 and 18 (24 frames/s) of its animation, as ufbx's `test_skin.h` checks it
 //! (`ufbxt_check_frame(scene, …, "maya_dq_weights_10", NULL, 10.0/24.0)`).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use cagerig::playback::{AnimationPlayer, PoseChannels};

@@ -2,8 +2,12 @@
 //! reimport round trip: the reimported rest mesh, rest joints and the pose stored in the nodes
 //! give cagerig's own M and M' to ≤ 1e-5 of the bounding-box diagonal (the file is f32).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use std::path::{Path, PathBuf};

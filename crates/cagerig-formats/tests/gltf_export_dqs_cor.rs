@@ -8,8 +8,12 @@
 //! vertices, divided by the bounding-box diagonal of the rest mesh, and checked against the
 //! bounds the README states (`GAP_BOUNDS`). Under LBS the same path gives ≤ 1e-5 (control).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use std::path::PathBuf;

@@ -9,8 +9,12 @@
 //! the rest bounding-box diagonal at the start. `RESAMPLING_BOUNDS` are the README's figures
 //! for the default 30 samples/s.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use std::path::PathBuf;

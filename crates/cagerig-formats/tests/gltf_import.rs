@@ -2,8 +2,12 @@
 //! rest) and posed vertices at animation times against an independent evaluation of the file
 //! (tests/common: the `gltf` crate's own readers and a direct Σ w G IBM v).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use cagerig::playback::{AnimationPlayer, PoseChannels};

@@ -3,8 +3,12 @@
 //! two skins. Posed meshes are compared with the independent evaluation of
 //! `common::ReferenceGltf` (the specification's interpolation, then LBS).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 mod synthetic_gltf;
 

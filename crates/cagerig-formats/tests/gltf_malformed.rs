@@ -1,8 +1,12 @@
 //! Malformed and hostile glTF files give clear errors naming the file and the element, never a
 //! panic nor a huge allocation.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use std::path::{Path, PathBuf};

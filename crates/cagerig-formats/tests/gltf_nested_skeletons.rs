@@ -22,8 +22,12 @@
 //! `common::ReferenceGltf` between the keys, where the root of B and C is carried along an arc
 //! by the turning joints above it.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 mod synthetic_gltf;
 

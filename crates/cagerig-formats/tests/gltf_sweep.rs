@@ -10,8 +10,12 @@
 //! (© Smith Micro Software, Poser EULA), are swept from there.
 //! `cargo test -p cagerig-formats --test gltf_sweep -- --nocapture` prints one line per file.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use std::path::{Path, PathBuf};

@@ -5,8 +5,12 @@
 //! Expected world positions are composed in the tests from the written TRS values; outward
 //! winding is checked by the signed volume of each closed part.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod common;
 
 use std::path::PathBuf;

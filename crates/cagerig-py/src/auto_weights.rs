@@ -110,7 +110,7 @@ pub fn weights_source_error(e: WeightsSourceError) -> PyErr {
 #[pyo3(signature = (vertices, triangles, joint_positions, parents, max_influences = 4,
                     cage = None, *, joint_names = None, tips = None, resolution = 128,
                     exponent = 8.0))]
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments)]
 pub fn skin_weights<'py>(
     py: Python<'py>,
     vertices: &Bound<'py, PyAny>,

@@ -189,7 +189,7 @@ impl Rig {
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
                         keep_file_coords = false, auto_cage = None, auto_weights = false,
                         coords = "mvc", skin = None, cage_fit = "regularised"))]
-    #[allow(clippy::too_many_arguments)]
+    #[expect(clippy::too_many_arguments)]
     fn load(
         py: Python<'_>,
         path: PathBuf,
@@ -276,7 +276,7 @@ impl Rig {
     #[pyo3(signature = (name, resolution = None, *, skinning = "lbs", fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
                         coords = "mvc", cage_fit = "regularised"))]
-    #[allow(clippy::too_many_arguments)]
+    #[expect(clippy::too_many_arguments)]
     fn builtin(
         py: Python<'_>,
         name: &str,
@@ -333,7 +333,7 @@ impl Rig {
                         fit_rows = "maxvol", localisation = "articulation", fit_source = "ghost",
                         coords_precision = "f64", coords = "mvc", dq_blend_weights = None,
                         cage_fit = "regularised"))]
-    #[allow(clippy::too_many_arguments)]
+    #[expect(clippy::too_many_arguments)]
     fn from_arrays(
         py: Python<'_>,
         vertices: &Bound<'_, PyAny>,

@@ -144,6 +144,10 @@ impl Rig {
     /// storage (no copy; Fortran order; it keeps the rig alive). Φ never changes after the rig
     /// is built. ``np.array(rig.cage_coords)`` makes a writable copy.
     #[getter]
+    #[expect(
+        unsafe_code,
+        reason = "Φ shared with numpy without a copy, kept alive by the Rig"
+    )]
     fn cage_coords<'py>(slf: Bound<'py, Self>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let view = {
             let this = slf.borrow();

@@ -7,7 +7,7 @@
 //! The first frame is written to PNG (default: `render_bench.png` in the system's temporary
 //! folder), and its path printed.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::time::Instant;
 

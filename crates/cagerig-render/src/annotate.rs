@@ -56,7 +56,7 @@ pub fn draw_text(image: &mut RgbaImage, x: u32, y: u32, text: &str, scale: u32, 
 
 /// A vertical colour bar `width × height` at `(x, y)` from `lo` (bottom) to `hi` (top), with
 /// the end values (and 0 for a diverging map) written to its right, and `title` above it.
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments)]
 pub fn draw_legend(
     image: &mut RgbaImage,
     map: ColorMap,

@@ -340,7 +340,6 @@ impl RigSceneData {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
     use cagerig::session::{RigParts, SessionOptions};
 

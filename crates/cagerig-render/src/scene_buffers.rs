@@ -70,7 +70,7 @@ impl SurfaceBuffers {
     /// Uploads positions (and normals, unless `flat`), colours, and the triangles if they
     /// changed (`topology_changed`, from [`SurfaceBuffers::same_triangles`]). Returns the number
     /// of buffers re-created and the bounds of the finite positions.
-    #[allow(clippy::too_many_arguments)]
+    #[expect(clippy::too_many_arguments)]
     fn update(
         &mut self,
         device: &wgpu::Device,

@@ -4,7 +4,7 @@
 //! These tests need a Vulkan or GL adapter (software ones are fine); `.ci/run` installs
 //! `mesa-vulkan-drivers`. Set `CAGERIG_SKIP_GPU_TESTS=1` to skip them on a machine without one.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig_render::palette::ColorMap;
 use cagerig_render::{

@@ -6,7 +6,7 @@
 //!
 //! `cargo run --release -p cagerig-studio --example edit_frame_bench -- [RESOLUTION] [EVENTS]`
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::time::Instant;
 

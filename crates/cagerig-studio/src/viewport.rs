@@ -100,7 +100,7 @@ impl View {
 
     /// Uploads (when the rig or the layers changed) and renders (when anything the picture
     /// depends on changed) at `size` pixels; returns the texture to show.
-    #[allow(clippy::too_many_arguments)]
+    #[expect(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
         render_state: &RenderState,

@@ -52,7 +52,7 @@ pub fn views_ui(
     });
 }
 
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments)]
 fn view_ui(
     ui: &mut egui::Ui,
     rect: egui::Rect,

@@ -3,12 +3,16 @@
 //! Green rigs' switch for poses the current cage cannot follow.
 //! `CAGERIG_SKIP_GPU_TESTS=1` skips it where no wgpu adapter exists.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use cagerig::CoordsKind;
 use egui::Modifiers;
 use egui_kittest::kittest::Queryable;
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 #[test]

@@ -3,7 +3,7 @@
 //! box selection, the autosave offered at the next start, and a hybrid export that reopens with
 //! its cage keys. `CAGERIG_SKIP_GPU_TESTS=1` skips them where no wgpu adapter exists.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 
@@ -15,6 +15,10 @@ use cagerig_studio::view_state::{CURRENT, REST};
 use egui_kittest::kittest::Queryable;
 use glam::{DVec2, DVec3};
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 use support::*;
 

@@ -5,7 +5,7 @@
 //! screenshot (`$CAGERIG_STUDIO_TEST_IMAGES/skeleton_built.png`, else in the temporary folder).
 //! `CAGERIG_SKIP_GPU_TESTS=1` skips it where no wgpu adapter exists.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::time::{Duration, Instant};
 
@@ -16,6 +16,10 @@ use egui::{Event, Modifiers};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 use support::{click, screen_of};
 

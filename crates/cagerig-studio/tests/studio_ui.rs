@@ -3,7 +3,7 @@
 //! G/R/S keys with typed values, numeric entry, undo / redo, keys and playback, session files
 //! and the skinning switch. `CAGERIG_SKIP_GPU_TESTS=1` skips them where no wgpu adapter exists.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::{Path, PathBuf};
 

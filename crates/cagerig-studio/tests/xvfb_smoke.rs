@@ -6,7 +6,7 @@
 //! Needs `xvfb-run` (package `xvfb`) and a Vulkan driver (`mesa-vulkan-drivers`); where they
 //! are missing the test is skipped with a note, except under `CI=true`, where it fails.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -4,7 +4,7 @@
 //! project's 2-core machine. `cargo bench -p cagerig --bench cage_gen`; the example
 //! `cage_gen_timing` prints the same runs with their stage times and quality figures.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Duration;

@@ -1,7 +1,7 @@
 //! Criterion benches of the kernels, parameterised by mesh size #V, joint count #B and cage
 //! size #C. `cargo bench -p cagerig`; the CLI's `cagerig bench` prints the Table-1 view.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::coords::mvc::compute_cage_coords;
 use cagerig::demo;

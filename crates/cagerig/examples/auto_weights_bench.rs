@@ -3,7 +3,7 @@
 //! `cargo run --release -p cagerig --example auto_weights_bench -- [--levels N] [--reps R]`
 //! (targets on a 2-core machine: ≤ 0.5 s on the Arm, ≤ 3 s at 133k vertices).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

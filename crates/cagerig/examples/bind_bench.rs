@@ -3,7 +3,7 @@
 //! `cargo run --release -p cagerig --example bind_bench -- [N] [--cor] [--reps R] [--sweep]`
 //! (`RAYON_NUM_THREADS=1` for the single-thread figures; `--sweep`: MaxVol with 1–32 starts).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

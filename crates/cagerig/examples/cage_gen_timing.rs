@@ -3,7 +3,7 @@
 //! the generation figures of the last run. Run with
 //! `cargo run --release -p cagerig --example cage_gen_timing [-- REPETITIONS]`.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

@@ -4,7 +4,7 @@
 //! rows: the number of cage vertices a mesh vertex effectively depends on) and the distances.
 //! `cargo run --release -p cagerig --example cage_guide_measure`.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 

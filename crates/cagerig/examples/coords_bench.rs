@@ -2,7 +2,7 @@
 //! three times (133 073 vertices, 58-vertex cage). Run with
 //! `cargo run --release -p cagerig --example coords_bench`.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

@@ -7,7 +7,7 @@
 //! ([`compute_cor_cage_coords`]); STEP (grid step, default 1/32 as in `CorGridOptions::default`), BINS (bin resolution, 128),
 //! INTERP (cubic | linear) for the grid; VSTEP, PSTEP, FLOOR, MASSTOL for the clustering.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

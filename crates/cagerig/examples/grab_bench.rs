@@ -5,7 +5,7 @@
 //! only the display path, `exact`: only the f64 path, each 400 grabs, e.g. under a profiler;
 //! `green`: a Green-coordinates rig, bent in 10° steps).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

@@ -3,7 +3,7 @@
 //! "binding / MVC"). `cargo run --release -p cagerig --example green_bind_bench -- [N] [--reps R]`
 //! (`RAYON_NUM_THREADS=1` for one thread).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

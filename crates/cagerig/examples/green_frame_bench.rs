@@ -6,7 +6,7 @@
 //! (`display`: the f32 display path; `all-rows`: CageUp fits every row; `mvc`: mean value
 //! coordinates instead, for comparison; `GREEN_FRAME_ERRORS=1` prints the first refusals).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

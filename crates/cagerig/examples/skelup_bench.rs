@@ -4,7 +4,7 @@
 //! registers' upper halves in use (36 against 70–75 ms at N = 3; see `vector_registers.rs`).
 //! `cargo run --release -p cagerig --example skelup_bench -- [N]`.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

@@ -4,7 +4,7 @@
 //! Run with `cargo run --release -p cagerig --example skinning_bench [repetitions] [kernel filter]
 //! [Arm subdivision levels, default 3]` (a filter of `-` keeps every kernel).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 use std::time::Instant;

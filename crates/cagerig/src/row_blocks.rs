@@ -3,6 +3,11 @@
 //! ever written, through raw pointers, so the page faults of first touch are spread over the
 //! workers instead of a serial zero fill (90 ms for Λ at 532k × 58).
 
+#![expect(
+    unsafe_code,
+    reason = "matrices filled by disjoint row blocks through raw pointers, without a zero fill"
+)]
+
 use faer::Mat;
 use rayon::prelude::*;
 

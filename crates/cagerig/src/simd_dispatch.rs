@@ -204,7 +204,9 @@ macro_rules! simd_dispatch {
             // CPU has all of them (detected with `is_x86_feature_detected!`). That is the whole
             // contract of calling a `target_feature` function; the arguments are passed on
             // unchanged and the wrapper's body is safe code.
-            return unsafe { $($method_call)* $wrapper($($arg),*) };
+            #[expect(unsafe_code, reason = "the call of a tier's #[target_feature] wrapper")]
+            let result = unsafe { $($method_call)* $wrapper($($arg),*) };
+            return result;
         }
     };
 
@@ -251,6 +253,10 @@ macro_rules! simd_dispatch {
 pub(crate) use simd_dispatch;
 
 #[cfg(test)]
+#[expect(
+    unsafe_code,
+    reason = "the tests call the #[target_feature] tiers after detecting them"
+)]
 mod tests {
     use super::*;
 

@@ -7,7 +7,7 @@
 //! its joint 2 ("upperarm02.R") is 0.41 off Ψ·C = rest position; its animation root motion
 //! depends on the previously played sample.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::{Path, PathBuf};
 

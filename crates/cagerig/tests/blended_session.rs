@@ -2,7 +2,7 @@
 //! (b ≡ 0 is LBS and b ≡ 1 is DQS, bit for bit, through every event), CageUp's ghost fit (C' is
 //! the LBS cage whatever b is), and the paths that rebuild a rig (rebind, new skeleton).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::demo;
 use cagerig::mesh::max_distance;
@@ -11,6 +11,10 @@ use cagerig::skinning::{DqBlendWeights, SkinningMethod};
 use cagerig::{CoordsKind, RigError};
 use glam::DVec3;
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 fn parts(blend: Option<DqBlendWeights>) -> RigParts {

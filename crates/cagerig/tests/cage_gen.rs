@@ -3,7 +3,7 @@
 //! (each either passes the full validator or fails with a clear reason) and on random
 //! star-shaped blobs (property test).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::{Path, PathBuf};
 

@@ -2,7 +2,7 @@
 //! built (a 24-vertex mesh with the default 100-vertex target would fail with "MaxVol needs at
 //! least #C mesh vertices: expected 100 but got 24").
 
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![expect(clippy::unwrap_used)]
 
 use std::path::Path;
 

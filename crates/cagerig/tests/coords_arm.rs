@@ -1,7 +1,7 @@
 //! Coordinate kernels on the paper's Arm example: MVC vs the shipped cage weights, MaxVol vs the
 //! shipped selection, max-entropy joint coordinates (including the joint the reference fails on).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::time::Instant;
 
@@ -16,6 +16,10 @@ use faer::Mat;
 use faer::linalg::solvers::DenseSolveCore;
 use glam::DVec3;
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 use support::{ARM, mesh as load_obj, read};
 

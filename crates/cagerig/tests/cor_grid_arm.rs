@@ -1,7 +1,7 @@
 //! CoR centres in cage coordinates from the similarity tables (`cor_grid`) against the exact
 //! Eq. 5 centres on the Arm: every vertex at N = 0, a sample at N = 2 midpoint subdivisions.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -6,7 +6,7 @@
 //! same holds for a rig bound with Green coordinates (M̃ = [φ̃ ψ̃]·[C; g(C)], the exact M on
 //! CageUp's rows).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::pose::LocalPose;
 use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
@@ -14,6 +14,10 @@ use cagerig::skinning::SkinningMethod;
 use cagerig::{CoordsKind, demo};
 use glam::{DQuat, DVec3};
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 fn session(coords: CoordsKind) -> RigSession {

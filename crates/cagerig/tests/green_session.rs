@@ -2,7 +2,7 @@
 //! the coupled loop (grabs land exactly, nothing else moves) under LBS, DQS and CoR, on the Arm
 //! and on the built-in rigs, with every structure in consensus after many interleaved events.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 
@@ -14,6 +14,10 @@ use cagerig::session::{RigParts, RigSession, SessionOptions, SyncLocks};
 use cagerig::skinning::SkinningMethod;
 use glam::{DQuat, DVec3};
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 fn green() -> SessionOptions {

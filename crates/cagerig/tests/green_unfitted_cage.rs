@@ -2,7 +2,7 @@
 //! the skin and skeletons exact, C' reported unfitted, grabs refused until a pose fits again
 //! (`session/unfitted_cage.rs`).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 

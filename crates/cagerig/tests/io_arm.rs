@@ -1,6 +1,6 @@
 //! The Arm example of the paper tool, read through every reader.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+// tests, benches and examples may panic on a broken fixture
 
 use std::path::{Path, PathBuf};
 

@@ -1,6 +1,6 @@
 //! Property tests: no reader panics, whatever the bytes.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 

@@ -6,7 +6,11 @@
 //! foreign thread, rayon's own injector queue allocates a block every few dozen jobs, which is
 //! rayon's amortised bookkeeping, not per-event work of ours.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(
+    unsafe_code,
+    reason = "a counting global allocator wraps the system one"
+)]
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -16,6 +20,10 @@ use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use glam::DVec3;
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 
 struct Counting;

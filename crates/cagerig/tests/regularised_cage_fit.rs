@@ -3,7 +3,7 @@
 //! C' → C → S → S' → C' is a fixed point, the skin is the paper fit's bit for bit), and the
 //! current cage stays near the body where the paper's fit leaves it.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::PathBuf;
 

@@ -1,7 +1,7 @@
 //! Malformed input, library side: events are all-or-nothing, and the constructors apply the one
 //! cage validation.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::error::RigError;
 use cagerig::session::{MAX_STATE_MAGNITUDE, RigParts, RigSession, SessionOptions};

@@ -3,7 +3,7 @@
 //! the ghost fit for DQS/CoR/blended), M = ΦC and A = ΨC hold after any number of events (no
 //! drift). Every rig carries random DQ blend weights, so the blended method runs everywhere.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::cage_coords::CoordsPrecision;
 use cagerig::demo;

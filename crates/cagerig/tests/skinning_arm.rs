@@ -1,6 +1,6 @@
 //! Skinning kernels and CoR centres on the Arm rig against the reference tool's outputs.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::time::Instant;
 
@@ -13,6 +13,10 @@ use cagerig::skinning::{
 use cagerig::sparse_rows::SparseRows;
 use glam::DVec3;
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 use support::{numbers, obj, read, step2_transforms};
 

@@ -2,7 +2,7 @@
 //! vertices) at reference step ii (joint 3 rotated by 60° about +X): max |f32 − f64| relative to
 //! the bounding-box diagonal of the rest mesh.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
 
@@ -16,6 +16,10 @@ use cagerig::skinning::{
 use cagerig::subdivide::subdivide_midpoint;
 use glam::{DAffine3, DVec3, Vec3};
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 use support::{ARM, spread_blend_weights, step2_transforms};
 

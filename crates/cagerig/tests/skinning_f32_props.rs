@@ -2,7 +2,7 @@
 //! kernels within f32 tolerance, and agreement with the f64 kernels. Coordinates and translations
 //! are in [-10, 10]; the tolerance 1e-4 is ≈ 2e-6 of the scale (f32 ε ≈ 6e-8).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::SkinWeights;
 use cagerig::skinning::{
@@ -13,6 +13,10 @@ use cagerig::skinning::{
 use glam::{DAffine3, DVec3, Vec3};
 use proptest::prelude::*;
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 use support::{point, rigid, skin_weights, spread_blend_weights, weight_rows};
 

@@ -1,6 +1,6 @@
 //! Property tests shared by the four skinning kernels (LBS, DQS, CoR, the LBS/DQS blend).
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use cagerig::SkinWeights;
 use cagerig::skinning::{
@@ -10,6 +10,10 @@ use cagerig::skinning::{
 use glam::{DAffine3, DVec3};
 use proptest::prelude::*;
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 use support::{point, rigid, skin_weights, spread_blend_weights, weight_rows};
 

@@ -1,13 +1,17 @@
 //! Midpoint subdivision of the Arm rig: 2089 → 33 289 (2 levels) → 133 073 (3 levels) vertices,
 //! the sizes of the reference tool's "sub1"/"sub2" benchmarks.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::collections::HashSet;
 
 use cagerig::subdivide::subdivide_midpoint;
 use cagerig::{SkinWeights, TriMesh};
 
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
 mod support;
 use support::ARM;
 

@@ -1,7 +1,7 @@
 //! Set-up shared by the CLI's integration tests: the binary under test, the repository's sample
 //! data, fresh temporary folders and commands that must succeed. Each test file uses its part.
 
-#![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
+#![expect(clippy::unwrap_used)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -101,7 +101,7 @@ pub(super) fn primitive_source(
 /// and lines), with its morph targets at the node's default weights. When `targets_out` asks,
 /// every target's displacements are kept, mapped by `world_from_bind` (a linear map of
 /// displacements).
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments)]
 pub(super) fn read_geometry(
     primitive: &gltf::Primitive,
     node: &gltf::Node,
@@ -207,7 +207,7 @@ pub(super) fn read_geometry(
 
 /// Appends one skinned primitive to the merged mesh. Returns (vertices, triangles, indexed),
 /// or None when the primitive was skipped (with a warning).
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments)]
 pub(super) fn read_primitive(
     primitive: &gltf::Primitive,
     node: &gltf::Node,

@@ -1,5 +1,4 @@
 //! Shared test helpers: data paths, a box cage, an independent glTF skinning evaluator.
-#![allow(dead_code)]
 
 use std::path::PathBuf;
 

@@ -2,7 +2,7 @@
 //! temporary folders, and pointer input at projected world positions. Each test file uses its
 //! part.
 
-#![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
+#![expect(clippy::unwrap_used)]
 
 use std::path::{Path, PathBuf};
 

@@ -12,6 +12,11 @@
 //! way (negative signed volume) is used with every triangle reversed; [`GreenCoords::triangles`]
 //! holds the triangles as used, and every normal must be taken from them.
 
+#![expect(
+    unsafe_code,
+    reason = "φ and ψ filled by disjoint row blocks without a zero fill (row_blocks)"
+)]
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;

@@ -1,5 +1,10 @@
 //! Tests of [`super`] (`green_batch.rs`), kept beside it to hold that file under ~600 lines.
 
+#![expect(
+    unsafe_code,
+    reason = "tests call the #[target_feature] tiers after detecting them"
+)]
+
 use super::*;
 use crate::coords::green::outward_triangles;
 use crate::coords::green::tests::{random_inside, test_cage};

@@ -144,6 +144,10 @@ pub(super) fn ln_of_quotient<M: LaneMath>(num: V8, den: V8) -> V8 {
 }
 
 #[cfg(test)]
+#[expect(
+    unsafe_code,
+    reason = "the tests call the #[target_feature] tiers after detecting them"
+)]
 mod tests {
     use super::super::mvc_lanes::{LaneMath, PlainMath};
     use super::*;

@@ -20,6 +20,11 @@
 //! Points outside the cage are supported (MVC are defined everywhere off the surface; weights may
 //! be negative). Closedness is not required by the per-point functions.
 
+#![expect(
+    unsafe_code,
+    reason = "Φ filled by disjoint row blocks without a zero fill (row_blocks)"
+)]
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;

@@ -4,6 +4,11 @@
 //! CPU ([`LaneMath`]: plain IEEE, FMA with IEEE division and square root, or AVX-512 estimates
 //! refined by Newton steps; MVC's tiers each use their own).
 
+#![expect(
+    unsafe_code,
+    reason = "AVX-512 intrinsics on the tiers that detected avx512f"
+)]
+
 /// Points per batch.
 pub(crate) const LANES: usize = 8;
 
@@ -238,7 +243,10 @@ impl LaneMath for Avx512Math {
     }
     #[inline(always)]
     fn recip(x: V8) -> V8 {
-        use std::arch::x86_64::*;
+        use std::arch::x86_64::{
+            _mm512_fmadd_pd, _mm512_fnmadd_pd, _mm512_loadu_pd, _mm512_rcp14_pd, _mm512_set1_pd,
+            _mm512_storeu_pd,
+        };
         const { assert!(LANES == 8) };
         let mut out = V8::splat(0.0);
         // SAFETY: only reached from the AVX-512 tiers (`evaluate_rows_avx512`,
@@ -259,7 +267,10 @@ impl LaneMath for Avx512Math {
     /// instead of five bit operations per number.
     #[inline(always)]
     fn significand_and_exponent(x: V8) -> (V8, V8) {
-        use std::arch::x86_64::*;
+        use std::arch::x86_64::{
+            _MM_MANT_NORM_1_2, _MM_MANT_SIGN_SRC, _mm512_getexp_pd, _mm512_getmant_pd,
+            _mm512_loadu_pd, _mm512_storeu_pd,
+        };
         let (mut significand, mut exponent) = (V8::splat(0.0), V8::splat(0.0));
         // SAFETY: as in `recip`.
         unsafe {
@@ -272,7 +283,10 @@ impl LaneMath for Avx512Math {
     }
     #[inline(always)]
     fn rsqrt(x: V8) -> V8 {
-        use std::arch::x86_64::*;
+        use std::arch::x86_64::{
+            _mm512_fmadd_pd, _mm512_fnmadd_pd, _mm512_loadu_pd, _mm512_mul_pd, _mm512_rsqrt14_pd,
+            _mm512_set1_pd, _mm512_storeu_pd,
+        };
         let mut out = V8::splat(0.0);
         // SAFETY: as in `recip`.
         unsafe {

@@ -27,6 +27,11 @@
 //! than two positive weights, no joint pair shared with any triangle, or a non-positive
 //! interpolated total) keep Λ_i = Φ_i (S_ii = 1, as in [`super::exact`]).
 
+#![expect(
+    unsafe_code,
+    reason = "Λ filled by disjoint row blocks without a zero fill (row_blocks)"
+)]
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;

@@ -84,7 +84,6 @@ pub const KEYFRAME_TERM_TOLERANCE: f64 = 1e-14;
 impl GreenState {
     /// From the Green coordinates of the rest mesh (φ is the session's `cage_coords`, ψ is
     /// `face_coords`), the CageUp rows, the rest cage and the number of joints.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn new(
         vertex_coords: &CageCoords,
         face_coords: CageCoords,

@@ -85,7 +85,7 @@ impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bo
 /// Fills the DQS part of `dqs` for `T_j ∘ translate(origin)` (`transforms`, `#J`) and skins
 /// `out` (`#V`) with the LBS columns `columns` (of the same maps, already relative to
 /// `origin`), `sorted`, `blend` (`#V`, by vertex) and `points`.
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments)]
 pub(crate) fn skin_blended<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>>(
     dqs: &mut DqsScratch<S>,
     transforms: &[DAffine3],

@@ -127,7 +127,7 @@ pub(crate) struct CountSortedWeights<S> {
 /// Skins one run of vertices with exactly `K` influences each; `first_slot`/`first_vertex` are
 /// the run's first global slot and its chunk's first vertex.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments)]
 fn skin_run<S: SkinReal, Kernel: VertexKernel<S>, const K: usize>(
     kernel: &Kernel,
     joints: &[u16],

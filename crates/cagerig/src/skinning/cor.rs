@@ -97,7 +97,7 @@ pub struct CorSkinning {
 /// sign-aligned quaternion blend (evaluated unnormalised, one division); `centre` = p in the
 /// kernel's space, `offset` = v − p.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments)]
 pub(crate) fn cor_point<S: SkinReal, T: JointColumns<S> + ?Sized, const TABLE: bool>(
     joints: &[u16],
     weights: &[S],

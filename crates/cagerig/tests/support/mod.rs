@@ -3,8 +3,6 @@
 //! transforms, and the proptest strategies of the skinning properties. Each test crate uses the
 //! part it needs (`mod support;`).
 
-#![allow(dead_code)]
-
 use cagerig::SkinWeights;
 use cagerig::mesh::TriMesh;
 use glam::{DAffine3, DMat3, DQuat, DVec3};

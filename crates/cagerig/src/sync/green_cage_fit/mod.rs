@@ -362,7 +362,7 @@ impl GreenCageFit {
         let mut trial_gradient = std::mem::take(&mut self.trial_gradient);
         let mut trial = std::mem::take(&mut self.trial);
         let mut report = NewtonReport::default();
-        #[allow(clippy::redundant_closure_call)] // the loop's `?` stays inside, scratch goes back
+        #[expect(clippy::redundant_closure_call)] // the loop's `?` stays inside, scratch goes back
         let outcome = (|| {
             let (mut energy, mut norm) = self.evaluate(
                 posed_cage,

@@ -9,7 +9,6 @@ use super::{GreenCageFit, rows_of};
 impl GreenCageFit {
     /// ½‖r‖² and Jᵀr at x (r = F_R(x) − target into `residual`, Jᵀr into `gradient`); returns
     /// (½‖r‖², max |Jᵀr|), infinite when not finite.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn evaluate(
         &self,
         x: &[DVec3],
