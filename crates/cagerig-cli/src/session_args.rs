@@ -8,35 +8,28 @@ use cagerig::session::{
 };
 use cagerig::skinning::SkinningMethod;
 use cagerig::sync::skeleton_updater::JointLocalisation;
-use cagerig::{CageFitKind, CoordsKind, Warning};
+use cagerig::{CageFitKind, CoordsKind, NamedKind, Warning};
 use clap::{Args, ValueEnum};
 
 use crate::rig_source::LoadedRig;
 
-/// The `--skinning` value parser: the names of [`SkinningMethod::ALL`] (listed in `--help`), read
-/// through `SkinningMethod: FromStr`, the one parser of method names.
-pub fn skinning_parser() -> impl clap::builder::TypedValueParser<Value = SkinningMethod> {
-    use clap::builder::TypedValueParser;
-    clap::builder::PossibleValuesParser::new(SkinningMethod::ALL.map(SkinningMethod::name))
-        .try_map(|name| name.parse::<SkinningMethod>())
-}
-
-/// The `--coords` value parser: the names of [`CoordsKind::ALL`], read through
-/// `CoordsKind: FromStr`, the one parser of coordinates names.
-pub fn coords_parser() -> impl clap::builder::TypedValueParser<Value = CoordsKind> {
-    use clap::builder::TypedValueParser;
-    clap::builder::PossibleValuesParser::new(CoordsKind::ALL.map(CoordsKind::name))
-        .try_map(|name| name.parse::<CoordsKind>())
-}
-
-/// The `--cage-fit` value parser: the names and help of [`CageFitKind::ALL`], read through
-/// `CageFitKind: FromStr`, the one parser of cage-fit names.
-pub fn cage_fit_parser() -> impl clap::builder::TypedValueParser<Value = CageFitKind> {
+/// The value parser of an option naming a [`NamedKind`] (`--skinning`, `--coords`,
+/// `--cage-fit`, `--unfitted-cage`): the names and help of `K::ALL` (listed in `--help`), read
+/// through `K: FromStr`, the one parser of those names.
+pub fn kind_parser<K>() -> impl clap::builder::TypedValueParser<Value = K>
+where
+    K: NamedKind + Send + Sync,
+    K::Err: std::error::Error + Send + Sync + 'static,
+{
     use clap::builder::{PossibleValue, TypedValueParser};
-    clap::builder::PossibleValuesParser::new(
-        CageFitKind::ALL.map(|k| PossibleValue::new(k.name()).help(k.help())),
-    )
-    .try_map(|name| name.parse::<CageFitKind>())
+    clap::builder::PossibleValuesParser::new(K::ALL.iter().map(|k| {
+        let value = PossibleValue::new(k.name());
+        match k.help() {
+            "" => value,
+            help => value.help(help),
+        }
+    }))
+    .try_map(|name| name.parse::<K>())
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, Default)]
@@ -76,24 +69,16 @@ pub enum PrecisionArg {
     F32,
 }
 
-/// The `--unfitted-cage` value parser: the names of [`UnfittedCagePolicy::ALL`], read through
-/// `UnfittedCagePolicy: FromStr`, the one parser of these names.
-pub fn unfitted_cage_parser() -> impl clap::builder::TypedValueParser<Value = UnfittedCagePolicy> {
-    use clap::builder::TypedValueParser;
-    clap::builder::PossibleValuesParser::new(UnfittedCagePolicy::ALL.map(UnfittedCagePolicy::name))
-        .try_map(|name| name.parse::<UnfittedCagePolicy>())
-}
-
 /// Session options shared by `edit` and `animate`.
 #[derive(Debug, Clone, Args)]
 pub struct SessionArgs {
     /// Cage coordinates: mean value (the paper's linear M = ΦC) or Green (shape-preserving cage
     /// edits; see docs/green-coordinates.md).
-    #[arg(long, value_parser = coords_parser(), default_value = "mvc")]
+    #[arg(long, value_parser = kind_parser::<CoordsKind>(), default_value = "mvc")]
     pub coords: CoordsKind,
     /// How CageUp fits the current cage C' to the posed skin (mean value rigs; Green rigs fit
     /// by Gauss–Newton on the rows). See docs/method.md.
-    #[arg(long, value_parser = cage_fit_parser(), default_value = CageFitKind::default().name())]
+    #[arg(long, value_parser = kind_parser::<CageFitKind>(), default_value = CageFitKind::default().name())]
     pub cage_fit: CageFitKind,
     /// Mesh rows used by CageUp/CageRev (Green: MaxVol rows of [φ ψ], least squares).
     #[arg(long, value_enum, default_value_t)]
@@ -115,7 +100,7 @@ pub struct SessionArgs {
     /// Green rigs: when CageUp finds no current cage C' for a pose (past a fold), `refuse` the
     /// event and stop, or `keep` it: the skin and skeletons exact, C' the fit's closest cage
     /// (written with a warning), grabs of C' refused until a pose fits again.
-    #[arg(long, value_parser = unfitted_cage_parser(), default_value = "refuse")]
+    #[arg(long, value_parser = kind_parser::<UnfittedCagePolicy>(), default_value = "refuse")]
     pub unfitted_cage: UnfittedCagePolicy,
 }
 

@@ -54,11 +54,6 @@ impl CoordsKind {
             Self::Green => false,
         }
     }
-
-    /// The accepted names as a sentence: `"mvc or green"`.
-    pub fn names_text() -> String {
-        crate::error::names_sentence(&Self::ALL.map(Self::name))
-    }
 }
 
 crate::named_kind::named_kind!(CoordsKind, UnknownCoordsKind);

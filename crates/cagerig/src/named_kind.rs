@@ -1,6 +1,25 @@
 //! The text form of the kinds front ends choose by name ([`crate::SkinningMethod`],
-//! [`crate::CoordsKind`]): one parser and one printer, generated from the kind's `ALL` and
-//! `name`, so that the CLI, Python, scripts and session files all read and write the same names.
+//! [`crate::CoordsKind`], [`crate::CageFitKind`], [`crate::session::UnfittedCagePolicy`]): one
+//! parser and one printer, generated from the kind's `ALL`, `name` and `help`, so that the CLI's
+//! values and `--help`, Python's strings and stubs, scripts and session files all read and write
+//! the same names ([`NamedKind`]).
+
+/// A kind front ends choose by name. Implemented by [`named_kind!`] from the kind's own
+/// `ALL`, `name` (and `help`), so that generic front-end code (the CLI's value parser, the
+/// Python package's list of names) has one definition per kind.
+pub trait NamedKind: Copy + std::str::FromStr + std::fmt::Display + 'static {
+    /// Every kind, in the order front ends list them.
+    const ALL: &'static [Self];
+    /// The kind's name: the CLI value, the Python string, the session files' value.
+    fn name(self) -> &'static str;
+    /// One line saying what the kind does (empty when the name says it).
+    fn help(self) -> &'static str;
+    /// The accepted names as a sentence: `"lbs, dqs, cor or blended"`.
+    fn names_text() -> String {
+        let names: Vec<&str> = Self::ALL.iter().map(|k| k.name()).collect();
+        crate::error::names_sentence(&names)
+    }
+}
 
 /// For a kind with `const ALL: [Self; N]` and `const fn name(self) -> &'static str`, and an
 /// error type with a `found: String` field: `FromStr` (a name of `ALL`, ignoring ASCII case,
@@ -8,6 +27,26 @@
 /// back through `FromStr`).
 macro_rules! named_kind {
     ($kind:ident, $error:ident) => {
+        $crate::named_kind::named_kind!($kind, $error, |_kind: $kind| "");
+    };
+    ($kind:ident, $error:ident, $help:expr) => {
+        impl $crate::named_kind::NamedKind for $kind {
+            const ALL: &'static [Self] = &$kind::ALL;
+            fn name(self) -> &'static str {
+                $kind::name(self)
+            }
+            fn help(self) -> &'static str {
+                ($help)(self)
+            }
+        }
+
+        impl $kind {
+            /// The accepted names as a sentence (`"a, b or c"`).
+            pub fn names_text() -> String {
+                <Self as $crate::named_kind::NamedKind>::names_text()
+            }
+        }
+
         impl ::std::str::FromStr for $kind {
             type Err = $error;
 

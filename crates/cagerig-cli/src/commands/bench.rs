@@ -53,10 +53,10 @@ pub struct Args {
     pub repeat_scale: f64,
     /// Cage coordinates of the session rows: `green` benches binding (against MVC), the
     /// per-event rows and their Newton iterations for a Green rig (docs/green-coordinates.md).
-    #[arg(long, value_parser = crate::session_args::coords_parser(), default_value = "mvc")]
+    #[arg(long, value_parser = crate::session_args::kind_parser::<cagerig::CoordsKind>(), default_value = "mvc")]
     pub coords: cagerig::CoordsKind,
     /// CageUp's fit in the timed sessions (mean value rigs).
-    #[arg(long, value_parser = crate::session_args::cage_fit_parser(), default_value = cagerig::CageFitKind::default().name())]
+    #[arg(long, value_parser = crate::session_args::kind_parser::<cagerig::CageFitKind>(), default_value = cagerig::CageFitKind::default().name())]
     pub cage_fit: cagerig::CageFitKind,
 }
 

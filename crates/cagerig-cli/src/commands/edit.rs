@@ -13,7 +13,7 @@ use crate::rig_source::{
     AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_for_session, report_generated_cage,
     write_generated_cage,
 };
-use crate::session_args::{SessionArgs, skinning_parser, start_session};
+use crate::session_args::{SessionArgs, kind_parser, start_session};
 use crate::state_files::write_state;
 
 /// The script operations, for `edit --help`.
@@ -52,7 +52,7 @@ pub struct Args {
     #[command(flatten)]
     pub output: StateOutputArgs,
     /// Skinning method (overrides the script's).
-    #[arg(long, value_parser = skinning_parser())]
+    #[arg(long, value_parser = kind_parser::<SkinningMethod>())]
     pub skinning: Option<SkinningMethod>,
     #[command(flatten)]
     pub session: SessionArgs,

@@ -20,7 +20,7 @@ use cagerig_formats::gltf::export_bake::BakeReport;
 
 use crate::animation_args::AnimationSourceArgs;
 use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_for_session, note_generated_cage};
-use crate::session_args::{SessionArgs, skinning_parser};
+use crate::session_args::{SessionArgs, kind_parser};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
@@ -51,7 +51,7 @@ pub struct Args {
     pub max_samples: usize,
     /// Skinning method (default: the script's, else the file's, else LBS). glTF viewers skin
     /// with LBS: under DQS/CoR they show the LBS result unless `--bake`.
-    #[arg(long, value_parser = skinning_parser())]
+    #[arg(long, value_parser = kind_parser::<SkinningMethod>())]
     pub skinning: Option<SkinningMethod>,
     /// With an animation under DQS/CoR: write cagerig's posed skin at every sample as a morph
     /// target (12 bytes per vertex and sample; weight 1 at its sample, LINEAR), so that viewers

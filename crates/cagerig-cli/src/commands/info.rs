@@ -82,7 +82,7 @@ pub struct Args {
     pub json: bool,
     /// Also bind with these cage coordinates and report it (`green`: face coordinates,
     /// reproduction error, vertices outside the cage, binding time).
-    #[arg(long, value_parser = crate::session_args::coords_parser(), default_value = "mvc")]
+    #[arg(long, value_parser = crate::session_args::kind_parser::<cagerig::CoordsKind>(), default_value = "mvc")]
     pub coords: cagerig::CoordsKind,
     /// Also bind the rig (with --coords and --cage-fit) and report how well the current cage
     /// follows the body when each joint is bent by this many degrees about the world x, y and z
@@ -90,7 +90,7 @@ pub struct Args {
     #[arg(long, value_name = "DEGREES")]
     pub bend_joints: Option<f64>,
     /// The CageUp fit for --bend-joints.
-    #[arg(long, value_parser = crate::session_args::cage_fit_parser(), default_value = cagerig::CageFitKind::default().name())]
+    #[arg(long, value_parser = crate::session_args::kind_parser::<cagerig::CageFitKind>(), default_value = cagerig::CageFitKind::default().name())]
     pub cage_fit: cagerig::CageFitKind,
 }
 

@@ -74,7 +74,7 @@ pub struct Args {
     #[arg(long)]
     pub turntable: Option<u32>,
     /// Skinning method.
-    #[arg(long, value_parser = crate::session_args::skinning_parser())]
+    #[arg(long, value_parser = crate::session_args::kind_parser::<cagerig::skinning::SkinningMethod>())]
     pub skinning: Option<SkinningMethod>,
     /// Draw the current skin from the f32 display path (LBS/DQS/CoR in f32, within 2e-6 of the
     /// bounding-box diagonal of the exact skin; faster on large characters). Cage, skeleton and

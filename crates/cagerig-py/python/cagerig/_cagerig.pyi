@@ -19,6 +19,9 @@ _I64Array = npt.NDArray[np.int64]
 _ArrayLike = npt.ArrayLike
 _PathLike = Union[str, os.PathLike[str]]
 _Skinning = Literal["lbs", "dqs", "cor", "blended"]
+_Coords = Literal["mvc", "green"]
+_CageFit = Literal["regularised", "paper"]
+_UnfittedCage = Literal["refuse", "keep"]
 _FitRows = Literal["maxvol", "all"]
 _Localisation = Literal["articulation", "reference_tool"]
 _FitSource = Literal["ghost", "displayed"]
@@ -150,8 +153,8 @@ class Rig:
         keep_file_coords: bool = False,
         auto_cage: Optional[int] = None,
         auto_weights: bool = False,
-        coords: Literal["mvc", "green"] = "mvc",
-        cage_fit: Literal["regularised", "paper"] = "regularised",
+        coords: _Coords = "mvc",
+        cage_fit: _CageFit = "regularised",
         skin: Optional[str] = None,
     ) -> Rig: ...
     @staticmethod
@@ -164,8 +167,8 @@ class Rig:
         localisation: _Localisation = "articulation",
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
-        coords: Literal["mvc", "green"] = "mvc",
-        cage_fit: Literal["regularised", "paper"] = "regularised",
+        coords: _Coords = "mvc",
+        cage_fit: _CageFit = "regularised",
     ) -> Rig: ...
     @staticmethod
     def from_arrays(
@@ -183,15 +186,15 @@ class Rig:
         localisation: _Localisation = "articulation",
         fit_source: _FitSource = "ghost",
         coords_precision: _Precision = "f64",
-        coords: Literal["mvc", "green"] = "mvc",
-        cage_fit: Literal["regularised", "paper"] = "regularised",
+        coords: _Coords = "mvc",
+        cage_fit: _CageFit = "regularised",
         dq_blend_weights: Optional[_ArrayLike] = None,
     ) -> Rig: ...
     def copy(self) -> Rig: ...
     @property
-    def coords(self) -> Literal["mvc", "green"]: ...
+    def coords(self) -> _Coords: ...
     @property
-    def cage_fit(self) -> Literal["regularised", "paper"]: ...
+    def cage_fit(self) -> _CageFit: ...
     def __copy__(self) -> Rig: ...
     def __deepcopy__(self, memo: Any) -> Rig: ...
     # Edits.
@@ -199,9 +202,9 @@ class Rig:
     def move_rest_cage(self, indices: Union[int, _ArrayLike], offsets: _ArrayLike) -> None: ...
     def move_posed_cage(self, indices: Union[int, _ArrayLike], offsets: _ArrayLike) -> None: ...
     def set_skinning(self, method: _Skinning) -> None: ...
-    def set_unfitted_cage(self, policy: Literal["refuse", "keep"]) -> None: ...
+    def set_unfitted_cage(self, policy: _UnfittedCage) -> None: ...
     @property
-    def unfitted_cage(self) -> Literal["refuse", "keep"]: ...
+    def unfitted_cage(self) -> _UnfittedCage: ...
     @property
     def posed_cage_unfitted(self) -> Optional[str]: ...
     def set_fit_source(self, source: _FitSource) -> None: ...

@@ -45,11 +45,6 @@ impl UnfittedCagePolicy {
             Self::KeepEvent => "keep",
         }
     }
-
-    /// The accepted names as a sentence: `"refuse or keep"`.
-    pub fn names_text() -> String {
-        crate::error::names_sentence(&Self::ALL.map(Self::name))
-    }
 }
 
 crate::named_kind::named_kind!(UnfittedCagePolicy, UnknownUnfittedCagePolicy);

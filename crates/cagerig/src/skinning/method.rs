@@ -74,11 +74,6 @@ impl SkinningMethod {
             Self::Blended => true,
         }
     }
-
-    /// The accepted names as a sentence: `"lbs, dqs, cor or blended"`.
-    pub fn names_text() -> String {
-        crate::error::names_sentence(&Self::ALL.map(Self::name))
-    }
 }
 
 crate::named_kind::named_kind!(SkinningMethod, UnknownSkinningMethod);

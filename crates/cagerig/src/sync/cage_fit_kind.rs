@@ -58,14 +58,9 @@ impl CageFitKind {
             Self::Paper => "the paper's Eq. 8: C' interpolates the skin at the MaxVol rows",
         }
     }
-
-    /// The accepted names as a sentence: `"regularised or paper"`.
-    pub fn names_text() -> String {
-        crate::error::names_sentence(&Self::ALL.map(Self::name))
-    }
 }
 
-crate::named_kind::named_kind!(CageFitKind, UnknownCageFitKind);
+crate::named_kind::named_kind!(CageFitKind, UnknownCageFitKind, CageFitKind::help);
 
 #[cfg(test)]
 mod tests {
