@@ -94,6 +94,15 @@ def build_rig(b: store.Binding) -> object:
     return rig
 
 
+_suspended = False
+
+
+def suspend(on: bool) -> None:
+    """Stops (or resumes) every sync: while Blender restores an undo step."""
+    global _suspended
+    _suspended = on
+
+
 def forget(skin_name: str | None = None) -> None:
     """Drops the run-time state (all of it, or one skin's); the next sync rebuilds it."""
     if skin_name is None:
@@ -223,7 +232,7 @@ def write_rest_bones(arm: bpy.types.Object, heads_world: np.ndarray) -> None:
 def sync(skin: bpy.types.Object) -> bool:
     """Runs one sync of ``skin``'s coupling; True when something was written."""
     global _busy
-    if _busy:
+    if _busy or _suspended:
         return False
     _busy = True
     try:

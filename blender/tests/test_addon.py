@@ -35,11 +35,23 @@ def check(name: str, ok: bool, detail: str) -> None:
 
 
 # ---- install + enable ---------------------------------------------------------------------------
-bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
-bpy.ops.preferences.addon_enable(module="cagerig_blender")
-import cagerig  # noqa: E402  (importable once the add-on is enabled)
-from cagerig_blender import convert, engine, store  # noqa: E402
+# Blender >= 4.2 installs the zip as an extension (its manifest, the bundled wheel), as a user's
+# drag and drop or Install from Disk does; older Blenders take it as a legacy add-on.
+print(f"Blender {bpy.app.version_string}, Python {sys.version.split()[0]}, numpy {np.__version__}")
+if bpy.app.version >= (4, 2, 0):
+    bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default", enable_on_install=True)
+    ADDON = "bl_ext.user_default.cagerig_blender"
+else:
+    bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
+    bpy.ops.preferences.addon_enable(module="cagerig_blender")
+    ADDON = "cagerig_blender"
+import importlib  # noqa: E402
 
+import cagerig  # noqa: E402  (importable once the add-on is enabled)
+
+_addon = importlib.import_module(ADDON)
+convert, engine, store = _addon.convert, _addon.engine, _addon.store
+check("enabled", ADDON in bpy.context.preferences.addons, ADDON)
 check("import cagerig", hasattr(cagerig.Rig, "from_arrays"), f"cagerig {cagerig.__version__} from {cagerig.__file__}")
 
 # Debian's Blender 3.4 glTF importer uses numpy.bool, removed in numpy 1.24.
