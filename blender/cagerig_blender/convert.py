@@ -116,6 +116,25 @@ class SparseWeights:
         return self
 
 
+# The skinning methods Blender's Armature modifier shows, by cagerig's names, with the modifier's
+# Preserve Volume setting for each (cagerig's DQS is Blender's Preserve Volume). The others that
+# cagerig has (CoR, blended) Blender cannot show: the add-on does not offer them.
+BLENDER_SKINNING = {"lbs": False, "dqs": True}
+
+
+def skinning_of(mod: bpy.types.ArmatureModifier) -> str:
+    """The skinning method the Armature modifier shows."""
+    return next(k for k, pv in BLENDER_SKINNING.items() if pv == bool(mod.use_deform_preserve_volume))
+
+
+def set_skinning(mod: bpy.types.ArmatureModifier, method: str) -> None:
+    if method not in BLENDER_SKINNING:
+        raise ValueError(
+            f"Blender's Armature modifier shows {' or '.join(BLENDER_SKINNING)} skinning, not {method!r}"
+        )
+    mod.use_deform_preserve_volume = BLENDER_SKINNING[method]
+
+
 def rest_skeleton(arm: bpy.types.Object) -> tuple[list[str], np.ndarray, np.ndarray, list[bool]]:
     """Bone names, rest heads in world space (J, 3), parent indices (-1 = root), deform flags.
 

@@ -52,11 +52,21 @@ def cage_of(skin: bpy.types.Object) -> bpy.types.Object:
     return cage
 
 
+def options_of(skin: bpy.types.Object) -> store.RigOptions:
+    """The rig options the user chose for ``skin``: its settings (props.py), and the skinning its
+    Armature modifier shows (Preserve Volume: DQS)."""
+    _, mod = armature_of(skin)
+    s = skin.cagerig
+    return store.RigOptions(
+        coords=s.coords, cage_fit=s.cage_fit, skinning=convert.skinning_of(mod), unfitted_cage=s.unfitted_cage
+    )
+
+
 @dataclass
 class Coupling:
     skin_name: str
     bind_id: str
-    cage_fit: str  # the stored binding's CageUp fit this rig was built with
+    options: store.RigOptions  # the options this rig was built with
     rig: object  # cagerig.Rig
     parents: np.ndarray
     rest_heads: np.ndarray  # S as last written into the bones (world)
@@ -64,29 +74,35 @@ class Coupling:
     last_transforms: tuple[np.ndarray, np.ndarray] | None  # last pose set (rotations, motion)
     last_mode: str
     bones_pending: bool = False
+    # Built with options other than those the shown state was computed with: the next sync
+    # writes the skin, the cage and the bones from this rig instead of reading them as edits.
+    rebound: bool = False
     last_sync_ms: float = 0.0
     messages: list[str] = field(default_factory=list)
 
 
-def _base_rig(b: store.Binding) -> object:
+def _base_rig(b: store.Binding, options: store.RigOptions) -> object:
     import cagerig
 
-    key = f"{b.bind_id}:{b.cage_fit}"
+    key = f"{b.bind_id}:{options.rig_key()}"
     rig = _base_rigs.get(key)
     if rig is None:
         n, nj = len(b.mesh), len(b.joints)
         weights = convert.SparseWeights((n, nj), b.weight_rows, b.weight_cols, b.weight_values)
         rig = cagerig.Rig.from_arrays(
             b.mesh, b.triangles, weights, b.joints, b.parents, b.cage, b.cage_triangles,
-            b.names, skinning=b.skinning, cage_fit=b.cage_fit,
+            b.names, skinning=options.skinning, cage_fit=options.cage_fit, coords=options.coords,
         )
         _base_rigs[key] = rig
     return rig.copy()
 
 
-def build_rig(b: store.Binding) -> object:
-    """The rig in the stored state: the bind-time rig with the stored rest cage applied."""
-    rig = _base_rig(b)
+def build_rig(b: store.Binding, options: store.RigOptions | None = None) -> object:
+    """The rig in the stored state: the bind-time rig, built with ``options`` (default: the
+    applied ones), with the stored rest cage applied."""
+    options = options or b.options
+    rig = _base_rig(b, options)
+    rig.set_unfitted_cage(options.unfitted_cage)
     delta = b.rest_cage - b.cage
     moved = np.flatnonzero(np.any(delta != 0.0, axis=1))
     if len(moved):
@@ -122,50 +138,50 @@ def displayed_cage(cage: bpy.types.Object) -> np.ndarray:
 
 def coupling(skin: bpy.types.Object) -> Coupling:
     """The run-time coupling of ``skin``, rebuilt from the stored binding when missing (file
-    opened, undo). A rebuilt coupling takes the cage as Blender shows it for a user edit, so
-    that the next sync brings everything into step."""
+    opened, undo) or when the user changed a rig option (a rebind: the next sync writes what the
+    new rig shows). A rebuilt coupling with the applied options takes the cage as Blender shows
+    it for a user edit, so that the next sync brings everything into step."""
+    options = options_of(skin)
     c = _couplings.get(skin.name)
-    if c is not None and c.bind_id == store.bind_id(skin) and c.cage_fit == store.cage_fit(skin):
+    if c is not None and c.bind_id == store.bind_id(skin) and c.options == options:
         return c
     b = store.load(skin)
     arm, _ = armature_of(skin)
-    rig = build_rig(b)
+    rig = build_rig(b, options)
     mode = arm.data.pose_position
     if mode == "POSE":
         t = convert.skinning_transforms(arm)
-        q, motion, _ = convert.cagerig_pose(t, rig.rest_joints, b.parents, _tolerance(rig))
+        q, motion, problems = convert.cagerig_pose(t, rig.rest_joints, b.parents, _tolerance(rig))
         rig.set_pose(q, motion)
+        messages = _pose_messages(rig, problems)
         pose: tuple[np.ndarray, np.ndarray] | None = (q, motion)
         shown = rig.posed_cage
     else:
         pose = None
+        messages = []
         shown = rig.rest_cage
     c = Coupling(
         skin_name=skin.name,
         bind_id=b.bind_id,
-        cage_fit=b.cage_fit,
+        options=options,
         rig=rig,
         parents=b.parents,
         rest_heads=rig.rest_joints,
         last_cage=convert.as_displayed(cage_of(skin), shown),
         last_transforms=pose,
         last_mode=mode,
+        rebound=options != b.options,
+        messages=messages,
     )
     _couplings[skin.name] = c
     return c
 
 
-def refit_cage(skin: bpy.types.Object) -> None:
-    """After the stored CageUp fit changed: rebuilds the coupling and writes its cage (C' in the
-    pose, C at rest) into the cage object, so that the switch refits the handle instead of the
-    old handle being read as a user's edit of it."""
-    forget(skin.name)
-    c = coupling(skin)
-    cage = cage_of(skin)
-    if cage.mode == "EDIT":
-        return  # the user is editing the cage: the next sync reads it as their edit
-    target = c.rig.posed_cage if c.last_mode == "POSE" else c.rig.rest_cage
-    c.last_cage = _write_cage(cage, target)
+def apply_options(skin: bpy.types.Object) -> None:
+    """After the user changed a rig option of a coupled skin: rebinds now (the sync writes what
+    the rebuilt rig shows). Errors go to the panel, as a live sync's do."""
+    if store.is_coupled(skin):
+        _sync_reporting(skin)
 
 
 _tolerances: dict[int, float] = {}
@@ -249,6 +265,17 @@ def _sync(skin: bpy.types.Object) -> bool:
     rig = c.rig
     if arm.mode == "EDIT":
         return False  # the user is editing the bones: Blender's rest data is in flux
+    cage_in_edit = cage.mode == "EDIT"
+    wrote = False
+    if c.rebound:
+        if cage_in_edit:
+            raise SyncError(f"leave Edit Mode of {cage.name!r} to rebind with the new options ({c.options.describe()})")
+        convert.write_world_coords(skin, rig.rest_mesh)
+        c.last_cage = _write_cage(cage, rig.posed_cage if c.last_mode == "POSE" else rig.rest_cage)
+        store.save_applied_options(skin, c.options)
+        c.rebound = False
+        c.bones_pending = True
+        wrote = True
     shown = displayed_cage(cage)
     if shown.shape != c.last_cage.shape:
         raise SyncError(
@@ -256,8 +283,6 @@ def _sync(skin: bpy.types.Object) -> bool:
             "couple again after changing its topology"
         )
     mode = arm.data.pose_position
-    cage_in_edit = cage.mode == "EDIT"
-    wrote = False
     rest_changed = False
     if mode != c.last_mode:
         # Pose Position <-> Rest Position: the cage shows the other state.
@@ -334,8 +359,15 @@ def _set_pose_from(arm: bpy.types.Object, c: Coupling) -> bool:
             return False
     rig.set_pose(q, motion)
     c.last_transforms = (q, motion)
-    c.messages = problems
+    c.messages = _pose_messages(rig, problems)
     return True
+
+
+def _pose_messages(rig: object, problems: list[str]) -> list[str]:
+    """What the panel says about a pose: what the pose model cannot represent, and a current
+    cage left unfitted (Green coordinates, Unfitted cage: Keep)."""
+    unfitted = rig.posed_cage_unfitted
+    return problems + ([f"the cage shows the closest fit: {unfitted}"] if unfitted else [])
 
 
 _last_errors: dict[str, str] = {}
@@ -350,16 +382,21 @@ def sync_all(scene: bpy.types.Scene, updated: set[int] | None = None) -> None:
             continue
         if updated is not None and not _touched(obj, updated):
             continue
-        try:
-            sync(obj)
-            _last_errors.pop(obj.name, None)
-        except (SyncError, ValueError) as e:
-            c = _couplings.get(obj.name)
-            if c is not None:
-                c.messages = [str(e)]
-            if _last_errors.get(obj.name) != str(e):
-                _last_errors[obj.name] = str(e)
-                print(f"cagerig: {e}")
+        _sync_reporting(obj)
+
+
+def _sync_reporting(skin: bpy.types.Object) -> None:
+    """sync(skin), its error kept for the panel and printed once."""
+    try:
+        sync(skin)
+        _last_errors.pop(skin.name, None)
+    except (SyncError, ValueError) as e:
+        c = _couplings.get(skin.name)
+        if c is not None:
+            c.messages = [str(e)]
+        if _last_errors.get(skin.name) != str(e):
+            _last_errors[skin.name] = str(e)
+            print(f"cagerig: {e}")
 
 
 def _touched(skin: bpy.types.Object, updated: set[int]) -> bool:
@@ -371,6 +408,11 @@ def _touched(skin: bpy.types.Object, updated: set[int]) -> bool:
         if m.type == "ARMATURE" and m.object is not None:
             ids += [m.object, m.object.data]
     return any(i.as_pointer() in updated for i in ids)
+
+
+def last_error(skin: bpy.types.Object) -> str | None:
+    """The last live sync's error for ``skin`` (None once a sync succeeds)."""
+    return _last_errors.get(skin.name)
 
 
 def status(skin: bpy.types.Object) -> Coupling | None:

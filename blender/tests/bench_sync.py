@@ -11,6 +11,7 @@ evaluation of the armature and the Armature modifier + the sync). Prints medians
 from __future__ import annotations
 
 import math
+import os
 import statistics
 import sys
 import time
@@ -22,13 +23,12 @@ argv = sys.argv[sys.argv.index("--") + 1:]
 ZIP, GLB, CAGE = argv[:3]
 REPEATS = int(argv[3]) if len(argv) > 3 else 15
 
-bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
-bpy.ops.preferences.addon_enable(module="cagerig_blender")
-from cagerig_blender import convert, engine  # noqa: E402
-from mathutils import Quaternion  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from install_addon import install  # noqa: E402
 
-if "bool" not in np.__dict__:  # Debian's Blender 3.4 glTF importer + numpy >= 1.24
-    np.bool = bool  # type: ignore[attr-defined]
+_addon = install(ZIP)
+convert, engine = _addon.convert, _addon.engine
+from mathutils import Quaternion  # noqa: E402
 
 for o in list(bpy.data.objects):
     bpy.data.objects.remove(o)

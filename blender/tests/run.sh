@@ -21,7 +21,7 @@ cli="${CAGERIG_CLI:-target/release/cagerig}"
 export BLENDER_USER_SCRIPTS="$work/user-scripts"
 export BLENDER_USER_CONFIG="$work/user-config"
 export BLENDER_USER_EXTENSIONS="$work/user-extensions"
-args=("$(cd "$(dirname "$zip")" && pwd)/$(basename "$zip")" "$work/arm.glb" "$PWD/data/arm/arm_cage.obj" "$work")
+args=("$(cd "$(dirname "$zip")" && pwd)/$(basename "$zip")" "$work/arm.glb" "$PWD/data/arm/arm_cage.obj" "$work" "$PWD/data/fox/Fox.glb")
 if [ -n "${BLENDER_PYTHON:-}" ]; then
   cmd=("$BLENDER_PYTHON" blender/tests/test_addon.py -- "${args[@]}")
 else

@@ -20,7 +20,7 @@ import bpy
 import numpy as np
 
 argv = sys.argv[sys.argv.index("--") + 1:]
-ZIP, ARM_GLB, ARM_CAGE, WORK = argv[:4]
+ZIP, ARM_GLB, ARM_CAGE, WORK, FOX_GLB = argv[:5]
 TOL = 1e-5  # of the bounding-box diagonal
 
 results: list[str] = []
@@ -35,28 +35,16 @@ def check(name: str, ok: bool, detail: str) -> None:
 
 
 # ---- install + enable ---------------------------------------------------------------------------
-# Blender >= 4.2 installs the zip as an extension (its manifest, the bundled wheel), as a user's
-# drag and drop or Install from Disk does; older Blenders take it as a legacy add-on.
-print(f"Blender {bpy.app.version_string}, Python {sys.version.split()[0]}, numpy {np.__version__}")
-if bpy.app.version >= (4, 2, 0):
-    bpy.ops.extensions.package_install_files(filepath=ZIP, repo="user_default", enable_on_install=True)
-    ADDON = "bl_ext.user_default.cagerig_blender"
-else:
-    bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
-    bpy.ops.preferences.addon_enable(module="cagerig_blender")
-    ADDON = "cagerig_blender"
-import importlib  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from install_addon import install  # noqa: E402
 
+_addon = install(ZIP)
 import cagerig  # noqa: E402  (importable once the add-on is enabled)
 
-_addon = importlib.import_module(ADDON)
 convert, engine, store = _addon.convert, _addon.engine, _addon.store
-check("enabled", ADDON in bpy.context.preferences.addons, ADDON)
+check("enabled", _addon.__name__ in bpy.context.preferences.addons, _addon.__name__)
 check("import cagerig", hasattr(cagerig.Rig, "from_arrays"), f"cagerig {cagerig.__version__} from {cagerig.__file__}")
 
-# Debian's Blender 3.4 glTF importer uses numpy.bool, removed in numpy 1.24.
-if "bool" not in np.__dict__:
-    np.bool = bool  # type: ignore[attr-defined]
 
 
 def update() -> None:
@@ -441,13 +429,219 @@ paper_cage = world(generated)
 skin.cagerig.cage_fit = "regularised"
 update()
 c = engine.coupling(skin)
+applied = store.applied_options(skin)
 check("cage fit switch: the rig is rebuilt with it", c.rig.cage_fit == "regularised" and
-      store.cage_fit(skin) == "regularised", f"{c.rig.cage_fit}, stored {store.cage_fit(skin)}")
+      applied.cage_fit == "regularised", f"{c.rig.cage_fit}, stored {applied.cage_fit}")
 e = float(np.abs(np.asarray(c.rig.posed_mesh) - deformed_skin(skin)).max())
 check("regularised: rig's M' = Blender's deformed skin", e <= TOL * diag, f"{e / diag:.2e}")
 e = float(np.abs(world(generated) - np.asarray(c.rig.posed_cage)).max())
 check("regularised: the cage shows the rig's C'", e <= TOL * diag, f"{e / diag:.2e}")
 moved = float(np.abs(world(generated) - paper_cage).max())
 check("regularised: C' differs from the paper's", moved > TOL * diag, f"{moved / diag:.2e}")
+
+
+
+# ---- every rig option: stored with the skin, a change rebinds, undo restores it ------------------
+def consistent(step: str, skin: bpy.types.Object, cage: bpy.types.Object, arm: bpy.types.Object) -> None:
+    """What Blender shows is what the rig computes: posed skin, cage, rest skin, rest bones."""
+    c = engine.coupling(skin)
+    shown_cage = world(cage)
+    target = np.asarray(c.rig.posed_cage if arm.data.pose_position == "POSE" else c.rig.rest_cage)
+    for what, e in (
+        ("rig's M' = Blender's deformed skin", float(np.abs(np.asarray(c.rig.posed_mesh) - deformed_skin(skin)).max())),
+        ("the cage shows the rig's cage", float(np.abs(shown_cage - target).max())),
+        ("skin mesh data = rig's M", float(np.abs(world(skin) - np.asarray(c.rig.rest_mesh)).max())),
+        ("rest bones = rig's S", float(np.abs(bone_heads(arm) - np.asarray(c.rig.rest_joints)).max())),
+    ):
+        check(f"{step}: {what}", e <= TOL * diag, f"{e / diag:.2e}")
+
+
+def set_option(skin: bpy.types.Object, name: str, value: str) -> None:
+    bpy.ops.ed.undo_push(message=f"before {name}")
+    setattr(skin.cagerig, name, value)
+    update()
+    bpy.ops.ed.undo_push(message=f"{name} = {value}")
+
+
+cage = generated
+for p in arm.pose.bones:  # Green's CageUp refuses the 45° elbow in one step on this cage: start at rest
+    p.rotation_quaternion = (1.0, 0.0, 0.0, 0.0)
+update()
+c = engine.coupling(skin)
+mvc_rest_skin = world(skin)
+check("options: the names are the package's", [i.identifier for i in skin.cagerig.bl_rna.properties["coords"].enum_items]
+      == list(cagerig.COORDS_KINDS), str(list(cagerig.COORDS_KINDS)))
+set_option(skin, "coords", "green")
+c = engine.coupling(skin)
+applied = store.applied_options(skin)
+check("coords = green rebinds", c.rig.coords == "green" and applied.coords == "green",
+      f"rig {c.rig.coords}, stored {applied.coords}")
+consistent("green", skin, cage, arm)
+rotate_bone(arm, JOINT, AXIS_BL, 6.0)  # Green's fit is the fragile one (docs/green-coordinates.md)
+update()
+consistent("green, posed", skin, cage, arm)
+cage.data.vertices[5].co.z += 0.02 * diag
+cage.data.update()
+update()
+consistent("green, after a grab", skin, cage, arm)
+before = {"skin": world(skin), "bones": bone_heads(arm), "cage": world(cage)}
+rotate_bone(arm, JOINT, AXIS_BL, 40.0)
+update()
+error = engine.last_error(skin) or ""
+e = max(float(np.abs(world(skin) - before["skin"]).max()), float(np.abs(bone_heads(arm) - before["bones"]).max()),
+        float(np.abs(world(cage) - before["cage"]).max()))
+check("green: a pose with no fitted cage is refused, said, and changes nothing", "refused" in error and e == 0.0,
+      f"{error[:120]}… ; skin, bones, cage moved by {e:.1e}")
+set_option(skin, "unfitted_cage", "keep")
+c = engine.coupling(skin)
+check("unfitted_cage = keep keeps that pose, the cage unfitted, and says so",
+      c.rig.unfitted_cage == "keep" and store.applied_options(skin).unfitted_cage == "keep"
+      and c.rig.posed_cage_unfitted is not None and any("closest fit" in m for m in c.messages),
+      f"{c.rig.unfitted_cage}; {c.rig.posed_cage_unfitted}; panel: {c.messages[:1]}")
+consistent("green, unfitted cage kept", skin, cage, arm)
+skin_name, arm_name = skin.name, arm.name
+bpy.ops.ed.undo()  # unfitted_cage back to refuse
+bpy.ops.ed.undo()  # the grab
+bpy.ops.ed.undo()  # coords back to mean value
+update()
+skin, arm = bpy.data.objects[skin_name], bpy.data.objects[arm_name]
+cage = skin.cagerig.cage
+c = engine.coupling(skin)
+applied = store.applied_options(skin)
+check("undo: the options come back", (skin.cagerig.coords, skin.cagerig.unfitted_cage, applied.coords, c.rig.coords)
+      == ("mvc", "refuse", "mvc", "mvc"), f"{skin.cagerig.coords}, {skin.cagerig.unfitted_cage}, stored {applied.coords}")
+e = float(np.abs(world(skin) - mvc_rest_skin).max())
+check("undo: the mean value rest skin comes back", e <= TOL * diag, f"{e / diag:.2e}")
+consistent("undo of the green rebind", skin, cage, arm)
+mod = next(m for m in skin.modifiers if m.type == "ARMATURE")
+set_option(skin, "skinning", "dqs")
+c = engine.coupling(skin)
+check("skinning = dqs is the modifier's Preserve Volume", mod.use_deform_preserve_volume and c.rig.skinning == "dqs"
+      and store.applied_options(skin).skinning == "dqs", f"preserve volume {mod.use_deform_preserve_volume}, rig {c.rig.skinning}")
+consistent("dqs", skin, cage, arm)
+mod.use_deform_preserve_volume = False  # in the modifier's own panel: the same setting
+update()
+c = engine.coupling(skin)
+check("Preserve Volume off in the modifier rebinds as LBS", skin.cagerig.skinning == "lbs" and c.rig.skinning == "lbs",
+      f"{skin.cagerig.skinning}, rig {c.rig.skinning}")
+consistent("lbs", skin, cage, arm)
+
+
+
+# ---- automatic weights: cagerig's and Blender's bone heat, each against the artist's --------------
+def weights_matrix(obj: bpy.types.Object, names: list[str]) -> np.ndarray:
+    rows, cols, vals = convert.skin_weights_sparse(obj, names, [True] * len(names))
+    w = np.zeros((len(obj.data.vertices), len(names)))
+    w[rows, cols] = vals
+    return w
+
+
+def dominant(w: np.ndarray) -> np.ndarray:
+    d = w.argmax(axis=1)
+    d[w.max(axis=1) <= 0.0] = -1  # no weight at all: agrees with nothing
+    return d
+
+
+def weighted_copy(skin: bpy.types.Object, arm: bpy.types.Object, how: str) -> tuple[bpy.types.Object, float]:
+    """A copy of ``skin`` without vertex groups, weighted by Object ▸ Parent with cagerig's or
+    Blender's automatic weights (the armature active, the copy selected); and the seconds it took."""
+    obj = skin.copy()
+    obj.data = skin.data.copy()
+    obj.name = f"{skin.name}.{how}"
+    bpy.context.scene.collection.objects.link(obj)
+    obj.vertex_groups.clear()
+    for m in [m for m in obj.modifiers if m.type == "ARMATURE"]:
+        obj.modifiers.remove(m)
+    bpy.ops.object.select_all(action="DESELECT")
+    obj.select_set(True)
+    arm.select_set(True)
+    bpy.context.view_layer.objects.active = arm
+    t0 = time.perf_counter()
+    if how == "cagerig":
+        bpy.ops.cagerig.auto_weights(max_influences=4)
+    else:
+        bpy.ops.object.parent_set(type="ARMATURE_AUTO")
+    seconds = time.perf_counter() - t0
+    mods = [m for m in obj.modifiers if m.type == "ARMATURE"]
+    check(f"{how} weights of {skin.name}: one Armature modifier on {arm.name}",
+          len(mods) == 1 and mods[0].object == arm and obj.parent == arm, f"{len(mods)} modifier(s)")
+    return obj, seconds
+
+
+def compare_weights(skin: bpy.types.Object, arm: bpy.types.Object, label: str) -> dict[str, object]:
+    names, _, _, deform = convert.rest_skeleton(arm)
+    artist = dominant(weights_matrix(skin, names))
+    out: dict[str, object] = {}
+    for how in ("cagerig", "heat"):
+        obj, seconds = weighted_copy(skin, arm, how)
+        w = weights_matrix(obj, names)
+        agreement = float(np.mean(dominant(w) == artist))
+        out[how] = (obj, agreement, seconds)
+        print(f"weights {label} {how}: agreement {agreement:.3f}, {seconds:.2f} s", flush=True)
+        if how == "cagerig":
+            per_vertex = (w > 0).sum(axis=1)
+            sums = w.sum(axis=1)
+            check(f"{label}: cagerig weights as vertex groups (rows sum to 1, at most 4 bones, deforming bones only)",
+                  np.abs(sums - 1).max() < 1e-5 and per_vertex.max() <= 4
+                  and not w[:, ~np.asarray(deform, dtype=bool)].any(),
+                  f"max |sum - 1| {np.abs(sums - 1).max():.1e}, max influences {per_vertex.max()}")
+    cg, heat = out["cagerig"][1], out["heat"][1]
+    check(f"{label}: dominant-joint agreement with the artist's, cagerig ≥ Blender's bone heat", cg >= heat,
+          f"cagerig {cg:.3f} ({out['cagerig'][2]:.2f} s), bone heat {heat:.3f} ({out['heat'][2]:.2f} s)")
+    return out
+
+
+skin, arm, cage = load_arm()
+compare_weights(skin, arm, "Arm")
+# The panel's way in: the active mesh, its Armature modifier's armature, its cage selected too.
+bpy.ops.object.select_all(action="DESELECT")
+copy = skin.copy()
+copy.data = skin.data.copy()
+bpy.context.scene.collection.objects.link(copy)
+copy.vertex_groups.clear()
+copy.select_set(True)
+cage.select_set(True)
+bpy.context.view_layer.objects.active = copy
+bpy.ops.cagerig.auto_weights(max_influences=2)
+w = weights_matrix(copy, convert.rest_skeleton(arm)[0])
+check("panel: the active mesh weighted for its modifier's armature, bounded by the selected cage, 2 influences",
+      (w > 0).sum(axis=1).max() <= 2 and np.abs(w.sum(axis=1) - 1).max() < 1e-5, f"{len(copy.vertex_groups)} groups")
+skin_name = skin.name
+skin.cagerig.cage_fit = "regularised"
+couple(skin, cage)
+bpy.ops.object.select_all(action="DESELECT")
+skin.select_set(True)
+bpy.context.view_layer.objects.active = skin
+try:
+    bpy.ops.cagerig.auto_weights()
+    check("a coupled skin is not re-weighted", False, "the operator re-weighted a coupled skin")
+except RuntimeError as e:
+    check("a coupled skin is not re-weighted", "uncouple" in str(e), str(e).strip()[:160])
+
+for o in list(bpy.data.objects):
+    bpy.data.objects.remove(o)
+bpy.ops.import_scene.gltf(filepath=FOX_GLB)
+fox = next(o for o in bpy.data.objects if o.type == "MESH" and any(m.type == "ARMATURE" for m in o.modifiers))
+fox_arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+print(f"Fox: {len(fox.data.vertices)} vertices, {len(fox_arm.data.bones)} bones")
+res = compare_weights(fox, fox_arm, "Fox")
+# The Walk at t = 0.45 s, skinned by Blender's Armature modifier with each set of weights.
+walk = next(a for a in bpy.data.actions if "walk" in a.name.lower())
+fox_arm.animation_data_create()
+fox_arm.animation_data.action = walk
+if hasattr(fox_arm.animation_data, "action_slot") and fox_arm.animation_data.action_slot is None and walk.slots:
+    fox_arm.animation_data.action_slot = walk.slots[0]
+scene = bpy.context.scene
+t = walk.frame_range[0] + 0.45 * scene.render.fps / scene.render.fps_base
+scene.frame_set(int(math.floor(t)), subframe=t - math.floor(t))
+rest = world(fox)
+fox_diag = float(np.linalg.norm(rest.max(0) - rest.min(0)))
+artist_pose = deformed_skin(fox)
+moved = float(np.linalg.norm(artist_pose - rest, axis=1).mean()) / fox_diag
+check("Fox Walk: the artist's skin moves at t = 0.45 s", moved > 1e-3, f"mean move {moved:.3f} of the diagonal")
+dev = {how: float(np.linalg.norm(deformed_skin(res[how][0]) - artist_pose, axis=1).mean()) / fox_diag
+       for how in ("cagerig", "heat")}
+check("Fox Walk deviation from the artist's skin, cagerig ≤ Blender's bone heat", dev["cagerig"] <= dev["heat"],
+      f"cagerig {dev['cagerig']:.4f}, bone heat {dev['heat']:.4f} of the diagonal")
 
 print("\n".join(["", "summary:"] + results))
