@@ -77,6 +77,7 @@ class Coupling:
     # Built with options other than those the shown state was computed with: the next sync
     # writes the skin, the cage and the bones from this rig instead of reading them as edits.
     rebound: bool = False
+    last_matrices: np.ndarray | None = None  # Blender's skinning transforms at the last pose read
     last_sync_ms: float = 0.0
     messages: list[str] = field(default_factory=list)
 
@@ -155,9 +156,11 @@ def coupling(skin: bpy.types.Object) -> Coupling:
         rig.set_pose(q, motion)
         messages = _pose_messages(rig, problems)
         pose: tuple[np.ndarray, np.ndarray] | None = (q, motion)
+        matrices: np.ndarray | None = t
         shown = rig.posed_cage
     else:
         pose = None
+        matrices = None
         messages = []
         shown = rig.rest_cage
     c = Coupling(
@@ -172,6 +175,7 @@ def coupling(skin: bpy.types.Object) -> Coupling:
         last_mode=mode,
         rebound=options != b.options,
         messages=messages,
+        last_matrices=matrices,
     )
     _couplings[skin.name] = c
     return c
@@ -206,7 +210,10 @@ def _mode_set(mode: str) -> None:
     try:
         from _bpy import ops as _ops  # type: ignore[import-not-found]
 
-        _ops.call("OBJECT_OT_mode_set", None, {"mode": mode}, "EXEC_DEFAULT", False)
+        if bpy.app.version >= (4, 0, 0):  # the context-dictionary argument was removed in 4.0
+            _ops.call("object.mode_set", {"mode": mode}, "EXEC_DEFAULT", False)
+        else:
+            _ops.call("OBJECT_OT_mode_set", None, {"mode": mode}, "EXEC_DEFAULT", False)
     except (ImportError, TypeError, AttributeError):
         bpy.ops.object.mode_set("EXEC_DEFAULT", False, mode=mode)
 
@@ -351,6 +358,9 @@ def _set_pose_from(arm: bpy.types.Object, c: Coupling) -> bool:
     SkelUp rewrites the rest bones Blender's matrices change by float32 rounding alone."""
     rig = c.rig
     t = convert.skinning_transforms(arm)
+    if c.last_matrices is not None and np.array_equal(t, c.last_matrices):
+        return False  # Blender's matrices unchanged bit for bit: the same pose, nothing to convert
+    c.last_matrices = t
     q, motion, problems = convert.cagerig_pose(t, rig.rest_joints, c.parents, _tolerance(rig))
     if c.last_transforms is not None:
         q0, m0 = c.last_transforms
