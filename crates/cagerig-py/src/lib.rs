@@ -48,7 +48,9 @@ fn _cagerig(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // the Blender add-on build their choices from these instead of repeating them.
     m.add(
         "SKINNING_METHODS",
-        cagerig::skinning::SkinningMethod::ALL.map(|k| k.name()).to_vec(),
+        cagerig::skinning::SkinningMethod::ALL
+            .map(|k| k.name())
+            .to_vec(),
     )?;
     m.add(
         "COORDS_KINDS",
