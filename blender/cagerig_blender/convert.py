@@ -20,7 +20,12 @@ def matrix_np(m: Matrix) -> np.ndarray:
     return np.array([list(row) for row in m], dtype=F64)
 
 
+_IDENTITY = np.eye(4)
+
+
 def _apply(m: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    if np.array_equal(m, _IDENTITY):  # an object at the origin, unrotated, unscaled: no pass over the points
+        return pts
     return pts @ m[:3, :3].T + m[:3, 3]
 
 

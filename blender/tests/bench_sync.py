@@ -1,6 +1,7 @@
 """Sync time of one interaction inside Blender (the add-on's speed check):
 
-    blender -b --factory-startup --python blender/tests/bench_sync.py -- ZIP CHARACTER_GLB CAGE_OBJ [REPEATS]
+    blender -b --factory-startup --python blender/tests/bench_sync.py -- ZIP CHARACTER_GLB CAGE_OBJ [REPEATS [profile]]
+    python blender/tests/bench_sync.py -- ZIP CHARACTER_GLB CAGE_OBJ [REPEATS [profile]]   # PyPI's bpy module
 
 Installs and enables the add-on, imports the character and cage, couples, then times, for each
 interaction, the add-on's sync (what the depsgraph handler runs: cagerig + reading and writing
