@@ -359,15 +359,16 @@ def _set_pose_from(arm: bpy.types.Object, c: Coupling) -> bool:
     rig = c.rig
     t = convert.skinning_transforms(arm)
     if c.last_matrices is not None and np.array_equal(t, c.last_matrices):
-        return False  # Blender's matrices unchanged bit for bit: the same pose, nothing to convert
-    c.last_matrices = t
+        return False  # Blender's matrices unchanged bit for bit since the rig took them: the same pose
     q, motion, problems = convert.cagerig_pose(t, rig.rest_joints, c.parents, _tolerance(rig))
     if c.last_transforms is not None:
         q0, m0 = c.last_transforms
         same_q = np.all(np.minimum(np.abs(q - q0).max(axis=1), np.abs(q + q0).max(axis=1)) < 1e-7)
         if same_q and np.abs(motion - m0).max() <= _tolerance(rig):
+            c.last_matrices = t
             return False
-    rig.set_pose(q, motion)
+    rig.set_pose(q, motion)  # a refused pose (Green) raises: retried, and reported, at every sync
+    c.last_matrices = t
     c.last_transforms = (q, motion)
     c.messages = _pose_messages(rig, problems)
     return True

@@ -40,7 +40,7 @@ for v in "$@"; do
     blender/tests/run.sh | grep -E '^(Blender|FAIL|Error|Traceback|  File|[A-Za-z]*Error)|sync time'; then :; fi
   grep -q '^summary:' "target/blender-tests/bpy-$v/test.log" && ! grep -q '^FAIL' "target/blender-tests/bpy-$v/test.log" \
     || failed+=("$v")
-  echo "-- bpy $v: $(grep -c '^ok' "target/blender-tests/bpy-$v/test.log" || true) checks passed, $((SECONDS - t0)) s"
+  echo "-- bpy $v: $(sed '/^summary:/q' "target/blender-tests/bpy-$v/test.log" | grep -c '^ok' || true) checks passed, $((SECONDS - t0)) s"
 done
 if [ ${#failed[@]} -gt 0 ]; then
   echo "run_bpy.sh: failed on bpy ${failed[*]} (logs: target/blender-tests/bpy-<version>/test.log)" >&2
