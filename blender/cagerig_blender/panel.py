@@ -39,7 +39,7 @@ class CAGERIG_PT_main(bpy.types.Panel):
         cage = skin.cagerig.cage
         box.label(text=cage.name if cage else "(cage missing)", icon="MESH_ICOSPHERE")
         try:
-            arm, mod = engine.armature_of(skin)
+            arm, _ = engine.armature_of(skin)
             box.label(text=arm.name, icon="ARMATURE_DATA")
             box.label(text=f"Cage shows: {'C (rest)' if arm.data.pose_position == 'REST' else 'C′ (pose)'}")
         except engine.SyncError as e:

@@ -15,6 +15,7 @@ import math
 import os
 import sys
 import time
+import types
 
 import bpy
 import numpy as np
@@ -540,6 +541,50 @@ consistent("lbs", skin, cage, arm)
 
 
 
+# ---- the panel draws (headless Blender draws no UI: its draw() runs on a recording layout) -------
+class RecordingLayout:
+    """Records the panel's prop/operator/label calls; rows, columns and boxes are itself."""
+
+    def __init__(self) -> None:
+        self.props: list[str] = []
+        self.operators: list[str] = []
+
+    def prop(self, data: object, name: str, **_kw: object) -> None:
+        if name not in data.bl_rna.properties:
+            raise AttributeError(f"the panel draws {name!r}, which {data!r} does not have")
+        self.props.append(name)
+
+    def operator(self, idname: str, **_kw: object) -> object:
+        module, name = idname.split(".")
+        getattr(getattr(bpy.ops, module), name).get_rna_type()  # raises for an unknown operator
+        self.operators.append(idname)
+        return types.SimpleNamespace()
+
+    def label(self, **_kw: object) -> None:
+        pass
+
+    def separator(self, **_kw: object) -> None:
+        pass
+
+    def column(self, **_kw: object) -> RecordingLayout:
+        return self
+
+    row = box = column
+
+
+def draw_panel() -> RecordingLayout:
+    layout = RecordingLayout()
+    _addon.panel.CAGERIG_PT_main.draw(types.SimpleNamespace(layout=layout), bpy.context)
+    return layout
+
+
+bpy.context.view_layer.objects.active = skin
+drawn = draw_panel()
+check("panel of a coupled skin: the four rig options, Sync, Bake, Uncouple",
+      {"coords", "cage_fit", "skinning", "unfitted_cage"} <= set(drawn.props)
+      and {"cagerig.sync", "cagerig.bake", "cagerig.uncouple"} <= set(drawn.operators), f"{drawn.props}, {drawn.operators}")
+
+
 # ---- automatic weights: cagerig's and Blender's bone heat, each against the artist's --------------
 def weights_matrix(obj: bpy.types.Object, names: list[str]) -> np.ndarray:
     rows, cols, vals = convert.skin_weights_sparse(obj, names, [True] * len(names))
@@ -608,6 +653,9 @@ def compare_weights(skin: bpy.types.Object, arm: bpy.types.Object, label: str) -
 # "Blender", points it along the joint's own Y axis, which bone heat then follows: Arm 0.50, Fox
 # 0.35, Walk deviation 0.021). cagerig's weights use the joints only.
 HEAT_IMPORT = {"bone_heuristic": "TEMPERANCE"}
+menu = bpy.types.VIEW3D_MT_object_parent._dyn_ui_initialize()
+check("Object ▸ Parent lists With cagerig Automatic Weights", any(f.__module__ == _addon.weights.__name__ for f in menu),
+      f"{len(menu)} draw functions")
 skin, arm, cage = load_arm(**HEAT_IMPORT)
 compare_weights(skin, arm, "Arm")
 # The panel's way in: the active mesh, its Armature modifier's armature, its cage selected too.
@@ -623,6 +671,11 @@ bpy.ops.cagerig.auto_weights(max_influences=2)
 w = weights_matrix(copy, convert.rest_skeleton(arm)[0])
 check("panel: the active mesh weighted for its modifier's armature, bounded by the selected cage, 2 influences",
       (w > 0).sum(axis=1).max() <= 2 and np.abs(w.sum(axis=1) - 1).max() < 1e-5, f"{len(copy.vertex_groups)} groups")
+drawn = draw_panel()
+check("panel of an uncoupled mesh: the options, Generate Cage, Couple, Automatic Weights",
+      {"coords", "cage_fit", "skinning", "unfitted_cage", "cage_vertices"} <= set(drawn.props)
+      and {"cagerig.generate_cage", "cagerig.couple", "cagerig.auto_weights"} <= set(drawn.operators),
+      f"{drawn.props}, {drawn.operators}")
 skin_name = skin.name
 skin.cagerig.cage_fit = "regularised"
 couple(skin, cage)
