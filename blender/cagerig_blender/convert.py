@@ -75,6 +75,14 @@ def write_world_coords(obj: bpy.types.Object, world: np.ndarray) -> None:
     mesh.update()
 
 
+def write_key_world_coords(obj: bpy.types.Object, key: bpy.types.ShapeKey, world: np.ndarray) -> None:
+    """Writes world-space points into a shape key of the object's mesh (object space)."""
+    inv = np.linalg.inv(matrix_np(obj.matrix_world))
+    key.data.foreach_set("co", _apply(inv, np.asarray(world, dtype=F64)).astype(np.float32).ravel())
+    key.id_data.update_tag()
+    obj.data.update()
+
+
 def as_displayed(obj: bpy.types.Object, world: np.ndarray) -> np.ndarray:
     """World points as ``write_world_coords`` then ``world_coords`` would give them back
     (float32 in the object's space)."""
@@ -134,23 +142,26 @@ class SparseWeights:
         return self
 
 
-# The skinning methods Blender's Armature modifier shows, by cagerig's names, with the modifier's
-# Preserve Volume setting for each (cagerig's DQS is Blender's Preserve Volume). The others that
-# cagerig has (CoR, blended) Blender cannot show: the add-on does not offer them.
-BLENDER_SKINNING = {"lbs": False, "dqs": True}
+# How Blender shows each of cagerig's skinning methods, by cagerig's names: the Armature
+# modifier's Preserve Volume setting, and whether the add-on adds a corrective shape key. LBS and
+# DQS are the modifier's own (cagerig's DQS is Blender's Preserve Volume); CoR is the modifier's
+# LBS of the rest skin plus a per-pose corrective key (engine.py). Blended (per-vertex LBS/DQS
+# weights) Blender cannot show: the add-on does not offer it.
+BLENDER_SKINNING = {"lbs": (False, False), "dqs": (True, False), "cor": (False, True)}
 
 
-def skinning_of(mod: bpy.types.ArmatureModifier) -> str:
-    """The skinning method the Armature modifier shows."""
-    return next(k for k, pv in BLENDER_SKINNING.items() if pv == bool(mod.use_deform_preserve_volume))
+def skinning_of(mod: bpy.types.ArmatureModifier, corrective: bool) -> str:
+    """The skinning method shown: the modifier's Preserve Volume (DQS) wins over the corrective
+    flag (a user who ticks Preserve Volume in the modifier gets DQS)."""
+    shown = (bool(mod.use_deform_preserve_volume), bool(corrective) and not mod.use_deform_preserve_volume)
+    return next(k for k, v in BLENDER_SKINNING.items() if v == shown)
 
 
-def set_skinning(mod: bpy.types.ArmatureModifier, method: str) -> None:
+def skinning_settings(method: str) -> tuple[bool, bool]:
+    """(Preserve Volume, corrective key) for a method; ValueError naming what Blender shows."""
     if method not in BLENDER_SKINNING:
-        raise ValueError(
-            f"Blender's Armature modifier shows {' or '.join(BLENDER_SKINNING)} skinning, not {method!r}"
-        )
-    mod.use_deform_preserve_volume = BLENDER_SKINNING[method]
+        raise ValueError(f"Blender shows {', '.join(BLENDER_SKINNING)} skinning, not {method!r}")
+    return BLENDER_SKINNING[method]
 
 
 def rest_skeleton(arm: bpy.types.Object) -> tuple[list[str], np.ndarray, np.ndarray, list[bool]]:

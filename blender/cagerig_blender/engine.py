@@ -58,7 +58,8 @@ def options_of(skin: bpy.types.Object) -> store.RigOptions:
     _, mod = armature_of(skin)
     s = skin.cagerig
     return store.RigOptions(
-        coords=s.coords, cage_fit=s.cage_fit, skinning=convert.skinning_of(mod), unfitted_cage=s.unfitted_cage
+        coords=s.coords, cage_fit=s.cage_fit, skinning=convert.skinning_of(mod, s.use_cor),
+        unfitted_cage=s.unfitted_cage,
     )
 
 
@@ -68,6 +69,7 @@ class Coupling:
     bind_id: str
     options: store.RigOptions  # the options this rig was built with
     rig: object  # cagerig.Rig
+    weights: tuple[np.ndarray, np.ndarray, np.ndarray]  # the binding's Ω as (rows, cols, values)
     parents: np.ndarray
     rest_heads: np.ndarray  # S as last written into the bones (world)
     last_cage: np.ndarray  # the cage as last written / seen (world, float32-rounded)
@@ -168,6 +170,7 @@ def coupling(skin: bpy.types.Object) -> Coupling:
         bind_id=b.bind_id,
         options=options,
         rig=rig,
+        weights=(b.weight_rows, b.weight_cols, b.weight_values),
         parents=b.parents,
         rest_heads=rig.rest_joints,
         last_cage=convert.as_displayed(cage_of(skin), shown),
@@ -277,7 +280,9 @@ def _sync(skin: bpy.types.Object) -> bool:
     if c.rebound:
         if cage_in_edit:
             raise SyncError(f"leave Edit Mode of {cage.name!r} to rebind with the new options ({c.options.describe()})")
-        convert.write_world_coords(skin, rig.rest_mesh)
+        if c.options.skinning != "cor":
+            remove_cor_key(skin)
+        _write_rest_skin(skin, rig.rest_mesh)
         c.last_cage = _write_cage(cage, rig.posed_cage if c.last_mode == "POSE" else rig.rest_cage)
         store.save_applied_options(skin, c.options)
         c.rebound = False
@@ -325,7 +330,7 @@ def _sync(skin: bpy.types.Object) -> bool:
             rest_changed = True
             wrote = True
     if rest_changed:
-        convert.write_world_coords(skin, rig.rest_mesh)
+        _write_rest_skin(skin, rig.rest_mesh)
         store.save_rest_cage(skin, rig.rest_cage)
         c.bones_pending = True
     if c.bones_pending and not cage_in_edit:
@@ -339,9 +344,58 @@ def _sync(skin: bpy.types.Object) -> bool:
         c.rest_heads = rig.rest_joints
         c.bones_pending = False
         wrote = True
+    if wrote and c.options.skinning == "cor":
+        _write_cor_key(skin, c)
     if wrote:
         c.last_sync_ms = 1000.0 * (time.perf_counter() - start)
     return wrote
+
+
+# CoR skinning: Blender's Armature modifier has no CoR, so the skin shows it as the modifier's LBS
+# of a corrective shape key. Per vertex, LBS is an affine map x ↦ L_v·x + t_v (Ω-blended skinning
+# transforms); the key holds x = L_v⁻¹·(M'_v − t_v), whose LBS is cagerig's CoR skin M'_v. It is
+# rewritten at every sync that changes what is shown (in Rest Position it is the rest skin).
+COR_KEY = "cagerig CoR"
+
+
+def _write_rest_skin(skin: bpy.types.Object, rest_mesh: np.ndarray) -> None:
+    """M into the skin's mesh data, and into its basis shape key when it has keys (CoR)."""
+    convert.write_world_coords(skin, rest_mesh)
+    keys = skin.data.shape_keys
+    if keys is not None:
+        convert.write_key_world_coords(skin, keys.reference_key, rest_mesh)
+
+
+def _write_cor_key(skin: bpy.types.Object, c: Coupling) -> None:
+    rig = c.rig
+    keys = skin.data.shape_keys
+    if keys is None or COR_KEY not in keys.key_blocks:
+        if keys is None:
+            skin.shape_key_add(name="Basis", from_mix=False)  # the mesh data: M
+        skin.shape_key_add(name=COR_KEY, from_mix=False).value = 1.0
+        keys = skin.data.shape_keys
+    key = keys.key_blocks[COR_KEY]
+    if c.last_mode != "POSE":
+        convert.write_key_world_coords(skin, key, rig.rest_mesh)
+        return
+    rows, cols, vals = c.weights
+    n = len(skin.data.vertices)
+    k = np.asarray(rig.skinning_transforms)[:, :3, :].reshape(-1, 12)  # world, the bones as SkelUp wrote them
+    blended = np.stack([np.bincount(rows, vals * k[cols, i], minlength=n) for i in range(12)], axis=1)
+    blended = blended.reshape(n, 3, 4)
+    x = np.linalg.solve(blended[:, :, :3], (np.asarray(rig.posed_mesh) - blended[:, :, 3])[:, :, None])[:, :, 0]
+    convert.write_key_world_coords(skin, key, x)
+
+
+def remove_cor_key(skin: bpy.types.Object) -> None:
+    """Removes the CoR corrective key (and the basis, when no other key is left)."""
+    keys = skin.data.shape_keys
+    if keys is None or COR_KEY not in keys.key_blocks:
+        return
+    skin.shape_key_remove(keys.key_blocks[COR_KEY])
+    keys = skin.data.shape_keys
+    if keys is not None and len(keys.key_blocks) == 1:
+        skin.shape_key_clear()
 
 
 def _write_cage(cage: bpy.types.Object, world: np.ndarray) -> np.ndarray:

@@ -119,6 +119,7 @@ class CAGERIG_OT_couple(bpy.types.Operator):
         if cage.mode == "EDIT" or skin.mode == "EDIT" or arm.mode == "EDIT":
             self.report({"ERROR"}, "Leave Edit Mode before coupling")
             return {"CANCELLED"}
+        engine.remove_cor_key(skin)  # a CoR coupling's own key (coupling again): not the user's
         for obj, what in ((skin, "skin"), (cage, "cage")):
             if obj.data.shape_keys is not None:
                 self.report({"ERROR"}, f"The {what} {obj.name!r} has shape keys: cagerig rewrites its mesh data; "
@@ -212,6 +213,7 @@ class CAGERIG_OT_uncouple(bpy.types.Operator):
         if skin is None:
             self.report({"ERROR"}, "Make a coupled skin (or its cage) the active object")
             return {"CANCELLED"}
+        engine.remove_cor_key(skin)  # the skin keeps its rest state, shown by the modifier's LBS
         store.remove(skin)
         engine.forget(skin.name)
         return {"FINISHED"}

@@ -34,6 +34,9 @@ LABELS: dict[str, dict[str, tuple[str, str]]] = {
     "skinning": {
         "lbs": ("Linear (LBS)", "Linear blend skinning: the Armature modifier without Preserve Volume"),
         "dqs": ("Preserve Volume (DQS)", "Dual quaternion skinning: the Armature modifier's Preserve Volume"),
+        "cor": ("Centres of rotation (CoR)",
+                "Optimised centres of rotation: the Armature modifier's LBS plus a corrective shape key the "
+                "add-on rewrites at every sync"),
     },
     "unfitted_cage": {
         "refuse": ("Refuse", "Green rigs: a pose whose current cage cannot be fitted is refused (default)"),
@@ -67,17 +70,19 @@ _SKINNING_ITEMS: list[tuple[str, str, str]] = []
 
 def _get_skinning(self: bpy.types.PropertyGroup) -> int:
     mod = _armature_modifier(self.id_data)
-    name = convert.skinning_of(mod) if mod is not None else "lbs"
+    name = convert.skinning_of(mod, self.use_cor) if mod is not None else "lbs"
     return [i[0] for i in _SKINNING_ITEMS].index(name)
 
 
 def _set_skinning(self: bpy.types.PropertyGroup, value: int) -> None:
-    # The skinning is the Armature modifier's (Preserve Volume): one setting, shown in both places.
+    # LBS and DQS are the Armature modifier's Preserve Volume: one setting, shown in both places.
     mod = _armature_modifier(self.id_data)
     if mod is None:
         print(f"cagerig: {self.id_data.name!r} has no Armature modifier: the skinning is its setting")
         return
-    convert.set_skinning(mod, _SKINNING_ITEMS[value][0])
+    preserve_volume, corrective = convert.skinning_settings(_SKINNING_ITEMS[value][0])
+    self.use_cor = corrective
+    mod.use_deform_preserve_volume = preserve_volume
 
 
 def _settings_class() -> type:
@@ -109,9 +114,15 @@ def _settings_class() -> type:
             default="regularised",
             update=_option_changed,
         )
+        use_cor: BoolProperty(  # type: ignore[valid-type]
+            name="CoR skinning",
+            description="Skinning by centres of rotation (set through Skinning)",
+            default=False,
+            options={"HIDDEN"},
+        )
         skinning: EnumProperty(  # type: ignore[valid-type]
             name="Skinning",
-            description="How the bones deform the skin: the Armature modifier's Preserve Volume setting",
+            description="How the bones deform the skin (LBS and DQS: the Armature modifier's Preserve Volume)",
             items=_SKINNING_ITEMS,
             get=_get_skinning,
             set=_set_skinning,

@@ -45,6 +45,9 @@ bpy.ops.object.select_all(action="DESELECT")
 skin.select_set(True)
 cage.select_set(True)
 bpy.context.view_layer.objects.active = skin
+# CAGERIG_BENCH_SKINNING=dqs|cor times that skinning (default: the modifier's, LBS for the Arm).
+if os.environ.get("CAGERIG_BENCH_SKINNING"):
+    skin.cagerig.skinning = os.environ["CAGERIG_BENCH_SKINNING"]
 t0 = time.perf_counter()
 bpy.ops.cagerig.couple()
 couple_s = time.perf_counter() - t0

@@ -538,6 +538,41 @@ c = engine.coupling(skin)
 check("Preserve Volume off in the modifier rebinds as LBS", skin.cagerig.skinning == "lbs" and c.rig.skinning == "lbs",
       f"{skin.cagerig.skinning}, rig {c.rig.skinning}")
 consistent("lbs", skin, cage, arm)
+set_option(skin, "skinning", "cor")
+c = engine.coupling(skin)
+keys = skin.data.shape_keys
+check("skinning = cor rebinds, shown through a corrective key on the modifier's LBS",
+      c.rig.skinning == "cor" and not mod.use_deform_preserve_volume and keys is not None
+      and engine.COR_KEY in keys.key_blocks, f"rig {c.rig.skinning}, keys {list(keys.key_blocks.keys()) if keys else None}")
+rotate_bone(arm, JOINT, AXIS_BL, 50.0)
+update()
+c = engine.coupling(skin)
+lbs_ghost = cagerig.lbs(c.rig.rest_mesh, c.rig.skin_weights, c.rig.skinning_transforms)
+e = float(np.abs(np.asarray(c.rig.posed_mesh) - lbs_ghost).max())
+check("cor: the CoR skin differs from LBS at a 50° elbow", e > 1e-4 * diag, f"{e / diag:.2e}")
+consistent("cor, posed", skin, cage, arm)
+cage.data.vertices[7].co.y += 0.02 * diag
+cage.data.update()
+update()
+consistent("cor, after a grab", skin, cage, arm)
+arm.data.pose_position = "REST"
+update()
+e = float(np.abs(deformed_skin(skin) - np.asarray(engine.coupling(skin).rig.rest_mesh)).max())
+check("cor, Rest Position: Blender shows the rest skin M", e <= TOL * diag, f"{e / diag:.2e}")
+arm.data.pose_position = "POSE"
+update()
+consistent("cor, back in the pose", skin, cage, arm)
+set_option(skin, "skinning", "lbs")
+check("skinning back to lbs removes the corrective key", skin.data.shape_keys is None, "no shape keys")
+consistent("lbs after cor", skin, cage, arm)
+bpy.ops.ed.undo()
+update()
+skin, arm = bpy.data.objects[skin_name], bpy.data.objects[arm_name]
+cage = skin.cagerig.cage
+c = engine.coupling(skin)
+check("undo: back to cor with its key", skin.cagerig.skinning == "cor" and c.rig.skinning == "cor"
+      and skin.data.shape_keys is not None, f"{skin.cagerig.skinning}, rig {c.rig.skinning}")
+consistent("undo to cor", skin, cage, arm)
 
 
 
@@ -583,6 +618,14 @@ drawn = draw_panel()
 check("panel of a coupled skin: the four rig options, Sync, Bake, Uncouple",
       {"coords", "cage_fit", "skinning", "unfitted_cage"} <= set(drawn.props)
       and {"cagerig.sync", "cagerig.bake", "cagerig.uncouple"} <= set(drawn.operators), f"{drawn.props}, {drawn.operators}")
+bpy.context.view_layer.objects.active = skin
+arm.data.pose_position = "REST"
+update()
+bpy.ops.cagerig.uncouple()
+check("uncouple a CoR skin: the key goes, the skin shows its rest state", skin.data.shape_keys is None
+      and not store.is_coupled(skin), "no shape keys, no binding")
+arm.data.pose_position = "POSE"
+update()
 
 
 # ---- automatic weights: cagerig's and Blender's bone heat, each against the artist's --------------
