@@ -71,6 +71,7 @@ class Coupling:
     rig: object  # cagerig.Rig
     weights: tuple[np.ndarray, np.ndarray, np.ndarray]  # the binding's Ω as (rows, cols, values)
     parents: np.ndarray
+    names: list[str]  # the bones coupled, joint j = bone j
     rest_heads: np.ndarray  # S as last written into the bones (world)
     last_cage: np.ndarray  # the cage as last written / seen (world, float32-rounded)
     last_transforms: tuple[np.ndarray, np.ndarray] | None  # last pose set (rotations, motion)
@@ -151,6 +152,7 @@ def coupling(skin: bpy.types.Object) -> Coupling:
         return c
     b = store.load(skin)
     arm, _ = armature_of(skin)
+    check_bones(arm, b.names)
     rig = build_rig(b, options)
     mode = arm.data.pose_position
     if mode == "POSE":
@@ -173,6 +175,7 @@ def coupling(skin: bpy.types.Object) -> Coupling:
         rig=rig,
         weights=(b.weight_rows, b.weight_cols, b.weight_values),
         parents=b.parents,
+        names=b.names,
         rest_heads=rig.rest_joints,
         last_cage=convert.as_displayed(cage_of(skin), shown),
         last_transforms=pose,
@@ -272,10 +275,11 @@ def _sync(skin: bpy.types.Object) -> bool:
     start = time.perf_counter()
     arm, _mod = armature_of(skin)
     cage = cage_of(skin)
-    c = coupling(skin)
-    rig = c.rig
     if arm.mode == "EDIT":
         return False  # the user is editing the bones: Blender's rest data is in flux
+    c = coupling(skin)
+    check_bones(arm, c.names)
+    rig = c.rig
     cage_in_edit = cage.mode == "EDIT"
     wrote = False
     if c.rebound:
@@ -451,6 +455,26 @@ def remove_cor_key(skin: bpy.types.Object) -> None:
     keys = skin.data.shape_keys
     if keys is not None and len(keys.key_blocks) == 1:
         skin.shape_key_clear()
+
+
+def check_bones(arm: bpy.types.Object, names: list[str]) -> None:
+    """SyncError unless the armature has the coupled bones, in the coupled order."""
+    now = [b.name for b in arm.data.bones]
+    if now == names:
+        return
+    added = [n for n in now if n not in names]
+    missing = [n for n in names if n not in now]
+    what = "; ".join(
+        part for part in (
+            f"added {', '.join(added[:3])}{'…' if len(added) > 3 else ''}" if added else "",
+            f"missing {', '.join(missing[:3])}{'…' if len(missing) > 3 else ''}" if missing else "",
+            "the same bones in another order" if not added and not missing else "",
+        ) if part
+    )
+    raise SyncError(
+        f"{arm.name!r} has {len(now)} bones, {len(names)} when coupled ({what}): the coupling is paused; undo the "
+        "change, or couple again (Uncouple, Rest Position, Couple)"
+    )
 
 
 def _write_cage(cage: bpy.types.Object, world: np.ndarray) -> np.ndarray:

@@ -574,6 +574,29 @@ check("undo: back to cor with its key", skin.cagerig.skinning == "cor" and c.rig
       and skin.data.shape_keys is not None, f"{skin.cagerig.skinning}, rig {c.rig.skinning}")
 consistent("undo to cor", skin, cage, arm)
 
+# ---- a bone added after coupling: the sync pauses, says why, changes nothing; removed, it goes on --
+shown_before = {"skin": world(skin), "cage": world(cage)}
+bpy.ops.object.select_all(action="DESELECT")
+bpy.context.view_layer.objects.active = arm
+bpy.ops.object.mode_set(mode="EDIT")
+extra = arm.data.edit_bones.new("extra")
+extra.head, extra.tail = (0.0, 0.0, 0.0), (0.0, 0.0, 0.1 * diag)
+bpy.ops.object.mode_set(mode="OBJECT")
+update()
+rotate_bone(arm, "wrist.R", np.array([0.0, 0.0, 1.0]), 20.0)
+update()
+error = engine.last_error(skin) or ""
+e = max(float(np.abs(world(skin) - shown_before["skin"]).max()), float(np.abs(world(cage) - shown_before["cage"]).max()))
+check("a bone added after coupling: the sync pauses and says so, nothing changes",
+      "added extra" in error and e == 0.0, f"{error[:140]}; moved {e:.1e}")
+bpy.ops.object.mode_set(mode="EDIT")
+arm.data.edit_bones.remove(arm.data.edit_bones["extra"])
+bpy.ops.object.mode_set(mode="OBJECT")
+bpy.context.view_layer.objects.active = skin
+update()
+check("the bone removed again: the sync goes on", engine.last_error(skin) is None, str(engine.last_error(skin)))
+consistent("bone removed again", skin, cage, arm)
+
 
 
 # ---- the panel draws (headless Blender draws no UI: its draw() runs on a recording layout) -------
