@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Headless tests of the Blender add-on: builds the add-on zip, exports the Arm as
 # glTF, then runs test_addon.py inside Blender (install the zip, enable, couple, the three
-# interactions against Blender's own evaluation, save/reopen, undo, bake, errors, and the same
-# edits through the cagerig Python package).
+# interactions against Blender's own evaluation, save/reopen, undo, bake, errors, the same
+# edits through the cagerig Python package, every rig option, and the automatic weights on the
+# Arm and data/fox/Fox.glb against Blender's bone heat).
 # Usage: blender/tests/run.sh   (needs blender, python3-numpy for Blender's Python, cargo, maturin)
 # Environment: BLENDER (the binary, default `blender`) or BLENDER_PYTHON (a Python with PyPI's
 # `bpy` module, which then runs the test as a script); CAGERIG_BLENDER_ZIP (an add-on zip already
