@@ -780,4 +780,75 @@ dev = {how: float(np.linalg.norm(deformed_skin(res[how][0]) - artist_pose, axis=
 check("Fox Walk deviation from the artist's skin, cagerig ≤ Blender's bone heat", dev["cagerig"] <= dev["heat"],
       f"cagerig {dev['cagerig']:.4f}, bone heat {dev['heat']:.4f} of the diagonal")
 
+
+# ---- undo and redo across a couple, a pose and a grab --------------------------------------------
+skin, arm, cage = load_arm()
+names = (skin.name, arm.name, cage.name)
+skin.cagerig.cage_fit = "regularised"
+update()
+bpy.ops.ed.undo_push(message="imported")
+imported = {"skin": world(skin), "cage": world(cage), "heads": bone_heads(arm)}
+couple(skin, cage)
+bpy.ops.ed.undo_push(message="couple")
+rotate_bone(arm, JOINT, AXIS_BL, 40.0)
+update()
+cage.data.vertices[12].co.x += 0.03 * diag
+cage.data.update()
+update()
+bpy.ops.ed.undo_push(message="pose and grab")
+grabbed = {"skin": world(skin), "cage": world(cage), "heads": bone_heads(arm)}
+
+
+def objects() -> tuple[bpy.types.Object, bpy.types.Object, bpy.types.Object]:
+    return tuple(bpy.data.objects[n] for n in names)  # type: ignore[return-value]
+
+
+def same(state: dict[str, np.ndarray], skin: bpy.types.Object, cage: bpy.types.Object, arm: bpy.types.Object) -> float:
+    return max(float(np.abs(world(skin) - state["skin"]).max()), float(np.abs(world(cage) - state["cage"]).max()),
+               float(np.abs(bone_heads(arm) - state["heads"]).max()))
+
+
+bpy.ops.ed.undo()
+update()
+skin, arm, cage = objects()
+check("undo of a pose and a grab: still coupled, consistent", store.is_coupled(skin), "coupled")
+consistent("undo of a pose and a grab", skin, cage, arm)
+bpy.ops.ed.undo()
+update()
+skin, arm, cage = objects()
+e = same(imported, skin, cage, arm)
+check("undo of the couple: uncoupled, skin, cage and bones as imported", not store.is_coupled(skin) and e == 0.0,
+      f"moved {e:.1e}")
+bpy.ops.ed.redo()
+bpy.ops.ed.redo()
+update()
+skin, arm, cage = objects()
+e = same(grabbed, skin, cage, arm)
+check("redo of both: coupled, the grab's state back", store.is_coupled(skin) and e <= TOL * diag, f"{e / diag:.2e}")
+consistent("redo of the couple, the pose and the grab", skin, cage, arm)
+
+# ---- Ctrl-Z in the cage's Edit Mode: the edit-mesh step is undone, the coupling follows ----------
+bpy.ops.object.select_all(action="DESELECT")
+bpy.context.view_layer.objects.active = cage
+bpy.ops.object.mode_set(mode="EDIT")
+bpy.ops.ed.undo_push(message="edit mode entered")
+bm = bmesh.from_edit_mesh(cage.data)
+bm.verts.ensure_lookup_table()
+bm.verts[25].co.z += 0.03 * diag
+bmesh.update_edit_mesh(cage.data)
+update()
+e = float(np.abs(world(skin) - grabbed["skin"]).max())
+check("Edit Mode grab: the rest skin follows live", e > 1e-4 * diag, f"moved {e / diag:.2e}")
+bpy.ops.ed.undo_push(message="edit-mode grab")
+bpy.ops.ed.undo()
+update()
+skin, arm, cage = objects()
+bpy.context.view_layer.objects.active = cage
+bpy.ops.object.mode_set(mode="OBJECT")
+update()
+e = same(grabbed, skin, cage, arm)
+check("Ctrl-Z in Edit Mode: the edit-mode grab undone, skin, cage and bones as before it", e <= TOL * diag,
+      f"{e / diag:.2e}")
+consistent("after Ctrl-Z in Edit Mode", skin, cage, arm)
+
 print("\n".join(["", "summary:"] + results))
