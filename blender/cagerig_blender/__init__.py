@@ -38,18 +38,20 @@ def _vendor_path() -> None:
 
 def register() -> None:
     _vendor_path()
-    from . import handlers, operators, panel, props
+    from . import handlers, operators, panel, props, weights
 
     props.register()
     operators.register()
+    weights.register()
     panel.register()
     handlers.register()
 
 
 def unregister() -> None:
-    from . import handlers, operators, panel, props
+    from . import handlers, operators, panel, props, weights
 
     handlers.unregister()
     panel.unregister()
+    weights.unregister()
     operators.unregister()
     props.unregister()

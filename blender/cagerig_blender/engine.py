@@ -52,46 +52,76 @@ def cage_of(skin: bpy.types.Object) -> bpy.types.Object:
     return cage
 
 
+def options_of(skin: bpy.types.Object) -> store.RigOptions:
+    """The rig options the user chose for ``skin``: its settings (props.py), and the skinning its
+    Armature modifier shows (Preserve Volume: DQS)."""
+    _, mod = armature_of(skin)
+    s = skin.cagerig
+    return store.RigOptions(
+        coords=s.coords, cage_fit=s.cage_fit, skinning=convert.skinning_of(mod, s.use_cor),
+        unfitted_cage=s.unfitted_cage,
+    )
+
+
 @dataclass
 class Coupling:
     skin_name: str
     bind_id: str
-    cage_fit: str  # the stored binding's CageUp fit this rig was built with
+    options: store.RigOptions  # the options this rig was built with
     rig: object  # cagerig.Rig
+    weights: tuple[np.ndarray, np.ndarray, np.ndarray]  # the binding's Ω as (rows, cols, values)
     parents: np.ndarray
+    names: list[str]  # the bones coupled, joint j = bone j
     rest_heads: np.ndarray  # S as last written into the bones (world)
     last_cage: np.ndarray  # the cage as last written / seen (world, float32-rounded)
     last_transforms: tuple[np.ndarray, np.ndarray] | None  # last pose set (rotations, motion)
     last_mode: str
     bones_pending: bool = False
+    # Built with options other than those the shown state was computed with: the next sync
+    # writes the skin, the cage and the bones from this rig instead of reading them as edits.
+    rebound: bool = False
+    last_matrices: np.ndarray | None = None  # Blender's skinning transforms at the last pose read
+    blend: np.ndarray | tuple[np.ndarray, np.ndarray] | None = None  # Ω for CoR's corrective key
     last_sync_ms: float = 0.0
     messages: list[str] = field(default_factory=list)
 
 
-def _base_rig(b: store.Binding) -> object:
+def _base_rig(b: store.Binding, options: store.RigOptions) -> object:
     import cagerig
 
-    key = f"{b.bind_id}:{b.cage_fit}"
+    key = f"{b.bind_id}:{options.rig_key()}"
     rig = _base_rigs.get(key)
     if rig is None:
         n, nj = len(b.mesh), len(b.joints)
         weights = convert.SparseWeights((n, nj), b.weight_rows, b.weight_cols, b.weight_values)
         rig = cagerig.Rig.from_arrays(
             b.mesh, b.triangles, weights, b.joints, b.parents, b.cage, b.cage_triangles,
-            b.names, skinning=b.skinning, cage_fit=b.cage_fit,
+            b.names, skinning=options.skinning, cage_fit=options.cage_fit, coords=options.coords,
         )
         _base_rigs[key] = rig
     return rig.copy()
 
 
-def build_rig(b: store.Binding) -> object:
-    """The rig in the stored state: the bind-time rig with the stored rest cage applied."""
-    rig = _base_rig(b)
+def build_rig(b: store.Binding, options: store.RigOptions | None = None) -> object:
+    """The rig in the stored state: the bind-time rig, built with ``options`` (default: the
+    applied ones), with the stored rest cage applied."""
+    options = options or b.options
+    rig = _base_rig(b, options)
+    rig.set_unfitted_cage(options.unfitted_cage)
     delta = b.rest_cage - b.cage
     moved = np.flatnonzero(np.any(delta != 0.0, axis=1))
     if len(moved):
         rig.move_rest_cage(moved, delta[moved])
     return rig
+
+
+_suspended = False
+
+
+def suspend(on: bool) -> None:
+    """Stops (or resumes) every sync: while Blender restores an undo step."""
+    global _suspended
+    _suspended = on
 
 
 def forget(skin_name: str | None = None) -> None:
@@ -113,50 +143,56 @@ def displayed_cage(cage: bpy.types.Object) -> np.ndarray:
 
 def coupling(skin: bpy.types.Object) -> Coupling:
     """The run-time coupling of ``skin``, rebuilt from the stored binding when missing (file
-    opened, undo). A rebuilt coupling takes the cage as Blender shows it for a user edit, so
-    that the next sync brings everything into step."""
+    opened, undo) or when the user changed a rig option (a rebind: the next sync writes what the
+    new rig shows). A rebuilt coupling with the applied options takes the cage as Blender shows
+    it for a user edit, so that the next sync brings everything into step."""
+    options = options_of(skin)
     c = _couplings.get(skin.name)
-    if c is not None and c.bind_id == store.bind_id(skin) and c.cage_fit == store.cage_fit(skin):
+    if c is not None and c.bind_id == store.bind_id(skin) and c.options == options:
         return c
     b = store.load(skin)
     arm, _ = armature_of(skin)
-    rig = build_rig(b)
+    check_bones(arm, b.names)
+    rig = build_rig(b, options)
     mode = arm.data.pose_position
     if mode == "POSE":
         t = convert.skinning_transforms(arm)
-        q, motion, _ = convert.cagerig_pose(t, rig.rest_joints, b.parents, _tolerance(rig))
+        q, motion, problems = convert.cagerig_pose(t, rig.rest_joints, b.parents, _tolerance(rig))
         rig.set_pose(q, motion)
+        messages = _pose_messages(rig, problems)
         pose: tuple[np.ndarray, np.ndarray] | None = (q, motion)
+        matrices: np.ndarray | None = t
         shown = rig.posed_cage
     else:
         pose = None
+        matrices = None
+        messages = []
         shown = rig.rest_cage
     c = Coupling(
         skin_name=skin.name,
         bind_id=b.bind_id,
-        cage_fit=b.cage_fit,
+        options=options,
         rig=rig,
+        weights=(b.weight_rows, b.weight_cols, b.weight_values),
         parents=b.parents,
+        names=b.names,
         rest_heads=rig.rest_joints,
         last_cage=convert.as_displayed(cage_of(skin), shown),
         last_transforms=pose,
         last_mode=mode,
+        rebound=options != b.options,
+        messages=messages,
+        last_matrices=matrices,
     )
     _couplings[skin.name] = c
     return c
 
 
-def refit_cage(skin: bpy.types.Object) -> None:
-    """After the stored CageUp fit changed: rebuilds the coupling and writes its cage (C' in the
-    pose, C at rest) into the cage object, so that the switch refits the handle instead of the
-    old handle being read as a user's edit of it."""
-    forget(skin.name)
-    c = coupling(skin)
-    cage = cage_of(skin)
-    if cage.mode == "EDIT":
-        return  # the user is editing the cage: the next sync reads it as their edit
-    target = c.rig.posed_cage if c.last_mode == "POSE" else c.rig.rest_cage
-    c.last_cage = _write_cage(cage, target)
+def apply_options(skin: bpy.types.Object) -> None:
+    """After the user changed a rig option of a coupled skin: rebinds now (the sync writes what
+    the rebuilt rig shows). Errors go to the panel, as a live sync's do."""
+    if store.is_coupled(skin):
+        _sync_reporting(skin)
 
 
 _tolerances: dict[int, float] = {}
@@ -181,7 +217,10 @@ def _mode_set(mode: str) -> None:
     try:
         from _bpy import ops as _ops  # type: ignore[import-not-found]
 
-        _ops.call("OBJECT_OT_mode_set", None, {"mode": mode}, "EXEC_DEFAULT", False)
+        if bpy.app.version >= (4, 0, 0):  # the context-dictionary argument was removed in 4.0
+            _ops.call("object.mode_set", {"mode": mode}, "EXEC_DEFAULT", False)
+        else:
+            _ops.call("OBJECT_OT_mode_set", None, {"mode": mode}, "EXEC_DEFAULT", False)
     except (ImportError, TypeError, AttributeError):
         bpy.ops.object.mode_set("EXEC_DEFAULT", False, mode=mode)
 
@@ -223,7 +262,7 @@ def write_rest_bones(arm: bpy.types.Object, heads_world: np.ndarray) -> None:
 def sync(skin: bpy.types.Object) -> bool:
     """Runs one sync of ``skin``'s coupling; True when something was written."""
     global _busy
-    if _busy:
+    if _busy or _suspended:
         return False
     _busy = True
     try:
@@ -236,10 +275,24 @@ def _sync(skin: bpy.types.Object) -> bool:
     start = time.perf_counter()
     arm, _mod = armature_of(skin)
     cage = cage_of(skin)
-    c = coupling(skin)
-    rig = c.rig
     if arm.mode == "EDIT":
         return False  # the user is editing the bones: Blender's rest data is in flux
+    c = coupling(skin)
+    check_bones(arm, c.names)
+    rig = c.rig
+    cage_in_edit = cage.mode == "EDIT"
+    wrote = False
+    if c.rebound:
+        if cage_in_edit:
+            raise SyncError(f"leave Edit Mode of {cage.name!r} to rebind with the new options ({c.options.describe()})")
+        if c.options.skinning != "cor":
+            remove_cor_key(skin)
+        _write_rest_skin(skin, rig.rest_mesh)
+        c.last_cage = _write_cage(cage, rig.posed_cage if c.last_mode == "POSE" else rig.rest_cage)
+        store.save_applied_options(skin, c.options)
+        c.rebound = False
+        c.bones_pending = True
+        wrote = True
     shown = displayed_cage(cage)
     if shown.shape != c.last_cage.shape:
         raise SyncError(
@@ -247,8 +300,6 @@ def _sync(skin: bpy.types.Object) -> bool:
             "couple again after changing its topology"
         )
     mode = arm.data.pose_position
-    cage_in_edit = cage.mode == "EDIT"
-    wrote = False
     rest_changed = False
     if mode != c.last_mode:
         # Pose Position <-> Rest Position: the cage shows the other state.
@@ -284,7 +335,7 @@ def _sync(skin: bpy.types.Object) -> bool:
             rest_changed = True
             wrote = True
     if rest_changed:
-        convert.write_world_coords(skin, rig.rest_mesh)
+        _write_rest_skin(skin, rig.rest_mesh)
         store.save_rest_cage(skin, rig.rest_cage)
         c.bones_pending = True
     if c.bones_pending and not cage_in_edit:
@@ -298,9 +349,132 @@ def _sync(skin: bpy.types.Object) -> bool:
         c.rest_heads = rig.rest_joints
         c.bones_pending = False
         wrote = True
+    if wrote and c.options.skinning == "cor":
+        _write_cor_key(skin, c)
     if wrote:
         c.last_sync_ms = 1000.0 * (time.perf_counter() - start)
     return wrote
+
+
+# CoR skinning: Blender's Armature modifier has no CoR, so the skin shows it as the modifier's LBS
+# of a corrective shape key. Per vertex, LBS is an affine map x ↦ L_v·x + t_v (Ω-blended skinning
+# transforms); the key holds x = L_v⁻¹·(M'_v − t_v), whose LBS is cagerig's CoR skin M'_v. It is
+# rewritten at every sync that changes what is shown (in Rest Position it is the rest skin).
+COR_KEY = "cagerig CoR"
+
+
+def _write_rest_skin(skin: bpy.types.Object, rest_mesh: np.ndarray) -> None:
+    """M into the skin's mesh data, and into its basis shape key when it has keys (CoR)."""
+    convert.write_world_coords(skin, rest_mesh)
+    keys = skin.data.shape_keys
+    if keys is not None:
+        convert.write_key_world_coords(skin, keys.reference_key, rest_mesh)
+
+
+def _write_cor_key(skin: bpy.types.Object, c: Coupling) -> None:
+    rig = c.rig
+    keys = skin.data.shape_keys
+    if keys is None or COR_KEY not in keys.key_blocks:
+        if keys is None:
+            skin.shape_key_add(name="Basis", from_mix=False)  # the mesh data: M
+        skin.shape_key_add(name=COR_KEY, from_mix=False).value = 1.0
+        keys = skin.data.shape_keys
+    key = keys.key_blocks[COR_KEY]
+    if c.last_mode != "POSE":
+        convert.write_key_world_coords(skin, key, rig.rest_mesh)
+        return
+    k = np.asarray(rig.skinning_transforms)[:, :3, :].reshape(-1, 12)  # world, the bones as SkelUp wrote them
+    if c.blend is None:
+        c.blend = _blend_matrix(*c.weights, len(skin.data.vertices), len(k))
+    if isinstance(c.blend, np.ndarray):
+        blended = c.blend @ k
+    else:
+        joints, weights = c.blend
+        blended = weights[:, 0, None] * k[joints[:, 0]]
+        for s in range(1, joints.shape[1]):
+            blended += weights[:, s, None] * k[joints[:, s]]
+    blended = blended.reshape(-1, 3, 4)
+    x = _solve3(blended[:, :, :3], np.asarray(rig.posed_mesh) - blended[:, :, 3])
+    convert.write_key_world_coords(skin, key, x)
+
+
+_DENSE_BLEND_BYTES = 256 << 20
+
+
+def _blend_matrix(
+    rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int, nj: int
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Ω for blending the bones' transforms: dense (n, J) (one matrix product) up to 256 MB, else
+    per-vertex slots (k passes over the vertices, k the most influences of a vertex)."""
+    if n * nj * 8 <= _DENSE_BLEND_BYTES:
+        dense = np.zeros((n, nj), dtype=np.float64)
+        dense[rows, cols] = vals
+        return dense
+    return _influence_slots(rows, cols, vals, n)
+
+
+def _influence_slots(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Ω as (n, k) joint indices and weights, k the most influences of a vertex (unused slots:
+    joint 0 with weight 0), so that blending is k passes over the vertices."""
+    order = np.argsort(rows, kind="stable")
+    rows, cols, vals = rows[order], cols[order], vals[order]
+    counts = np.bincount(rows, minlength=n)
+    slot = np.arange(len(rows)) - np.repeat(np.cumsum(counts) - counts, counts)
+    k = int(counts.max()) if len(counts) else 1
+    joints = np.zeros((n, k), dtype=np.int64)
+    weights = np.zeros((n, k), dtype=np.float64)
+    joints[rows, slot] = cols
+    weights[rows, slot] = vals
+    return joints, weights
+
+
+def _solve3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solves the (n, 3, 3) systems a·x = b (n, 3) by Cramer's rule, component by component
+    (numpy's batched solve and cross are several times slower for 3×3)."""
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = (
+        [np.ascontiguousarray(a[:, i, j]) for j in range(3)] for i in range(3)
+    )
+    b0, b1, b2 = (np.ascontiguousarray(b[:, i]) for i in range(3))
+    # The columns' cross products: c0 = col1 × col2, c1 = col2 × col0, c2 = col0 × col1.
+    c0 = (a11 * a22 - a21 * a12, a21 * a02 - a01 * a22, a01 * a12 - a11 * a02)
+    c1 = (a12 * a20 - a22 * a10, a22 * a00 - a02 * a20, a02 * a10 - a12 * a00)
+    c2 = (a10 * a21 - a20 * a11, a20 * a01 - a00 * a21, a00 * a11 - a10 * a01)
+    det = a00 * c0[0] + a10 * c0[1] + a20 * c0[2]
+    x = np.empty_like(b)
+    for i, c in enumerate((c0, c1, c2)):
+        x[:, i] = (b0 * c[0] + b1 * c[1] + b2 * c[2]) / det
+    return x
+
+
+def remove_cor_key(skin: bpy.types.Object) -> None:
+    """Removes the CoR corrective key (and the basis, when no other key is left)."""
+    keys = skin.data.shape_keys
+    if keys is None or COR_KEY not in keys.key_blocks:
+        return
+    skin.shape_key_remove(keys.key_blocks[COR_KEY])
+    keys = skin.data.shape_keys
+    if keys is not None and len(keys.key_blocks) == 1:
+        skin.shape_key_clear()
+
+
+def check_bones(arm: bpy.types.Object, names: list[str]) -> None:
+    """SyncError unless the armature has the coupled bones, in the coupled order."""
+    now = [b.name for b in arm.data.bones]
+    if now == names:
+        return
+    added = [n for n in now if n not in names]
+    missing = [n for n in names if n not in now]
+    what = "; ".join(
+        part for part in (
+            f"added {', '.join(added[:3])}{'…' if len(added) > 3 else ''}" if added else "",
+            f"missing {', '.join(missing[:3])}{'…' if len(missing) > 3 else ''}" if missing else "",
+            "the same bones in another order" if not added and not missing else "",
+        ) if part
+    )
+    raise SyncError(
+        f"{arm.name!r} has {len(now)} bones, {len(names)} when coupled ({what}): the coupling is paused; undo the "
+        "change, or couple again (Uncouple, Rest Position, Couple)"
+    )
 
 
 def _write_cage(cage: bpy.types.Object, world: np.ndarray) -> np.ndarray:
@@ -317,16 +491,27 @@ def _set_pose_from(arm: bpy.types.Object, c: Coupling) -> bool:
     SkelUp rewrites the rest bones Blender's matrices change by float32 rounding alone."""
     rig = c.rig
     t = convert.skinning_transforms(arm)
+    if c.last_matrices is not None and np.array_equal(t, c.last_matrices):
+        return False  # Blender's matrices unchanged bit for bit since the rig took them: the same pose
     q, motion, problems = convert.cagerig_pose(t, rig.rest_joints, c.parents, _tolerance(rig))
     if c.last_transforms is not None:
         q0, m0 = c.last_transforms
         same_q = np.all(np.minimum(np.abs(q - q0).max(axis=1), np.abs(q + q0).max(axis=1)) < 1e-7)
         if same_q and np.abs(motion - m0).max() <= _tolerance(rig):
+            c.last_matrices = t
             return False
-    rig.set_pose(q, motion)
+    rig.set_pose(q, motion)  # a refused pose (Green) raises: retried, and reported, at every sync
+    c.last_matrices = t
     c.last_transforms = (q, motion)
-    c.messages = problems
+    c.messages = _pose_messages(rig, problems)
     return True
+
+
+def _pose_messages(rig: object, problems: list[str]) -> list[str]:
+    """What the panel says about a pose: what the pose model cannot represent, and a current
+    cage left unfitted (Green coordinates, Unfitted cage: Keep)."""
+    unfitted = rig.posed_cage_unfitted
+    return problems + ([f"the cage shows the closest fit: {unfitted}"] if unfitted else [])
 
 
 _last_errors: dict[str, str] = {}
@@ -341,16 +526,21 @@ def sync_all(scene: bpy.types.Scene, updated: set[int] | None = None) -> None:
             continue
         if updated is not None and not _touched(obj, updated):
             continue
-        try:
-            sync(obj)
-            _last_errors.pop(obj.name, None)
-        except (SyncError, ValueError) as e:
-            c = _couplings.get(obj.name)
-            if c is not None:
-                c.messages = [str(e)]
-            if _last_errors.get(obj.name) != str(e):
-                _last_errors[obj.name] = str(e)
-                print(f"cagerig: {e}")
+        _sync_reporting(obj)
+
+
+def _sync_reporting(skin: bpy.types.Object) -> None:
+    """sync(skin), its error kept for the panel and printed once."""
+    try:
+        sync(skin)
+        _last_errors.pop(skin.name, None)
+    except (SyncError, ValueError) as e:
+        c = _couplings.get(skin.name)
+        if c is not None:
+            c.messages = [str(e)]
+        if _last_errors.get(skin.name) != str(e):
+            _last_errors[skin.name] = str(e)
+            print(f"cagerig: {e}")
 
 
 def _touched(skin: bpy.types.Object, updated: set[int]) -> bool:
@@ -362,6 +552,11 @@ def _touched(skin: bpy.types.Object, updated: set[int]) -> bool:
         if m.type == "ARMATURE" and m.object is not None:
             ids += [m.object, m.object.data]
     return any(i.as_pointer() in updated for i in ids)
+
+
+def last_error(skin: bpy.types.Object) -> str | None:
+    """The last live sync's error for ``skin`` (None once a sync succeeds)."""
+    return _last_errors.get(skin.name)
 
 
 def status(skin: bpy.types.Object) -> Coupling | None:

@@ -21,15 +21,26 @@ def on_frame_change(scene: bpy.types.Scene, _depsgraph: bpy.types.Depsgraph) -> 
 
 
 @persistent
-def on_undo_redo(scene: bpy.types.Scene, *_args: object) -> None:
-    # Undo restored the stored rest cage and whatever Blender shows; rebuild the rigs from the
-    # binding and sync, so that what is shown and what is stored agree again.
+def on_undo_redo_pre(_scene: bpy.types.Scene, *_args: object) -> None:
+    # While Blender restores a step, what it shows is not an edit of the user's: no sync reads it.
+    engine.suspend(True)
     engine.forget()
-    engine.sync_all(scene)
+
+
+@persistent
+def on_undo_redo(_scene: bpy.types.Scene, *_args: object) -> None:
+    # Undo restored the stored binding (rest cage C) together with the skin, bones and cage of
+    # the same step. The rigs are rebuilt from the binding at the next sync, after Blender has
+    # evaluated the restored scene: until then the pose bones' matrices are not those of the
+    # restored pose (Blender >= 4.2 leaves them unevaluated here), and a rig posed with them
+    # would read the restored cage as a grab.
+    engine.forget()
+    engine.suspend(False)
 
 
 @persistent
 def on_load(*_args: object) -> None:
+    engine.suspend(False)
     engine.forget()
     engine.forget_bases()
 
@@ -37,6 +48,8 @@ def on_load(*_args: object) -> None:
 _HANDLERS = (
     (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
     (bpy.app.handlers.frame_change_post, on_frame_change),
+    (bpy.app.handlers.undo_pre, on_undo_redo_pre),
+    (bpy.app.handlers.redo_pre, on_undo_redo_pre),
     (bpy.app.handlers.undo_post, on_undo_redo),
     (bpy.app.handlers.redo_post, on_undo_redo),
     (bpy.app.handlers.load_post, on_load),

@@ -119,6 +119,7 @@ class CAGERIG_OT_couple(bpy.types.Operator):
         if cage.mode == "EDIT" or skin.mode == "EDIT" or arm.mode == "EDIT":
             self.report({"ERROR"}, "Leave Edit Mode before coupling")
             return {"CANCELLED"}
+        engine.remove_cor_key(skin)  # a CoR coupling's own key (coupling again): not the user's
         for obj, what in ((skin, "skin"), (cage, "cage")):
             if obj.data.shape_keys is not None:
                 self.report({"ERROR"}, f"The {what} {obj.name!r} has shape keys: cagerig rewrites its mesh data; "
@@ -151,13 +152,12 @@ class CAGERIG_OT_couple(bpy.types.Operator):
         tris = convert.triangles(skin.data)
         cage_points = convert.world_coords(cage)
         cage_tris = convert.triangles(cage.data)
-        skinning = "dqs" if mod.use_deform_preserve_volume else "lbs"
+        options = engine.options_of(skin)
         bind_id = store.new_bind_id()
         binding = store.Binding(
             bind_id=bind_id, mesh=points, triangles=tris, weight_rows=rows, weight_cols=cols,
             weight_values=vals, joints=heads, parents=parents, names=names, cage=cage_points,
-            cage_triangles=cage_tris, skinning=skinning, rest_cage=cage_points,
-            cage_fit=skin.cagerig.cage_fit,
+            cage_triangles=cage_tris, rest_cage=cage_points, options=options,
         )
         try:
             engine.build_rig(binding)
@@ -177,7 +177,7 @@ class CAGERIG_OT_couple(bpy.types.Operator):
             self.report({"WARNING"}, f"Coupled, but the first sync failed: {e}")
             return {"FINISHED"}
         self.report({"INFO"}, f"Coupled {skin.name!r} ({n} vertices), {arm.name!r} ({len(names)} bones) "
-                    f"and {cage.name!r} ({len(cage_points)} vertices), {skinning.upper()}")
+                    f"and {cage.name!r} ({len(cage_points)} vertices): {options.describe()}")
         return {"FINISHED"}
 
 
@@ -213,6 +213,7 @@ class CAGERIG_OT_uncouple(bpy.types.Operator):
         if skin is None:
             self.report({"ERROR"}, "Make a coupled skin (or its cage) the active object")
             return {"CANCELLED"}
+        engine.remove_cor_key(skin)  # the skin keeps its rest state, shown by the modifier's LBS
         store.remove(skin)
         engine.forget(skin.name)
         return {"FINISHED"}

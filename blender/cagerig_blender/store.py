@@ -1,10 +1,15 @@
 """The binding, kept with the skin object as ID properties (saved in the .blend, restored by undo).
 
 ``skin["cagerig_binding"]`` holds what the rig was built from (bind-time rest skin, triangles, skinning
-weights, rest joints, cage; world space, float64) and the current rest cage C. Φ, MaxVol and Ψ
-are recomputed from the bind-time arrays when the file is opened (deterministic: the same
-arrays give the same rig), then the stored rest cage is applied as one rest-cage edit, which
-reproduces M = Φ·C and S = Ψ·C exactly as they were.
+weights, rest joints, cage; world space, float64), the current rest cage C and the rig options
+(coordinates, CageUp fit, skinning, unfitted-cage policy) that what Blender shows was computed
+with. Φ, MaxVol and Ψ are recomputed from the bind-time arrays when the file is opened
+(deterministic: the same arrays give the same rig), then the stored rest cage is applied as one
+rest-cage edit, which reproduces M = Φ·C and S = Ψ·C exactly as they were.
+
+The options the user wants live in the skin's settings (props.py) and, for the skinning, in its
+Armature modifier (Preserve Volume); when they differ from the applied ones the add-on rebinds
+(engine.coupling). Undo restores both together.
 """
 
 from __future__ import annotations
@@ -33,9 +38,29 @@ class Binding:
     names: list[str]
     cage: np.ndarray  # (c, 3) bind-time rest cage, world space
     cage_triangles: np.ndarray
-    skinning: str
     rest_cage: np.ndarray  # (c, 3) current rest cage C, world space
-    cage_fit: str = "regularised"  # CageUp's fit (absent in older files: the default)
+    options: RigOptions  # the options what Blender shows was computed with
+
+
+@dataclass(frozen=True)
+class RigOptions:
+    """The rig choices of the CLI (``--coords``, ``--cage-fit``, ``--skinning``,
+    ``--unfitted-cage``), by the names the cagerig package lists (cagerig.COORDS_KINDS, …)."""
+
+    coords: str = "mvc"
+    cage_fit: str = "regularised"
+    skinning: str = "lbs"
+    unfitted_cage: str = "refuse"
+
+    def rig_key(self) -> str:
+        """What the rig's precomputation depends on (the unfitted-cage policy is set after)."""
+        return f"{self.coords}:{self.cage_fit}:{self.skinning}"
+
+    def describe(self) -> str:
+        return f"{self.coords}, {self.cage_fit} fit, {self.skinning.upper()}, unfitted cage: {self.unfitted_cage}"
+
+
+_OPTION_KEYS = ("coords", "cage_fit", "skinning", "unfitted_cage")
 
 
 def _floats(a: np.ndarray) -> list[float]:
@@ -66,9 +91,8 @@ def save(skin: bpy.types.Object, b: Binding) -> None:
         "names": "\n".join(b.names),
         "cage": _floats(b.cage),
         "cage_triangles": _ints(b.cage_triangles),
-        "skinning": b.skinning,
         "rest_cage": _floats(b.rest_cage),
-        "cage_fit": b.cage_fit,
+        **{k: getattr(b.options, k) for k in _OPTION_KEYS},
     }
 
 
@@ -80,13 +104,18 @@ def save_rest_cage(skin: bpy.types.Object, rest_cage: np.ndarray) -> None:
     skin[KEY]["rest_cage"] = _floats(rest_cage)
 
 
-def cage_fit(skin: bpy.types.Object) -> str:
-    """The stored binding's CageUp fit (cheap: reads no array)."""
-    return str(skin[KEY].get("cage_fit", "regularised"))
+def applied_options(skin: bpy.types.Object) -> RigOptions:
+    """The options the shown state was computed with (cheap: reads no array). Files from before
+    an option existed hold none for it: its default, which is what they were computed with."""
+    g = skin[KEY]
+    default = RigOptions()
+    return RigOptions(**{k: str(g.get(k, getattr(default, k))) for k in _OPTION_KEYS})
 
 
-def save_cage_fit(skin: bpy.types.Object, fit: str) -> None:
-    skin[KEY]["cage_fit"] = fit
+def save_applied_options(skin: bpy.types.Object, options: RigOptions) -> None:
+    g = skin[KEY]
+    for k in _OPTION_KEYS:
+        g[k] = getattr(options, k)
 
 
 def is_coupled(obj: bpy.types.Object) -> bool:
@@ -121,9 +150,8 @@ def load(skin: bpy.types.Object) -> Binding:
             names=str(g["names"]).split("\n"),
             cage=_array(g, "cage", np.float64, 3),
             cage_triangles=_array(g, "cage_triangles", np.int64, 3),
-            skinning=str(g["skinning"]),
             rest_cage=_array(g, "rest_cage", np.float64, 3),
-            cage_fit=str(g.get("cage_fit", "regularised")),
+            options=applied_options(skin),
         )
     except KeyError as e:
         raise ValueError(f"the cagerig binding of {skin.name!r} lacks {e}: couple again") from None

@@ -1,6 +1,7 @@
 """Sync time of one interaction inside Blender (the add-on's speed check):
 
-    blender -b --factory-startup --python blender/tests/bench_sync.py -- ZIP CHARACTER_GLB CAGE_OBJ [REPEATS]
+    blender -b --factory-startup --python blender/tests/bench_sync.py -- ZIP CHARACTER_GLB CAGE_OBJ [REPEATS [profile]]
+    python blender/tests/bench_sync.py -- ZIP CHARACTER_GLB CAGE_OBJ [REPEATS [profile]]   # PyPI's bpy module
 
 Installs and enables the add-on, imports the character and cage, couples, then times, for each
 interaction, the add-on's sync (what the depsgraph handler runs: cagerig + reading and writing
@@ -11,6 +12,7 @@ evaluation of the armature and the Armature modifier + the sync). Prints medians
 from __future__ import annotations
 
 import math
+import os
 import statistics
 import sys
 import time
@@ -22,13 +24,12 @@ argv = sys.argv[sys.argv.index("--") + 1:]
 ZIP, GLB, CAGE = argv[:3]
 REPEATS = int(argv[3]) if len(argv) > 3 else 15
 
-bpy.ops.preferences.addon_install(filepath=ZIP, overwrite=True)
-bpy.ops.preferences.addon_enable(module="cagerig_blender")
-from cagerig_blender import convert, engine  # noqa: E402
-from mathutils import Quaternion  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from install_addon import install  # noqa: E402
 
-if "bool" not in np.__dict__:  # Debian's Blender 3.4 glTF importer + numpy >= 1.24
-    np.bool = bool  # type: ignore[attr-defined]
+_addon = install(ZIP)
+convert, engine = _addon.convert, _addon.engine
+from mathutils import Quaternion  # noqa: E402
 
 for o in list(bpy.data.objects):
     bpy.data.objects.remove(o)
@@ -44,6 +45,9 @@ bpy.ops.object.select_all(action="DESELECT")
 skin.select_set(True)
 cage.select_set(True)
 bpy.context.view_layer.objects.active = skin
+# CAGERIG_BENCH_SKINNING=dqs|cor times that skinning (default: the modifier's, LBS for the Arm).
+if os.environ.get("CAGERIG_BENCH_SKINNING"):
+    skin.cagerig.skinning = os.environ["CAGERIG_BENCH_SKINNING"]
 t0 = time.perf_counter()
 bpy.ops.cagerig.couple()
 couple_s = time.perf_counter() - t0

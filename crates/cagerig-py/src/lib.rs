@@ -43,6 +43,29 @@ fn _cagerig(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(functions::read_obj, m)?)?;
     m.add_function(wrap_pyfunction!(functions::write_obj, m)?)?;
     m.add_function(wrap_pyfunction!(interchange::generate_cage, m)?)?;
+    // The accepted names of each rig option, in the order front ends list them (the CLI's
+    // `--skinning`, `--coords`, `--cage-fit` and `--unfitted-cage` values): front ends such as
+    // the Blender add-on build their choices from these instead of repeating them.
+    m.add(
+        "SKINNING_METHODS",
+        cagerig::skinning::SkinningMethod::ALL
+            .map(|k| k.name())
+            .to_vec(),
+    )?;
+    m.add(
+        "COORDS_KINDS",
+        cagerig::CoordsKind::ALL.map(|k| k.name()).to_vec(),
+    )?;
+    m.add(
+        "CAGE_FITS",
+        cagerig::CageFitKind::ALL.map(|k| k.name()).to_vec(),
+    )?;
+    m.add(
+        "UNFITTED_CAGE_POLICIES",
+        cagerig::session::UnfittedCagePolicy::ALL
+            .map(|k| k.name())
+            .to_vec(),
+    )?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

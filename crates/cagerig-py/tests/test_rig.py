@@ -281,3 +281,41 @@ def test_cage_fit_is_chosen_by_name_and_keeps_the_skin(arm_path):
     np.testing.assert_allclose(regularised.posed_cage, target, atol=1e-8)
     with pytest.raises(ValueError, match="regularised or paper"):
         cagerig.Rig.builtin("bar", cage_fit="exact")
+
+
+@pytest.mark.parametrize(
+    "names, option",
+    [
+        (cagerig.SKINNING_METHODS, "skinning"),
+        (cagerig.COORDS_KINDS, "coords"),
+        (cagerig.CAGE_FITS, "cage_fit"),
+    ],
+)
+def test_option_name_lists_are_what_the_rig_accepts(names, option):
+    # Front ends (the Blender add-on) list their choices from these: each is accepted and read
+    # back, and a wrong name's error lists the same names.
+    bar = cagerig.Rig.builtin("bar")
+
+    def build(**options):
+        # From the bar's arrays, with DQ blend weights so that every skinning method applies.
+        return cagerig.Rig.from_arrays(
+            bar.rest_mesh, bar.triangles, bar.skin_weights, bar.rest_joints, bar.joint_parents,
+            bar.rest_cage, bar.cage_triangles, dq_blend_weights=np.full(len(bar.rest_mesh), 0.5), **options,
+        )
+
+    assert len(names) >= 2 and len(set(names)) == len(names)
+    for name in names:
+        assert getattr(build(**{option: name}), option) == name
+    with pytest.raises(ValueError) as e:
+        build(**{option: "no-such-name"})
+    assert all(name in str(e.value) for name in names)
+
+
+def test_unfitted_cage_policy_names_are_what_the_rig_accepts():
+    rig = cagerig.Rig.builtin("bar", coords="green")
+    for name in cagerig.UNFITTED_CAGE_POLICIES:
+        rig.set_unfitted_cage(name)
+        assert rig.unfitted_cage == name
+    with pytest.raises(ValueError) as e:
+        rig.set_unfitted_cage("no-such-policy")
+    assert all(name in str(e.value) for name in cagerig.UNFITTED_CAGE_POLICIES)

@@ -13,6 +13,10 @@ triangles.
 """
 
 from ._cagerig import (
+    CAGE_FITS as CAGE_FITS,
+    COORDS_KINDS as COORDS_KINDS,
+    SKINNING_METHODS as SKINNING_METHODS,
+    UNFITTED_CAGE_POLICIES as UNFITTED_CAGE_POLICIES,
     EditScript as EditScript,
     OutputFolder as OutputFolder,
     Rig as Rig,
@@ -39,6 +43,10 @@ from ._cagerig import (
 from .states import replay_script as replay_script, save_state as save_state
 
 __all__ = [
+    "CAGE_FITS",
+    "COORDS_KINDS",
+    "SKINNING_METHODS",
+    "UNFITTED_CAGE_POLICIES",
     "EditScript",
     "OutputFolder",
     "Rig",

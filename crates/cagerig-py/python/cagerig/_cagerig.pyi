@@ -10,9 +10,15 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+# The accepted names of each rig option, in the order front ends list them.
+SKINNING_METHODS: list[str]
+COORDS_KINDS: list[str]
+CAGE_FITS: list[str]
+UNFITTED_CAGE_POLICIES: list[str]
 __all__ = ['RigError', 'RigFileError', 'ScriptError', 'RigWarning', 'Rig', 'EditScript', 'mvc', 'maxvol_rows',
            'max_entropy_coordinates', 'lbs', 'dqs', 'cor', 'cor_centres', 'validate_cage', 'generate_cage', 'subdivide',
-           'read_obj', 'write_obj', '__version__']
+           'read_obj', 'write_obj', '__version__', 'SKINNING_METHODS', 'COORDS_KINDS',
+           'CAGE_FITS', 'UNFITTED_CAGE_POLICIES']
 
 _F64Array = npt.NDArray[np.float64]
 _I64Array = npt.NDArray[np.int64]
