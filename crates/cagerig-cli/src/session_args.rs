@@ -4,12 +4,12 @@
 use anyhow::Context;
 use cagerig::cage_coords::CoordsPrecision;
 use cagerig::session::{
-    CageFitSource, FitRows, GivenCageCoords, RigSession, SessionOptions, UnfittedCagePolicy,
+    CageFitSource, FitRowsKind, GivenCageCoords, RigSession, SessionOptions, UnfittedCagePolicy,
 };
 use cagerig::skinning::SkinningMethod;
-use cagerig::sync::skeleton_updater::JointLocalisation;
+use cagerig::sync::skeleton_updater::LocalisationKind;
 use cagerig::{CageFitKind, CoordsKind, NamedKind, Warning};
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use crate::rig_source::LoadedRig;
 
@@ -32,43 +32,6 @@ where
     .try_map(|name| name.parse::<K>())
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum, Default)]
-pub enum FitRowsArg {
-    /// MaxVol rows (shipped `.maxvol` if found, else computed): exact square system.
-    #[default]
-    Maxvol,
-    /// All mesh rows, least squares.
-    All,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum, Default)]
-pub enum LocalisationArg {
-    /// cagerig's articulation-localised prior (default).
-    #[default]
-    Articulation,
-    /// The paper tool's localisation (s = 0.05, ε = 0.01, signed masses).
-    ReferenceTool,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum, Default)]
-pub enum FitSourceArg {
-    /// LBS ghost of the fitted rows drives CageUp (exact loop for DQS/CoR).
-    #[default]
-    Ghost,
-    /// CageUp fits the displayed DQS/CoR mesh (approximate reverse deformer).
-    Displayed,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum, Default)]
-pub enum PrecisionArg {
-    /// Φ as computed (exact; matches the paper tool's outputs to 1e-9).
-    #[default]
-    F64,
-    /// Φ rounded to f32 once: half the memory traffic per frame, invariants still exact for the
-    /// rounded Φ, rest mesh moved by ~1e-7 of its size.
-    F32,
-}
-
 /// Session options shared by `edit` and `animate`.
 #[derive(Debug, Clone, Args)]
 pub struct SessionArgs {
@@ -81,17 +44,17 @@ pub struct SessionArgs {
     #[arg(long, value_parser = kind_parser::<CageFitKind>(), default_value = CageFitKind::default().name())]
     pub cage_fit: CageFitKind,
     /// Mesh rows used by CageUp/CageRev (Green: MaxVol rows of [φ ψ], least squares).
-    #[arg(long, value_enum, default_value_t)]
-    pub fit_rows: FitRowsArg,
+    #[arg(long, value_parser = kind_parser::<FitRowsKind>(), default_value = FitRowsKind::default().name())]
+    pub fit_rows: FitRowsKind,
     /// Joint localisation of the skeleton updater.
-    #[arg(long, value_enum, default_value_t)]
-    pub localisation: LocalisationArg,
+    #[arg(long, value_parser = kind_parser::<LocalisationKind>(), default_value = LocalisationKind::default().name())]
+    pub localisation: LocalisationKind,
     /// What CageUp fits with DQS/CoR.
-    #[arg(long, value_enum, default_value_t)]
-    pub fit_source: FitSourceArg,
+    #[arg(long, value_parser = kind_parser::<CageFitSource>(), default_value = CageFitSource::default().name())]
+    pub fit_source: CageFitSource,
     /// Precision of the cage coordinates Φ in the per-frame products M = ΦC.
-    #[arg(long, value_enum, default_value_t)]
-    pub coords_precision: PrecisionArg,
+    #[arg(long, value_parser = kind_parser::<CoordsPrecision>(), default_value = CoordsPrecision::default().name())]
+    pub coords_precision: CoordsPrecision,
     /// Keep a cage-weights file's Φ even when it does not reproduce the mesh (M ≠ ΦC, e.g. the
     /// tool's 6 decimals): to compare with the tool. By default such a Φ is recomputed, so that
     /// the first cage edit moves only what it touches.
@@ -118,22 +81,10 @@ impl SessionArgs {
     pub fn options(&self) -> SessionOptions {
         SessionOptions {
             coords: self.coords,
-            localisation: match self.localisation {
-                LocalisationArg::Articulation => JointLocalisation::default(),
-                LocalisationArg::ReferenceTool => JointLocalisation::reference_tool(),
-            },
-            fit_rows: match self.fit_rows {
-                FitRowsArg::Maxvol => FitRows::MaxVol,
-                FitRowsArg::All => FitRows::AllRows,
-            },
-            fit_source: match self.fit_source {
-                FitSourceArg::Ghost => CageFitSource::GhostLbs,
-                FitSourceArg::Displayed => CageFitSource::DisplayedMesh,
-            },
-            cage_coords_precision: match self.coords_precision {
-                PrecisionArg::F64 => CoordsPrecision::F64,
-                PrecisionArg::F32 => CoordsPrecision::F32,
-            },
+            localisation: self.localisation.localisation(),
+            fit_rows: self.fit_rows.into(),
+            fit_source: self.fit_source,
+            cage_coords_precision: self.coords_precision,
             given_cage_coords: if self.keep_file_coords {
                 GivenCageCoords::Keep
             } else {

@@ -44,28 +44,33 @@ fn _cagerig(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(functions::write_obj, m)?)?;
     m.add_function(wrap_pyfunction!(interchange::generate_cage, m)?)?;
     // The accepted names of each rig option, in the order front ends list them (the CLI's
-    // `--skinning`, `--coords`, `--cage-fit` and `--unfitted-cage` values): front ends such as
-    // the Blender add-on build their choices from these instead of repeating them.
+    // values of the same options): front ends such as the Blender add-on build their choices
+    // from these instead of repeating them, and the stubs' literals are checked against them.
     m.add(
         "SKINNING_METHODS",
-        cagerig::skinning::SkinningMethod::ALL
-            .map(|k| k.name())
-            .to_vec(),
+        names::<cagerig::skinning::SkinningMethod>(),
     )?;
-    m.add(
-        "COORDS_KINDS",
-        cagerig::CoordsKind::ALL.map(|k| k.name()).to_vec(),
-    )?;
-    m.add(
-        "CAGE_FITS",
-        cagerig::CageFitKind::ALL.map(|k| k.name()).to_vec(),
-    )?;
+    m.add("COORDS_KINDS", names::<cagerig::CoordsKind>())?;
+    m.add("CAGE_FITS", names::<cagerig::CageFitKind>())?;
     m.add(
         "UNFITTED_CAGE_POLICIES",
-        cagerig::session::UnfittedCagePolicy::ALL
-            .map(|k| k.name())
-            .to_vec(),
+        names::<cagerig::session::UnfittedCagePolicy>(),
+    )?;
+    m.add("FIT_ROWS", names::<cagerig::session::FitRowsKind>())?;
+    m.add(
+        "LOCALISATIONS",
+        names::<cagerig::sync::skeleton_updater::LocalisationKind>(),
+    )?;
+    m.add("FIT_SOURCES", names::<cagerig::session::CageFitSource>())?;
+    m.add(
+        "COORDS_PRECISIONS",
+        names::<cagerig::cage_coords::CoordsPrecision>(),
     )?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
+}
+
+/// The names of the kind `K`, in `K::ALL`'s order.
+fn names<K: cagerig::NamedKind>() -> Vec<&'static str> {
+    K::ALL.iter().map(|k| k.name()).collect()
 }

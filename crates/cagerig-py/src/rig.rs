@@ -161,7 +161,7 @@ impl Rig {
     ///     else "lbs". "blended" needs DQ blend weights: FBX characters carry them.
     /// fit_rows : {"maxvol", "all"}, default "maxvol"
     ///     Mesh rows used by CageUp/CageRev (MaxVol square system, or least squares on all rows).
-    /// localisation : {"articulation", "reference_tool"}, default "articulation"
+    /// localisation : {"articulation", "reference-tool"} ("reference_tool" is read alike), default "articulation"
     ///     SkelUp prior (see the README).
     /// fit_source : {"ghost", "displayed"}, default "ghost"
     ///     What CageUp fits under DQS/CoR.

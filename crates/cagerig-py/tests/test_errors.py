@@ -101,7 +101,10 @@ def test_bad_rig_edits(arm):
         arm.rotate_joint(3, [1, 0, 0], float("nan"))
     with pytest.raises(ValueError, match=r"axis must have shape \(3,\)"):
         arm.rotate_joint(3, [1, 0], 10)
-    with pytest.raises(ValueError, match="skinning must be 'lbs', 'dqs', 'cor' or 'blended'"):
+    with pytest.raises(
+        ValueError,
+        match='skinning: unknown skinning method "quaternions": expected lbs, dqs, cor or blended',
+    ):
         arm.set_skinning("quaternions")
     with pytest.raises(ValueError, match=r"local_rotations must have shape \(25, 4\)"):
         arm.set_pose(np.zeros((24, 4)))

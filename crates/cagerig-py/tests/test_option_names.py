@@ -13,6 +13,10 @@ ALIASES = {
     "_Coords": "COORDS_KINDS",
     "_CageFit": "CAGE_FITS",
     "_UnfittedCage": "UNFITTED_CAGE_POLICIES",
+    "_FitRows": "FIT_ROWS",
+    "_Localisation": "LOCALISATIONS",
+    "_FitSource": "FIT_SOURCES",
+    "_Precision": "COORDS_PRECISIONS",
 }
 
 
@@ -52,3 +56,8 @@ def test_every_listed_name_is_accepted_and_others_are_refused():
         assert "mvc" in str(error) and "harmonic" in str(error), error
     else:
         raise AssertionError("an unknown coordinates name was accepted")
+
+
+def test_the_localisation_reads_dash_and_underscore_alike():
+    for spelling in ("reference-tool", "reference_tool", "Reference_Tool"):
+        cagerig.Rig.builtin("bar", localisation=spelling)

@@ -38,6 +38,48 @@ pub enum CoordsPrecision {
     F32,
 }
 
+impl CoordsPrecision {
+    /// Every precision, the default first.
+    pub const ALL: [CoordsPrecision; 2] = [Self::F64, Self::F32];
+
+    /// The name front ends use (`--coords-precision`, Python's `coords_precision=`; serde's too).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::F64 => "f64",
+            Self::F32 => "f32",
+        }
+    }
+
+    /// One line for `--help`.
+    pub const fn help(self) -> &'static str {
+        match self {
+            Self::F64 => "Φ as computed (exact; matches the paper tool's outputs to 1e-9)",
+            Self::F32 => {
+                "Φ rounded to f32 once: half the memory traffic per frame, invariants still exact \
+                 for the rounded Φ, rest mesh moved by ~1e-7 of its size"
+            }
+        }
+    }
+}
+
+/// A name that is not a [`CoordsPrecision`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown coordinates precision {found:?}: expected {}",
+    CoordsPrecision::names_text()
+)]
+pub struct UnknownCoordsPrecision {
+    /// The name given.
+    pub found: String,
+}
+
+crate::named_kind::named_kind!(
+    CoordsPrecision,
+    UnknownCoordsPrecision,
+    CoordsPrecision::help,
+    no_serde
+);
+
 /// Cage coordinates Φ, `#V × #C`, column-major.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CageCoords {

@@ -53,8 +53,9 @@ pub use display_path::DisplayPrecision;
 pub use editable_state::{EditableState, SyncLocks};
 pub use green::GREEN_FIT_LIMIT;
 pub use parts::{
-    CageFitSource, FitRows, GRID_COR_CENTRES_ABOVE, GivenCageCoords, PHI_C_TOLERANCE,
-    PHI_C_TOLERANCE_F32, RigParts, SessionOptions, centre_coords_method, compute_centre_coords,
+    CageFitSource, FitRows, FitRowsKind, GRID_COR_CENTRES_ABOVE, GivenCageCoords, PHI_C_TOLERANCE,
+    PHI_C_TOLERANCE_F32, RigParts, SessionOptions, UnknownCageFitSource, UnknownFitRowsKind,
+    centre_coords_method, compute_centre_coords,
 };
 use rest_map::{BoundRestMap, GivenCoords, RestMap};
 use skinning::{CorSource, RigSkinning};

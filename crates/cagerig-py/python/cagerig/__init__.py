@@ -15,6 +15,10 @@ triangles.
 from ._cagerig import (
     CAGE_FITS as CAGE_FITS,
     COORDS_KINDS as COORDS_KINDS,
+    COORDS_PRECISIONS as COORDS_PRECISIONS,
+    FIT_ROWS as FIT_ROWS,
+    FIT_SOURCES as FIT_SOURCES,
+    LOCALISATIONS as LOCALISATIONS,
     SKINNING_METHODS as SKINNING_METHODS,
     UNFITTED_CAGE_POLICIES as UNFITTED_CAGE_POLICIES,
     EditScript as EditScript,
@@ -45,6 +49,10 @@ from .states import replay_script as replay_script, save_state as save_state
 __all__ = [
     "CAGE_FITS",
     "COORDS_KINDS",
+    "COORDS_PRECISIONS",
+    "FIT_ROWS",
+    "FIT_SOURCES",
+    "LOCALISATIONS",
     "SKINNING_METHODS",
     "UNFITTED_CAGE_POLICIES",
     "EditScript",

@@ -15,9 +15,13 @@ SKINNING_METHODS: list[str]
 COORDS_KINDS: list[str]
 CAGE_FITS: list[str]
 UNFITTED_CAGE_POLICIES: list[str]
+FIT_ROWS: list[str]
+LOCALISATIONS: list[str]
+FIT_SOURCES: list[str]
+COORDS_PRECISIONS: list[str]
 __all__ = ['RigError', 'RigFileError', 'ScriptError', 'RigWarning', 'Rig', 'EditScript', 'mvc', 'maxvol_rows',
            'max_entropy_coordinates', 'lbs', 'dqs', 'cor', 'cor_centres', 'validate_cage', 'generate_cage', 'subdivide',
-           'read_obj', 'write_obj', '__version__', 'SKINNING_METHODS', 'COORDS_KINDS',
+           'read_obj', 'write_obj', '__version__', 'SKINNING_METHODS', 'COORDS_KINDS', 'FIT_ROWS', 'LOCALISATIONS', 'FIT_SOURCES', 'COORDS_PRECISIONS',
            'CAGE_FITS', 'UNFITTED_CAGE_POLICIES']
 
 _F64Array = npt.NDArray[np.float64]
@@ -29,7 +33,7 @@ _Coords = Literal["mvc", "green"]
 _CageFit = Literal["regularised", "paper"]
 _UnfittedCage = Literal["refuse", "keep"]
 _FitRows = Literal["maxvol", "all"]
-_Localisation = Literal["articulation", "reference_tool"]
+_Localisation = Literal["articulation", "reference-tool"]
 _FitSource = Literal["ghost", "displayed"]
 _Precision = Literal["f64", "f32"]
 _Structure = Literal["posed_mesh", "rest_mesh", "posed_cage", "rest_cage"]

@@ -74,8 +74,7 @@ pub fn compute_centre_coords(
 }
 
 /// Which mesh CageUp fits when the skinning method is not LBS (Section 4.3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum CageFitSource {
     /// An LBS "ghost" of the fitted rows drives CageUp whatever the skinning method, so the
     /// loop C' → C → S → S' → C' stays exact for DQS and CoR too (the default).
@@ -84,6 +83,98 @@ pub enum CageFitSource {
     /// CageUp fits the displayed mesh; with DQS/CoR the reverse deformer is then approximate.
     DisplayedMesh,
 }
+
+impl CageFitSource {
+    /// Every source, the default first.
+    pub const ALL: [CageFitSource; 2] = [Self::GhostLbs, Self::DisplayedMesh];
+
+    /// The name front ends use (`--fit-source`, Python's `fit_source=`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::GhostLbs => "ghost",
+            Self::DisplayedMesh => "displayed",
+        }
+    }
+
+    /// One line for `--help`.
+    pub const fn help(self) -> &'static str {
+        match self {
+            Self::GhostLbs => {
+                "an LBS ghost of the fitted rows drives CageUp (exact loop for DQS/CoR)"
+            }
+            Self::DisplayedMesh => {
+                "CageUp fits the displayed DQS/CoR mesh (approximate reverse deformer)"
+            }
+        }
+    }
+}
+
+/// A name that is not a [`CageFitSource`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown fit source {found:?}: expected {}",
+    CageFitSource::names_text()
+)]
+pub struct UnknownCageFitSource {
+    /// The name given.
+    pub found: String,
+}
+
+crate::named_kind::named_kind!(CageFitSource, UnknownCageFitSource, CageFitSource::help);
+
+/// The named choices of [`FitRows`] (explicit rows are given as data, not by name).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FitRowsKind {
+    /// [`FitRows::MaxVol`].
+    #[default]
+    MaxVol,
+    /// [`FitRows::AllRows`].
+    AllRows,
+}
+
+impl FitRowsKind {
+    /// Every choice, the default first.
+    pub const ALL: [FitRowsKind; 2] = [Self::MaxVol, Self::AllRows];
+
+    /// The name front ends use (`--fit-rows`, Python's `fit_rows=`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::MaxVol => "maxvol",
+            Self::AllRows => "all",
+        }
+    }
+
+    /// One line for `--help`.
+    pub const fn help(self) -> &'static str {
+        match self {
+            Self::MaxVol => {
+                "MaxVol rows (a shipped .maxvol if found, else computed): exact square system"
+            }
+            Self::AllRows => {
+                "all mesh rows, least squares (the paper tool's GUI; slow on big meshes)"
+            }
+        }
+    }
+}
+
+impl From<FitRowsKind> for FitRows {
+    fn from(kind: FitRowsKind) -> Self {
+        match kind {
+            FitRowsKind::MaxVol => FitRows::MaxVol,
+            FitRowsKind::AllRows => FitRows::AllRows,
+        }
+    }
+}
+
+/// A name that is not a [`FitRowsKind`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown fit rows {found:?}: expected {}", FitRowsKind::names_text())]
+pub struct UnknownFitRowsKind {
+    /// The name given.
+    pub found: String,
+}
+
+crate::named_kind::named_kind!(FitRowsKind, UnknownFitRowsKind, FitRowsKind::help);
 
 /// Which mesh rows CageUp and CageRev use.
 #[derive(Debug, Clone, PartialEq, Default)]

@@ -76,6 +76,65 @@ impl JointLocalisation {
     }
 }
 
+/// The named choices of [`JointLocalisation`], with their parameters fixed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LocalisationKind {
+    /// [`JointLocalisation::default`]: cagerig's articulation-localised prior.
+    #[default]
+    Articulation,
+    /// [`JointLocalisation::reference_tool`]: the paper tool's localisation.
+    ReferenceTool,
+}
+
+impl LocalisationKind {
+    /// Every choice, the default first.
+    pub const ALL: [LocalisationKind; 2] = [Self::Articulation, Self::ReferenceTool];
+
+    /// The name front ends use (`--localisation`, Python's `localisation=`; `reference_tool` is
+    /// read as `reference-tool`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Articulation => "articulation",
+            Self::ReferenceTool => "reference-tool",
+        }
+    }
+
+    /// One line for `--help`.
+    pub const fn help(self) -> &'static str {
+        match self {
+            Self::Articulation => "cagerig's articulation-localised prior",
+            Self::ReferenceTool => {
+                "the paper tool's localisation (s = 0.05, ε = 0.01, signed masses)"
+            }
+        }
+    }
+
+    /// The localisation with this choice's parameters.
+    pub fn localisation(self) -> JointLocalisation {
+        match self {
+            Self::Articulation => JointLocalisation::default(),
+            Self::ReferenceTool => JointLocalisation::reference_tool(),
+        }
+    }
+}
+
+/// A name that is not a [`LocalisationKind`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown localisation {found:?}: expected {}",
+    LocalisationKind::names_text()
+)]
+pub struct UnknownLocalisationKind {
+    /// The name given.
+    pub found: String,
+}
+
+crate::named_kind::named_kind!(
+    LocalisationKind,
+    UnknownLocalisationKind,
+    LocalisationKind::help
+);
+
 /// Positive masses are floored at this fraction of the largest one in `Articulation` mode.
 pub const MASS_FLOOR_RATIO: f64 = 1e-8;
 
