@@ -181,20 +181,10 @@ pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow:
 }
 
 /// The rig of a command that opens a session (`edit`, `animate`, `export`, `render`): loaded
-/// with a progress bar, its cage generated under `--auto-cage`, and mean value coordinates
-/// computed only when the session binds with them
-/// ([`crate::session_args::SessionArgs::needs_mean_value_coords`]).
-pub fn load_rig_for_session(
-    rig: &RigArgs,
-    auto_cage: &AutoCageArgs,
-    session: &crate::session_args::SessionArgs,
-) -> anyhow::Result<LoadedRig> {
-    load_rig_or_generate_cage(
-        rig,
-        true,
-        session.needs_mean_value_coords(),
-        auto_cage.options(),
-    )
+/// with a progress bar and its cage generated under `--auto-cage`; the session computes the
+/// coordinates of the kind it binds with ([`crate::session_args::start_session`]).
+pub fn load_rig_for_session(rig: &RigArgs, auto_cage: &AutoCageArgs) -> anyhow::Result<LoadedRig> {
+    load_rig_or_generate_cage(rig, true, false, auto_cage.options())
 }
 
 /// [`load_rig`]; when the rig has no cage and `auto_cage` gives options, one is generated
@@ -399,6 +389,19 @@ fn load_files(
     })
 }
 
+/// A progress bar over the `num_vertices` vertices of a coordinates computation named `what`,
+/// when `progress` is on, stderr is a terminal and the mesh is big enough to wait for.
+pub fn coords_progress_bar(num_vertices: usize, progress: bool, what: &str) -> Option<ProgressBar> {
+    (progress && std::io::stderr().is_terminal() && num_vertices > 20_000).then(|| {
+        let bar = ProgressBar::new(num_vertices as u64);
+        bar.set_style(
+            ProgressStyle::with_template(&format!("{what} {{bar:40}} {{pos}}/{{len}} {{eta}}"))
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    })
+}
+
 /// Mean value coordinates of the rest mesh w.r.t. the rest cage, with a progress bar on a
 /// terminal.
 pub fn compute_coords_with_progress(
@@ -406,14 +409,7 @@ pub fn compute_coords_with_progress(
     progress: bool,
 ) -> anyhow::Result<CageCoords> {
     let n = parts.mesh.num_vertices();
-    let bar = (progress && std::io::stderr().is_terminal() && n > 20_000).then(|| {
-        let bar = ProgressBar::new(n as u64);
-        bar.set_style(
-            ProgressStyle::with_template("mean value coordinates {bar:40} {pos}/{len} {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        bar
-    });
+    let bar = coords_progress_bar(n, progress, "mean value coordinates");
     let report = |done: usize| {
         if let Some(b) = &bar {
             b.set_position(done as u64);

@@ -4,7 +4,8 @@
 use anyhow::Context;
 use cagerig::cage_coords::CoordsPrecision;
 use cagerig::session::{
-    CageFitSource, FitRowsKind, GivenCageCoords, RigSession, SessionOptions, UnfittedCagePolicy,
+    BindStage, CageFitSource, FitRowsKind, GivenCageCoords, RigSession, SessionOptions,
+    UnfittedCagePolicy,
 };
 use cagerig::skinning::SkinningMethod;
 use cagerig::sync::skeleton_updater::LocalisationKind;
@@ -68,16 +69,6 @@ pub struct SessionArgs {
 }
 
 impl SessionArgs {
-    /// Whether loading the rig should compute mean value coordinates Φ for the session: only a
-    /// rig bound with them uses Φ (a Green binding computes its own φ, ψ and would discard Φ,
-    /// with a note about coordinates nobody gave).
-    pub fn needs_mean_value_coords(&self) -> bool {
-        match self.coords {
-            CoordsKind::Mvc => true,
-            CoordsKind::Green => false,
-        }
-    }
-
     pub fn options(&self) -> SessionOptions {
         SessionOptions {
             coords: self.coords,
@@ -135,8 +126,22 @@ pub fn start_session(
         allow_mesh_outside_cage: loaded.allow_outside_cage,
         ..options
     };
-    let (session, mut warnings) =
-        RigSession::new(loaded.parts, options).context("assembling the rig")?;
+    // The session binds with the coordinates it was asked for and reports their progress.
+    let bar = crate::rig_source::coords_progress_bar(
+        loaded.parts.mesh.num_vertices(),
+        true,
+        "cage coordinates",
+    );
+    let report = |_stage: BindStage, done: usize, _total: usize| {
+        if let Some(bar) = &bar {
+            bar.set_position(done as u64);
+        }
+    };
+    let bound = RigSession::with_progress(loaded.parts, options, &report);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let (session, mut warnings) = bound.context("assembling the rig")?;
     let mut all = loaded.warnings;
     all.append(&mut warnings);
     Ok((session, all))

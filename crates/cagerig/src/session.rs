@@ -53,9 +53,9 @@ pub use display_path::DisplayPrecision;
 pub use editable_state::{EditableState, SyncLocks};
 pub use green::GREEN_FIT_LIMIT;
 pub use parts::{
-    CageFitSource, FitRows, FitRowsKind, GRID_COR_CENTRES_ABOVE, GivenCageCoords, PHI_C_TOLERANCE,
-    PHI_C_TOLERANCE_F32, RigParts, SessionOptions, UnknownCageFitSource, UnknownFitRowsKind,
-    centre_coords_method, compute_centre_coords,
+    BindProgress, BindStage, CageFitSource, FitRows, FitRowsKind, GRID_COR_CENTRES_ABOVE,
+    GivenCageCoords, PHI_C_TOLERANCE, PHI_C_TOLERANCE_F32, RigParts, SessionOptions,
+    UnknownCageFitSource, UnknownFitRowsKind, centre_coords_method, compute_centre_coords,
 };
 use rest_map::{BoundRestMap, GivenCoords, RestMap};
 use skinning::{CorSource, RigSkinning};
@@ -139,6 +139,17 @@ impl RigSession {
     /// Validates the parts, computes what is missing (Φ, MaxVol rows, Ψ), builds the operators
     /// and places the rig at rest. Returns the warnings gathered on the way.
     pub fn new(parts: RigParts, options: SessionOptions) -> Result<(Self, Vec<Warning>), RigError> {
+        Self::with_progress(parts, options, &|_, _, _| {})
+    }
+
+    /// [`RigSession::new`], reporting the progress of the long stages of binding to `progress`
+    /// (from worker threads): the one place the kind of coordinates is decided and computed, so
+    /// that a front end's progress bar needs nothing computed beforehand.
+    pub fn with_progress(
+        parts: RigParts,
+        options: SessionOptions,
+        progress: BindProgress<'_>,
+    ) -> Result<(Self, Vec<Warning>), RigError> {
         let stored_options = options.clone();
         let RigParts {
             mut mesh,
@@ -215,6 +226,7 @@ impl RigSession {
             &skin_weights,
             &skeleton,
             skeleton_updater_of,
+            progress,
             &mut warnings,
         )?;
         let nj = skeleton.len();

@@ -253,10 +253,7 @@ macro_rules! simd_dispatch {
 pub(crate) use simd_dispatch;
 
 #[cfg(test)]
-#[expect(
-    unsafe_code,
-    reason = "the tests call the #[target_feature] tiers after detecting them"
-)]
+#[expect(unsafe_code, reason = "the tests call each dispatch wrapper directly")]
 mod tests {
     use super::*;
 

@@ -101,7 +101,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     check_times(times)?;
     let mut pictures = crate::pictures::PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
-    let mut loaded = load_rig_for_session(rig, auto_cage, session_args)?;
+    let mut loaded = load_rig_for_session(rig, auto_cage)?;
     if let Some(g) = &loaded.generated_cage {
         report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
         write_generated_cage(&mut staged, &g.cage)?;

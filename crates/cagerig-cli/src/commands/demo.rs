@@ -120,7 +120,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         auto_weights: false,
     };
     let t = Instant::now();
-    let loaded = load_rig(&args, true, session_args.needs_mean_value_coords())?;
+    let loaded = load_rig(&args, true, false)?;
     let (mut s, warnings) = start_session(loaded, session_args.options())?;
     println!(
         "loaded built-in rig {builtin:?}: {} vertices, {} joints, {} cage vertices, {} coordinates ({:.1} ms incl. coordinates, MaxVol, Ψ)",

@@ -74,7 +74,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let script = read_script(script_path)?;
     let mut pictures = PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
-    let loaded = load_rig_for_session(rig, auto_cage, session_args)?;
+    let loaded = load_rig_for_session(rig, auto_cage)?;
     if let Some(g) = &loaded.generated_cage {
         report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
         write_generated_cage(&mut staged, &g.cage)?;

@@ -85,7 +85,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.max_between
         );
     }
-    let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage, &args.session)?;
+    let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage)?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
     let name = loaded

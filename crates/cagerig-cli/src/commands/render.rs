@@ -278,7 +278,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .map(crate::commands::edit::read_script)
         .transpose()?;
     let mut pictures = open_pictures(args)?;
-    let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage, &args.session)?;
+    let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage)?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
     tracks.warn_times_past_end(&args.times);

@@ -146,7 +146,7 @@ pub(super) fn ln_of_quotient<M: LaneMath>(num: V8, den: V8) -> V8 {
 #[cfg(test)]
 #[expect(
     unsafe_code,
-    reason = "the tests call the #[target_feature] tiers after detecting them"
+    reason = "the tests compare each lane-function tier with the scalar one"
 )]
 mod tests {
     use super::super::mvc_lanes::{LaneMath, PlainMath};

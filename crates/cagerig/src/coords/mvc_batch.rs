@@ -330,7 +330,7 @@ fn half_angle_over_sin(sin: f64, cos: f64) -> f64 {
 #[cfg(test)]
 #[expect(
     unsafe_code,
-    reason = "the tests call the #[target_feature] tiers after detecting them"
+    reason = "the tests run every batch kernel tier the CPU has"
 )]
 mod tests {
     use super::*;

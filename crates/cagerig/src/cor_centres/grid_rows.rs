@@ -153,10 +153,7 @@ fn accumulate_generic(items: &[(u64, u32, f64, f64)], tables: &Tables<'_>, sums:
 }
 
 #[cfg(test)]
-#[expect(
-    unsafe_code,
-    reason = "the tests call the #[target_feature] tiers after detecting them"
-)]
+#[expect(unsafe_code, reason = "the tests run every grid-row tier the CPU has")]
 mod tests {
     use super::super::grid_layout::GridInterpolation;
     use super::*;

@@ -14,8 +14,9 @@ use glam::DVec3;
 pub(super) fn compute_green_coords_for_mesh(
     cage: &TriMesh,
     positions: &[DVec3],
+    progress: Option<&(dyn Fn(usize) + Sync)>,
 ) -> Result<(crate::coords::green::GreenCoords, usize), RigError> {
-    let mut coords = compute_green_coords(cage, positions, None)?;
+    let mut coords = compute_green_coords(cage, positions, progress)?;
     let nc = cage.num_vertices();
     let outside: Vec<usize> = (0..positions.len())
         .filter(|&i| {

@@ -73,6 +73,28 @@ pub fn compute_centre_coords(
     )
 }
 
+/// The long stage of binding a rig that [`BindProgress`] reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BindStage {
+    /// The cage coordinates of the rest mesh's vertices: Φ for mean value rigs, φ and ψ for
+    /// Green rigs (`done` and `total` count vertices).
+    CageCoordinates,
+}
+
+impl BindStage {
+    /// What the stage computes, for a progress bar's label.
+    pub const fn label(self) -> &'static str {
+        match self {
+            Self::CageCoordinates => "cage coordinates",
+        }
+    }
+}
+
+/// Called while a rig binds, from worker threads, with the stage, the work done and its total:
+/// front ends show progress with it and compute nothing themselves
+/// ([`super::RigSession::with_progress`]).
+pub type BindProgress<'a> = &'a (dyn Fn(BindStage, usize, usize) + Sync);
+
 /// Which mesh CageUp fits when the skinning method is not LBS (Section 4.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum CageFitSource {

@@ -25,7 +25,8 @@
 use super::green::GreenState;
 use super::green_binding::{compute_green_coords_for_mesh, green_fit_rows};
 use super::parts::{
-    FitRows, GivenCageCoords, PHI_C_TOLERANCE, PHI_C_TOLERANCE_F32, SessionOptions, phi_c_residual,
+    BindProgress, BindStage, FitRows, GivenCageCoords, PHI_C_TOLERANCE, PHI_C_TOLERANCE_F32,
+    SessionOptions, phi_c_residual,
 };
 use crate::cage_coords::{CageCoords, CoordsPrecision};
 use crate::coords::{maxvol, mvc};
@@ -130,6 +131,7 @@ impl RestMap {
         skin_weights: &SkinWeights,
         skeleton: &Skeleton,
         skeleton_updater_of: Box<SkeletonUpdaterOf<'_>>,
+        progress: BindProgress<'_>,
         warnings: &mut Vec<Warning>,
     ) -> Result<BoundRestMap, RigError> {
         let (lo, hi) = cage.bounding_box();
@@ -140,6 +142,7 @@ impl RestMap {
             skin_weights,
             skeleton,
             size,
+            progress,
         };
         match options.coords {
             CoordsKind::Mvc => inputs.bind_mvc(mesh, given, skeleton_updater_of, warnings),
@@ -156,6 +159,7 @@ struct BindInputs<'a> {
     skeleton: &'a Skeleton,
     /// The cage's bounding-box diagonal.
     size: f64,
+    progress: BindProgress<'a>,
 }
 
 impl BindInputs<'_> {
@@ -196,12 +200,12 @@ impl BindInputs<'_> {
                              so that nothing the user does not touch moves at the first cage edit"
                         ),
                     });
-                    mvc::compute_cage_coords(cage, &mesh.positions, None)?
+                    self.cage_coordinates(&mesh.positions)?
                 } else {
                     phi
                 }
             }
-            None => mvc::compute_cage_coords(cage, &mesh.positions, None)?,
+            None => self.cage_coordinates(&mesh.positions)?,
         };
         let precision = options.cage_coords_precision;
         if precision == CoordsPrecision::F32 {
@@ -286,7 +290,9 @@ impl BindInputs<'_> {
                     .into(),
             });
         }
-        let (green_coords, outside) = compute_green_coords_for_mesh(cage, &mesh.positions)?;
+        let report = |done| (self.progress)(BindStage::CageCoordinates, done, nv);
+        let (green_coords, outside) =
+            compute_green_coords_for_mesh(cage, &mesh.positions, Some(&report))?;
         if outside > 0 {
             warnings.push(Warning::Note {
                 message: format!(
@@ -345,6 +351,12 @@ impl BindInputs<'_> {
             skeleton_updater,
             cor_centre_coords: None,
         })
+    }
+
+    /// Φ of `positions` (`#V`) for the cage, reporting progress.
+    fn cage_coordinates(&self, positions: &[DVec3]) -> Result<CageCoords, RigError> {
+        let report = |done| (self.progress)(BindStage::CageCoordinates, done, positions.len());
+        mvc::compute_cage_coords(self.cage, positions, Some(&report))
     }
 
     /// M's state against `map`, the map of C₀ (`#V`): the map when it reproduces M; with f32

@@ -34,7 +34,6 @@ pub(super) struct CorState {
     /// in full when CoR skinning runs next), so cage edits under LBS/DQS do not pay for Λ·C.
     pub(super) stale: bool,
     skinning: CorSkinning,
-    scratch: CorScratch,
 }
 
 impl CorState {
@@ -50,7 +49,6 @@ impl CorState {
             centres,
             stale: false,
             skinning: CorSkinning::new(skin_weights),
-            scratch: CorScratch::new(skin_weights.num_joints()),
         }
     }
 }
@@ -79,12 +77,45 @@ pub(super) enum ActiveSkinning {
     Blended(Box<BlendedSkinning>),
 }
 
+/// The kernels of Ω every rig has (`#V × #J`).
+#[derive(Debug, Clone)]
+struct SkinningKernels {
+    lbs: LinearBlendSkinning,
+    dqs: DualQuaternionSkinning,
+}
+
+impl SkinningKernels {
+    /// M' (`out`, `#V`) of `rest_mesh` (`#V`) under the skinning transforms `posed_from_rest`
+    /// (`#J`) by the method `active`, with the given scratch.
+    fn apply(
+        &self,
+        active: &ActiveSkinning,
+        posed_from_rest: &[DAffine3],
+        rest_mesh: &[DVec3],
+        dqs_scratch: &mut DqsScratch,
+        cor_scratch: &mut CorScratch,
+        out: &mut [DVec3],
+    ) {
+        match active {
+            ActiveSkinning::Lbs => self.lbs.apply(posed_from_rest, rest_mesh, out),
+            ActiveSkinning::Dqs => self.dqs.apply(posed_from_rest, rest_mesh, dqs_scratch, out),
+            ActiveSkinning::Blended(blended) => {
+                blended.apply(posed_from_rest, rest_mesh, dqs_scratch, out)
+            }
+            ActiveSkinning::Cor(cor) => {
+                cor.skinning
+                    .apply(posed_from_rest, rest_mesh, &cor.centres, cor_scratch, out)
+            }
+        }
+    }
+}
+
 /// The skinning component: the kernels, the method in use and the data of the others.
 #[derive(Debug, Clone)]
 pub(super) struct RigSkinning {
-    lbs: LinearBlendSkinning,
-    dqs: DualQuaternionSkinning,
+    kernels: SkinningKernels,
     dqs_scratch: DqsScratch,
+    cor_scratch: CorScratch,
     active: ActiveSkinning,
     /// The CoR state while another method is active (once built).
     idle_cor: Option<Box<CorState>>,
@@ -104,9 +135,12 @@ impl RigSkinning {
         cor_source: CorSource,
     ) -> Self {
         Self {
-            lbs: LinearBlendSkinning::new(skin_weights),
-            dqs: DualQuaternionSkinning::new(skin_weights),
+            kernels: SkinningKernels {
+                lbs: LinearBlendSkinning::new(skin_weights),
+                dqs: DualQuaternionSkinning::new(skin_weights),
+            },
             dqs_scratch: DqsScratch::new(skin_weights.num_joints()),
+            cor_scratch: CorScratch::new(skin_weights.num_joints()),
             active: ActiveSkinning::Lbs,
             idle_cor: None,
             idle_blended: blended.map(Box::new),
@@ -131,7 +165,7 @@ impl RigSkinning {
 
     /// The LBS kernel of Ω.
     pub(super) fn lbs(&self) -> &LinearBlendSkinning {
-        &self.lbs
+        &self.kernels.lbs
     }
 
     /// The rig's DQ blend weights b (`#V`), when it has them.
@@ -305,38 +339,21 @@ impl RigSkinning {
         rest_mesh: &[DVec3],
         out: &mut [DVec3],
     ) {
-        let mut dqs_scratch = std::mem::replace(&mut self.dqs_scratch, DqsScratch::new(0));
-        match &mut self.active {
-            ActiveSkinning::Cor(cor) => {
-                let mut scratch = std::mem::replace(&mut cor.scratch, CorScratch::new(0));
-                Self::apply_active(
-                    &self.active,
-                    &self.lbs,
-                    &self.dqs,
-                    posed_from_rest,
-                    rest_mesh,
-                    &mut dqs_scratch,
-                    &mut scratch,
-                    out,
-                );
-                if let ActiveSkinning::Cor(cor) = &mut self.active {
-                    cor.scratch = scratch;
-                }
-            }
-            ActiveSkinning::Lbs | ActiveSkinning::Dqs | ActiveSkinning::Blended(_) => {
-                Self::apply_active(
-                    &self.active,
-                    &self.lbs,
-                    &self.dqs,
-                    posed_from_rest,
-                    rest_mesh,
-                    &mut dqs_scratch,
-                    &mut CorScratch::new(0),
-                    out,
-                )
-            }
-        }
-        self.dqs_scratch = dqs_scratch;
+        let Self {
+            kernels,
+            dqs_scratch,
+            cor_scratch,
+            active,
+            ..
+        } = self;
+        kernels.apply(
+            active,
+            posed_from_rest,
+            rest_mesh,
+            dqs_scratch,
+            cor_scratch,
+            out,
+        );
     }
 
     /// [`RigSkinning::apply`] with caller-owned scratch (for a lazily computed M' behind `&`).
@@ -348,42 +365,13 @@ impl RigSkinning {
         cor_scratch: &mut CorScratch,
         out: &mut [DVec3],
     ) {
-        Self::apply_active(
+        self.kernels.apply(
             &self.active,
-            &self.lbs,
-            &self.dqs,
             posed_from_rest,
             rest_mesh,
             dqs_scratch,
             cor_scratch,
             out,
         );
-    }
-
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "the kernels and scratches are split borrows"
-    )]
-    fn apply_active(
-        active: &ActiveSkinning,
-        lbs: &LinearBlendSkinning,
-        dqs: &DualQuaternionSkinning,
-        posed_from_rest: &[DAffine3],
-        rest_mesh: &[DVec3],
-        dqs_scratch: &mut DqsScratch,
-        cor_scratch: &mut CorScratch,
-        out: &mut [DVec3],
-    ) {
-        match active {
-            ActiveSkinning::Lbs => lbs.apply(posed_from_rest, rest_mesh, out),
-            ActiveSkinning::Dqs => dqs.apply(posed_from_rest, rest_mesh, dqs_scratch, out),
-            ActiveSkinning::Blended(blended) => {
-                blended.apply(posed_from_rest, rest_mesh, dqs_scratch, out)
-            }
-            ActiveSkinning::Cor(cor) => {
-                cor.skinning
-                    .apply(posed_from_rest, rest_mesh, &cor.centres, cor_scratch, out)
-            }
-        }
     }
 }
