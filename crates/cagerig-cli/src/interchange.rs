@@ -5,10 +5,12 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use cagerig::animation::{CageTrack, SkeletonTrack};
-use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, choose_cage};
+use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError};
 use cagerig::playback::{AnimationPlayer, PoseChannels};
-use cagerig::session::{RigParts, RigSession};
-use cagerig_formats::{ImportOptions, ImportedCharacter, MorphTargets, import_character};
+use cagerig::session::RigSession;
+use cagerig_formats::{
+    ImportOptions, ImportedCharacter, MorphTargets, OpenCharacterError, import_character,
+};
 use serde::Serialize;
 
 use crate::rig_source::FileUse;
@@ -129,7 +131,36 @@ pub fn load_interchange(
     skin: Option<&str>,
     auto_cage: Option<cagerig::cage_gen::CageOptions>,
 ) -> anyhow::Result<LoadedRig> {
-    let character = import(path, skin)?;
+    let options = ImportOptions {
+        skin: skin.map(str::to_owned),
+        ..ImportOptions::default()
+    };
+    let request = CageRequest {
+        given: cage,
+        generate: auto_cage,
+    };
+    let opened = match cagerig_formats::open_character(path, &options, &request) {
+        Ok(opened) => opened,
+        Err(OpenCharacterError::Import(e)) => return Err(e.into()),
+        Err(OpenCharacterError::Cage(CageSourceError::Read(e))) => {
+            return Err(anyhow::Error::new(e).context(format!(
+                "reading the cage {}",
+                cage.map(Path::display)
+                    .map(|d| d.to_string())
+                    .unwrap_or_default()
+            )));
+        }
+        Err(OpenCharacterError::Cage(CageSourceError::Missing { .. })) => bail!(
+            "{}: no cage: give --cage CAGE.obj (in the character's space: the file's world space, \
+             FBX converted to +Y up metres as `cagerig info` states), add a mesh node \
+             named `<name>_cage` (or with extras.cagerig_cage) to the file, or pass \
+             --auto-cage to generate one",
+            path.display()
+        ),
+        Err(OpenCharacterError::Cage(e @ CageSourceError::Generate { .. })) => {
+            return Err(e.into());
+        }
+    };
     let mut files = vec![FileUse {
         role: "character".into(),
         path: path.to_path_buf(),
@@ -140,57 +171,21 @@ pub fn load_interchange(
             path: c.to_path_buf(),
         });
     }
-    let request = CageRequest {
-        given: cage,
-        generate: auto_cage,
-    };
-    let chosen = match choose_cage(path, &character.mesh, character.cage.clone(), &request) {
-        Ok(chosen) => chosen,
-        Err(CageSourceError::Read(e)) => {
-            return Err(anyhow::Error::new(e).context(format!(
-                "reading the cage {}",
-                cage.map(Path::display)
-                    .map(|d| d.to_string())
-                    .unwrap_or_default()
-            )));
-        }
-        Err(CageSourceError::Missing { .. }) => bail!(
-            "{}: no cage: give --cage CAGE.obj (in the character's space: the file's world space, \
-             FBX converted to +Y up metres as `cagerig info` states), add a mesh node \
-             named `<name>_cage` (or with extras.cagerig_cage) to the file, or pass \
-             --auto-cage to generate one",
-            path.display()
-        ),
-        Err(e @ CageSourceError::Generate { .. }) => return Err(e.into()),
-    };
-    let cage_mesh = chosen.cage;
-    let generated_cage = match chosen.origin {
+    let generated_cage = match opened.cage_origin {
         CageOrigin::Generated(g) => Some(*g),
         CageOrigin::Given(_) | CageOrigin::Found => None,
     };
-    let ImportedCharacter {
-        mesh,
-        skeleton,
-        skin_weights,
-        animations,
-        morph_targets,
-        warnings,
-        skinning: file_skinning,
-        dq_blend_weights,
-        ..
-    } = character;
     Ok(LoadedRig {
         name: path.display().to_string(),
-        parts: RigParts::new(mesh, skeleton, skin_weights, cage_mesh)
-            .with_dq_blend_weights(dq_blend_weights),
+        parts: opened.parts,
         files,
-        warnings,
+        warnings: opened.warnings,
         maxvol_path: None,
-        animations,
-        morph_targets,
+        animations: opened.animations,
+        morph_targets: opened.morph_targets,
         allow_outside_cage: false,
         generated_cage,
-        file_skinning,
+        file_skinning: opened.skinning,
     })
 }
 

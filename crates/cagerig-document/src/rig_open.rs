@@ -4,12 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use cagerig::Warning;
-use cagerig::cage_source::{
-    CageOrigin, CageRequest, CageSourceError, cage_options_with_vertices, choose_cage,
-};
+use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, cage_options_with_vertices};
 use cagerig::rig_files::MissingCage;
 use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
-use cagerig_formats::{ImportOptions, ImportedAnimation};
+use cagerig_formats::{ImportOptions, ImportedAnimation, OpenCharacterError};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -260,36 +258,28 @@ fn import_interchange(
         skin: skin.map(str::to_owned),
         ..ImportOptions::default()
     };
-    let character = cagerig_formats::import_character(path, &options)?;
-    let mut files = vec![("character".to_string(), path.to_path_buf())];
-    let mut warnings = character.warnings;
-    if let Some(c) = cage {
-        files.push(("cage".into(), c.to_path_buf()));
-    }
     let request = CageRequest {
         given: cage,
         generate: auto_cage.map(cage_options_with_vertices),
     };
-    let chosen = choose_cage(path, &character.mesh, character.cage, &request)?;
-    if let CageOrigin::Generated(g) = &chosen.origin {
+    let opened =
+        cagerig_formats::open_character(path, &options, &request).map_err(|e| match e {
+            OpenCharacterError::Import(e) => OpenError::from(e),
+            OpenCharacterError::Cage(e) => OpenError::from(e),
+        })?;
+    let mut files = vec![("character".to_string(), path.to_path_buf())];
+    if let Some(c) = cage {
+        files.push(("cage".into(), c.to_path_buf()));
+    }
+    let mut warnings = opened.warnings;
+    if let CageOrigin::Generated(g) = &opened.cage_origin {
         warnings.push(generated_note(g));
     }
-    let cage_mesh = chosen.cage;
     Ok((
-        RigParts::new(
-            character.mesh,
-            character.skeleton,
-            character.skin_weights,
-            cage_mesh,
-        )
-        .with_dq_blend_weights(character.dq_blend_weights),
+        opened.parts,
         warnings,
         files,
-        (
-            character.animations,
-            character.morph_targets,
-            character.skinning,
-        ),
+        (opened.animations, opened.morph_targets, opened.skinning),
     ))
 }
 

@@ -11,6 +11,7 @@ pub mod error;
 pub mod fbx;
 pub mod gltf;
 pub mod morph_cage_track;
+pub mod open_character;
 pub mod static_mesh;
 
 use std::path::Path;
@@ -21,6 +22,7 @@ pub use character::{
 pub use character_format::{CharacterFormat, export_character, export_character_baked};
 pub use error::FormatError;
 pub use morph_cage_track::{MorphCageTrack, morph_cage_track};
+pub use open_character::{OpenCharacterError, OpenedCharacter, open_character};
 pub use static_mesh::StaticMesh;
 
 /// Import choices.

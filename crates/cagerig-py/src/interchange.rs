@@ -6,14 +6,14 @@ use std::path::{Path, PathBuf};
 
 use cagerig::Warning;
 use cagerig::cage_gen::{CageOptions, generate_cage as generate};
-use cagerig::cage_source::{
-    CageOrigin, CageRequest, CageSourceError, choose_cage, generated_cage_note,
-};
+use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, generated_cage_note};
 use cagerig::mesh::TriMesh;
 use cagerig::session::RigParts;
 use cagerig::skinning::SkinningMethod;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+
+use cagerig_formats::OpenCharacterError;
 
 use crate::convert;
 use crate::errors::{RigError, file_error, format_error, rig_error};
@@ -46,40 +46,31 @@ pub fn load_character(
         skin,
         ..cagerig_formats::ImportOptions::default()
     };
-    let character = py
-        .detach(|| cagerig_formats::import_character(path, &options))
-        .map_err(format_error)?;
-    let mut warnings = character.warnings;
     let request = CageRequest {
         given: cage,
         generate: auto_cage.map(|n| cage_options(n, None)).transpose()?,
     };
-    let (mesh, found) = (&character.mesh, character.cage);
-    let chosen = py
-        .detach(|| choose_cage(path, mesh, found, &request))
+    let opened = py
+        .detach(|| cagerig_formats::open_character(path, &options, &request))
         .map_err(|e| match e {
-            CageSourceError::Read(e) => file_error(e),
-            e @ CageSourceError::Generate { .. } => RigError::new_err(e.to_string()),
-            CageSourceError::Missing { .. } => crate::errors::RigFileError::new_err(format!(
-                "{}: no cage: pass cage=CAGE.obj, or auto_cage=N to generate one with N vertices",
-                path.display()
-            )),
+            OpenCharacterError::Import(e) => format_error(e),
+            OpenCharacterError::Cage(CageSourceError::Read(e)) => file_error(e),
+            OpenCharacterError::Cage(e @ CageSourceError::Generate { .. }) => {
+                RigError::new_err(e.to_string())
+            }
+            OpenCharacterError::Cage(CageSourceError::Missing { .. }) => {
+                crate::errors::RigFileError::new_err(format!(
+                    "{}: no cage: pass cage=CAGE.obj, or auto_cage=N to generate one with N \
+                     vertices",
+                    path.display()
+                ))
+            }
         })?;
-    if let CageOrigin::Generated(g) = &chosen.origin {
+    let mut warnings = opened.warnings;
+    if let CageOrigin::Generated(g) = &opened.cage_origin {
         warnings.push(generated_cage_note(g));
     }
-    let cage_mesh = chosen.cage;
-    Ok((
-        RigParts::new(
-            character.mesh,
-            character.skeleton,
-            character.skin_weights,
-            cage_mesh,
-        )
-        .with_dq_blend_weights(character.dq_blend_weights),
-        warnings,
-        character.skinning,
-    ))
+    Ok((opened.parts, warnings, opened.skinning))
 }
 
 #[pymethods]
