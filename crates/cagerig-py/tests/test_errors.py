@@ -144,7 +144,7 @@ def test_bad_files(tmp_path):
     lonely.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     with pytest.raises(FileNotFoundError, match="no skeleton found"):
         cagerig.Rig.load(lonely)
-    with pytest.raises(ValueError, match="fit_rows must be"):
+    with pytest.raises(ValueError, match=r"fit_rows: unknown fit rows \"some\": expected maxvol or all"):
         cagerig.Rig.load(lonely, fit_rows="some")
 
 
