@@ -125,7 +125,10 @@ impl<'a> SendBytes<'a> {
     }
 }
 
-#[expect(unsafe_code, reason = "a write-only byte borrow is as Send as &mut [u8]")]
+#[expect(
+    unsafe_code,
+    reason = "a write-only byte borrow is as Send as &mut [u8]"
+)]
 // SAFETY: `WriteOnly<'a, [u8]>` is a unique, write-only borrow of `'a` bytes, like `&'a mut [u8]`,
 // which is `Send`; wgpu implements `Send` for `WriteOnly<'_, T>` only for sized `T` (its impl has
 // the implicit `T: Sized` bound), not because a byte slice could not be sent. The two halves of
