@@ -10,8 +10,6 @@
 //!
 //! `issue`: joints 1, 3, 4, 5, 8, 12, 16, 20, 24 from the rest pose only.
 
-// tests, benches and examples may panic on a broken fixture
-
 use std::path::Path;
 use std::time::Instant;
 
@@ -24,7 +22,7 @@ use glam::DVec3;
 
 const ANGLES: [f64; 5] = [15.0, 30.0, 45.0, 60.0, 90.0];
 
-fn main() {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let face_term = match args.first().map(String::as_str) {
         Some("lipman") => FaceTermKind::Lipman,
@@ -35,23 +33,26 @@ fn main() {
         _ => CageFitKind::Regularised,
     };
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
-    let files = load_rig_files(&dir.join("arm.obj"), None).unwrap();
+    let files = load_rig_files(&dir.join("arm.obj"), None)?;
     let options = SessionOptions {
         coords: CoordsKind::Green,
         green_face_term: face_term,
         cage_fit,
         ..SessionOptions::default()
     };
-    let mut s = RigSession::new(files.parts, options).unwrap().0;
+    let mut s = RigSession::new(files.parts, options)?.0;
     let nj = s.skeleton().len();
     let (joints, continuation): (Vec<usize>, bool) = match args.get(2).map(String::as_str) {
         Some("issue") => (vec![1, 3, 4, 5, 8, 12, 16, 20, 24], false),
-        Some(list) if list != "all" => {
-            (list.split(',').map(|j| j.parse().unwrap()).collect(), true)
-        }
+        Some(list) if list != "all" => (
+            list.split(',')
+                .map(str::parse)
+                .collect::<Result<Vec<usize>, _>>()?,
+            true,
+        ),
         _ => ((0..nj).collect(), true),
     };
-    let probe = CageQualityProbe::of_session(&s).unwrap();
+    let probe = CageQualityProbe::of_session(&s)?;
     println!("{face_term:?}, {cage_fit:?}, joints {joints:?}");
     let start = Instant::now();
     let mut events = 0;
@@ -66,8 +67,9 @@ fn main() {
                     worst = Some(worst.map_or(q, |w| w.worst(q)));
                 }
                 Err(RigError::GreenFitFailed(f)) => refused.push(format!("{what} ({f})")),
-                Err(e) => panic!("{what}: {e}"),
+                Err(e) => return Err(e),
             }
+            Ok(())
         };
     for &joint in &joints {
         for (axis_name, axis) in [("x", DVec3::X), ("y", DVec3::Y), ("z", DVec3::Z)] {
@@ -80,7 +82,7 @@ fn main() {
                     result,
                     &mut refused_rest,
                     format!("joint {joint} {axis_name} {angle}° from rest"),
-                );
+                )?;
             }
             if continuation {
                 s.reset_pose();
@@ -96,7 +98,7 @@ fn main() {
                         result,
                         &mut refused_continued,
                         format!("joint {joint} {axis_name} {angle}° continued"),
-                    );
+                    )?;
                 }
             }
         }
@@ -112,4 +114,5 @@ fn main() {
         refused_continued.len(),
         worst.map_or("none".to_string(), |q| q.to_string())
     );
+    Ok(())
 }

@@ -86,6 +86,10 @@ impl GreenState {
     /// `face_coords`), the CageUp rows, the rest cage, the number of joints, the face term and
     /// the rest mesh (`#V`); with `regularised` CageUp is regularised towards the carried cage
     /// ([`crate::sync::green_cage_fit::prior`]).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the binding's coordinates, rows and rest state, and the fit's two options"
+    )]
     pub(super) fn new(
         vertex_coords: &CageCoords,
         face_coords: CageCoords,
