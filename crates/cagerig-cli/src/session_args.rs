@@ -3,6 +3,7 @@
 
 use anyhow::Context;
 use cagerig::cage_coords::CoordsPrecision;
+use cagerig::coords::stretched_normals::FaceTermKind;
 use cagerig::session::{
     BindStage, CageFitSource, FitRowsKind, GivenCageCoords, RigSession, SessionOptions,
     UnfittedCagePolicy,
@@ -40,8 +41,9 @@ pub struct SessionArgs {
     /// edits; see docs/green-coordinates.md).
     #[arg(long, value_parser = kind_parser::<CoordsKind>(), default_value = "mvc")]
     pub coords: CoordsKind,
-    /// How CageUp fits the current cage C' to the posed skin (mean value rigs; Green rigs fit
-    /// by Gauss–Newton on the rows). See docs/method.md.
+    /// How CageUp fits the current cage C' to the posed skin: regularised towards the rest cage
+    /// carried by the skeleton, or the paper's fit on the rows alone (Green rigs: Gauss–Newton
+    /// on the rows, with or without that regulariser). See docs/method.md.
     #[arg(long, value_parser = kind_parser::<CageFitKind>(), default_value = CageFitKind::default().name())]
     pub cage_fit: CageFitKind,
     /// Mesh rows used by CageUp/CageRev (Green: MaxVol rows of [φ ψ], least squares).
@@ -66,6 +68,11 @@ pub struct SessionArgs {
     /// (written with a warning), grabs of C' refused until a pose fits again.
     #[arg(long, value_parser = kind_parser::<UnfittedCagePolicy>(), default_value = "refuse")]
     pub unfitted_cage: UnfittedCagePolicy,
+    /// Green rigs: the face term of the map M = φC + ψ·g(C): `fold-safe` (smooth when a
+    /// current cage triangle folds) or `lipman` (Lipman et al.'s stretched normal, which jumps
+    /// there). See docs/green-coordinates.md.
+    #[arg(long, value_parser = kind_parser::<FaceTermKind>(), default_value = FaceTermKind::default().name())]
+    pub green_face_term: FaceTermKind,
 }
 
 impl SessionArgs {
@@ -83,6 +90,7 @@ impl SessionArgs {
             },
             unfitted_cage: self.unfitted_cage,
             cage_fit: self.cage_fit,
+            green_face_term: self.green_face_term,
             ..SessionOptions::default()
         }
     }

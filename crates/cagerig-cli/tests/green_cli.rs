@@ -252,7 +252,8 @@ fn past_the_fold_keep_poses_the_skin_exactly_and_refuses_the_grab() {
     let dir = std::env::temp_dir().join(format!("cagerig-unfitted-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    // 120° at the elbow in one event: past the Arm's Green fold limit (about 66°).
+    // 120° at the elbow in one event: past the fold limit (about 66°) of the Arm's Green rig with
+    // Lipman's stretched normal and the fit on the rows alone (the default rig follows it).
     let bend = r#"{"op":"rotate_joint","joint":"lowerarm01.R","axis":[1,0,0],"degrees":120}"#;
     let inflate = r#"{"op":"move_rest_cage","vertices":[0,2,4,5,6],"offset":[2,-1,1.5]}"#;
     let grab = r#"{"op":"move_posed_cage","vertices":[20],"offset":[0,1,0]}"#;
@@ -266,7 +267,14 @@ fn past_the_fold_keep_poses_the_skin_exactly_and_refuses_the_grab() {
         cagerig()
             .arg("edit")
             .arg(repo().join("data/arm/arm.obj"))
-            .args(["--coords", coords, "--unfitted-cage", policy, "--script"])
+            .args(["--coords", coords, "--unfitted-cage", policy])
+            .args([
+                "--green-face-term",
+                "lipman",
+                "--cage-fit",
+                "paper",
+                "--script",
+            ])
             .arg(script)
             .arg("--out")
             .arg(dir.join(out))
@@ -324,7 +332,8 @@ fn export_past_the_fold_names_the_option_and_keeps_the_animation_with_it() {
     let dir = std::env::temp_dir().join(format!("cagerig-unfitted-export-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    // The Arm's own skeleton animation folds the Green current cage at t ≈ 1.17 s.
+    // The Arm's own skeleton animation folds the current cage of its Green rig with Lipman's
+    // stretched normal and the fit on the rows alone at t ≈ 1.17 s.
     let export = |policy: &str, out: &str| {
         cagerig()
             .arg("export")
@@ -334,6 +343,10 @@ fn export_past_the_fold_names_the_option_and_keeps_the_animation_with_it() {
                 "green",
                 "--unfitted-cage",
                 policy,
+                "--green-face-term",
+                "lipman",
+                "--cage-fit",
+                "paper",
                 "--fps",
                 "10",
             ])

@@ -94,8 +94,9 @@ impl RigSession {
         self.rest_map.linear_fit()
     }
 
-    /// The CageUp fit in use: the options' [`CageFitKind`] for mean value rigs, the paper's
-    /// (Gauss–Newton on the rows) for Green rigs.
+    /// The CageUp fit in use: the options' [`CageFitKind`] for mean value rigs; for Green rigs
+    /// `Regularised` when the Gauss–Newton fit on the rows is regularised towards the carried
+    /// cage, `Paper` when it fits the rows alone.
     pub fn cage_fit(&self) -> CageFitKind {
         self.rest_map.fit_kind()
     }

@@ -7,14 +7,15 @@ use crate::mesh::TriMesh;
 use crate::sync::cage_fit_kind::CageFitKind;
 
 impl RigSession {
-    /// The CageUp fit the rig was asked for (its options; Green rigs fit on the rows whatever
-    /// this says, see [`RigSession::cage_fit`]).
+    /// The CageUp fit the rig was asked for (its options; see [`RigSession::cage_fit`] for the
+    /// fit it has).
     pub fn requested_cage_fit(&self) -> CageFitKind {
         self.options.cage_fit
     }
 
     /// Switches CageUp to the fit `kind` and refits C' (unless CageUp is locked). One
-    /// all-or-nothing step: on an error nothing changed. Green rigs record the choice only.
+    /// all-or-nothing step: on an error nothing changed. Green rigs switch their fit's
+    /// regulariser (a rig whose cage has no prior keeps the fit on the rows alone).
     pub fn set_cage_fit(&mut self, kind: CageFitKind) -> Result<(), RigError> {
         if kind == self.options.cage_fit {
             return Ok(());

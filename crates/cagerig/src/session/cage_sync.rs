@@ -114,6 +114,8 @@ impl RigSession {
             }
             CageMap::Green(green) => {
                 let mut fit = green.fit.clone();
+                // The rows alone: no regulariser towards a carried cage.
+                fit.set_regularised(false);
                 // Start from the better of the given cage and the linear map's cage P·rows (the
                 // vertex part's fit, which ignores ψ·g but follows large deformations).
                 let mut linear = vec![DVec3::ZERO; out.len()];

@@ -10,13 +10,13 @@
 use std::sync::OnceLock;
 
 use crate::cage_coords::CageCoords;
-use crate::coords::stretched_normals::StretchedNormals;
+use crate::coords::stretched_normals::{FaceTermKind, StretchedNormals};
 use crate::error::RigError;
 use crate::error::UnfittedCage;
 use crate::skin_weights::SkinWeights;
 use crate::sync::cage_updater::CageUpdater;
-use crate::sync::green_cage_fit::GreenCageFit;
 use crate::sync::green_cage_fit::reverser::GreenCageReverser;
+use crate::sync::green_cage_fit::{FitPrior, GreenCageFit};
 use crate::sync::newton::NewtonReport;
 use glam::{DAffine3, DVec3};
 
@@ -83,7 +83,13 @@ pub const KEYFRAME_TERM_TOLERANCE: f64 = 1e-14;
 
 impl GreenState {
     /// From the Green coordinates of the rest mesh (φ is the session's `cage_coords`, ψ is
-    /// `face_coords`), the CageUp rows, the rest cage and the number of joints.
+    /// `face_coords`), the CageUp rows, the rest cage, the number of joints, the face term and
+    /// the rest mesh (`#V`); with `regularised` CageUp is regularised towards the carried cage
+    /// ([`crate::sync::green_cage_fit::prior`]).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the binding's coordinates, rows and rest state, and the fit's two options"
+    )]
     pub(super) fn new(
         vertex_coords: &CageCoords,
         face_coords: CageCoords,
@@ -92,6 +98,9 @@ impl GreenState {
         skin_weights: &SkinWeights,
         rest_cage: &[DVec3],
         num_joints: usize,
+        face_term: FaceTermKind,
+        rest_mesh: &[DVec3],
+        regularised: bool,
     ) -> Result<Self, RigError> {
         let (rows, cage_from_rows) = (linear.rows(), linear.cage_from_rows());
         let mut cage_weights = vec![0.0; rest_cage.len() * num_joints];
@@ -109,7 +118,7 @@ impl GreenState {
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),
         );
         let size = (hi - lo).length();
-        let normals = StretchedNormals::new(rest_cage, triangles);
+        let normals = StretchedNormals::with_kind(rest_cage, triangles, face_term);
         let num_faces = normals.len();
         let num_cage = rest_cage.len();
         let mut vertex_face_start = vec![0usize; num_cage + 1];
@@ -131,12 +140,33 @@ impl GreenState {
         }
         let mut rest_terms = vec![DVec3::ZERO; num_faces];
         normals.apply(rest_cage, &mut rest_terms);
-        let fit = GreenCageFit::new(
+        let mut fit = GreenCageFit::new(
             vertex_coords.select_rows(rows),
             face_coords.select_rows(rows),
             rest_cage,
             normals,
         )?;
+        // The regulariser's prior; kept aside when the rig asks for the paper's fit (a rig
+        // that cannot have one then fits on the rows alone).
+        let prior = (|| {
+            let triangles = fit.normals().triangles().to_vec();
+            let maps = crate::sync::cage_prior::regularised_maps(
+                vertex_coords,
+                rows,
+                rest_cage,
+                &triangles,
+                rest_mesh,
+                skin_weights,
+            )?;
+            let regulariser =
+                crate::sync::cage_prior::laplacian_regulariser(rest_cage.len(), &triangles)?;
+            Ok::<_, RigError>(FitPrior::new(maps.prior, &regulariser, rest_cage))
+        })();
+        match (prior, regularised) {
+            (Ok(prior), on) => fit = fit.with_prior(prior, on),
+            (Err(e), true) => return Err(e),
+            (Err(_), false) => {}
+        }
         Ok(Self {
             face_coords,
             reverser: GreenCageReverser::new(num_cage, num_faces, rows.len(), num_joints, size),

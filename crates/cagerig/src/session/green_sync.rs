@@ -22,6 +22,9 @@ impl RigSession {
             return;
         };
         let limit = GREEN_FIT_LIMIT * green.size;
+        green
+            .fit
+            .carry_prior(&self.posed_from_rest, &self.rest_cage);
         let predict = !green.start_from_posed_cage;
         green.start_from_posed_cage = false;
         if predict {
@@ -175,6 +178,10 @@ impl RigSession {
                 locked,
                 fill_skeleton_rows,
             );
+            let joint_linear: Vec<DMat3> = self.posed_from_rest.iter().map(|t| t.matrix3).collect();
+            green
+                .reverser
+                .prepare_prior(&green.fit, &joint_linear, &translation_jacobian);
         }
         Ok(())
     }

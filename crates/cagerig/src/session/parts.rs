@@ -261,9 +261,14 @@ pub struct SessionOptions {
     /// default) or keep it with C' unfitted ([`UnfittedCagePolicy`]).
     pub unfitted_cage: UnfittedCagePolicy,
     /// How CageUp fits C' ([`CageFitKind`]): regularised towards the rest cage carried by the
-    /// skeleton (the default), or the paper's interpolation of the MaxVol rows. Mean value
-    /// rigs only: Green rigs fit by Gauss–Newton on the rows ([`RigSession::cage_fit`]).
+    /// skeleton (the default), or the paper's interpolation of the MaxVol rows. Green rigs fit
+    /// by Gauss–Newton on the rows, with the same regulariser or without it
+    /// ([`RigSession::cage_fit`]).
     pub cage_fit: CageFitKind,
+    /// Green rigs: the face term g(C') of the map M = φC + ψ·g(C)
+    /// ([`crate::coords::stretched_normals::FaceTermKind`]): smooth through folds (the default)
+    /// or Lipman et al.'s stretched normal.
+    pub green_face_term: crate::coords::stretched_normals::FaceTermKind,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).

@@ -321,6 +321,9 @@ impl BindInputs<'_> {
             self.skin_weights,
             &cage.positions,
             self.skeleton.len(),
+            options.green_face_term,
+            &mesh.positions,
+            options.cage_fit == CageFitKind::Regularised,
         )?;
         let mut map = vec![DVec3::ZERO; nv];
         coords.apply_with_extra(
@@ -507,18 +510,20 @@ impl RestMap {
         self.linear_fit().rows()
     }
 
-    /// The CageUp fit in use: the bound [`CageFitKind`] for mean value rigs, the paper's
-    /// (Gauss–Newton on the rows) for Green rigs.
+    /// The CageUp fit in use: the bound [`CageFitKind`] for mean value rigs; for Green rigs
+    /// `Regularised` when the Gauss–Newton fit on the rows is regularised towards the carried
+    /// cage, `Paper` when it fits the rows alone.
     pub(super) fn fit_kind(&self) -> CageFitKind {
         match &self.kind {
             CageMap::Mvc(mvc) => mvc.fit.fit_kind(),
+            CageMap::Green(green) if green.fit.prior().is_some() => CageFitKind::Regularised,
             CageMap::Green(_) => CageFitKind::Paper,
         }
     }
 
     /// Switches a mean value rig's CageUp to the fit `kind` (Eq. 19 rebuilt for it, with
-    /// SkelUp's Ψ, for the binding cage `cage`); Green rigs keep their fit. Nothing changes on
-    /// error.
+    /// SkelUp's Ψ, for the binding cage `cage`); Green rigs switch their fit's regulariser (a
+    /// rig whose cage has no prior keeps the fit on the rows alone). Nothing changes on error.
     pub(super) fn set_fit_kind(
         &mut self,
         kind: CageFitKind,
@@ -536,7 +541,11 @@ impl RestMap {
                 skeleton_updater,
                 skeleton,
             ),
-            CageMap::Green(_) => Ok(()),
+            CageMap::Green(green) => {
+                green.fit.set_regularised(kind == CageFitKind::Regularised);
+                green.reverser.invalidate();
+                Ok(())
+            }
         }
     }
 

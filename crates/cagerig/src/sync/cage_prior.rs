@@ -108,6 +108,14 @@ impl CagePrior {
         self.strength
     }
 
+    /// The (cage vertex k, joint j, a_kj) entries with a_kj > 0, by cage vertex: how the
+    /// translations t_j move P_k (∂P_k/∂t_j = a_kj I).
+    pub fn joint_shares(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        self.joints
+            .iter()
+            .map(|e| (e.cage_vertex, e.joint, e.share))
+    }
+
     /// x̄_k and β_kj C for `rest_cage` (`#C`), when it changed since the last call.
     fn update_moments(&mut self, rest_cage: &[DVec3]) {
         if self.moments_cage == rest_cage {
@@ -309,7 +317,10 @@ pub(crate) fn regularised_maps(
 
 /// R = LᵀL + εI (`#C × #C`), L the uniform graph Laplacian of the cage's edges, ε =
 /// [`PRIOR_EPSILON`] · tr(LᵀL)/#C. Errors on a cage vertex with no edge.
-fn laplacian_regulariser(nc: usize, triangles: &[[u32; 3]]) -> Result<Mat<f64>, RigError> {
+pub(crate) fn laplacian_regulariser(
+    nc: usize,
+    triangles: &[[u32; 3]],
+) -> Result<Mat<f64>, RigError> {
     let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); nc];
     for tri in triangles {
         for e in 0..3 {

@@ -1,17 +1,18 @@
 //! CageUp for Green coordinates (S'→C'): the current cage C' whose Green deformation fits the
 //! skinned fitting rows M'_R, by Gauss–Newton.
 //!
-//! With Green coordinates the fitting rows are `F_R(C') = φ_R C' + ψ_R g(C')` (g = s·n, see
-//! [`crate::coords::stretched_normals`]), non-linear in C'. An exact interpolation of #C rows (the
+//! With Green coordinates the fitting rows are `F_R(C') = φ_R C' + ψ_R g(C')` (g the face terms,
+//! see [`crate::coords::stretched_normals`]), non-linear in C'. An exact interpolation of #C rows (the
 //! MVC CageUp) has no solution once the skinned rows leave what a Green cage can produce (a
 //! strong bend folds the interpolation map), so CageUp is the least-squares fit
 //!
-//! `C' = argmin ½ ‖F_R(C') − M'_R‖²`  over the rows R (MaxVol rows of [φ ψ], #C + #F of them, or
-//! all rows),
+//! `C' = argmin ½ ‖F_R(C') − M'_R‖² + ½ Σ_axes (C' − P)ᵀ W (C' − P)`  over the rows R (MaxVol
+//! rows of [φ ψ], #C + #F of them, or all rows), the second term when the fit is regularised
+//! towards the carried cage P ([`prior`]; W = λ(LᵀL + εI), `#C × #C`),
 //!
 //! solved by Newton's method on the gradient Jᵀr, with the analytic Jacobian
-//! `J = φ_R ⊗ I₃ + ψ_R ∂g/∂C'` (`3#R × 3#C`) and the Hessian `JᵀJ + Σ_f ∇²(u_f·g_f)` (u = ψ_Rᵀr;
-//! the second-order term by differences of the analytic ∂g, as the fitted rows are not all
+//! `J = φ_R ⊗ I₃ + ψ_R ∂g/∂C'` (`3#R × 3#C`) and the Hessian `JᵀJ + Σ_f ∇²(u_f·g_f)` (+ W ⊗ I₃;
+//! u = ψ_Rᵀr; the second-order term by differences of the analytic ∂g, as the fitted rows are not all
 //! reachable and Gauss–Newton alone converges slowly on such large-residual fits). Where that
 //! Hessian is not positive definite, or its quadratic model predicts the decrease of ½‖r‖² badly,
 //! the step is damped (Levenberg–Marquardt on the full Hessian, i.e. a trust region whose damping
@@ -36,6 +37,7 @@ mod damping;
 mod gram;
 mod objective;
 mod prediction;
+pub mod prior;
 pub mod reverser;
 mod rows;
 #[cfg(test)]
@@ -44,6 +46,7 @@ mod tests;
 pub use budget::{AfterDirectSolve, FitBudget, UNFITTED_STEPS};
 use damping::{damping_scale, lower_damping, raise_damping};
 use gram::gram_matrices;
+pub use prior::FitPrior;
 pub(crate) use rows::{rows_jacobian_into, rows_of};
 
 /// Converged when max |Jᵀr| is at most this fraction of the cage size.
@@ -118,6 +121,10 @@ pub struct GreenCageFit {
     /// The direct solve's cage while a retry runs (`#C`).
     retry_cage: Vec<DVec3>,
     last: NewtonReport,
+    /// The regulariser towards the carried cage ([`prior`]), when the fit has one, and a prior
+    /// kept aside while the fit is not regularised.
+    prior: Option<FitPrior>,
+    prior_aside: Option<FitPrior>,
 }
 
 impl GreenCageFit {
@@ -188,6 +195,8 @@ impl GreenCageFit {
             piece_target: vec![DVec3::ZERO; num_rows],
             retry_cage: vec![DVec3::ZERO; num_cage],
             last: NewtonReport::default(),
+            prior: None,
+            prior_aside: None,
         })
     }
 
@@ -216,6 +225,7 @@ impl GreenCageFit {
         self.g = g;
         self.last_target = rows;
         self.last_solution.copy_from_slice(cage);
+        self.restart_prior_from(cage);
         self.has_last_target = true;
         self.lu.invalidate();
         self.factor_damping = f64::INFINITY;
@@ -232,7 +242,8 @@ impl GreenCageFit {
         self.tolerance
     }
 
-    /// ½‖F_R(x) − target‖² (the fit's energy at x). No allocation.
+    /// ½‖F_R(x) − target‖² plus the prior's ½ Σ_axes (x − P)ᵀW(x − P) (the fit's energy at x).
+    /// No allocation.
     pub fn energy(&mut self, target: &[DVec3], x: &[DVec3]) -> f64 {
         let mut g = std::mem::take(&mut self.g);
         let mut rows = std::mem::take(&mut self.trial_residual);
@@ -241,7 +252,8 @@ impl GreenCageFit {
             .iter()
             .zip(target)
             .map(|(r, t)| 0.5 * r.distance_squared(*t))
-            .sum::<f64>();
+            .sum::<f64>()
+            + self.prior_energy(x);
         self.g = g;
         self.trial_residual = rows;
         if energy.is_finite() {
@@ -313,14 +325,17 @@ impl GreenCageFit {
                 for ((p, last), t) in piece_target.iter_mut().zip(&self.last_target).zip(target) {
                     *p = last.lerp(*t, a);
                 }
+                self.blend_prior(a);
                 let report = self.solve_for(&piece_target, posed_cage, MAX_PIECE_STEPS);
                 self.piece_target = piece_target;
                 report
             })?;
+            self.blend_prior(1.0);
         }
         if total.residual <= self.accepted {
             self.last_target.copy_from_slice(target);
             self.last_solution.copy_from_slice(posed_cage);
+            self.keep_prior_as_last();
             self.has_last_target = true;
         }
         self.last = total;

@@ -11,16 +11,17 @@ impl GreenCageFit {
     /// function theorem the solution for the rows t moves by H⁻¹J(x₀)ᵀ(t − t₀) = −H⁻¹∇E(x₀; t),
     /// one chord step from x₀ on the last factors (taken at x₀ to round-off when that solve
     /// converged). It follows the fit's flat directions, which a warm start moved with the bones
-    /// does not know about. No allocation.
+    /// does not know about. With a prior, the carried cage P is tried as a start as well. No
+    /// allocation.
     pub(super) fn predict_from_last_solution(
         &mut self,
         target: &[DVec3],
         posed_cage: &mut [DVec3],
     ) {
-        if !self.has_last_target
-            || !self.lu.is_factorised()
-            || self.factor_damping > CHORD_DAMPING * damping_scale(&self.normal_matrix)
-        {
+        let predict = self.has_last_target
+            && self.lu.is_factorised()
+            && self.factor_damping <= CHORD_DAMPING * damping_scale(&self.normal_matrix);
+        if !predict && self.prior.is_none() {
             return;
         }
         let mut g = std::mem::take(&mut self.g);
@@ -28,7 +29,7 @@ impl GreenCageFit {
         let mut residual = std::mem::take(&mut self.trial_residual);
         let mut gradient = std::mem::take(&mut self.trial_gradient);
         let mut trial = std::mem::take(&mut self.trial);
-        let (start_energy, start_norm) = self.evaluate(
+        let (mut start_energy, start_norm) = self.evaluate(
             posed_cage,
             target,
             &mut g,
@@ -38,27 +39,45 @@ impl GreenCageFit {
         );
         // A warm start that is already the answer (after a grab: CageRev made it one) stays.
         if start_norm > self.tolerance {
-            let _ = self.evaluate(
-                &self.last_solution,
-                target,
-                &mut g,
-                &mut face_sums,
-                &mut residual,
-                &mut gradient,
-            );
-            let from = std::mem::take(&mut self.last_solution);
-            self.newton_step(&gradient, &from, &mut trial);
-            self.last_solution = from;
-            let (predicted_energy, _) = self.evaluate(
-                &trial,
-                target,
-                &mut g,
-                &mut face_sums,
-                &mut residual,
-                &mut gradient,
-            );
-            if predicted_energy < start_energy {
-                posed_cage.copy_from_slice(&trial);
+            // With a prior, the carried cage P is a start too.
+            if let Some(p) = &self.prior {
+                trial.copy_from_slice(p.target());
+                let (carried_energy, _) = self.evaluate(
+                    &trial,
+                    target,
+                    &mut g,
+                    &mut face_sums,
+                    &mut residual,
+                    &mut gradient,
+                );
+                if carried_energy < start_energy {
+                    posed_cage.copy_from_slice(&trial);
+                    start_energy = carried_energy;
+                }
+            }
+            if predict {
+                let _ = self.evaluate(
+                    &self.last_solution,
+                    target,
+                    &mut g,
+                    &mut face_sums,
+                    &mut residual,
+                    &mut gradient,
+                );
+                let from = std::mem::take(&mut self.last_solution);
+                self.newton_step(&gradient, &from, &mut trial);
+                self.last_solution = from;
+                let (predicted_energy, _) = self.evaluate(
+                    &trial,
+                    target,
+                    &mut g,
+                    &mut face_sums,
+                    &mut residual,
+                    &mut gradient,
+                );
+                if predicted_energy < start_energy {
+                    posed_cage.copy_from_slice(&trial);
+                }
             }
         }
         self.g = g;

@@ -21,10 +21,21 @@
 //! `J_tᵀ (R̃ J(C₀ + δ) + K_A J_A(C₀ + δ))` from δ = 0, J_A the Jacobian of A (`3#J × 3#C`); a
 //! large grab that stalls is split into pieces. For MVC (ψ = 0, Ψ_ψ = 0, J = Φ̃) this is Eq. 19
 //! in its least-squares form.
+//!
+//! A fit regularised towards the carried cage P ([`super::prior`]) is stationary where
+//! `J(C')ᵀ (F_R(C') − M'_R) + W (C' − P) = 0`, so
+//!
+//! `G(δ) = J_tᵀ (M'_R(C₀ + δ) − F_R(C'_t)) + W (P(C₀ + δ) − C'_t)`,
+//!
+//! with P affine in C and in the joint translations for a fixed pose (the translations affine
+//! in A): `P(C₀ + δ) = P(C₀) + (∂P/∂C) δ + (∂P/∂t)(∂t/∂A)(A(C₀ + δ) − A(C₀))` exactly, both
+//! matrices built once per pose ([`GreenCageReverser::prepare_prior`]). Its Jacobian adds
+//! `W (∂P/∂C + (∂P/∂t)(∂t/∂A) J_A)`.
 
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use glam::{DMat3, DVec3};
 
+use super::prior::prior_jacobians;
 use super::{GRADIENT_TOLERANCE, GreenCageFit, rows_jacobian_into, rows_of};
 use crate::error::RigError;
 use crate::sync::newton::{NewtonReport, NewtonSolver, solve_by_continuation};
@@ -77,6 +88,24 @@ pub struct GreenCageReverser {
     g: Vec<DVec3>,
     moved: Vec<DVec3>,
     moved_for_jacobian: Vec<DVec3>,
+    /// The regularised fit's terms (see the module docs), when the fit has a prior.
+    prior: Option<ReverserPrior>,
+}
+
+/// CageRev's terms of a regularised fit, for one pose (see the module docs).
+#[derive(Debug, Clone)]
+struct ReverserPrior {
+    /// W ⊗ I₃, `3#C × 3#C`.
+    weight: Mat<f64>,
+    /// ∂P/∂C (`3#C × 3#C`) and (∂P/∂t)(∂t/∂A) (`3#C × 3#J`, zero while SkelUp is locked).
+    cage_rows: Mat<f64>,
+    joint_rows: Mat<f64>,
+    /// P(C₀) − C'_t of the current piece, then P(C₀ + δ) − C'_t (`3#C`), and δ (`3#C`).
+    start: Vec<f64>,
+    change: faer::Col<f64>,
+    delta: Vec<f64>,
+    /// ∂P/∂C + (∂P/∂t)(∂t/∂A) J_A, `3#C × 3#C`.
+    system: Mat<f64>,
 }
 
 /// The state a grab starts from.
@@ -134,7 +163,50 @@ impl GreenCageReverser {
             g: vec![DVec3::ZERO; num_faces],
             moved: vec![DVec3::ZERO; num_cage],
             moved_for_jacobian: vec![DVec3::ZERO; num_cage],
+            prior: None,
         }
+    }
+
+    /// The regularised fit's terms for the pose of the last [`Self::prepare`] (after it): with
+    /// the joints' linear parts `joint_linear` (`#J`) and ∂t_j/∂A_l (`translation_jacobian`,
+    /// `#J × #J` blocks, row-major by j). Drops them when `fit` has no prior.
+    pub fn prepare_prior(
+        &mut self,
+        fit: &GreenCageFit,
+        joint_linear: &[DMat3],
+        translation_jacobian: &[DMat3],
+    ) {
+        let Some(prior) = fit.prior() else {
+            self.prior = None;
+            return;
+        };
+        let n = 3 * self.num_cage;
+        let nj = joint_linear.len();
+        let terms = self.prior.get_or_insert_with(|| ReverserPrior {
+            weight: Mat::zeros(n, n),
+            cage_rows: Mat::zeros(n, n),
+            joint_rows: Mat::zeros(n, 3 * nj),
+            start: vec![0.0; n],
+            change: faer::Col::zeros(n),
+            delta: vec![0.0; n],
+            system: Mat::zeros(n, n),
+        });
+        let weight = prior.weight();
+        for k in 0..self.num_cage {
+            for m in 0..self.num_cage {
+                for a in 0..3 {
+                    terms.weight[(3 * k + a, 3 * m + a)] = weight[(k, m)];
+                }
+            }
+        }
+        prior_jacobians(
+            prior,
+            joint_linear,
+            translation_jacobian,
+            self.skel_up_locked,
+            &mut terms.cage_rows,
+            &mut terms.joint_rows,
+        );
     }
 
     /// Takes SkelUp's coordinates: row j of Ψ_φ (`#C`) and of Ψ_ψ (`#F`, or empty for a SkelUp
@@ -149,6 +221,12 @@ impl GreenCageReverser {
                 self.joint_face_rows[(j, f)] = face.get(f).copied().unwrap_or(0.0);
             }
         }
+        self.ready = false;
+    }
+
+    /// Forgets the pose K_A, R̃ and the prior's terms were built for: the next grab rebuilds
+    /// them (after the fit's regulariser was switched).
+    pub fn invalidate(&mut self) {
         self.ready = false;
     }
 
@@ -204,6 +282,11 @@ impl GreenCageReverser {
             ));
         }
         rest_delta.iter_mut().for_each(|d| *d = DVec3::ZERO);
+        if fit.prior().is_some() != self.prior.is_some() {
+            return Err(RigError::Invalid(
+                "the Green reverse cage deformer was not prepared for the fit's prior".into(),
+            ));
+        }
         fit.normals().apply(at.rest_cage, &mut self.g);
         rows_of(
             &self.joint_vertex_rows,
@@ -243,6 +326,16 @@ impl GreenCageReverser {
             *t = *p + a * *d;
         }
         fit.rows_of(&self.posed_target, &mut self.g, &mut self.rows_target);
+        if let (Some(terms), Some(carried)) = (&mut self.prior, fit.prior_target()) {
+            for ((start, p), t) in terms
+                .start
+                .chunks_exact_mut(3)
+                .zip(carried)
+                .zip(&self.posed_target)
+            {
+                start.copy_from_slice(&(*p - *t).to_array());
+            }
+        }
         for (f, blocks) in self.target_blocks.iter_mut().enumerate() {
             *blocks = fit.normals().face_jacobian(&self.posed_target, f);
         }
@@ -279,6 +372,8 @@ impl GreenCageReverser {
         let g = &mut self.g;
         let moved = &mut self.moved;
         let moved_for_jacobian = &mut self.moved_for_jacobian;
+        // Shared by both closures below (one runs at a time).
+        let prior = std::cell::RefCell::new(self.prior.as_mut());
         self.solver.solve(
             rest_delta,
             self.tolerance,
@@ -352,6 +447,40 @@ impl GreenCageReverser {
                         out[corner as usize] += block.transpose() * sum;
                     }
                 }
+                // + W (P(C₀ + δ) − C'_t), P(C₀ + δ) = P(C₀) + ∂P/∂C δ + ∂P/∂A ΔA.
+                if let Some(terms) = prior.borrow_mut().as_mut() {
+                    flatten(delta, &mut terms.delta);
+                    faer::linalg::matmul::matmul(
+                        terms.change.as_mat_mut(),
+                        Accum::Replace,
+                        terms.cage_rows.as_ref(),
+                        MatRef::from_column_major_slice(&terms.delta, terms.delta.len(), 1),
+                        1.0,
+                        Par::Seq,
+                    );
+                    faer::linalg::matmul::matmul(
+                        terms.change.as_mat_mut(),
+                        Accum::Add,
+                        terms.joint_rows.as_ref(),
+                        MatRef::from_column_major_slice(joint_change, joint_change.len(), 1),
+                        1.0,
+                        Par::Seq,
+                    );
+                    for (c, s) in terms.change.iter_mut().zip(&terms.start) {
+                        *c += *s;
+                    }
+                    for (k, o) in out.iter_mut().enumerate() {
+                        let mut pull = [0.0; 3];
+                        for (a, p) in pull.iter_mut().enumerate() {
+                            let row = terms.weight.row(3 * k + a);
+                            *p = row
+                                .iter()
+                                .zip(terms.change.iter())
+                                .fold(0.0, |acc, (w, c)| acc + w * c);
+                        }
+                        *o += DVec3::from_array(pull);
+                    }
+                }
                 let largest = out.iter().fold(0.0f64, |m, o| m.max(o.abs().max_element()));
                 if largest.is_finite() {
                     largest
@@ -401,6 +530,26 @@ impl GreenCageReverser {
                     1.0,
                     Par::Seq,
                 );
+                // + W (∂P/∂C + ∂P/∂A J_A).
+                if let Some(terms) = prior.borrow_mut().as_mut() {
+                    terms.system.copy_from(&terms.cage_rows);
+                    faer::linalg::matmul::matmul(
+                        terms.system.as_mut(),
+                        Accum::Add,
+                        terms.joint_rows.as_ref(),
+                        joint_jacobian.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    faer::linalg::matmul::matmul(
+                        system.as_mut(),
+                        Accum::Add,
+                        terms.weight.as_ref(),
+                        terms.system.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                }
                 for c in 0..n {
                     let column = system.col(c);
                     for r in 0..n {

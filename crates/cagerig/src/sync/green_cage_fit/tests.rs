@@ -222,3 +222,134 @@ fn a_fit_whose_round_off_floor_is_above_the_tolerance_stops_there() {
         "{second:?}"
     );
 }
+
+/// The fit of all rows of `points` regularised towards the carried cage, with two joints
+/// splitting the points by x (the test cage and the points' φ for the prior).
+fn regularised_fit_of(points: &[DVec3]) -> (GreenCageFit, crate::mesh::TriMesh) {
+    let (fit, cage) = fit_of(points);
+    let coords = compute_green_coords(&cage, points, None).unwrap();
+    let (lo, hi) = crate::mesh::bounding_box(points);
+    let (omega, _) = crate::skin_weights::SkinWeights::from_triplets(
+        points.len(),
+        2,
+        points.iter().enumerate().flat_map(|(i, p)| {
+            let t = ((p.x - lo.x) / (hi.x - lo.x)).clamp(0.0, 1.0);
+            [(i, 0, 1.0 - t), (i, 1, t)]
+        }),
+    )
+    .unwrap();
+    let rows: Vec<usize> = (0..points.len()).collect();
+    let maps = crate::sync::cage_prior::regularised_maps(
+        &coords.vertex,
+        &rows,
+        &cage.positions,
+        &coords.triangles,
+        points,
+        &omega,
+    )
+    .unwrap();
+    let regulariser =
+        crate::sync::cage_prior::laplacian_regulariser(cage.num_vertices(), &coords.triangles)
+            .unwrap();
+    let prior = FitPrior::new(maps.prior, &regulariser, &cage.positions);
+    (fit.with_prior(prior, true), cage)
+}
+
+/// At the rest pose the carried cage is the rest cage, so the regularised fit of the rest rows
+/// returns the rest cage (from a perturbed start); a rigid motion of both joints moves the
+/// answer rigidly.
+#[test]
+fn a_regularised_fit_keeps_the_rest_cage_and_follows_rigid_motions() {
+    let points = random_inside(17, 80);
+    let (mut fit, cage) = regularised_fit_of(&points);
+    fit.carry_prior(&[glam::DAffine3::IDENTITY; 2], &cage.positions);
+    for (p, c) in fit.prior_target().unwrap().iter().zip(&cage.positions) {
+        assert!(p.distance(*c) < 1e-13, "P {p} vs C {c}");
+    }
+    let mut g = vec![DVec3::ZERO; fit.normals().len()];
+    let mut rows = vec![DVec3::ZERO; points.len()];
+    fit.rows_of(&cage.positions, &mut g, &mut rows);
+    let mut solved: Vec<DVec3> = cage
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, c)| *c + DVec3::new(0.02, -0.01 * (i % 3) as f64, 0.015))
+        .collect();
+    let report = fit.apply(&rows, &mut solved).unwrap();
+    assert!(report.residual <= fit.tolerance(), "{report:?}");
+    for (s, c) in solved.iter().zip(&cage.positions) {
+        assert!(s.distance(*c) < 1e-11, "{s} vs {c}");
+    }
+    let motion = glam::DAffine3::from_rotation_translation(
+        DQuat::from_axis_angle(DVec3::new(0.2, 1.0, -0.4).normalize(), 0.7),
+        DVec3::new(0.3, -0.2, 0.5),
+    );
+    fit.carry_prior(&[motion; 2], &cage.positions);
+    let moved_rows: Vec<DVec3> = rows.iter().map(|r| motion.transform_point3(*r)).collect();
+    let report = fit.apply(&moved_rows, &mut solved).unwrap();
+    assert!(report.residual <= fit.tolerance(), "{report:?}");
+    for (s, c) in solved.iter().zip(&cage.positions) {
+        let expected = motion.transform_point3(*c);
+        assert!(s.distance(expected) < 1e-10, "{s} vs {expected}");
+    }
+}
+
+/// With a prior, the gradient is the derivative of the energy and the Newton matrix the
+/// derivative of the gradient (central differences), at a large-residual state.
+#[test]
+fn a_regularised_fits_gradient_and_newton_matrix_are_its_derivatives() {
+    let points = random_inside(19, 50);
+    let (mut fit, cage) = regularised_fit_of(&points);
+    let turn = glam::DAffine3::from_rotation_translation(
+        DQuat::from_axis_angle(DVec3::X, 0.5),
+        DVec3::new(0.0, 0.1, 0.0),
+    );
+    fit.carry_prior(&[glam::DAffine3::IDENTITY, turn], &cage.positions);
+    let target: Vec<DVec3> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| *p * 1.1 + DVec3::new(0.05 * (i % 4) as f64, -0.03, 0.02))
+        .collect();
+    let x: Vec<DVec3> = cage
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, c)| *c + DVec3::new(0.02 * i as f64, 0.01, -0.015 * (i % 3) as f64))
+        .collect();
+    let (nr, nf) = (points.len(), fit.normals().len());
+    let evaluate = |fit: &GreenCageFit, x: &[DVec3]| {
+        let mut g = vec![DVec3::ZERO; nf];
+        let mut sums = vec![DVec3::ZERO; nf];
+        let mut r = vec![DVec3::ZERO; nr];
+        let mut grad = vec![DVec3::ZERO; x.len()];
+        let (energy, _) = fit.evaluate(x, &target, &mut g, &mut sums, &mut r, &mut grad);
+        (energy, grad, r)
+    };
+    let (energy, gradient, residual) = evaluate(&fit, &x);
+    assert!((fit.energy(&target, &x) - energy).abs() <= 1e-14 * energy);
+    fit.hessian_at(&x, &residual);
+    let n = 3 * x.len();
+    let h = 1e-6;
+    for q in 0..n {
+        let mut plus = x.clone();
+        let mut minus = x.clone();
+        plus[q / 3][q % 3] += h;
+        minus[q / 3][q % 3] -= h;
+        let (ep, gp, _) = evaluate(&fit, &plus);
+        let (em, gm, _) = evaluate(&fit, &minus);
+        let slope = (ep - em) / (2.0 * h);
+        let analytic = gradient[q / 3][q % 3];
+        assert!(
+            (slope - analytic).abs() < 1e-6 * (1.0 + slope.abs()),
+            "gradient {q}: {slope} vs {analytic}"
+        );
+        for p in 0..n {
+            let fd = (gp[p / 3][p % 3] - gm[p / 3][p % 3]) / (2.0 * h);
+            let analytic = fit.normal_matrix[(p, q)];
+            assert!(
+                (fd - analytic).abs() < 1e-5 * (1.0 + fd.abs()),
+                "({p}, {q}): {fd} vs {analytic}"
+            );
+        }
+    }
+}

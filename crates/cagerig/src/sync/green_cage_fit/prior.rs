@@ -1,0 +1,181 @@
+//! The regulariser of the Green CageUp: C' stays close to the rest cage carried by the
+//! skeleton while it fits the rows.
+//!
+//! With P (`#C`) the carried cage of the mean value rigs' regularised fit
+//! ([`crate::sync::cage_prior`]: every rest cage vertex carried by the mean motion of its
+//! nearest rest-skin vertices, built here on the vertex coordinates φ) and
+//! W = λ(LᵀL + εI) (`#C × #C`, symmetric positive definite: L the cage's uniform graph
+//! Laplacian, λ chosen once per binding from the fitting rows), the fit minimises
+//!
+//! `E(C') = ½ ‖F_R(C') − M'_R‖² + ½ Σ_axes (C' − P)ᵀ W (C' − P)`.
+//!
+//! Its gradient adds W(C' − P) and its Hessian W ⊗ I₃ (constant): the fit keeps its stationary
+//! point form, and CageRev ([`super::reverser`]) inverts it with P(C) affine in the rest cage
+//! and the rest joints for a fixed pose. At the rest pose P = C (the skinning transforms are the
+//! identity and Σ_j ω_ij = 1), so C' = C stays the exact answer.
+
+use faer::Mat;
+use glam::{DAffine3, DMat3, DVec3};
+
+use crate::sync::cage_prior::CagePrior;
+
+/// The regulariser's data (see the module docs).
+#[derive(Debug, Clone)]
+pub struct FitPrior {
+    prior: CagePrior,
+    /// W = λ(LᵀL + εI), `#C × #C`.
+    weight: Mat<f64>,
+    /// P of the current event (`#C`).
+    target: Vec<DVec3>,
+    /// P of the current solve (a continuation's piece blends `last` and `target`), `#C`.
+    active: Vec<DVec3>,
+    /// P of the last converged solution, `#C`.
+    last: Vec<DVec3>,
+}
+
+impl FitPrior {
+    /// From the carried-cage prior (its λ and neighbourhoods) and R = LᵀL + εI (`#C × #C`) of
+    /// the cage; P starts at `rest_cage` (`#C`).
+    pub fn new(prior: CagePrior, regulariser: &Mat<f64>, rest_cage: &[DVec3]) -> Self {
+        let strength = prior.strength();
+        Self {
+            prior,
+            weight: Mat::from_fn(regulariser.nrows(), regulariser.ncols(), |r, c| {
+                strength * regulariser[(r, c)]
+            }),
+            target: rest_cage.to_vec(),
+            active: rest_cage.to_vec(),
+            last: rest_cage.to_vec(),
+        }
+    }
+
+    /// W = λ(LᵀL + εI), `#C × #C`.
+    pub fn weight(&self) -> &Mat<f64> {
+        &self.weight
+    }
+
+    /// P of the current event, `#C`.
+    pub fn target(&self) -> &[DVec3] {
+        &self.target
+    }
+
+    /// The carried-cage prior (its neighbourhoods and ∂P/∂C).
+    pub fn carried(&self) -> &CagePrior {
+        &self.prior
+    }
+
+    /// Sets P: `rest_cage` (`#C`) carried by the skinning transforms `posed_from_rest` (`#J`).
+    pub(super) fn carry(&mut self, posed_from_rest: &[DAffine3], rest_cage: &[DVec3]) {
+        self.prior.carry(posed_from_rest, rest_cage);
+        self.target.copy_from_slice(self.prior.carried_cage());
+        self.active.copy_from_slice(&self.target);
+    }
+
+    /// ½ Σ_axes dᵀWd for d = x − P of the current solve (`x`: `#C`). No allocation.
+    pub(super) fn energy(&self, x: &[DVec3]) -> f64 {
+        let mut energy = 0.0;
+        for k in 0..x.len() {
+            let row = self.weight.row(k);
+            let pull = x
+                .iter()
+                .zip(&self.active)
+                .enumerate()
+                .fold(DVec3::ZERO, |acc, (m, (xm, pm))| acc + row[m] * (*xm - *pm));
+            energy += 0.5 * pull.dot(x[k] - self.active[k]);
+        }
+        energy
+    }
+
+    /// `normal_matrix` (`3#C × 3#C`) += W ⊗ I₃.
+    pub(super) fn add_to_hessian(&self, normal_matrix: &mut Mat<f64>) {
+        let n = self.weight.nrows();
+        for k in 0..n {
+            for m in 0..n {
+                let w = self.weight[(k, m)];
+                for a in 0..3 {
+                    normal_matrix[(3 * k + a, 3 * m + a)] += w;
+                }
+            }
+        }
+    }
+
+    /// P of the current solve: the blend (1 − a)·P_last + a·P_target (a continuation's piece).
+    pub(super) fn blend(&mut self, a: f64) {
+        for ((active, last), target) in self.active.iter_mut().zip(&self.last).zip(&self.target) {
+            *active = last.lerp(*target, a);
+        }
+    }
+
+    /// After a converged solve: the current P becomes the last solution's.
+    pub(super) fn keep_as_last(&mut self) {
+        self.last.copy_from_slice(&self.target);
+    }
+
+    /// `cage` (`#C`) becomes the last solution's P (it is the fit's answer for its own rows and
+    /// that P).
+    pub(super) fn restart_from(&mut self, cage: &[DVec3]) {
+        self.last.copy_from_slice(cage);
+    }
+
+    /// ½ Σ_axes dᵀWd and gradient += Wd for d = x − P of the current solve (`x`, `gradient`:
+    /// `#C`). No allocation.
+    pub(super) fn add_to_gradient(&self, x: &[DVec3], gradient: &mut [DVec3]) -> f64 {
+        let mut energy = 0.0;
+        for (k, out) in gradient.iter_mut().enumerate() {
+            let row = self.weight.row(k);
+            let pull = x
+                .iter()
+                .zip(&self.active)
+                .enumerate()
+                .fold(DVec3::ZERO, |acc, (m, (xm, pm))| acc + row[m] * (*xm - *pm));
+            *out += pull;
+            energy += 0.5 * pull.dot(x[k] - self.active[k]);
+        }
+        energy
+    }
+}
+
+/// ∂P/∂C for a fixed pose and fixed joint translations (`3#C × 3#C`, row 3k + a, column 3m + b)
+/// and ∂P/∂A through the translations (`3#C × 3#J`): P_k depends on t_j by a_kj I, and
+/// ∂t_j/∂A_l is `translation_jacobian[j·#J + l]` (`#J × #J` blocks). Used by CageRev.
+pub(crate) fn prior_jacobians(
+    prior: &FitPrior,
+    joint_linear: &[DMat3],
+    translation_jacobian: &[DMat3],
+    skel_up_locked: bool,
+    cage_rows: &mut Mat<f64>,
+    joint_rows: &mut Mat<f64>,
+) {
+    let nc = prior.target.len();
+    let nj = joint_linear.len();
+    let zero_translations = vec![DMat3::ZERO; nj * nc];
+    let mut by_entry = Mat::<f64>::zeros(nc, 9 * nc);
+    prior
+        .prior
+        .jacobian(joint_linear, &zero_translations, by_entry.as_mut());
+    // Entry (k, 9m + 3a + b) is entry (a, b) of block (k, m).
+    for k in 0..nc {
+        for m in 0..nc {
+            for a in 0..3 {
+                for b in 0..3 {
+                    cage_rows[(3 * k + a, 3 * m + b)] = by_entry[(k, 9 * m + 3 * a + b)];
+                }
+            }
+        }
+    }
+    joint_rows.fill(0.0);
+    if skel_up_locked {
+        return;
+    }
+    for (k, j, share) in prior.prior.joint_shares() {
+        for l in 0..nj {
+            let block = translation_jacobian[j * nj + l] * share;
+            for b in 0..3 {
+                let column = block.col(b);
+                for a in 0..3 {
+                    joint_rows[(3 * k + a, 3 * l + b)] += column[a];
+                }
+            }
+        }
+    }
+}
