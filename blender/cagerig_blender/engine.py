@@ -59,7 +59,7 @@ def options_of(skin: bpy.types.Object) -> store.RigOptions:
     s = skin.cagerig
     return store.RigOptions(
         coords=s.coords, cage_fit=s.cage_fit, skinning=convert.skinning_of(mod, s.use_cor),
-        unfitted_cage=s.unfitted_cage,
+        unfitted_cage=s.unfitted_cage, green_face_term=s.green_face_term,
     )
 
 
@@ -97,6 +97,7 @@ def _base_rig(b: store.Binding, options: store.RigOptions) -> object:
         rig = cagerig.Rig.from_arrays(
             b.mesh, b.triangles, weights, b.joints, b.parents, b.cage, b.cage_triangles,
             b.names, skinning=options.skinning, cage_fit=options.cage_fit, coords=options.coords,
+            green_face_term=options.green_face_term,
         )
         _base_rigs[key] = rig
     return rig.copy()

@@ -68,9 +68,10 @@ def _options(layout: bpy.types.UILayout, obj: bpy.types.Object) -> None:
     s = obj.cagerig
     col = layout.column(align=True)
     col.prop(s, "coords")
+    col.prop(s, "cage_fit")
     row = col.row()
-    row.active = s.coords == "mvc"  # Green rigs fit C' by Gauss–Newton on the rows
-    row.prop(s, "cage_fit")
+    row.active = s.coords == "green"  # the face term of Green's stretched normals
+    row.prop(s, "green_face_term")
     row = col.row()
     row.active = s.coords == "green"  # only Green rigs can meet a pose with no fitted cage
     row.prop(s, "unfitted_cage")

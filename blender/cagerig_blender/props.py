@@ -31,6 +31,11 @@ LABELS: dict[str, dict[str, tuple[str, str]]] = {
                         "The cage fits the skin and stays near the rest cage carried by the skeleton (default)"),
         "paper": ("Paper", "The paper's Eq. 8: the cage interpolates the skin at the MaxVol rows"),
     },
+    "green_face_term": {
+        "fold-safe": ("Fold-safe",
+                      "Green rigs: a face term smooth through folds, so every pose finds a current cage (default)"),
+        "lipman": ("Lipman", "Green rigs: Lipman's stretched normal, which jumps where a cage triangle folds"),
+    },
     "skinning": {
         "lbs": ("Linear (LBS)", "Linear blend skinning: the Armature modifier without Preserve Volume"),
         "dqs": ("Preserve Volume (DQS)", "Dual quaternion skinning: the Armature modifier's Preserve Volume"),
@@ -109,9 +114,16 @@ def _settings_class() -> type:
         )
         cage_fit: EnumProperty(  # type: ignore[valid-type]
             name="Current cage fit",
-            description="How the current cage follows the pose (mean value coordinates)",
+            description="How the current cage follows the pose",
             items=_items("cage_fit", cagerig.CAGE_FITS),
             default="regularised",
+            update=_option_changed,
+        )
+        green_face_term: EnumProperty(  # type: ignore[valid-type]
+            name="Green face term",
+            description="Green coordinates: the stretched normals' face term",
+            items=_items("green_face_term", cagerig.GREEN_FACE_TERMS),
+            default="fold-safe",
             update=_option_changed,
         )
         use_cor: BoolProperty(  # type: ignore[valid-type]

@@ -51,16 +51,19 @@ class RigOptions:
     cage_fit: str = "regularised"
     skinning: str = "lbs"
     unfitted_cage: str = "refuse"
+    green_face_term: str = "fold-safe"
 
     def rig_key(self) -> str:
         """What the rig's precomputation depends on (the unfitted-cage policy is set after)."""
-        return f"{self.coords}:{self.cage_fit}:{self.skinning}"
+        return f"{self.coords}:{self.cage_fit}:{self.skinning}:{self.green_face_term}"
 
     def describe(self) -> str:
-        return f"{self.coords}, {self.cage_fit} fit, {self.skinning.upper()}, unfitted cage: {self.unfitted_cage}"
+        green = f", {self.green_face_term} face term" if self.coords == "green" else ""
+        return (f"{self.coords}{green}, {self.cage_fit} fit, {self.skinning.upper()}, "
+                f"unfitted cage: {self.unfitted_cage}")
 
 
-_OPTION_KEYS = ("coords", "cage_fit", "skinning", "unfitted_cage")
+_OPTION_KEYS = ("coords", "cage_fit", "skinning", "unfitted_cage", "green_face_term")
 
 
 def _floats(a: np.ndarray) -> list[float]:

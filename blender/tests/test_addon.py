@@ -485,16 +485,33 @@ applied = store.applied_options(skin)
 check("coords = green rebinds", c.rig.coords == "green" and applied.coords == "green",
       f"rig {c.rig.coords}, stored {applied.coords}")
 consistent("green", skin, cage, arm)
-rotate_bone(arm, JOINT, AXIS_BL, 6.0)  # Green's fit is the fragile one (docs/green-coordinates.md)
+rotate_bone(arm, JOINT, AXIS_BL, 6.0)
 update()
 consistent("green, posed", skin, cage, arm)
 cage.data.vertices[5].co.z += 0.02 * diag
 cage.data.update()
 update()
 consistent("green, after a grab", skin, cage, arm)
-# Bend on in 30° steps until Green's CageUp finds no current cage (past the fold of the elbow).
+# The default Green rig (fold-safe face term, regularised fit) bends the elbow on in 30° steps
+# to 156° without a refusal.
 error, bent = "", 6.0
 while not error and bent < 150.0:
+    rotate_bone(arm, JOINT, AXIS_BL, 30.0)
+    bent += 30.0
+    update()
+    error = engine.last_error(skin) or ""
+check("green (fold-safe, regularised): the elbow bends to 156° with a fitted cage", not error and bent > 150.0,
+      f"refused at {bent:.0f}°: {error[:120]}")
+consistent("green, bent far", skin, cage, arm)
+# Lipman's face term with the rows alone still meets poses with no fitted cage: bend on until one.
+set_option(skin, "green_face_term", "lipman")
+set_option(skin, "cage_fit", "paper")
+c = engine.coupling(skin)
+check("green_face_term = lipman rebinds", c.rig.green_face_term == "lipman" and c.rig.cage_fit == "paper",
+      f"{c.rig.green_face_term}, {c.rig.cage_fit}")
+error = engine.last_error(skin) or ""
+before = {"skin": world(skin), "bones": bone_heads(arm), "cage": world(cage)}
+while not error and bent < 400.0:
     before = {"skin": world(skin), "bones": bone_heads(arm), "cage": world(cage)}
     rotate_bone(arm, JOINT, AXIS_BL, 30.0)
     bent += 30.0
@@ -514,6 +531,8 @@ check("unfitted_cage = keep keeps that pose, the cage unfitted, and says so",
 consistent("green, unfitted cage kept", skin, cage, arm)
 skin_name, arm_name = skin.name, arm.name
 bpy.ops.ed.undo()  # unfitted_cage back to refuse
+bpy.ops.ed.undo()  # cage_fit back to regularised
+bpy.ops.ed.undo()  # green_face_term back to fold-safe
 bpy.ops.ed.undo()  # the grab
 bpy.ops.ed.undo()  # coords back to mean value
 update()
@@ -521,8 +540,11 @@ skin, arm = bpy.data.objects[skin_name], bpy.data.objects[arm_name]
 cage = skin.cagerig.cage
 c = engine.coupling(skin)
 applied = store.applied_options(skin)
-check("undo: the options come back", (skin.cagerig.coords, skin.cagerig.unfitted_cage, applied.coords, c.rig.coords)
-      == ("mvc", "refuse", "mvc", "mvc"), f"{skin.cagerig.coords}, {skin.cagerig.unfitted_cage}, stored {applied.coords}")
+check("undo: the options come back",
+      (skin.cagerig.coords, skin.cagerig.unfitted_cage, skin.cagerig.green_face_term, skin.cagerig.cage_fit,
+       applied.coords, c.rig.coords) == ("mvc", "refuse", "fold-safe", "regularised", "mvc", "mvc"),
+      f"{skin.cagerig.coords}, {skin.cagerig.unfitted_cage}, {skin.cagerig.green_face_term}, "
+      f"{skin.cagerig.cage_fit}, stored {applied.coords}")
 e = float(np.abs(world(skin) - mvc_rest_skin).max())
 check("undo: the mean value rest skin comes back", e <= TOL * diag, f"{e / diag:.2e}")
 consistent("undo of the green rebind", skin, cage, arm)

@@ -66,6 +66,10 @@ fn _cagerig(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "COORDS_PRECISIONS",
         names::<cagerig::cage_coords::CoordsPrecision>(),
     )?;
+    m.add(
+        "GREEN_FACE_TERMS",
+        names::<cagerig::coords::stretched_normals::FaceTermKind>(),
+    )?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Session options from Python keyword strings (the CLI's option values, same meaning).
 
 use cagerig::cage_coords::CoordsPrecision;
+use cagerig::coords::stretched_normals::FaceTermKind;
 use cagerig::session::{CageFitSource, FitRowsKind, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use cagerig::sync::skeleton_updater::LocalisationKind;
@@ -29,24 +30,32 @@ pub fn fit_source(value: &str) -> PyResult<CageFitSource> {
     named("fit_source", value)
 }
 
-/// Options of `Rig.load` / `Rig.builtin` / `Rig.from_arrays`.
-pub fn session_options(
-    skinning: &str,
-    fit_rows: &str,
-    localisation: &str,
-    fit_source_name: &str,
-    coords_precision: &str,
-    coords: &str,
-    cage_fit: &str,
-) -> PyResult<SessionOptions> {
+/// The option names of `Rig.load` / `Rig.builtin` / `Rig.from_arrays`, as given.
+pub struct OptionNames<'a> {
+    pub skinning: &'a str,
+    pub fit_rows: &'a str,
+    pub localisation: &'a str,
+    pub fit_source: &'a str,
+    pub coords_precision: &'a str,
+    pub coords: &'a str,
+    pub cage_fit: &'a str,
+    pub green_face_term: &'a str,
+}
+
+/// The session options these names give (each read by its kind's `FromStr`).
+pub fn session_options(names: &OptionNames<'_>) -> PyResult<SessionOptions> {
     Ok(SessionOptions {
-        cage_fit: named::<CageFitKind>("cage_fit", cage_fit)?,
-        coords: named::<CoordsKind>("coords", coords)?,
-        skinning: skinning_method(skinning)?,
-        fit_rows: named::<FitRowsKind>("fit_rows", fit_rows)?.into(),
-        localisation: named::<LocalisationKind>("localisation", localisation)?.localisation(),
-        fit_source: fit_source(fit_source_name)?,
-        cage_coords_precision: named::<CoordsPrecision>("coords_precision", coords_precision)?,
+        cage_fit: named::<CageFitKind>("cage_fit", names.cage_fit)?,
+        coords: named::<CoordsKind>("coords", names.coords)?,
+        skinning: skinning_method(names.skinning)?,
+        fit_rows: named::<FitRowsKind>("fit_rows", names.fit_rows)?.into(),
+        localisation: named::<LocalisationKind>("localisation", names.localisation)?.localisation(),
+        fit_source: fit_source(names.fit_source)?,
+        cage_coords_precision: named::<CoordsPrecision>(
+            "coords_precision",
+            names.coords_precision,
+        )?,
+        green_face_term: named::<FaceTermKind>("green_face_term", names.green_face_term)?,
         ..SessionOptions::default()
     })
 }

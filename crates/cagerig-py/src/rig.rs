@@ -172,8 +172,10 @@ impl Rig {
     ///     volume) instead of using the character's own; an OBJ then needs no ``.skw``.
     /// cage_fit : {"regularised", "paper"}, default "regularised"
     ///     How CageUp fits the current cage C' (as ``cagerig --cage-fit``): near the rest cage
-    ///     carried by the skeleton while fitting the skin, or the paper's interpolation of the
-    ///     MaxVol rows. Mean value rigs; Green rigs fit on the rows.
+    ///     carried by the skeleton while fitting the skin, or the paper's fit of the rows alone.
+    /// green_face_term : {"fold-safe", "lipman"}, default "fold-safe"
+    ///     Green rigs: the stretched normals' face term (as ``cagerig --green-face-term``), smooth
+    ///     through folds, or Lipman's, which jumps there.
     /// keep_file_coords : bool, default False
     ///     Keep a cage-weights file's Φ even when it does not reproduce the mesh (the paper
     ///     tool's 6-decimal files; for conformance). By default such a Φ is recomputed, so that
@@ -188,7 +190,7 @@ impl Rig {
     #[pyo3(signature = (path, cage = None, *, skinning = None, fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
                         keep_file_coords = false, auto_cage = None, auto_weights = false,
-                        coords = "mvc", skin = None, cage_fit = "regularised"))]
+                        coords = "mvc", skin = None, cage_fit = "regularised", green_face_term = "fold-safe"))]
     #[expect(clippy::too_many_arguments)]
     fn load(
         py: Python<'_>,
@@ -205,21 +207,23 @@ impl Rig {
         coords: &str,
         skin: Option<String>,
         cage_fit: &str,
+        green_face_term: &str,
     ) -> PyResult<Self> {
         let weights_source = if auto_weights {
             WeightsSource::Automatic(AutoWeightsOptions::default())
         } else {
             WeightsSource::Character
         };
-        let mut options = options::session_options(
-            skinning.unwrap_or("lbs"),
+        let mut options = options::session_options(&options::OptionNames {
+            skinning: skinning.unwrap_or("lbs"),
             fit_rows,
             localisation,
             fit_source,
             coords_precision,
             coords,
             cage_fit,
-        )?;
+            green_face_term,
+        })?;
         if keep_file_coords {
             options.given_cage_coords = cagerig::session::GivenCageCoords::Keep;
         }
@@ -275,7 +279,7 @@ impl Rig {
     #[staticmethod]
     #[pyo3(signature = (name, resolution = None, *, skinning = "lbs", fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
-                        coords = "mvc", cage_fit = "regularised"))]
+                        coords = "mvc", cage_fit = "regularised", green_face_term = "fold-safe"))]
     #[expect(clippy::too_many_arguments)]
     fn builtin(
         py: Python<'_>,
@@ -288,8 +292,9 @@ impl Rig {
         coords_precision: &str,
         coords: &str,
         cage_fit: &str,
+        green_face_term: &str,
     ) -> PyResult<Self> {
-        let options = options::session_options(
+        let options = options::session_options(&options::OptionNames {
             skinning,
             fit_rows,
             localisation,
@@ -297,7 +302,8 @@ impl Rig {
             coords_precision,
             coords,
             cage_fit,
-        )?;
+            green_face_term,
+        })?;
         let rig = py
             .detach(|| cagerig::demo::builtin(name, resolution))
             .map_err(rig_error)?;
@@ -332,7 +338,7 @@ impl Rig {
                         cage_vertices, cage_triangles, joint_names = None, *, skinning = "lbs",
                         fit_rows = "maxvol", localisation = "articulation", fit_source = "ghost",
                         coords_precision = "f64", coords = "mvc", dq_blend_weights = None,
-                        cage_fit = "regularised"))]
+                        cage_fit = "regularised", green_face_term = "fold-safe"))]
     #[expect(clippy::too_many_arguments)]
     fn from_arrays(
         py: Python<'_>,
@@ -352,8 +358,9 @@ impl Rig {
         coords: &str,
         dq_blend_weights: Option<&Bound<'_, PyAny>>,
         cage_fit: &str,
+        green_face_term: &str,
     ) -> PyResult<Self> {
-        let options = options::session_options(
+        let options = options::session_options(&options::OptionNames {
             skinning,
             fit_rows,
             localisation,
@@ -361,7 +368,8 @@ impl Rig {
             coords_precision,
             coords,
             cage_fit,
-        )?;
+            green_face_term,
+        })?;
         let positions = convert::points(vertices, "vertices")?;
         let tris = convert::triangles(triangles, "triangles", positions.len())?;
         let (weights, warnings) =

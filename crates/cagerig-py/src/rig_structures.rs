@@ -20,11 +20,16 @@ impl Rig {
         self.session.coords_kind().name()
     }
 
-    /// How CageUp fits the current cage C': ``"regularised"`` or ``"paper"`` (Green rigs:
-    /// ``"paper"``, their Gauss–Newton fit on the rows).
+    /// How CageUp fits the current cage C': ``"regularised"`` or ``"paper"``.
     #[getter]
     fn cage_fit(&self) -> &'static str {
         self.session.cage_fit().name()
+    }
+
+    /// Green rigs' face term: ``"fold-safe"`` or ``"lipman"``.
+    #[getter]
+    fn green_face_term(&self) -> &'static str {
+        self.session.green_face_term().name()
     }
 
     /// What an edit does when a Green CageUp finds no current cage: ``"refuse"`` or ``"keep"``

@@ -17,6 +17,7 @@ ALIASES = {
     "_Localisation": "LOCALISATIONS",
     "_FitSource": "FIT_SOURCES",
     "_Precision": "COORDS_PRECISIONS",
+    "_GreenFaceTerm": "GREEN_FACE_TERMS",
 }
 
 

@@ -19,9 +19,10 @@ FIT_ROWS: list[str]
 LOCALISATIONS: list[str]
 FIT_SOURCES: list[str]
 COORDS_PRECISIONS: list[str]
+GREEN_FACE_TERMS: list[str]
 __all__ = ['RigError', 'RigFileError', 'ScriptError', 'RigWarning', 'Rig', 'EditScript', 'mvc', 'maxvol_rows',
            'max_entropy_coordinates', 'lbs', 'dqs', 'cor', 'cor_centres', 'validate_cage', 'generate_cage', 'subdivide',
-           'read_obj', 'write_obj', '__version__', 'SKINNING_METHODS', 'COORDS_KINDS', 'FIT_ROWS', 'LOCALISATIONS', 'FIT_SOURCES', 'COORDS_PRECISIONS',
+           'read_obj', 'write_obj', '__version__', 'SKINNING_METHODS', 'COORDS_KINDS', 'FIT_ROWS', 'LOCALISATIONS', 'FIT_SOURCES', 'COORDS_PRECISIONS', 'GREEN_FACE_TERMS',
            'CAGE_FITS', 'UNFITTED_CAGE_POLICIES']
 
 _F64Array = npt.NDArray[np.float64]
@@ -32,6 +33,7 @@ _Skinning = Literal["lbs", "dqs", "cor", "blended"]
 _Coords = Literal["mvc", "green"]
 _CageFit = Literal["regularised", "paper"]
 _UnfittedCage = Literal["refuse", "keep"]
+_GreenFaceTerm = Literal["fold-safe", "lipman"]
 _FitRows = Literal["maxvol", "all"]
 _Localisation = Literal["articulation", "reference-tool"]
 _FitSource = Literal["ghost", "displayed"]
@@ -165,6 +167,7 @@ class Rig:
         auto_weights: bool = False,
         coords: _Coords = "mvc",
         cage_fit: _CageFit = "regularised",
+        green_face_term: _GreenFaceTerm = "fold-safe",
         skin: Optional[str] = None,
     ) -> Rig: ...
     @staticmethod
@@ -179,6 +182,7 @@ class Rig:
         coords_precision: _Precision = "f64",
         coords: _Coords = "mvc",
         cage_fit: _CageFit = "regularised",
+        green_face_term: _GreenFaceTerm = "fold-safe",
     ) -> Rig: ...
     @staticmethod
     def from_arrays(
@@ -198,6 +202,7 @@ class Rig:
         coords_precision: _Precision = "f64",
         coords: _Coords = "mvc",
         cage_fit: _CageFit = "regularised",
+        green_face_term: _GreenFaceTerm = "fold-safe",
         dq_blend_weights: Optional[_ArrayLike] = None,
     ) -> Rig: ...
     def copy(self) -> Rig: ...
@@ -205,6 +210,8 @@ class Rig:
     def coords(self) -> _Coords: ...
     @property
     def cage_fit(self) -> _CageFit: ...
+    @property
+    def green_face_term(self) -> _GreenFaceTerm: ...
     def __copy__(self) -> Rig: ...
     def __deepcopy__(self, memo: Any) -> Rig: ...
     # Edits.

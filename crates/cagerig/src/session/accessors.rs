@@ -13,6 +13,8 @@ use crate::sync::cage_updater::CageUpdater;
 use crate::sync::skeleton_updater::SkeletonUpdater;
 use glam::{DAffine3, DVec3};
 
+use crate::coords::stretched_normals::FaceTermKind;
+
 impl RigSession {
     /// Rest skin M (`#V`), exact (on the f32 display path, after a current-cage edit it is
     /// computed in f64 on the first call; [`RigSession::display_rest_mesh`] is the drawn one).
@@ -99,6 +101,12 @@ impl RigSession {
     /// cage, `Paper` when it fits the rows alone.
     pub fn cage_fit(&self) -> CageFitKind {
         self.rest_map.fit_kind()
+    }
+
+    /// The face term a Green rig's stretched normals use ([`FaceTermKind`]; the options' choice,
+    /// which mean value rigs keep for a rebind).
+    pub fn green_face_term(&self) -> FaceTermKind {
+        self.options.green_face_term
     }
 
     /// Current rest frames of the joints (S).
