@@ -88,10 +88,12 @@ def test_edit_scenario_under_green_equals_the_cli(arm_path, cli, tmp_path):
 
 
 def test_keep_poses_the_skin_past_the_fold_and_refuses_grabs_until_it_fits(arm_path):
-    rig = cagerig.Rig.load(arm_path, coords="green")
+    # Lipman's face term with the fit on the rows alone meets poses with no current cage.
+    rig = cagerig.Rig.load(arm_path, coords="green", green_face_term="lipman", cage_fit="paper")
     mvc = cagerig.Rig.load(arm_path)
     assert rig.unfitted_cage == "refuse" and rig.posed_cage_unfitted is None
-    # 120° at the elbow in one edit is past the Green fold limit (about 66°): refused by default.
+    assert (rig.green_face_term, rig.cage_fit) == ("lipman", "paper")
+    # 120° at the elbow in one edit is past that fit's fold limit (about 66°): refused by default.
     with pytest.raises(cagerig.RigError, match="Green CageUp found no current cage"):
         rig.rotate_joint("lowerarm01.R", [1, 0, 0], 120)
     rig.set_unfitted_cage("keep")
@@ -108,3 +110,11 @@ def test_keep_poses_the_skin_past_the_fold_and_refuses_grabs_until_it_fits(arm_p
     rig.move_posed_cage([20], [0, 1, 0])
     with pytest.raises(ValueError, match="expected refuse or keep"):
         rig.set_unfitted_cage("sometimes")
+
+
+def test_the_default_green_rig_bends_the_elbow_without_a_refusal(arm_path):
+    rig = cagerig.Rig.load(arm_path, coords="green")
+    assert (rig.green_face_term, rig.cage_fit) == ("fold-safe", "regularised")
+    for _ in range(5):
+        rig.rotate_joint("lowerarm01.R", [1, 0, 0], 30)
+        assert rig.posed_cage_unfitted is None
