@@ -501,7 +501,7 @@ while not error and bent < 150.0:
     update()
     error = engine.last_error(skin) or ""
 check("green (fold-safe, regularised): the elbow bends to 156° with a fitted cage", not error and bent > 150.0,
-      f"refused at {bent:.0f}°: {error[:120]}")
+      f"bent to {bent:.0f}°" + (f", refused: {error[:120]}" if error else ", no refusal"))
 consistent("green, bent far", skin, cage, arm)
 # Lipman's face term with the rows alone still meets poses with no fitted cage: back to 6°, switch,
 # and bend on until one.
