@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use cagerig::auto_weights::{AutoWeights, AutoWeightsOptions, Progress, Stage};
-use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
+use cagerig::session::{BindStage, DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::{Skeleton, SkinWeights, Warning};
 use glam::{DQuat, DVec3};
 
@@ -107,8 +107,9 @@ impl BindRequest {
         })
     }
 
-    /// Computes Ω and builds the new session; `progress` follows the automatic weights.
-    pub fn run(mut self, progress: &(dyn Fn(Progress) + Sync)) -> Result<BoundRig, String> {
+    /// Computes Ω and builds the new session; `progress` follows the automatic weights, then
+    /// the rig's binding.
+    pub fn run(mut self, progress: &(dyn Fn(BindStep) + Sync)) -> Result<BoundRig, String> {
         let t = Instant::now();
         let mut warnings = Vec::new();
         if let Some(options) = &self.automatic {
@@ -118,14 +119,15 @@ impl BindRequest {
                     &self.parts.mesh,
                     &self.parts.skeleton,
                     Some(&self.parts.cage),
-                    progress,
+                    &|p| progress(BindStep::Weights(p)),
                 )
                 .map_err(|e| format!("automatic weights: {e}"))?;
             warnings.extend(result.report.warnings);
             self.parts.skin_weights = result.weights;
         }
-        let (mut session, more) =
-            RigSession::new(self.parts, self.options).map_err(|e| e.to_string())?;
+        let report = |stage, done, total| progress(BindStep::Rig { stage, done, total });
+        let (mut session, more) = RigSession::with_progress(self.parts, self.options, &report)
+            .map_err(|e| e.to_string())?;
         warnings.extend(more);
         session
             .set_display_precision(self.precision)
@@ -213,10 +215,24 @@ pub fn carry_pose(
     )
 }
 
+/// How far a bind is: the automatic weights' stages (when it computes them), then the rig's
+/// binding ([`RigSession::with_progress`]).
+#[derive(Debug, Clone, Copy)]
+pub enum BindStep {
+    /// The automatic weights.
+    Weights(Progress),
+    /// The rig's binding: its `stage`, `done` of `total`.
+    Rig {
+        stage: BindStage,
+        done: usize,
+        total: usize,
+    },
+}
+
 /// A bind running on a background thread.
 pub struct BindJob {
     receiver: Receiver<Result<BoundRig, String>>,
-    progress: Arc<Mutex<Option<Progress>>>,
+    progress: Arc<Mutex<Option<BindStep>>>,
     started: Instant,
 }
 
@@ -227,7 +243,7 @@ impl BindJob {
         let progress = Arc::new(Mutex::new(None));
         let shared = Arc::clone(&progress);
         std::thread::spawn(move || {
-            let report = |p: Progress| {
+            let report = |p: BindStep| {
                 if let Ok(mut slot) = shared.lock() {
                     *slot = Some(p);
                 }
@@ -261,19 +277,24 @@ impl BindJob {
         let Some(p) = p else {
             return (0.0, format!("binding… {seconds:.1} s"));
         };
-        let within = if p.total == 0 {
-            0.0
-        } else {
-            p.done as f32 / p.total as f32
+        let fraction = |done: usize, total: usize| {
+            if total == 0 {
+                0.0
+            } else {
+                done as f32 / total as f32
+            }
         };
-        let (start, span, what) = match p.stage {
-            Stage::Voxelising => (0.0, 0.2, "voxelising the body"),
-            Stage::Distances => (0.2, 0.7, "geodesic distances"),
-            Stage::Weights => (0.9, 0.1, "weights"),
+        let (start, span, what, done, total) = match p {
+            BindStep::Weights(w) => match w.stage {
+                Stage::Voxelising => (0.0, 0.15, "voxelising the body", w.done, w.total),
+                Stage::Distances => (0.15, 0.5, "geodesic distances", w.done, w.total),
+                Stage::Weights => (0.65, 0.1, "weights", w.done, w.total),
+            },
+            BindStep::Rig { stage, done, total } => (0.75, 0.25, stage.label(), done, total),
         };
         (
-            start + span * within,
-            format!("binding: {what} ({}/{}) {seconds:.1} s", p.done, p.total),
+            start + span * fraction(done, total),
+            format!("binding: {what} ({done}/{total}) {seconds:.1} s"),
         )
     }
 }

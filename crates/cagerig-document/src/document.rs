@@ -122,6 +122,9 @@ pub enum Command {
     SetCoords(cagerig::CoordsKind),
     /// Switch CageUp's fit of the current cage ([`cagerig::CageFitKind`]); C' is refitted.
     SetCageFit(cagerig::CageFitKind),
+    /// Green rigs: rebind with another face term
+    /// ([`cagerig::coords::stretched_normals::FaceTermKind`]), keeping every edit.
+    SetGreenFaceTerm(cagerig::coords::stretched_normals::FaceTermKind),
     ResetPose,
     SetLocks(SyncLocks),
     /// Green rigs: refuse an edit whose CageUp finds no current cage, or keep it with C'
@@ -155,6 +158,7 @@ impl Command {
             Command::SetSkinning(m) => format!("skinning {}", m.label()),
             Command::SetCoords(k) => format!("{} coordinates", k.label()),
             Command::SetCageFit(k) => format!("{} cage fit", k.name()),
+            Command::SetGreenFaceTerm(k) => format!("{} face term", k.name()),
             Command::ResetPose => "reset pose".into(),
             Command::SetLocks(_) => "sync locks".into(),
             Command::SetUnfittedCage(policy) => match policy {
@@ -393,6 +397,13 @@ impl Document {
                 self.player = None;
             }
             Command::SetCageFit(kind) => s.set_cage_fit(*kind)?,
+            Command::SetGreenFaceTerm(kind) => {
+                let mut state = s.editable_state();
+                state.green_face_term = *kind;
+                s.restore_editable_state(&state)?;
+                // A new binding: the player's keyframes belong to the old one.
+                self.player = None;
+            }
             Command::ResetPose => s.reset_pose(),
             Command::SetLocks(locks) => s.set_sync_locks(*locks),
             Command::SetUnfittedCage(policy) => s.set_unfitted_cage_policy(*policy),

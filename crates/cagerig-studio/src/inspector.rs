@@ -145,7 +145,11 @@ fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: 
     });
     match coords {
         cagerig::CoordsKind::Mvc => cage_fit_ui(ui, doc, diag),
-        cagerig::CoordsKind::Green => unfitted_cage_ui(ui, doc, diag),
+        cagerig::CoordsKind::Green => {
+            cage_fit_ui(ui, doc, diag);
+            face_term_ui(ui, doc, diag);
+            unfitted_cage_ui(ui, doc, diag);
+        }
     }
     let mut new_locks = locks;
     ui.checkbox(
@@ -170,7 +174,27 @@ fn rig_ui(ui: &mut egui::Ui, doc: Option<&mut Document>, tool: &mut Tool, diag: 
     }
 }
 
-/// Mean value rigs: how CageUp fits the current cage C' ([`cagerig::CageFitKind`]).
+/// Green rigs: the stretched normals' face term
+/// ([`cagerig::coords::stretched_normals::FaceTermKind`]); a change rebinds.
+fn face_term_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
+    use cagerig::coords::stretched_normals::FaceTermKind;
+    let term = doc.session.green_face_term();
+    ui.horizontal(|ui| {
+        ui.label("Face term");
+        for k in FaceTermKind::ALL {
+            if ui
+                .selectable_label(term == k, k.name())
+                .on_hover_text(k.help())
+                .clicked()
+                && term != k
+            {
+                run_command(doc, &Command::SetGreenFaceTerm(k), diag);
+            }
+        }
+    });
+}
+
+/// How CageUp fits the current cage C' ([`cagerig::CageFitKind`]).
 fn cage_fit_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
     let fit = doc.session.requested_cage_fit();
     ui.horizontal(|ui| {

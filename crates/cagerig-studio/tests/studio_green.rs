@@ -44,8 +44,10 @@ fn the_coordinates_switch_rebinds_in_one_undo_step() {
     std::fs::remove_dir_all(state).ok();
 }
 
-/// Green rigs get a "Keep poses the current cage cannot follow" switch (one undo step); past
-/// the fold, a kept pose shows that the current cage is not fitted.
+/// Green rigs get a face-term choice and a "Keep poses the current cage cannot follow" switch
+/// (one undo step each). The default Green rig meets no pose without a current cage; with
+/// Lipman's face term and the rows alone one exists past the fold, and a kept pose there shows
+/// that the current cage is not fitted.
 #[test]
 fn the_unfitted_cage_switch_keeps_a_pose_past_the_fold() {
     use cagerig::session::UnfittedCagePolicy;
@@ -56,6 +58,18 @@ fn the_unfitted_cage_switch_keeps_a_pose_past_the_fold() {
     let (mut h, state) = support::open_bar("unfitted-cage-switch");
     h.get_by_label("Green").click();
     h.run_steps(3);
+    h.get_by_label("lipman").click();
+    h.run_steps(3);
+    h.get_by_label("paper").click();
+    h.run_steps(3);
+    let doc = h.state().project.doc.as_ref().unwrap();
+    assert_eq!(
+        (
+            doc.session.green_face_term().name(),
+            doc.session.cage_fit().name()
+        ),
+        ("lipman", "paper")
+    );
     let keep = "Keep poses the current cage cannot follow";
     h.get_by_label(keep).click();
     h.run_steps(3);
@@ -64,7 +78,11 @@ fn the_unfitted_cage_switch_keeps_a_pose_past_the_fold() {
         doc.session.unfitted_cage_policy(),
         UnfittedCagePolicy::KeepEvent
     );
-    assert_eq!(doc.history().undo_len(), 2, "rebind, then the switch");
+    assert_eq!(
+        doc.history().undo_len(),
+        4,
+        "rebind, face term, cage fit, then the switch"
+    );
     let joint = doc.session.skeleton().len() / 2;
     // Far past the bar's fold: a bend whose current cage has no fit from this state (found on
     // a copy of the session; the studio's command computes the same).

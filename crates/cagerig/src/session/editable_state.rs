@@ -10,6 +10,7 @@ use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::unfitted_cage::UnfittedCagePolicy;
+use crate::coords::stretched_normals::FaceTermKind;
 use crate::coords_kind::CoordsKind;
 use crate::skinning::SkinningMethod;
 use crate::sync::cage_fit_kind::CageFitKind;
@@ -64,4 +65,8 @@ pub struct EditableState {
     /// older file opens with the same C, S and S').
     #[serde(default)]
     pub cage_fit: CageFitKind,
+    /// Green rigs' face term (absent in older files: the default, fold-safe; a Green rig saved
+    /// with Lipman's term before it was recorded reopens with the fold-safe one).
+    #[serde(default)]
+    pub green_face_term: FaceTermKind,
 }

@@ -3,6 +3,7 @@
 
 use super::RigSession;
 use super::parts::{GivenCageCoords, RigParts, SessionOptions};
+use crate::coords::stretched_normals::FaceTermKind;
 use crate::coords_kind::CoordsKind;
 use crate::error::{RigError, Warning};
 use crate::mesh::TriMesh;
@@ -15,6 +16,15 @@ impl RigSession {
     /// are not applied: restore them with [`RigSession::restore_editable_state`] (which does
     /// this rebind itself when a state's coordinates differ).
     pub fn rebound(&self, coords: CoordsKind) -> Result<(RigSession, Vec<Warning>), RigError> {
+        self.rebound_with(coords, self.options.green_face_term)
+    }
+
+    /// [`RigSession::rebound`] with the Green face term `green_face_term`.
+    pub fn rebound_with(
+        &self,
+        coords: CoordsKind,
+        green_face_term: FaceTermKind,
+    ) -> Result<(RigSession, Vec<Warning>), RigError> {
         let mut binding_mesh = vec![DVec3::ZERO; self.rest_mesh.len()];
         self.rest_mesh_of_cage(&self.original_rest_cage, &mut binding_mesh);
         let dq_blend_weights = self.dq_blend_weights().cloned();
@@ -33,6 +43,7 @@ impl RigSession {
         .with_dq_blend_weights(dq_blend_weights);
         let options = SessionOptions {
             coords,
+            green_face_term,
             skinning: self.skinning.method(),
             // The binding mesh is the map of C₀: nothing to recompute or keep.
             given_cage_coords: GivenCageCoords::RecomputeIfInexact,

@@ -4,6 +4,7 @@
 use super::RigSession;
 use super::editable_state::{EditableState, SyncLocks};
 use super::parts::PHI_C_TOLERANCE;
+use crate::coords_kind::CoordsKind;
 use crate::error::RigError;
 use crate::pose::LocalPose;
 use glam::{DAffine3, DQuat, DVec3};
@@ -73,15 +74,21 @@ impl RigSession {
             coords: self.coords_kind(),
             unfitted_cage: self.unfitted_cage_policy(),
             cage_fit: self.requested_cage_fit(),
+            green_face_term: self.green_face_term(),
         }
     }
 
     /// Restores a state taken with [`RigSession::editable_state`] (from this rig: the sizes
     /// must match, every number finite). One all-or-nothing event. A state bound with other
-    /// cage coordinates rebinds the rig first ([`RigSession::rebound`]).
+    /// cage coordinates, or a Green state with another face term, rebinds the rig first
+    /// ([`RigSession::rebound_with`]).
     pub fn restore_editable_state(&mut self, state: &EditableState) -> Result<(), RigError> {
-        if state.coords != self.coords_kind() {
-            let (mut rebound, _) = self.rebound(state.coords)?;
+        let other_map = match state.coords {
+            CoordsKind::Mvc => false,
+            CoordsKind::Green => state.green_face_term != self.green_face_term(),
+        };
+        if state.coords != self.coords_kind() || other_map {
+            let (mut rebound, _) = self.rebound_with(state.coords, state.green_face_term)?;
             let mut adapted = state.clone();
             if !state.locks.skel_up && state.rest_cage.len() == rebound.rest_cage.len() {
                 // SkelUp of the new binding places the joints (its Ψ differs), unless the
@@ -102,6 +109,8 @@ impl RigSession {
             *self = rebound;
             return Ok(());
         }
+        // A mean value rig only records the face term (its map does not use it).
+        self.options.green_face_term = state.green_face_term;
         if state.cage_fit != self.requested_cage_fit() {
             // All or nothing: switch a copy, restore into it, keep it only if both succeed.
             let mut switched = self.clone();
