@@ -158,29 +158,9 @@ pub fn generated_cage_note(generated: &GeneratedCage) -> Warning {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DVec3;
 
     fn octahedron(scale: f64) -> TriMesh {
-        let p = [
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ]
-        .map(|v| v * scale)
-        .to_vec();
-        let t = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
+        let (p, t) = crate::coords::mvc::tests::octahedron([scale; 6]);
         TriMesh::new(p, t).unwrap()
     }
 

@@ -152,19 +152,9 @@ pub(crate) mod tests {
             DVec3::new(0.1, -0.03, 1.05),
             DVec3::new(0.0, 0.08, -0.95),
         ];
-        let triangles = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
         TriMesh {
             positions,
-            triangles,
+            triangles: crate::coords::mvc::tests::OCTAHEDRON_TRIANGLES.to_vec(),
         }
     }
 

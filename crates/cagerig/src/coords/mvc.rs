@@ -291,6 +291,18 @@ pub(crate) mod tests {
     use proptest::prelude::*;
 
     /// Octahedron with outward CCW triangles; vertex k at `radii[k]` along ±axes.
+    /// The triangles of [`octahedron`] (outward), shared by other tests' octahedra.
+    pub(crate) const OCTAHEDRON_TRIANGLES: [[u32; 3]; 8] = [
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+
     pub(crate) fn octahedron(radii: [f64; 6]) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         let dirs = [
             DVec3::X,
@@ -301,17 +313,7 @@ pub(crate) mod tests {
             DVec3::NEG_Z,
         ];
         let positions = dirs.iter().zip(radii).map(|(d, r)| *d * r).collect();
-        let triangles = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        (positions, triangles)
+        (positions, OCTAHEDRON_TRIANGLES.to_vec())
     }
 
     /// Icosphere (subdivided icosahedron, 42 vertices, 80 triangles) with per-vertex radii.
