@@ -11,11 +11,11 @@
 //!
 //! | hook | [`CageMap::Mvc`] (M = ΦC) | [`CageMap::Green`] (M = φC + ψ·g(C)) |
 //! |---|---|---|
-//! | [`RestMap::bind`] | Φ (given or computed), MaxVol rows of Φ, the fit ([`CageFitKind`]), Eq. 19 | φ, ψ, MaxVol rows of [φ ψ], the Gauss–Newton fit and the Newton CageRev |
+//! | [`RestMap::bind`] | Φ (given or computed), MaxVol rows of Φ, the fit ([`CageFitKind`]), Eq. 19 | φ, ψ (face term: [`crate::coords::stretched_normals::FaceTermKind`]), MaxVol rows of [φ ψ], the Gauss–Newton fit (regularised or on the rows alone) and the Newton CageRev |
 //! | [`RestMap::rest_mesh_in_full`], [`RestMap::rest_mesh_of`], [`RestMap::apply_rest_delta`] | M = ΦC | M = φC + ψ·g(C) in one pass; M += ψ·g(C) by face |
 //! | [`RestMap::is_linear`] (keyframe lerp, centre deltas) | yes | no |
 //! | the f32 display path's M̃ ([`RestMap::extra_coords`], [`RestMap::terms`]) | Φ̃·C | [φ̃ ψ̃]·[C; g(C)] |
-//! | CageUp ([`RigSession::fit_cage`]) | C' = P·M'_R, or regularised ([`MvcMap::fit`]) | Gauss–Newton on the rows |
+//! | CageUp ([`RigSession::fit_cage`]) | C' = P·M'_R, or regularised ([`MvcMap::fit`]) | Gauss–Newton on the rows, regularised towards the carried cage by default |
 //! | CageRev ([`RigSession::reverse_cage`]) | Eq. 19, factorised per pose ([`MvcMap::reverser`]) | Newton on the fit's stationarity |
 //! | CoR centres | Λ·C | Λ·C + Λ_ψ·g(C) |
 //!
