@@ -82,7 +82,7 @@ pub const GREEN_FIT_LIMIT: f64 = crate::sync::green_cage_fit::ACCEPTED_GRADIENT;
 pub const KEYFRAME_TERM_TOLERANCE: f64 = 1e-14;
 
 impl GreenState {
-    /// From the Green coordinates of the rest mesh (φ is the session's `cage_coords`, ψ is
+    /// From the Green coordinates of the rest mesh (φ is the rest map's vertex part, ψ is
     /// `face_coords`), the CageUp rows, the rest cage, the number of joints, the face term and
     /// the rest mesh (`#V`); with `regularised` CageUp is regularised towards the carried cage
     /// ([`crate::sync::green_cage_fit::prior`]).
