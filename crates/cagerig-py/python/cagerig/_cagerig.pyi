@@ -4,7 +4,7 @@ integer (indices) dtype."""
 
 import os
 import pathlib
-from typing import Any, Literal, Optional, Sequence, Union, final, overload
+from typing import Any, Callable, Literal, Optional, Sequence, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -168,6 +168,7 @@ class Rig:
         coords: _Coords = "mvc",
         cage_fit: _CageFit = "regularised",
         green_face_term: _GreenFaceTerm = "fold-safe",
+        progress: Optional[Callable[[str, int, int], None]] = None,
         skin: Optional[str] = None,
     ) -> Rig: ...
     @staticmethod
@@ -183,6 +184,7 @@ class Rig:
         coords: _Coords = "mvc",
         cage_fit: _CageFit = "regularised",
         green_face_term: _GreenFaceTerm = "fold-safe",
+        progress: Optional[Callable[[str, int, int], None]] = None,
     ) -> Rig: ...
     @staticmethod
     def from_arrays(
@@ -203,6 +205,7 @@ class Rig:
         coords: _Coords = "mvc",
         cage_fit: _CageFit = "regularised",
         green_face_term: _GreenFaceTerm = "fold-safe",
+        progress: Optional[Callable[[str, int, int], None]] = None,
         dq_blend_weights: Optional[_ArrayLike] = None,
     ) -> Rig: ...
     def copy(self) -> Rig: ...
