@@ -8,6 +8,13 @@
 //! the rest joints, rotations, scales and offsets are thus kept and the translations T_j^t
 //! re-derived root-first (Sec. 4.2).
 //! Every event ends with C' = CageUp(M') so that the loop C' → C → S → S' → C' is closed.
+//!
+//! The session holds the six structures and the pose, and coordinates components that own their
+//! state and invariants: the rest map ([`rest_map`]: M = f(C), CageUp, CageRev, by coordinates
+//! kind), SkelUp ([`SkeletonUpdater`]), the skinning ([`skinning`]: the method with its data),
+//! the f32 display path ([`display_path`]) and the checkpoint of an event ([`checkpoint`]). The
+//! events live in their own files (`cage_events`, `pose_events`, `cage_sync`, `green_sync`,
+//! `display_events`, `state_restore`, `events`); `docs/architecture.md` draws the whole.
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
@@ -86,6 +93,7 @@ pub struct RigSession {
     skin_weights: SkinWeights,
     /// The rest map: M = f(C) with its CageUp and CageRev (see [`rest_map`]).
     rest_map: RestMap,
+    /// SkelUp: the rest joints A = ΨC (+ Ψ_ψ·g(C) for Green rigs).
     skeleton_updater: SkeletonUpdater,
     /// The skinning component: M' from M under the method in use (see [`skinning`]).
     skinning: RigSkinning,
