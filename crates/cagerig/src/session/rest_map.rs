@@ -238,9 +238,17 @@ impl BindInputs<'_> {
             }
         };
         let paper = CageUpdater::new(&coords, rows, mode)?;
-        let fit = with_cage_fit(paper, options.cage_fit, &coords, cage, self.skin_weights)?;
+        // M₀ = ΦC₀: the regularised fit's neighbourhoods and the check of M's state.
         let mut map = vec![DVec3::ZERO; nv];
         coords.apply(&cage.positions, &mut map);
+        let fit = with_cage_fit(
+            paper,
+            options.cage_fit,
+            &coords,
+            cage,
+            Some(&map),
+            self.skin_weights,
+        )?;
         let mesh_state = self.adopt_map(mesh, &map, precision, warnings);
         let (skeleton_updater, notes) = skeleton_updater_of(mesh, &coords, None)?;
         warnings.extend(notes);
@@ -394,23 +402,33 @@ impl BindInputs<'_> {
 /// The paper's CageUp `paper` (on Φ `cage_coords`, `#V × #C`) as the fit `kind` for the
 /// binding cage `cage` (C₀) and Ω `skin_weights`: itself, or regularised with the prior of the
 /// binding (neighbourhoods found on M₀ = ΦC₀, so a rig switched to it later gets the same fit).
+/// `binding_mesh` is M₀ (`#V`) when the caller has it; it is computed here otherwise.
 fn with_cage_fit(
     paper: CageUpdater,
     kind: CageFitKind,
     cage_coords: &CageCoords,
     cage: &TriMesh,
+    binding_mesh: Option<&[DVec3]>,
     skin_weights: &SkinWeights,
 ) -> Result<CageUpdater, RigError> {
     match kind {
         CageFitKind::Paper => Ok(paper),
         CageFitKind::Regularised => {
-            let mut binding_mesh = vec![DVec3::ZERO; cage_coords.num_vertices()];
-            cage_coords.apply(&cage.positions, &mut binding_mesh);
+            let computed;
+            let binding_mesh = match binding_mesh {
+                Some(mesh) => mesh,
+                None => {
+                    let mut mesh = vec![DVec3::ZERO; cage_coords.num_vertices()];
+                    cage_coords.apply(&cage.positions, &mut mesh);
+                    computed = mesh;
+                    &computed
+                }
+            };
             paper.regularised(
                 cage_coords,
                 &cage.positions,
                 &cage.triangles,
-                &binding_mesh,
+                binding_mesh,
                 skin_weights,
             )
         }
@@ -430,7 +448,7 @@ impl MvcMap {
         skeleton_updater: &SkeletonUpdater,
         skeleton: &Skeleton,
     ) -> Result<(), RigError> {
-        let fit = with_cage_fit(self.fit.paper(), kind, coords, cage, skin_weights)?;
+        let fit = with_cage_fit(self.fit.paper(), kind, coords, cage, None, skin_weights)?;
         let mut reverser = CageReverser::new(
             coords,
             &fit,

@@ -215,12 +215,7 @@ impl RigSkinning {
         if method == self.method() {
             return Ok(());
         }
-        // Park the data of the method in use.
-        match std::mem::replace(&mut self.active, ActiveSkinning::Lbs) {
-            ActiveSkinning::Lbs | ActiveSkinning::Dqs => {}
-            ActiveSkinning::Cor(cor) => self.idle_cor = Some(cor),
-            ActiveSkinning::Blended(blended) => self.idle_blended = Some(blended),
-        }
+        self.park_active();
         // Checked above: the data of `method` is idle here.
         self.active = match method {
             SkinningMethod::Lbs => ActiveSkinning::Lbs,
@@ -242,11 +237,16 @@ impl RigSkinning {
     /// result.
     pub(super) fn restore(&mut self, method: SkinningMethod) {
         if self.select(method).is_err() {
-            match std::mem::replace(&mut self.active, ActiveSkinning::Lbs) {
-                ActiveSkinning::Lbs | ActiveSkinning::Dqs => {}
-                ActiveSkinning::Cor(cor) => self.idle_cor = Some(cor),
-                ActiveSkinning::Blended(blended) => self.idle_blended = Some(blended),
-            }
+            self.park_active();
+        }
+    }
+
+    /// LBS becomes the method in use; the data of the one that was is kept idle.
+    fn park_active(&mut self) {
+        match std::mem::replace(&mut self.active, ActiveSkinning::Lbs) {
+            ActiveSkinning::Lbs | ActiveSkinning::Dqs => {}
+            ActiveSkinning::Cor(cor) => self.idle_cor = Some(cor),
+            ActiveSkinning::Blended(blended) => self.idle_blended = Some(blended),
         }
     }
 

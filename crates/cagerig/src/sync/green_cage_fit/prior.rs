@@ -71,17 +71,20 @@ impl FitPrior {
         self.active.copy_from_slice(&self.target);
     }
 
+    /// (Wd)_k for d = x − P of the current solve (`x`: `#C`).
+    fn pull(&self, x: &[DVec3], k: usize) -> DVec3 {
+        let row = self.weight.row(k);
+        x.iter()
+            .zip(&self.active)
+            .enumerate()
+            .fold(DVec3::ZERO, |acc, (m, (xm, pm))| acc + row[m] * (*xm - *pm))
+    }
+
     /// ½ Σ_axes dᵀWd for d = x − P of the current solve (`x`: `#C`). No allocation.
     pub(super) fn energy(&self, x: &[DVec3]) -> f64 {
         let mut energy = 0.0;
         for k in 0..x.len() {
-            let row = self.weight.row(k);
-            let pull = x
-                .iter()
-                .zip(&self.active)
-                .enumerate()
-                .fold(DVec3::ZERO, |acc, (m, (xm, pm))| acc + row[m] * (*xm - *pm));
-            energy += 0.5 * pull.dot(x[k] - self.active[k]);
+            energy += 0.5 * self.pull(x, k).dot(x[k] - self.active[k]);
         }
         energy
     }
@@ -122,12 +125,7 @@ impl FitPrior {
     pub(super) fn add_to_gradient(&self, x: &[DVec3], gradient: &mut [DVec3]) -> f64 {
         let mut energy = 0.0;
         for (k, out) in gradient.iter_mut().enumerate() {
-            let row = self.weight.row(k);
-            let pull = x
-                .iter()
-                .zip(&self.active)
-                .enumerate()
-                .fold(DVec3::ZERO, |acc, (m, (xm, pm))| acc + row[m] * (*xm - *pm));
+            let pull = self.pull(x, k);
             *out += pull;
             energy += 0.5 * pull.dot(x[k] - self.active[k]);
         }
