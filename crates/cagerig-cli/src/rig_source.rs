@@ -174,17 +174,38 @@ pub struct LoadedRig {
     pub file_skinning: Option<cagerig::skinning::SkinningMethod>,
 }
 
+impl LoadedRig {
+    /// The cage's file as the user named it, or "the cage of NAME" when it came with the rig.
+    pub fn cage_name(&self) -> String {
+        self.files.iter().find(|f| f.role == "cage").map_or_else(
+            || format!("the cage of {}", self.name),
+            |f| f.path.display().to_string(),
+        )
+    }
+}
+
 /// Loads the rig. With `compute_coords`, Φ is computed (with a progress bar when `progress` and
 /// stderr is a terminal) if no cage-weights file was found.
 pub fn load_rig(args: &RigArgs, progress: bool, compute_coords: bool) -> anyhow::Result<LoadedRig> {
-    load_rig_or_generate_cage(args, progress, compute_coords, None)
+    load_rig_or_generate_cage(args, progress, compute_coords, None, CageCheck::Loader)
+}
+
+/// Where a loaded rig's cage is validated: once, by whoever uses it first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CageCheck {
+    /// By the loader ([`cagerig::cage_enclosure::validate_cage_for_mesh`]): the command uses the
+    /// cage without a session (`info`, `coords`, `maxvol`, `subdivide`, `bench`).
+    Loader,
+    /// By the session the command opens ([`crate::session_args::start_session`], which words
+    /// the session's cage errors with the cage file's name).
+    Session,
 }
 
 /// The rig of a command that opens a session (`edit`, `animate`, `export`, `render`): loaded
 /// with a progress bar and its cage generated under `--auto-cage`; the session computes the
 /// coordinates of the kind it binds with ([`crate::session_args::start_session`]).
 pub fn load_rig_for_session(rig: &RigArgs, auto_cage: &AutoCageArgs) -> anyhow::Result<LoadedRig> {
-    load_rig_or_generate_cage(rig, true, false, auto_cage.options())
+    load_rig_or_generate_cage(rig, true, false, auto_cage.options(), CageCheck::Session)
 }
 
 /// [`load_rig`]; when the rig has no cage and `auto_cage` gives options, one is generated
@@ -194,6 +215,7 @@ pub fn load_rig_or_generate_cage(
     progress: bool,
     compute_coords: bool,
     auto_cage: Option<CageOptions>,
+    cage_check: CageCheck,
 ) -> anyhow::Result<LoadedRig> {
     let weights = args.weights_source();
     let bar = crate::weights_progress::DelayedBar::new();
@@ -279,19 +301,19 @@ pub fn load_rig_or_generate_cage(
         drop_animations_of_another_skeleton(&mut loaded, &file_skeleton, &weights);
     }
     bar.finish();
-    // The one cage validation, the same for every command (and again in the session).
-    let cage_name = loaded.files.iter().find(|f| f.role == "cage").map_or_else(
-        || format!("the cage of {}", loaded.name),
-        |f| f.path.display().to_string(),
-    );
-    let (cage, cage_warnings) = cagerig::cage_enclosure::validate_cage_for_mesh(
-        std::mem::take(&mut loaded.parts.cage),
-        &loaded.parts.mesh.positions,
-        args.allow_outside_cage,
-    )
-    .map_err(|e| anyhow::anyhow!("{cage_name}: {e}"))?;
-    loaded.parts.cage = cage;
-    loaded.warnings.extend(cage_warnings);
+    match cage_check {
+        CageCheck::Loader => {
+            let (cage, cage_warnings) = cagerig::cage_enclosure::validate_cage_for_mesh(
+                std::mem::take(&mut loaded.parts.cage),
+                &loaded.parts.mesh.positions,
+                args.allow_outside_cage,
+            )
+            .map_err(|e| anyhow::anyhow!("{}: {e}", loaded.cage_name()))?;
+            loaded.parts.cage = cage;
+            loaded.warnings.extend(cage_warnings);
+        }
+        CageCheck::Session => {}
+    }
     if compute_coords && loaded.parts.cage_coords.is_none() {
         loaded.parts.cage_coords = Some(compute_coords_with_progress(&loaded.parts, progress)?);
     }

@@ -1,7 +1,6 @@
 //! The session options every rig-building subcommand shares (`--fit-rows`, `--skinning`, …),
 //! and starting a session from a loaded rig.
 
-use anyhow::Context;
 use cagerig::cage_coords::CoordsPrecision;
 use cagerig::coords::stretched_normals::FaceTermKind;
 use cagerig::session::{
@@ -145,11 +144,19 @@ pub fn start_session(
             bar.set_position(done as u64);
         }
     };
+    let cage_name = loaded.cage_name();
     let bound = RigSession::with_progress(loaded.parts, options, &report);
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    let (session, mut warnings) = bound.context("assembling the rig")?;
+    // The session is where the cage is validated (once); its cage errors name the cage's file.
+    let (session, mut warnings) = bound.map_err(|e| {
+        if e.concerns_cage() {
+            anyhow::anyhow!("{cage_name}: {e}")
+        } else {
+            anyhow::Error::new(e).context("assembling the rig")
+        }
+    })?;
     let mut all = loaded.warnings;
     all.append(&mut warnings);
     Ok((session, all))

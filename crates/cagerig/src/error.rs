@@ -330,6 +330,23 @@ pub enum RigError {
     Invalid(String),
 }
 
+impl RigError {
+    /// Whether the error is about the rest cage C itself (its validation, or the mesh outside
+    /// it), so that a front end can name the cage's file in its message.
+    pub fn concerns_cage(&self) -> bool {
+        matches!(
+            self,
+            Self::CageOpenBoundary { .. }
+                | Self::CageNonManifoldEdge { .. }
+                | Self::CageInconsistentOrientation { .. }
+                | Self::CageDegenerateTriangle { .. }
+                | Self::CageRepeatedVertex { .. }
+                | Self::MeshOutsideCage { .. }
+                | Self::EmptyCage
+        )
+    }
+}
+
 /// Something that was accepted but changed or is suspicious; shown to the user by `info`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]

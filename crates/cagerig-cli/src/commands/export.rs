@@ -108,9 +108,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         script.as_ref().and_then(|s| s.skinning),
         &loaded,
     );
-    let (mut session, warnings) =
-        RigSession::new(loaded.parts, options).context("assembling the rig")?;
-    for w in loaded.warnings.iter().chain(&warnings) {
+    let (mut session, warnings) = crate::session_args::start_session(loaded, options)?;
+    for w in &warnings {
         eprintln!("warning: {w}");
     }
     if let (Some(script), Some(path)) = (&script, &args.script) {

@@ -54,7 +54,13 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
         );
     }
     let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
-    let loaded = load_rig_or_generate_cage(args, true, false, cli.auto_cage.options())?;
+    let loaded = load_rig_or_generate_cage(
+        args,
+        true,
+        false,
+        cli.auto_cage.options(),
+        crate::rig_source::CageCheck::Loader,
+    )?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
