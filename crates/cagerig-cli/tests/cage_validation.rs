@@ -68,10 +68,7 @@ fn an_accepted_outside_mesh_is_reported_once_and_a_refused_one_names_the_cage() 
                 dir.join("animated").into(),
             ],
         ),
-        (
-            "export",
-            vec!["--out".into(), dir.join("arm.glb").into()],
-        ),
+        ("export", vec!["--out".into(), dir.join("arm.glb").into()]),
     ];
     for (command, extra) in &runs {
         let refused = cagerig()

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use cagerig::Warning;
 use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, cage_options_with_vertices};
 use cagerig::rig_files::MissingCage;
-use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
+use cagerig::session::{BindProgress, DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig_formats::{ImportOptions, ImportedAnimation, OpenCharacterError};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -134,6 +134,15 @@ pub struct OpenedRig {
 /// Loads `source` and assembles the session (Φ, MaxVol rows and Ψ are computed when no file
 /// gives them).
 pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
+    open_rig_with_progress(source, &|_, _, _| {})
+}
+
+/// [`open_rig`], reporting the binding's progress to `progress` (from worker threads), as
+/// [`RigSession::with_progress`] does.
+pub fn open_rig_with_progress(
+    source: &RigSource,
+    progress: BindProgress<'_>,
+) -> Result<OpenedRig, OpenError> {
     let mut rigged = true;
     let (parts, mut warnings, files, (animations, morph_targets, file_skinning)) = match source {
         RigSource::Builtin { name, resolution } => {
@@ -206,10 +215,11 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
         skinning: file_skinning.unwrap_or_default(),
         ..SessionOptions::default()
     };
-    let (mut session, mut more) = RigSession::new(parts, options).map_err(|e| OpenError::Rig {
-        name: name.clone(),
-        source: e,
-    })?;
+    let (mut session, mut more) =
+        RigSession::with_progress(parts, options, progress).map_err(|e| OpenError::Rig {
+            name: name.clone(),
+            source: e,
+        })?;
     // The views draw the current skin from the f32 display path (within 2e-6 of the bounding-box
     // diagonal of the exact one); every sync operator, export and script result stays exact.
     session

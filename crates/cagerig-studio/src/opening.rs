@@ -3,10 +3,12 @@
 //! (the application's side, which swaps the documents, is in `open_document`).
 
 use std::path::PathBuf;
-use std::sync::mpsc;
+use std::sync::{Arc, Mutex, mpsc};
 use std::time::Instant;
 
-use crate::rig_open::{OpenError, OpenedRig, RigSource, open_rig};
+use cagerig::session::BindStage;
+
+use crate::rig_open::{OpenError, OpenedRig, RigSource, open_rig_with_progress};
 use crate::session_file::SessionFile;
 
 /// Something to open.
@@ -46,6 +48,8 @@ pub struct PendingOpen {
     session: Option<SessionFile>,
     started: Instant,
     result: mpsc::Receiver<Result<OpenedRig, OpenError>>,
+    /// The binding's last report: its stage, the work done and its total.
+    progress: Arc<Mutex<Option<(BindStage, usize, usize)>>>,
 }
 
 impl PendingOpen {
@@ -59,11 +63,18 @@ impl PendingOpen {
     ) -> Result<Self, Box<NoThread>> {
         let (sender, receiver) = mpsc::channel();
         let job = source.clone();
+        let progress = Arc::new(Mutex::new(None));
+        let shared = Arc::clone(&progress);
         let spawned = std::thread::Builder::new()
             .name("cagerig-open".into())
             .spawn(move || {
+                let report = |stage: BindStage, done: usize, total: usize| {
+                    if let Ok(mut slot) = shared.lock() {
+                        *slot = Some((stage, done, total));
+                    }
+                };
                 // The receiver is gone only if the load was abandoned.
-                let _ = sender.send(open_rig(&job));
+                let _ = sender.send(open_rig_with_progress(&job, &report));
             });
         let started = Instant::now();
         match spawned {
@@ -72,6 +83,7 @@ impl PendingOpen {
                 session,
                 started,
                 result: receiver,
+                progress,
             }),
             Err(error) => Err(Box::new(NoThread {
                 request,
@@ -93,6 +105,18 @@ impl PendingOpen {
 
     pub fn request(&self) -> &OpenRequest {
         &self.request
+    }
+
+    /// The binding's progress: the fraction done (0…1) of its current stage and what it
+    /// computes, once it has reported (reading and importing the file come before).
+    pub fn progress(&self) -> Option<(f32, &'static str)> {
+        let (stage, done, total) = self.progress.lock().ok().and_then(|p| *p)?;
+        let fraction = if total == 0 {
+            0.0
+        } else {
+            done as f32 / total as f32
+        };
+        Some((fraction, stage.label()))
     }
 
     /// The request, its session file and when it started.
@@ -127,8 +151,52 @@ pub fn opening_ui(ctx: &egui::Context, pending: &PendingOpen) -> bool {
                 ui.spinner();
                 ui.label(format!("{name}: {elapsed:.1} s"));
             });
-            ui.label("Computing the cage coordinates and the coupling operators…");
+            match pending.progress() {
+                Some((fraction, what)) => {
+                    ui.add(
+                        egui::ProgressBar::new(fraction)
+                            .show_percentage()
+                            .text(format!("{what} {:.0} %", 100.0 * fraction)),
+                    );
+                }
+                None => {
+                    ui.label("Reading the character…");
+                }
+            }
+            ui.label("Then the coupling operators: MaxVol rows, SkelUp, CageUp and CageRev.");
             cancel = ui.button("Stop waiting").clicked();
         });
     cancel
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{OpenRequest, PendingOpen};
+    use crate::rig_open::RigSource;
+
+    #[test]
+    fn a_background_open_reports_the_bindings_progress() {
+        let source = RigSource::Builtin {
+            name: "bar".into(),
+            resolution: None,
+        };
+        let pending = PendingOpen::spawn(OpenRequest::Rig(source.clone()), &source, None)
+            .map_err(|e| e.error)
+            .expect("a thread");
+        let opened = loop {
+            if let Some(result) = pending.try_result() {
+                break result.expect("the bar opens");
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        };
+        let (fraction, what) = pending
+            .progress()
+            .expect("the binding reported its progress");
+        assert_eq!(what, "cage coordinates");
+        assert!(
+            (fraction - 1.0).abs() < 1e-6,
+            "the last report is the stage's end: {fraction}"
+        );
+        assert!(!opened.session.rest_mesh().is_empty());
+    }
 }
