@@ -37,6 +37,7 @@ mod cage_sync;
 mod checkpoint;
 mod display_events;
 mod display_path;
+mod display_rest_map;
 mod editable_state;
 mod events;
 mod green;
@@ -57,6 +58,7 @@ use checkpoint::Checkpoint;
 pub use checkpoint::MAX_STATE_MAGNITUDE;
 use display_path::DisplayPath;
 pub use display_path::DisplayPrecision;
+pub use display_rest_map::{DisplayRestMap, DisplayRestMapBackend, DisplayRestMapProduct};
 pub use editable_state::{EditableState, SyncLocks};
 pub use green::GREEN_FIT_LIMIT;
 pub use parts::{

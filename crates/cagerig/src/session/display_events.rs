@@ -7,7 +7,6 @@ use super::RigSession;
 use super::display_path::{DisplayPath, DisplayPrecision, MethodF32, SkinF32};
 use super::rest_map::RestMeshState;
 use super::skinning::ActiveSkinning;
-use crate::cage_coords::DisplayCageCoords;
 use crate::error::RigError;
 use crate::skinning::cor::CorScratch;
 use crate::skinning::dqs::DqsScratch;
@@ -65,16 +64,17 @@ impl RigSession {
         };
         if display.coords.is_none() {
             let coords = self.rest_map.coords();
+            let backend = &self.options.display_rest_map;
             display.coords = match self.rest_map.extra_coords() {
-                None => DisplayCageCoords::try_new(coords),
-                Some(extra) => DisplayCageCoords::try_new_concatenated(&[coords, extra]),
+                None => backend.upload(&[coords]),
+                Some(extra) => backend.upload(&[coords, extra]),
             };
         }
         let Some(coords) = &display.coords else {
             return self.rest_from_cage_in_full();
         };
         self.rest_map.update_terms(&self.rest_cage);
-        coords.apply_concatenated(
+        coords.apply(
             &self.rest_cage,
             self.rest_map.terms(),
             &mut display.rest_positions,

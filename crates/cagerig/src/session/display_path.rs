@@ -20,11 +20,12 @@
 //! (one f32 product, g(C) exact in f64) and the exact rows φ_R C + ψ_R g(C), the bits of the full
 //! product's rows ([`CageCoords::add_rows`]).
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use glam::{DAffine3, DVec3, Vec3};
 
-use crate::cage_coords::{CageCoords, DisplayCageCoords};
+use super::display_rest_map::DisplayRestMapProduct;
+use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::{
@@ -77,9 +78,10 @@ pub(super) struct DisplayPath {
     pub positions: Vec<Vec3>,
     /// The exact M' of the current state, skinned on demand.
     pub exact: OnceLock<Vec<DVec3>>,
-    /// Φ̃, Φ rounded to f32 (built at the first current-cage edit; `None` before, or when its
-    /// memory could not be reserved, and then M is computed exactly).
-    pub(super) coords: Option<DisplayCageCoords>,
+    /// The product M̃ = Φ̃·[C; g] of the session's [`super::DisplayRestMap`] (by default Φ
+    /// rounded to f32; built at the first current-cage edit; `None` before, or when the backend
+    /// could not hold it, and then M is computed exactly).
+    pub(super) coords: Option<Arc<dyn DisplayRestMapProduct>>,
     /// Φ and the kind's extra coordinates (ψ) on CageUp's rows alone (`#R` rows each, built
     /// with `coords`): the exact rows of M from a few contiguous kilobytes, the bits of the
     /// full product's rows (2.1 ms → µs at 133k vertices on Green's 170 columns, whose entries

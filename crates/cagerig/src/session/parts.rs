@@ -1,6 +1,7 @@
 //! What a session is assembled from: the rig parts, the options, and the constants and
 //! helpers of that assembly (CoR coordinates Λ, the ΦC = M check).
 
+use super::display_rest_map::DisplayRestMap;
 use super::unfitted_cage::UnfittedCagePolicy;
 use crate::cage_coords::{CageCoords, CoordsPrecision};
 use crate::coords_kind::CoordsKind;
@@ -269,6 +270,10 @@ pub struct SessionOptions {
     /// ([`crate::coords::stretched_normals::FaceTermKind`]): smooth through folds (the default)
     /// or Lipman et al.'s stretched normal.
     pub green_face_term: crate::coords::stretched_normals::FaceTermKind,
+    /// Who computes the drawn rest skin M̃ on the f32 display path: the CPU (the default) or a
+    /// backend from another crate, such as a GPU one ([`DisplayRestMap`]). It changes what is
+    /// drawn only; the rig's state is exact either way.
+    pub display_rest_map: DisplayRestMap,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).
