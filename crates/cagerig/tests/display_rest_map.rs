@@ -6,7 +6,7 @@
 //! bit-identical to a session on the CPU backend. A backend that cannot hold the coordinates
 //! leaves the session on the exact product.
 
-#![expect(clippy::unwrap_used, clippy::expect_used)] // tests may panic on a broken fixture
+#![expect(clippy::unwrap_used)] // tests may panic on a broken fixture
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
