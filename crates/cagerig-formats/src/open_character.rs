@@ -49,6 +49,19 @@ pub fn open_character(
     options: &ImportOptions,
     cage: &CageRequest<'_>,
 ) -> Result<OpenedCharacter, OpenCharacterError> {
+    let imported = import_character(path, options)?;
+    Ok(open_imported_character(path, imported, cage)?)
+}
+
+/// The rule of [`open_character`] after the import: the cage chosen by `cage` and the parts
+/// assembled from a character already imported — by this crate's importers, or by a loader of
+/// another crate that returns an [`ImportedCharacter`] (`tests/toy_loader.rs` is one). `path`
+/// names the character in messages and places a generated cage's report.
+pub fn open_imported_character(
+    path: &Path,
+    imported: ImportedCharacter,
+    cage: &CageRequest<'_>,
+) -> Result<OpenedCharacter, CageSourceError> {
     let ImportedCharacter {
         mesh,
         skeleton,
@@ -60,7 +73,7 @@ pub fn open_character(
         skinning,
         dq_blend_weights,
         ..
-    } = import_character(path, options)?;
+    } = imported;
     let chosen = choose_cage(path, &mesh, found, cage)?;
     Ok(OpenedCharacter {
         parts: RigParts::new(mesh, skeleton, skin_weights, chosen.cage)
