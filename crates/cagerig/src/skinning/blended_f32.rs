@@ -11,10 +11,11 @@
 use glam::{DAffine3, Vec3, Vec3A};
 
 use super::blended::skin_blended;
-use super::compact_weights::{SortedRestMesh, columns_from_local};
+use super::compact_weights::columns_from_local;
 use super::dq_blend_weights::DqBlendWeights;
 use super::dqs::DqsScratch;
 use super::precision::RestPoint;
+use super::stored_rest_kernel::StoredRestKernel;
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: the `#J` joint dual quaternions and f32 columns of
@@ -35,13 +36,15 @@ impl BlendedF32Scratch {
     }
 }
 
-/// Precomputed f32 blended skinning: compact Ω, pivots, the rest mesh M (`#V`, f32, local
-/// origin) and the DQ blend weights `b` (`#V`, f32, by vertex).
+/// The method data of [`BlendedF32`]: the DQ blend weights `b` (`#V`, f32, by vertex).
 #[derive(Debug, Clone)]
-pub struct BlendedF32 {
-    mesh: SortedRestMesh,
+pub struct BlendedF32Method {
     blend: Vec<f32>,
 }
+
+/// Precomputed f32 blended skinning: compact Ω, pivots, the rest mesh M (`#V`, f32, local
+/// origin) and the DQ blend weights `b`.
+pub type BlendedF32 = StoredRestKernel<BlendedF32Method>;
 
 impl BlendedF32 {
     /// Ω (`#V × #J`), `b` (`#V`) and rest positions M (`#V`). Errors if the sizes differ.
@@ -51,33 +54,15 @@ impl BlendedF32 {
         rest_positions: &[P],
     ) -> Result<Self, RigError> {
         blend.check_vertices(skin_weights.num_vertices())?;
-        Ok(Self {
-            mesh: SortedRestMesh::new(
-                skin_weights,
-                rest_positions,
-                "blended f32 rest positions vs. weight rows",
-            )?,
+        Self::build(
+            skin_weights,
+            rest_positions,
+            "blended f32 rest positions vs. weight rows",
             // b ∈ [0, 1]: 0 and 1 stay exact, so those vertices run one rule alone.
-            blend: blend.values().iter().map(|&b| b as f32).collect(),
-        })
-    }
-
-    /// Number of mesh vertices `#V`.
-    pub fn num_vertices(&self) -> usize {
-        self.mesh.weights.num_vertices()
-    }
-
-    /// Number of joints `#J`.
-    pub fn num_joints(&self) -> usize {
-        self.mesh.weights.num_joints
-    }
-
-    /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
-    pub fn set_rest_positions<P: RestPoint>(
-        &mut self,
-        rest_positions: &[P],
-    ) -> Result<(), RigError> {
-        self.mesh.set_rest_positions(rest_positions)
+            BlendedF32Method {
+                blend: blend.values().iter().map(|&b| b as f32).collect(),
+            },
+        )
     }
 
     /// M' = (1 − b)·LBS + b·DQS in f32. `transforms`: `#J`; `scratch`:
@@ -103,7 +88,7 @@ impl BlendedF32 {
             &scratch.columns[..],
             self.mesh.origin,
             &self.mesh.weights,
-            &self.blend,
+            &self.method.blend,
             self.mesh.points(),
             out,
         );

@@ -10,19 +10,20 @@
 
 use glam::{DAffine3, Vec3};
 
-use super::compact_weights::SortedRestMesh;
 use super::dqs::DqsScratch;
 use super::precision::RestPoint;
+use super::stored_rest_kernel::StoredRestKernel;
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: the `#J` joint dual quaternions of `T_j ∘ translate(o)`, f32.
 pub type DqsF32Scratch = DqsScratch<f32>;
 
+/// The method data of [`DqsF32`]: none beyond Ω, its pivots and M.
+#[derive(Debug, Clone, Copy)]
+pub struct DqsF32Method;
+
 /// Precomputed f32 DQS: compact Ω, pivots and the rest mesh M (`#V`, f32, local origin).
-#[derive(Debug, Clone)]
-pub struct DqsF32 {
-    mesh: SortedRestMesh,
-}
+pub type DqsF32 = StoredRestKernel<DqsF32Method>;
 
 impl DqsF32 {
     /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
@@ -30,31 +31,12 @@ impl DqsF32 {
         skin_weights: &SkinWeights,
         rest_positions: &[P],
     ) -> Result<Self, RigError> {
-        Ok(Self {
-            mesh: SortedRestMesh::new(
-                skin_weights,
-                rest_positions,
-                "DQS f32 rest positions vs. weight rows",
-            )?,
-        })
-    }
-
-    /// Number of mesh vertices `#V`.
-    pub fn num_vertices(&self) -> usize {
-        self.mesh.weights.num_vertices()
-    }
-
-    /// Number of joints `#J`.
-    pub fn num_joints(&self) -> usize {
-        self.mesh.weights.num_joints
-    }
-
-    /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
-    pub fn set_rest_positions<P: RestPoint>(
-        &mut self,
-        rest_positions: &[P],
-    ) -> Result<(), RigError> {
-        self.mesh.set_rest_positions(rest_positions)
+        Self::build(
+            skin_weights,
+            rest_positions,
+            "DQS f32 rest positions vs. weight rows",
+            DqsF32Method,
+        )
     }
 
     /// M' = DQS(T, Ω, M) in f32 (Eq. 4). `transforms`: `#J`; `scratch`:

@@ -9,9 +9,10 @@
 
 use glam::{DAffine3, Vec3, Vec3A};
 
-use super::compact_weights::{SortedRestMesh, columns_from_local};
+use super::compact_weights::columns_from_local;
 use super::lbs::LbsRule;
 use super::precision::RestPoint;
+use super::stored_rest_kernel::StoredRestKernel;
 use crate::{RigError, SkinWeights};
 
 /// Caller-owned per-frame buffer: the `#J` transforms `T_j ∘ translate(o)` as f32 columns.
@@ -29,12 +30,13 @@ impl LbsF32Scratch {
     }
 }
 
+/// The method data of [`LbsF32`]: none beyond Ω and M.
+#[derive(Debug, Clone, Copy)]
+pub struct LbsF32Method;
+
 /// Precomputed f32 LBS: count-sorted compact Ω and the rest mesh M (`#V`, f32, relative to a
 /// local origin, in sorted order; see [`super::compact_weights`]).
-#[derive(Debug, Clone)]
-pub struct LbsF32 {
-    mesh: SortedRestMesh,
-}
+pub type LbsF32 = StoredRestKernel<LbsF32Method>;
 
 impl LbsF32 {
     /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
@@ -42,31 +44,12 @@ impl LbsF32 {
         skin_weights: &SkinWeights,
         rest_positions: &[P],
     ) -> Result<Self, RigError> {
-        Ok(Self {
-            mesh: SortedRestMesh::new(
-                skin_weights,
-                rest_positions,
-                "LBS f32 rest positions vs. weight rows",
-            )?,
-        })
-    }
-
-    /// Number of mesh vertices `#V`.
-    pub fn num_vertices(&self) -> usize {
-        self.mesh.weights.num_vertices()
-    }
-
-    /// Number of joints `#J`.
-    pub fn num_joints(&self) -> usize {
-        self.mesh.weights.num_joints
-    }
-
-    /// Replaces the stored rest mesh M (`#V`; after a rest-cage edit). Parallel, no allocation.
-    pub fn set_rest_positions<P: RestPoint>(
-        &mut self,
-        rest_positions: &[P],
-    ) -> Result<(), RigError> {
-        self.mesh.set_rest_positions(rest_positions)
+        Self::build(
+            skin_weights,
+            rest_positions,
+            "LBS f32 rest positions vs. weight rows",
+            LbsF32Method,
+        )
     }
 
     /// M' = LBS(T, Ω, M) in f32 (Eq. 2–3). `transforms`: `#J`; `scratch`:

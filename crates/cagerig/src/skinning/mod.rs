@@ -20,9 +20,11 @@ pub mod lbs_f32;
 mod method;
 pub mod precision;
 pub mod rigid_rotation;
+mod stored_rest_kernel;
+pub use stored_rest_kernel::StoredRestKernel;
 
 pub use blended::BlendedSkinning;
-pub use blended_f32::{BlendedF32, BlendedF32Scratch};
+pub use blended_f32::{BlendedF32, BlendedF32Method, BlendedF32Scratch};
 pub use cor::{CorScratch, CorSkinning};
 // The CoR-centre precomputation lives beside this module, in `crate::cor_centres`; its
 // types are re-exported here for the callers of the skinning kernels.
@@ -34,8 +36,8 @@ pub use crate::cor_centres::{
 pub use cor_f32::{CorF32, CorF32Scratch};
 pub use dq_blend_weights::DqBlendWeights;
 pub use dqs::{DqsScratch, DualQuat, DualQuaternionSkinning};
-pub use dqs_f32::{DqsF32, DqsF32Scratch};
+pub use dqs_f32::{DqsF32, DqsF32Method, DqsF32Scratch};
 pub use lbs::LinearBlendSkinning;
-pub use lbs_f32::{LbsF32, LbsF32Scratch};
+pub use lbs_f32::{LbsF32, LbsF32Method, LbsF32Scratch};
 pub use method::{SkinningMethod, UnknownSkinningMethod};
 pub use precision::{RestPoint, SkinReal};
