@@ -466,17 +466,9 @@ pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
         );
     }
     println!("skeleton       {} joints", s.joints);
-    let histogram: Vec<String> = s
-        .influences_histogram
-        .iter()
-        .enumerate()
-        .filter(|(_, n)| **n > 0)
-        .map(|(k, n)| format!("{k}: {n}"))
-        .collect();
     println!(
-        "influences     max {} per vertex; vertices by count {{{}}}",
-        s.max_influences,
-        histogram.join(", ")
+        "{}",
+        influences_line(s.max_influences, &s.influences_histogram)
     );
     println!("renormalised   {} weight rows", s.renormalised_rows);
     for a in &s.animations {
@@ -512,4 +504,19 @@ pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
         println!("warning        {w}");
     }
     Ok(())
+}
+
+/// The `influences` line of `info` and `weights`: the most influences of a vertex, and how many
+/// vertices have each count (`histogram[k]` vertices have k influences; zero counts left out).
+pub fn influences_line(max_influences: usize, histogram: &[usize]) -> String {
+    let counts: Vec<String> = histogram
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| **n > 0)
+        .map(|(k, n)| format!("{k}: {n}"))
+        .collect();
+    format!(
+        "influences     max {max_influences} per vertex; vertices by count {{{}}}",
+        counts.join(", ")
+    )
 }

@@ -252,17 +252,9 @@ fn print_report(o: &WeightsOutput) {
         o.solid_voxels,
         o.capped_holes
     );
-    let counts: Vec<String> = o
-        .influences_histogram
-        .iter()
-        .enumerate()
-        .filter(|(_, n)| **n > 0)
-        .map(|(k, n)| format!("{k}: {n}"))
-        .collect();
     println!(
-        "influences     max {} per vertex; vertices by count {{{}}}",
-        o.max_influences,
-        counts.join(", ")
+        "{}",
+        crate::interchange::influences_line(o.max_influences, &o.influences_histogram)
     );
     for w in &o.warnings {
         println!("warning        {w}");
