@@ -103,6 +103,25 @@ def triangles(mesh: bpy.types.Mesh) -> np.ndarray:
     return t.reshape(n, 3).astype(np.int64)
 
 
+def connected_parts(num_vertices: int, tris: np.ndarray) -> int:
+    """How many separate parts the triangles ``tris`` (m, 3) form over ``num_vertices`` vertices
+    (vertices in no triangle count as parts of their own)."""
+    parent = np.arange(num_vertices)
+
+    def root(v: int) -> int:
+        while parent[v] != v:
+            parent[v] = parent[parent[v]]
+            v = int(parent[v])
+        return v
+
+    for a, b, c in tris.tolist():
+        for u, w in ((a, b), (b, c)):
+            ru, rw = root(u), root(w)
+            if ru != rw:
+                parent[ru] = rw
+    return len({root(v) for v in range(num_vertices)})
+
+
 def skin_weights_sparse(
     obj: bpy.types.Object, bone_names: list[str], deform: list[bool]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -45,6 +45,22 @@ def armature_of(skin: bpy.types.Object) -> tuple[bpy.types.Object, bpy.types.Arm
     return mod.object, mod
 
 
+def linked_part(skin: bpy.types.Object, arm: bpy.types.Object, cage: bpy.types.Object) -> str | None:
+    """Why the coupling cannot write its result, when the skin, the cage or their mesh data come
+    from a linked library (Blender would not save what cagerig writes there): None otherwise.
+    The armature may be linked through a library override: cagerig only reads its pose."""
+    for obj, what in ((skin, "skin"), (cage, "cage")):
+        for block in (obj, obj.data):
+            if block.library is not None:
+                return (f"the {what} {obj.name!r} is linked from {block.library.filepath!r}: cagerig cannot write "
+                        "to linked data (Blender would not save it); couple the character in its own file, or "
+                        "make it local (Object ▸ Relations ▸ Make Local ▸ Selected Objects and Data)")
+    if arm.library is not None and arm.override_library is None:
+        return (f"the armature {arm.name!r} is linked from {arm.library.filepath!r} and cannot be posed here: "
+                "add a library override (Object ▸ Library Override ▸ Make)")
+    return None
+
+
 def cage_of(skin: bpy.types.Object) -> bpy.types.Object:
     cage = skin.cagerig.cage
     if cage is None:
@@ -276,6 +292,9 @@ def _sync(skin: bpy.types.Object) -> bool:
     start = time.perf_counter()
     arm, _mod = armature_of(skin)
     cage = cage_of(skin)
+    linked = linked_part(skin, arm, cage)
+    if linked is not None:
+        raise SyncError(linked)
     if arm.mode == "EDIT":
         return False  # the user is editing the bones: Blender's rest data is in flux
     c = coupling(skin)

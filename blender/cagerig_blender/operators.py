@@ -119,6 +119,10 @@ class CAGERIG_OT_couple(bpy.types.Operator):
         if cage.mode == "EDIT" or skin.mode == "EDIT" or arm.mode == "EDIT":
             self.report({"ERROR"}, "Leave Edit Mode before coupling")
             return {"CANCELLED"}
+        linked = engine.linked_part(skin, arm, cage)
+        if linked is not None:
+            self.report({"ERROR"}, linked[0].upper() + linked[1:])
+            return {"CANCELLED"}
         engine.remove_cor_key(skin)  # a CoR coupling's own key (coupling again): not the user's
         for obj, what in ((skin, "skin"), (cage, "cage")):
             if obj.data.shape_keys is not None:
@@ -152,6 +156,11 @@ class CAGERIG_OT_couple(bpy.types.Operator):
         tris = convert.triangles(skin.data)
         cage_points = convert.world_coords(cage)
         cage_tris = convert.triangles(cage.data)
+        parts = convert.connected_parts(len(cage_points), cage_tris)
+        if parts > 1:
+            self.report({"ERROR"}, f"The cage {cage.name!r} has {parts} separate parts: cagerig needs one closed "
+                        "cage around the skin; delete the loose parts (in Edit Mode, L over a part selects it)")
+            return {"CANCELLED"}
         options = engine.options_of(skin)
         bind_id = store.new_bind_id()
         binding = store.Binding(
@@ -165,6 +174,9 @@ class CAGERIG_OT_couple(bpy.types.Operator):
             msg = str(e)
             if "outside" in msg or "enclose" in msg:
                 msg = f"the cage {cage.name!r} does not enclose {skin.name!r} in its rest pose: {msg}"
+            elif "open boundary" in msg or "non-manifold" in msg:
+                msg = (f"the cage {cage.name!r} must be closed, each edge shared by two faces: {msg}. Find the "
+                       "edges with Select ▸ Select All by Trait ▸ Non Manifold in Edit Mode, and fill the holes (F)")
             self.report({"ERROR"}, f"cagerig refused the binding: {msg}")
             return {"CANCELLED"}
         store.save(skin, binding)

@@ -878,4 +878,160 @@ check("Ctrl-Z in Edit Mode: the edit-mode grab undone, skin, cage and bones as b
       f"{e / diag:.2e}")
 consistent("after Ctrl-Z in Edit Mode", skin, cage, arm)
 
+# ---- dead ends a Blender user runs into: each works, or is refused saying what to do ------------
+from mathutils import Matrix  # noqa: E402
+
+
+def import_arm_beside() -> tuple[bpy.types.Object, bpy.types.Object, bpy.types.Object]:
+    """One more Arm with its cage, next to what the scene holds (load_arm empties the scene)."""
+    before = set(bpy.data.objects)
+    bpy.ops.import_scene.gltf(filepath=ARM_GLB)
+    new = [o for o in bpy.data.objects if o not in before]
+    skin_ = next(o for o in new if o.type == "MESH" and any(m.type == "ARMATURE" for m in o.modifiers))
+    arm_ = next(o for o in new if o.type == "ARMATURE")
+    for o in new:
+        if o.type == "MESH" and o is not skin_:
+            bpy.data.objects.remove(o)
+    bpy.ops.wm.obj_import(filepath=ARM_CAGE)
+    return skin_, arm_, bpy.context.selected_objects[0]
+
+
+def refused(what: str, skin_: bpy.types.Object, cage_: bpy.types.Object, *needles: str) -> None:
+    try:
+        couple(skin_, cage_)
+        check(f"{what}: refused", False, "Couple accepted it")
+    except RuntimeError as e:
+        message = str(e).strip()
+        check(f"{what}: refused saying what to do", all(n in message for n in needles) and not store.is_coupled(skin_),
+              message[:200])
+
+
+def edit_cage(cage_: bpy.types.Object, edit) -> None:  # noqa: ANN001
+    bm = bmesh.new()
+    bm.from_mesh(cage_.data)
+    edit(bm)
+    bm.to_mesh(cage_.data)
+    bm.free()
+    cage_.data.update()
+
+
+skin, arm, cage = load_arm()
+bpy.context.view_layer.objects.active = cage
+bpy.ops.object.mode_set(mode="EDIT")
+bpy.ops.mesh.select_all(action="SELECT")
+bpy.ops.mesh.tris_convert_to_quads()
+bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def dissolve_one_edge_between_quads(bm: bmesh.types.BMesh) -> None:
+    edge = next(e for e in bm.edges if len(e.link_faces) == 2 and all(len(f.verts) == 4 for f in e.link_faces))
+    bmesh.ops.dissolve_edges(bm, edges=[edge])
+
+
+edit_cage(cage, dissolve_one_edge_between_quads)
+sides = sorted({len(p.vertices) for p in cage.data.polygons})
+check("a cage of quads and an n-gon: made", 4 in sides and max(sides) > 4, f"face sizes {sides}")
+couple(skin, cage)
+rotate_bone(arm, JOINT, AXIS_BL, 40.0)
+update()
+consistent("a cage of quads and an n-gon, posed", skin, cage, arm)
+
+skin, arm, cage = load_arm()
+edit_cage(cage, lambda bm: (bm.faces.ensure_lookup_table(),
+                            bmesh.ops.delete(bm, geom=[bm.faces[0]], context="FACES_ONLY")))
+refused("a cage with a hole", skin, cage, "must be closed", "Non Manifold")
+skin, arm, cage = load_arm()
+far = Matrix.Translation((50.0 * diag, 0.0, 0.0))
+edit_cage(cage, lambda bm: bmesh.ops.create_cube(bm, size=0.1 * diag, matrix=far))
+refused("a cage with a loose part", skin, cage, "2 separate parts", "loose parts")
+
+skin, arm, cage = load_arm()
+skin.shape_key_add(name="Basis")
+refused("a skin with a shape key", skin, cage, "shape keys", "apply or remove")
+skin, arm, cage = load_arm()
+for m in [m for m in skin.modifiers if m.type == "ARMATURE"]:
+    skin.modifiers.remove(m)
+refused("vertex groups and no Armature modifier", skin, cage, "no Armature modifier", "add one")
+
+skin, arm, cage = load_arm()
+subsurf = skin.modifiers.new("Subdivision", "SUBSURF")
+couple(skin, cage)
+rotate_bone(arm, JOINT, AXIS_BL, 40.0)
+update()
+subsurf.show_viewport = False
+consistent("a Subdivision Surface after the Armature modifier (the skin under it)", skin, cage, arm)
+subsurf.show_viewport = True
+update()
+check("a Subdivision Surface after the Armature modifier: it subdivides the posed skin",
+      len(deformed_skin(skin)) > len(skin.data.vertices), f"{len(deformed_skin(skin))} evaluated vertices")
+
+skin, arm, cage = load_arm()
+parent = bpy.data.objects.new("character", None)
+bpy.context.scene.collection.objects.link(parent)
+parent.location = (0.5 * diag, -0.2 * diag, 0.1 * diag)
+parent.rotation_euler = (0.3, 0.0, 0.7)
+parent.scale = (2.0, 2.0, 2.0)
+for o in (arm, cage):
+    o.parent = parent
+update()
+couple(skin, cage)
+rotate_bone(arm, JOINT, AXIS_BL, 40.0)
+update()
+diag_scaled, diag = diag, 2.0 * diag  # the character is twice as large in the world
+consistent("a character parented, moved, turned and scaled ×2", skin, cage, arm)
+diag = diag_scaled
+
+skin, arm, cage = load_arm()
+second = import_arm_beside()
+couple(skin, cage)
+couple(second[0], second[2])
+second_cage = world(second[2])
+rotate_bone(arm, JOINT, AXIS_BL, 40.0)
+update()
+consistent("two characters: the posed one", skin, cage, arm)
+check("two characters: the other stays", float(np.abs(world(second[2]) - second_cage).max()) == 0.0, "its cage unmoved")
+rotate_bone(second[1], JOINT, AXIS_BL, -30.0)
+update()
+consistent("two characters: the other posed", second[0], second[2], second[1])
+
+# A .blend saved coupled, opened and edited where the add-on is missing, then re-enabled.
+skin, arm, cage = load_arm()
+couple(skin, cage)
+rotate_bone(arm, JOINT, AXIS_BL, 20.0)
+update()
+coupled_blend = os.path.join(WORK, "dead_ends_coupled.blend")
+bpy.ops.wm.save_as_mainfile(filepath=coupled_blend)
+names = (skin.name, arm.name, cage.name)
+bpy.ops.preferences.addon_disable(module=_addon.__name__)
+bpy.ops.wm.open_mainfile(filepath=coupled_blend)
+skin, arm, cage = objects()
+rotate_bone(arm, JOINT, AXIS_BL, 20.0)  # posed further without cagerig
+update()
+without = os.path.join(WORK, "dead_ends_edited_without.blend")
+bpy.ops.wm.save_as_mainfile(filepath=without)
+bpy.ops.preferences.addon_enable(module=_addon.__name__)
+engine, store = sys.modules[_addon.__name__].engine, sys.modules[_addon.__name__].store
+bpy.ops.wm.open_mainfile(filepath=without)
+skin, arm, cage = objects()
+update()
+check("opened where the add-on was missing, then re-enabled: still coupled", store.is_coupled(skin), "coupled")
+engine.sync(skin)
+consistent("opened where the add-on was missing, then re-enabled", skin, cage, arm)
+
+# A character linked from another .blend: nothing written where Blender would not save it.
+for o in list(bpy.data.objects):
+    bpy.data.objects.remove(o)
+with bpy.data.libraries.load(coupled_blend, link=True) as (source, linked):
+    linked.objects = list(source.objects)
+for o in linked.objects:
+    bpy.context.scene.collection.objects.link(o)
+skin, arm, cage = objects()
+before_sync = world(cage)
+try:
+    engine.sync(skin)
+    check("a linked character: its sync refused", False, "synced into linked data")
+except engine.SyncError as e:
+    check("a linked character: its sync refused saying what to do", "linked from" in str(e)
+          and "Make Local" in str(e) and float(np.abs(world(cage) - before_sync).max()) == 0.0, str(e)[:200])
+
 print("\n".join(["", "summary:"] + results))
