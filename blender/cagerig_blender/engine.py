@@ -85,7 +85,6 @@ class Coupling:
     bind_id: str
     options: store.RigOptions  # the options this rig was built with
     rig: object  # cagerig.Rig
-    weights: tuple[np.ndarray, np.ndarray, np.ndarray]  # the binding's Ω as (rows, cols, values)
     parents: np.ndarray
     names: list[str]  # the bones coupled, joint j = bone j
     rest_heads: np.ndarray  # S as last written into the bones (world)
@@ -97,7 +96,6 @@ class Coupling:
     # writes the skin, the cage and the bones from this rig instead of reading them as edits.
     rebound: bool = False
     last_matrices: np.ndarray | None = None  # Blender's skinning transforms at the last pose read
-    blend: np.ndarray | tuple[np.ndarray, np.ndarray] | None = None  # Ω for CoR's corrective key
     last_sync_ms: float = 0.0
     messages: list[str] = field(default_factory=list)
 
@@ -190,7 +188,6 @@ def coupling(skin: bpy.types.Object) -> Coupling:
         bind_id=b.bind_id,
         options=options,
         rig=rig,
-        weights=(b.weight_rows, b.weight_cols, b.weight_values),
         parents=b.parents,
         names=b.names,
         rest_heads=rig.rest_joints,
@@ -403,67 +400,8 @@ def _write_cor_key(skin: bpy.types.Object, c: Coupling) -> None:
     if c.last_mode != "POSE":
         convert.write_key_world_coords(skin, key, rig.rest_mesh)
         return
-    k = np.asarray(rig.skinning_transforms)[:, :3, :].reshape(-1, 12)  # world, the bones as SkelUp wrote them
-    if c.blend is None:
-        c.blend = _blend_matrix(*c.weights, len(skin.data.vertices), len(k))
-    if isinstance(c.blend, np.ndarray):
-        blended = c.blend @ k
-    else:
-        joints, weights = c.blend
-        blended = weights[:, 0, None] * k[joints[:, 0]]
-        for s in range(1, joints.shape[1]):
-            blended += weights[:, s, None] * k[joints[:, s]]
-    blended = blended.reshape(-1, 3, 4)
-    x = _solve3(blended[:, :, :3], np.asarray(rig.posed_mesh) - blended[:, :, 3])
-    convert.write_key_world_coords(skin, key, x)
-
-
-_DENSE_BLEND_BYTES = 256 << 20
-
-
-def _blend_matrix(
-    rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int, nj: int
-) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-    """Ω for blending the bones' transforms: dense (n, J) (one matrix product) up to 256 MB, else
-    per-vertex slots (k passes over the vertices, k the most influences of a vertex)."""
-    if n * nj * 8 <= _DENSE_BLEND_BYTES:
-        dense = np.zeros((n, nj), dtype=np.float64)
-        dense[rows, cols] = vals
-        return dense
-    return _influence_slots(rows, cols, vals, n)
-
-
-def _influence_slots(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Ω as (n, k) joint indices and weights, k the most influences of a vertex (unused slots:
-    joint 0 with weight 0), so that blending is k passes over the vertices."""
-    order = np.argsort(rows, kind="stable")
-    rows, cols, vals = rows[order], cols[order], vals[order]
-    counts = np.bincount(rows, minlength=n)
-    slot = np.arange(len(rows)) - np.repeat(np.cumsum(counts) - counts, counts)
-    k = int(counts.max()) if len(counts) else 1
-    joints = np.zeros((n, k), dtype=np.int64)
-    weights = np.zeros((n, k), dtype=np.float64)
-    joints[rows, slot] = cols
-    weights[rows, slot] = vals
-    return joints, weights
-
-
-def _solve3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solves the (n, 3, 3) systems a·x = b (n, 3) by Cramer's rule, component by component
-    (numpy's batched solve and cross are several times slower for 3×3)."""
-    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = (
-        [np.ascontiguousarray(a[:, i, j]) for j in range(3)] for i in range(3)
-    )
-    b0, b1, b2 = (np.ascontiguousarray(b[:, i]) for i in range(3))
-    # The columns' cross products: c0 = col1 × col2, c1 = col2 × col0, c2 = col0 × col1.
-    c0 = (a11 * a22 - a21 * a12, a21 * a02 - a01 * a22, a01 * a12 - a11 * a02)
-    c1 = (a12 * a20 - a22 * a10, a22 * a00 - a02 * a20, a02 * a10 - a12 * a00)
-    c2 = (a10 * a21 - a20 * a11, a20 * a01 - a00 * a21, a00 * a11 - a10 * a01)
-    det = a00 * c0[0] + a10 * c0[1] + a20 * c0[2]
-    x = np.empty_like(b)
-    for i, c in enumerate((c0, c1, c2)):
-        x[:, i] = (b0 * c[0] + b1 * c[1] + b2 * c[2]) / det
-    return x
+    # The points whose LBS (the modifier's) is cagerig's CoR skin M', from the library.
+    convert.write_key_world_coords(skin, key, np.asarray(rig.lbs_rest_preimage()))
 
 
 def remove_cor_key(skin: bpy.types.Object) -> None:

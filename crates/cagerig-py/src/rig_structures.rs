@@ -58,6 +58,19 @@ impl Rig {
         convert::points_to_py(py, self.session.posed_mesh())
     }
 
+    /// The rest points whose linear blend skinning under the current pose is the current skin
+    /// M', (#V, 3) float64: x_v = R_v⁻¹·(M'_v − t_v), with R_v, t_v the Ω-blended skinning
+    /// transform of vertex v. Skinned with LBS they give M' whatever the rig's method: what a
+    /// host with LBS only shows CoR or DQS with (the Blender add-on's CoR shape key). Raises
+    /// ValueError naming the first vertex whose blended transform is singular.
+    fn lbs_rest_preimage<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let mut out = vec![DVec3::ZERO; self.session.posed_mesh().len()];
+        self.session
+            .lbs_rest_preimage(&mut out)
+            .map_err(crate::errors::rig_error)?;
+        convert::points_to_py(py, &out)
+    }
+
     /// Rest cage C, (#C, 3) float64 (copy).
     #[getter]
     fn rest_cage<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {

@@ -78,6 +78,19 @@ def test_grab_lands_under_every_skinning(arm):
         np.testing.assert_allclose(arm.posed_cage, target, atol=1e-8, err_msg=method)
 
 
+def test_the_lbs_rest_preimage_skins_to_the_cor_skin(arm):
+    # What the Blender add-on shows CoR with: points whose LBS (Ω, the skinning transforms) is M'.
+    arm.set_skinning("cor")
+    arm.rotate_joint("lowerarm01.R", [1, 0, 0], 50)
+    x = arm.lbs_rest_preimage()
+    t = arm.skinning_transforms
+    w = arm.skin_weights.toarray() if hasattr(arm.skin_weights, "toarray") else np.asarray(arm.skin_weights)
+    blended = np.einsum("vj,jab->vab", w, t)
+    lbs_of_x = np.einsum("vab,vb->va", blended[:, :3, :3], x) + blended[:, :3, 3]
+    np.testing.assert_allclose(lbs_of_x, arm.posed_mesh, atol=1e-9)
+    assert np.abs(x - arm.rest_mesh).max() > 1e-3  # CoR differs from LBS under this bend
+
+
 def test_phi_is_a_read_only_view_and_reading_posed_mesh_does_not_copy_it(arm):
     phi = arm.cage_coords
     assert phi.shape == (2089, 58) and phi.dtype == np.float64

@@ -270,6 +270,19 @@ pub enum RigError {
     /// The cage has no triangles.
     #[error("the cage has no triangles")]
     EmptyCage,
+    /// A vertex's blended LBS transform `Σ_j ω_vj T_j^r` is singular, so no rest point skins to
+    /// a given posed point ([`crate::skinning::LinearBlendSkinning::rest_preimage`]).
+    #[error(
+        "vertex {vertex}: its blended LBS transform is singular (determinant {determinant:e}), so \
+         no rest point skins to its posed position; expected its joints' rotations not to cancel \
+         out (such as a half-half blend of opposite half-turns)"
+    )]
+    SingularBlend {
+        /// The mesh vertex.
+        vertex: usize,
+        /// The determinant of its blended linear part.
+        determinant: f64,
+    },
     /// An edit would have produced a non-finite or out-of-bounds state; it was rolled back.
     #[error(
         "the event was refused and the rig left as it was: it would have moved {what} {index} to \

@@ -4,6 +4,7 @@ use super::RigSession;
 use super::parts::CageFitSource;
 use super::rest_map::RestMeshState;
 use crate::cage_coords::CageCoords;
+use crate::error::RigError;
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::skinning::{DqBlendWeights, SkinningMethod};
@@ -120,6 +121,14 @@ impl RigSession {
     /// Skinning transforms T_j = posed_from_rest (Eq. 1–3).
     pub fn posed_from_rest(&self) -> &[DAffine3] {
         &self.posed_from_rest
+    }
+    /// The rest points whose LBS under the current pose is the current skin M' (`#V`, into
+    /// `out`): x_v = R_v⁻¹·(M'_v − t_v) ([`crate::skinning::LinearBlendSkinning::rest_preimage`]). A host that
+    /// skins with LBS only shows any method's M' by skinning these (Blender's CoR shape key).
+    pub fn lbs_rest_preimage(&self, out: &mut [DVec3]) -> Result<(), RigError> {
+        self.skinning
+            .lbs()
+            .rest_preimage(&self.posed_from_rest, self.posed_mesh(), out)
     }
     /// Rest joint positions (`#J`).
     pub fn rest_joints(&self) -> impl Iterator<Item = DVec3> + '_ {

@@ -7,8 +7,8 @@ use rayon::prelude::*;
 use super::compact_weights::VERTEX_GRAIN_F32;
 use super::compact_weights::{JointColumns, RestPoints, VertexKernel};
 use super::precision::SkinReal;
-use crate::SkinWeights;
 use crate::simd_dispatch::simd_dispatch;
+use crate::{RigError, SkinWeights};
 
 /// Precomputed LBS: Ω (`#V × #J`) as flat CSR rows, streamed in vertex order by
 /// [`LinearBlendSkinning::apply`] (LBS is memory-bound: sequential rows beat the count-sorted
@@ -218,6 +218,60 @@ impl LinearBlendSkinning {
         DMat3::from_cols(x, y, z)
     }
 
+    /// The rest points whose LBS is `posed` (Eq. 2–3 solved per vertex):
+    /// `x_v = R_v⁻¹·(y_v − t_v)`, with `R_v = Σ_j ω_vj T_j^r` and `t_v = Σ_j ω_vj T_j^t`. What a
+    /// host that skins with LBS only (Blender's Armature modifier) needs to show another
+    /// method's M' = y: a corrective shape holding x. An unweighted vertex keeps `y_v`.
+    /// `transforms`: `#J`; `posed`, `out`: `#V`. Parallel, no allocation.
+    ///
+    /// # Errors
+    /// [`RigError::SingularBlend`] for the first vertex whose `R_v` is singular
+    /// (`|det R_v| ≤ 1e-12·‖R_v‖³`, e.g. a half-half blend of opposite rotations).
+    ///
+    /// # Panics
+    /// If a slice length does not match `#J` / `#V`.
+    pub fn rest_preimage(
+        &self,
+        transforms: &[DAffine3],
+        posed: &[DVec3],
+        out: &mut [DVec3],
+    ) -> Result<(), RigError> {
+        assert_eq!(
+            transforms.len(),
+            self.num_joints,
+            "LBS preimage: transforms"
+        );
+        assert_eq!(posed.len(), self.num_vertices(), "LBS preimage: posed");
+        assert_eq!(out.len(), self.num_vertices(), "LBS preimage: out");
+        out.par_chunks_mut(VERTEX_GRAIN_F32)
+            .enumerate()
+            .try_for_each(|(chunk, out)| {
+                let first = chunk * VERTEX_GRAIN_F32;
+                for (offset, x) in out.iter_mut().enumerate() {
+                    let v = first + offset;
+                    let (joints, weights) = self.row(v);
+                    if joints.is_empty() {
+                        *x = posed[v];
+                        continue;
+                    }
+                    let [c0, c1, c2, t] = blend_columns::<f64, _>(joints, weights, transforms);
+                    let linear = DMat3::from_cols(c0, c1, c2);
+                    let determinant = linear.determinant();
+                    let scale = c0.length().max(c1.length()).max(c2.length());
+                    if determinant.abs() <= 1e-12 * scale * scale * scale
+                        || !determinant.is_finite()
+                    {
+                        return Err(RigError::SingularBlend {
+                            vertex: v,
+                            determinant,
+                        });
+                    }
+                    *x = linear.inverse() * (posed[v] - t);
+                }
+                Ok(())
+            })
+    }
+
     /// Blended translation `Σ_j ω_ij T_j^t` of vertex `v` (Eq. 3).
     pub fn blended_translation(&self, v: usize, transforms: &[DAffine3]) -> DVec3 {
         let (joints, weights) = self.row(v);
@@ -232,6 +286,47 @@ mod tests {
 
     fn about(point: DVec3, rotation: DAffine3) -> DAffine3 {
         DAffine3::from_translation(point) * rotation * DAffine3::from_translation(-point)
+    }
+
+    #[test]
+    fn the_rest_preimage_skins_back_to_the_posed_points_and_a_singular_blend_is_named() {
+        let (w, _) =
+            SkinWeights::from_dense(&[vec![1.0, 0.0], vec![0.3, 0.7], vec![0.0, 0.0]]).unwrap();
+        let lbs = LinearBlendSkinning::new(&w);
+        let t = [
+            about(DVec3::new(1.0, 2.0, 0.0), DAffine3::from_rotation_z(0.4)),
+            DAffine3::from_scale_rotation_translation(
+                DVec3::splat(1.5),
+                glam::DQuat::from_rotation_x(-0.9),
+                DVec3::new(0.5, -1.0, 2.0),
+            ),
+        ];
+        let posed = [
+            DVec3::new(3.0, -1.0, 2.0),
+            DVec3::new(-2.0, 0.5, 1.0),
+            DVec3::new(7.0, 8.0, 9.0),
+        ];
+        let mut rest = [DVec3::ZERO; 3];
+        lbs.rest_preimage(&t, &posed, &mut rest).unwrap();
+        let mut back = [DVec3::ZERO; 3];
+        lbs.apply(&t, &rest, &mut back);
+        for (b, p) in back.iter().zip(&posed) {
+            assert!(b.abs_diff_eq(*p, 1e-12), "{back:?} vs {posed:?}");
+        }
+        assert_eq!(rest[2], posed[2], "an unweighted vertex stays");
+        // Half of +90° and half of −90° about x: the blend flattens y and z to zero.
+        let (w, _) = SkinWeights::from_dense(&[vec![0.5, 0.5]]).unwrap();
+        let twist = [
+            DAffine3::from_rotation_x(FRAC_PI_2 * 2.0),
+            DAffine3::IDENTITY,
+        ];
+        let error = LinearBlendSkinning::new(&w)
+            .rest_preimage(&twist, &[DVec3::X], &mut [DVec3::ZERO])
+            .unwrap_err();
+        assert!(
+            matches!(error, RigError::SingularBlend { vertex: 0, .. }),
+            "{error}"
+        );
     }
 
     #[test]
