@@ -170,21 +170,15 @@ pub fn choose_skinning(
     script: Option<SkinningMethod>,
     loaded: &LoadedRig,
 ) -> SkinningMethod {
-    if let Some(method) = option.or(script) {
-        return method;
+    let chosen = option.or(script);
+    let method = SkinningMethod::chosen_else_file(chosen, loaded.file_skinning);
+    if chosen.is_none() && method != SkinningMethod::default() {
+        eprintln!(
+            "note: {}: skinning with {}, as the file's skin says (choose another with \
+             --skinning)",
+            loaded.name,
+            method.label()
+        );
     }
-    match loaded.file_skinning {
-        Some(method) => {
-            if method != SkinningMethod::default() {
-                eprintln!(
-                    "note: {}: skinning with {}, as the file's skin says (choose another with \
-                     --skinning)",
-                    loaded.name,
-                    method.label()
-                );
-            }
-            method
-        }
-        None => SkinningMethod::default(),
-    }
+    method
 }

@@ -212,7 +212,7 @@ pub fn open_rig_with_progress(
     let name = source.display_name();
     // A character opens with the skinning method its file says (FBX skin deformers).
     let options = SessionOptions {
-        skinning: file_skinning.unwrap_or_default(),
+        skinning: cagerig::skinning::SkinningMethod::chosen_else_file(None, file_skinning),
         ..SessionOptions::default()
     };
     let (mut session, mut more) =

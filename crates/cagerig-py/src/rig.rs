@@ -248,10 +248,10 @@ impl Rig {
         let (parts, warnings) = if cagerig_formats::CharacterFormat::of(&path).is_some() {
             let (parts, warnings, file_skinning) =
                 crate::interchange::load_character(py, &path, cage.as_deref(), auto_cage, skin)?;
-            // The file's own method (FBX skin deformers) unless the caller chose one.
-            if let (None, Some(method)) = (skinning, file_skinning) {
-                options.skinning = method;
-            }
+            // `skinning=` was parsed into the options when given.
+            let chosen = skinning.map(|_| options.skinning);
+            options.skinning =
+                cagerig::skinning::SkinningMethod::chosen_else_file(chosen, file_skinning);
             let (mut parts, mut warnings) = (parts, warnings);
             let name = path.display().to_string();
             let applied = py

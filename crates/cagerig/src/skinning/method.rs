@@ -36,6 +36,13 @@ impl SkinningMethod {
     /// Every method, in the order front ends list them.
     pub const ALL: [SkinningMethod; 4] = [Self::Lbs, Self::Dqs, Self::Cor, Self::Blended];
 
+    /// The method a rig opens with, by the one rule of every front end: the one the user chose
+    /// (`--skinning`, a script's `"skinning"`, Python's `skinning=`), else the one the
+    /// character's file says its authoring tool uses (FBX skin deformers), else LBS.
+    pub fn chosen_else_file(chosen: Option<Self>, file: Option<Self>) -> Self {
+        chosen.or(file).unwrap_or_default()
+    }
+
     /// The name in scripts, options and files: `"lbs"`, `"dqs"`, `"cor"` or `"blended"`.
     pub const fn name(self) -> &'static str {
         match self {
