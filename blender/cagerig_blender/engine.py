@@ -15,6 +15,7 @@ rest-cage edit (Rest Position) → move_rest_cage (M = Φ·C, SkelUp) → M and 
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -108,13 +109,56 @@ def _base_rig(b: store.Binding, options: store.RigOptions) -> object:
     if rig is None:
         n, nj = len(b.mesh), len(b.joints)
         weights = convert.SparseWeights((n, nj), b.weight_rows, b.weight_cols, b.weight_values)
-        rig = cagerig.Rig.from_arrays(
+        rig = with_progress(lambda progress: cagerig.Rig.from_arrays(
             b.mesh, b.triangles, weights, b.joints, b.parents, b.cage, b.cage_triangles,
             b.names, skinning=options.skinning, cage_fit=options.cage_fit, coords=options.coords,
-            green_face_term=options.green_face_term,
-        )
+            green_face_term=options.green_face_term, progress=progress,
+        ))
         _base_rigs[key] = rig
     return rig.copy()
+
+
+# The last report of a binding's progress: (stage, done, total), for the panel's tests.
+last_bind_progress: tuple[str, int, int] | None = None
+
+
+def with_progress(build) -> object:  # noqa: ANN001
+    """``build(progress)`` on a worker thread while Blender's main thread shows its progress in
+    the mouse cursor (``window_manager.progress_update``, which may only be called from the main
+    thread). The library calls ``progress(stage, done, total)`` from its own threads; the binding
+    releases Python's lock, so both threads run. An exception of ``build`` is raised here."""
+    global last_bind_progress
+    latest: list[float] = [0.0]
+    outcome: dict[str, object] = {}
+
+    def progress(stage: str, done: int, total: int) -> None:
+        global last_bind_progress
+        last_bind_progress = (stage, done, total)
+        latest[0] = done / total if total else 0.0
+
+    def run() -> None:
+        try:
+            outcome["rig"] = build(progress)
+        except BaseException as e:  # noqa: BLE001  (raised again on the main thread)
+            outcome["error"] = e
+
+    last_bind_progress = None
+    worker = threading.Thread(target=run, name="cagerig bind")
+    wm = bpy.context.window_manager
+    worker.start()
+    if wm is not None:
+        wm.progress_begin(0, 100)
+    try:
+        while worker.is_alive():
+            if wm is not None:
+                wm.progress_update(int(100 * latest[0]))
+            worker.join(0.05)
+    finally:
+        if wm is not None:
+            wm.progress_end()
+    if "error" in outcome:
+        raise outcome["error"]  # type: ignore[misc]
+    return outcome["rig"]
 
 
 def build_rig(b: store.Binding, options: store.RigOptions | None = None) -> object:

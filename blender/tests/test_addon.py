@@ -177,6 +177,10 @@ check("couple", store.is_coupled(skin) and skin.cagerig.cage == cage, "binding s
 c = engine.coupling(skin)
 check("skin data untouched by couple", np.abs(world(skin) - rest_skin0).max() == 0.0, "rest skin as imported")
 
+reported = engine.last_bind_progress
+check("couple shows the binding's progress", reported is not None and reported[0] == "cage coordinates"
+      and reported[1] == reported[2] > 0, f"last report {reported}")
+
 # ---- the same edits through the Python package (what `cagerig edit` computes), step by step ---
 # Blender's importers turn glTF/OBJ's +Y up into +Z up: (x, y, z)_file = (x, z, -y)_Blender.
 to_file = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
