@@ -53,6 +53,28 @@ pub(crate) struct GreenModelRow {
     pub display_f32: GreenEventRows,
     /// Events refused (Green CageUp fold) among the timed ones.
     pub refused_events: usize,
+    /// The same events on a mean value rig of the same model, timed in the same run (exact
+    /// path), for the ratios.
+    pub mvc_exact: GreenEventRows,
+    /// Green / MVC medians of the animation frame and the rest-cage drag (exact path).
+    pub frame_over_mvc: f64,
+    pub drag_over_mvc: f64,
+    /// The grab after a skeleton edit against its memory-bandwidth bound: the bytes the event
+    /// must read (the whole coordinate matrix, [φ ψ] for Green and Φ for MVC, in f64) over the
+    /// read bandwidth measured in this run.
+    pub grab_bound: GrabBound,
+}
+
+/// A grab's time against the bound set by the bytes it must read.
+#[derive(Debug, Serialize)]
+pub(crate) struct GrabBound {
+    pub read_bandwidth_gbs: f64,
+    pub green_bytes: f64,
+    pub green_bound_ms: f64,
+    pub green_over_bound: f64,
+    pub mvc_bytes: f64,
+    pub mvc_bound_ms: f64,
+    pub mvc_over_bound: f64,
 }
 
 /// The per-event rows of one display precision, with their Newton steps.
@@ -202,6 +224,27 @@ pub(crate) fn bench_green_model(
     let exact = event_rows(&mut session, bend_joint, &tracks, &reps)?;
     session.set_display_precision(DisplayPrecision::F32)?;
     let display_f32 = event_rows(&mut session, bend_joint, &tracks, &reps)?;
+    drop(session);
+    // The same events on a mean value rig of the same model, in the same run.
+    let mut mvc_session = RigSession::new(parts.clone(), SessionOptions::default())?.0;
+    let mvc_exact = event_rows(&mut mvc_session, bend_joint, &tracks, &reps)?;
+    drop(mvc_session);
+    let read_bandwidth_gbs = crate::bench_bandwidth::read_bandwidth_gbs();
+    let matrix_bytes = |columns: usize| 8.0 * nv as f64 * columns as f64;
+    let bound_ms = |bytes: f64| bytes / (read_bandwidth_gbs * 1e9) * 1e3;
+    let ratio = |a: &Stat, b: &Stat| a.median_ms / b.median_ms.max(f64::MIN_POSITIVE);
+    let (green_bytes, mvc_bytes) = (matrix_bytes(nc + cage_faces), matrix_bytes(nc));
+    let grab_bound = GrabBound {
+        read_bandwidth_gbs,
+        green_bytes,
+        green_bound_ms: bound_ms(green_bytes),
+        green_over_bound: exact.grab_after_skeleton_edit.median_ms
+            / bound_ms(green_bytes).max(f64::MIN_POSITIVE),
+        mvc_bytes,
+        mvc_bound_ms: bound_ms(mvc_bytes),
+        mvc_over_bound: mvc_exact.grab_after_skeleton_edit.median_ms
+            / bound_ms(mvc_bytes).max(f64::MIN_POSITIVE),
+    };
     Ok(GreenModelRow {
         model,
         coords: CoordsKind::Green.name(),
@@ -215,8 +258,12 @@ pub(crate) fn bench_green_model(
         mvc_binding,
         session_build,
         refused_events: exact.refused + display_f32.refused,
+        frame_over_mvc: ratio(&exact.animation_frame, &mvc_exact.animation_frame),
+        drag_over_mvc: ratio(&exact.rest_cage_drag, &mvc_exact.rest_cage_drag),
+        grab_bound,
         exact,
         display_f32,
+        mvc_exact,
     })
 }
 
@@ -367,6 +414,30 @@ pub(crate) fn print_green_table(rows: &[GreenModelRow]) {
                 Some(&events.grab_after_skeleton_edit_iterations),
             );
         }
+        let mvc = &row.mvc_exact;
+        line("animation frame (MVC)", &mvc.animation_frame, None);
+        line("rest-cage drag (MVC)", &mvc.rest_cage_drag, None);
+        line("grab after skel. edit (MVC)", &mvc.grab_after_skeleton_edit, None);
+        println!(
+            "{:<26} {:>10.2}×   (medians, exact path, this run)",
+            "animation frame Green/MVC", row.frame_over_mvc
+        );
+        println!(
+            "{:<26} {:>10.2}×",
+            "rest-cage drag Green/MVC", row.drag_over_mvc
+        );
+        let b = &row.grab_bound;
+        println!(
+            "grab against its read bound at {:.1} GB/s: Green {:.0} MB, bound {:.2} ms, {:.2}× it; \
+             MVC {:.0} MB, bound {:.2} ms, {:.2}× it",
+            b.read_bandwidth_gbs,
+            b.green_bytes / 1e6,
+            b.green_bound_ms,
+            b.green_over_bound,
+            b.mvc_bytes / 1e6,
+            b.mvc_bound_ms,
+            b.mvc_over_bound
+        );
         for (precision, events) in [("exact", &row.exact), ("f32 display", &row.display_f32)] {
             if events.bend_degrees < 60.0 {
                 println!(
