@@ -68,8 +68,9 @@ fn the_default_automatic_cages_stay_on_the_body() {
         let (spread, deviation, flipped) = auto_cage(file, animation, last, "skeleton");
         let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
         assert!(spread <= 1.5, "{what}");
-        assert!(deviation <= 0.08, "{what}");
-        assert!(flipped <= 0.016, "{what}");
+        assert!(deviation <= 0.075, "{what}");
+        // Five of the Fox's 196 triangles at worst (2.6 %).
+        assert!(flipped <= 0.027, "{what}");
     }
 }
 
@@ -109,7 +110,7 @@ fn the_arms_generated_cage_follows_its_animation() {
         ],
     );
     assert!(spread <= 1.1, "{spread}");
-    assert!(deviation <= 0.03, "{deviation}");
+    assert!(deviation <= 0.02, "{deviation}");
     assert_eq!(flipped, 0.0);
 }
 

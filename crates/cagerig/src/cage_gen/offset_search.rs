@@ -52,12 +52,15 @@ pub const SKELETON_SPACING_FACTOR: f64 = 0.5;
 /// ([`super::limb_separation`]).
 pub const SLAB_SPACINGS: f64 = 2.0;
 /// Least distance of a limb cut from the skin beyond the margin, in grid spacings: the first
-/// attempt's surface is verified exactly ([`check_start_surface`]); when it fails the cut keeps
-/// [`GUARANTEED_SPACINGS`].
-pub const KEEP_SPACINGS: f64 = 0.75;
+/// attempt's surface is verified exactly ([`check_start_surface`]); when it fails the cut moves
+/// out by [`KEEP_STEP_SPACINGS`] up to [`GUARANTEED_SPACINGS`], which the grid guarantees.
+pub const KEEP_SPACINGS: f64 = 0.5;
+/// Step of the limb cut's `keep` distance, and of the offset beyond it, after a starting
+/// surface fails its exact check, in grid spacings.
+pub const KEEP_STEP_SPACINGS: f64 = 0.5;
 /// First offset of the skeleton layout above the margin, in grid spacings: beyond `keep`, so
 /// that the solid has room to be cut between limbs.
-pub const SKELETON_OFFSET_SPACINGS: f64 = 1.75;
+pub const SKELETON_OFFSET_SPACINGS: f64 = 1.25;
 /// Offset above which the limb cut's `keep` distance is verified rather than guaranteed, in
 /// grid spacings (as [`TIGHT_OFFSET_SPACINGS`]).
 const GUARANTEED_SPACINGS: f64 = 1.75;
@@ -320,10 +323,14 @@ fn generate(
                 check_start_surface(&surface, &clearances, &bvh, margin, &piece_points)
         {
             if cut_points > 0 && keep_spacings < GUARANTEED_SPACINGS {
+                // Cut farther from the skin, with the offset beyond the cut so that there is
+                // still solid to cut.
+                keep_spacings = (keep_spacings + KEEP_STEP_SPACINGS).min(GUARANTEED_SPACINGS);
+                offset = offset.max(margin + (keep_spacings + KEEP_STEP_SPACINGS) * spacing);
                 attempts.push(format!(
-                    "offset {offset_percent:.2} %: starting surface rejected ({why}); cutting limbs apart farther from the skin"
+                    "offset {offset_percent:.2} %: starting surface rejected ({why}); cutting limbs apart from margin + {keep_spacings:.2}·h, offset {:.2} %",
+                    100.0 * offset / diag
                 ));
-                keep_spacings = GUARANTEED_SPACINGS;
                 lap(&mut stage_seconds.surface);
                 continue;
             }
