@@ -417,7 +417,11 @@ pub(crate) fn print_green_table(rows: &[GreenModelRow]) {
         let mvc = &row.mvc_exact;
         line("animation frame (MVC)", &mvc.animation_frame, None);
         line("rest-cage drag (MVC)", &mvc.rest_cage_drag, None);
-        line("grab after skel. edit (MVC)", &mvc.grab_after_skeleton_edit, None);
+        line(
+            "grab after skel. edit (MVC)",
+            &mvc.grab_after_skeleton_edit,
+            None,
+        );
         println!(
             "{:<26} {:>10.2}×   (medians, exact path, this run)",
             "animation frame Green/MVC", row.frame_over_mvc

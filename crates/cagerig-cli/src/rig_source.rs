@@ -88,13 +88,20 @@ pub struct AutoCageArgs {
     /// Target vertex count of the generated cage.
     #[arg(long, requires = "auto_cage", default_value_t = cagerig::cage_gen::DEFAULT_VERTICES)]
     pub cage_vertices: usize,
+    /// Layout of the generated cage, as `cagerig cage --layout`: by the skeleton (limbs kept
+    /// apart by the skin's dominant joints, rings of vertices at the articulations) or one
+    /// offset surface around the whole skin.
+    #[arg(long, requires = "auto_cage", value_parser = crate::session_args::kind_parser::<cagerig::cage_gen::CageLayout>(), default_value = cagerig::cage_gen::CageLayout::default().name())]
+    pub cage_layout: cagerig::cage_gen::CageLayout,
 }
 
 impl AutoCageArgs {
     /// The generation options, when asked for.
     pub fn options(&self) -> Option<CageOptions> {
-        self.auto_cage
-            .then(|| cagerig::cage_source::cage_options_with_vertices(self.cage_vertices))
+        self.auto_cage.then(|| CageOptions {
+            layout: self.cage_layout,
+            ..cagerig::cage_source::cage_options_with_vertices(self.cage_vertices)
+        })
     }
 }
 

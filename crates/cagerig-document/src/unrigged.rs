@@ -100,7 +100,7 @@ fn unrigged(
             cagerig::cage_source::cage_options_with_vertices,
         )),
     };
-    let chosen = choose_cage(path, &mesh, cage_in_file, &request)?;
+    let chosen = choose_cage(path, &mesh, None, cage_in_file, &request)?;
     match &chosen.origin {
         CageOrigin::Given(p) => files.push(("cage".into(), p.clone())),
         CageOrigin::Generated(g) => warnings.push(crate::rig_open::generated_note(g)),

@@ -74,7 +74,11 @@ pub fn open_imported_character(
         dq_blend_weights,
         ..
     } = imported;
-    let chosen = choose_cage(path, &mesh, found, cage)?;
+    let rig = cagerig::cage_gen::CageRig {
+        skeleton: &skeleton,
+        weights: Some(&skin_weights),
+    };
+    let chosen = choose_cage(path, &mesh, Some(rig), found, cage)?;
     Ok(OpenedCharacter {
         parts: RigParts::new(mesh, skeleton, skin_weights, chosen.cage)
             .with_dq_blend_weights(dq_blend_weights),

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use cagerig::Warning;
-use cagerig::cage_gen::{CageOptions, generate_cage as generate};
+use cagerig::cage_gen::{CageLayout, CageOptions, generate_cage as generate};
 use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, generated_cage_note};
 use cagerig::mesh::TriMesh;
 use cagerig::session::RigParts;
@@ -19,8 +19,10 @@ use crate::convert;
 use crate::errors::{RigError, file_error, format_error, rig_error};
 use crate::rig::Rig;
 
-/// Cage options for `vertices` target vertices and an optional margin (× bbox diagonal).
-pub fn cage_options(vertices: usize, margin: Option<f64>) -> PyResult<CageOptions> {
+/// Cage options for `vertices` target vertices, an optional margin (× bbox diagonal) and the
+/// layout named `layout` (`cage_layout=`).
+pub fn cage_options(vertices: usize, margin: Option<f64>, layout: &str) -> PyResult<CageOptions> {
+    let layout: CageLayout = crate::options::named("cage_layout", layout)?;
     if vertices < 4 {
         return Err(PyValueError::new_err(format!(
             "a cage needs at least 4 vertices, asked for {vertices}"
@@ -30,6 +32,7 @@ pub fn cage_options(vertices: usize, margin: Option<f64>) -> PyResult<CageOption
     if let Some(m) = margin {
         options.margin = m;
     }
+    options.layout = layout;
     Ok(options)
 }
 
@@ -40,6 +43,7 @@ pub fn load_character(
     path: &Path,
     cage: Option<&Path>,
     auto_cage: Option<usize>,
+    cage_layout: &str,
     skin: Option<String>,
 ) -> PyResult<(RigParts, Vec<Warning>, Option<SkinningMethod>)> {
     let options = cagerig_formats::ImportOptions {
@@ -48,7 +52,9 @@ pub fn load_character(
     };
     let request = CageRequest {
         given: cage,
-        generate: auto_cage.map(|n| cage_options(n, None)).transpose()?,
+        generate: auto_cage
+            .map(|n| cage_options(n, None, cage_layout))
+            .transpose()?,
     };
     let opened = py
         .detach(|| cagerig_formats::open_character(path, &options, &request))
@@ -113,7 +119,9 @@ impl Rig {
 }
 
 /// A closed, validated deformation cage around a triangle mesh (``cagerig cage``'s method:
-/// distance grid, marching tetrahedra, constrained edge collapses, offset search).
+/// distance grid, marching tetrahedra, constrained edge collapses, offset search). The mesh has
+/// no skeleton here, so the cage is one offset surface (``cage_layout="offset"``); a character
+/// loaded with ``Rig.load(..., auto_cage=N)`` gets the skeleton layout.
 ///
 /// Parameters
 /// ----------
@@ -147,7 +155,7 @@ pub fn generate_cage<'py>(
     let positions = convert::points(vertices, "vertices")?;
     let tris = convert::triangles(triangles, "triangles", positions.len())?;
     let mesh = TriMesh::new(positions, tris).map_err(rig_error)?;
-    let options = cage_options(target_vertices, margin)?;
+    let options = cage_options(target_vertices, margin, CageLayout::Offset.name())?;
     let generated = py
         .detach(|| generate(&mesh, &options))
         .map_err(|e| RigError::new_err(format!("generate_cage: {e}")))?;

@@ -52,6 +52,7 @@ fn _cagerig(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add("COORDS_KINDS", names::<cagerig::CoordsKind>())?;
     m.add("CAGE_FITS", names::<cagerig::CageFitKind>())?;
+    m.add("CAGE_LAYOUTS", names::<cagerig::cage_gen::CageLayout>())?;
     m.add(
         "UNFITTED_CAGE_POLICIES",
         names::<cagerig::session::UnfittedCagePolicy>(),

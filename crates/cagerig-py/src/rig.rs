@@ -165,6 +165,10 @@ impl Rig {
     /// auto_cage : int, optional
     ///     When no cage is found, generate one with this many vertices (as ``cagerig cage``;
     ///     issued as a RigWarning) instead of failing.
+    /// cage_layout : {"skeleton", "offset"}, default "skeleton"
+    ///     How that generated cage is laid out (as ``cagerig --cage-layout``): by the skeleton
+    ///     (limbs kept apart by the skin's dominant joints, rings of vertices at the
+    ///     articulations) or as one offset surface around the whole skin.
     /// skin : str, optional
     ///     glTF / FBX: the skin to import, by name or index (``"0"``, ``"1"``, …; as
     ///     ``cagerig --skin``). Default: the first, with the skins that share its skeleton.
@@ -206,7 +210,7 @@ impl Rig {
     #[staticmethod]
     #[pyo3(signature = (path, cage = None, *, skinning = None, fit_rows = "maxvol",
                         localisation = "articulation", fit_source = "ghost", coords_precision = "f64",
-                        keep_file_coords = false, auto_cage = None, auto_weights = false,
+                        keep_file_coords = false, auto_cage = None, cage_layout = "skeleton", auto_weights = false,
                         coords = "mvc", skin = None, cage_fit = "regularised", green_face_term = "fold-safe", progress = None))]
     #[expect(clippy::too_many_arguments)]
     fn load(
@@ -220,6 +224,7 @@ impl Rig {
         coords_precision: &str,
         keep_file_coords: bool,
         auto_cage: Option<usize>,
+        cage_layout: &str,
         auto_weights: bool,
         coords: &str,
         skin: Option<String>,
@@ -246,8 +251,14 @@ impl Rig {
             options.given_cage_coords = cagerig::session::GivenCageCoords::Keep;
         }
         let (parts, warnings) = if cagerig_formats::CharacterFormat::of(&path).is_some() {
-            let (parts, warnings, file_skinning) =
-                crate::interchange::load_character(py, &path, cage.as_deref(), auto_cage, skin)?;
+            let (parts, warnings, file_skinning) = crate::interchange::load_character(
+                py,
+                &path,
+                cage.as_deref(),
+                auto_cage,
+                cage_layout,
+                skin,
+            )?;
             // `skinning=` was parsed into the options when given.
             let chosen = skinning.map(|_| options.skinning);
             options.skinning =
@@ -268,7 +279,9 @@ impl Rig {
                 )));
             }
             let missing = match auto_cage {
-                Some(n) => MissingCage::Generate(crate::interchange::cage_options(n, None)?),
+                Some(n) => {
+                    MissingCage::Generate(crate::interchange::cage_options(n, None, cage_layout)?)
+                }
                 None => MissingCage::Fail,
             };
             let files = py

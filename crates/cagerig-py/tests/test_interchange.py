@@ -43,6 +43,19 @@ def test_a_character_without_a_cage_fails_clearly_or_gets_a_generated_one():
     assert 72 <= rig.rest_cage.shape[0] <= 88
 
 
+def test_the_generated_cage_layout_is_chosen_by_name():
+    fox = DATA / "fox" / "Fox.glb"
+    with pytest.warns(cagerig.RigWarning, match="generated"):
+        by_skeleton = cagerig.Rig.load(fox, auto_cage=80)
+    with pytest.warns(cagerig.RigWarning, match="generated"):
+        offset = cagerig.Rig.load(fox, auto_cage=80, cage_layout="offset")
+    assert by_skeleton.rest_cage.shape != offset.rest_cage.shape or not np.allclose(
+        by_skeleton.rest_cage, offset.rest_cage
+    )
+    with pytest.raises(ValueError, match="cage_layout.*skeleton or offset"):
+        cagerig.Rig.load(fox, auto_cage=80, cage_layout="bones")
+
+
 def test_generate_cage_encloses_the_mesh_and_validates():
     v, f = cagerig.read_obj(DATA / "arm" / "arm.obj")
     cv, cf = cagerig.generate_cage(v, f, target_vertices=60)

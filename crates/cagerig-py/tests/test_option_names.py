@@ -12,6 +12,7 @@ ALIASES = {
     "_Skinning": "SKINNING_METHODS",
     "_Coords": "COORDS_KINDS",
     "_CageFit": "CAGE_FITS",
+    "_CageLayout": "CAGE_LAYOUTS",
     "_UnfittedCage": "UNFITTED_CAGE_POLICIES",
     "_FitRows": "FIT_ROWS",
     "_Localisation": "LOCALISATIONS",

@@ -3,14 +3,17 @@
 //!
 //! The rule, in order: the cage OBJ the user gave; else the cage found with the character (a cage
 //! node in a glTF/FBX file, or `<stem>_cage.obj` beside an OBJ); else a generated one
-//! ([`crate::cage_gen::generate_cage`]) when the user asked for one; else an error that the front
-//! end words in its own terms (an option name, a keyword, a checkbox).
+//! ([`crate::cage_gen::generate_rig_cage`], laid out by the rig's skeleton when it has one) when
+//! the user asked for one; else an error that the front end words in its own terms (an option
+//! name, a keyword, a checkbox).
 
 use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
-use crate::cage_gen::{CageGenError, CageOptions, CageTarget, GeneratedCage, generate_cage};
+use crate::cage_gen::{
+    CageGenError, CageOptions, CageRig, CageTarget, GeneratedCage, generate_rig_cage,
+};
 use crate::error::Warning;
 use crate::io::ParseError;
 use crate::mesh::TriMesh;
@@ -67,10 +70,12 @@ pub enum CageSourceError {
 }
 
 /// Applies the cage-source rule (see the module doc) to `character` (the file, for messages),
-/// its skin `mesh` M (`#V`, for generation) and the cage `found` with it.
+/// its skin `mesh` M (`#V`, for generation), its skeleton and weights `rig` (for the skeleton
+/// layout of a generated cage; `None` for a mesh without a rig) and the cage `found` with it.
 pub fn choose_cage(
     character: &Path,
     mesh: &TriMesh,
+    rig: Option<CageRig<'_>>,
     found: Option<TriMesh>,
     request: &CageRequest<'_>,
 ) -> Result<ChosenCage, CageSourceError> {
@@ -103,11 +108,12 @@ pub fn choose_cage(
     match &request.generate {
         Some(options) => {
             let options = fit_cage_to_rig(options, mesh);
-            let generated =
-                generate_cage(mesh, &options).map_err(|source| CageSourceError::Generate {
+            let generated = generate_rig_cage(mesh, &options, rig).map_err(|source| {
+                CageSourceError::Generate {
                     character: character.to_path_buf(),
                     source,
-                })?;
+                }
+            })?;
             Ok(ChosenCage {
                 cage: generated.cage.clone(),
                 origin: CageOrigin::Generated(Box::new(generated)),
@@ -172,11 +178,24 @@ mod tests {
             given: None,
             generate: Some(cage_options_with_vertices(50)),
         };
-        let chosen = choose_cage(Path::new("x.glb"), &mesh, Some(found.clone()), &request).unwrap();
+        let chosen = choose_cage(
+            Path::new("x.glb"),
+            &mesh,
+            None,
+            Some(found.clone()),
+            &request,
+        )
+        .unwrap();
         assert!(matches!(chosen.origin, CageOrigin::Found));
         assert_eq!(chosen.cage.positions, found.positions);
-        let err =
-            choose_cage(Path::new("x.glb"), &mesh, None, &CageRequest::default()).unwrap_err();
+        let err = choose_cage(
+            Path::new("x.glb"),
+            &mesh,
+            None,
+            None,
+            &CageRequest::default(),
+        )
+        .unwrap_err();
         assert!(matches!(err, CageSourceError::Missing { .. }), "{err}");
         assert_eq!(
             err.to_string(),
@@ -195,7 +214,7 @@ mod tests {
             given: Some(&path),
             generate: None,
         };
-        let err = choose_cage(Path::new("x.obj"), &octahedron(1.0), None, &request)
+        let err = choose_cage(Path::new("x.obj"), &octahedron(1.0), None, None, &request)
             .unwrap_err()
             .to_string();
         assert!(
@@ -212,8 +231,14 @@ mod tests {
             given: Some(Path::new("/nonexistent/cage.obj")),
             generate: None,
         };
-        let err =
-            choose_cage(Path::new("x.glb"), &mesh, Some(octahedron(2.0)), &request).unwrap_err();
+        let err = choose_cage(
+            Path::new("x.glb"),
+            &mesh,
+            None,
+            Some(octahedron(2.0)),
+            &request,
+        )
+        .unwrap_err();
         assert!(err.to_string().contains("/nonexistent/cage.obj"), "{err}");
     }
 }

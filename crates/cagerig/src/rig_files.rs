@@ -133,7 +133,11 @@ pub fn load_rig_files_with_weights(
             MissingCage::Generate(options) => Some(options),
         },
     };
-    let chosen = choose_cage(mesh, &mesh_data, None, &request).map_err(|e| match e {
+    let rig = crate::cage_gen::CageRig {
+        skeleton: &skeleton,
+        weights: Some(&skin_weights),
+    };
+    let chosen = choose_cage(mesh, &mesh_data, Some(rig), None, &request).map_err(|e| match e {
         CageSourceError::Read(e) => e,
         CageSourceError::Missing { .. } => missing("cage", format!("{stem}_cage.obj or --cage")),
         CageSourceError::Generate { source, .. } => ParseError::Rig {

@@ -49,7 +49,7 @@ fn a_generated_cage_on_a_24_vertex_mesh_builds_a_rig() {
         given: None,
         generate: Some(CageOptions::default()),
     };
-    let chosen = choose_cage(Path::new("prism.obj"), &mesh, None, &request).unwrap();
+    let chosen = choose_cage(Path::new("prism.obj"), &mesh, None, None, &request).unwrap();
     assert!(matches!(chosen.origin, CageOrigin::Generated(_)));
     let nc = chosen.cage.num_vertices();
     assert!(

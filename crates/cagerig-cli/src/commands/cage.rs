@@ -4,12 +4,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use cagerig::TriMesh;
 use cagerig::cage_gen::{
-    CageOptions, CageReport, CageRequirements, CageTarget, DEFAULT_MARGIN, DEFAULT_VERTICES,
-    GeneratedCage, check_coordinates, generate_cage, validate_cage_geometry,
+    CageLayout, CageOptions, CageReport, CageRequirements, CageRig, CageTarget, DEFAULT_MARGIN,
+    DEFAULT_VERTICES, GeneratedCage, check_coordinates, generate_rig_cage, validate_cage_geometry,
 };
 use cagerig::io::obj::{read_obj, write_obj};
+use cagerig::{SkinWeights, TriMesh};
 use serde::Serialize;
 
 #[derive(Debug, Clone, clap::Args)]
@@ -31,6 +31,11 @@ pub struct Args {
     /// diagonal.
     #[arg(long, default_value_t = DEFAULT_MARGIN)]
     pub margin: f64,
+    /// How the cage is laid out when the mesh has a skeleton (a glTF/FBX skin, a built-in rig,
+    /// or an OBJ with `<stem>.skt` beside it): by the skeleton (limbs kept apart by the skin's
+    /// dominant joints, rings of vertices at the articulations) or one offset surface.
+    #[arg(long, value_parser = crate::session_args::kind_parser::<CageLayout>(), default_value = CageLayout::default().name())]
+    pub layout: CageLayout,
     /// Write the cage here (OBJ). Without it nothing is written.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -54,19 +59,28 @@ struct CageOutput<'a> {
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (name, mesh) = match (&args.builtin, &args.mesh) {
+    let (name, mesh, rig) = match (&args.builtin, &args.mesh) {
         (Some(name), _) => {
             let rig = cagerig::demo::builtin(name, None)
                 .with_context(|| format!("building the built-in rig {name:?}"))?;
-            (format!("builtin:{name}"), rig.mesh)
+            (
+                format!("builtin:{name}"),
+                rig.mesh,
+                Some((rig.skeleton, Some(rig.skin_weights))),
+            )
         }
         (None, Some(path)) if crate::interchange::is_interchange(path)? => {
             let character = crate::interchange::import(path, None)?;
-            (path.display().to_string(), character.mesh)
+            (
+                path.display().to_string(),
+                character.mesh,
+                Some((character.skeleton, Some(character.skin_weights))),
+            )
         }
         (None, Some(path)) => {
             let mesh = read_obj(path).with_context(|| format!("reading {}", path.display()))?;
-            (path.display().to_string(), mesh)
+            let rig = obj_rig(path, &mesh)?;
+            (path.display().to_string(), mesh, rig)
         }
         (None, None) => bail!("give a mesh file or --builtin NAME"),
     };
@@ -78,13 +92,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let options = CageOptions {
         target,
         margin: args.margin,
+        layout: args.layout,
     };
+    let cage_rig = rig.as_ref().map(|(skeleton, weights)| CageRig {
+        skeleton,
+        weights: weights.as_ref(),
+    });
     let start = Instant::now();
     let GeneratedCage {
         cage,
         mut report,
         stats,
-    } = generate_cage(&mesh, &options).with_context(|| format!("generating a cage for {name}"))?;
+    } = generate_rig_cage(&mesh, &options, cage_rig)
+        .with_context(|| format!("generating a cage for {name}"))?;
     let generation_seconds = start.elapsed().as_secs_f64();
     let start = Instant::now();
     check_coordinates(&cage, &mesh, &mut report);
@@ -118,6 +138,35 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The skeleton (`<stem>.skt`) and skinning weights (`<stem>.skw`) beside an OBJ mesh, when
+/// there is a skeleton: they lay the cage out by the body. Files that are there but cannot be
+/// read are errors.
+fn obj_rig(
+    path: &Path,
+    mesh: &TriMesh,
+) -> anyhow::Result<Option<(cagerig::Skeleton, Option<SkinWeights>)>> {
+    let found = cagerig::io::discovery::discover(path, None);
+    let Some(skeleton_path) = found.skeleton else {
+        return Ok(None);
+    };
+    let skeleton = cagerig::io::skt::read_skt(&skeleton_path)
+        .with_context(|| format!("reading the skeleton {}", skeleton_path.display()))?;
+    let weights = match found.skin_weights {
+        Some(weights_path) => Some(
+            cagerig::io::skw::read_skw_for_skeleton(
+                &weights_path,
+                mesh.num_vertices(),
+                &skeleton,
+                &skeleton_path.display().to_string(),
+            )
+            .with_context(|| format!("reading the skinning weights {}", weights_path.display()))?
+            .0,
+        ),
+        None => None,
+    };
+    Ok(Some((skeleton, weights)))
+}
+
 fn write_cage(out: &Path, cage: &TriMesh) -> anyhow::Result<()> {
     write_obj(out, &cage.positions, &cage.triangles).context("writing the cage")
 }
@@ -145,6 +194,13 @@ fn print_report(o: &CageOutput) {
     );
     if let Some(c) = r.maxvol_condition {
         println!("MaxVol cond.   {c:.3e}");
+    }
+    match o.generation.layout {
+        CageLayout::Skeleton => println!(
+            "layout         skeleton: {} body parts, {} grid points cut between limbs, {} articulation rings",
+            o.generation.body_parts, o.generation.cut_points, o.generation.articulation_rings
+        ),
+        CageLayout::Offset => println!("layout         offset"),
     }
     println!(
         "offset         {:.3} % of the diagonal (grid spacing {:.3} %, {} surface vertices simplified)",

@@ -14,6 +14,7 @@ triangles.
 
 from ._cagerig import (
     CAGE_FITS as CAGE_FITS,
+    CAGE_LAYOUTS as CAGE_LAYOUTS,
     COORDS_KINDS as COORDS_KINDS,
     COORDS_PRECISIONS as COORDS_PRECISIONS,
     FIT_ROWS as FIT_ROWS,
@@ -49,6 +50,7 @@ from .states import replay_script as replay_script, save_state as save_state
 
 __all__ = [
     "CAGE_FITS",
+    "CAGE_LAYOUTS",
     "COORDS_KINDS",
     "COORDS_PRECISIONS",
     "FIT_ROWS",

@@ -14,6 +14,7 @@ __version__: str
 SKINNING_METHODS: list[str]
 COORDS_KINDS: list[str]
 CAGE_FITS: list[str]
+CAGE_LAYOUTS: list[str]
 UNFITTED_CAGE_POLICIES: list[str]
 FIT_ROWS: list[str]
 LOCALISATIONS: list[str]
@@ -23,7 +24,7 @@ GREEN_FACE_TERMS: list[str]
 __all__ = ['RigError', 'RigFileError', 'ScriptError', 'RigWarning', 'Rig', 'EditScript', 'mvc', 'maxvol_rows',
            'max_entropy_coordinates', 'lbs', 'dqs', 'cor', 'cor_centres', 'validate_cage', 'generate_cage', 'subdivide',
            'read_obj', 'write_obj', '__version__', 'SKINNING_METHODS', 'COORDS_KINDS', 'FIT_ROWS', 'LOCALISATIONS', 'FIT_SOURCES', 'COORDS_PRECISIONS', 'GREEN_FACE_TERMS',
-           'CAGE_FITS', 'UNFITTED_CAGE_POLICIES']
+           'CAGE_FITS', 'CAGE_LAYOUTS', 'UNFITTED_CAGE_POLICIES']
 
 _F64Array = npt.NDArray[np.float64]
 _I64Array = npt.NDArray[np.int64]
@@ -32,6 +33,7 @@ _PathLike = Union[str, os.PathLike[str]]
 _Skinning = Literal["lbs", "dqs", "cor", "blended"]
 _Coords = Literal["mvc", "green"]
 _CageFit = Literal["regularised", "paper"]
+_CageLayout = Literal["skeleton", "offset"]
 _UnfittedCage = Literal["refuse", "keep"]
 _GreenFaceTerm = Literal["fold-safe", "lipman"]
 _FitRows = Literal["maxvol", "all"]
@@ -164,6 +166,7 @@ class Rig:
         coords_precision: _Precision = "f64",
         keep_file_coords: bool = False,
         auto_cage: Optional[int] = None,
+        cage_layout: _CageLayout = "skeleton",
         auto_weights: bool = False,
         coords: _Coords = "mvc",
         cage_fit: _CageFit = "regularised",

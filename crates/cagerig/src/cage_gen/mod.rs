@@ -18,8 +18,12 @@
 //!    exactly ([`surface_clearance`]) or else the tightest the grid guarantees, and keep the
 //!    first whose cage reaches the target and passes [`validate`].
 //!
-//! [`generate_guided_cage`] orders the collapses with a [`skeleton_guide`] (rings of vertices
-//! around articulations); it is not offered by the CLI, since it measured no better (README).
+//! With a skeleton, [`generate_rig_cage`] lays the cage out by the body ([`CageLayout`],
+//! the default [`CageLayout::Skeleton`]): before step 3 the solid is cut between body parts
+//! whose dominant joints lie on different branches of the skeleton ([`limb_separation`]: no
+//! webbing between the legs, or between an arm and the torso), on a grid fine enough to resolve
+//! the gaps between limbs, and step 4 orders the collapses with a [`skeleton_guide`] (rings of
+//! vertices around the articulations).
 //!
 //! Every step keeps the invariants, so a cage that reaches the target passes the validator by
 //! construction; the validator runs anyway and any failure is reported, never returned as a cage.
@@ -29,6 +33,8 @@ pub mod collapse_checks;
 pub mod distance_grid;
 pub mod edge_flips;
 pub mod geometry;
+pub mod layout;
+pub mod limb_separation;
 pub mod marching_tets;
 pub mod offset_search;
 pub mod quadric;
@@ -41,7 +47,11 @@ pub mod weld;
 
 use thiserror::Error;
 
-pub use offset_search::{GeneratedCage, generate_cage, generate_guided_cage};
+pub use layout::{CageLayout, UnknownCageLayout};
+pub use limb_separation::{BodyParts, BodyPartsError};
+pub use offset_search::{
+    CageRig, GeneratedCage, generate_cage, generate_guided_cage, generate_rig_cage,
+};
 pub use skeleton_guide::CageGuide;
 pub use validate::{
     CageReport, CageRequirements, Check, check_coordinates, validate_cage_geometry,
@@ -84,6 +94,9 @@ pub struct CageOptions {
     /// loses digits, while still letting the cage hug concave regions; the Arm's hand-made
     /// cage comes to 0.075 %.
     pub margin: f64,
+    /// How the cage is laid out around a rigged character ([`generate_rig_cage`]; without a
+    /// skeleton every layout is the offset one).
+    pub layout: CageLayout,
 }
 
 impl Default for CageOptions {
@@ -91,6 +104,7 @@ impl Default for CageOptions {
         Self {
             target: CageTarget::Vertices(DEFAULT_VERTICES),
             margin: DEFAULT_MARGIN,
+            layout: CageLayout::default(),
         }
     }
 }
@@ -146,6 +160,9 @@ pub enum CageGenError {
         /// The offset of that attempt, in % of the bbox diagonal of the mesh.
         offset_percent: f64,
     },
+    /// The skeleton layout's body parts could not be built from the rig.
+    #[error("the rig's body parts: {0}")]
+    BodyParts(#[from] BodyPartsError),
     /// Every cage that reached the target failed [`validate`].
     #[error("the generated cage failed validation at every offset; last failures: {failures:?}")]
     ValidationFailed {

@@ -9,6 +9,8 @@ use serde::Serialize;
 
 use super::bvh::{Aabb, TriangleBvh};
 use super::distance_grid::{SampleGrid, fill_from_outside};
+use super::layout::CageLayout;
+use super::limb_separation::{BodyParts, cut_between_parts, dominant_joints_by_bones};
 use super::marching_tets::extract_surface;
 use super::simplify::{CollapseConstraints, StopAt, simplify};
 use super::skeleton_guide::CageGuide;
@@ -19,6 +21,8 @@ use super::validate::{
 use super::weld::{piece_representatives, weld_by_position};
 use super::{CageGenError, CageOptions, CageTarget, MIN_VERTICES};
 use crate::mesh::TriMesh;
+use crate::skeleton::Skeleton;
+use crate::skin_weights::SkinWeights;
 
 /// Grid samples of the starting surface per target cage vertex (sets the spacing h):
 /// enough for the quadric order to pick the cage's features, few enough to stay fast (the
@@ -39,6 +43,38 @@ pub const OFFSET_GROWTH: f64 = 1.5;
 pub const MAX_OFFSET: f64 = 0.5;
 /// Cage self-separation kept during simplification, × diagonal.
 pub const SEPARATION: f64 = 1e-6;
+
+/// Grid spacing of the skeleton layout, × the offset layout's: fine enough that the cut
+/// between two limbs (a sheet `SLAB_SPACINGS` thick, at least `keep` from either skin) fits
+/// in the gaps of a character's limbs.
+pub const SKELETON_SPACING_FACTOR: f64 = 0.5;
+/// Thickness of the cut between two separable body parts, in grid spacings
+/// ([`super::limb_separation`]).
+pub const SLAB_SPACINGS: f64 = 2.0;
+/// Least distance of a limb cut from the skin beyond the margin, in grid spacings: the first
+/// attempt's surface is verified exactly ([`check_start_surface`]); when it fails the cut moves
+/// out by [`KEEP_STEP_SPACINGS`] up to [`GUARANTEED_SPACINGS`], which the grid guarantees.
+pub const KEEP_SPACINGS: f64 = 0.5;
+/// Step of the limb cut's `keep` distance, and of the offset beyond it, after a starting
+/// surface fails its exact check, in grid spacings.
+pub const KEEP_STEP_SPACINGS: f64 = 0.5;
+/// First offset of the skeleton layout above the margin, in grid spacings: beyond `keep`, so
+/// that the solid has room to be cut between limbs.
+pub const SKELETON_OFFSET_SPACINGS: f64 = 1.25;
+/// Offset above which the limb cut's `keep` distance is verified rather than guaranteed, in
+/// grid spacings (as [`TIGHT_OFFSET_SPACINGS`]).
+const GUARANTEED_SPACINGS: f64 = 1.75;
+
+/// The rig a cage is generated for: its skeleton S and, when it has them, its skinning
+/// weights Ω (whose heaviest joint per vertex decides the body parts; without them, the
+/// nearest bone does).
+#[derive(Debug, Clone, Copy)]
+pub struct CageRig<'a> {
+    /// The rest skeleton S.
+    pub skeleton: &'a Skeleton,
+    /// Skinning weights Ω (`#V` rows), if the rig has them.
+    pub weights: Option<&'a SkinWeights>,
+}
 
 /// Figures of one generation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -67,6 +103,14 @@ pub struct GenerationStats {
     pub stage_seconds: StageSeconds,
     /// Total wall-clock seconds of the generation.
     pub seconds: f64,
+    /// The layout used ([`CageLayout::Offset`] when the rig had no skeleton).
+    pub layout: CageLayout,
+    /// Body parts of the skeleton layout (joints that dominate a skin vertex); 0 otherwise.
+    pub body_parts: usize,
+    /// Grid points cut between limbs in the accepted attempt.
+    pub cut_points: usize,
+    /// Articulation rings that guided the simplification.
+    pub articulation_rings: usize,
 }
 
 /// Seconds per stage of [`generate_cage`] (summed over the offsets tried).
@@ -105,6 +149,42 @@ pub fn generate_guided_cage(
     mesh: &TriMesh,
     options: &CageOptions,
     guide: &CageGuide,
+) -> Result<GeneratedCage, CageGenError> {
+    generate(mesh, options, guide, None)
+}
+
+/// A cage for a rigged character: with a skeleton and [`CageLayout::Skeleton`], limbs are
+/// kept apart by the skin's dominant joints ([`super::limb_separation`]) on a grid
+/// [`SKELETON_SPACING_FACTOR`] as fine, and articulation rings guide the simplification
+/// ([`super::skeleton_guide`]); otherwise [`generate_cage`].
+pub fn generate_rig_cage(
+    mesh: &TriMesh,
+    options: &CageOptions,
+    rig: Option<CageRig<'_>>,
+) -> Result<GeneratedCage, CageGenError> {
+    let rig = match (options.layout, rig) {
+        (CageLayout::Skeleton, Some(rig)) if !rig.skeleton.is_empty() => rig,
+        (CageLayout::Skeleton | CageLayout::Offset, _) => return generate_cage(mesh, options),
+    };
+    let dominant: Vec<usize> = match rig.weights {
+        Some(w) if w.num_vertices() == mesh.num_vertices() && w.num_entries() > 0 => {
+            let by_bones = dominant_joints_by_bones(mesh, rig.skeleton);
+            (0..mesh.num_vertices())
+                .map(|v| w.heaviest(v).unwrap_or(by_bones[v]))
+                .collect()
+        }
+        Some(_) | None => dominant_joints_by_bones(mesh, rig.skeleton),
+    };
+    let parts = BodyParts::new(mesh, rig.skeleton, &dominant)?;
+    let guide = CageGuide::from_skeleton(rig.skeleton);
+    generate(mesh, options, &guide, Some(&parts))
+}
+
+fn generate(
+    mesh: &TriMesh,
+    options: &CageOptions,
+    guide: &CageGuide,
+    parts: Option<&BodyParts>,
 ) -> Result<GeneratedCage, CageGenError> {
     let start = Instant::now();
     if let Some(vertex) = mesh.positions.iter().position(|p| !p.is_finite()) {
@@ -151,9 +231,15 @@ pub fn generate_guided_cage(
         })
         .sum();
     let longest = (hi - lo).max_element();
-    let mut spacing = (area / (SURFACE_SAMPLES_PER_CAGE_VERTEX * target as f64))
-        .sqrt()
-        .clamp(longest / 200.0, longest / 16.0);
+    let spacing_factor = if parts.is_some() {
+        SKELETON_SPACING_FACTOR
+    } else {
+        1.0
+    };
+    let mut spacing = spacing_factor
+        * (area / (SURFACE_SAMPLES_PER_CAGE_VERTEX * target as f64))
+            .sqrt()
+            .clamp(longest / 200.0, longest / 16.0);
     let requirements = CageRequirements {
         margin,
         target_vertices: matches!(options.target, CageTarget::Vertices(_)).then_some(target),
@@ -177,10 +263,16 @@ pub fn generate_guided_cage(
     let mut last_pieces: Option<(usize, f64)> = None;
     let mut last_failures = Vec::new();
     let mut refinements = 0;
+    let mut keep_spacings = KEEP_SPACINGS;
     // Offset ≥ margin + h√3 guarantees the starting surface keeps the margin (marching_tets);
     // a tighter one is tried first and its surface verified (surface_clearance).
     let guaranteed = |spacing: f64| margin + spacing * 3f64.sqrt() * 1.01;
-    let mut offset = margin + spacing * TIGHT_OFFSET_SPACINGS;
+    let first_offset_spacings = if parts.is_some() {
+        SKELETON_OFFSET_SPACINGS
+    } else {
+        TIGHT_OFFSET_SPACINGS
+    };
+    let mut offset = margin + spacing * first_offset_spacings;
     while offset <= MAX_OFFSET * diag {
         let grid = SampleGrid::around(
             bounds,
@@ -188,8 +280,18 @@ pub fn generate_guided_cage(
             offset + (2.0 + GRID_SHIFT_SPACINGS) * spacing,
         );
         let grid_points = grid.num_points();
-        let field = fill_from_outside(grid, &bvh, bounds, offset);
+        let mut field = fill_from_outside(grid, &bvh, bounds, offset);
         let queries = field.exact_queries;
+        let cut_points = parts.map_or(0, |parts| {
+            cut_between_parts(
+                &mut field,
+                &bvh,
+                parts,
+                offset,
+                margin + keep_spacings * spacing,
+                SLAB_SPACINGS * spacing,
+            )
+        });
         lap(&mut stage_seconds.distance_grid);
         let surface = extract_surface(&field);
         drop(field);
@@ -216,10 +318,30 @@ pub fn generate_guided_cage(
             continue;
         }
         let clearances = vertex_clearances(&surface, &bvh);
-        if offset < guaranteed(spacing)
+        if (offset < guaranteed(spacing) || cut_points > 0)
             && let Err(why) =
                 check_start_surface(&surface, &clearances, &bvh, margin, &piece_points)
         {
+            if cut_points > 0 && keep_spacings < GUARANTEED_SPACINGS {
+                // Cut farther from the skin, with the offset beyond the cut so that there is
+                // still solid to cut.
+                keep_spacings = (keep_spacings + KEEP_STEP_SPACINGS).min(GUARANTEED_SPACINGS);
+                offset = offset.max(margin + (keep_spacings + KEEP_STEP_SPACINGS) * spacing);
+                attempts.push(format!(
+                    "offset {offset_percent:.2} %: starting surface rejected ({why}); cutting limbs apart from margin + {keep_spacings:.2}·h, offset {:.2} %",
+                    100.0 * offset / diag
+                ));
+                lap(&mut stage_seconds.surface);
+                continue;
+            }
+            if offset >= guaranteed(spacing) {
+                attempts.push(format!(
+                    "offset {offset_percent:.2} %: starting surface rejected ({why})"
+                ));
+                offset *= OFFSET_GROWTH;
+                lap(&mut stage_seconds.surface);
+                continue;
+            }
             attempts.push(format!(
                 "offset {offset_percent:.2} %: starting surface rejected ({why}); trying the offset the grid guarantees"
             ));
@@ -272,6 +394,14 @@ pub fn generate_guided_cage(
             attempts,
             stage_seconds,
             seconds: start.elapsed().as_secs_f64(),
+            layout: if parts.is_some() {
+                CageLayout::Skeleton
+            } else {
+                CageLayout::Offset
+            },
+            body_parts: parts.map_or(0, |p| p.joints.len()),
+            cut_points,
+            articulation_rings: guide.planes.len(),
         };
         return Ok(GeneratedCage {
             cage,

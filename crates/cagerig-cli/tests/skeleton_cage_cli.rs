@@ -1,0 +1,131 @@
+//! Generated cages laid out by the skeleton (`cagerig cage --layout`, `--auto-cage
+//! --cage-layout`): the current cage C' of the default rig stays on the body through the
+//! characters' animations, sampled at 10 per second (the measures of `animate --json`: spread,
+//! deviation as a fraction of the diagonal, flipped as a fraction of the triangles), and the
+//! offset layout's CesiumMan, whose cage webs the legs, does not.
+
+#![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
+
+#[expect(
+    dead_code,
+    reason = "each test binary uses a part of the shared helpers"
+)]
+mod support;
+
+use support::{cagerig, data, run_ok, temp_dir};
+
+/// `0, 0.1, …` up to `last` seconds.
+fn times(last: f64) -> String {
+    let n = (last * 10.0).round() as usize;
+    (0..=n)
+        .map(|i| format!("{:.1}", i as f64 / 10.0))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// The worst (spread, deviation, flipped) of `animate --json` with `args`.
+fn worst(name: &str, args: &[&str]) -> (f64, f64, f64) {
+    let out = temp_dir(&format!("skeleton-cage-{name}"));
+    let json = run_ok(
+        cagerig()
+            .arg("animate")
+            .args(args)
+            .args(["--json", "--force", "--out"])
+            .arg(&out),
+    );
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let w = &report["worst"];
+    let get = |k: &str| w[k].as_f64().unwrap();
+    (get("spread"), get("deviation"), get("flipped"))
+}
+
+fn auto_cage(file: &str, animation: &str, last: f64, layout: &str) -> (f64, f64, f64) {
+    let path = data(file);
+    let times = times(last);
+    worst(
+        &format!("{}-{animation}-{layout}", file.replace('/', "-")),
+        &[
+            path.to_str().unwrap(),
+            "--auto-cage",
+            "--cage-layout",
+            layout,
+            "--animation",
+            animation,
+            "--times",
+            &times,
+        ],
+    )
+}
+
+#[test]
+fn the_default_automatic_cages_stay_on_the_body() {
+    for (file, animation, last) in [
+        ("fox/Fox.glb", "Walk", 0.7),
+        ("fox/Fox.glb", "Run", 1.1),
+        ("gltf/CesiumMan/CesiumMan.glb", "0", 2.0),
+        ("gltf/RiggedFigure/RiggedFigure.gltf", "0", 1.2),
+    ] {
+        let (spread, deviation, flipped) = auto_cage(file, animation, last, "skeleton");
+        let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
+        assert!(spread <= 1.5, "{what}");
+        assert!(deviation <= 0.075, "{what}");
+        // Five of the Fox's 196 triangles at worst (2.6 %).
+        assert!(flipped <= 0.027, "{what}");
+    }
+}
+
+#[test]
+fn cesium_mans_webbed_offset_cage_cannot_follow_both_legs() {
+    let (offset, _, _) = auto_cage("gltf/CesiumMan/CesiumMan.glb", "0", 2.0, "offset");
+    let (skeleton, _, _) = auto_cage("gltf/CesiumMan/CesiumMan.glb", "0", 2.0, "skeleton");
+    assert!(offset > 3.0, "{offset}");
+    assert!(skeleton < 0.5 * offset, "{skeleton} vs {offset}");
+}
+
+#[test]
+fn the_arms_generated_cage_follows_its_animation() {
+    let dir = temp_dir("skeleton-cage-arm");
+    let cage = dir.join("arm_cage58.obj");
+    let json = run_ok(
+        cagerig()
+            .arg("cage")
+            .arg(data("arm/arm.obj"))
+            .args(["--vertices", "58", "--json", "--out"])
+            .arg(&cage),
+    );
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(report["generation"]["layout"], "skeleton");
+    assert_eq!(report["generation"]["body_parts"], 24);
+    let anim = data("arm/arm_skelAnim.txt");
+    let (spread, deviation, flipped) = worst(
+        "arm58",
+        &[
+            data("arm/arm.obj").to_str().unwrap(),
+            "--cage",
+            cage.to_str().unwrap(),
+            "--skeleton-anim",
+            anim.to_str().unwrap(),
+            "--times",
+            &times(3.0),
+        ],
+    );
+    assert!(spread <= 1.1, "{spread}");
+    assert!(deviation <= 0.02, "{deviation}");
+    assert_eq!(flipped, 0.0);
+}
+
+#[test]
+fn an_unknown_layout_lists_the_accepted_ones() {
+    let output = cagerig()
+        .arg("cage")
+        .arg(data("arm/arm.obj"))
+        .args(["--layout", "bones"])
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("skeleton") && stderr.contains("offset"),
+        "{stderr}"
+    );
+}
