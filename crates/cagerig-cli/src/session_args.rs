@@ -149,9 +149,15 @@ pub fn start_session(
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    let (session, mut warnings) = bound.context("assembling the rig")?;
+    let (session, warnings) = bound.context("assembling the rig")?;
+    // The session validates the cage against the mesh again: a warning the loading already
+    // gave (e.g. vertices outside the cage, accepted by --allow-outside-cage) is shown once.
     let mut all = loaded.warnings;
-    all.append(&mut warnings);
+    for w in warnings {
+        if !all.contains(&w) {
+            all.push(w);
+        }
+    }
     Ok((session, all))
 }
 

@@ -87,6 +87,8 @@ pub enum OpenError {
         path = path.display()
     )]
     NoCage { path: PathBuf },
+    #[error("{path}: no cage in the file, and no usable cage could be generated: {reason}", path = path.display())]
+    UnusableCage { path: PathBuf, reason: String },
     #[error("{path}: no cage in the file, and none could be generated: {source}", path = path.display())]
     Generate {
         path: PathBuf,
@@ -111,6 +113,10 @@ impl From<CageSourceError> for OpenError {
                 source,
             },
             CageSourceError::Missing { character } => OpenError::NoCage { path: character },
+            CageSourceError::Unusable { character, reason } => OpenError::UnusableCage {
+                path: character,
+                reason,
+            },
         }
     }
 }
@@ -152,7 +158,10 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
             skin,
             auto_cage,
         } if cagerig_formats::CharacterFormat::of(path).is_some() => {
-            match import_interchange(path, cage.as_deref(), skin.as_deref(), *auto_cage) {
+            // A character with no cage opens with a generated one, said so in the log, as a
+            // mesh with no skeleton does.
+            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
+            match import_interchange(path, cage.as_deref(), skin.as_deref(), Some(vertices)) {
                 Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
                     rigged = false;
                     let (parts, warnings, files) = crate::unrigged::open_unskinned_character(
@@ -182,10 +191,9 @@ pub fn open_rig(source: &RigSource) -> Result<OpenedRig, OpenError> {
             auto_cage,
             ..
         } => {
-            let missing = match auto_cage {
-                Some(n) => MissingCage::Generate(cage_options_with_vertices(*n)),
-                None => MissingCage::Fail,
-            };
+            // As for a character: a rig with no cage opens with a generated one.
+            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
+            let missing = MissingCage::Generate(cage_options_with_vertices(vertices));
             let rig =
                 cagerig::rig_files::load_rig_files_or_generate(path, cage.as_deref(), missing)?;
             let mut warnings = rig.warnings;
@@ -241,7 +249,7 @@ type Imported = (
 /// The log line of a generated cage: the library's note and where File ▸ Export writes it.
 pub(crate) fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
     match cagerig::cage_source::generated_cage_note(g) {
-        Warning::Note { message } => Warning::Note {
+        Warning::Info { message } => Warning::Info {
             message: format!("{message}; File > Export writes it as cage_rest.obj"),
         },
         other => other,

@@ -103,6 +103,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     let mut options = args.session.options();
+    options.allow_mesh_outside_cage = loaded.allow_outside_cage;
     options.skinning = crate::session_args::choose_skinning(
         args.skinning,
         script.as_ref().and_then(|s| s.skinning),
@@ -110,8 +111,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     );
     let (mut session, warnings) =
         RigSession::new(loaded.parts, options).context("assembling the rig")?;
-    for w in loaded.warnings.iter().chain(&warnings) {
-        eprintln!("warning: {w}");
+    let again = |w: &&cagerig::Warning| !loaded.warnings.contains(w);
+    for w in loaded.warnings.iter().chain(warnings.iter().filter(again)) {
+        crate::errors::report_warning(w);
     }
     if let (Some(script), Some(path)) = (&script, &args.script) {
         script

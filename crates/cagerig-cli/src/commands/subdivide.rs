@@ -56,7 +56,7 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
     let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
     let loaded = load_rig_or_generate_cage(args, true, false, cli.auto_cage.options())?;
     for w in &loaded.warnings {
-        eprintln!("warning: {w}");
+        crate::errors::report_warning(w);
     }
     let p = &loaded.parts;
     let levels_u32 = u32::try_from(levels).unwrap_or(u32::MAX);
