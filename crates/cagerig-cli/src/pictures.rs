@@ -196,6 +196,27 @@ impl PictureMaker {
                 .data
                 .scene(session, pose, self.options.layers, self.options.color_by);
             let mut image = self.renderer.render(&scene, &style, camera, w, h)?;
+            // The moved cage vertices, ringed (their handles alone are too small to find).
+            let cage = match pose {
+                Pose::Rest => session.rest_cage(),
+                Pose::Current => session.posed_cage(),
+            };
+            for &k in &self.data.marked_handles {
+                if let Some((x, y, _)) = cage
+                    .get(k)
+                    .and_then(|&p| camera.project(p, f64::from(w), f64::from(h), 1.0))
+                {
+                    let radius = 7.0 * f64::from(style.scale).max(1.0);
+                    annotate::draw_ring(
+                        &mut image,
+                        x,
+                        y,
+                        radius,
+                        radius / 3.0,
+                        cagerig_render::rig_scene::MARKED_HANDLE,
+                    );
+                }
+            }
             if self.options.labels {
                 let label = match pose {
                     Pose::Rest => "rest pose (M, C, S)",

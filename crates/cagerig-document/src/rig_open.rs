@@ -369,13 +369,22 @@ mod tests {
         for (a, b) in session.posed_mesh().iter().zip(&expected) {
             assert!(a.distance(*b) < 1e-9 * diagonal, "{a} vs {b}");
         }
-        // Without a cage (none in the file) the message says how to give one.
-        let err = match open_rig(&RigSource::file(format!("{fox}/Fox.glb"))) {
-            Err(e) => e.to_string(),
-            Ok(_) => panic!("opened the Fox without a cage"),
-        };
-        assert!(err.contains("Fox.glb") && err.contains("--cage"), "{err}");
-        // Or with a generated one.
+        // Without a cage (none in the file) it opens with a generated one of the default size,
+        // and says so (it was refused: the studio exited, or fell back to the snake).
+        let opened = open_rig(&RigSource::file(format!("{fox}/Fox.glb"))).unwrap();
+        let n = opened.session.rest_cage().len();
+        assert!((90..=110).contains(&n), "{n} cage vertices");
+        let note = opened
+            .warnings
+            .iter()
+            .find(|w| w.to_string().contains("generated one"))
+            .unwrap();
+        assert_eq!(note.severity(), cagerig::Severity::Note);
+        assert!(
+            note.to_string().contains("File > Export writes it"),
+            "{note}"
+        );
+        // Or with a generated one of the size asked for.
         let opened = open_rig(&RigSource::File {
             path: format!("{fox}/Fox.glb").into(),
             cage: None,
@@ -390,6 +399,28 @@ mod tests {
                 .warnings
                 .iter()
                 .any(|w| w.to_string().contains("generated"))
+        );
+    }
+
+    /// A skinned character with no cage (CesiumMan) opens with a generated cage, as a mesh with
+    /// no skeleton does.
+    #[test]
+    fn a_skinned_file_with_no_cage_opens_with_a_generated_one() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../data/gltf/CesiumMan/CesiumMan.glb"
+        );
+        let opened = open_rig(&RigSource::file(path)).unwrap();
+        assert!(opened.rigged);
+        assert!(opened.session.skeleton().len() > 10);
+        assert!(!opened.animations.is_empty());
+        assert!(
+            opened
+                .warnings
+                .iter()
+                .any(|w| w.to_string().contains("no cage was found: generated one")),
+            "{:?}",
+            opened.warnings
         );
     }
 

@@ -54,6 +54,25 @@ pub fn draw_text(image: &mut RgbaImage, x: u32, y: u32, text: &str, scale: u32, 
     }
 }
 
+/// A ring of outer radius `radius` and width `width` pixels centred on `(cx, cy)` in `color`,
+/// over a dark outline one pixel wider on each side (it reads on light and dark backgrounds):
+/// the mark of a cage vertex an edit moved. Clipped to the image.
+pub fn draw_ring(image: &mut RgbaImage, cx: f64, cy: f64, radius: f64, width: f64, color: [u8; 4]) {
+    let outline = [40, 10, 40, 255];
+    let reach = (radius + 2.0).ceil() as i64;
+    let (x0, y0) = (cx.floor() as i64, cy.floor() as i64);
+    for y in y0 - reach..=y0 + reach {
+        for x in x0 - reach..=x0 + reach {
+            let d = ((x as f64 + 0.5 - cx).powi(2) + (y as f64 + 0.5 - cy).powi(2)).sqrt();
+            if d <= radius && d >= radius - width {
+                image.fill_rect(x, y, 1, 1, color);
+            } else if d <= radius + 1.0 && d >= radius - width - 1.0 {
+                image.fill_rect(x, y, 1, 1, outline);
+            }
+        }
+    }
+}
+
 /// A vertical colour bar `width × height` at `(x, y)` from `lo` (bottom) to `hi` (top), with
 /// the end values (and 0 for a diverging map) written to its right, and `title` above it.
 #[expect(clippy::too_many_arguments)]
@@ -218,6 +237,17 @@ mod tests {
         };
         assert!(!(title_bottom..label_top).any(row_has_ink));
         assert!(legend_width(map, "Φ", 12, scale) >= 12 + 3 * scale + text_width("-0.013", scale));
+    }
+
+    #[test]
+    fn a_ring_marks_its_circle_and_leaves_its_centre() {
+        let mut image = blank(40, 40);
+        draw_ring(&mut image, 20.0, 20.0, 8.0, 3.0, [200, 20, 160, 255]);
+        assert_eq!(image.pixel(20, 13), [200, 20, 160, 255]);
+        assert_eq!(image.pixel(20, 20), [255, 255, 255, 255]);
+        assert_eq!(image.pixel(2, 2), [255, 255, 255, 255]);
+        // Past the edges: clipped, no panic.
+        draw_ring(&mut image, 39.0, 0.0, 8.0, 3.0, [200, 20, 160, 255]);
     }
 
     #[test]
