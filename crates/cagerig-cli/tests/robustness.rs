@@ -847,8 +847,7 @@ fn an_exported_animation_keeps_its_name() {
 /// for flat shading) or a flat 11 × 11 grid, with a three-joint skeleton through it.
 fn small_mesh(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
     let mut obj = String::new();
-    let skt;
-    if name == "cube" {
+    let skt = if name == "cube" {
         let faces: [[[f64; 3]; 4]; 6] = [
             [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]],
             [[0., 0., 1.], [0., 1., 1.], [1., 1., 1.], [1., 0., 1.]],
@@ -869,7 +868,7 @@ fn small_mesh(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
             let b = 4 * k + 1;
             obj += &format!("f {} {} {}\nf {} {} {}\n", b, b + 1, b + 2, b, b + 2, b + 3);
         }
-        skt = "j 0 root -1 0 -0.8 0\nj 1 mid 0 0 0 0\nj 2 tip 1 0 0.8 0\n";
+        "j 0 root -1 0 -0.8 0\nj 1 mid 0 0 0 0\nj 2 tip 1 0 0.8 0\n"
     } else {
         let n = 10;
         for j in 0..=n {
@@ -884,8 +883,8 @@ fn small_mesh(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
                 obj += &format!("f {a} {c} {b}\nf {b} {c} {}\n", c + 1);
             }
         }
-        skt = "j 0 root -1 0 0 0.5\nj 1 mid 0 0.5 0 0.5\nj 2 tip 1 1 0 0.5\n";
-    }
+        "j 0 root -1 0 0 0.5\nj 1 mid 0 0.5 0 0.5\nj 2 tip 1 1 0 0.5\n"
+    };
     let mesh = dir.join(format!("{name}.obj"));
     std::fs::write(&mesh, obj).unwrap();
     let skeleton = dir.join(format!("{name}.skt"));
@@ -1061,4 +1060,100 @@ fn known_harmless_facts_about_the_arm_are_notes() {
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The samples' edit scripts show their edit: every cage step of the Arm's and the Fox's moves
+/// its vertices by at least 5 % of the character's size (`examples/edits.json` moved them by
+/// 0.06 % of the Fox's), and the Fox's cage indices are the parts the docs name for
+/// `data/fox/Fox_cage.obj` (the ears: the highest vertices of the head; the tail's tip: the
+/// rearmost). A regenerated cage that moves them fails here: pick the new indices.
+#[test]
+fn the_samples_edit_scripts_are_sized_to_their_character_and_name_their_parts() {
+    let read_obj = |path: &Path| -> Vec<[f64; 3]> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .filter_map(|l| l.strip_prefix("v "))
+            .map(|rest| {
+                let v: Vec<f64> = rest
+                    .split_whitespace()
+                    .map(|x| x.parse().unwrap())
+                    .collect();
+                [v[0], v[1], v[2]]
+            })
+            .collect()
+    };
+    let diagonal = |points: &[[f64; 3]]| {
+        (0..3)
+            .map(|a| {
+                let lo = points.iter().map(|p| p[a]).fold(f64::INFINITY, f64::min);
+                let hi = points
+                    .iter()
+                    .map(|p| p[a])
+                    .fold(f64::NEG_INFINITY, f64::max);
+                (hi - lo).powi(2)
+            })
+            .sum::<f64>()
+            .sqrt()
+    };
+    let cage_steps = |script: &str| -> Vec<(String, Vec<usize>, f64)> {
+        let text = std::fs::read_to_string(support::repo().join(script)).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|s| s["op"] == "move_rest_cage" || s["op"] == "move_posed_cage")
+            .map(|s| {
+                let vertices = s["vertices"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|k| k.as_u64().unwrap() as usize)
+                    .collect();
+                let offset: f64 = s["offset"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|x| x.as_f64().unwrap().powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                (s["op"].as_str().unwrap().to_string(), vertices, offset)
+            })
+            .collect()
+    };
+    let arm_cage = read_obj(&arm_dir().join("arm_cage.obj"));
+    let fox_cage = read_obj(&support::data("fox/Fox_cage.obj"));
+    for (script, cage) in [
+        ("examples/arm-edits.json", &arm_cage),
+        ("examples/fox-edits.json", &fox_cage),
+    ] {
+        let size = diagonal(cage);
+        let steps = cage_steps(script);
+        assert!(steps.len() >= 2, "{script}");
+        for (op, _, offset) in &steps {
+            assert!(
+                offset / size >= 0.05,
+                "{script}: {op} by {offset} of {size}"
+            );
+        }
+    }
+    let fox = cage_steps("examples/fox-edits.json");
+    let mut head: Vec<usize> = (0..fox_cage.len())
+        .filter(|&k| fox_cage[k][2] > 25.0)
+        .collect();
+    head.sort_by(|&a, &b| fox_cage[b][1].total_cmp(&fox_cage[a][1]));
+    let mut rear: Vec<usize> = (0..fox_cage.len()).collect();
+    rear.sort_by(|&a, &b| fox_cage[a][2].total_cmp(&fox_cage[b][2]));
+    for (op, vertices, _) in &fox {
+        let part = if op == "move_rest_cage" {
+            &head[..6]
+        } else {
+            &rear[..vertices.len()]
+        };
+        assert!(
+            vertices.iter().all(|k| part.contains(k)),
+            "{op} {vertices:?}: expected among {part:?}"
+        );
+    }
 }

@@ -23,10 +23,12 @@ struct Args {
     /// glTF/FBX: the skin to import, by name or index (default: the first), as `cagerig --skin`.
     #[arg(long, requires = "path")]
     skin: Option<String>,
-    /// When the character has no cage, generate one (as `cagerig cage`).
+    /// When the character has no cage, generate one (as `cagerig cage`). A character with no
+    /// cage opens with a generated one anyway, and the log says so; this flag goes with
+    /// --cage-vertices.
     #[arg(long, requires = "path")]
     auto_cage: bool,
-    /// Vertex count of a generated cage.
+    /// Vertex count of a generated cage (lowered on a small mesh to what the rig can use).
     #[arg(long, default_value_t = 100, requires = "auto_cage")]
     cage_vertices: usize,
     /// A built-in demo rig instead of a file (bar, bar_irregular, snake).
