@@ -346,10 +346,10 @@ proptest! {
     }
 }
 
-/// A chain of four bones along the bar (joints `j0` … `j4` at x = 0 … 4), scaled by `scale`
-/// about the origin and moved by `offset`.
+/// A chain of four bones along the bar (joints `j0` … `j3` and the end marker `j4_end` at
+/// x = 0 … 4), scaled by `scale` about the origin and moved by `offset`.
 fn moved_chain(offset: DVec3, scale: f64) -> Skeleton {
-    let names = ["j0", "j1", "j2", "j3", "j4"];
+    let names = ["j0", "j1", "j2", "j3", "j4_end"];
     let joints: Vec<(&str, Option<usize>, DVec3)> = names
         .iter()
         .enumerate()
