@@ -122,8 +122,19 @@ fn gltf_and_fbx_characters_get_validated_cages_with_default_options() {
                 "{file}: check {name}: {check:?}"
             );
         }
+        // The default 100, or fewer where the rig needs it, said so: RiggedSimple has 96
+        // distinct positions, too few for 100 cage vertices (its 100-vertex cage passed here
+        // while a rig could not be built on it).
         let vertices = v["cage"]["cage_vertices"].as_u64().unwrap();
-        assert!((90..=110).contains(&vertices), "{file}: {vertices}");
+        let rig = checks.iter().find(|c| c["name"] == "rig").unwrap();
+        let lowered = rig["detail"]
+            .as_str()
+            .unwrap()
+            .contains("instead of the 100 asked for");
+        assert!(
+            (90..=110).contains(&vertices) || lowered && file.contains("RiggedSimple"),
+            "{file}: {vertices}: {rig}"
+        );
     }
 }
 
