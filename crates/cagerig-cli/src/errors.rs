@@ -18,6 +18,12 @@ pub fn messages(error: &anyhow::Error) -> Vec<String> {
     out
 }
 
+/// A library warning on stderr, at its level: `note: …` for information (a harmless fact about
+/// the input, such as the Arm's weights rounded when written), `warning: …` for the rest.
+pub fn report_warning(w: &cagerig::Warning) {
+    eprintln!("{}: {w}", w.label());
+}
+
 /// Exit status and report of a command's result.
 pub fn exit(result: anyhow::Result<()>, json: bool) -> ExitCode {
     match result {

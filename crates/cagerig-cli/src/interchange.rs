@@ -157,7 +157,9 @@ pub fn load_interchange(
              --auto-cage to generate one",
             path.display()
         ),
-        Err(OpenCharacterError::Cage(e @ CageSourceError::Generate { .. })) => {
+        Err(OpenCharacterError::Cage(
+            e @ (CageSourceError::Generate { .. } | CageSourceError::Unusable { .. }),
+        )) => {
             return Err(e.into());
         }
     };

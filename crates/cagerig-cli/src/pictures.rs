@@ -69,6 +69,37 @@ pub struct PictureMaker {
     pub options: PictureOptions,
     /// What the next pictures show (the step, the sample time), drawn under each view's label.
     pub caption: Option<String>,
+    /// The cage vertices the next pictures mark (those an edit moved).
+    pub marked: MarkedHandles,
+}
+
+/// Cage vertices marked in the pictures: those a script moved in the rest cage C (marked in
+/// the rest view) and those it grabbed in the current cage C' (marked in the current view).
+#[derive(Debug, Clone, Default)]
+pub struct MarkedHandles {
+    pub rest: Vec<usize>,
+    pub current: Vec<usize>,
+}
+
+impl MarkedHandles {
+    /// The vertices moved by `steps`.
+    pub fn of_steps<'a>(steps: impl IntoIterator<Item = &'a cagerig::script::EditStep>) -> Self {
+        let mut marked = Self::default();
+        for step in steps {
+            match step {
+                cagerig::script::EditStep::MoveRestCage { vertices, .. } => {
+                    marked.rest.extend(vertices)
+                }
+                cagerig::script::EditStep::MovePosedCage { vertices, .. } => {
+                    marked.current.extend(vertices)
+                }
+                cagerig::script::EditStep::RotateJoint { .. }
+                | cagerig::script::EditStep::SetSkinning { .. }
+                | cagerig::script::EditStep::ResetPose {} => {}
+            }
+        }
+        marked
+    }
 }
 
 impl PictureMaker {
@@ -80,6 +111,7 @@ impl PictureMaker {
             data: RigSceneData::new(),
             options,
             caption: None,
+            marked: MarkedHandles::default(),
         })
     }
 
@@ -148,13 +180,43 @@ impl PictureMaker {
         };
         let text_scale = (h.saturating_add(150) / 300).clamp(1, 4);
         let legend = self.data.legend(session, self.options.color_by);
+        let margin = 6 * text_scale;
+        let legend_bar = 6 * text_scale;
+        // The legend's place at the top right, kept clear of the labels on the left.
+        let legend_width = legend.as_ref().map_or(0, |(map, title)| {
+            annotate::legend_width(*map, title, legend_bar, text_scale) + margin
+        });
         let mut views = Vec::with_capacity(2);
         for &pose in self.poses() {
+            self.data.marked_handles = match pose {
+                Pose::Rest => self.marked.rest.clone(),
+                Pose::Current => self.marked.current.clone(),
+            };
             let scene = self
                 .data
                 .scene(session, pose, self.options.layers, self.options.color_by);
             let mut image = self.renderer.render(&scene, &style, camera, w, h)?;
-            let margin = 6 * text_scale;
+            // The moved cage vertices, ringed (their handles alone are too small to find).
+            let cage = match pose {
+                Pose::Rest => session.rest_cage(),
+                Pose::Current => session.posed_cage(),
+            };
+            for &k in &self.data.marked_handles {
+                if let Some((x, y, _)) = cage
+                    .get(k)
+                    .and_then(|&p| camera.project(p, f64::from(w), f64::from(h), 1.0))
+                {
+                    let radius = 7.0 * f64::from(style.scale).max(1.0);
+                    annotate::draw_ring(
+                        &mut image,
+                        x,
+                        y,
+                        radius,
+                        radius / 3.0,
+                        cagerig_render::rig_scene::MARKED_HANDLE,
+                    );
+                }
+            }
             if self.options.labels {
                 let label = match pose {
                     Pose::Rest => "rest pose (M, C, S)",
@@ -169,31 +231,29 @@ impl PictureMaker {
                     [30, 32, 38, 255],
                 );
                 if let Some(caption) = &self.caption {
-                    annotate::draw_text(
-                        &mut image,
-                        margin,
-                        margin + 11 * text_scale,
-                        caption,
-                        text_scale,
-                        [70, 74, 84, 255],
-                    );
+                    // Wrapped within the view, clear of the legend.
+                    let width = w.saturating_sub(2 * margin + legend_width);
+                    for (k, line) in annotate::wrap_text(caption, width, text_scale)
+                        .iter()
+                        .enumerate()
+                    {
+                        annotate::draw_text(
+                            &mut image,
+                            margin,
+                            margin + (11 + 10 * k as u32) * text_scale,
+                            line,
+                            text_scale,
+                            [70, 74, 84, 255],
+                        );
+                    }
                 }
             }
             if let Some((map, title)) = &legend {
                 let bar_height = h / 3;
-                let x = w.saturating_sub(
-                    annotate::text_width(title, text_scale).max(70 * text_scale) + margin,
-                );
+                let x = w.saturating_sub(legend_width);
                 let y = margin;
                 annotate::draw_legend(
-                    &mut image,
-                    *map,
-                    x,
-                    y,
-                    6 * text_scale,
-                    bar_height,
-                    text_scale,
-                    title,
+                    &mut image, *map, x, y, legend_bar, bar_height, text_scale, title,
                 );
             }
             views.push(image);

@@ -120,10 +120,17 @@ pub const GENERATED_CAGE_FILE: &str = "generated_cage.obj";
 /// Says that the rig's cage was generated (on stderr, beside the other notes), where it will be
 /// written (`written_to`), and how it measures.
 pub fn report_generated_cage(rig: &str, g: &GeneratedCage, written_to: &Path) {
+    let lowered = g
+        .report
+        .checks
+        .iter()
+        .find(|c| c.name == cagerig::cage_source::RIG_CHECK && c.detail.contains("instead of"))
+        .map(|c| format!("; {}", c.detail))
+        .unwrap_or_default();
     eprintln!(
         "note: {rig} has no cage: generated one with {} vertices, {} triangles (validated: \
-         margin ≥ {:.2} % of the diagonal, least distance {:.3} %, mean {:.3} %) in {:.2} s; \
-         it is written to {}",
+         margin ≥ {:.2} % of the diagonal, least distance {:.3} %, mean {:.3} %) in {:.2} s{lowered}; \
+         it goes into the output with the results, as {}",
         g.report.cage_vertices,
         g.report.cage_faces,
         100.0 * cagerig::cage_gen::DEFAULT_MARGIN,

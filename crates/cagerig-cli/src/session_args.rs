@@ -150,7 +150,7 @@ pub fn start_session(
         bar.finish_and_clear();
     }
     // The session is where the cage is validated (once); its cage errors name the cage's file.
-    let (session, mut warnings) = bound.map_err(|e| {
+    let (session, warnings) = bound.map_err(|e| {
         if e.concerns_cage() {
             anyhow::anyhow!("{cage_name}: {e}")
         } else {
@@ -158,7 +158,7 @@ pub fn start_session(
         }
     })?;
     let mut all = loaded.warnings;
-    all.append(&mut warnings);
+    all.extend(warnings);
     Ok((session, all))
 }
 

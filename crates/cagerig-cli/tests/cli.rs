@@ -187,12 +187,17 @@ fn info_reports_counts_files_and_warnings_as_json() {
     assert_eq!(v["cage_triangles"], 112);
     let files = v["files"].as_array().unwrap();
     assert!(files.iter().any(|f| f["role"] == "maxvol"));
-    let warnings = v["warnings"].as_array().unwrap();
-    assert!(
-        warnings
+    // The Arm's weight rows, rounded when written (worst sum 0.99907), are renormalised: a note,
+    // not a warning.
+    let mentions = |key: &str| {
+        v[key]
+            .as_array()
+            .unwrap()
             .iter()
             .any(|w| w.as_str().unwrap().contains("renormalised"))
-    );
+    };
+    assert!(mentions("notes"));
+    assert!(!mentions("warnings"));
     let bad = cagerig()
         .args(["info", "/nonexistent/x.obj"])
         .output()

@@ -1,14 +1,24 @@
-//! Every `cagerig` command the README and `docs/*.md` show in a shell block runs as written.
+//! Every shell block of the README and `docs/*.md` runs as written.
 //!
-//! Each document's blocks are replayed in order in a fresh folder that links the repository's
-//! `data/` and `examples/` (so that the commands' `out/…` paths and the files one command
-//! writes for the next stay in that folder), with this build's `cagerig` first on `PATH`. The
-//! lines run are those starting with `cagerig ` and the `mkdir`/`cp` lines that prepare their
-//! inputs; `cagerig bench` (minutes at its larger sizes, timed by the benches), the editor,
-//! `cargo`, `python`, `pip` and Blender lines are left to their own tests (and, with
-//! `CAGERIG_SKIP_GPU_TESTS=1`, the pictures). Regressions: the command-line page showed
-//! `edit data/fox/Fox.glb --auto-weights` without a cage, which the command refuses, and the
-//! weights page's file outputs failed on a fresh clone without `out/`.
+//! Each page's ```sh blocks run in order, each as one `sh -e` script (so every line of a block
+//! must succeed), in a fresh folder per page that links the repository's top-level files and
+//! folders (`data/`, `examples/`, `crates/`, `tools/`, …) but not `out/` or `target/`, with this
+//! build's `cagerig` first on `PATH`. A block is left out only when the line before its fence
+//! says what it needs that a test machine does not give:
+//!
+//! - `<!-- needs: display -->`: a window (the editor);
+//! - `<!-- needs: blender -->`: Blender;
+//! - `<!-- needs: network -->`: downloads (`pip install`, and what the Python package it
+//!   installs runs; the Python suite runs the package's documented blocks itself);
+//! - `<!-- needs: build -->`: a build of the workspace (`cargo install`, `cargo run`,
+//!   `cargo test`, `cargo bench`: minutes each; CI builds, tests and benches the workspace
+//!   itself).
+//!
+//! Pages are replayed in separate folders, so a reader who follows them all in one clone is
+//! checked separately: a folder that one page writes with `--out` may not be written by another
+//! page (the commands refuse a non-empty output folder, so the second page would fail).
+//! With `CAGERIG_SKIP_GPU_TESTS=1` blocks that draw pictures are left out as well, as the other
+//! picture tests are.
 
 #![expect(clippy::unwrap_used)]
 
@@ -18,89 +28,157 @@
 )]
 mod support;
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::Instant;
 
 use support::{repo, temp_dir};
 
-/// One shell line of a document, with where it starts.
-struct DocumentedCommand {
+/// What a block needs that the test machine does not give.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Need {
+    Display,
+    Blender,
+    Network,
+    Build,
+}
+
+impl Need {
+    fn parse(text: &str) -> Option<Need> {
+        match text {
+            "display" => Some(Need::Display),
+            "blender" => Some(Need::Blender),
+            "network" => Some(Need::Network),
+            "build" => Some(Need::Build),
+            _ => None,
+        }
+    }
+}
+
+/// One ```sh block of a page.
+#[derive(Debug)]
+struct ShellBlock {
+    /// Line of the opening fence (1-based).
     line: usize,
+    /// The block's text.
     text: String,
+    /// The `<!-- needs: … -->` marker on the line before the fence, if any.
+    needs: Option<Need>,
 }
 
-/// The lines of `markdown`'s ```sh blocks that this test runs, continuation lines (`\`) joined
-/// and trailing `# comments` removed.
-fn documented_commands(markdown: &str) -> Vec<DocumentedCommand> {
-    let mut commands = Vec::new();
-    let mut in_shell_block = false;
-    let mut pending: Option<DocumentedCommand> = None;
+/// The ```sh blocks of `markdown`; an unknown `needs:` marker is an error naming its line.
+fn shell_blocks(markdown: &str) -> Result<Vec<ShellBlock>, String> {
+    let mut blocks = Vec::new();
+    let mut previous = "";
+    let mut open: Option<(ShellBlock, bool)> = None; // (block, is a shell block)
     for (index, line) in markdown.lines().enumerate() {
-        if let Some(language) = line.strip_prefix("```") {
-            in_shell_block = !in_shell_block && language.trim() == "sh";
-            pending = None;
-            continue;
-        }
-        if !in_shell_block {
-            continue;
-        }
-        let mut command = match pending.take() {
-            Some(mut command) => {
-                command.text.push(' ');
-                command.text.push_str(line.trim());
-                command
+        if let Some(language) = line.trim_start().strip_prefix("```") {
+            match open.take() {
+                Some((block, true)) => blocks.push(block),
+                Some((_, false)) => {}
+                None => {
+                    let marker = previous
+                        .trim()
+                        .strip_prefix("<!-- needs:")
+                        .and_then(|m| m.strip_suffix("-->"))
+                        .map(str::trim);
+                    let needs = match marker {
+                        Some(m) => Some(Need::parse(m).ok_or_else(|| {
+                            format!(
+                                "line {index}: unknown marker `needs: {m}` (expected display, \
+                                 blender, network or build)"
+                            )
+                        })?),
+                        None => None,
+                    };
+                    let shell = matches!(language.trim(), "sh" | "bash" | "shell");
+                    open = Some((
+                        ShellBlock {
+                            line: index + 1,
+                            text: String::new(),
+                            needs,
+                        },
+                        shell,
+                    ));
+                }
             }
-            None => DocumentedCommand {
-                line: index + 1,
-                text: line.trim().to_owned(),
-            },
-        };
-        if let Some(start) = command.text.strip_suffix('\\') {
-            command.text = start.trim_end().to_owned();
-            pending = Some(command);
+            previous = line;
             continue;
         }
-        if let Some(comment) = command.text.find(" #") {
-            command.text.truncate(comment);
+        if let Some((block, _)) = &mut open {
+            block.text.push_str(line);
+            block.text.push('\n');
         }
-        command.text = command.text.trim().to_owned();
-        if is_run_here(&command.text) {
-            commands.push(command);
-        }
+        previous = line;
     }
-    commands
+    Ok(blocks)
 }
 
-/// Whether this test runs the shell line `text`. Pictures need a graphics adapter:
-/// `CAGERIG_SKIP_GPU_TESTS=1` leaves `render` and `--render` out, as for the other picture tests.
-fn is_run_here(text: &str) -> bool {
-    let pictures = text
+/// Whether `block` draws pictures (a graphics adapter; `CAGERIG_SKIP_GPU_TESTS=1` skips it).
+fn draws_pictures(block: &str) -> bool {
+    block
         .split_whitespace()
-        .any(|w| w == "render" || w == "--render");
-    if pictures && std::env::var_os("CAGERIG_SKIP_GPU_TESTS").is_some() {
-        return false;
-    }
-    let mut words = text.split_whitespace();
-    match words.next() {
-        Some("cagerig") => words.next() != Some("bench"),
-        Some("mkdir" | "cp") => true,
-        _ => false,
-    }
+        .any(|w| w == "render" || w == "--render")
 }
 
-/// Replays `document`'s commands in a new folder; returns the failures, each naming the
-/// document's line, the command and its standard error.
-fn replay(document: &Path) -> Vec<String> {
+/// The output folders that `block`'s commands refuse to write into when they are not empty:
+/// `--out` paths with no extension, but for `demo` (which replaces its folder) and lines with
+/// `--force`.
+fn output_folders(block: &str) -> Vec<String> {
+    let joined = block.replace("\\\n", " ");
+    let mut folders = Vec::new();
+    for line in joined.lines() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.contains(&"demo") || words.contains(&"--force") {
+            continue;
+        }
+        folders.extend(
+            words
+                .windows(2)
+                .filter(|w| w[0] == "--out")
+                .map(|w| w[1].trim_end_matches('/').to_string())
+                .filter(|p| Path::new(p).extension().is_none()),
+        );
+    }
+    folders
+}
+
+/// The blocks of `document` this test runs.
+fn runnable(document: &Path) -> Vec<ShellBlock> {
     let markdown = std::fs::read_to_string(document).unwrap();
-    let commands = documented_commands(&markdown);
-    if commands.is_empty() {
-        return Vec::new();
+    let skip_pictures = std::env::var_os("CAGERIG_SKIP_GPU_TESTS").is_some();
+    shell_blocks(&markdown)
+        .unwrap_or_else(|e| panic!("{}: {e}", document.display()))
+        .into_iter()
+        .filter(|b| b.needs.is_none() && !(skip_pictures && draws_pictures(&b.text)))
+        .collect()
+}
+
+/// A fresh folder laid out like the repository's root, without `out/` and `target/`.
+fn fresh_folder(name: &str) -> PathBuf {
+    let dir = temp_dir(&format!("doc-{name}"));
+    for entry in std::fs::read_dir(repo()).unwrap() {
+        let entry = entry.unwrap();
+        let file_name = entry.file_name();
+        if matches!(file_name.to_str(), Some("out" | "target" | ".git")) {
+            continue;
+        }
+        std::os::unix::fs::symlink(entry.path(), dir.join(&file_name)).unwrap();
+    }
+    dir
+}
+
+/// Replays `document`'s blocks in a fresh folder; returns the failures, each naming the
+/// document's line, and the seconds taken.
+fn replay(document: &Path) -> (Vec<String>, f64) {
+    let started = Instant::now();
+    let blocks = runnable(document);
+    if blocks.is_empty() {
+        return (Vec::new(), 0.0);
     }
     let name = document.file_stem().unwrap().to_string_lossy().into_owned();
-    let dir = temp_dir(&format!("doc-{name}"));
-    for linked in ["data", "examples"] {
-        std::os::unix::fs::symlink(repo().join(linked), dir.join(linked)).unwrap();
-    }
+    let dir = fresh_folder(&name);
     let binary = PathBuf::from(env!("CARGO_BIN_EXE_cagerig"));
     let path = std::env::join_paths(
         std::iter::once(binary.parent().unwrap().to_path_buf()).chain(std::env::split_paths(
@@ -109,73 +187,111 @@ fn replay(document: &Path) -> Vec<String> {
     )
     .unwrap();
     let mut failures = Vec::new();
-    for command in &commands {
+    for block in &blocks {
         let output = Command::new("sh")
+            .arg("-e")
             .arg("-c")
-            .arg(&command.text)
+            .arg(&block.text)
             .current_dir(&dir)
             .env("PATH", &path)
             .output()
             .unwrap();
         if !output.status.success() {
             failures.push(format!(
-                "{}:{}: `{}` failed:\n{}",
+                "{}:{}: the block failed ({}):\n{}\n{}",
                 document.display(),
-                command.line,
-                command.text,
+                block.line,
+                output.status,
+                block.text,
                 String::from_utf8_lossy(&output.stderr)
             ));
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
-    failures
+    (failures, started.elapsed().as_secs_f64())
 }
 
-#[test]
-fn the_readme_and_docs_commands_run_as_written() {
+/// The README, then `docs/*.md` by name.
+fn documents() -> Vec<PathBuf> {
     let root = repo();
-    let mut documents = vec![root.join("README.md")];
     let mut pages: Vec<PathBuf> = std::fs::read_dir(root.join("docs"))
         .unwrap()
         .map(|entry| entry.unwrap().path())
         .filter(|path| path.extension().is_some_and(|e| e == "md"))
         .collect();
     pages.sort();
-    documents.extend(pages);
-    let runs: usize = documents
-        .iter()
-        .map(|d| documented_commands(&std::fs::read_to_string(d).unwrap()).len())
-        .sum();
-    assert!(runs >= 40, "only {runs} documented commands found");
-    // Two documents at a time (one per core of the smallest CI machine).
-    let failures: Vec<String> = std::thread::scope(|scope| {
-        let halves: Vec<_> = documents
-            .chunks(documents.len().div_ceil(2))
-            .map(|half| {
-                scope.spawn(move || half.iter().flat_map(|d| replay(d)).collect::<Vec<_>>())
-            })
-            .collect();
-        halves
-            .into_iter()
-            .flat_map(|half| half.join().unwrap())
-            .collect()
-    });
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    std::iter::once(root.join("README.md"))
+        .chain(pages)
+        .collect()
 }
 
 #[test]
-fn shell_blocks_are_read_with_their_continuations_and_without_comments() {
+fn the_readme_and_docs_shell_blocks_run_as_written() {
+    let documents = documents();
+    let runs: usize = documents.iter().map(|d| runnable(d).len()).sum();
+    assert!(runs >= 10, "only {runs} documented blocks found");
+    // Two pages at a time (one per core of the smallest CI machine).
+    let (tx, rx) = std::sync::mpsc::channel();
+    let queue = std::sync::Mutex::new(documents.clone());
+    std::thread::scope(|scope| {
+        for _ in 0..2 {
+            let tx = tx.clone();
+            let queue = &queue;
+            scope.spawn(move || {
+                while let Some(document) = queue.lock().unwrap().pop() {
+                    let (failures, seconds) = replay(&document);
+                    tx.send((document, failures, seconds)).unwrap();
+                }
+            });
+        }
+    });
+    drop(tx);
+    let mut failures = Vec::new();
+    for (document, mut page_failures, seconds) in rx {
+        eprintln!("{}: {seconds:.1} s", document.display());
+        failures.append(&mut page_failures);
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A reader who follows every page in one clone: no output folder is written by two pages.
+#[test]
+fn no_two_pages_write_the_same_output_folder() {
+    let mut writers: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    for document in documents() {
+        let markdown = std::fs::read_to_string(&document).unwrap();
+        let name = document.strip_prefix(repo()).unwrap().display().to_string();
+        for block in shell_blocks(&markdown).unwrap() {
+            for folder in output_folders(&block.text) {
+                let pages = writers.entry(folder).or_default();
+                if !pages.contains(&name) {
+                    pages.push(name.clone());
+                }
+            }
+        }
+    }
+    let collisions: Vec<String> = writers
+        .iter()
+        .filter(|(_, pages)| pages.len() > 1)
+        .map(|(folder, pages)| format!("{folder}: written by {}", pages.join(" and ")))
+        .collect();
+    assert!(collisions.is_empty(), "{}", collisions.join("\n"));
+}
+
+#[test]
+fn blocks_are_read_with_their_markers() {
     let markdown = "text\n```sh\nmkdir -p out   # a folder\ncagerig animate a.obj \\\n    \
-                    --times 1 --out out/x   # samples\ncagerig bench a.obj\ncargo test\n```\n\
-                    ```json\ncagerig info not-a-shell-block\n```\n";
-    let commands = documented_commands(markdown);
-    let texts: Vec<&str> = commands.iter().map(|c| c.text.as_str()).collect();
-    assert_eq!(
-        texts,
-        [
-            "mkdir -p out",
-            "cagerig animate a.obj --times 1 --out out/x"
-        ]
+                    --times 1 --out out/x\n```\n<!-- needs: display -->\n```sh\n\
+                    cagerig-studio\n```\n```json\n{}\n```\n";
+    let blocks = shell_blocks(markdown).unwrap();
+    assert_eq!(blocks.len(), 2);
+    assert_eq!(blocks[0].line, 2);
+    assert_eq!(blocks[0].needs, None);
+    assert_eq!(output_folders(&blocks[0].text), ["out/x"]);
+    assert!(
+        output_folders("cagerig demo --out out/d\ncagerig edit a --force --out out/e").is_empty()
     );
-    assert_eq!(commands[1].line, 4);
+    assert_eq!(blocks[1].needs, Some(Need::Display));
+    let err = shell_blocks("<!-- needs: coffee -->\n```sh\nls\n```\n").unwrap_err();
+    assert!(err.contains("coffee"), "{err}");
 }

@@ -87,6 +87,8 @@ pub enum OpenError {
         path = path.display()
     )]
     NoCage { path: PathBuf },
+    #[error("{path}: no cage in the file, and no usable cage could be generated: {reason}", path = path.display())]
+    UnusableCage { path: PathBuf, reason: String },
     #[error("{path}: no cage in the file, and none could be generated: {source}", path = path.display())]
     Generate {
         path: PathBuf,
@@ -111,6 +113,10 @@ impl From<CageSourceError> for OpenError {
                 source,
             },
             CageSourceError::Missing { character } => OpenError::NoCage { path: character },
+            CageSourceError::Unusable { character, reason } => OpenError::UnusableCage {
+                path: character,
+                reason,
+            },
         }
     }
 }
@@ -161,7 +167,10 @@ pub fn open_rig_with_progress(
             skin,
             auto_cage,
         } if cagerig_formats::CharacterFormat::of(path).is_some() => {
-            match import_interchange(path, cage.as_deref(), skin.as_deref(), *auto_cage) {
+            // A character with no cage opens with a generated one, said so in the log, as a
+            // mesh with no skeleton does.
+            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
+            match import_interchange(path, cage.as_deref(), skin.as_deref(), Some(vertices)) {
                 Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
                     rigged = false;
                     let (parts, warnings, files) = crate::unrigged::open_unskinned_character(
@@ -191,10 +200,9 @@ pub fn open_rig_with_progress(
             auto_cage,
             ..
         } => {
-            let missing = match auto_cage {
-                Some(n) => MissingCage::Generate(cage_options_with_vertices(*n)),
-                None => MissingCage::Fail,
-            };
+            // As for a character: a rig with no cage opens with a generated one.
+            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
+            let missing = MissingCage::Generate(cage_options_with_vertices(vertices));
             let rig =
                 cagerig::rig_files::load_rig_files_or_generate(path, cage.as_deref(), missing)?;
             let mut warnings = rig.warnings;
@@ -251,7 +259,7 @@ type Imported = (
 /// The log line of a generated cage: the library's note and where File ▸ Export writes it.
 pub(crate) fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
     match cagerig::cage_source::generated_cage_note(g) {
-        Warning::Note { message } => Warning::Note {
+        Warning::Info { message } => Warning::Info {
             message: format!("{message}; File > Export writes it as cage_rest.obj"),
         },
         other => other,
@@ -371,13 +379,22 @@ mod tests {
         for (a, b) in session.posed_mesh().iter().zip(&expected) {
             assert!(a.distance(*b) < 1e-9 * diagonal, "{a} vs {b}");
         }
-        // Without a cage (none in the file) the message says how to give one.
-        let err = match open_rig(&RigSource::file(format!("{fox}/Fox.glb"))) {
-            Err(e) => e.to_string(),
-            Ok(_) => panic!("opened the Fox without a cage"),
-        };
-        assert!(err.contains("Fox.glb") && err.contains("--cage"), "{err}");
-        // Or with a generated one.
+        // Without a cage (none in the file) it opens with a generated one of the default size,
+        // and says so (it was refused: the studio exited, or fell back to the snake).
+        let opened = open_rig(&RigSource::file(format!("{fox}/Fox.glb"))).unwrap();
+        let n = opened.session.rest_cage().len();
+        assert!((90..=110).contains(&n), "{n} cage vertices");
+        let note = opened
+            .warnings
+            .iter()
+            .find(|w| w.to_string().contains("generated one"))
+            .unwrap();
+        assert_eq!(note.severity(), cagerig::Severity::Note);
+        assert!(
+            note.to_string().contains("File > Export writes it"),
+            "{note}"
+        );
+        // Or with a generated one of the size asked for.
         let opened = open_rig(&RigSource::File {
             path: format!("{fox}/Fox.glb").into(),
             cage: None,
@@ -392,6 +409,28 @@ mod tests {
                 .warnings
                 .iter()
                 .any(|w| w.to_string().contains("generated"))
+        );
+    }
+
+    /// A skinned character with no cage (CesiumMan) opens with a generated cage, as a mesh with
+    /// no skeleton does.
+    #[test]
+    fn a_skinned_file_with_no_cage_opens_with_a_generated_one() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../data/gltf/CesiumMan/CesiumMan.glb"
+        );
+        let opened = open_rig(&RigSource::file(path)).unwrap();
+        assert!(opened.rigged);
+        assert!(opened.session.skeleton().len() > 10);
+        assert!(!opened.animations.is_empty());
+        assert!(
+            opened
+                .warnings
+                .iter()
+                .any(|w| w.to_string().contains("no cage was found: generated one")),
+            "{:?}",
+            opened.warnings
         );
     }
 

@@ -46,7 +46,17 @@ fn every_truncation_of_the_fox_is_an_error_not_a_panic() {
     {
         let e = err_of(&bytes[..k], path);
         assert!(e.contains("truncated/Fox.glb"), "{k}: {e}");
+        // Past the magic, the message says the file is cut short and how long it should be.
+        if k >= 4 {
+            assert!(e.contains("the file looks truncated"), "{k}: {e}");
+            assert!(e.contains(&format!("found {k}")), "{k}: {e}");
+        }
     }
+    let e = err_of(&bytes[..n / 2], path);
+    assert!(
+        e.contains(&format!("its GLB header says {n} bytes, found {}", n / 2)),
+        "{e}"
+    );
 }
 
 #[test]

@@ -61,9 +61,9 @@ pub fn load_character(
         .map_err(|e| match e {
             OpenCharacterError::Import(e) => format_error(e),
             OpenCharacterError::Cage(CageSourceError::Read(e)) => file_error(e),
-            OpenCharacterError::Cage(e @ CageSourceError::Generate { .. }) => {
-                RigError::new_err(e.to_string())
-            }
+            OpenCharacterError::Cage(
+                e @ (CageSourceError::Generate { .. } | CageSourceError::Unusable { .. }),
+            ) => RigError::new_err(e.to_string()),
             OpenCharacterError::Cage(CageSourceError::Missing { .. }) => {
                 crate::errors::RigFileError::new_err(format!(
                     "{}: no cage: pass cage=CAGE.obj, or auto_cage=N to generate one with N \

@@ -54,6 +54,25 @@ pub fn draw_text(image: &mut RgbaImage, x: u32, y: u32, text: &str, scale: u32, 
     }
 }
 
+/// A ring of outer radius `radius` and width `width` pixels centred on `(cx, cy)` in `color`,
+/// over a dark outline one pixel wider on each side (it reads on light and dark backgrounds):
+/// the mark of a cage vertex an edit moved. Clipped to the image.
+pub fn draw_ring(image: &mut RgbaImage, cx: f64, cy: f64, radius: f64, width: f64, color: [u8; 4]) {
+    let outline = [40, 10, 40, 255];
+    let reach = (radius + 2.0).ceil() as i64;
+    let (x0, y0) = (cx.floor() as i64, cy.floor() as i64);
+    for y in y0 - reach..=y0 + reach {
+        for x in x0 - reach..=x0 + reach {
+            let d = ((x as f64 + 0.5 - cx).powi(2) + (y as f64 + 0.5 - cy).powi(2)).sqrt();
+            if d <= radius && d >= radius - width {
+                image.fill_rect(x, y, 1, 1, color);
+            } else if d <= radius + 1.0 && d >= radius - width - 1.0 {
+                image.fill_rect(x, y, 1, 1, outline);
+            }
+        }
+    }
+}
+
 /// A vertical colour bar `width × height` at `(x, y)` from `lo` (bottom) to `hi` (top), with
 /// the end values (and 0 for a diverging map) written to its right, and `title` above it.
 #[expect(clippy::too_many_arguments)]
@@ -73,7 +92,7 @@ pub fn draw_legend(
     };
     let ink = [30, 32, 38, 255];
     draw_text(image, x, y, title, scale, ink);
-    let top = y + (GLYPH + 4) * scale;
+    let top = legend_bar_top(y, scale);
     image.fill_rect(x as i64 - 1, top as i64 - 1, width + 2, height + 2, ink);
     for row in 0..height {
         let t = 1.0 - row as f64 / (height.max(2) - 1) as f64;
@@ -108,6 +127,46 @@ pub fn draw_legend(
             ink,
         );
     }
+}
+
+/// Where a legend's colour bar starts below its title at `y`: far enough that the top value,
+/// written centred on the bar's top edge, clears the title and its halo.
+pub fn legend_bar_top(y: u32, scale: u32) -> u32 {
+    y + (GLYPH + 4) * scale + GLYPH * scale / 2
+}
+
+/// Width in pixels of a legend drawn by [`draw_legend`] for `map` with a bar `width` wide:
+/// the title or the bar and its widest value label, whichever is wider.
+pub fn legend_width(map: ColorMap, title: &str, width: u32, scale: u32) -> u32 {
+    let (lo, hi) = match map {
+        ColorMap::Sequential { lo, hi } => (lo, hi),
+        ColorMap::Diverging { limit } => (-limit, limit),
+    };
+    let labels = text_width(&format_value(lo), scale).max(text_width(&format_value(hi), scale));
+    text_width(title, scale).max(width + 3 * scale + labels)
+}
+
+/// `text` split at spaces into lines at most `max_width` pixels wide at `scale` (a word longer
+/// than a line gets a line of its own, clipped when drawn).
+pub fn wrap_text(text: &str, max_width: u32, scale: u32) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        let candidate = if line.is_empty() {
+            word.to_string()
+        } else {
+            format!("{line} {word}")
+        };
+        if !line.is_empty() && text_width(&candidate, scale) > max_width {
+            lines.push(std::mem::replace(&mut line, word.to_string()));
+        } else {
+            line = candidate;
+        }
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
 }
 
 /// A short label for a legend value: up to 3 significant digits.
@@ -153,9 +212,52 @@ mod tests {
         let mut image = blank(120, 140);
         let map = ColorMap::Sequential { lo: 0.0, hi: 1.0 };
         draw_legend(&mut image, map, 10, 10, 12, 100, 1, "w");
-        let top = 10 + 12;
+        let top = legend_bar_top(10, 1);
         assert_eq!(image.pixel(15, top), map.color_u8(1.0));
         assert_eq!(image.pixel(15, top + 99), map.color_u8(0.0));
+    }
+
+    #[test]
+    fn the_legend_top_value_clears_the_title() {
+        // A diverging Φ legend as `render --color-by cage-vertex:K` draws it, at scale 2.
+        let (scale, y) = (2, 10);
+        let mut image = blank(240, 300);
+        let map = ColorMap::Diverging { limit: 0.013 };
+        draw_legend(&mut image, map, 20, y, 12, 200, scale, "Φ cage vertex 20");
+        let top = legend_bar_top(y, scale);
+        // The title's glyphs and halo end at y + (8 + 1)·scale; the value label "0.013"
+        // (centred on the bar's top edge, with its halo) starts below that.
+        let title_bottom = y + (GLYPH + 1) * scale;
+        let label_top = top - GLYPH * scale / 2 - scale;
+        assert!(label_top >= title_bottom, "{label_top} < {title_bottom}");
+        // Nothing is drawn in the blank row between them, right of the bar.
+        let label_x = 20 + 12 + 3 * scale;
+        let row_has_ink = |row: u32| {
+            (label_x..label_x + text_width("0.013", scale)).any(|x| image.pixel(x, row)[0] < 200)
+        };
+        assert!(!(title_bottom..label_top).any(row_has_ink));
+        assert!(legend_width(map, "Φ", 12, scale) >= 12 + 3 * scale + text_width("-0.013", scale));
+    }
+
+    #[test]
+    fn a_ring_marks_its_circle_and_leaves_its_centre() {
+        let mut image = blank(40, 40);
+        draw_ring(&mut image, 20.0, 20.0, 8.0, 3.0, [200, 20, 160, 255]);
+        assert_eq!(image.pixel(20, 13), [200, 20, 160, 255]);
+        assert_eq!(image.pixel(20, 20), [255, 255, 255, 255]);
+        assert_eq!(image.pixel(2, 2), [255, 255, 255, 255]);
+        // Past the edges: clipped, no panic.
+        draw_ring(&mut image, 39.0, 0.0, 8.0, 3.0, [200, 20, 160, 255]);
+    }
+
+    #[test]
+    fn captions_wrap_at_spaces_within_the_width() {
+        let text = "move rest-cage vertices 0, 2, 4, 5, 6 by [0.2, -0.1, 0.15]";
+        let lines = wrap_text(text, 160, 1);
+        assert!(lines.len() > 1, "{lines:?}");
+        assert!(lines.iter().all(|l| text_width(l, 1) <= 160), "{lines:?}");
+        assert_eq!(lines.join(" "), text);
+        assert_eq!(wrap_text("", 100, 1), Vec::<String>::new());
     }
 
     #[test]

@@ -74,6 +74,8 @@ pub struct RigSceneData {
     joints: Vec<DVec3>,
     parents: Vec<Option<usize>>,
     scalars: Vec<f64>,
+    /// Cage vertices drawn as marked (e.g. those an edit moved), over any handle colour map.
+    pub marked_handles: Vec<usize>,
 }
 
 /// Why a colour map cannot be shown.
@@ -186,6 +188,10 @@ const PHI_MAP_QUANTILE: f64 = 0.9;
 
 /// Colour of the cage handle whose Φ column is shown.
 const CHOSEN_HANDLE: [u8; 4] = [25, 30, 60, 255];
+
+/// The colour of marked cage handles ([`RigSceneData::marked_handles`]): magenta, apart from
+/// the usual orange handles and the reach map's red.
+pub const MARKED_HANDLE: [u8; 4] = [200, 20, 160, 255];
 
 impl RigSceneData {
     /// Empty scratch data.
@@ -313,6 +319,17 @@ impl RigSceneData {
                 }));
             }
             (true, ColorBy::None | ColorBy::JointWeights(_)) | (false, _) => {}
+        }
+        if !self.marked_handles.is_empty() {
+            if self.handle_colors.is_empty() {
+                let usual = crate::scene::Style::default().cage_handles;
+                self.handle_colors.resize(cage.len(), usual);
+            }
+            for &k in &self.marked_handles {
+                if let Some(c) = self.handle_colors.get_mut(k) {
+                    *c = MARKED_HANDLE;
+                }
+            }
         }
         Scene {
             mesh: layers.mesh.then_some(MeshLayer {

@@ -23,10 +23,12 @@ struct Args {
     /// glTF/FBX: the skin to import, by name or index (default: the first), as `cagerig --skin`.
     #[arg(long, requires = "path")]
     skin: Option<String>,
-    /// When the character has no cage, generate one (as `cagerig cage`).
+    /// When the character has no cage, generate one (as `cagerig cage`). A character with no
+    /// cage opens with a generated one anyway, and the log says so; this flag goes with
+    /// --cage-vertices.
     #[arg(long, requires = "path")]
     auto_cage: bool,
-    /// Vertex count of a generated cage.
+    /// Vertex count of a generated cage (lowered on a small mesh to what the rig can use).
     #[arg(long, default_value_t = 100, requires = "auto_cage")]
     cage_vertices: usize,
     /// A built-in demo rig instead of a file (bar, bar_irregular, snake).
@@ -77,8 +79,9 @@ struct Args {
 }
 
 const AFTER_HELP: &str = "\
-Without a display (a server, CI), run it under a virtual one:
-  xvfb-run -a cagerig-studio --script edits.json --screenshot out.png
+Without a display (a server, CI), run it under a virtual one with a screen larger than the
+window (--size, default 1600x900; xvfb-run's own screen is 1280x1024):
+  xvfb-run -a -s \"-screen 0 1920x1080x24\" cagerig-studio --script edits.json --screenshot out.png
 For pictures without any window, use `cagerig render` or `cagerig demo`.
 Shortcuts: Help ▸ Shortcuts in the editor.";
 
@@ -185,17 +188,32 @@ fn run(args: Args) -> anyhow::Result<()> {
              mesa-vulkan-drivers; without a display, run under xvfb-run -a)"
         )
     })?;
-    let failures = failures.lock().map(|f| f.clone()).unwrap_or_default();
-    if !failures.is_empty() {
-        bail!("{}", failures.join("\n"));
+    let failures = failures.lock().map(|f| f.len()).unwrap_or_default();
+    if failures > 0 {
+        // Each was written to stderr when it was logged.
+        return Err(ErrorsPrinted(failures).into());
     }
     Ok(())
 }
+
+/// The run logged errors, each already written to stderr: the exit status says so, and the
+/// messages are not printed a second time.
+#[derive(Debug)]
+struct ErrorsPrinted(usize);
+
+impl std::fmt::Display for ErrorsPrinted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} error(s), printed above", self.0)
+    }
+}
+
+impl std::error::Error for ErrorsPrinted {}
 
 fn main() -> ExitCode {
     let args = Args::parse();
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<ErrorsPrinted>() => ExitCode::from(2),
         Err(e) => {
             eprintln!("cagerig-studio: {e:#}");
             ExitCode::from(2)

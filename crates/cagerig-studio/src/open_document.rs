@@ -199,7 +199,10 @@ impl StudioApp {
             started.elapsed().as_secs_f64() * 1e3
         ));
         for w in &opened.warnings {
-            log.warning(w.to_string());
+            match w.severity() {
+                cagerig::Severity::Note => log.info(w.to_string()),
+                cagerig::Severity::Warning => log.warning(w.to_string()),
+            }
         }
         if !opened.animations.is_empty() {
             log.info(format!(

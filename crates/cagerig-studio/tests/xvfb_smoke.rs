@@ -202,6 +202,8 @@ fn a_failing_script_fails_the_run_with_the_step_named() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("bad.json") && err.contains("step 1"), "{err}");
+    // The error is printed once (it was printed when logged, then again at the exit).
+    assert_eq!(err.matches("step 1").count(), 1, "{err}");
     std::fs::remove_dir_all(dir).ok();
 }
 

@@ -139,7 +139,7 @@ pub fn validate_cage_for_mesh(
         }
         warnings.push(Warning::Note {
             message: format!(
-                "{} of {} mesh vertices are outside the cage (farthest: vertex {}, {:.3e} from \\
+                "{} of {} mesh vertices are outside the cage (farthest: vertex {}, {:.3e} from \
                  it); accepted as asked, mean value coordinates extrapolate there",
                 out.count,
                 mesh_positions.len(),

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use crate::cage_gen::{
-    CageGenError, CageOptions, CageRig, CageTarget, GeneratedCage, generate_rig_cage,
+    CageGenError, CageOptions, CageRig, CageTarget, Check, GeneratedCage, generate_rig_cage,
 };
 use crate::error::Warning;
 use crate::io::ParseError;
@@ -61,6 +61,14 @@ pub enum CageSourceError {
         /// Why generation failed.
         source: CageGenError,
     },
+    /// A cage was generated, but the rig could not use one at any size tried.
+    #[error("{}: no usable cage could be generated: {reason}", character.display())]
+    Unusable {
+        /// The character file.
+        character: PathBuf,
+        /// What is wrong with the mesh, and what to do (the rig check's detail).
+        reason: String,
+    },
     /// No cage was given or found, and none was to be generated.
     #[error("{}: no cage was given or found with the character", character.display())]
     Missing {
@@ -106,14 +114,9 @@ pub fn choose_cage(
         });
     }
     match &request.generate {
-        Some(options) => {
-            let options = fit_cage_to_rig(options, mesh);
-            let generated = generate_rig_cage(mesh, &options, rig).map_err(|source| {
-                CageSourceError::Generate {
-                    character: character.to_path_buf(),
-                    source,
-                }
-            })?;
+        Some(asked) => {
+            let generated =
+                generate_usable_cage(character, mesh, rig, asked, RigCheckDepth::WhenInDoubt)?;
             Ok(ChosenCage {
                 cage: generated.cage.clone(),
                 origin: CageOrigin::Generated(Box::new(generated)),
@@ -125,13 +128,58 @@ pub fn choose_cage(
     }
 }
 
+/// A cage for `mesh` (from `character`, for messages) that a rig can use: generated with the
+/// target `asked` lowered to what the mesh allows ([`fit_cage_to_rig`]), then checked as the rig
+/// will use it ([`rig_check`], added to the report); a cage the rig could not use is made again
+/// with about half as many vertices, down to [`crate::cage_gen::MIN_VERTICES`]. Fails with what
+/// is wrong with the mesh and what to do when no size works.
+pub fn generate_usable_cage(
+    character: &Path,
+    mesh: &TriMesh,
+    rig: Option<CageRig<'_>>,
+    asked: &CageOptions,
+    depth: RigCheckDepth,
+) -> Result<GeneratedCage, CageSourceError> {
+    let mut options = fit_cage_to_rig(asked, mesh);
+    loop {
+        let mut generated =
+            generate_rig_cage(mesh, &options, rig).map_err(|source| CageSourceError::Generate {
+                character: character.to_path_buf(),
+                source,
+            })?;
+        let mut check = rig_check(&generated.cage, mesh, depth);
+        let nc = generated.cage.num_vertices();
+        if check.passed {
+            if options.target.vertices() < asked.target.vertices() {
+                check.detail = format!(
+                    "{nc} vertices instead of the {} asked for, as the rig needs on this mesh: {}",
+                    asked.target.vertices(),
+                    check.detail
+                );
+            }
+            generated.report.checks.push(check);
+            return Ok(generated);
+        }
+        // Fewer cage vertices need fewer independent rows: try about half as many.
+        let fewer = (nc / 2).max(crate::cage_gen::MIN_VERTICES);
+        if nc <= crate::cage_gen::MIN_VERTICES || fewer >= options.target.vertices() {
+            return Err(CageSourceError::Unusable {
+                character: character.to_path_buf(),
+                reason: check.detail,
+            });
+        }
+        options.target = CageTarget::Vertices(fewer);
+    }
+}
+
 /// `options` with the target lowered to what a rig on `mesh` can use: CageUp and CageRev fit
-/// the cage on #C MaxVol rows of the mesh, so the cage needs fewer vertices than the mesh; a
-/// target above half the mesh's vertex count (at least [`crate::cage_gen::MIN_VERTICES`]) is
-/// lowered to it. So `--auto-cage` on a 24-vertex mesh gets a 12-vertex cage, where the default
-/// 100 could not be fitted.
+/// the cage on #C MaxVol rows of the mesh, so the cage needs fewer vertices than the mesh has
+/// distinct positions; a target above half of them (at least [`crate::cage_gen::MIN_VERTICES`])
+/// is lowered to it. So `--auto-cage` on a 24-vertex prism gets a 12-vertex cage, and on a cube
+/// whose 24 vertices sit at its 8 corners an 8-vertex one, where the default 100 could not be
+/// fitted. The note of the generated cage says so ([`generated_cage_note`]).
 pub fn fit_cage_to_rig(options: &CageOptions, mesh: &TriMesh) -> CageOptions {
-    let limit = (mesh.num_vertices() / 2).max(crate::cage_gen::MIN_VERTICES);
+    let limit = (distinct_positions(mesh) / 2).max(crate::cage_gen::MIN_VERTICES);
     if options.target.vertices() <= limit {
         return *options;
     }
@@ -149,15 +197,120 @@ pub fn cage_options_with_vertices(vertices: usize) -> CageOptions {
     }
 }
 
-/// The note that tells the user a cage was generated, with its size and least distance to M.
+/// The note that tells the user a cage was generated, with its size and least distance to M,
+/// and why it has fewer vertices than asked for when the rig needed that.
 pub fn generated_cage_note(generated: &GeneratedCage) -> Warning {
-    Warning::Note {
+    let lowered = generated
+        .report
+        .checks
+        .iter()
+        .find(|c| c.name == RIG_CHECK && c.detail.contains("instead of"))
+        .map(|c| format!("; {}", c.detail))
+        .unwrap_or_default();
+    Warning::Info {
         message: format!(
             "no cage was found: generated one with {} vertices (least distance to the mesh {:.2} % \
-             of its diagonal)",
+             of its diagonal){lowered}",
             generated.cage.num_vertices(),
             100.0 * generated.report.min_distance_fraction
         ),
+    }
+}
+
+/// Name of the validator's check of what a rig needs of a cage ([`rig_check`]).
+pub const RIG_CHECK: &str = "rig";
+
+/// How much [`rig_check`] computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RigCheckDepth {
+    /// Always compute Φ and its MaxVol rows, as the rig will (`cagerig cage`).
+    Always,
+    /// Only when the mesh is flat or has fewer than [`ROWS_BEYOND_DOUBT`] distinct positions per
+    /// cage vertex (a generated cage, before the rig computes Φ itself).
+    WhenInDoubt,
+}
+
+/// Distinct mesh positions per cage vertex above which a mesh that is not flat is taken to
+/// give Φ its #C independent rows without computing them ([`RigCheckDepth::WhenInDoubt`]).
+pub const ROWS_BEYOND_DOUBT: usize = 20;
+
+/// A mesh is flat when its thinnest bounding-box side is below this fraction of its diagonal.
+const FLAT_FRACTION: f64 = 1e-6;
+
+/// Vertices of `mesh` at distinct positions (vertices split for shading share one).
+pub fn distinct_positions(mesh: &TriMesh) -> usize {
+    mesh.positions
+        .iter()
+        .map(|p| p.to_array().map(f64::to_bits))
+        .collect::<std::collections::HashSet<_>>()
+        .len()
+}
+
+/// The validator's check of what a rig needs of `cage` on `mesh` (named [`RIG_CHECK`]):
+/// CageUp and CageRev solve for the #C cage vertices on #C MaxVol rows of Φ, so the mesh needs
+/// at least #C distinct positions whose mean value coordinates are independent. A failed
+/// check's detail says, in a modeller's words, what is wrong with the mesh and what to do.
+pub fn rig_check(cage: &TriMesh, mesh: &TriMesh, depth: RigCheckDepth) -> Check {
+    let nc = cage.num_vertices();
+    let (nv, distinct) = (mesh.num_vertices(), distinct_positions(mesh));
+    let (lo, hi) = mesh.bounding_box();
+    let thinnest = (hi - lo).min_element() / (hi - lo).length().max(f64::MIN_POSITIVE);
+    let flat = thinnest < FLAT_FRACTION;
+    let fewer_cage_vertices = format!(
+        "ask for fewer cage vertices (at most {}), or give the mesh more vertices \
+         (`cagerig subdivide`)",
+        (distinct / 2).max(crate::cage_gen::MIN_VERTICES)
+    );
+    let fail = |detail: String| Check {
+        name: RIG_CHECK,
+        passed: false,
+        detail,
+    };
+    if distinct < nc {
+        let split = if distinct < nv {
+            format!(
+                "only {distinct} distinct vertex positions ({nv} vertices, several at each \
+                 position, as a mesh split for flat shading has)"
+            )
+        } else {
+            format!("only {nv} vertices")
+        };
+        return fail(format!(
+            "the rig fits the cage's {nc} vertices to as many mesh vertices, but the mesh has \
+             {split}: {fewer_cage_vertices}"
+        ));
+    }
+    let flat_text = "the mesh is flat (it lies in a plane, with no thickness): a cage's mean \
+                     value coordinates cannot tell its vertices apart enough to fit the cage to \
+                     them; give the mesh some thickness (e.g. Blender's Solidify modifier) or \
+                     rig it with a cage made for it";
+    let ok = |detail: String| Check {
+        name: RIG_CHECK,
+        passed: true,
+        detail,
+    };
+    if depth == RigCheckDepth::WhenInDoubt && !flat && distinct >= ROWS_BEYOND_DOUBT * nc {
+        return ok(format!(
+            "{distinct} distinct mesh positions for {nc} cage vertices"
+        ));
+    }
+    let singular = match crate::coords::mvc::compute_cage_coords(cage, &mesh.positions, None) {
+        Err(e) => Some(format!(
+            "its mean value coordinates could not be computed ({e})"
+        )),
+        Ok(phi) => crate::coords::maxvol::select_maxvol_rows(&phi)
+            .err()
+            .map(|_| format!("no {nc} of its vertices have independent mean value coordinates")),
+    };
+    match singular {
+        None => ok(format!(
+            "{nc} independent MaxVol rows among {distinct} distinct mesh positions"
+        )),
+        Some(_) if flat => fail(flat_text.to_string()),
+        Some(why) => fail(format!(
+            "the rig fits the cage's {nc} vertices to {nc} mesh vertices, but {why}: the mesh \
+             is too simple for this cage; {fewer_cage_vertices}"
+        )),
     }
 }
 

@@ -254,8 +254,9 @@ pub enum RigError {
     /// Vertices of the rest mesh M lie outside the rest cage C.
     #[error(
         "{count} of {total} mesh vertices are outside the cage (farthest: vertex {worst_vertex}, \
-         {worst_distance:.3e} from the cage surface); expected the cage to enclose the mesh \
-         (accept it explicitly to let mean value coordinates extrapolate)"
+         {worst_distance:.3e} from the cage surface); expected the cage to enclose the mesh: \
+         enlarge the cage, or accept it as it is with `--allow-outside-cage` (mean value \
+         coordinates then extrapolate outside)"
     )]
     MeshOutsideCage {
         /// Number of mesh vertices outside the cage.
@@ -407,6 +408,56 @@ pub enum Warning {
         /// The message shown to the user.
         message: String,
     },
+    /// A known, harmless fact about the input (e.g. coordinates given for another kind of
+    /// binding and recomputed): shown as a note, never as a warning.
+    Info {
+        /// The message shown to the user.
+        message: String,
+    },
+}
+
+/// How loudly a [`Warning`] is shown: [`Warning::severity`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Severity {
+    /// Information: the input was accepted as it is meant (front ends print `note:`).
+    Note,
+    /// Something changed or suspicious that the user should look at (`warning:`).
+    Warning,
+}
+
+/// Weight rows whose sum is off 1 by at most this much were only rounded when written (the
+/// paper's Arm: 0.99907): their renormalisation is a [`Severity::Note`].
+pub const WEIGHT_ROUNDING_TOLERANCE: f64 = 1e-2;
+
+impl Warning {
+    /// Whether this is information ([`Severity::Note`]) or something to look at
+    /// ([`Severity::Warning`]).
+    pub fn severity(&self) -> Severity {
+        match self {
+            Warning::WeightsRenormalised { worst_sum, .. } => {
+                if (worst_sum - 1.0).abs() <= WEIGHT_ROUNDING_TOLERANCE {
+                    Severity::Note
+                } else {
+                    Severity::Warning
+                }
+            }
+            Warning::ZeroWeightEntries { .. } | Warning::Info { .. } => Severity::Note,
+            Warning::UnweightedVertices { .. }
+            | Warning::DuplicateWeightEntries { .. }
+            | Warning::CageOrientationFlipped { .. }
+            | Warning::MecFallback { .. }
+            | Warning::Note { .. } => Severity::Warning,
+        }
+    }
+
+    /// `"note"` or `"warning"`: the word front ends print before the message.
+    pub fn label(&self) -> &'static str {
+        match self.severity() {
+            Severity::Note => "note",
+            Severity::Warning => "warning",
+        }
+    }
 }
 
 impl std::fmt::Display for Warning {
@@ -441,7 +492,7 @@ impl std::fmt::Display for Warning {
                 f,
                 "joint {joint} ({name}): max-entropy projection fell back to least squares: {reason}"
             ),
-            Warning::Note { message } => f.write_str(message),
+            Warning::Note { message } | Warning::Info { message } => f.write_str(message),
         }
     }
 }

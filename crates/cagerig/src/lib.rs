@@ -47,7 +47,7 @@ pub mod weights_source;
 
 pub use cage_coords::CageCoords;
 pub use coords_kind::CoordsKind;
-pub use error::{RigError, UnfittedCage, Warning};
+pub use error::{RigError, Severity, UnfittedCage, Warning};
 pub use mesh::TriMesh;
 pub use named_kind::NamedKind;
 pub use skeleton::{Joint, Skeleton};

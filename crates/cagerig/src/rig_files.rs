@@ -146,6 +146,12 @@ pub fn load_rig_files_with_weights(
                 "no cage found beside the mesh, and none could be generated: {source}"
             )),
         },
+        CageSourceError::Unusable { reason, .. } => ParseError::Rig {
+            path: mesh.to_path_buf(),
+            source: crate::error::RigError::Invalid(format!(
+                "no cage found beside the mesh, and no usable cage could be generated: {reason}"
+            )),
+        },
     })?;
     let cage_data = chosen.cage;
     let generated_cage = match chosen.origin {

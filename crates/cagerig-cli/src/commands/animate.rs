@@ -112,7 +112,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     options.skinning = crate::session_args::choose_skinning(skinning, None, &loaded);
     let (session, warnings) = start_session(loaded, options)?;
     for w in &warnings {
-        eprintln!("warning: {w}");
+        crate::errors::report_warning(w);
     }
     let mut player = tracks.resolve(&session)?.player(&session)?;
     let mut session = session;

@@ -8,6 +8,7 @@ use cagerig::cage_gen::{
     CageLayout, CageOptions, CageReport, CageRequirements, CageRig, CageTarget, DEFAULT_MARGIN,
     DEFAULT_VERTICES, GeneratedCage, check_coordinates, generate_rig_cage, validate_cage_geometry,
 };
+use cagerig::cage_source::{RIG_CHECK, RigCheckDepth, generate_usable_cage, rig_check};
 use cagerig::io::obj::{read_obj, write_obj};
 use cagerig::{SkinWeights, TriMesh};
 use serde::Serialize;
@@ -99,18 +100,43 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         weights: weights.as_ref(),
     });
     let start = Instant::now();
+    let asked_for_a_size = args.vertices.is_some() || args.faces.is_some();
+    let generated = if asked_for_a_size {
+        // The size asked for, checked below as a rig will use it.
+        generate_rig_cage(&mesh, &options, cage_rig)
+            .with_context(|| format!("generating a cage for {name}"))?
+    } else {
+        // The default size, lowered to what a rig on this mesh can use (and said so).
+        generate_usable_cage(
+            Path::new(&name),
+            &mesh,
+            cage_rig,
+            &options,
+            RigCheckDepth::Always,
+        )?
+    };
     let GeneratedCage {
         cage,
         mut report,
         stats,
-    } = generate_rig_cage(&mesh, &options, cage_rig)
-        .with_context(|| format!("generating a cage for {name}"))?;
+    } = generated;
     let generation_seconds = start.elapsed().as_secs_f64();
     let start = Instant::now();
     check_coordinates(&cage, &mesh, &mut report);
+    if asked_for_a_size {
+        report
+            .checks
+            .push(rig_check(&cage, &mesh, RigCheckDepth::Always));
+    } else if let Some(lowered) = report
+        .checks
+        .iter()
+        .find(|c| c.name == RIG_CHECK && c.detail.contains("instead of"))
+    {
+        eprintln!("note: {name}: {}", lowered.detail);
+    }
     let coordinates_seconds = start.elapsed().as_secs_f64();
     if !report.passed() {
-        // Generation validated the geometry; only the coordinates check can fail here.
+        // Generation validated the geometry; the coordinates and the rig's checks can fail here.
         bail!(
             "the cage for {name} failed validation: {}",
             report.failures().join("; ")

@@ -23,7 +23,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let (rig, out, fixed6) = (&args.rig, args.out.as_path(), args.fixed6);
     let mut loaded = load_rig(rig, true, false)?;
     for w in &loaded.warnings {
-        eprintln!("warning: {w}");
+        crate::errors::report_warning(w);
     }
     let t = Instant::now();
     let phi = crate::rig_source::compute_coords_with_progress(&loaded.parts, true)?;

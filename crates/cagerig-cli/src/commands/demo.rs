@@ -131,7 +131,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         t.elapsed().as_secs_f64() * 1e3
     );
     for w in &warnings {
-        println!("warning: {w}");
+        println!("{}: {w}", w.label());
     }
     // The output folder is complete or absent: files go to a staging folder renamed to `out`
     // at the end; an earlier demo's output there is replaced (the demo writes only its own

@@ -83,7 +83,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     options.skinning = crate::session_args::choose_skinning(skinning, script.skinning, &loaded);
     let (mut session, warnings) = start_session(loaded, options)?;
     for w in &warnings {
-        eprintln!("warning: {w}");
+        crate::errors::report_warning(w);
     }
     script
         .validate(&session)
@@ -107,6 +107,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         write_state(&mut staged, &format!("step{}", k + 1), &session)?;
         if let Some(p) = &mut pictures {
             p.caption = Some(format!("step {}: {}", k + 1, script.steps[k].summary()));
+            p.marked = crate::pictures::MarkedHandles::of_steps(&script.steps[k..=k]);
             p.write_staged(&session, &mut staged, &format!("step{}.png", k + 1))?;
         }
     }

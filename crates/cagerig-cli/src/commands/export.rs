@@ -103,6 +103,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     let mut options = args.session.options();
+    options.allow_mesh_outside_cage = loaded.allow_outside_cage;
     options.skinning = crate::session_args::choose_skinning(
         args.skinning,
         script.as_ref().and_then(|s| s.skinning),
@@ -110,7 +111,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     );
     let (mut session, warnings) = crate::session_args::start_session(loaded, options)?;
     for w in &warnings {
-        eprintln!("warning: {w}");
+        crate::errors::report_warning(w);
     }
     if let (Some(script), Some(path)) = (&script, &args.script) {
         script

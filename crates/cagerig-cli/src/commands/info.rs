@@ -14,7 +14,10 @@ struct InfoReport {
     cage_triangles: usize,
     max_influences: usize,
     files: Vec<FileUse>,
+    /// Things to look at: weights that were far from summing to 1, a flipped cage, ….
     warnings: Vec<String>,
+    /// Harmless facts about the input (e.g. weight rows rounded when written, renormalised).
+    notes: Vec<String>,
     /// The cage validator's checks and figures for this mesh (margin required: none).
     cage_checks: Option<cagerig::cage_gen::CageReport>,
     /// With `--coords green`: the Green binding of this mesh.
@@ -150,11 +153,20 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let loaded = load_rig(rig, !json, false)?;
     let p = &loaded.parts;
-    let mut warnings: Vec<String> = loaded.warnings.iter().map(|w| w.to_string()).collect();
     let cage_check = cagerig::cage::validate_cage(p.cage.clone());
-    match &cage_check {
-        Ok((_, w)) => warnings.extend(w.iter().map(|w| w.to_string())),
-        Err(e) => warnings.push(format!("the cage is unusable: {e}")),
+    let (mut warnings, mut notes) = (Vec::new(), Vec::new());
+    let cage_warnings = cage_check
+        .as_ref()
+        .map(|(_, w)| w.as_slice())
+        .unwrap_or(&[]);
+    for w in loaded.warnings.iter().chain(cage_warnings) {
+        match w.severity() {
+            cagerig::Severity::Note => notes.push(w.to_string()),
+            cagerig::Severity::Warning => warnings.push(w.to_string()),
+        }
+    }
+    if let Err(e) = &cage_check {
+        warnings.push(format!("the cage is unusable: {e}"));
     }
     let report = InfoReport {
         rig: loaded.name.clone(),
@@ -166,6 +178,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         max_influences: p.skin_weights.max_influences(),
         files: loaded.files.clone(),
         warnings,
+        notes,
         cage_checks: cage_check
             .is_ok()
             .then(|| crate::commands::cage::validate_rig_cage(&p.cage, &p.mesh)),
@@ -234,6 +247,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             if let Some(w) = bends.worst {
                 println!("  worst                            {w}");
             }
+        }
+        for n in &report.notes {
+            println!("note           {n}");
         }
         if report.warnings.is_empty() {
             println!("warnings       none");

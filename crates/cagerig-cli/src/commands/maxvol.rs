@@ -39,7 +39,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let (rig, out, json) = (&args.rig, args.out.as_path(), args.json);
     let loaded = load_rig(rig, !json, true)?;
     for w in &loaded.warnings {
-        eprintln!("warning: {w}");
+        crate::errors::report_warning(w);
     }
     let phi = match &loaded.parts.cage_coords {
         Some(phi) => phi.clone(),

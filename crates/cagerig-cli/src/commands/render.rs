@@ -290,7 +290,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     );
     let (mut session, warnings) = start_session(loaded, options)?;
     for w in &warnings {
-        eprintln!("warning: {w}");
+        crate::errors::report_warning(w);
     }
     if args.display_f32 {
         session.set_display_precision(DisplayPrecision::F32)?;
@@ -318,6 +318,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         color_by,
         labels: !args.no_labels,
     })?;
+    // The cage vertices the script moved are marked.
+    if let Some(script) = &script {
+        maker.marked = crate::pictures::MarkedHandles::of_steps(&script.steps);
+    }
     if args.times.is_empty() {
         render_state(&mut maker, &session, args, "", &mut pictures)?;
     } else {

@@ -62,7 +62,7 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
         crate::rig_source::CageCheck::Loader,
     )?;
     for w in &loaded.warnings {
-        eprintln!("warning: {w}");
+        crate::errors::report_warning(w);
     }
     let p = &loaded.parts;
     let levels_u32 = u32::try_from(levels).unwrap_or(u32::MAX);

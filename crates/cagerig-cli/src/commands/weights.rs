@@ -99,7 +99,7 @@ fn load(args: &Args) -> anyhow::Result<(TriMesh, Skeleton, Vec<String>)> {
             Err(FormatError::NoSkin { path, format }) => {
                 let Some(p) = &args.skeleton else {
                     bail!(
-                        "{}: the {format} file has no skin, so it has no skeleton of its own:                          --skeleton FILE.skt is required for a file with no skin (lines `j                          <index> <name> <parent index or -1> x y z` in the file's world space)",
+                        "{}: the {format} file has no skin, so it has no skeleton of its own: --skeleton FILE.skt is required for a file with no skin (lines `j <index> <name> <parent index or -1> x y z` in the file's world space)",
                         path.display()
                     );
                 };

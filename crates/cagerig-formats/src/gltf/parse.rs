@@ -7,6 +7,47 @@ use cagerig::Warning;
 
 use crate::error::FormatError;
 
+/// Why GLB `bytes` (magic `glTF`) are shorter than their header or a chunk header says: the
+/// file looks truncated (a download or copy that stopped early). `None` for complete files and
+/// for anything that is not GLB.
+fn glb_truncation(bytes: &[u8]) -> Option<String> {
+    const HEADER: usize = 12;
+    const CHUNK_HEADER: usize = 8;
+    if !bytes.starts_with(b"glTF") {
+        return None;
+    }
+    let found = bytes.len();
+    let word = |at: usize| -> Option<usize> {
+        let b = bytes.get(at..at + 4)?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    let truncated = |expected: usize, what: &str| {
+        format!(
+            "the file looks truncated: {what} says {expected} bytes, found {found} (the download \
+             or copy stopped early: get the file again)"
+        )
+    };
+    let Some(total) = word(8) else {
+        return Some(truncated(HEADER, "a GLB header"));
+    };
+    if total > found {
+        return Some(truncated(total, "its GLB header"));
+    }
+    // The chunks (JSON, then the optional binary chunk) within the declared length.
+    let mut at = HEADER;
+    while at < total {
+        let Some(length) = word(at) else {
+            return Some(truncated(at + CHUNK_HEADER, "its chunk list"));
+        };
+        let end = at.saturating_add(CHUNK_HEADER).saturating_add(length);
+        if end > found {
+            return Some(truncated(end, "its chunk list"));
+        }
+        at = end;
+    }
+    None
+}
+
 /// Parses and validates glTF/GLB bytes. The `gltf` crate's validation (1.4) indexes the
 /// accessors with each primitive's POSITION index before checking it, and panics on an index
 /// out of range, and it does not check animation channel targets: both are checked here.
@@ -22,6 +63,9 @@ pub(super) fn parse_validated(
         path: path.to_path_buf(),
         message,
     };
+    if let Some(message) = glb_truncation(bytes) {
+        return Err(gltf_error(message));
+    }
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
     let mut root = document.into_json();

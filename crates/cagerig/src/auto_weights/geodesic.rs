@@ -62,6 +62,38 @@ impl SolidVoxels {
         (k != u32::MAX).then_some(k as usize)
     }
 
+    /// How far a joint's bones stay outside the solid: 0 when a bone crosses a solid voxel,
+    /// else the least distance from the bones to a solid voxel's centre (model units).
+    pub fn distance_outside(&self, bones: &[BoneSegment]) -> f64 {
+        let h = self.grid.spacing;
+        for bone in bones {
+            let steps = (2.0 * bone.start.distance(bone.end) / h).ceil() as usize;
+            for s in 0..=steps {
+                let t = if steps == 0 {
+                    0.0
+                } else {
+                    s as f64 / steps as f64
+                };
+                let p = bone.start.lerp(bone.end, t);
+                let c = self.grid.voxel_of(p);
+                let within = (p - self.grid.centre(c)).abs().max_element() <= 0.5 * h;
+                if within && self.solid_index(c).is_some() {
+                    return 0.0;
+                }
+            }
+        }
+        self.voxels
+            .iter()
+            .map(|&i| {
+                let centre = self.grid.centre(self.grid.coords(i as usize));
+                bones
+                    .iter()
+                    .map(|b| centre.distance(closest_point_on_segment(centre, b.start, b.end)))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// `(compact index, initial distance)` of the seeds of a joint's bones.
     pub fn seeds(&self, bones: &[BoneSegment]) -> Vec<(usize, f64)> {
         let h = self.grid.spacing;

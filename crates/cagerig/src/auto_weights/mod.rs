@@ -149,6 +149,26 @@ pub enum AutoWeightsError {
         /// The resolution asked for.
         resolution: usize,
     },
+    /// Most of the skeleton's bones lie outside the mesh's volume: the skeleton is in another
+    /// space (offset, scale or units) than the mesh.
+    #[error(
+        "{outside} of the {deforming} deforming joints lie outside the mesh: {joints}; expected \
+         the skeleton inside the body, in the mesh's space (the skeleton spans {skeleton_box}, \
+         the mesh {mesh_box}): check that they share units, scale and origin, or move the \
+         skeleton into the mesh"
+    )]
+    SkeletonOutsideMesh {
+        /// Deforming joints whose bones cross no part of the volume.
+        outside: usize,
+        /// Deforming joints in all.
+        deforming: usize,
+        /// The farthest joints, by name, with their distance to the volume.
+        joints: String,
+        /// The skeleton's joints' bounding box, as text.
+        skeleton_box: String,
+        /// The mesh's bounding box, as text.
+        mesh_box: String,
+    },
     /// The weights failed validation (a bug if it happens).
     #[error("the computed weights are invalid: {0}")]
     Weights(#[from] RigError),
@@ -361,6 +381,7 @@ impl AutoWeights {
         let solid_mask =
             voxel_grid::solid_voxels(&grid, &surface, o.closing, cage_solid.as_deref());
         let solid = SolidVoxels::new(grid, &solid_mask);
+        let outside_warning = skeleton_outside(skeleton, &segments, &deforming, &solid, lo, hi)?;
         progress(Progress {
             stage: Stage::Voxelising,
             done: 1,
@@ -417,6 +438,7 @@ impl AutoWeights {
             .enumerate()
             .flat_map(|(v, row)| row.iter().map(move |&(j, w)| (v, j, w)));
         let (weights, mut warnings) = SkinWeights::from_triplets(n, skeleton.len(), triplets)?;
+        warnings.extend(outside_warning);
         if let Some(&first) = unreached.first() {
             warnings.push(Warning::Note {
                 message: format!(
@@ -444,6 +466,73 @@ impl AutoWeights {
             },
         })
     }
+}
+
+/// Deforming joints farther than a voxel from the volume: an error when they are most of the
+/// skeleton (it is in another space than the mesh), else a warning naming them. `lo`, `hi`:
+/// the volume's box.
+fn skeleton_outside(
+    skeleton: &Skeleton,
+    segments: &[BoneSegment],
+    deforming: &[usize],
+    solid: &SolidVoxels,
+    lo: DVec3,
+    hi: DVec3,
+) -> Result<Option<Warning>, AutoWeightsError> {
+    let mut outside: Vec<(usize, f64)> = deforming
+        .par_iter()
+        .map(|&j| {
+            let own: Vec<BoneSegment> = segments.iter().filter(|s| s.joint == j).copied().collect();
+            (j, solid.distance_outside(&own))
+        })
+        .filter(|&(_, d)| d > solid.grid.spacing)
+        .collect();
+    if outside.is_empty() {
+        return Ok(None);
+    }
+    outside.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    let diagonal = (hi - lo).length();
+    const LISTED: usize = 5;
+    let mut joints = outside
+        .iter()
+        .take(LISTED)
+        .map(|&(j, d)| {
+            format!(
+                "{} {:.3} away ({:.0} % of the mesh's diagonal)",
+                skeleton.joint(j).name,
+                d,
+                100.0 * d / diagonal
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    if outside.len() > LISTED {
+        joints.push_str(&format!(" and {} more", outside.len() - LISTED));
+    }
+    if 2 * outside.len() > deforming.len() {
+        let (slo, shi) = crate::mesh::bounding_box(&skeleton.rest_positions());
+        let text = |a: DVec3, b: DVec3| {
+            format!(
+                "[{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}]",
+                a.x, a.y, a.z, b.x, b.y, b.z
+            )
+        };
+        return Err(AutoWeightsError::SkeletonOutsideMesh {
+            outside: outside.len(),
+            deforming: deforming.len(),
+            joints,
+            skeleton_box: text(slo, shi),
+            mesh_box: text(lo, hi),
+        });
+    }
+    Ok(Some(Warning::Note {
+        message: format!(
+            "{} of the {} deforming joints lie outside the mesh: {joints}; they are weighted \
+             from the nearest part of the body (move them inside for weights that follow them)",
+            outside.len(),
+            deforming.len()
+        ),
+    }))
 }
 
 /// Distance from `p` to the nearest bone segment of joint `joint`.

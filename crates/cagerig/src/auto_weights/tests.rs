@@ -345,3 +345,77 @@ proptest! {
         }
     }
 }
+
+/// A chain of four bones along the bar (joints `j0` … `j3` and the end marker `j4_end` at
+/// x = 0 … 4), scaled by `scale` about the origin and moved by `offset`.
+fn moved_chain(offset: DVec3, scale: f64) -> Skeleton {
+    let names = ["j0", "j1", "j2", "j3", "j4_end"];
+    let joints: Vec<(&str, Option<usize>, DVec3)> = names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let x = DVec3::new(i as f64, 0.0, 0.0);
+            (*name, i.checked_sub(1), offset + scale * x)
+        })
+        .collect();
+    skeleton(&joints)
+}
+
+#[test]
+fn a_skeleton_outside_the_mesh_is_refused_naming_its_joints_and_distances() {
+    let (mesh, _) = two_bone_bar();
+    let aw = AutoWeights::new(AutoWeightsOptions::default()).unwrap();
+    // Shifted 100 units: every bone is far from the body.
+    let shifted = moved_chain(DVec3::new(0.0, 100.0, 0.0), 1.0);
+    let e = aw.compute(&mesh, &shifted, None).unwrap_err();
+    let AutoWeightsError::SkeletonOutsideMesh {
+        outside, deforming, ..
+    } = &e
+    else {
+        panic!("expected SkeletonOutsideMesh, got {e}");
+    };
+    assert_eq!((*outside, *deforming), (4, 4));
+    let text = e.to_string();
+    assert!(text.contains("j0 99.") && text.contains("j3 99."), "{text}");
+    assert!(text.contains("share units, scale and origin"), "{text}");
+    // Scaled ×100 about the bar's end: the first bone crosses the bar, the others are far.
+    let scaled = moved_chain(DVec3::ZERO, 100.0);
+    let e = aw.compute(&mesh, &scaled, None).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            AutoWeightsError::SkeletonOutsideMesh {
+                outside: 3,
+                deforming: 4,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // The same chain inside the bar is weighted with no warning.
+    let inside = moved_chain(DVec3::ZERO, 1.0);
+    let r = aw.compute(&mesh, &inside, None).unwrap();
+    assert!(r.report.warnings.is_empty(), "{:?}", r.report.warnings);
+}
+
+#[test]
+fn one_joint_outside_the_mesh_is_a_warning_naming_it() {
+    let (mesh, _) = two_bone_bar();
+    let s = skeleton(&[
+        ("upper", None, DVec3::ZERO),
+        ("lower", Some(0), DVec3::new(2.0, 0.0, 0.0)),
+        ("arm", Some(1), DVec3::new(3.0, 0.0, 0.0)),
+        ("arm_end", Some(2), DVec3::new(4.0, 0.0, 0.0)),
+        ("antenna", Some(0), DVec3::new(1.0, 3.0, 0.0)),
+        ("antenna_end", Some(4), DVec3::new(1.0, 4.0, 0.0)),
+    ]);
+    let aw = AutoWeights::new(AutoWeightsOptions::default()).unwrap();
+    let r = aw.compute(&mesh, &s, None).unwrap();
+    let notes: Vec<String> = r.report.warnings.iter().map(ToString::to_string).collect();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.starts_with("1 of the 4 deforming joints lie outside the mesh: antenna 2.")),
+        "{notes:?}"
+    );
+}

@@ -76,6 +76,13 @@ impl Default for MaxVolOptions {
     }
 }
 
+/// What [`RigError::Singular`] names when no #C rows of Φ are independent: the mesh gives the
+/// cage no #C vertices to be fitted on, in a modeller's words.
+const MAXVOL_RANK_DEFICIENT: &str = "the cage coordinates Φ of the mesh (the rig fits the cage's \
+     #C vertices to #C mesh vertices with independent coordinates, and this mesh has none: it is \
+     flat, or has fewer distinct vertex positions than the cage has vertices; use a cage with \
+     fewer vertices, or a mesh with more; `cagerig cage` checks this), whose MaxVol block";
+
 /// Candidate rows on big Φ: per column k, the rows with the [`CANDIDATES_PER_COLUMN`] largest
 /// |Φ[i, k]| (a row interpolating cage vertex k is one where Φ[:, k] dominates). The starts run
 /// on the candidates only, which keeps them independent of #V.
@@ -251,7 +258,7 @@ fn best_of_starts(
         }
     }
     best.ok_or(RigError::Singular {
-        what: "cage coordinates Φ (rank deficient: MaxVol needs rank #C)",
+        what: MAXVOL_RANK_DEFICIENT,
     })
 }
 
@@ -315,7 +322,7 @@ fn lu_pivot_rows(
         .any(|d| d.abs().partial_cmp(&(1e-12 * scale)) != Some(std::cmp::Ordering::Greater))
     {
         return Err(RigError::Singular {
-            what: "cage coordinates Φ (rank deficient: MaxVol needs rank #C)",
+            what: MAXVOL_RANK_DEFICIENT,
         });
     }
     Ok(lu.forward[..rank].to_vec())

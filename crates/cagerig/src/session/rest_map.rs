@@ -38,6 +38,10 @@ use crate::skin_weights::SkinWeights;
 use crate::sync::cage_fit_kind::CageFitKind;
 use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
+
+/// Given Φ off M by at most this fraction of the size was only rounded when written (the
+/// paper's Arm: 1.3e-5): recomputing it is a note, not a warning.
+const ROUNDED_PHI_C: f64 = 1e-4;
 use crate::sync::skeleton_updater::{JointFaceTerms, SkeletonUpdater};
 use glam::{DAffine3, DVec3};
 
@@ -193,12 +197,17 @@ impl BindInputs<'_> {
                 if residual > PHI_C_TOLERANCE * self.size
                     && options.given_cage_coords == GivenCageCoords::RecomputeIfInexact
                 {
-                    warnings.push(Warning::Note {
-                        message: format!(
-                            "the given cage coordinates reproduce the rest mesh only to \
-                             {residual:.3e} (M ≠ ΦC, e.g. a file with 6 decimals): recomputed, \
-                             so that nothing the user does not touch moves at the first cage edit"
-                        ),
+                    let message = format!(
+                        "the given cage coordinates reproduce the rest mesh only to \
+                         {residual:.3e} (M ≠ ΦC, e.g. a file with 6 decimals): recomputed, so \
+                         that nothing the user does not touch moves at the first cage edit"
+                    );
+                    // Rounded when written (the paper's Arm): a note; farther off, the file may
+                    // belong to another mesh or cage: a warning.
+                    warnings.push(if residual <= ROUNDED_PHI_C * self.size {
+                        Warning::Info { message }
+                    } else {
+                        Warning::Note { message }
                     });
                     self.cage_coordinates(&mesh.positions)?
                 } else {
@@ -285,14 +294,14 @@ impl BindInputs<'_> {
             || given.maxvol_rows.is_some()
             || given.cor_centre_coords.is_some()
         {
-            warnings.push(Warning::Note {
+            warnings.push(Warning::Info {
                 message: "Green coordinates: the given mean value coordinates (Φ, their \
                           MaxVol rows, Λ) do not apply and were recomputed"
                     .into(),
             });
         }
         if options.cage_coords_precision == CoordsPrecision::F32 {
-            warnings.push(Warning::Note {
+            warnings.push(Warning::Info {
                 message: "Green coordinates are kept in f64 (f32 coordinates are for mean \
                           value coordinates only)"
                     .into(),
