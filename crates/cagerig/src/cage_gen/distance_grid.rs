@@ -67,6 +67,30 @@ impl SampleGrid {
         [x, y, i / (self.dims[0] * self.dims[1])]
     }
 
+    /// Whether point `i` lies on the grid's boundary (a first or last index on some axis).
+    pub fn on_boundary(&self, i: usize) -> bool {
+        let [x, y, z] = self.coords(i);
+        let [nx, ny, nz] = self.dims;
+        x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz
+    }
+
+    /// The up to six points that share a face of the grid's cells with point `i`.
+    pub fn face_neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let c = self.coords(i);
+        let strides = [
+            1isize,
+            self.dims[0] as isize,
+            (self.dims[0] * self.dims[1]) as isize,
+        ];
+        (0..3).flat_map(move |axis| {
+            [-1isize, 1].into_iter().filter_map(move |dir| {
+                let coord = c[axis] as isize + dir;
+                (coord >= 0 && coord < self.dims[axis] as isize)
+                    .then(|| (i as isize + dir * strides[axis]) as usize)
+            })
+        })
+    }
+
     /// Position of the point at integer coordinates `[x, y, z]`.
     pub fn position(&self, [x, y, z]: [usize; 3]) -> DVec3 {
         self.origin + DVec3::new(x as f64, y as f64, z as f64) * self.spacing
@@ -120,43 +144,35 @@ pub fn fill_from_outside(
             }
         }
     }
-    let strides = [1isize, nx as isize, (nx * ny) as isize];
     while let Some(i) = queue.pop_front() {
         let c = grid.coords(i);
-        for axis in 0..3 {
-            for dir in [-1isize, 1] {
-                let coord = c[axis] as isize + dir;
-                if coord < 0 || coord >= grid.dims[axis] as isize {
-                    continue;
-                }
-                let j = (i as isize + dir * strides[axis]) as usize;
-                if state[j] == SOLID && !exact[i] {
-                    // A crossing edge: make its outside end exact for a good surface position.
-                    value[i] = bvh.nearest_distance(grid.position(c), cap);
-                    exact[i] = true;
-                    queries += 1;
-                }
-                if state[j] != UNVISITED {
-                    continue;
-                }
-                let p = grid.position(grid.coords(j));
-                let bound = (value[i] - h).max(mesh_bounds.distance_squared(p).sqrt());
-                if bound > offset {
-                    state[j] = OUTSIDE;
-                    value[j] = bound;
-                    queue.push_back(j);
-                    continue;
-                }
-                let d = bvh.nearest_distance(p, cap);
+        for j in grid.face_neighbours(i) {
+            if state[j] == SOLID && !exact[i] {
+                // A crossing edge: make its outside end exact for a good surface position.
+                value[i] = bvh.nearest_distance(grid.position(c), cap);
+                exact[i] = true;
                 queries += 1;
-                exact[j] = true;
-                value[j] = d;
-                if d > offset {
-                    state[j] = OUTSIDE;
-                    queue.push_back(j);
-                } else {
-                    state[j] = SOLID;
-                }
+            }
+            if state[j] != UNVISITED {
+                continue;
+            }
+            let p = grid.position(grid.coords(j));
+            let bound = (value[i] - h).max(mesh_bounds.distance_squared(p).sqrt());
+            if bound > offset {
+                state[j] = OUTSIDE;
+                value[j] = bound;
+                queue.push_back(j);
+                continue;
+            }
+            let d = bvh.nearest_distance(p, cap);
+            queries += 1;
+            exact[j] = true;
+            value[j] = d;
+            if d > offset {
+                state[j] = OUTSIDE;
+                queue.push_back(j);
+            } else {
+                state[j] = SOLID;
             }
         }
     }

@@ -302,31 +302,19 @@ pub fn cut_between_parts(
         }
     }
     // Fill again the cut points the outside does not reach.
-    let [nx, ny, nz] = grid.dims;
     let mut reached = vec![false; grid.num_points()];
     let mut queue = VecDeque::new();
     for (i, &v) in field.values.iter().enumerate() {
-        let [x, y, z] = grid.coords(i);
-        let boundary = x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz;
-        if boundary && v > 0.0 {
+        if v > 0.0 && grid.on_boundary(i) {
             reached[i] = true;
             queue.push_back(i);
         }
     }
-    let strides = [1isize, nx as isize, (nx * ny) as isize];
     while let Some(i) = queue.pop_front() {
-        let c = grid.coords(i);
-        for axis in 0..3 {
-            for dir in [-1isize, 1] {
-                let coord = c[axis] as isize + dir;
-                if coord < 0 || coord >= grid.dims[axis] as isize {
-                    continue;
-                }
-                let j = (i as isize + dir * strides[axis]) as usize;
-                if !reached[j] && field.values[j] > 0.0 {
-                    reached[j] = true;
-                    queue.push_back(j);
-                }
+        for j in grid.face_neighbours(i) {
+            if !reached[j] && field.values[j] > 0.0 {
+                reached[j] = true;
+                queue.push_back(j);
             }
         }
     }
