@@ -17,17 +17,7 @@ use support::{arm, arm_dir, cagerig, stderr, temp_dir};
 /// The Arm's cage shrunk by 10 % towards its centroid, so that part of the arm is outside it.
 fn shrunken_arm_cage(dir: &Path) -> std::path::PathBuf {
     let text = std::fs::read_to_string(arm_dir().join("arm_cage.obj")).unwrap();
-    let points: Vec<[f64; 3]> = text
-        .lines()
-        .filter_map(|l| l.strip_prefix("v "))
-        .map(|rest| {
-            let v: Vec<f64> = rest
-                .split_whitespace()
-                .map(|x| x.parse().unwrap())
-                .collect();
-            [v[0], v[1], v[2]]
-        })
-        .collect();
+    let points = support::obj_vertices(&arm_dir().join("arm_cage.obj"));
     let n = points.len() as f64;
     let centre: Vec<f64> = (0..3)
         .map(|i| points.iter().map(|p| p[i]).sum::<f64>() / n)

@@ -1069,20 +1069,7 @@ fn known_harmless_facts_about_the_arm_are_notes() {
 /// rearmost). A regenerated cage that moves them fails here: pick the new indices.
 #[test]
 fn the_samples_edit_scripts_are_sized_to_their_character_and_name_their_parts() {
-    let read_obj = |path: &Path| -> Vec<[f64; 3]> {
-        std::fs::read_to_string(path)
-            .unwrap()
-            .lines()
-            .filter_map(|l| l.strip_prefix("v "))
-            .map(|rest| {
-                let v: Vec<f64> = rest
-                    .split_whitespace()
-                    .map(|x| x.parse().unwrap())
-                    .collect();
-                [v[0], v[1], v[2]]
-            })
-            .collect()
-    };
+    let read_obj = support::obj_vertices;
     let diagonal = |points: &[[f64; 3]]| {
         (0..3)
             .map(|a| {

@@ -63,3 +63,19 @@ pub fn run_ok_with_stderr(cmd: &mut Command) -> (String, String) {
 pub fn run_ok(cmd: &mut Command) -> String {
     run_ok_with_stderr(cmd).0
 }
+
+/// The `v x y z` points of an OBJ file, in order.
+pub fn obj_vertices(path: &Path) -> Vec<[f64; 3]> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|rest| {
+            let v: Vec<f64> = rest
+                .split_whitespace()
+                .map(|x| x.parse().unwrap())
+                .collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect()
+}
