@@ -62,73 +62,70 @@ impl SolidVoxels {
         (k != u32::MAX).then_some(k as usize)
     }
 
-    /// How far a joint's bones stay outside the solid: 0 when a bone crosses a solid voxel,
-    /// else the least distance from the bones to a solid voxel's centre (model units).
-    pub fn distance_outside(&self, bones: &[BoneSegment]) -> f64 {
+    /// Points along each of `bones`, at most half a voxel apart (both ends included), with the
+    /// bone they lie on.
+    fn bone_samples<'a>(
+        &self,
+        bones: &'a [BoneSegment],
+    ) -> impl Iterator<Item = (&'a BoneSegment, DVec3)> + 'a {
         let h = self.grid.spacing;
-        for bone in bones {
+        bones.iter().flat_map(move |bone| {
             let steps = (2.0 * bone.start.distance(bone.end) / h).ceil() as usize;
-            for s in 0..=steps {
+            (0..=steps).map(move |s| {
                 let t = if steps == 0 {
                     0.0
                 } else {
                     s as f64 / steps as f64
                 };
-                let p = bone.start.lerp(bone.end, t);
-                let c = self.grid.voxel_of(p);
-                let within = (p - self.grid.centre(c)).abs().max_element() <= 0.5 * h;
-                if within && self.solid_index(c).is_some() {
-                    return 0.0;
-                }
-            }
-        }
-        self.voxels
-            .iter()
-            .map(|&i| {
-                let centre = self.grid.centre(self.grid.coords(i as usize));
-                bones
-                    .iter()
-                    .map(|b| centre.distance(closest_point_on_segment(centre, b.start, b.end)))
-                    .fold(f64::INFINITY, f64::min)
+                (bone, bone.start.lerp(bone.end, t))
             })
-            .fold(f64::INFINITY, f64::min)
+        })
+    }
+
+    /// Each solid voxel's centre's least distance to `bones` (`#solid`).
+    fn distances_to_bones<'a>(
+        &'a self,
+        bones: &'a [BoneSegment],
+    ) -> impl Iterator<Item = f64> + 'a {
+        self.voxels.iter().map(move |&i| {
+            let centre = self.grid.centre(self.grid.coords(i as usize));
+            bones
+                .iter()
+                .map(|b| centre.distance(closest_point_on_segment(centre, b.start, b.end)))
+                .fold(f64::INFINITY, f64::min)
+        })
+    }
+
+    /// How far a joint's bones stay outside the solid: 0 when a bone crosses a solid voxel,
+    /// else the least distance from the bones to a solid voxel's centre (model units).
+    pub fn distance_outside(&self, bones: &[BoneSegment]) -> f64 {
+        let h = self.grid.spacing;
+        let crosses = self.bone_samples(bones).any(|(_, p)| {
+            let c = self.grid.voxel_of(p);
+            let within = (p - self.grid.centre(c)).abs().max_element() <= 0.5 * h;
+            within && self.solid_index(c).is_some()
+        });
+        if crosses {
+            return 0.0;
+        }
+        self.distances_to_bones(bones).fold(f64::INFINITY, f64::min)
     }
 
     /// `(compact index, initial distance)` of the seeds of a joint's bones.
     pub fn seeds(&self, bones: &[BoneSegment]) -> Vec<(usize, f64)> {
         let h = self.grid.spacing;
         let mut seeds: Vec<(usize, f64)> = Vec::new();
-        for bone in bones {
-            let length = bone.start.distance(bone.end);
-            let steps = (2.0 * length / h).ceil() as usize;
-            for s in 0..=steps {
-                let t = if steps == 0 {
-                    0.0
-                } else {
-                    s as f64 / steps as f64
-                };
-                let p = bone.start.lerp(bone.end, t);
-                let c = self.grid.voxel_of(p);
-                if let Some(k) = self.solid_index(c) {
-                    let centre = self.grid.centre(c);
-                    let d = centre.distance(closest_point_on_segment(centre, bone.start, bone.end));
-                    seeds.push((k, d));
-                }
+        for (bone, p) in self.bone_samples(bones) {
+            let c = self.grid.voxel_of(p);
+            if let Some(k) = self.solid_index(c) {
+                let centre = self.grid.centre(c);
+                let d = centre.distance(closest_point_on_segment(centre, bone.start, bone.end));
+                seeds.push((k, d));
             }
         }
         if seeds.is_empty() {
             // Outside the body: seed at the solid voxels within a voxel of the nearest ones.
-            let distances: Vec<f64> = self
-                .voxels
-                .iter()
-                .map(|&i| {
-                    let centre = self.grid.centre(self.grid.coords(i as usize));
-                    bones
-                        .iter()
-                        .map(|b| centre.distance(closest_point_on_segment(centre, b.start, b.end)))
-                        .fold(f64::INFINITY, f64::min)
-                })
-                .collect();
+            let distances: Vec<f64> = self.distances_to_bones(bones).collect();
             let nearest = distances.iter().copied().fold(f64::INFINITY, f64::min);
             seeds.extend(
                 distances
