@@ -8,7 +8,7 @@ use cagerig::session::RigSession;
 use glam::DVec3;
 
 use crate::output_dir::StagedDir;
-use crate::rig_source::{RigArgs, load_rig};
+use crate::rig_source::{CageCheck, RigArgs, load_rig_or_generate_cage};
 use crate::session_args::{SessionArgs, event_error, start_session};
 use crate::state_files::write_state;
 
@@ -120,7 +120,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         auto_weights: false,
     };
     let t = Instant::now();
-    let loaded = load_rig(&args, true, false)?;
+    // The session validates the cage (start_session), so the loader does not.
+    let loaded = load_rig_or_generate_cage(&args, true, false, None, CageCheck::Session)?;
     let (mut s, warnings) = start_session(loaded, session_args.options())?;
     println!(
         "loaded built-in rig {builtin:?}: {} vertices, {} joints, {} cage vertices, {} coordinates ({:.1} ms incl. coordinates, MaxVol, Ψ)",
