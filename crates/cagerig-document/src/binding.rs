@@ -6,7 +6,7 @@
 
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use web_time::Instant;
 
 use cagerig::auto_weights::{AutoWeights, AutoWeightsOptions, Progress, Stage};
 use cagerig::session::{BindStage, DisplayPrecision, RigParts, RigSession, SessionOptions};
@@ -237,12 +237,13 @@ pub struct BindJob {
 }
 
 impl BindJob {
-    /// Starts `request` on a new thread.
+    /// Starts `request` on a new thread (on the web target, which has no threads, runs it
+    /// now: its result is then ready at the first [`Self::poll`]).
     pub fn spawn(request: BindRequest) -> Self {
         let (sender, receiver) = channel();
         let progress = Arc::new(Mutex::new(None));
         let shared = Arc::clone(&progress);
-        std::thread::spawn(move || {
+        let work = move || {
             let report = |p: BindStep| {
                 if let Ok(mut slot) = shared.lock() {
                     *slot = Some(p);
@@ -251,7 +252,11 @@ impl BindJob {
             let result = request.run(&report);
             // The studio may have closed the document meanwhile: nobody to tell.
             let _ = sender.send(result);
-        });
+        };
+        #[cfg(not(target_arch = "wasm32"))]
+        std::thread::spawn(work);
+        #[cfg(target_arch = "wasm32")]
+        work();
         Self {
             receiver,
             progress,

@@ -2,7 +2,7 @@
 //! the UI, of an edit script or of the timeline goes through [`Document::execute`] (one undo
 //! step) or through a gesture (one session event per mouse move, one undo step per drag).
 
-use std::time::Instant;
+use web_time::Instant;
 
 use cagerig::RigError;
 use cagerig::playback::AnimationPlayer;

@@ -7,7 +7,7 @@ use cagerig::Warning;
 use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, cage_options_with_vertices};
 use cagerig::rig_files::MissingCage;
 use cagerig::session::{BindProgress, DisplayPrecision, RigParts, RigSession, SessionOptions};
-use cagerig_formats::{ImportOptions, ImportedAnimation, OpenCharacterError};
+use cagerig_formats::{CharacterInput, ImportOptions, ImportedAnimation, OpenCharacterError};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -31,6 +31,39 @@ pub enum RigSource {
         #[serde(default)]
         auto_cage: Option<usize>,
     },
+    /// A glTF (`.glb`, `.gltf`) or FBX character whose bytes are already in memory (the web
+    /// edition's file input and bundled samples), named `path`. A session file records it as
+    /// [`RigSource::File`] with that name, so that the session reopens beside the file.
+    Memory {
+        path: PathBuf,
+        /// The file's content (not written to session files).
+        #[serde(skip)]
+        bytes: FileBytes,
+        #[serde(default)]
+        auto_cage: Option<usize>,
+    },
+}
+
+/// A file's bytes held in memory, shared without copying; printed as its length.
+#[derive(Clone, Default)]
+pub struct FileBytes(pub std::sync::Arc<[u8]>);
+
+impl std::fmt::Debug for FileBytes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "FileBytes({} bytes)", self.0.len())
+    }
+}
+
+impl PartialEq for FileBytes {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0) || self.0 == other.0
+    }
+}
+
+impl From<Vec<u8>> for FileBytes {
+    fn from(bytes: Vec<u8>) -> Self {
+        Self(bytes.into())
+    }
 }
 
 impl Default for RigSource {
@@ -61,7 +94,9 @@ impl RigSource {
                 Some(r) => format!("builtin:{name} ({r})"),
                 None => format!("builtin:{name}"),
             },
-            RigSource::File { path, .. } => path.display().to_string(),
+            RigSource::File { path, .. } | RigSource::Memory { path, .. } => {
+                path.display().to_string()
+            }
         }
     }
 }
@@ -170,14 +205,35 @@ pub fn open_rig_with_progress(
             // A character with no cage opens with a generated one, said so in the log, as a
             // mesh with no skeleton does.
             let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
-            match import_interchange(path, cage.as_deref(), skin.as_deref(), Some(vertices)) {
+            let input = CharacterInput::File(path);
+            match import_interchange(input, cage.as_deref(), skin.as_deref(), Some(vertices)) {
                 Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
                     rigged = false;
                     let (parts, warnings, files) = crate::unrigged::open_unskinned_character(
-                        path,
+                        input,
                         cage.as_deref(),
                         *auto_cage,
                     )?;
+                    (parts, warnings, files, Default::default())
+                }
+                other => other?,
+            }
+        }
+        RigSource::Memory {
+            path,
+            bytes,
+            auto_cage,
+        } => {
+            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
+            let input = CharacterInput::Bytes {
+                path,
+                bytes: &bytes.0,
+            };
+            match import_interchange(input, None, None, Some(vertices)) {
+                Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
+                    rigged = false;
+                    let (parts, warnings, files) =
+                        crate::unrigged::open_unskinned_character(input, None, *auto_cage)?;
                     (parts, warnings, files, Default::default())
                 }
                 other => other?,
@@ -267,7 +323,7 @@ pub(crate) fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
 }
 
 fn import_interchange(
-    path: &Path,
+    input: CharacterInput<'_>,
     cage: Option<&Path>,
     skin: Option<&str>,
     auto_cage: Option<usize>,
@@ -281,11 +337,11 @@ fn import_interchange(
         generate: auto_cage.map(cage_options_with_vertices),
     };
     let opened =
-        cagerig_formats::open_character(path, &options, &request).map_err(|e| match e {
+        cagerig_formats::open_character_input(input, &options, &request).map_err(|e| match e {
             OpenCharacterError::Import(e) => OpenError::from(e),
             OpenCharacterError::Cage(e) => OpenError::from(e),
         })?;
-    let mut files = vec![("character".to_string(), path.to_path_buf())];
+    let mut files = vec![("character".to_string(), input.path().to_path_buf())];
     if let Some(c) = cage {
         files.push(("cage".into(), c.to_path_buf()));
     }

@@ -173,12 +173,17 @@ impl SessionFile {
         Self::parse(&text, path)
     }
 
-    /// Writes the file atomically (temporary file beside it, then rename).
-    pub fn write(&self, path: &Path) -> Result<(), SessionFileError> {
-        let text = serde_json::to_string(self).map_err(|e| SessionFileError::Write {
+    /// The file's text (JSON), as [`Self::write`] writes it; `path` names it in the error.
+    pub fn to_text(&self, path: &Path) -> Result<String, SessionFileError> {
+        serde_json::to_string(self).map_err(|e| SessionFileError::Write {
             path: path.to_path_buf(),
             message: e.to_string(),
-        })?;
+        })
+    }
+
+    /// Writes the file atomically (temporary file beside it, then rename).
+    pub fn write(&self, path: &Path) -> Result<(), SessionFileError> {
+        let text = self.to_text(path)?;
         // Creates a missing folder; the error names the path once.
         cagerig::io::write_atomically(path, |w| w.write_all(text.as_bytes())).map_err(|e| {
             SessionFileError::Write {
@@ -203,7 +208,16 @@ fn absolute_source(source: RigSource) -> RigSource {
             skin,
             auto_cage,
         },
-        builtin => builtin,
+        // A file opened from memory (the web edition) reopens as the file of that name.
+        RigSource::Memory {
+            path, auto_cage, ..
+        } => RigSource::File {
+            path,
+            cage: None,
+            skin: None,
+            auto_cage,
+        },
+        builtin @ RigSource::Builtin { .. } => builtin,
     }
 }
 

@@ -67,11 +67,12 @@ pub fn open_unrigged_obj(
 /// The mesh of the glTF / FBX file `path`, which has no skin, with its cage: `cage` if given,
 /// else the `<name>_cage` mesh in the file, else one generated with `auto_cage` vertices.
 pub fn open_unskinned_character(
-    path: &Path,
+    input: cagerig_formats::CharacterInput<'_>,
     cage: Option<&Path>,
     auto_cage: Option<usize>,
 ) -> Result<UnriggedMesh, OpenError> {
-    let imported = cagerig_formats::import_static_mesh(path)?;
+    let imported = input.import_static()?;
+    let path = input.path();
     unrigged(
         path,
         imported.mesh,

@@ -151,7 +151,7 @@ fn the_fuzz_seeds_are_current_session_files_that_open() {
         // Every seed opens as the fuzz target opens it (a file source onto the bar).
         let source = match &read.source {
             RigSource::Builtin { .. } => read.source.clone(),
-            RigSource::File { .. } => bar(),
+            RigSource::File { .. } | RigSource::Memory { .. } => bar(),
         };
         let doc = restore_session(&path, &read, open_rig(&source).unwrap()).unwrap();
         assert_eq!(doc.snapshot().keys, read.state.keys, "{name}");

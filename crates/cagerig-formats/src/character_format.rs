@@ -60,6 +60,28 @@ impl CharacterFormat {
         }
     }
 
+    /// [`Self::import`] on the bytes of a file already in memory (`path` names it in messages
+    /// and places what it refers to, such as a `.gltf`'s external buffers).
+    pub fn import_bytes(
+        self,
+        bytes: &[u8],
+        path: &Path,
+        options: &ImportOptions,
+    ) -> Result<ImportedCharacter, FormatError> {
+        match self {
+            Self::Gltf => crate::gltf::import_gltf_bytes(bytes, path, options),
+            Self::Fbx => crate::fbx::import_fbx_bytes(bytes, path, options),
+        }
+    }
+
+    /// [`Self::import_static`] on the bytes of a file already in memory.
+    pub fn import_static_bytes(self, bytes: &[u8], path: &Path) -> Result<StaticMesh, FormatError> {
+        match self {
+            Self::Gltf => crate::gltf::import_gltf_static_bytes(bytes, path),
+            Self::Fbx => crate::fbx::import_fbx_static_bytes(bytes, path),
+        }
+    }
+
     /// Reads `path` in this format as a static mesh: every mesh in world space, no skeleton or
     /// weights (a file without a skin, or a skinned one's bind shape; see [`StaticMesh`]).
     pub fn import_static(self, path: &Path) -> Result<StaticMesh, FormatError> {
@@ -103,6 +125,24 @@ pub fn export_character_baked(
         })?;
     crate::gltf::export::write_gltf_or_glb(path, &document, &bin)?;
     Ok(report)
+}
+
+/// [`export_character_baked`] as the bytes of a `.glb` (the web edition's download); `name`
+/// names the rig in the file and in messages.
+pub fn export_character_baked_glb(
+    session: &RigSession,
+    name: &str,
+) -> Result<(Vec<u8>, crate::gltf::export_bake::BakeReport), FormatError> {
+    let failed = |message: String| FormatError::Io {
+        path: format!("{name}.glb").into(),
+        message,
+    };
+    let (document, bin, report) =
+        crate::gltf::export_bake::baked_state_to_gltf(session, name).map_err(failed)?;
+    let mut bytes = Vec::new();
+    crate::gltf::export::write_glb(&mut bytes, &document, &bin)
+        .map_err(|e| failed(e.to_string()))?;
+    Ok((bytes, report))
 }
 
 /// Refuses a path whose extension is not a format cagerig writes.

@@ -12,7 +12,7 @@ use cagerig::skinning::SkinningMethod;
 
 use crate::character::{ImportedAnimation, ImportedCharacter, MorphTargets};
 use crate::error::FormatError;
-use crate::{ImportOptions, import_character};
+use crate::{CharacterInput, ImportOptions};
 
 /// A character opened as a rig's parts, with what the file brought beside them.
 #[derive(Debug)]
@@ -49,8 +49,17 @@ pub fn open_character(
     options: &ImportOptions,
     cage: &CageRequest<'_>,
 ) -> Result<OpenedCharacter, OpenCharacterError> {
-    let imported = import_character(path, options)?;
-    Ok(open_imported_character(path, imported, cage)?)
+    open_character_input(CharacterInput::File(path), options, cage)
+}
+
+/// [`open_character`] on a file or on a file's bytes already in memory.
+pub fn open_character_input(
+    input: CharacterInput<'_>,
+    options: &ImportOptions,
+    cage: &CageRequest<'_>,
+) -> Result<OpenedCharacter, OpenCharacterError> {
+    let imported = input.import(options)?;
+    Ok(open_imported_character(input.path(), imported, cage)?)
 }
 
 /// The rule of [`open_character`] after the import: the cage chosen by `cage` and the parts

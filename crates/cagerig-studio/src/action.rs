@@ -39,6 +39,12 @@ pub enum Action {
     /// Puts animation `i` of the character on the skeleton track.
     LoadCharacterAnimation(usize),
     Quit,
+    /// The web edition: choose a character with the page's file input.
+    ChooseCharacter,
+    /// The web edition: open a sample the page serves (its file name).
+    OpenSample(String),
+    /// The web edition: download the rig as a `.glb`.
+    DownloadGlb,
     Undo,
     Redo,
     /// Selects every cage vertex.

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Instant;
+use web_time::Instant;
 
 use cagerig_render::{CameraPreset, Renderer};
 use glam::DVec3;
@@ -19,6 +19,7 @@ use crate::inspector::inspector_ui;
 use crate::menus::menu_bar_ui;
 use crate::opening::{AfterConfirm, OpenRequest, PendingOpen, opening_ui};
 use crate::project::Project;
+use crate::rig_open::RigSource;
 use crate::scripted_run::{ScriptedRun, run_script_file};
 use crate::session_file::{StateDir, default_state_dir};
 use crate::startup::StartupOptions;
@@ -76,7 +77,7 @@ impl StudioApp {
                 .error("no wgpu device: the 3D views cannot be drawn (start with a wgpu renderer)");
         }
         let scripted = options.script.is_some() || options.screenshot.is_some();
-        if !scripted && options.session.is_none() {
+        if !scripted && options.session.is_none() && options.page_files.is_none() {
             app.dialogs.recovery = app.project.state_dir.pending_recovery();
         }
         match (&options.session, &options.source) {
@@ -163,6 +164,17 @@ impl StudioApp {
             }
             Action::LoadCharacterAnimation(index) => self.load_character_animation(index),
             Action::Quit => self.quit_requested = true,
+            Action::ChooseCharacter => {
+                if let Some(page) = &self.run.options().page_files {
+                    page.choose_character();
+                }
+            }
+            Action::OpenSample(name) => {
+                if let Some(page) = &self.run.options().page_files {
+                    page.fetch_sample(&name);
+                }
+            }
+            Action::DownloadGlb => self.download_glb(),
             Action::Undo => self.undo(),
             Action::Redo => self.redo(),
             Action::SelectAll => self.select_all(),
@@ -248,8 +260,12 @@ impl StudioApp {
         }
     }
 
-    /// Saves to the session's file, or asks for one.
+    /// Saves to the session's file, or asks for one (the web edition downloads it).
     pub fn save(&mut self) {
+        if self.run.options().page_files.is_some() {
+            self.download_session();
+            return;
+        }
         match self.project.session_path.clone() {
             Some(p) => {
                 self.save_session_to(&p);
@@ -261,6 +277,12 @@ impl StudioApp {
     /// The unsaved-edits question was answered Save: saves to the session's file and goes on,
     /// or asks for a file and goes on once saved there.
     fn save_then_continue(&mut self, ctx: &egui::Context, after: AfterConfirm) {
+        if self.run.options().page_files.is_some() {
+            if self.download_session() {
+                self.continue_after_confirm(ctx, after);
+            }
+            return;
+        }
         match self.project.session_path.clone() {
             Some(path) => {
                 if self.save_session_to(&path) {
@@ -279,6 +301,63 @@ impl StudioApp {
         let cameras = self.view.camera_keys();
         let log = &mut self.diagnostics.log;
         self.project.save_to(path, self.timeline.time, cameras, log)
+    }
+
+    /// The web edition: offers the session as a download (`<character>.cagerig`), with the
+    /// playhead and the cameras; true when the page took it.
+    pub fn download_session(&mut self) -> bool {
+        let Some(page) = self.run.options().page_files.clone() else {
+            return false;
+        };
+        let cameras = self.view.camera_keys();
+        let log = &mut self.diagnostics.log;
+        let Some((name, text)) = self.project.session_text(self.timeline.time, cameras, log) else {
+            return false;
+        };
+        match page.download(&name, "application/json", text.as_bytes()) {
+            Ok(()) => {
+                self.project.mark_saved();
+                log.info(format!("session downloaded as {name}"));
+                true
+            }
+            Err(e) => {
+                log.error(format!("{name}: the download failed: {e}"));
+                false
+            }
+        }
+    }
+
+    /// The web edition: offers the rig as a glTF download (under DQS, CoR or the blended
+    /// method with the current skin baked in, as File ▸ Export writes it).
+    pub fn download_glb(&mut self) {
+        let Some(page) = self.run.options().page_files.clone() else {
+            return;
+        };
+        let log = &mut self.diagnostics.log;
+        let Some(doc) = &self.project.doc else {
+            log.error("nothing to export: no rig is open");
+            return;
+        };
+        let name = crate::project::file_stem_of(&doc.source);
+        match cagerig_formats::export_character_baked_glb(&doc.session, &name) {
+            Ok((bytes, _)) => {
+                match page.download(&format!("{name}.glb"), "model/gltf-binary", &bytes) {
+                    Ok(()) => log.info(format!("{name}.glb downloaded ({} bytes)", bytes.len())),
+                    Err(e) => log.error(format!("{name}.glb: the download failed: {e}")),
+                }
+            }
+            Err(e) => log.error(format!("glTF export: {e}")),
+        }
+    }
+
+    /// Opens a character file whose bytes the page read (its file input, a dropped file or a
+    /// sample), named `name` (`.glb`, `.gltf`), asking about unsaved edits first.
+    pub fn open_character_bytes(&mut self, name: &str, bytes: Vec<u8>) {
+        self.request_open(OpenRequest::Rig(RigSource::Memory {
+            path: PathBuf::from(name),
+            bytes: bytes.into(),
+            auto_cage: None,
+        }));
     }
 
     /// Writes the recovery file now (true when written).
@@ -338,7 +417,14 @@ impl eframe::App for StudioApp {
         );
         let doc = self.project.doc.as_mut();
         self.timeline.advance(&ctx, doc, &mut self.diagnostics);
-        let actions = menu_bar_ui(ui, &self.project, &mut self.view.layout, &mut self.dialogs);
+        let page_files = self.run.options().page_files.clone();
+        let actions = menu_bar_ui(
+            ui,
+            &self.project,
+            &mut self.view.layout,
+            &mut self.dialogs,
+            page_files.as_deref(),
+        );
         self.apply_all(actions, &ctx);
         let doc = self.project.doc.as_ref();
         let help = &mut self.dialogs.help;
@@ -373,6 +459,12 @@ impl eframe::App for StudioApp {
             .frame_end(&ctx, &mut self.diagnostics, self.quit_requested);
     }
 
+    /// The web edition's page reaches the app through this (`eframe::WebRunner::app_mut`).
+    #[cfg(target_arch = "wasm32")]
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        Some(&mut *self)
+    }
+
     fn on_exit(&mut self) {
         self.run.write_frame_stats(&mut self.diagnostics);
         // A clean exit: the recovery file is not needed (unsaved edits were asked about).
@@ -389,7 +481,8 @@ impl StudioApp {
         if ctx.memory(|m| m.focused().is_some()) {
             return;
         }
-        let actions = crate::shortcuts::document_shortcuts(ctx, &mut self.dialogs);
+        let page_files = self.run.options().page_files.is_some();
+        let actions = crate::shortcuts::document_shortcuts(ctx, &mut self.dialogs, page_files);
         self.apply_all(actions, ctx);
         if self.tools.interaction.transform.is_none() {
             let actions = crate::shortcuts::editing_shortcuts(ctx);
@@ -417,7 +510,9 @@ impl StudioApp {
     /// Autosave to the recovery file, at most every two seconds, after edits (not in
     /// `--screenshot` or `--script` runs).
     fn autosave(&mut self) {
-        if self.run.autosaves() {
+        // The web edition has no file system to write a recovery file to (the page asks
+        // before it is closed with unsaved edits).
+        if self.run.autosaves() && self.run.options().page_files.is_none() {
             let log = &mut self.diagnostics.log;
             self.project.autosave(self.timeline.time, log);
         }

@@ -3,7 +3,7 @@
 //! (interval between frame starts).
 
 use std::path::Path;
-use std::time::Instant;
+use web_time::Instant;
 
 use serde::Serialize;
 

@@ -21,6 +21,7 @@
 //! | `open_document` | unsaved-edits question, background loading, swapping documents |
 //! | `opening` | open requests, the background load and its progress window |
 //! | `startup` | the startup options |
+//! | `page_files` | the web edition's files: file input, samples, downloads |
 //! | `scripted_run` | `--script`, `--screenshot`, `--quit-after-frames`, `--frame-stats` |
 //! | **panels** | |
 //! | `menus` | menu bar |
@@ -59,6 +60,7 @@ pub mod menus;
 pub mod open_document;
 pub mod opening;
 pub mod overlay;
+pub mod page_files;
 pub mod picking;
 pub mod project;
 pub mod scripted_run;

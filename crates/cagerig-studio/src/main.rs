@@ -167,6 +167,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         select_joint: args.select_joint,
         color_mode: args.color_map,
         coords: args.coords,
+        page_files: None,
     };
     let failures = std::sync::Arc::clone(&options.failures);
     let native = eframe::NativeOptions {

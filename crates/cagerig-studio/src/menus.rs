@@ -8,6 +8,7 @@ use crate::dialogs::{Dialogs, cwd_string};
 use crate::document::Command;
 use crate::keys::Track;
 use crate::opening::OpenRequest;
+use crate::page_files::PageFiles;
 use crate::project::Project;
 use crate::rig_open::RigSource;
 use crate::view_state::Layout;
@@ -18,12 +19,14 @@ pub fn menu_bar_ui(
     project: &Project,
     layout: &mut Layout,
     dialogs: &mut Dialogs,
+    page_files: Option<&dyn PageFiles>,
 ) -> Vec<Action> {
     let mut actions = Vec::new();
     egui::Panel::top("menu").show(ui, |ui| {
         egui::MenuBar::new().ui(ui, |ui| {
-            ui.menu_button("File", |ui| {
-                file_menu_ui(ui, project, dialogs, &mut actions);
+            ui.menu_button("File", |ui| match page_files {
+                None => file_menu_ui(ui, project, dialogs, &mut actions),
+                Some(page) => page_file_menu_ui(ui, project, page, &mut actions),
             });
             ui.menu_button("Edit", |ui| edit_menu_ui(ui, project, &mut actions));
             ui.menu_button("View", |ui| view_menu_ui(ui, layout, &mut actions));
@@ -80,16 +83,7 @@ fn file_menu_ui(
     {
         dialogs.export_dir = Some(format!("{}cagerig-export", cwd_string()));
     }
-    let names: Vec<String> = project.animations.iter().map(|a| a.name.clone()).collect();
-    ui.add_enabled_ui(!names.is_empty(), |ui| {
-        ui.menu_button("Load animation of the character", |ui| {
-            for (i, name) in names.iter().enumerate() {
-                if ui.button(name).clicked() {
-                    actions.push(Action::LoadCharacterAnimation(i));
-                }
-            }
-        });
-    });
+    character_animations_ui(ui, project, actions);
     if ui.button("Import skeleton animation…").clicked() {
         dialogs.import_animation = Some((Track::Skeleton, cwd_string()));
     }
@@ -100,6 +94,55 @@ fn file_menu_ui(
     if ui.button("Quit").clicked() {
         actions.push(Action::Quit);
     }
+}
+
+/// The File menu of the web edition: the page's file chooser, the samples, downloads.
+fn page_file_menu_ui(
+    ui: &mut egui::Ui,
+    project: &Project,
+    page: &dyn PageFiles,
+    actions: &mut Vec<Action>,
+) {
+    if ui.button("Open .glb / .gltf… (Ctrl+O)").clicked() {
+        actions.push(Action::ChooseCharacter);
+    }
+    ui.menu_button("Open sample", |ui| {
+        for name in cagerig::demo::builtin_names() {
+            if ui.button(format!("{name} (built-in)")).clicked() {
+                actions.push(Action::RequestOpen(OpenRequest::Rig(RigSource::Builtin {
+                    name: (*name).to_string(),
+                    resolution: None,
+                })));
+            }
+        }
+        for name in page.samples() {
+            if ui.button(&name).clicked() {
+                actions.push(Action::OpenSample(name));
+            }
+        }
+    });
+    ui.separator();
+    if ui.button("Download session (Ctrl+S)").clicked() {
+        actions.push(Action::Save);
+    }
+    if ui.button("Download glTF (.glb)").clicked() {
+        actions.push(Action::DownloadGlb);
+    }
+    character_animations_ui(ui, project, actions);
+}
+
+/// Load animation of the character ▸ (one entry per animation of a glTF / FBX character).
+fn character_animations_ui(ui: &mut egui::Ui, project: &Project, actions: &mut Vec<Action>) {
+    let names: Vec<String> = project.animations.iter().map(|a| a.name.clone()).collect();
+    ui.add_enabled_ui(!names.is_empty(), |ui| {
+        ui.menu_button("Load animation of the character", |ui| {
+            for (i, name) in names.iter().enumerate() {
+                if ui.button(name).clicked() {
+                    actions.push(Action::LoadCharacterAnimation(i));
+                }
+            }
+        });
+    });
 }
 
 fn edit_menu_ui(ui: &mut egui::Ui, project: &Project, actions: &mut Vec<Action>) {

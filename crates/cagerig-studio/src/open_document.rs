@@ -5,7 +5,9 @@
 //! playhead at 0 and the views framed on it.
 
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use crate::app::StudioApp;
 use crate::document::Document;

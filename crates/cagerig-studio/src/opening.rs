@@ -2,9 +2,10 @@
 //! to the unsaved-edits question, and the background load of a rig with its progress window
 //! (the application's side, which swaps the documents, is in `open_document`).
 
+use std::cell::{Cell, RefCell};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, mpsc};
-use std::time::Instant;
+use web_time::Instant;
 
 use cagerig::session::BindStage;
 
@@ -41,7 +42,12 @@ pub enum AfterConfirm {
     Open(OpenRequest),
 }
 
-/// A rig being loaded on a background thread.
+/// A load with no thread to run on (the web target): it runs at the second poll, so that the
+/// frame before it draws the progress window.
+type DeferredLoad = Box<dyn FnOnce()>;
+
+/// A rig being loaded on a background thread (on the web target, which has no threads, on the
+/// main thread after one frame of the progress window).
 pub struct PendingOpen {
     request: OpenRequest,
     /// The session file of a session or recovery request, read before its rig.
@@ -50,6 +56,9 @@ pub struct PendingOpen {
     result: mpsc::Receiver<Result<OpenedRig, OpenError>>,
     /// The binding's last report: its stage, the work done and its total.
     progress: Arc<Mutex<Option<(BindStage, usize, usize)>>>,
+    /// The load itself when no thread runs it, and the polls it has waited.
+    deferred: RefCell<Option<DeferredLoad>>,
+    polls: Cell<u32>,
 }
 
 impl PendingOpen {
@@ -65,25 +74,36 @@ impl PendingOpen {
         let job = source.clone();
         let progress = Arc::new(Mutex::new(None));
         let shared = Arc::clone(&progress);
-        let spawned = std::thread::Builder::new()
-            .name("cagerig-open".into())
-            .spawn(move || {
-                let report = |stage: BindStage, done: usize, total: usize| {
-                    if let Ok(mut slot) = shared.lock() {
-                        *slot = Some((stage, done, total));
-                    }
-                };
-                // The receiver is gone only if the load was abandoned.
-                let _ = sender.send(open_rig_with_progress(&job, &report));
-            });
+        let work = move || {
+            let report = |stage: BindStage, done: usize, total: usize| {
+                if let Ok(mut slot) = shared.lock() {
+                    *slot = Some((stage, done, total));
+                }
+            };
+            // The receiver is gone only if the load was abandoned.
+            let _ = sender.send(open_rig_with_progress(&job, &report));
+        };
         let started = Instant::now();
+        #[cfg(target_arch = "wasm32")]
+        let (spawned, deferred): (std::io::Result<()>, Option<DeferredLoad>) =
+            (Ok(()), Some(Box::new(work)));
+        #[cfg(not(target_arch = "wasm32"))]
+        let (spawned, deferred): (std::io::Result<()>, Option<DeferredLoad>) = (
+            std::thread::Builder::new()
+                .name("cagerig-open".into())
+                .spawn(work)
+                .map(drop),
+            None,
+        );
         match spawned {
-            Ok(_) => Ok(Self {
+            Ok(()) => Ok(Self {
                 request,
                 session,
                 started,
                 result: receiver,
                 progress,
+                deferred: RefCell::new(deferred),
+                polls: Cell::new(0),
             }),
             Err(error) => Err(Box::new(NoThread {
                 request,
@@ -94,8 +114,14 @@ impl PendingOpen {
         }
     }
 
-    /// The result of the load once it has arrived.
+    /// The result of the load once it has arrived (a deferred load runs at the second call).
     pub fn try_result(&self) -> Option<Result<OpenedRig, OpenError>> {
+        self.polls.set(self.polls.get().saturating_add(1));
+        if self.polls.get() >= 2
+            && let Some(work) = self.deferred.borrow_mut().take()
+        {
+            work();
+        }
         match self.result.try_recv() {
             Ok(result) => Some(result),
             Err(mpsc::TryRecvError::Empty) => None,

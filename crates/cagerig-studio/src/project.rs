@@ -4,7 +4,9 @@
 //! and animation import.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use cagerig_formats::{ImportedAnimation, MorphTargets};
 
@@ -90,6 +92,37 @@ impl Project {
                 log.error(e.to_string());
                 false
             }
+        }
+    }
+
+    /// The session file's name (`<character>.cagerig`) and text, for the web edition's
+    /// download (logs why when there is none).
+    pub fn session_text(
+        &self,
+        time: f64,
+        cameras: Option<[[f64; 7]; 2]>,
+        log: &mut Log,
+    ) -> Option<(String, String)> {
+        let Some(doc) = &self.doc else {
+            log.error("nothing to save: no rig is open");
+            return None;
+        };
+        let mut file = doc.session_file(time);
+        file.cameras = cameras;
+        let name = format!("{}.cagerig", file_stem_of(&doc.source));
+        match file.to_text(Path::new(&name)) {
+            Ok(text) => Some((name, text)),
+            Err(e) => {
+                log.error(e.to_string());
+                None
+            }
+        }
+    }
+
+    /// The document's edits are saved (the web edition's download was taken).
+    pub fn mark_saved(&mut self) {
+        if let Some(doc) = &self.doc {
+            self.saved_edits = doc.edits;
         }
     }
 
@@ -238,5 +271,17 @@ impl Project {
             }
             Err(e) => log.error(e.to_string()),
         }
+    }
+}
+
+/// The name a rig's files are saved under: its character file's stem, or the built-in rig's
+/// name.
+pub fn file_stem_of(source: &crate::rig_open::RigSource) -> String {
+    use crate::rig_open::RigSource;
+    match source {
+        RigSource::Builtin { name, .. } => name.clone(),
+        RigSource::File { path, .. } | RigSource::Memory { path, .. } => path
+            .file_stem()
+            .map_or_else(|| "rig".to_string(), |s| s.to_string_lossy().into_owned()),
     }
 }

@@ -3,7 +3,7 @@
 //! `--frame-stats`.
 
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use web_time::Instant;
 
 use crate::diagnostics::{Diagnostics, Log};
 use crate::document::Document;

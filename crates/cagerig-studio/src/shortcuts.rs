@@ -14,7 +14,13 @@ fn pressed(ctx: &egui::Context, modifiers: Modifiers, key: Key) -> bool {
 
 /// The shortcuts of the document and its files: undo / redo, save, open (the caller skips
 /// them while a text field has the focus). Dialogs are opened here; the rest is returned.
-pub fn document_shortcuts(ctx: &egui::Context, dialogs: &mut Dialogs) -> Vec<Action> {
+/// In the web edition (`page_files`), Ctrl+O opens the page's file chooser and Ctrl+Shift+S
+/// downloads the session as Ctrl+S does.
+pub fn document_shortcuts(
+    ctx: &egui::Context,
+    dialogs: &mut Dialogs,
+    page_files: bool,
+) -> Vec<Action> {
     let mut actions = Vec::new();
     let ctrl_shift = Modifiers::COMMAND | Modifiers::SHIFT;
     if pressed(ctx, ctrl_shift, Key::Z) || pressed(ctx, Modifiers::COMMAND, Key::Y) {
@@ -23,12 +29,20 @@ pub fn document_shortcuts(ctx: &egui::Context, dialogs: &mut Dialogs) -> Vec<Act
         actions.push(Action::Undo);
     }
     if pressed(ctx, ctrl_shift, Key::S) {
-        dialogs.save_as = Some("session.cagerig".into());
+        if page_files {
+            actions.push(Action::Save);
+        } else {
+            dialogs.save_as = Some("session.cagerig".into());
+        }
     } else if pressed(ctx, Modifiers::COMMAND, Key::S) {
         actions.push(Action::Save);
     }
     if pressed(ctx, Modifiers::COMMAND, Key::O) {
-        dialogs.open = Some(String::new());
+        if page_files {
+            actions.push(Action::ChooseCharacter);
+        } else {
+            dialogs.open = Some(String::new());
+        }
     }
     actions
 }

@@ -37,6 +37,8 @@ pub struct StartupOptions {
     pub color_mode: ColorMode,
     /// Cage coordinates to bind with after opening (`--coords`); `None`: as opened.
     pub coords: Option<cagerig::CoordsKind>,
+    /// The web page's files (file input, samples, downloads); `None` in the native studio.
+    pub page_files: Option<crate::page_files::SharedPageFiles>,
     /// Failures of the startup actions (open, script, save), for the binary's exit status.
     pub failures: Arc<std::sync::Mutex<Vec<String>>>,
 }

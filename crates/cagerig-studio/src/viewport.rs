@@ -3,7 +3,7 @@
 //! (selection, gizmo, names) are painted over it by egui.
 
 use std::sync::Arc;
-use std::time::Instant;
+use web_time::Instant;
 
 use cagerig::session::RigSession;
 use cagerig_render::rig_scene::{ColorBy, Layers, Pose, RigSceneData};

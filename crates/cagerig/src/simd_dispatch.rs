@@ -96,10 +96,12 @@ pub(crate) fn cpu() -> Cpu {
 
 #[cold]
 fn detect() -> Cpu {
-    let mut bits = DETECTED;
+    #[cfg(not(target_arch = "x86_64"))]
+    let bits = DETECTED;
     #[cfg(target_arch = "x86_64")]
-    {
+    let bits = {
         use std::arch::is_x86_feature_detected;
+        let mut bits = DETECTED;
         for (present, bit) in [
             (is_x86_feature_detected!("avx512f"), AVX512F),
             (is_x86_feature_detected!("avx2"), AVX2),
@@ -109,7 +111,8 @@ fn detect() -> Cpu {
                 bits |= bit;
             }
         }
-    }
+        bits
+    };
     FEATURES.store(bits, Ordering::Relaxed);
     Cpu(bits)
 }

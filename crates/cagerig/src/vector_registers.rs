@@ -10,9 +10,12 @@
 //! the registers before they return, on every thread they ran it on. (The CPU's XINUSE bits do
 //! not show this state: they read the same before and after the clearing.)
 
-#![expect(
-    unsafe_code,
-    reason = "the register-width probe calls #[target_feature] functions after detection"
+#![cfg_attr(
+    target_arch = "x86_64",
+    expect(
+        unsafe_code,
+        reason = "the register-width probe calls #[target_feature] functions after detection"
+    )
 )]
 
 /// Clears the upper halves of the vector registers of the calling thread (a no-op without AVX).

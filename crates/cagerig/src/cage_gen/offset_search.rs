@@ -2,7 +2,7 @@
 //! spacing from the target, then offsets from the tightest the grid guarantees upwards until a
 //! cage reaches the target and passes the validator.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use glam::DVec3;
 use serde::Serialize;

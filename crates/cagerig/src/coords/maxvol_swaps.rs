@@ -25,8 +25,10 @@ const MAX_SWAPS_PER_COLUMN: usize = 100;
 /// against 2.4 ms for the whole selection).
 const PARALLEL_ENTRIES: usize = 1 << 20;
 /// Most rows per parallel task of the rank-1 update.
+#[cfg(not(target_arch = "wasm32"))]
 const ROW_BLOCK: usize = 8192;
 /// Fewest rows per parallel task of the rank-1 update.
+#[cfg(not(target_arch = "wasm32"))]
 const MIN_ROW_BLOCK: usize = 256;
 /// Pair swaps are searched among rows with |B[i, j]| ≥ this in both columns: a pair swap
 /// that improves on a single-swap maximum (all |B| ≤ 1) needs two rows spread over the same
@@ -442,6 +444,7 @@ fn max_entry(a: (usize, usize, f64), b: (usize, usize, f64)) -> (usize, usize, f
 }
 
 /// `B[:, k] -= pivot_column · pivot_row[k]` for every k, returning the new argmax |B|.
+#[cfg(not(target_arch = "wasm32"))]
 fn rank_one_update_and_argmax(
     b: &mut Mat<f64>,
     pivot_column: &[f64],
@@ -461,6 +464,17 @@ fn rank_one_update_and_argmax(
             (start + r, k, value)
         })
         .reduce(|| (0, 0, -1.0), max_entry)
+}
+
+/// The web target has no threads: [`rank_one_update_and_argmax_seq`], the same argmax (ties are
+/// broken by position, whatever the split).
+#[cfg(target_arch = "wasm32")]
+fn rank_one_update_and_argmax(
+    b: &mut Mat<f64>,
+    pivot_column: &[f64],
+    pivot_row: &[f64],
+) -> (usize, usize, f64) {
+    rank_one_update_and_argmax_seq(b, pivot_column, pivot_row)
 }
 
 /// Sequential [`rank_one_update_and_argmax`] (a zero `pivot_row` just finds the argmax).

@@ -4,9 +4,12 @@
 //! CPU ([`LaneMath`]: plain IEEE, FMA with IEEE division and square root, or AVX-512 estimates
 //! refined by Newton steps; MVC's tiers each use their own).
 
-#![expect(
-    unsafe_code,
-    reason = "AVX-512 intrinsics on the tiers that detected avx512f"
+#![cfg_attr(
+    target_arch = "x86_64",
+    expect(
+        unsafe_code,
+        reason = "AVX-512 intrinsics on the tiers that detected avx512f"
+    )
 )]
 
 /// Points per batch.

@@ -288,7 +288,7 @@ mod tests {
 
     #[test]
     fn snake_scales_to_130k_vertices() {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let rig = builtin("snake", Some(130_000)).unwrap();
         let elapsed = start.elapsed();
         let n = rig.mesh.num_vertices();

@@ -1,0 +1,221 @@
+//! The web page's side of the studio: starting it on the page's canvas, the page's files
+//! ([`cagerig_studio::page_files::PageFiles`], implemented by `window.cagerigPage` in
+//! `web/index.html`), and the exports the page and its test call.
+//!
+//! Every export works on the one running studio; before [`start`] has finished, or after a
+//! panic, they report that no studio runs.
+
+use std::cell::RefCell;
+use std::sync::Arc;
+
+use cagerig_studio::StudioApp;
+use cagerig_studio::page_files::PageFiles;
+use cagerig_studio::rig_open::RigSource;
+use cagerig_studio::startup::StartupOptions;
+use wasm_bindgen::prelude::*;
+
+use crate::rig_state::RigState;
+
+/// The samples the page serves beside itself (`web/build.sh` copies them to `samples/`).
+const SAMPLES: [&str; 3] = ["Arm.glb", "Fox.glb", "CesiumMan.glb"];
+
+#[wasm_bindgen]
+extern "C" {
+    /// `window.cagerigPage.chooseCharacter()`: clicks the page's file input.
+    #[wasm_bindgen(js_namespace = cagerigPage, js_name = chooseCharacter)]
+    fn page_choose_character();
+    /// `window.cagerigPage.fetchSample(name)`: fetches `samples/<name>` and opens it.
+    #[wasm_bindgen(js_namespace = cagerigPage, js_name = fetchSample)]
+    fn page_fetch_sample(name: &str);
+    /// `window.cagerigPage.download(name, mime, bytes)`: offers a download.
+    #[wasm_bindgen(catch, js_namespace = cagerigPage, js_name = download)]
+    fn page_download(name: &str, mime: &str, bytes: &[u8]) -> Result<(), JsValue>;
+}
+
+/// [`PageFiles`] through `window.cagerigPage`.
+#[derive(Debug)]
+struct Page;
+
+impl PageFiles for Page {
+    fn choose_character(&self) {
+        page_choose_character();
+    }
+
+    fn samples(&self) -> Vec<String> {
+        SAMPLES.iter().map(|s| (*s).to_string()).collect()
+    }
+
+    fn fetch_sample(&self, name: &str) {
+        page_fetch_sample(name);
+    }
+
+    fn download(&self, file_name: &str, mime: &str, bytes: &[u8]) -> Result<(), String> {
+        page_download(file_name, mime, bytes).map_err(|e| format!("{e:?}"))
+    }
+}
+
+thread_local! {
+    /// The running studio.
+    static RUNNER: RefCell<Option<eframe::WebRunner>> = const { RefCell::new(None) };
+    /// Its egui context, to ask for a frame after a change from outside.
+    static CONTEXT: RefCell<Option<egui::Context>> = const { RefCell::new(None) };
+}
+
+/// Runs `f` on the studio (and asks for a new frame), or fails when none runs.
+fn with_app<T>(f: impl FnOnce(&mut StudioApp) -> T) -> Result<T, JsValue> {
+    let result = RUNNER.with(|runner| {
+        let runner = runner.borrow();
+        let runner = runner
+            .as_ref()
+            .ok_or_else(|| JsValue::from_str("the studio has not started"))?;
+        let mut app = runner
+            .app_mut::<StudioApp>()
+            .ok_or_else(|| JsValue::from_str("the studio has stopped (see the console)"))?;
+        Ok::<T, JsValue>(f(&mut app))
+    })?;
+    CONTEXT.with(|c| {
+        if let Some(ctx) = c.borrow().as_ref() {
+            ctx.request_repaint();
+        }
+    });
+    Ok(result)
+}
+
+/// Starts the studio on the canvas with id `canvas_id`, on the built-in snake.
+#[wasm_bindgen]
+pub async fn start(canvas_id: String) -> Result<(), JsValue> {
+    eframe::WebLogger::init(log::LevelFilter::Warn).ok();
+    let document = web_sys::window()
+        .and_then(|w| w.document())
+        .ok_or_else(|| JsValue::from_str("no document"))?;
+    let canvas = document
+        .get_element_by_id(&canvas_id)
+        .ok_or_else(|| JsValue::from_str(&format!("no element with id {canvas_id:?}")))?
+        .dyn_into::<web_sys::HtmlCanvasElement>()?;
+    let runner = eframe::WebRunner::new();
+    let options = StartupOptions {
+        // No file system: nothing is read from or written to a state folder.
+        state_dir: Some("/cagerig-studio".into()),
+        page_files: Some(Arc::new(Page)),
+        ..StartupOptions::default()
+    };
+    runner
+        .start(
+            canvas,
+            eframe::WebOptions::default(),
+            Box::new(move |cc| {
+                let ctx = cc.egui_ctx.clone();
+                CONTEXT.with(|c| *c.borrow_mut() = Some(ctx));
+                Ok(Box::new(StudioApp::new(cc, options)))
+            }),
+        )
+        .await?;
+    RUNNER.with(|r| *r.borrow_mut() = Some(runner));
+    Ok(())
+}
+
+/// Opens a character file the page read (file input, drop, sample): `name` gives its format.
+#[wasm_bindgen]
+pub fn open_file(name: String, bytes: Vec<u8>) -> Result<(), JsValue> {
+    with_app(|app| app.open_character_bytes(&name, bytes))
+}
+
+/// Opens a built-in rig (`snake`, `bar`, `bar_irregular`) at its default resolution.
+#[wasm_bindgen]
+pub fn open_builtin(name: String) -> Result<(), JsValue> {
+    with_app(|app| {
+        app.request_open(cagerig_studio::opening::OpenRequest::Rig(
+            RigSource::Builtin {
+                name,
+                resolution: None,
+            },
+        ))
+    })
+}
+
+/// The rig's state (S', C, C', M, M') as JSON, for the test's comparison with native runs.
+#[wasm_bindgen]
+pub fn rig_state() -> Result<String, JsValue> {
+    with_app(|app| {
+        app.project.doc.as_ref().map_or_else(
+            || "null".to_string(),
+            |doc| RigState::of(&doc.session).to_json(),
+        )
+    })
+}
+
+/// Runs an edit script (`cagerig edit`'s JSON) through the studio's command path, one undo
+/// step per step; returns the milliseconds the engine took (`performance.now()`).
+#[wasm_bindgen]
+pub fn run_script(json: String) -> Result<f64, JsValue> {
+    let script = cagerig::script::EditScript::parse(&json)
+        .map_err(|e| JsValue::from_str(&format!("the script: {e}")))?;
+    with_app(|app| {
+        let doc = app
+            .project
+            .doc
+            .as_mut()
+            .ok_or_else(|| JsValue::from_str("no rig is open"))?;
+        let started = web_time::Instant::now();
+        doc.run_script(&script)
+            .map_err(|e| JsValue::from_str(&e.to_string()))?;
+        Ok(started.elapsed().as_secs_f64() * 1e3)
+    })?
+}
+
+/// The studio's status as JSON: the rig's name and sizes, whether it is opening, unsaved
+/// edits, the undo depth, the frames drawn and the log.
+#[wasm_bindgen]
+pub fn status() -> Result<String, JsValue> {
+    with_app(|app| {
+        let doc = app.project.doc.as_ref();
+        let log: Vec<serde_json::Value> = app
+            .diagnostics
+            .log
+            .lines()
+            .iter()
+            .map(|l| serde_json::json!({"level": format!("{:?}", l.level), "text": l.text}))
+            .collect();
+        serde_json::json!({
+            "name": doc.map(|d| d.source.display_name()),
+            "vertices": doc.map(|d| d.session.num_vertices()),
+            "joints": doc.map(|d| d.session.skeleton().len()),
+            "cage_vertices": doc.map(|d| d.session.rest_cage().len()),
+            "opening": app.is_opening(),
+            "unsaved": app.unsaved(),
+            "undo_depth": doc.map(|d| d.history().undo_len()),
+            "frames": app.frames(),
+            "log": log,
+        })
+        .to_string()
+    })
+}
+
+/// Where a posed joint (`kind` "joint") or a current-cage vertex (`kind` "cage") of index
+/// `index` is drawn in the current-pose view, in CSS pixels of the page; `None` when it is not
+/// drawn.
+#[wasm_bindgen]
+pub fn screen_point(kind: String, index: usize) -> Result<Option<Vec<f64>>, JsValue> {
+    with_app(|app| {
+        let doc = app.project.doc.as_ref()?;
+        let point = match kind.as_str() {
+            "joint" => doc.session.posed_joints().nth(index)?,
+            "cage" => *doc.session.posed_cage().get(index)?,
+            _ => return None,
+        };
+        let view = cagerig_studio::view_state::CURRENT;
+        let rect = app.tools.interaction.view_rects[view];
+        let at = app.view.projection(view).project(point)?;
+        Some(vec![
+            f64::from(rect.min.x) + at.x,
+            f64::from(rect.min.y) + at.y,
+        ])
+    })
+}
+
+/// Whether the studio has edits not yet downloaded as a session (the page asks before it is
+/// closed).
+#[wasm_bindgen]
+pub fn has_unsaved_edits() -> bool {
+    with_app(|app| app.unsaved()).unwrap_or(false)
+}
