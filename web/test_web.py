@@ -347,7 +347,14 @@ def main():
         check("the Fox's session names its file", session["source"].get("path") == "Fox.glb",
               json.dumps(session["source"]))
 
-        # 9. The Arm sample: the binding's time in the page.
+        # 9. File ▸ Download glTF: a .glb the native library reads back.
+        driver.js("cagerigTest.downloadGlb()")
+        glb = wait("the .glb download", lambda: [p for p in downloads.glob("*.glb") if p.stat().st_size], 30)[0]
+        info = subprocess.run([str(args.cli), "info", str(glb)], capture_output=True, text=True)
+        check("the downloaded .glb opens in the native library", info.returncode == 0 and "24 joints" in info.stdout,
+              f"{glb.name}: {glb.stat().st_size} bytes; {info.stderr.strip()[:200]}")
+
+        # 10. The Arm sample: the binding's time in the page.
         driver.js("window.cagerigPage.fetchSample('Arm.glb')")
         wait("the Arm to open", lambda: (s := status()) and s["name"] == "Arm.glb" and not s["opening"], 120)
         lines = [l["text"] for l in status()["log"] if l["text"].startswith("opened Arm.glb")]
@@ -355,7 +362,7 @@ def main():
         report["arm_open_ms"] = arm_ms
         print(f"     Arm: opened and bound in {arm_ms:.0f} ms", flush=True)
 
-        # 10. Bad files give a message, and the page goes on.
+        # 11. Bad files give a message, and the page goes on.
         truncated = list(fox.read_bytes()[:4000])
         for name, payload in [("truncated.glb", truncated),
                               ("no-mesh.gltf", list(b'{"asset":{"version":"2.0"},"scenes":[{"nodes":[]}]}')),
@@ -374,7 +381,7 @@ def main():
                   name in message and after["name"] == "Arm.glb", message[:160])
         driver.screenshot(out / "bad-file.png")
 
-        # 11. No errors in the console.
+        # 12. No errors in the console.
         console = [e for e in driver.browser_log() if e.get("level") == "SEVERE"]
         check("the console has no errors", not console, json.dumps(console)[:1000])
     finally:

@@ -553,6 +553,12 @@ impl StudioApp {
     }
 
     fn handle_dropped_files(&mut self, ctx: &egui::Context) {
+        if let Some(page) = &self.run.options().page_files {
+            for file in ctx.input(|i| i.raw.dropped_files.clone()) {
+                page.open_dropped(file);
+            }
+            return;
+        }
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw
                 .dropped_files

@@ -16,6 +16,9 @@ pub trait PageFiles: std::fmt::Debug {
     fn samples(&self) -> Vec<String>;
     /// Fetches sample `name` (one of [`Self::samples`]); its bytes come back as a chosen file's.
     fn fetch_sample(&self, name: &str);
+    /// Reads a file dropped on the studio (the browser reads it asynchronously) and opens it as
+    /// a chosen file.
+    fn open_dropped(&self, file: egui::DroppedFileHandle);
     /// Offers `bytes` as a download named `file_name` of MIME type `mime`.
     fn download(&self, file_name: &str, mime: &str, bytes: &[u8]) -> Result<(), String>;
 }

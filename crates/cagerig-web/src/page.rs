@@ -49,6 +49,22 @@ impl PageFiles for Page {
         page_fetch_sample(name);
     }
 
+    fn open_dropped(&self, file: egui::DroppedFileHandle) {
+        wasm_bindgen_futures::spawn_local(async move {
+            let name = file.path().display().to_string();
+            let read = file.bytes_async().await;
+            // Runs between frames: the studio is free.
+            let _ = match read {
+                Ok(bytes) => open_file(name, bytes),
+                Err(e) => with_app(|app| {
+                    app.diagnostics
+                        .log
+                        .error(format!("{name}: the browser could not read the file: {e}"))
+                }),
+            };
+        });
+    }
+
     fn download(&self, file_name: &str, mime: &str, bytes: &[u8]) -> Result<(), String> {
         page_download(file_name, mime, bytes).map_err(|e| format!("{e:?}"))
     }
@@ -114,10 +130,32 @@ pub async fn start(canvas_id: String) -> Result<(), JsValue> {
     Ok(())
 }
 
+/// The largest character file the page opens (the wasm memory holds the file, the rig and its
+/// dense coordinates; larger characters open in the native studio).
+const LARGEST_FILE: usize = 64 << 20;
+
 /// Opens a character file the page read (file input, drop, sample): `name` gives its format.
+/// A file over [`LARGEST_FILE`] is refused in the log.
 #[wasm_bindgen]
 pub fn open_file(name: String, bytes: Vec<u8>) -> Result<(), JsValue> {
-    with_app(|app| app.open_character_bytes(&name, bytes))
+    with_app(|app| {
+        if bytes.len() > LARGEST_FILE {
+            app.diagnostics.log.error(format!(
+                "cannot open: {name}: {:.1} MB is more than the web studio opens ({} MB); open \
+                 it in the native studio",
+                bytes.len() as f64 / 1048576.0,
+                LARGEST_FILE >> 20
+            ));
+        } else {
+            app.open_character_bytes(&name, bytes);
+        }
+    })
+}
+
+/// Offers the rig as a `.glb` download (File ▸ Download glTF).
+#[wasm_bindgen]
+pub fn download_glb() -> Result<(), JsValue> {
+    with_app(StudioApp::download_glb)
 }
 
 /// Opens a built-in rig (`snake`, `bar`, `bar_irregular`) at its default resolution.
@@ -185,6 +223,8 @@ pub fn status() -> Result<String, JsValue> {
             "unsaved": app.unsaved(),
             "undo_depth": doc.map(|d| d.history().undo_len()),
             "frames": app.frames(),
+            "selected_joint": app.tools.selection.joint,
+            "selected_cage": app.tools.selection.cage.iter().collect::<Vec<_>>(),
             "log": log,
         })
         .to_string()
