@@ -131,8 +131,20 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
              target added)"
         ),
         (SkinningMethod::Lbs, false)
-        | (SkinningMethod::Dqs | SkinningMethod::Cor | SkinningMethod::Blended, true) => {}
-        (SkinningMethod::Dqs | SkinningMethod::Cor | SkinningMethod::Blended, false) => eprintln!(
+        | (
+            SkinningMethod::Dqs
+            | SkinningMethod::Cor
+            | SkinningMethod::Blended
+            | SkinningMethod::External,
+            true,
+        ) => {}
+        (
+            SkinningMethod::Dqs
+            | SkinningMethod::Cor
+            | SkinningMethod::Blended
+            | SkinningMethod::External,
+            false,
+        ) => eprintln!(
             "warning: glTF skins with LBS: viewers show the LBS result of this rig, not \
              cagerig's {label} skin (up to a few % of the diagonal apart){hint}",
             label = method.label(),
