@@ -49,6 +49,15 @@ def _coupled_skin(context: bpy.types.Context) -> bpy.types.Object | None:
     return None
 
 
+def _coupled_skin_or_report(op: bpy.types.Operator, context: bpy.types.Context) -> bpy.types.Object | None:
+    """The coupled skin the user means (see `_coupled_skin`); when there is none, `op` reports
+    the error that says what to select."""
+    skin = _coupled_skin(context)
+    if skin is None:
+        op.report({"ERROR"}, "Make a coupled skin (or its cage) the active object")
+    return skin
+
+
 class CAGERIG_OT_generate_cage(bpy.types.Operator):
     """Generate a closed cage around the active skinned mesh (cagerig's cage generator)"""
 
@@ -201,9 +210,8 @@ class CAGERIG_OT_sync(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context: bpy.types.Context) -> set[str]:
-        skin = _coupled_skin(context)
+        skin = _coupled_skin_or_report(self, context)
         if skin is None:
-            self.report({"ERROR"}, "Make a coupled skin (or its cage) the active object")
             return {"CANCELLED"}
         try:
             engine.sync(skin)
@@ -221,9 +229,8 @@ class CAGERIG_OT_uncouple(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context: bpy.types.Context) -> set[str]:
-        skin = _coupled_skin(context)
+        skin = _coupled_skin_or_report(self, context)
         if skin is None:
-            self.report({"ERROR"}, "Make a coupled skin (or its cage) the active object")
             return {"CANCELLED"}
         engine.remove_cor_key(skin)  # the skin keeps its rest state, shown by the modifier's LBS
         store.remove(skin)
@@ -240,9 +247,8 @@ class CAGERIG_OT_bake(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context: bpy.types.Context) -> set[str]:
-        skin = _coupled_skin(context)
+        skin = _coupled_skin_or_report(self, context)
         if skin is None:
-            self.report({"ERROR"}, "Make a coupled skin (or its cage) the active object")
             return {"CANCELLED"}
         scene = context.scene
         try:
@@ -293,11 +299,4 @@ CLASSES = (
 )
 
 
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -82,11 +82,4 @@ def _options(layout: bpy.types.UILayout, obj: bpy.types.Object) -> None:
 CLASSES = (CAGERIG_PT_main,)
 
 
-def register() -> None:
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister() -> None:
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

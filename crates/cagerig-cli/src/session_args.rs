@@ -182,3 +182,22 @@ pub fn choose_skinning(
     }
     method
 }
+
+/// Replays every step of the edit script `script`, read from `path`, on `session`: checked
+/// against the session first, then run step by step; an error names the file.
+pub fn replay_script(
+    script: &cagerig::script::EditScript,
+    path: &std::path::Path,
+    session: &mut RigSession,
+) -> anyhow::Result<()> {
+    use anyhow::Context;
+    script
+        .validate(session)
+        .with_context(|| format!("in {}", path.display()))?;
+    for k in 0..script.steps.len() {
+        script
+            .run_step(k, session)
+            .with_context(|| format!("in {}", path.display()))?;
+    }
+    Ok(())
+}

@@ -56,11 +56,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         cagerig::CoordsKind::Mvc
     };
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
-    let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
-    let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
-    let (weights, _) = cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), 25)?;
-    let cage = cagerig::io::read_obj(&dir.join("arm_cage.obj"))?;
+    let arm_obj = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm/arm.obj");
+    let arm = cagerig::rig_files::load_rig_files(&arm_obj, None)?.parts;
+    let (mesh, skeleton, weights, cage) = (arm.mesh, arm.skeleton, arm.skin_weights, arm.cage);
     let sub = subdivide_midpoint(&mesh, &weights, levels)?;
     let nv = sub.mesh.num_vertices();
     println!("Arm N={levels}: {nv} vertices");

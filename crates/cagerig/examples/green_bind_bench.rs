@@ -22,12 +22,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .position(|a| a == "--reps")
         .and_then(|i| args.get(i + 1))
         .map_or(Ok(if levels >= 3 { 5 } else { 31 }), |a| a.parse())?;
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
-    let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
-    let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
-    let (weights, _) =
-        cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), skeleton.len())?;
-    let cage = cagerig::io::read_obj(&dir.join("arm_cage.obj"))?;
+    let arm_obj = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm/arm.obj");
+    let arm = cagerig::rig_files::load_rig_files(&arm_obj, None)?.parts;
+    let (mesh, weights, cage) = (arm.mesh, arm.skin_weights, arm.cage);
     let mesh = cagerig::subdivide::subdivide_midpoint(&mesh, &weights, levels)?.mesh;
     let points = &mesh.positions;
     println!(

@@ -16,11 +16,9 @@ use cagerig::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let levels: usize = std::env::args().nth(1).map_or(Ok(2), |a| a.parse())?;
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
-    let mesh = cagerig::io::read_obj(&dir.join("arm.obj"))?;
-    let skeleton = cagerig::io::read_skt(&dir.join("arm.skt"))?;
-    let (weights, _) = cagerig::io::read_skw(&dir.join("arm.skw"), mesh.num_vertices(), 25)?;
-    let cage = cagerig::io::read_obj(&dir.join("arm_cage.obj"))?;
+    let arm_obj = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm/arm.obj");
+    let arm = cagerig::rig_files::load_rig_files(&arm_obj, None)?.parts;
+    let (mesh, skeleton, weights, cage) = (arm.mesh, arm.skeleton, arm.skin_weights, arm.cage);
     let sub = subdivide_midpoint(&mesh, &weights, levels)?;
     let phi = compute_cage_coords(&cage, &sub.mesh.positions, None)?;
     // Best of three runs, in ms.

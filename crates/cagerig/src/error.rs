@@ -193,6 +193,20 @@ pub enum RigError {
          its mesh); expected a rig with DQ blend weights, or choose lbs, dqs or cor"
     )]
     NoDqBlendWeights,
+    /// The external skinning method was asked of a session built without one.
+    #[error(
+        "the session has no external skinning method: expected one passed in \
+         SessionOptions::external_skinning, or choose lbs, dqs, cor or blended"
+    )]
+    NoExternalSkinning,
+    /// The external skinning method could not bind the rig.
+    #[error("the external skinning method {name:?} could not bind the rig: {message}")]
+    ExternalSkinning {
+        /// The method's name ([`crate::session::SkinningBackend::name`]).
+        name: String,
+        /// Why, in the method's words.
+        message: String,
+    },
     /// Two sizes that must agree (e.g. rows of Φ and vertices of M) differ.
     #[error("{what}: expected {expected} but got {actual}")]
     SizeMismatch {

@@ -40,6 +40,7 @@ mod display_path;
 mod display_rest_map;
 mod editable_state;
 mod events;
+mod external_skinning;
 mod green;
 mod green_binding;
 mod green_sync;
@@ -60,6 +61,7 @@ use display_path::DisplayPath;
 pub use display_path::DisplayPrecision;
 pub use display_rest_map::{DisplayRestMap, DisplayRestMapBackend, DisplayRestMapProduct};
 pub use editable_state::{EditableState, SyncLocks};
+pub use external_skinning::{BoundSkinning, SkinningBackend, SkinningBindInput};
 pub use green::GREEN_FIT_LIMIT;
 pub use parts::{
     BindProgress, BindStage, CageFitSource, FitRows, FitRowsKind, GRID_COR_CENTRES_ABOVE,
@@ -252,6 +254,23 @@ impl RigSession {
             .collect::<Result<Vec<_>, _>>()?
             .into_iter()
             .unzip();
+        let external_skinning = options
+            .external_skinning
+            .as_ref()
+            .map(|backend| {
+                backend
+                    .bind(&SkinningBindInput {
+                        rest_mesh: &mesh.positions,
+                        triangles: &mesh.triangles,
+                        skeleton: &skeleton,
+                        skin_weights: &skin_weights,
+                    })
+                    .map_err(|message| RigError::ExternalSkinning {
+                        name: backend.name().to_owned(),
+                        message,
+                    })
+            })
+            .transpose()?;
         let mut session = Self {
             mesh_triangles: mesh.triangles.clone(),
             topology_id: next_topology_id(),
@@ -259,6 +278,7 @@ impl RigSession {
             skinning: RigSkinning::new(
                 &skin_weights,
                 blended,
+                external_skinning,
                 CorSource {
                     rows: cor_rows,
                     given: cor_centre_coords,

@@ -22,6 +22,18 @@ pub struct Joint {
     pub rest_world_from_joint: DAffine3,
 }
 
+impl Joint {
+    /// A joint named `name` under `parent` whose rest frame is a translation to `position`
+    /// (the joint position a_j, axes aligned with the world's).
+    pub fn at(name: impl Into<String>, parent: Option<usize>, position: DVec3) -> Self {
+        Self {
+            name: name.into(),
+            parent,
+            rest_world_from_joint: DAffine3::from_translation(position),
+        }
+    }
+}
+
 /// A validated joint hierarchy: parents exist, no cycles, unique names.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Skeleton {
@@ -191,27 +203,22 @@ impl Skeleton {
 mod tests {
     use super::*;
 
-    fn joint(name: &str, parent: Option<usize>, t: DVec3) -> Joint {
-        Joint {
-            name: name.into(),
-            parent,
-            rest_world_from_joint: DAffine3::from_translation(t),
-        }
-    }
-
     #[test]
     fn rejects_cycles_unknown_parents_and_duplicates() {
         let cyc = vec![
-            joint("a", Some(1), DVec3::ZERO),
-            joint("b", Some(0), DVec3::X),
+            Joint::at("a", Some(1), DVec3::ZERO),
+            Joint::at("b", Some(0), DVec3::X),
         ];
         assert!(matches!(Skeleton::new(cyc), Err(RigError::Cycle { .. })));
-        let unk = vec![joint("a", Some(5), DVec3::ZERO)];
+        let unk = vec![Joint::at("a", Some(5), DVec3::ZERO)];
         assert!(matches!(
             Skeleton::new(unk),
             Err(RigError::UnknownParent { parent: 5, .. })
         ));
-        let dup = vec![joint("a", None, DVec3::ZERO), joint("a", Some(0), DVec3::X)];
+        let dup = vec![
+            Joint::at("a", None, DVec3::ZERO),
+            Joint::at("a", Some(0), DVec3::X),
+        ];
         assert!(matches!(
             Skeleton::new(dup),
             Err(RigError::DuplicateJointName {
@@ -226,14 +233,14 @@ mod tests {
     fn fk_of_rest_locals_gives_rest_frames_with_children_listed_first() {
         // Child listed before its parent, two roots.
         let joints = vec![
-            joint("child", Some(1), DVec3::new(1.0, 2.0, 0.0)),
+            Joint::at("child", Some(1), DVec3::new(1.0, 2.0, 0.0)),
             Joint {
                 name: "root".into(),
                 parent: None,
                 rest_world_from_joint: DAffine3::from_rotation_z(0.3)
                     * DAffine3::from_translation(DVec3::new(1.0, 0.0, 0.0)),
             },
-            joint("other_root", None, DVec3::Z),
+            Joint::at("other_root", None, DVec3::Z),
         ];
         let s = Skeleton::new(joints).unwrap();
         assert_eq!(s.topological_order()[2], 0);

@@ -12,7 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use cagerig::session::RigSession;
 use cagerig::skinning::SkinningMethod;
 use cagerig_formats::gltf::export_animation;
@@ -114,14 +114,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         crate::errors::report_warning(w);
     }
     if let (Some(script), Some(path)) = (&script, &args.script) {
-        script
-            .validate(&session)
-            .with_context(|| format!("in {}", path.display()))?;
-        for k in 0..script.steps.len() {
-            script
-                .run_step(k, &mut session)
-                .with_context(|| format!("in {}", path.display()))?;
-        }
+        crate::session_args::replay_script(script, path, &mut session)?;
     }
     let method = session.skinning();
     let bake = args.bake && !method.is_linear();
@@ -131,8 +124,20 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
              target added)"
         ),
         (SkinningMethod::Lbs, false)
-        | (SkinningMethod::Dqs | SkinningMethod::Cor | SkinningMethod::Blended, true) => {}
-        (SkinningMethod::Dqs | SkinningMethod::Cor | SkinningMethod::Blended, false) => eprintln!(
+        | (
+            SkinningMethod::Dqs
+            | SkinningMethod::Cor
+            | SkinningMethod::Blended
+            | SkinningMethod::External,
+            true,
+        ) => {}
+        (
+            SkinningMethod::Dqs
+            | SkinningMethod::Cor
+            | SkinningMethod::Blended
+            | SkinningMethod::External,
+            false,
+        ) => eprintln!(
             "warning: glTF skins with LBS: viewers show the LBS result of this rig, not \
              cagerig's {label} skin (up to a few % of the diagonal apart){hint}",
             label = method.label(),

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use cagerig::session::{DisplayPrecision, RigSession};
 use cagerig::skinning::SkinningMethod;
 use cagerig_render::CameraPreset;
@@ -301,14 +301,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     if let Some(script) = &script {
         let path = args.script.as_deref().unwrap_or(Path::new(""));
-        script
-            .validate(&session)
-            .with_context(|| format!("in {}", path.display()))?;
-        for k in 0..script.steps.len() {
-            script
-                .run_step(k, &mut session)
-                .with_context(|| format!("in {}", path.display()))?;
-        }
+        crate::session_args::replay_script(script, path, &mut session)?;
     }
     let mut maker = PictureMaker::new(PictureOptions {
         view: args.view,

@@ -331,8 +331,6 @@ pub fn cut_between_parts(
 
 #[cfg(test)]
 mod tests {
-    use glam::DAffine3;
-
     use super::*;
     use crate::cage_gen::bvh::Aabb;
     use crate::cage_gen::distance_grid::{SampleGrid, fill_from_outside};
@@ -340,26 +338,18 @@ mod tests {
     use crate::cage_gen::validate::count_pieces;
     use crate::skeleton::Joint;
 
-    fn joint(name: &str, parent: Option<usize>, at: DVec3) -> Joint {
-        Joint {
-            name: name.into(),
-            parent,
-            rest_world_from_joint: DAffine3::from_translation(at),
-        }
-    }
-
     /// hips → (spine → chest → (neck, arm → forearm → hand), thigh.L, thigh.R).
     fn body() -> Skeleton {
         Skeleton::new(vec![
-            joint("hips", None, DVec3::ZERO),
-            joint("spine", Some(0), DVec3::Y),
-            joint("chest", Some(1), DVec3::Y * 2.0),
-            joint("neck", Some(2), DVec3::Y * 3.0),
-            joint("arm", Some(2), DVec3::new(1.0, 2.0, 0.0)),
-            joint("forearm", Some(4), DVec3::new(1.0, 1.0, 0.0)),
-            joint("thigh.L", Some(0), DVec3::new(-0.3, -1.0, 0.0)),
-            joint("thigh.R", Some(0), DVec3::new(0.3, -1.0, 0.0)),
-            joint("hand", Some(5), DVec3::new(1.0, 0.5, 0.0)),
+            Joint::at("hips", None, DVec3::ZERO),
+            Joint::at("spine", Some(0), DVec3::Y),
+            Joint::at("chest", Some(1), DVec3::Y * 2.0),
+            Joint::at("neck", Some(2), DVec3::Y * 3.0),
+            Joint::at("arm", Some(2), DVec3::new(1.0, 2.0, 0.0)),
+            Joint::at("forearm", Some(4), DVec3::new(1.0, 1.0, 0.0)),
+            Joint::at("thigh.L", Some(0), DVec3::new(-0.3, -1.0, 0.0)),
+            Joint::at("thigh.R", Some(0), DVec3::new(0.3, -1.0, 0.0)),
+            Joint::at("hand", Some(5), DVec3::new(1.0, 0.5, 0.0)),
         ])
         .unwrap()
     }

@@ -276,16 +276,7 @@ pub fn simplify(
     let mut sweeps = 0;
     loop {
         let collapses_before_sweep = collapses;
-        for f in 0..state.faces.len() {
-            if state.face_alive[f] {
-                for k in 0..3 {
-                    let (a, b) = (state.faces[f][k], state.faces[f][(k + 1) % 3]);
-                    if a < b {
-                        heap.push(state.candidate(a, b));
-                    }
-                }
-            }
-        }
+        state.push_edge_candidates(&mut heap);
         while !done(num_alive_vertices, num_alive_faces) {
             let remaining = match stop {
                 StopAt::Vertices(n) => num_alive_vertices > QUALITY_PHASE * n,
@@ -294,16 +285,7 @@ pub fn simplify(
             if !remaining && state.quality_floor > FINAL_SHAPE_QUALITY {
                 // Entering the final phase: edges blocked by the floor become candidates again.
                 state.quality_floor = FINAL_SHAPE_QUALITY;
-                for f in 0..state.faces.len() {
-                    if state.face_alive[f] {
-                        for k in 0..3 {
-                            let (a, b) = (state.faces[f][k], state.faces[f][(k + 1) % 3]);
-                            if a < b {
-                                heap.push(state.candidate(a, b));
-                            }
-                        }
-                    }
-                }
+                state.push_edge_candidates(&mut heap);
             }
             let Some(c) = heap.pop() else { break };
             let (a, b) = (c.a as usize, c.b as usize);
@@ -399,6 +381,24 @@ impl State<'_> {
             if self.face_alive[f] {
                 let c = self.corners(self.faces[f]);
                 self.hash.insert(f as u32, &Aabb::of_triangle(&c));
+            }
+        }
+    }
+
+    /// Pushes the collapse of every edge of the alive faces onto `heap`, each edge once (from
+    /// its face where it runs from the lower index up), faces and edges in order.
+    fn push_edge_candidates(&self, heap: &mut BinaryHeap<Candidate>) {
+        for (face, _) in self
+            .faces
+            .iter()
+            .zip(&self.face_alive)
+            .filter(|(_, alive)| **alive)
+        {
+            for k in 0..3 {
+                let (a, b) = (face[k], face[(k + 1) % 3]);
+                if a < b {
+                    heap.push(self.candidate(a, b));
+                }
             }
         }
     }

@@ -89,26 +89,16 @@ impl CageGuide {
 
 #[cfg(test)]
 mod tests {
-    use glam::DAffine3;
-
     use super::*;
     use crate::skeleton::Joint;
-
-    fn joint(name: &str, parent: Option<usize>, at: DVec3) -> Joint {
-        Joint {
-            name: name.into(),
-            parent,
-            rest_world_from_joint: DAffine3::from_translation(at),
-        }
-    }
 
     #[test]
     fn planes_bisect_the_bones_at_articulations_only() {
         // Shoulder → elbow (bent 90°) → wrist: one articulation, the elbow.
         let skeleton = Skeleton::new(vec![
-            joint("shoulder", None, DVec3::ZERO),
-            joint("elbow", Some(0), DVec3::X * 4.0),
-            joint("wrist", Some(1), DVec3::new(4.0, 2.0, 0.0)),
+            Joint::at("shoulder", None, DVec3::ZERO),
+            Joint::at("elbow", Some(0), DVec3::X * 4.0),
+            Joint::at("wrist", Some(1), DVec3::new(4.0, 2.0, 0.0)),
         ])
         .unwrap();
         let guide = CageGuide::from_skeleton(&skeleton);

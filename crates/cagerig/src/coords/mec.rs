@@ -448,14 +448,7 @@ mod tests {
     #[test]
     fn prior_at_target_is_returned_unchanged() {
         // Octahedron vertices; the prior's own centroid is the target ⇒ b = normalised prior.
-        let c = vec![
-            DVec3::X,
-            DVec3::NEG_X,
-            DVec3::Y,
-            DVec3::NEG_Y,
-            DVec3::Z,
-            DVec3::NEG_Z,
-        ];
+        let (c, _) = crate::coords::mvc::tests::octahedron([1.0; 6]);
         let prior = [3.0, 1.0, 2.0, 2.0, 0.5, 0.5];
         let a: DVec3 = c.iter().zip(prior).map(|(p, m)| m / 9.0 * *p).sum();
         let mut b = [0.0; 6];
@@ -513,14 +506,7 @@ mod tests {
 
     #[test]
     fn non_positive_masses_are_clamped() {
-        let c = vec![
-            DVec3::X,
-            DVec3::NEG_X,
-            DVec3::Y,
-            DVec3::NEG_Y,
-            DVec3::Z,
-            DVec3::NEG_Z,
-        ];
+        let (c, _) = crate::coords::mvc::tests::octahedron([1.0; 6]);
         let a = DVec3::new(0.1, -0.2, 0.05);
         let mut b = [0.0; 6];
         let report = max_entropy_coordinates(&c, &[1.0, -0.5, 2.0, 0.0, 1.0, 1.0], a, &mut b);

@@ -133,27 +133,18 @@ mod tests {
 
     /// A strip of quads along x in the plane z = 0, weights blending joint 0 → 1 → 2 along x.
     fn strip(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>, SkinWeights) {
-        let mut p = Vec::new();
-        let mut rows = Vec::new();
-        for i in 0..=n {
-            let x = i as f64 / n as f64;
-            for y in [0.0, 1.0] {
-                p.push(DVec3::new(x, y, 0.0));
+        super::super::strip(
+            n,
+            |x, y| DVec3::new(x, y, 0.0),
+            |x, _| {
                 let t = 2.0 * x;
-                rows.push(if t <= 1.0 {
+                if t <= 1.0 {
                     vec![1.0 - t, t, 0.0]
                 } else {
                     vec![0.0, 2.0 - t, t - 1.0]
-                });
-            }
-        }
-        let mut tris = Vec::new();
-        for i in 0..n as u32 {
-            let (a, b, c, d) = (2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1);
-            tris.push([a, b, c]);
-            tris.push([a, c, d]);
-        }
-        (p, tris, SkinWeights::from_dense(&rows).unwrap().0)
+                }
+            },
+        )
     }
 
     /// Coordinates of the strip's points w.r.t. a 4-point "cage" (bilinear in the unit square):

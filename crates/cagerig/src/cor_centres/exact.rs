@@ -498,22 +498,7 @@ mod tests {
 
     /// A strip of quads along x, weights blending joint 0 → joint 1 linearly in x.
     fn strip(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>, SkinWeights) {
-        let mut p = Vec::new();
-        let mut rows = Vec::new();
-        for i in 0..=n {
-            let x = i as f64 / n as f64;
-            for y in [0.0, 1.0] {
-                p.push(DVec3::new(x, y, 0.0));
-                rows.push(vec![1.0 - x, x]);
-            }
-        }
-        let mut tris = Vec::new();
-        for i in 0..n as u32 {
-            let (a, b, c, d) = (2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1);
-            tris.push([a, b, c]);
-            tris.push([a, c, d]);
-        }
-        (p, tris, SkinWeights::from_dense(&rows).unwrap().0)
+        super::super::strip(n, |x, y| DVec3::new(x, y, 0.0), |x, _| vec![1.0 - x, x])
     }
 
     #[test]

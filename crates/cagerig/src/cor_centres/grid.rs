@@ -251,12 +251,10 @@ mod tests {
     /// A strip of quads along x in the plane z = 0, weights blending joint 0 → 1 → 2 along x, with
     /// a bump of joint 2 near the middle so that three-joint rows occur.
     fn strip(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>, SkinWeights) {
-        let mut p = Vec::new();
-        let mut rows = Vec::new();
-        for i in 0..=n {
-            let x = i as f64 / n as f64;
-            for y in [0.0, 1.0] {
-                p.push(DVec3::new(x, y, 0.1 * (3.0 * x).sin() * y));
+        super::super::strip(
+            n,
+            |x, y| DVec3::new(x, y, 0.1 * (3.0 * x).sin() * y),
+            |x, y| {
                 let t = 2.0 * x;
                 let mut row = if t <= 1.0 {
                     vec![1.0 - t, t, 0.0]
@@ -268,16 +266,9 @@ mod tests {
                     let s: f64 = row.iter().sum();
                     row.iter_mut().for_each(|w| *w /= s);
                 }
-                rows.push(row);
-            }
-        }
-        let mut tris = Vec::new();
-        for i in 0..n as u32 {
-            let (a, b, c, d) = (2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1);
-            tris.push([a, b, c]);
-            tris.push([a, c, d]);
-        }
-        (p, tris, SkinWeights::from_dense(&rows).unwrap().0)
+                row
+            },
+        )
     }
 
     /// Coordinates w.r.t. a unit-cube "cage" (trilinear): rows non-negative, sum to 1, ΦC = p.

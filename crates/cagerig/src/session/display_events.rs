@@ -173,6 +173,10 @@ impl RigSession {
                 ActiveSkinning::Dqs => MethodF32::Dqs,
                 ActiveSkinning::Cor(cor) => MethodF32::Cor(&cor.centres),
                 ActiveSkinning::Blended(blended) => MethodF32::Blended(blended.dq_blend_weights()),
+                ActiveSkinning::External(_) => {
+                    display.rest_positions = rest_display;
+                    return self.skin_display_from_exact();
+                }
             },
             transforms: &self.posed_from_rest,
             weights: &self.skin_weights,
@@ -185,6 +189,28 @@ impl RigSession {
         };
         display.rest_positions = rest_display;
         result
+    }
+
+    /// The displayed M' of a method with no f32 kernel (an external one): its exact M' of the
+    /// exact M, rounded; the exact M' is kept for [`RigSession::posed_mesh`] and CageUp.
+    fn skin_display_from_exact(&mut self) -> Result<(), RigError> {
+        self.ensure_exact_rest_mesh();
+        let mut exact = vec![DVec3::ZERO; self.rest_mesh.len()];
+        let nj = self.skeleton.len();
+        self.skin_exact(
+            &self.rest_mesh,
+            &mut DqsScratch::new(nj),
+            &mut CorScratch::new(nj),
+            &mut exact,
+        );
+        let Some(display) = self.display.as_deref_mut() else {
+            return Ok(());
+        };
+        for (o, p) in display.positions.iter_mut().zip(&exact) {
+            *o = p.as_vec3();
+        }
+        display.exact = OnceLock::from(exact);
+        Ok(())
     }
 
     /// The MaxVol rows of M', exact, into `scratch_rows_posed` (display path only; the exact
@@ -218,6 +244,18 @@ impl RigSession {
                 &mut display.rows_dqs_scratch,
                 &mut self.scratch_rows_posed,
             ),
+            // An external method has no row kernel: the rows of its exact M' (which `skin`
+            // computed for display).
+            (ActiveSkinning::External(bound), _) => {
+                let exact = display.exact.get_or_init(|| {
+                    let mut out = vec![DVec3::ZERO; self.rest_mesh.len()];
+                    bound.apply(transforms, &self.rest_mesh, &mut out);
+                    out
+                });
+                for (p, &row) in self.scratch_rows_posed.iter_mut().zip(rows) {
+                    *p = exact[row];
+                }
+            }
             (ActiveSkinning::Cor(cor), _) => {
                 for (c, &row) in display.rows_centres.iter_mut().zip(rows) {
                     *c = cor.centres[row];

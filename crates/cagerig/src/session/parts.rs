@@ -2,6 +2,7 @@
 //! helpers of that assembly (CoR coordinates Λ, the ΦC = M check).
 
 use super::display_rest_map::DisplayRestMap;
+use super::external_skinning::SkinningBackend;
 use super::unfitted_cage::UnfittedCagePolicy;
 use crate::cage_coords::{CageCoords, CoordsPrecision};
 use crate::coords_kind::CoordsKind;
@@ -17,6 +18,7 @@ use crate::sparse_rows::SparseRows;
 use crate::sync::cage_fit_kind::CageFitKind;
 use crate::sync::skeleton_updater::JointLocalisation;
 use glam::DVec3;
+use std::sync::Arc;
 
 /// Above this many vertices, CoR centres computed on demand with [`CorCentresMethod::Exact`] use
 /// the similarity tables of [`crate::cor_centres::grid`] (seconds, centre error ≈ 1e-4 × bbox
@@ -274,6 +276,11 @@ pub struct SessionOptions {
     /// backend from another crate, such as a GPU one ([`DisplayRestMap`]). It changes what is
     /// drawn only; the rig's state is exact either way.
     pub display_rest_map: DisplayRestMap,
+    /// A skinning method from another crate, bound with the rig and selected as
+    /// [`crate::skinning::SkinningMethod::External`] (start with it through
+    /// [`SessionOptions::skinning`], or switch to it with [`super::RigSession::set_skinning`]).
+    /// CageUp fits its ghost LBS as for every method but LBS ([`super::SkinningBackend`]).
+    pub external_skinning: Option<Arc<dyn SkinningBackend>>,
 }
 
 /// Rig inputs: the rest structures and optional precomputed data (computed when absent).

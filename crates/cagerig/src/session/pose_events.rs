@@ -11,7 +11,9 @@ use glam::{DQuat, DVec3};
 
 impl RigSession {
     /// Switches the skinning method; computes CoR centres on the first switch to CoR. The
-    /// blended method needs the rig's DQ blend weights ([`RigError::NoDqBlendWeights`]).
+    /// blended method needs the rig's DQ blend weights ([`RigError::NoDqBlendWeights`]), the
+    /// external one a method passed in `SessionOptions::external_skinning`
+    /// ([`RigError::NoExternalSkinning`]).
     pub fn set_skinning(&mut self, method: SkinningMethod) -> Result<(), RigError> {
         self.save_checkpoint();
         let result = self.set_skinning_event(method);

@@ -8,12 +8,17 @@
 //! | [`ActiveSkinning::Dqs`] | Ω (the DQS kernel every rig has) |
 //! | [`ActiveSkinning::Cor`] | the CoR centres p_i = Λ·C and their kernel ([`CorState`]) |
 //! | [`ActiveSkinning::Blended`] | the rig's DQ blend weights b ([`BlendedSkinning`]) |
+//! | [`ActiveSkinning::External`] | the method passed in, bound to the rig ([`BoundSkinning`]) |
 //!
-//! A method's data is built once (the CoR centres on the first switch to CoR) and kept while
-//! another method runs; the CoR centres then lag behind C and are refreshed when CoR runs next.
+//! A method's data is built once (the CoR centres on the first switch to CoR, an external
+//! method's binding with the session) and kept while another method runs; the CoR centres then
+//! lag behind C and are refreshed when CoR runs next.
+
+use std::sync::Arc;
 
 use glam::{DAffine3, DVec3};
 
+use super::external_skinning::BoundSkinning;
 use crate::cage_coords::CageCoords;
 use crate::cor_centres::CorCentresOptions;
 use crate::error::RigError;
@@ -75,6 +80,8 @@ pub(super) enum ActiveSkinning {
     Cor(Box<CorState>),
     /// `(1 − b)·LBS + b·DQS` with the rig's DQ blend weights b.
     Blended(Box<BlendedSkinning>),
+    /// A method from outside the library, bound to the rig.
+    External(Arc<dyn BoundSkinning>),
 }
 
 /// The kernels of Ω every rig has (`#V × #J`).
@@ -106,6 +113,7 @@ impl SkinningKernels {
                 cor.skinning
                     .apply(posed_from_rest, rest_mesh, &cor.centres, cor_scratch, out)
             }
+            ActiveSkinning::External(bound) => bound.apply(posed_from_rest, rest_mesh, out),
         }
     }
 }
@@ -122,16 +130,21 @@ pub(super) struct RigSkinning {
     /// The blended kernel while another method is active (`None` when the rig has no b, or
     /// while it is active).
     idle_blended: Option<Box<BlendedSkinning>>,
+    /// The external method while another method is active (`None` when the session has none,
+    /// or while it is active).
+    idle_external: Option<Arc<dyn BoundSkinning>>,
     /// Where Λ comes from on the first switch to CoR.
     cor_source: CorSource,
 }
 
 impl RigSkinning {
     /// LBS with the kernels of Ω `skin_weights` (`#V × #J`), the rig's blended kernel when it
-    /// has DQ blend weights, and where CoR's Λ will come from.
+    /// has DQ blend weights, the external method bound to the rig when one was passed in, and
+    /// where CoR's Λ will come from.
     pub(super) fn new(
         skin_weights: &SkinWeights,
         blended: Option<BlendedSkinning>,
+        external: Option<Arc<dyn BoundSkinning>>,
         cor_source: CorSource,
     ) -> Self {
         Self {
@@ -144,6 +157,7 @@ impl RigSkinning {
             active: ActiveSkinning::Lbs,
             idle_cor: None,
             idle_blended: blended.map(Box::new),
+            idle_external: external,
             cor_source,
         }
     }
@@ -155,6 +169,7 @@ impl RigSkinning {
             ActiveSkinning::Dqs => SkinningMethod::Dqs,
             ActiveSkinning::Cor(_) => SkinningMethod::Cor,
             ActiveSkinning::Blended(_) => SkinningMethod::Blended,
+            ActiveSkinning::External(_) => SkinningMethod::External,
         }
     }
 
@@ -172,7 +187,10 @@ impl RigSkinning {
     pub(super) fn dq_blend_weights(&self) -> Option<&DqBlendWeights> {
         match &self.active {
             ActiveSkinning::Blended(blended) => Some(blended.dq_blend_weights()),
-            ActiveSkinning::Lbs | ActiveSkinning::Dqs | ActiveSkinning::Cor(_) => self
+            ActiveSkinning::Lbs
+            | ActiveSkinning::Dqs
+            | ActiveSkinning::Cor(_)
+            | ActiveSkinning::External(_) => self
                 .idle_blended
                 .as_deref()
                 .map(BlendedSkinning::dq_blend_weights),
@@ -183,9 +201,10 @@ impl RigSkinning {
     pub(super) fn cor(&self) -> Option<&CorState> {
         match &self.active {
             ActiveSkinning::Cor(cor) => Some(cor),
-            ActiveSkinning::Lbs | ActiveSkinning::Dqs | ActiveSkinning::Blended(_) => {
-                self.idle_cor.as_deref()
-            }
+            ActiveSkinning::Lbs
+            | ActiveSkinning::Dqs
+            | ActiveSkinning::Blended(_)
+            | ActiveSkinning::External(_) => self.idle_cor.as_deref(),
         }
     }
 
@@ -194,9 +213,14 @@ impl RigSkinning {
         self.cor().is_some()
     }
 
+    /// Whether the session has an external method (active or idle).
+    fn has_external(&self) -> bool {
+        matches!(self.active, ActiveSkinning::External(_)) || self.idle_external.is_some()
+    }
+
     /// Selects `method`. CoR needs its state built first ([`RigSkinning::build_cor`]); Blended
-    /// needs the rig's DQ blend weights ([`RigError::NoDqBlendWeights`]). Nothing changes on
-    /// error.
+    /// needs the rig's DQ blend weights ([`RigError::NoDqBlendWeights`]); External a method
+    /// passed in ([`RigError::NoExternalSkinning`]). Nothing changes on error.
     pub(super) fn select(&mut self, method: SkinningMethod) -> Result<(), RigError> {
         match method {
             SkinningMethod::Blended if self.dq_blend_weights().is_none() => {
@@ -207,10 +231,14 @@ impl RigSkinning {
                     "CoR skinning was selected before its centres were built".into(),
                 ));
             }
+            SkinningMethod::External if !self.has_external() => {
+                return Err(RigError::NoExternalSkinning);
+            }
             SkinningMethod::Lbs
             | SkinningMethod::Dqs
             | SkinningMethod::Cor
-            | SkinningMethod::Blended => {}
+            | SkinningMethod::Blended
+            | SkinningMethod::External => {}
         }
         if method == self.method() {
             return Ok(());
@@ -226,6 +254,10 @@ impl RigSkinning {
             },
             SkinningMethod::Blended => match self.idle_blended.take() {
                 Some(blended) => ActiveSkinning::Blended(blended),
+                None => ActiveSkinning::Lbs,
+            },
+            SkinningMethod::External => match self.idle_external.take() {
+                Some(external) => ActiveSkinning::External(external),
                 None => ActiveSkinning::Lbs,
             },
         };
@@ -247,6 +279,7 @@ impl RigSkinning {
             ActiveSkinning::Lbs | ActiveSkinning::Dqs => {}
             ActiveSkinning::Cor(cor) => self.idle_cor = Some(cor),
             ActiveSkinning::Blended(blended) => self.idle_blended = Some(blended),
+            ActiveSkinning::External(external) => self.idle_external = Some(external),
         }
     }
 
@@ -269,9 +302,10 @@ impl RigSkinning {
     ) {
         match &mut self.active {
             ActiveSkinning::Cor(cor) => centres_of(&cor.centre_coords, &mut cor.centres),
-            ActiveSkinning::Lbs | ActiveSkinning::Dqs | ActiveSkinning::Blended(_) => {
-                self.mark_idle_centres_stale()
-            }
+            ActiveSkinning::Lbs
+            | ActiveSkinning::Dqs
+            | ActiveSkinning::Blended(_)
+            | ActiveSkinning::External(_) => self.mark_idle_centres_stale(),
         }
     }
 
@@ -290,9 +324,10 @@ impl RigSkinning {
                     .apply_delta(vertices, deltas, &mut cor.centres)
             }
             ActiveSkinning::Cor(cor) => cor.stale = true,
-            ActiveSkinning::Lbs | ActiveSkinning::Dqs | ActiveSkinning::Blended(_) => {
-                self.mark_idle_centres_stale()
-            }
+            ActiveSkinning::Lbs
+            | ActiveSkinning::Dqs
+            | ActiveSkinning::Blended(_)
+            | ActiveSkinning::External(_) => self.mark_idle_centres_stale(),
         }
     }
 
@@ -306,9 +341,13 @@ impl RigSkinning {
                 cor.stale = false;
             }
             (ActiveSkinning::Cor(cor), None) => cor.stale = true,
-            (ActiveSkinning::Lbs | ActiveSkinning::Dqs | ActiveSkinning::Blended(_), _) => {
-                self.mark_idle_centres_stale()
-            }
+            (
+                ActiveSkinning::Lbs
+                | ActiveSkinning::Dqs
+                | ActiveSkinning::Blended(_)
+                | ActiveSkinning::External(_),
+                _,
+            ) => self.mark_idle_centres_stale(),
         }
     }
 

@@ -19,6 +19,11 @@ pub enum SkinningMethod {
     /// blend weights `b` (`#V`, in [0, 1]): Maya's "weight blended" skin cluster (ufbx's
     /// `UFBX_SKINNING_METHOD_BLENDED_DQ_LINEAR`). Needs [`super::DqBlendWeights`] in the rig.
     Blended,
+    /// The method passed in from outside the library
+    /// (`crate::session::SessionOptions::external_skinning`, a
+    /// `crate::session::SkinningBackend`). It has no name front ends choose: it is not in
+    /// [`SkinningMethod::ALL`], and a session built without one refuses it.
+    External,
 }
 
 /// A method name that [`SkinningMethod::from_str`] does not know.
@@ -33,7 +38,8 @@ pub struct UnknownSkinningMethod {
 }
 
 impl SkinningMethod {
-    /// Every method, in the order front ends list them.
+    /// Every method front ends name, in the order they list them ([`SkinningMethod::External`]
+    /// is passed in as a value, not named).
     pub const ALL: [SkinningMethod; 4] = [Self::Lbs, Self::Dqs, Self::Cor, Self::Blended];
 
     /// The method a rig opens with, by the one rule of every front end: the one the user chose
@@ -43,22 +49,25 @@ impl SkinningMethod {
         chosen.or(file).unwrap_or_default()
     }
 
-    /// The name in scripts, options and files: `"lbs"`, `"dqs"`, `"cor"` or `"blended"`.
+    /// The name in scripts, options and files: `"lbs"`, `"dqs"`, `"cor"` or `"blended"`
+    /// (`"external"` for the method passed in, which no parser reads back).
     pub const fn name(self) -> &'static str {
         match self {
             Self::Lbs => "lbs",
             Self::Dqs => "dqs",
             Self::Cor => "cor",
             Self::Blended => "blended",
+            Self::External => "external",
         }
     }
 
     /// Whether M' is linear in the skinning transforms (LBS): CageUp then fits the skinned rows
-    /// directly; the other methods fit their ghost LBS (see `CageFitSource`).
+    /// directly; the other methods, an external one included, fit their ghost LBS (see
+    /// `CageFitSource`). The session's one rule of what CageUp fits.
     pub const fn is_linear(self) -> bool {
         match self {
             Self::Lbs => true,
-            Self::Dqs | Self::Cor | Self::Blended => false,
+            Self::Dqs | Self::Cor | Self::Blended | Self::External => false,
         }
     }
 
@@ -70,6 +79,7 @@ impl SkinningMethod {
             Self::Dqs => "DQS",
             Self::Cor => "CoR",
             Self::Blended => "LBS/DQS blend",
+            Self::External => "external method",
         }
     }
 
@@ -77,7 +87,7 @@ impl SkinningMethod {
     /// [`SkinningMethod::Blended`] (a session refuses the method without them).
     pub const fn needs_dq_blend_weights(self) -> bool {
         match self {
-            Self::Lbs | Self::Dqs | Self::Cor => false,
+            Self::Lbs | Self::Dqs | Self::Cor | Self::External => false,
             Self::Blended => true,
         }
     }
@@ -117,5 +127,12 @@ mod tests {
                 .contains("expected lbs, dqs, cor or blended"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn the_external_method_is_not_a_name_front_ends_choose() {
+        assert!(!SkinningMethod::ALL.contains(&SkinningMethod::External));
+        assert!("external".parse::<SkinningMethod>().is_err());
+        assert!(!SkinningMethod::External.is_linear());
     }
 }
