@@ -59,7 +59,9 @@ class WebDriver:
             "goog:chromeOptions": {
                 "binary": "/usr/bin/chromium", "args": flags,
                 "prefs": {"download.default_directory": str(download_dir),
-                          "download.prompt_for_download": False},
+                          "download.prompt_for_download": False,
+                          # A download asked for by the test hook has no user gesture behind it.
+                          "profile.default_content_setting_values.automatic_downloads": 1},
             },
             "goog:loggingPrefs": {"browser": "ALL"},
         }}}
