@@ -451,7 +451,10 @@ impl eframe::App for StudioApp {
             self.cancel_open();
         }
         self.autosave();
-        ctx.send_viewport_cmd(egui::ViewportCommand::Title(self.title()));
+        // A web page keeps its own title (eframe's web backend has no window title).
+        if self.run.options().page_files.is_none() {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(self.title()));
+        }
         self.diagnostics
             .stats
             .end_frame(frame_start.elapsed().as_secs_f64() * 1e3);

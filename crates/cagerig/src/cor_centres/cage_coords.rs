@@ -133,7 +133,7 @@ mod tests {
 
     /// A strip of quads along x in the plane z = 0, weights blending joint 0 → 1 → 2 along x.
     fn strip(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>, SkinWeights) {
-        super::super::strip(
+        super::super::test_strip::strip(
             n,
             |x, y| DVec3::new(x, y, 0.0),
             |x, _| {

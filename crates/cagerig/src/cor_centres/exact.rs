@@ -498,7 +498,7 @@ mod tests {
 
     /// A strip of quads along x, weights blending joint 0 → joint 1 linearly in x.
     fn strip(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>, SkinWeights) {
-        super::super::strip(n, |x, y| DVec3::new(x, y, 0.0), |x, _| vec![1.0 - x, x])
+        super::super::test_strip::strip(n, |x, y| DVec3::new(x, y, 0.0), |x, _| vec![1.0 - x, x])
     }
 
     #[test]

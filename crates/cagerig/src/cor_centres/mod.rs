@@ -21,6 +21,8 @@ mod grid_rows;
 mod grid_tables;
 mod options;
 mod similarity;
+#[cfg(test)]
+mod test_strip;
 
 pub use cage_coords::compute_cor_cage_coords;
 pub use exact::{compute_cor_centres, compute_cor_centres_factored};
@@ -28,35 +30,3 @@ pub use factored::CorCentresFactored;
 pub use grid::{CorGridOptions, GridInterpolation, compute_cor_cage_coords_grid};
 pub use options::{CorCentresMethod, CorCentresOptions};
 pub use similarity::weight_similarity;
-
-/// A test strip of `n` quads along x: the points `point(x, y)` for x = i/n and y ∈ {0, 1}
-/// (`2(n + 1)`, in that order), their Ω rows `row(x, y)`, and the strip's `2n` triangles.
-#[cfg(test)]
-fn strip(
-    n: usize,
-    point: impl Fn(f64, f64) -> glam::DVec3,
-    row: impl Fn(f64, f64) -> Vec<f64>,
-) -> (
-    Vec<glam::DVec3>,
-    Vec<[u32; 3]>,
-    crate::skin_weights::SkinWeights,
-) {
-    let mut p = Vec::new();
-    let mut rows = Vec::new();
-    for i in 0..=n {
-        let x = i as f64 / n as f64;
-        for y in [0.0, 1.0] {
-            p.push(point(x, y));
-            rows.push(row(x, y));
-        }
-    }
-    let mut tris = Vec::new();
-    for i in 0..n as u32 {
-        let (a, b, c, d) = (2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1);
-        tris.push([a, b, c]);
-        tris.push([a, c, d]);
-    }
-    let (weights, _) = crate::skin_weights::SkinWeights::from_dense(&rows)
-        .unwrap_or_else(|e| panic!("the strip's rows are weights: {e}"));
-    (p, tris, weights)
-}
