@@ -464,16 +464,20 @@ fn largest_eigenvector(mut a: [[f64; 4]; 4]) -> [f64; 4] {
     [v[0][best], v[1][best], v[2][best], v[3][best]]
 }
 
-/// The rotation of `m` (its polar factor, by Newton's iteration X ← (X + X⁻ᵀ)/2), or the
-/// identity when `m` is singular.
+/// The rotation of `m` (its polar factor, by Newton's iteration X ← (γX + (γX)⁻ᵀ)/2 with
+/// Higham's scaling γ = (‖X⁻¹‖_F / ‖X‖_F)^½, which takes a few steps even for an
+/// ill-conditioned `m`), or the identity when `m` is singular.
 fn rotation_of(m: DMat3) -> DMat3 {
+    let frobenius = |a: DMat3| a.to_cols_array().iter().map(|v| v * v).sum::<f64>().sqrt();
     let mut x = m;
     for _ in 0..32 {
         let det = x.determinant();
         if !(det.is_finite() && det.abs() > 1e-12) {
             return DMat3::IDENTITY;
         }
-        let next = (x + x.inverse().transpose()) * 0.5;
+        let inverse = x.inverse();
+        let scale = (frobenius(inverse) / frobenius(x)).sqrt();
+        let next = (x * scale + inverse.transpose() * (1.0 / scale)) * 0.5;
         let change = (next - x)
             .to_cols_array()
             .iter()
