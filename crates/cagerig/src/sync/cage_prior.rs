@@ -201,8 +201,9 @@ pub struct CagePrior {
     binding_centroids: Vec<DVec3>,
     /// μ_k, `#C`.
     rotation_blend: Vec<f64>,
-    /// Scratch: the translations of T̂_j, `#J`.
+    /// Scratch: the translations of T̂_j and the joints' scales |det L_j|^⅓, `#J` each.
     posed_translations: Vec<DVec3>,
+    joint_scales: Vec<f64>,
 }
 
 /// K and the prior of a regularised fit.
@@ -253,15 +254,20 @@ impl CagePrior {
 
     /// A_k into `blended` (`#C`) for the linear parts `joint_linear` (`#J`): the best-fit
     /// rotation of H_k times the mean scale Σ_j a_kj |det L_j|^⅓ (module docs), with
-    /// `translations` (`#J`) as scratch for T̂_j. No allocation.
+    /// `translations` and `scales` (`#J` each) as scratch for T̂_j and |det L_j|^⅓. No
+    /// allocation.
     fn blend_rotations(
         &self,
         joint_linear: impl Fn(usize) -> DMat3,
         translations: &mut [DVec3],
+        scales: &mut [f64],
         blended: &mut [DMat3],
     ) {
         self.binding_joints
             .posed_translations(&joint_linear, translations);
+        for (j, s) in scales.iter_mut().enumerate() {
+            *s = joint_linear(j).determinant().abs().cbrt();
+        }
         let mut entries = self.joints.iter().peekable();
         for (k, b) in blended.iter_mut().enumerate() {
             let mut scale = 0.0;
@@ -273,7 +279,7 @@ impl CagePrior {
                 let image = linear * centroid + translations[entry.joint];
                 motion += linear * entry.spread + outer(image, entry.offset);
                 blend += linear * entry.share;
-                scale += entry.share * linear.determinant().abs().cbrt();
+                scale += entry.share * scales[entry.joint];
             }
             *b = best_rotation(motion + blend * self.rotation_blend[k]) * scale;
         }
@@ -286,13 +292,16 @@ impl CagePrior {
         self.update_moments(rest_cage);
         let mut rotations = std::mem::take(&mut self.rotations);
         let mut translations = std::mem::take(&mut self.posed_translations);
+        let mut scales = std::mem::take(&mut self.joint_scales);
         self.blend_rotations(
             |j| posed_from_rest[j].matrix3,
             &mut translations,
+            &mut scales,
             &mut rotations,
         );
         self.rotations = rotations;
         self.posed_translations = translations;
+        self.joint_scales = scales;
         self.carried.iter_mut().for_each(|p| *p = DVec3::ZERO);
         for (entry, m) in self.joints.iter().zip(&self.joint_moments) {
             let t = &posed_from_rest[entry.joint];
@@ -322,7 +331,13 @@ impl CagePrior {
         let nc = self.rest_centroids.len();
         let mut blended = vec![DMat3::ZERO; nc];
         let mut translations = vec![DVec3::ZERO; self.binding_joints.len()];
-        self.blend_rotations(|j| joint_linear[j], &mut translations, &mut blended);
+        let mut scales = vec![0.0; self.binding_joints.len()];
+        self.blend_rotations(
+            |j| joint_linear[j],
+            &mut translations,
+            &mut scales,
+            &mut blended,
+        );
         // ∂P_k/∂c_m = A_k (δ_km − ξ_km) + Σ_j (β_kj[m] L_j + a_kj ∂t_j/∂c_m), as 3×3 blocks
         // (k, m) in row-major order.
         let mut blocks = vec![DMat3::ZERO; nc * nc];
@@ -429,7 +444,7 @@ fn largest_eigenvector(mut a: [[f64; 4]; 4]) -> [f64; 4] {
             .flat_map(|p| (p + 1..4).map(move |q| (p, q)))
             .map(|(p, q)| a[p][q] * a[p][q])
             .sum();
-        if off <= (1e-30 * scale).powi(2) {
+        if off <= (1e-16 * scale).powi(2) {
             break;
         }
         for p in 0..4 {
@@ -468,17 +483,30 @@ fn largest_eigenvector(mut a: [[f64; 4]; 4]) -> [f64; 4] {
 /// Higham's scaling γ = (‖X⁻¹‖_F / ‖X‖_F)^½, which takes a few steps even for an
 /// ill-conditioned `m`), or the identity when `m` is singular.
 fn rotation_of(m: DMat3) -> DMat3 {
-    let frobenius = |a: DMat3| a.to_cols_array().iter().map(|v| v * v).sum::<f64>().sqrt();
+    let squared_norm = |a: DMat3| {
+        a.x_axis.length_squared() + a.y_axis.length_squared() + a.z_axis.length_squared()
+    };
     let mut x = m;
+    let mut change = f64::INFINITY;
     for _ in 0..32 {
-        let det = x.determinant();
+        // X⁻ᵀ = [b × c, c × a, a × b] / det X for the columns a, b, c of X.
+        let (a, b, c) = (x.x_axis, x.y_axis, x.z_axis);
+        let cofactors = DMat3::from_cols(b.cross(c), c.cross(a), a.cross(b));
+        let det = a.dot(cofactors.x_axis);
         if !(det.is_finite() && det.abs() > 1e-12) {
             return DMat3::IDENTITY;
         }
-        let inverse = x.inverse();
-        let scale = (frobenius(inverse) / frobenius(x)).sqrt();
-        let next = (x * scale + inverse.transpose() * (1.0 / scale)) * 0.5;
-        let change = (next - x)
+        let inverse_transpose = cofactors * (1.0 / det);
+        // Higham's scaling while far from the answer; plain Newton (quadratic) near it.
+        let scale = if change > 1e-2 {
+            (squared_norm(inverse_transpose) / squared_norm(x))
+                .sqrt()
+                .sqrt()
+        } else {
+            1.0
+        };
+        let next = (x * scale + inverse_transpose * (1.0 / scale)) * 0.5;
+        change = (next - x)
             .to_cols_array()
             .iter()
             .fold(0.0f64, |a, v| a.max(v.abs()));
@@ -568,6 +596,7 @@ pub(crate) fn regularised_maps(
         carried: vec![DVec3::ZERO; nc],
         rotations: vec![DMat3::IDENTITY; nc],
         posed_translations: vec![DVec3::ZERO; binding_joints.len()],
+        joint_scales: vec![0.0; binding_joints.len()],
         binding_joints: binding_joints.clone(),
         binding_centroids,
         rotation_blend,
