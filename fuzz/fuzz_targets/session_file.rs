@@ -118,7 +118,8 @@ fuzz_target!(|data: &[u8]| {
                 },
             }
         }
-        RigSource::File { .. } => match opened("bar", Some(2)) {
+        // A file (or a file's bytes, which no session file holds) opens onto the small bar.
+        RigSource::File { .. } | RigSource::Memory { .. } => match opened("bar", Some(2)) {
             Some(o) => o,
             None => return,
         },
