@@ -59,16 +59,7 @@ fn file_menu_ui(
             }
         });
     });
-    ui.menu_button("Open built-in demo", |ui| {
-        for name in cagerig::demo::builtin_names() {
-            if ui.button(*name).clicked() {
-                actions.push(Action::RequestOpen(OpenRequest::Rig(RigSource::Builtin {
-                    name: (*name).to_string(),
-                    resolution: None,
-                })));
-            }
-        }
-    });
+    ui.menu_button("Open built-in demo", |ui| builtin_rigs_ui(ui, "", actions));
     ui.separator();
     if ui.button("Save session (Ctrl+S)").clicked() {
         actions.push(Action::Save);
@@ -96,6 +87,19 @@ fn file_menu_ui(
     }
 }
 
+/// A button per built-in demo rig (its name and `suffix`), each asking to open it at its
+/// default resolution.
+fn builtin_rigs_ui(ui: &mut egui::Ui, suffix: &str, actions: &mut Vec<Action>) {
+    for name in cagerig::demo::builtin_names() {
+        if ui.button(format!("{name}{suffix}")).clicked() {
+            actions.push(Action::RequestOpen(OpenRequest::Rig(RigSource::Builtin {
+                name: (*name).to_string(),
+                resolution: None,
+            })));
+        }
+    }
+}
+
 /// The File menu of the web edition: the page's file chooser, the samples, downloads.
 fn page_file_menu_ui(
     ui: &mut egui::Ui,
@@ -107,14 +111,7 @@ fn page_file_menu_ui(
         actions.push(Action::ChooseCharacter);
     }
     ui.menu_button("Open sample", |ui| {
-        for name in cagerig::demo::builtin_names() {
-            if ui.button(format!("{name} (built-in)")).clicked() {
-                actions.push(Action::RequestOpen(OpenRequest::Rig(RigSource::Builtin {
-                    name: (*name).to_string(),
-                    resolution: None,
-                })));
-            }
-        }
+        builtin_rigs_ui(ui, " (built-in)", actions);
         for name in page.samples() {
             if ui.button(&name).clicked() {
                 actions.push(Action::OpenSample(name));

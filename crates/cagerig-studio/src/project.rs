@@ -13,7 +13,7 @@ use cagerig_formats::{ImportedAnimation, MorphTargets};
 use crate::diagnostics::Log;
 use crate::document::Document;
 use crate::keys::Track;
-use crate::session_file::StateDir;
+use crate::session_file::{SessionFile, StateDir};
 
 /// The document and its files.
 pub struct Project {
@@ -73,13 +73,9 @@ impl Project {
         cameras: Option<[[f64; 7]; 2]>,
         log: &mut Log,
     ) -> bool {
-        let Some(doc) = &self.doc else {
-            log.error("nothing to save: no rig is open");
+        let Some((file, edits)) = self.session_file_to_save(time, cameras, log) else {
             return false;
         };
-        let mut file = doc.session_file(time);
-        file.cameras = cameras;
-        let edits = doc.edits;
         match file.write(path) {
             Ok(()) => {
                 self.saved_edits = edits;
@@ -103,13 +99,8 @@ impl Project {
         cameras: Option<[[f64; 7]; 2]>,
         log: &mut Log,
     ) -> Option<(String, String)> {
-        let Some(doc) = &self.doc else {
-            log.error("nothing to save: no rig is open");
-            return None;
-        };
-        let mut file = doc.session_file(time);
-        file.cameras = cameras;
-        let name = format!("{}.cagerig", file_stem_of(&doc.source));
+        let (file, _) = self.session_file_to_save(time, cameras, log)?;
+        let name = format!("{}.cagerig", file_stem_of(&file.source));
         match file.to_text(Path::new(&name)) {
             Ok(text) => Some((name, text)),
             Err(e) => {
@@ -117,6 +108,23 @@ impl Project {
                 None
             }
         }
+    }
+
+    /// The session file of the document, with the playhead at `time` and the views' `cameras`,
+    /// and the edit count it holds; logs why when no rig is open.
+    fn session_file_to_save(
+        &self,
+        time: f64,
+        cameras: Option<[[f64; 7]; 2]>,
+        log: &mut Log,
+    ) -> Option<(SessionFile, u64)> {
+        let Some(doc) = &self.doc else {
+            log.error("nothing to save: no rig is open");
+            return None;
+        };
+        let mut file = doc.session_file(time);
+        file.cameras = cameras;
+        Some((file, doc.edits))
     }
 
     /// The document's edits are saved (the web edition's download was taken).
