@@ -202,42 +202,24 @@ pub fn open_rig_with_progress(
             skin,
             auto_cage,
         } if cagerig_formats::CharacterFormat::of(path).is_some() => {
-            // A character with no cage opens with a generated one, said so in the log, as a
-            // mesh with no skeleton does.
-            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
             let input = CharacterInput::File(path);
-            match import_interchange(input, cage.as_deref(), skin.as_deref(), Some(vertices)) {
-                Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
-                    rigged = false;
-                    let (parts, warnings, files) = crate::unrigged::open_unskinned_character(
-                        input,
-                        cage.as_deref(),
-                        *auto_cage,
-                    )?;
-                    (parts, warnings, files, Default::default())
-                }
-                other => other?,
-            }
+            let (imported, skinned) =
+                open_interchange(input, cage.as_deref(), skin.as_deref(), *auto_cage)?;
+            rigged = skinned;
+            imported
         }
         RigSource::Memory {
             path,
             bytes,
             auto_cage,
         } => {
-            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
             let input = CharacterInput::Bytes {
                 path,
                 bytes: &bytes.0,
             };
-            match import_interchange(input, None, None, Some(vertices)) {
-                Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
-                    rigged = false;
-                    let (parts, warnings, files) =
-                        crate::unrigged::open_unskinned_character(input, None, *auto_cage)?;
-                    (parts, warnings, files, Default::default())
-                }
-                other => other?,
-            }
+            let (imported, skinned) = open_interchange(input, None, None, *auto_cage)?;
+            rigged = skinned;
+            imported
         }
         RigSource::File {
             path,
@@ -319,6 +301,26 @@ pub(crate) fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
             message: format!("{message}; File > Export writes it as cage_rest.obj"),
         },
         other => other,
+    }
+}
+
+/// A glTF / FBX character as a rig's parts, and whether it is skinned. A character with no
+/// cage opens with a generated one (`auto_cage` vertices, else the default), said so in the
+/// log, as a mesh with no skeleton does; a file with no skin opens as a mesh to rig.
+fn open_interchange(
+    input: CharacterInput<'_>,
+    cage: Option<&Path>,
+    skin: Option<&str>,
+    auto_cage: Option<usize>,
+) -> Result<(Imported, bool), OpenError> {
+    let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
+    match import_interchange(input, cage, skin, Some(vertices)) {
+        Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
+            let (parts, warnings, files) =
+                crate::unrigged::open_unskinned_character(input, cage, auto_cage)?;
+            Ok(((parts, warnings, files, Default::default()), false))
+        }
+        other => Ok((other?, true)),
     }
 }
 
