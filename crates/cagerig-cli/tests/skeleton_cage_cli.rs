@@ -40,37 +40,72 @@ fn worst(name: &str, args: &[&str]) -> (f64, f64, f64) {
 }
 
 fn auto_cage(file: &str, animation: &str, last: f64, layout: &str) -> (f64, f64, f64) {
+    auto_cage_with(file, animation, last, layout, &[])
+}
+
+/// [`auto_cage`] with more `animate` arguments (`extra`).
+fn auto_cage_with(
+    file: &str,
+    animation: &str,
+    last: f64,
+    layout: &str,
+    extra: &[&str],
+) -> (f64, f64, f64) {
     let path = data(file);
     let times = times(last);
+    let mut args = vec![
+        path.to_str().unwrap(),
+        "--auto-cage",
+        "--cage-layout",
+        layout,
+        "--animation",
+        animation,
+        "--times",
+        &times,
+    ];
+    args.extend_from_slice(extra);
     worst(
-        &format!("{}-{animation}-{layout}", file.replace('/', "-")),
-        &[
-            path.to_str().unwrap(),
-            "--auto-cage",
-            "--cage-layout",
-            layout,
-            "--animation",
-            animation,
-            "--times",
-            &times,
-        ],
+        &format!(
+            "{}-{animation}-{layout}{}",
+            file.replace('/', "-"),
+            extra.join("")
+        ),
+        &args,
     )
 }
 
+/// The characters of the figures: file, animation, last sample time.
+const CHARACTERS: [(&str, &str, f64); 4] = [
+    ("fox/Fox.glb", "Walk", 0.7),
+    ("fox/Fox.glb", "Run", 1.1),
+    ("gltf/CesiumMan/CesiumMan.glb", "0", 2.0),
+    ("gltf/RiggedFigure/RiggedFigure.gltf", "0", 1.2),
+];
+
 #[test]
 fn the_default_automatic_cages_stay_on_the_body() {
-    for (file, animation, last) in [
-        ("fox/Fox.glb", "Walk", 0.7),
-        ("fox/Fox.glb", "Run", 1.1),
-        ("gltf/CesiumMan/CesiumMan.glb", "0", 2.0),
-        ("gltf/RiggedFigure/RiggedFigure.gltf", "0", 1.2),
-    ] {
+    for (file, animation, last) in CHARACTERS {
         let (spread, deviation, flipped) = auto_cage(file, animation, last, "skeleton");
         let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
         assert!(spread <= 1.5, "{what}");
-        assert!(deviation <= 0.075, "{what}");
-        // Five of the Fox's 196 triangles at worst (2.6 %).
-        assert!(flipped <= 0.027, "{what}");
+        assert!(deviation <= 0.06, "{what}");
+        // One of the Fox's 196 triangles at worst (0.51 %).
+        assert!(flipped <= 1.0 / 196.0 + 1e-12, "{what}");
+    }
+}
+
+/// The same rigs under Green coordinates: no sample refused, and the handle as near the body as
+/// `docs/characters.md` says (spread 1.82, deviation 0.085, two of the Fox's 196 triangles at
+/// worst), which is not yet within the mean value rigs' bounds.
+#[test]
+fn the_default_automatic_cages_of_green_rigs_stay_near_the_body() {
+    for (file, animation, last) in CHARACTERS {
+        let (spread, deviation, flipped) =
+            auto_cage_with(file, animation, last, "skeleton", &["--coords", "green"]);
+        let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
+        assert!(spread <= 1.85, "{what}");
+        assert!(deviation <= 0.09, "{what}");
+        assert!(flipped <= 2.0 / 196.0 + 1e-12, "{what}");
     }
 }
 
@@ -110,7 +145,7 @@ fn the_arms_generated_cage_follows_its_animation() {
         ],
     );
     assert!(spread <= 1.1, "{spread}");
-    assert!(deviation <= 0.02, "{deviation}");
+    assert!(deviation <= 0.015, "{deviation}");
     assert_eq!(flipped, 0.0);
 }
 

@@ -83,7 +83,7 @@ pub const KEYFRAME_TERM_TOLERANCE: f64 = 1e-14;
 
 impl GreenState {
     /// From the Green coordinates of the rest mesh (φ is the rest map's vertex part, ψ is
-    /// `face_coords`), the CageUp rows, the rest cage, the number of joints, the face term and
+    /// `face_coords`), the CageUp rows, the rest cage, the skeleton of the binding, the face term and
     /// the rest mesh (`#V`); with `regularised` CageUp is regularised towards the carried cage
     /// ([`crate::sync::green_cage_fit::prior`]).
     #[expect(
@@ -97,11 +97,12 @@ impl GreenState {
         linear: CageUpdater,
         skin_weights: &SkinWeights,
         rest_cage: &[DVec3],
-        num_joints: usize,
+        binding_joints: &crate::sync::cage_prior::BindingJoints,
         face_term: FaceTermKind,
         rest_mesh: &[DVec3],
         regularised: bool,
     ) -> Result<Self, RigError> {
+        let num_joints = binding_joints.len();
         let (rows, cage_from_rows) = (linear.rows(), linear.cage_from_rows());
         let mut cage_weights = vec![0.0; rest_cage.len() * num_joints];
         for (r, &row) in rows.iter().enumerate() {
@@ -157,6 +158,7 @@ impl GreenState {
                 &triangles,
                 rest_mesh,
                 skin_weights,
+                binding_joints,
             )?;
             let regulariser =
                 crate::sync::cage_prior::laplacian_regulariser(rest_cage.len(), &triangles)?;

@@ -36,6 +36,7 @@ use crate::mesh::TriMesh;
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
 use crate::sync::cage_fit_kind::CageFitKind;
+use crate::sync::cage_prior::BindingJoints;
 use crate::sync::cage_reverser::{CageReverser, ReverserMethod};
 use crate::sync::cage_updater::{CageFitMode, CageUpdater};
 
@@ -250,6 +251,9 @@ impl BindInputs<'_> {
         // M₀ = ΦC₀: the regularised fit's neighbourhoods and the check of M's state.
         let mut map = vec![DVec3::ZERO; nv];
         coords.apply(&cage.positions, &mut map);
+        let mesh_state = self.adopt_map(mesh, &map, precision, warnings);
+        let (skeleton_updater, notes) = skeleton_updater_of(mesh, &coords, None)?;
+        warnings.extend(notes);
         let fit = with_cage_fit(
             paper,
             options.cage_fit,
@@ -257,10 +261,9 @@ impl BindInputs<'_> {
             cage,
             Some(&map),
             self.skin_weights,
+            &skeleton_updater,
+            self.skeleton,
         )?;
-        let mesh_state = self.adopt_map(mesh, &map, precision, warnings);
-        let (skeleton_updater, notes) = skeleton_updater_of(mesh, &coords, None)?;
-        warnings.extend(notes);
         let reverser = CageReverser::new(
             &coords,
             &fit,
@@ -337,7 +340,7 @@ impl BindInputs<'_> {
             linear,
             self.skin_weights,
             &cage.positions,
-            self.skeleton.len(),
+            &BindingJoints::of_skeleton(self.skeleton),
             options.green_face_term,
             &mesh.positions,
             options.cage_fit == CageFitKind::Regularised,
@@ -410,8 +413,13 @@ impl BindInputs<'_> {
 
 /// The paper's CageUp `paper` (on Φ `cage_coords`, `#V × #C`) as the fit `kind` for the
 /// binding cage `cage` (C₀) and Ω `skin_weights`: itself, or regularised with the prior of the
-/// binding (neighbourhoods found on M₀ = ΦC₀, so a rig switched to it later gets the same fit).
-/// `binding_mesh` is M₀ (`#V`) when the caller has it; it is computed here otherwise.
+/// binding (neighbourhoods found on M₀ = ΦC₀ and the joints at ΨC₀, SkelUp's Ψ of
+/// `skeleton_updater` over `skeleton`'s hierarchy, so a rig switched to it later gets the same
+/// fit). `binding_mesh` is M₀ (`#V`) when the caller has it; it is computed here otherwise.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the binding's coordinates, cage, skin, weights and skeleton"
+)]
 fn with_cage_fit(
     paper: CageUpdater,
     kind: CageFitKind,
@@ -419,6 +427,8 @@ fn with_cage_fit(
     cage: &TriMesh,
     binding_mesh: Option<&[DVec3]>,
     skin_weights: &SkinWeights,
+    skeleton_updater: &SkeletonUpdater,
+    skeleton: &Skeleton,
 ) -> Result<CageUpdater, RigError> {
     match kind {
         CageFitKind::Paper => Ok(paper),
@@ -433,12 +443,22 @@ fn with_cage_fit(
                     &computed
                 }
             };
+            let joints = (0..skeleton.len())
+                .map(|j| {
+                    skeleton_updater
+                        .joint_row(j)
+                        .iter()
+                        .zip(&cage.positions)
+                        .fold(DVec3::ZERO, |acc, (&w, c)| acc + w * *c)
+                })
+                .collect();
             paper.regularised(
                 cage_coords,
                 &cage.positions,
                 &cage.triangles,
                 binding_mesh,
                 skin_weights,
+                &BindingJoints::new(skeleton, joints)?,
             )
         }
     }
@@ -457,7 +477,16 @@ impl MvcMap {
         skeleton_updater: &SkeletonUpdater,
         skeleton: &Skeleton,
     ) -> Result<(), RigError> {
-        let fit = with_cage_fit(self.fit.paper(), kind, coords, cage, None, skin_weights)?;
+        let fit = with_cage_fit(
+            self.fit.paper(),
+            kind,
+            coords,
+            cage,
+            None,
+            skin_weights,
+            skeleton_updater,
+            skeleton,
+        )?;
         let mut reverser = CageReverser::new(
             coords,
             &fit,

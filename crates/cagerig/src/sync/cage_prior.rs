@@ -14,14 +14,33 @@
 //! - P (`#C`) the *prior*: every rest cage vertex carried by the mean motion of the skin around
 //!   it. With N_k the [`PRIOR_NEIGHBOURS`] rest-skin vertices nearest to C_k, x̄_k their rest
 //!   centroid, ȳ_k the centroid of their LBS-posed positions and A_k the rotation of their mean
-//!   skinning transform (the polar factor of Σ_j a_kj L_j, a_kj the mean weight of joint j on
-//!   N_k and L_j its linear part, times its mean scale),
-//!   `P_k = ȳ_k + A_k (C_k − x̄_k)`. The centroid follows the body exactly; only the offset of
-//!   the cage from it turns, so a cage vertex between two limbs stays between them;
+//!   skinning transform (see below), `P_k = ȳ_k + A_k (C_k − x̄_k)`. The centroid follows the
+//!   body exactly; only the offset of the cage from it turns, so a cage vertex between two
+//!   limbs stays between them;
 //! - L the cage's uniform graph Laplacian (`#C × #C`, row k: c_k − mean of its neighbours), so
 //!   the prior fixes the cage's local shape and the rows its placement; ε ([`PRIOR_EPSILON`])
 //!   keeps the system definite on parts the rows do not see;
 //! - λ = [`PRIOR_STRENGTH`] · tr(Φ̃ᵀΦ̃) / tr(LᵀL + εI), chosen once per binding from the rig.
+//!
+//! **The rotation A_k** is the best-fit rotation of the neighbourhood: the proper rotation R
+//! maximising tr(Rᵀ H_k) (Kabsch; Horn's quaternion where H_k is a reflection), times the
+//! joints' mean scale Σ_j a_kj |det L_j|^⅓, with
+//!
+//! ```text
+//! H_k = Σ_{i ∈ N_k} (ŷ_i − ŷ̄)(x_i − x̄_k)ᵀ / #N_k + μ_k Σ_j a_kj L_j
+//!     = Σ_j [ L_j D_kj + T̂_j(x̄_k) s_kjᵀ ] + μ_k Σ_j a_kj L_j.
+//! ```
+//!
+//! ŷ_i = Σ_j ω_ij T̂_j(x_i) poses the binding skin M₀ with the *binding* skeleton under the
+//! current linear parts: T̂_j(x) = q_j + L_j (x − b_j), b_j the joint's position at binding and
+//! q_j = q_parent + L_parent (b_j − b_parent) (q = b at a root). So the rotation sees how the
+//! parts of the neighbourhood move apart (a knee closing turns the neighbourhood; a blend of
+//! the two joints' rotations alone does not), and it depends on the pose's linear parts only,
+//! never on C: P stays linear in C. D_kj = Σ_i ω_ij d_i d_iᵀ and s_kj = Σ_i ω_ij d_i
+//! (d_i = x_i − x̄_k, means over N_k) are moments of the binding. μ_k = [`ROTATION_BLEND`] ·
+//! tr(Σ_j D_kj) keeps H_k definite where the neighbourhood is flat. At rest H_k is symmetric
+//! positive definite (A_k = I); under one rigid motion R of every joint H_k = R(Σ_j D_kj + μ_k I)
+//! (Σ_j s_kj = 0), so A_k = R.
 //!
 //! The minimiser is linear in both targets: with `R = LᵀL + εI` and `H = Φ̃ᵀΦ̃ + λR` (SPD),
 //!
@@ -54,6 +73,90 @@ pub const PRIOR_EPSILON: f64 = 0.05;
 pub const PRIOR_NEIGHBOURS: usize = 32;
 /// Skin vertices searched for neighbours at most (a regular subsample of larger skins).
 const PRIOR_SEARCH_VERTICES: usize = 16_384;
+/// μ_k / tr(Σ_j D_kj) in the carried rotation's H_k: how much of the blend of the joints'
+/// linear parts H_k holds beside the neighbourhood's own motion (see the module docs).
+pub const ROTATION_BLEND: f64 = 0.05;
+
+/// The skeleton of the binding, whose pose under the current linear parts turns the carried
+/// cage (T̂_j in the module docs): every joint's parent, an order with parents first, and each
+/// joint's position at binding b_j (`#J` each).
+#[derive(Debug, Clone)]
+pub struct BindingJoints {
+    parents: Vec<Option<usize>>,
+    order: Vec<usize>,
+    positions: Vec<DVec3>,
+}
+
+impl BindingJoints {
+    /// `skeleton`'s hierarchy with the joint positions `positions` (`#J`, e.g. ΨC₀).
+    pub fn new(
+        skeleton: &crate::skeleton::Skeleton,
+        positions: Vec<DVec3>,
+    ) -> Result<Self, RigError> {
+        if positions.len() != skeleton.len() {
+            return Err(RigError::SizeMismatch {
+                what: "binding joint positions for the cage prior",
+                expected: skeleton.len(),
+                actual: positions.len(),
+            });
+        }
+        if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(RigError::NonFinite {
+                what: "binding joint position for the cage prior",
+                index: bad,
+            });
+        }
+        Ok(Self {
+            parents: skeleton.joints().iter().map(|j| j.parent).collect(),
+            order: skeleton.topological_order().to_vec(),
+            positions,
+        })
+    }
+
+    /// `skeleton`'s hierarchy at its rest joint positions.
+    pub fn of_skeleton(skeleton: &crate::skeleton::Skeleton) -> Self {
+        Self {
+            parents: skeleton.joints().iter().map(|j| j.parent).collect(),
+            order: skeleton.topological_order().to_vec(),
+            positions: skeleton.rest_positions(),
+        }
+    }
+
+    /// A chain of two joints, the second a child of the first, at `root` and `child` (tests).
+    #[cfg(test)]
+    pub(crate) fn two_joint_chain(root: DVec3, child: DVec3) -> Self {
+        Self {
+            parents: vec![None, Some(0)],
+            order: vec![0, 1],
+            positions: vec![root, child],
+        }
+    }
+
+    /// Number of joints `#J`.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Whether there is no joint.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// q_j − L_j b_j for every joint (`out`, `#J`): the translations of T̂_j, the binding
+    /// skeleton posed by the linear parts `joint_linear` (`#J`). No allocation.
+    fn posed_translations(&self, joint_linear: impl Fn(usize) -> DMat3, out: &mut [DVec3]) {
+        // First the posed joint positions q_j, parents first, then q_j − L_j b_j in place.
+        for &j in &self.order {
+            out[j] = match self.parents[j] {
+                Some(p) => out[p] + joint_linear(p) * (self.positions[j] - self.positions[p]),
+                None => self.positions[j],
+            };
+        }
+        for (j, t) in out.iter_mut().enumerate() {
+            *t -= joint_linear(j) * self.positions[j];
+        }
+    }
+}
 
 /// One joint of a cage vertex's neighbourhood: a_kj and β_kj (see the module docs).
 #[derive(Debug, Clone)]
@@ -64,6 +167,10 @@ struct NeighbourhoodJoint {
     share: f64,
     /// β_kj = mean_i ω_ij Φ_i, `#C`.
     coords: Vec<f64>,
+    /// D_kj = mean_i ω_ij d_i d_iᵀ on the binding skin (d_i = x_i − x̄_k).
+    spread: DMat3,
+    /// s_kj = mean_i ω_ij d_i on the binding skin.
+    offset: DVec3,
 }
 
 /// The prior of the regularised CageUp: the neighbourhoods' moments and Q (see the module
@@ -88,6 +195,15 @@ pub struct CagePrior {
     carried: Vec<DVec3>,
     /// A_k of the last fit, `#C`.
     rotations: Vec<DMat3>,
+    /// The binding skeleton posed by the linear parts (T̂_j).
+    binding_joints: BindingJoints,
+    /// x̄_k on the binding skin, `#C`.
+    binding_centroids: Vec<DVec3>,
+    /// μ_k, `#C`.
+    rotation_blend: Vec<f64>,
+    /// Scratch: the translations of T̂_j and the joints' scales |det L_j|^⅓, `#J` each.
+    posed_translations: Vec<DVec3>,
+    joint_scales: Vec<f64>,
 }
 
 /// K and the prior of a regularised fit.
@@ -136,19 +252,36 @@ impl CagePrior {
         self.moments_cage.copy_from_slice(rest_cage);
     }
 
-    /// A_k into `blended` (`#C`) from Σ_j a_kj L_j of `joint_linear` (`#J`): the polar
-    /// factor times the mean scale Σ_j a_kj |det L_j|^⅓. No allocation.
-    fn blend_rotations(&self, joint_linear: impl Fn(usize) -> DMat3, blended: &mut [DMat3]) {
-        blended.iter_mut().for_each(|b| *b = DMat3::ZERO);
+    /// A_k into `blended` (`#C`) for the linear parts `joint_linear` (`#J`): the best-fit
+    /// rotation of H_k times the mean scale Σ_j a_kj |det L_j|^⅓ (module docs), with
+    /// `translations` and `scales` (`#J` each) as scratch for T̂_j and |det L_j|^⅓. No
+    /// allocation.
+    fn blend_rotations(
+        &self,
+        joint_linear: impl Fn(usize) -> DMat3,
+        translations: &mut [DVec3],
+        scales: &mut [f64],
+        blended: &mut [DMat3],
+    ) {
+        self.binding_joints
+            .posed_translations(&joint_linear, translations);
+        for (j, s) in scales.iter_mut().enumerate() {
+            *s = joint_linear(j).determinant().abs().cbrt();
+        }
         let mut entries = self.joints.iter().peekable();
         for (k, b) in blended.iter_mut().enumerate() {
             let mut scale = 0.0;
+            let mut motion = DMat3::ZERO;
+            let mut blend = DMat3::ZERO;
+            let centroid = self.binding_centroids[k];
             while let Some(entry) = entries.next_if(|e| e.cage_vertex == k) {
                 let linear = joint_linear(entry.joint);
-                *b += linear * entry.share;
-                scale += entry.share * linear.determinant().abs().cbrt();
+                let image = linear * centroid + translations[entry.joint];
+                motion += linear * entry.spread + outer(image, entry.offset);
+                blend += linear * entry.share;
+                scale += entry.share * scales[entry.joint];
             }
-            *b = rotation_of(*b) * scale;
+            *b = best_rotation(motion + blend * self.rotation_blend[k]) * scale;
         }
     }
 
@@ -158,8 +291,17 @@ impl CagePrior {
     pub fn carry(&mut self, posed_from_rest: &[DAffine3], rest_cage: &[DVec3]) {
         self.update_moments(rest_cage);
         let mut rotations = std::mem::take(&mut self.rotations);
-        self.blend_rotations(|j| posed_from_rest[j].matrix3, &mut rotations);
+        let mut translations = std::mem::take(&mut self.posed_translations);
+        let mut scales = std::mem::take(&mut self.joint_scales);
+        self.blend_rotations(
+            |j| posed_from_rest[j].matrix3,
+            &mut translations,
+            &mut scales,
+            &mut rotations,
+        );
         self.rotations = rotations;
+        self.posed_translations = translations;
+        self.joint_scales = scales;
         self.carried.iter_mut().for_each(|p| *p = DVec3::ZERO);
         for (entry, m) in self.joints.iter().zip(&self.joint_moments) {
             let t = &posed_from_rest[entry.joint];
@@ -188,7 +330,14 @@ impl CagePrior {
     ) {
         let nc = self.rest_centroids.len();
         let mut blended = vec![DMat3::ZERO; nc];
-        self.blend_rotations(|j| joint_linear[j], &mut blended);
+        let mut translations = vec![DVec3::ZERO; self.binding_joints.len()];
+        let mut scales = vec![0.0; self.binding_joints.len()];
+        self.blend_rotations(
+            |j| joint_linear[j],
+            &mut translations,
+            &mut scales,
+            &mut blended,
+        );
         // ∂P_k/∂c_m = A_k (δ_km − ξ_km) + Σ_j (β_kj[m] L_j + a_kj ∂t_j/∂c_m), as 3×3 blocks
         // (k, m) in row-major order.
         let mut blocks = vec![DMat3::ZERO; nc * nc];
@@ -221,17 +370,143 @@ impl CagePrior {
     }
 }
 
-/// The rotation of `m` (its polar factor, by Newton's iteration X ← (X + X⁻ᵀ)/2), or the
-/// identity when `m` is singular.
-fn rotation_of(m: DMat3) -> DMat3 {
-    let mut x = m;
+/// a bᵀ.
+fn outer(a: DVec3, b: DVec3) -> DMat3 {
+    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// The proper rotation R maximising tr(Rᵀ h): the polar factor of `h` when det h > 0, else
+/// Horn's quaternion (the eigenvector of the largest eigenvalue of his 4 × 4 matrix), which
+/// flips the weakest direction of a reflection as Kabsch's SVD does. The identity for h = 0.
+fn best_rotation(h: DMat3) -> DMat3 {
+    let size = h.to_cols_array().iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if !(size.is_finite() && size > 0.0) {
+        return DMat3::IDENTITY;
+    }
+    let h = h * (1.0 / size);
+    if h.determinant() > 1e-9 {
+        let r = rotation_of(h);
+        if r.determinant() > 0.5 {
+            return r;
+        }
+    }
+    horn_rotation(h)
+}
+
+/// Horn's closed form: with S = hᵀ (S_ab = Σ d_a e_b for h = Σ e dᵀ), the unit quaternion of
+/// the largest eigenvalue of N(S) is the rotation maximising tr(Rᵀ h).
+fn horn_rotation(h: DMat3) -> DMat3 {
+    let s = |a: usize, b: usize| h.col(a)[b];
+    let n = [
+        [
+            s(0, 0) + s(1, 1) + s(2, 2),
+            s(1, 2) - s(2, 1),
+            s(2, 0) - s(0, 2),
+            s(0, 1) - s(1, 0),
+        ],
+        [
+            s(1, 2) - s(2, 1),
+            s(0, 0) - s(1, 1) - s(2, 2),
+            s(0, 1) + s(1, 0),
+            s(2, 0) + s(0, 2),
+        ],
+        [
+            s(2, 0) - s(0, 2),
+            s(0, 1) + s(1, 0),
+            -s(0, 0) + s(1, 1) - s(2, 2),
+            s(1, 2) + s(2, 1),
+        ],
+        [
+            s(0, 1) - s(1, 0),
+            s(2, 0) + s(0, 2),
+            s(1, 2) + s(2, 1),
+            -s(0, 0) - s(1, 1) + s(2, 2),
+        ],
+    ];
+    let [w, x, y, z] = largest_eigenvector(n);
+    let q = glam::DQuat::from_xyzw(x, y, z, w);
+    if !(q.is_finite() && q.length() > 0.5) {
+        return DMat3::IDENTITY;
+    }
+    DMat3::from_quat(q.normalize())
+}
+
+/// The unit eigenvector of the largest eigenvalue of the symmetric 4 × 4 matrix `a`, by
+/// cyclic Jacobi rotations.
+fn largest_eigenvector(mut a: [[f64; 4]; 4]) -> [f64; 4] {
+    let mut v = [[0.0f64; 4]; 4];
+    for (i, row) in v.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let scale = a.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
     for _ in 0..32 {
-        let det = x.determinant();
+        let off: f64 = (0..4)
+            .flat_map(|p| (p + 1..4).map(move |q| (p, q)))
+            .map(|(p, q)| a[p][q] * a[p][q])
+            .sum();
+        if off <= (1e-16 * scale).powi(2) {
+            break;
+        }
+        for p in 0..4 {
+            for q in p + 1..4 {
+                if a[p][q] == 0.0 {
+                    continue;
+                }
+                let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let sn = t * c;
+                for row in a.iter_mut() {
+                    let (akp, akq) = (row[p], row[q]);
+                    row[p] = c * akp - sn * akq;
+                    row[q] = sn * akp + c * akq;
+                }
+                let (row_p, row_q) = (a[p], a[q]);
+                for (k, (apk, aqk)) in row_p.into_iter().zip(row_q).enumerate() {
+                    a[p][k] = c * apk - sn * aqk;
+                    a[q][k] = sn * apk + c * aqk;
+                }
+                for row in v.iter_mut() {
+                    let (vp, vq) = (row[p], row[q]);
+                    row[p] = c * vp - sn * vq;
+                    row[q] = sn * vp + c * vq;
+                }
+            }
+        }
+    }
+    let best = (0..4).fold(0, |b, i| if a[i][i] > a[b][b] { i } else { b });
+    [v[0][best], v[1][best], v[2][best], v[3][best]]
+}
+
+/// The rotation of `m` (its polar factor, by Newton's iteration X ← (γX + (γX)⁻ᵀ)/2 with
+/// Higham's scaling γ = (‖X⁻¹‖_F / ‖X‖_F)^½, which takes a few steps even for an
+/// ill-conditioned `m`), or the identity when `m` is singular.
+fn rotation_of(m: DMat3) -> DMat3 {
+    let squared_norm = |a: DMat3| {
+        a.x_axis.length_squared() + a.y_axis.length_squared() + a.z_axis.length_squared()
+    };
+    let mut x = m;
+    let mut change = f64::INFINITY;
+    for _ in 0..32 {
+        // X⁻ᵀ = [b × c, c × a, a × b] / det X for the columns a, b, c of X.
+        let (a, b, c) = (x.x_axis, x.y_axis, x.z_axis);
+        let cofactors = DMat3::from_cols(b.cross(c), c.cross(a), a.cross(b));
+        let det = a.dot(cofactors.x_axis);
         if !(det.is_finite() && det.abs() > 1e-12) {
             return DMat3::IDENTITY;
         }
-        let next = (x + x.inverse().transpose()) * 0.5;
-        let change = (next - x)
+        let inverse_transpose = cofactors * (1.0 / det);
+        // Higham's scaling while far from the answer; plain Newton (quadratic) near it.
+        let scale = if change > 1e-2 {
+            (squared_norm(inverse_transpose) / squared_norm(x))
+                .sqrt()
+                .sqrt()
+        } else {
+            1.0
+        };
+        let next = (x * scale + inverse_transpose * (1.0 / scale)) * 0.5;
+        change = (next - x)
             .to_cols_array()
             .iter()
             .fold(0.0f64, |a, v| a.max(v.abs()));
@@ -249,7 +524,8 @@ fn rotation_of(m: DMat3) -> DMat3 {
 
 /// Builds K and the prior for the fitting rows `rows` (their Φ̃, `#R × #C`, is read from
 /// `cage_coords`), the rest cage `rest_cage` (`#C`) and its `cage_triangles`, the rest skin
-/// `rest_mesh` (`#V`) and Ω `skin_weights` (`#V × #J`).
+/// `rest_mesh` (`#V`), Ω `skin_weights` (`#V × #J`) and the binding skeleton
+/// `binding_joints` (`#J`).
 pub(crate) fn regularised_maps(
     cage_coords: &CageCoords,
     rows: &[usize],
@@ -257,6 +533,7 @@ pub(crate) fn regularised_maps(
     cage_triangles: &[[u32; 3]],
     rest_mesh: &[DVec3],
     skin_weights: &SkinWeights,
+    binding_joints: &BindingJoints,
 ) -> Result<RegularisedMaps, RigError> {
     let nc = cage_coords.num_cage_vertices();
     if rest_cage.len() != nc || rest_mesh.len() != cage_coords.num_vertices() {
@@ -266,9 +543,20 @@ pub(crate) fn regularised_maps(
             actual: rest_cage.len(),
         });
     }
+    if binding_joints.len() != skin_weights.num_joints() {
+        return Err(RigError::SizeMismatch {
+            what: "binding joints (skinning weight columns) for the cage prior",
+            expected: skin_weights.num_joints(),
+            actual: binding_joints.len(),
+        });
+    }
     let row_coords = cage_coords.select_rows(rows);
-    let (joints, centroid_coords) =
-        neighbourhoods(cage_coords, rest_cage, rest_mesh, skin_weights)?;
+    let Neighbourhoods {
+        joints,
+        centroid_coords,
+        binding_centroids,
+        rotation_blend,
+    } = neighbourhoods(cage_coords, rest_cage, rest_mesh, skin_weights)?;
     let regulariser = laplacian_regulariser(nc, cage_triangles)?;
     let gram = row_coords.transpose() * &row_coords;
     let trace_gram: f64 = (0..nc).map(|k| gram[(k, k)]).sum();
@@ -307,6 +595,11 @@ pub(crate) fn regularised_maps(
         joint_moments: vec![DVec3::ZERO; num_entries],
         carried: vec![DVec3::ZERO; nc],
         rotations: vec![DMat3::IDENTITY; nc],
+        posed_translations: vec![DVec3::ZERO; binding_joints.len()],
+        joint_scales: vec![0.0; binding_joints.len()],
+        binding_joints: binding_joints.clone(),
+        binding_centroids,
+        rotation_blend,
     };
     prior.update_moments(rest_cage);
     Ok(RegularisedMaps {
@@ -360,15 +653,26 @@ pub(crate) fn laplacian_regulariser(
     Ok(regulariser)
 }
 
+/// What [`neighbourhoods`] finds.
+struct Neighbourhoods {
+    joints: Vec<NeighbourhoodJoint>,
+    /// ξ, `#C × #C` row-major.
+    centroid_coords: Vec<f64>,
+    /// x̄_k on the binding skin, `#C`.
+    binding_centroids: Vec<DVec3>,
+    /// μ_k, `#C`.
+    rotation_blend: Vec<f64>,
+}
+
 /// The neighbourhood N_k of every rest cage vertex (its [`PRIOR_NEIGHBOURS`] nearest rest-skin
-/// vertices, among a regular subsample of at most 16,384 for larger skins) as its joints' a_kj
-/// and β_kj, and ξ (`#C × #C` row-major, row k the mean of Φ over N_k).
+/// vertices, among a regular subsample of at most 16,384 for larger skins) as its joints' a_kj,
+/// β_kj, D_kj and s_kj, ξ (`#C × #C` row-major, row k the mean of Φ over N_k), x̄_k and μ_k.
 fn neighbourhoods(
     cage_coords: &CageCoords,
     rest_cage: &[DVec3],
     rest_mesh: &[DVec3],
     skin_weights: &SkinWeights,
-) -> Result<(Vec<NeighbourhoodJoint>, Vec<f64>), RigError> {
+) -> Result<Neighbourhoods, RigError> {
     let nv = rest_mesh.len();
     let nc = rest_cage.len();
     if skin_weights.num_vertices() != nv || nv == 0 {
@@ -387,6 +691,8 @@ fn neighbourhoods(
     let mut slot = vec![usize::MAX; nj];
     let mut joints: Vec<NeighbourhoodJoint> = Vec::new();
     let mut centroid_coords = vec![0.0f64; nc * nc];
+    let mut binding_centroids = vec![DVec3::ZERO; nc];
+    let mut rotation_blend = vec![0.0f64; nc];
     for (k, c) in rest_cage.iter().enumerate() {
         distances.clear();
         distances.extend(
@@ -401,7 +707,12 @@ fn neighbourhoods(
         let first = joints.len();
         let mut near: Vec<usize> = distances[..take].iter().map(|d| d.1).collect();
         near.sort_unstable();
+        let centre = near.iter().map(|&v| rest_mesh[v]).sum::<DVec3>() * share;
+        binding_centroids[k] = centre;
+        let mut spread = 0.0;
         for &v in &near {
+            let d = rest_mesh[v] - centre;
+            spread += share * d.length_squared();
             let centroid = &mut centroid_coords[k * nc..(k + 1) * nc];
             for (m, x) in centroid.iter_mut().enumerate() {
                 *x += share * cage_coords.get(v, m);
@@ -416,10 +727,14 @@ fn neighbourhoods(
                         joint: j,
                         share: 0.0,
                         coords: vec![0.0; nc],
+                        spread: DMat3::ZERO,
+                        offset: DVec3::ZERO,
                     });
                 }
                 let entry = &mut joints[slot[j]];
                 entry.share += share * w;
+                entry.spread += outer(d, d) * (share * w);
+                entry.offset += d * (share * w);
                 for (m, x) in entry.coords.iter_mut().enumerate() {
                     *x += share * w * cage_coords.get(v, m);
                 }
@@ -428,8 +743,19 @@ fn neighbourhoods(
         for entry in &joints[first..] {
             slot[entry.joint] = usize::MAX;
         }
+        // A neighbourhood of coincident skin vertices keeps the blend of its joints alone.
+        rotation_blend[k] = if spread > 0.0 {
+            ROTATION_BLEND * spread
+        } else {
+            1.0
+        };
     }
-    Ok((joints, centroid_coords))
+    Ok(Neighbourhoods {
+        joints,
+        centroid_coords,
+        binding_centroids,
+        rotation_blend,
+    })
 }
 
 #[cfg(test)]
@@ -474,6 +800,7 @@ mod tests {
             &cage.triangles,
             &points,
             &omega,
+            &BindingJoints::two_joint_chain(DVec3::ZERO, DVec3::new(0.5, 0.5, 0.5)),
         )
         .unwrap();
         (cage, phi, rows, maps)
@@ -536,6 +863,104 @@ mod tests {
             .map(|p| motion.transform_point3(*p))
             .collect();
         assert!(crate::mesh::max_distance(maps.prior.carried_cage(), &expected) < 1e-12);
+    }
+
+    #[test]
+    fn the_best_rotation_of_a_turned_symmetric_matrix_is_the_turn_even_through_a_reflection() {
+        let turn = DMat3::from_axis_angle(DVec3::new(0.3, -1.0, 0.6).normalize(), 2.4);
+        let close = |a: DMat3, b: DMat3| (a - b).to_cols_array().iter().all(|x| x.abs() < 1e-12);
+        // Positive definite: the polar factor.
+        let got = best_rotation(turn * DMat3::from_diagonal(DVec3::new(3.0, 2.0, 1.0)));
+        assert!(close(got, turn), "{got:?}");
+        // A reflection along the weakest axis: Kabsch flips that axis back, Horn's quaternion.
+        let got = best_rotation(turn * DMat3::from_diagonal(DVec3::new(3.0, 2.0, -0.5)));
+        assert!(close(got, turn), "{got:?}");
+        assert_eq!(best_rotation(DMat3::ZERO), DMat3::IDENTITY);
+        // Horn's path agrees with the polar factor where both apply.
+        let h = turn
+            * DMat3::from_cols(
+                DVec3::new(2.0, 0.3, 0.1),
+                DVec3::new(0.3, 1.5, -0.2),
+                DVec3::new(0.1, -0.2, 0.7),
+            );
+        assert!(close(horn_rotation(h), rotation_of(h)));
+    }
+
+    /// The carried rotation is the best-fit rotation of the neighbourhood posed with the binding
+    /// skeleton (a hinge closing turns the neighbourhood by less than the child joint): the
+    /// moments D_kj, s_kj and the posed binding joints give the covariance summed point by point.
+    #[test]
+    fn the_carried_rotation_is_the_neighbourhoods_best_fit_rotation() {
+        let (cage, points, phi, omega) = cube_rig();
+        let rows: Vec<usize> = (0..points.len()).step_by(3).collect();
+        let (root, pivot) = (DVec3::ZERO, DVec3::new(0.5, 0.5, 0.5));
+        let mut maps = regularised_maps(
+            &phi,
+            &rows,
+            &cage.positions,
+            &cage.triangles,
+            &points,
+            &omega,
+            &BindingJoints::two_joint_chain(root, pivot),
+        )
+        .unwrap();
+        // The root turns a little, the child (the x > 0.5 side) much more about the pivot.
+        let root_turn = DMat3::from_rotation_y(0.2);
+        let child_turn = DMat3::from_rotation_z(1.1) * root_turn;
+        let root_motion = DAffine3::from_mat3_translation(root_turn, DVec3::new(0.1, 0.0, 0.0));
+        let posed_pivot = root_motion.transform_point3(pivot);
+        let child_motion =
+            DAffine3::from_mat3_translation(child_turn, posed_pivot - child_turn * pivot);
+        let motions = [root_motion, child_motion];
+        maps.prior.carry(&motions, &cage.positions);
+        let posed: Vec<DVec3> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let (joints, weights) = omega.row(i);
+                joints
+                    .iter()
+                    .zip(weights)
+                    .fold(DVec3::ZERO, |acc, (&j, &w)| {
+                        acc + w * motions[j as usize].transform_point3(*p)
+                    })
+            })
+            .collect();
+        let mut turned = 0;
+        for (k, c) in cage.positions.iter().enumerate() {
+            let mut order: Vec<usize> = (0..points.len()).collect();
+            order.sort_by(|&a, &b| {
+                points[a]
+                    .distance_squared(*c)
+                    .total_cmp(&points[b].distance_squared(*c))
+                    .then(a.cmp(&b))
+            });
+            let near = &order[..PRIOR_NEIGHBOURS];
+            let n = near.len() as f64;
+            let x_bar = near.iter().map(|&i| points[i]).sum::<DVec3>() / n;
+            let y_bar = near.iter().map(|&i| posed[i]).sum::<DVec3>() / n;
+            let mut covariance = DMat3::ZERO;
+            let mut spread = 0.0;
+            let mut blend = DMat3::ZERO;
+            for &i in near {
+                covariance += outer(posed[i] - y_bar, points[i] - x_bar) * (1.0 / n);
+                spread += (points[i] - x_bar).length_squared() / n;
+                let (joints, weights) = omega.row(i);
+                for (&j, &w) in joints.iter().zip(weights) {
+                    blend += motions[j as usize].matrix3 * (w / n);
+                }
+            }
+            let rotation = best_rotation(covariance + blend * (ROTATION_BLEND * spread));
+            let expected = y_bar + rotation * (*c - x_bar);
+            let got = maps.prior.carried_cage()[k];
+            assert!(got.distance(expected) < 1e-12, "{k}: {got} vs {expected}");
+            // Not the blend of the joints' rotations.
+            let blended = y_bar + rotation_of(blend) * (*c - x_bar);
+            if got.distance(blended) > 1e-3 {
+                turned += 1;
+            }
+        }
+        assert!(turned > 0);
     }
 
     #[test]

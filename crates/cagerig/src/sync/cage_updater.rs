@@ -15,7 +15,7 @@ use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
 use crate::sync::cage_fit_kind::CageFitKind;
-use crate::sync::cage_prior::{CagePrior, RegularisedMaps, regularised_maps};
+use crate::sync::cage_prior::{BindingJoints, CagePrior, RegularisedMaps, regularised_maps};
 
 /// Reciprocal condition estimate below which a cage-fitting system is rejected as singular.
 pub const MIN_RECIPROCAL_CONDITION: f64 = 1e-13;
@@ -112,8 +112,8 @@ impl CageUpdater {
 
     /// The regularised fit on the same rows ([`super::cage_prior`]): `cage_coords` is Φ
     /// (`#V × #C`) of the rest skin `rest_mesh` (`#V`) in `rest_cage` (`#C`, with its
-    /// `cage_triangles`), `skin_weights` Ω (`#V × #J`). [`Self::apply_rows`] keeps the paper's
-    /// map.
+    /// `cage_triangles`), `skin_weights` Ω (`#V × #J`), `binding_joints` the skeleton of the
+    /// binding (`#J`). [`Self::apply_rows`] keeps the paper's map.
     pub fn regularised(
         self,
         cage_coords: &CageCoords,
@@ -121,6 +121,7 @@ impl CageUpdater {
         cage_triangles: &[[u32; 3]],
         rest_mesh: &[DVec3],
         skin_weights: &SkinWeights,
+        binding_joints: &BindingJoints,
     ) -> Result<Self, RigError> {
         let RegularisedMaps {
             cage_from_rows,
@@ -132,6 +133,7 @@ impl CageUpdater {
             cage_triangles,
             rest_mesh,
             skin_weights,
+            binding_joints,
         )?;
         Ok(Self {
             rows: self.rows,

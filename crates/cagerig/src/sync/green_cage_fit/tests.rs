@@ -246,6 +246,10 @@ fn regularised_fit_of(points: &[DVec3]) -> (GreenCageFit, crate::mesh::TriMesh) 
         &coords.triangles,
         points,
         &omega,
+        &crate::sync::cage_prior::BindingJoints::two_joint_chain(
+            DVec3::new(lo.x, 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z)),
+            0.5 * (lo + hi),
+        ),
     )
     .unwrap();
     let regulariser =
