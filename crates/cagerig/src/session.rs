@@ -318,7 +318,8 @@ impl RigSession {
             display: None,
             rest_revision: 0,
         };
-        session.set_skinning(options.skinning)?;
+        // The method, then one pose and one fit (each later event fits once too).
+        session.select_skinning(options.skinning)?;
         session.pose_and_fit();
         Ok((session, warnings))
     }

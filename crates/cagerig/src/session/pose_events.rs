@@ -13,24 +13,30 @@ impl RigSession {
     /// Switches the skinning method; computes CoR centres on the first switch to CoR. The
     /// blended method needs the rig's DQ blend weights ([`RigError::NoDqBlendWeights`]), the
     /// external one a method passed in `SessionOptions::external_skinning`
-    /// ([`RigError::NoExternalSkinning`]).
+    /// ([`RigError::NoExternalSkinning`]). Selecting the method in use changes nothing: no
+    /// structure moves and CageUp does not fit again (a Green fit starts from the last C', so
+    /// a second fit of the same pose would move C' by round-off).
     pub fn set_skinning(&mut self, method: SkinningMethod) -> Result<(), RigError> {
+        if method == self.skinning.method() {
+            return Ok(());
+        }
         self.save_checkpoint();
-        let result = self.set_skinning_event(method);
+        let result = self
+            .select_skinning(method)
+            .map(|()| self.pose_and_fit());
         self.finish_event(result)
     }
 
-    /// [`RigSession::set_skinning`] without the checkpoint.
-    fn set_skinning_event(&mut self, method: SkinningMethod) -> Result<(), RigError> {
+    /// Selects `method` and builds what it needs (CoR centres), without posing: the first half
+    /// of [`RigSession::set_skinning`], also used once at binding.
+    pub(super) fn select_skinning(&mut self, method: SkinningMethod) -> Result<(), RigError> {
         if method.needs_dq_blend_weights() && self.skinning.dq_blend_weights().is_none() {
             return Err(RigError::NoDqBlendWeights);
         }
         if method == SkinningMethod::Cor {
             self.build_cor()?;
         }
-        self.skinning.select(method)?;
-        self.pose_and_fit();
-        Ok(())
+        self.skinning.select(method)
     }
 
     /// Selects what CageUp fits for DQS / CoR (see [`CageFitSource`]).
