@@ -149,21 +149,15 @@ impl GreenState {
         )?;
         // The regulariser's prior; kept aside when the rig asks for the paper's fit (a rig
         // that cannot have one then fits on the rows alone).
-        let prior = (|| {
-            let triangles = fit.normals().triangles().to_vec();
-            let maps = crate::sync::cage_prior::regularised_maps(
-                vertex_coords,
-                rows,
-                rest_cage,
-                &triangles,
-                rest_mesh,
-                skin_weights,
-                binding_joints,
-            )?;
-            let regulariser =
-                crate::sync::cage_prior::laplacian_regulariser(rest_cage.len(), &triangles)?;
-            Ok::<_, RigError>(FitPrior::new(maps.prior, &regulariser, rest_cage))
-        })();
+        let prior = FitPrior::for_binding(
+            &mut fit,
+            vertex_coords,
+            rows,
+            rest_cage,
+            rest_mesh,
+            skin_weights,
+            binding_joints,
+        );
         match (prior, regularised) {
             (Ok(prior), on) => fit = fit.with_prior(prior, on),
             (Err(e), true) => return Err(e),

@@ -21,9 +21,7 @@ impl RigSession {
             return Ok(());
         }
         self.save_checkpoint();
-        let result = self
-            .select_skinning(method)
-            .map(|()| self.pose_and_fit());
+        let result = self.select_skinning(method).map(|()| self.pose_and_fit());
         self.finish_event(result)
     }
 

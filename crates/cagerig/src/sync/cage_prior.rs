@@ -522,10 +522,27 @@ fn rotation_of(m: DMat3) -> DMat3 {
     }
 }
 
+/// The coordinates that express each neighbourhood's skin vertices in the rest cage (the rows
+/// of ξ and β_kj, see the module docs). P is linear in C through them, and at binding they must
+/// reproduce the skin: x̄_k = ξ_k C is the neighbourhood's centroid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum NeighbourCoords {
+    /// The fitting coordinates themselves: mean value rigs, whose Φ reproduces the skin (M = ΦC).
+    Fitting,
+    /// Mean value coordinates of the neighbourhoods' skin vertices (at most
+    /// [`PRIOR_NEIGHBOURS`] · #C of them), computed at binding: Green rigs, whose vertex part φ
+    /// alone does not reproduce the skin (M = φC + ψ·g(C)), while P must stay linear in C.
+    MeanValue,
+}
+
 /// Builds K and the prior for the fitting rows `rows` (their Φ̃, `#R × #C`, is read from
 /// `cage_coords`), the rest cage `rest_cage` (`#C`) and its `cage_triangles`, the rest skin
 /// `rest_mesh` (`#V`), Ω `skin_weights` (`#V × #J`) and the binding skeleton
-/// `binding_joints` (`#J`).
+/// `binding_joints` (`#J`); the neighbourhoods are expressed in `neighbour_coords`.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the binding's parts, each named in the docs"
+)]
 pub(crate) fn regularised_maps(
     cage_coords: &CageCoords,
     rows: &[usize],
@@ -534,6 +551,7 @@ pub(crate) fn regularised_maps(
     rest_mesh: &[DVec3],
     skin_weights: &SkinWeights,
     binding_joints: &BindingJoints,
+    neighbour_coords: NeighbourCoords,
 ) -> Result<RegularisedMaps, RigError> {
     let nc = cage_coords.num_cage_vertices();
     if rest_cage.len() != nc || rest_mesh.len() != cage_coords.num_vertices() {
@@ -556,7 +574,14 @@ pub(crate) fn regularised_maps(
         centroid_coords,
         binding_centroids,
         rotation_blend,
-    } = neighbourhoods(cage_coords, rest_cage, rest_mesh, skin_weights)?;
+    } = neighbourhoods(
+        cage_coords,
+        neighbour_coords,
+        rest_cage,
+        cage_triangles,
+        rest_mesh,
+        skin_weights,
+    )?;
     let regulariser = laplacian_regulariser(nc, cage_triangles)?;
     let gram = row_coords.transpose() * &row_coords;
     let trace_gram: f64 = (0..nc).map(|k| gram[(k, k)]).sum();
@@ -666,10 +691,13 @@ struct Neighbourhoods {
 
 /// The neighbourhood N_k of every rest cage vertex (its [`PRIOR_NEIGHBOURS`] nearest rest-skin
 /// vertices, among a regular subsample of at most 16,384 for larger skins) as its joints' a_kj,
-/// β_kj, D_kj and s_kj, ξ (`#C × #C` row-major, row k the mean of Φ over N_k), x̄_k and μ_k.
+/// β_kj, D_kj and s_kj, ξ (`#C × #C` row-major, row k the mean over N_k of the vertices'
+/// coordinates in `neighbour_coords`), x̄_k and μ_k.
 fn neighbourhoods(
     cage_coords: &CageCoords,
+    neighbour_coords: NeighbourCoords,
     rest_cage: &[DVec3],
+    cage_triangles: &[[u32; 3]],
     rest_mesh: &[DVec3],
     skin_weights: &SkinWeights,
 ) -> Result<Neighbourhoods, RigError> {
@@ -682,40 +710,47 @@ fn neighbourhoods(
             actual: skin_weights.num_vertices(),
         });
     }
-    let stride = nv.div_ceil(PRIOR_SEARCH_VERTICES).max(1);
-    let candidates: Vec<usize> = (0..nv).step_by(stride).collect();
-    let take = PRIOR_NEIGHBOURS.min(candidates.len());
-    let share = 1.0 / take as f64;
+    let near = nearest_skin_vertices(rest_cage, rest_mesh);
+    // The coordinate row of each neighbour: Φ's own, or mean value coordinates of the
+    // neighbours alone (row `local[v]` of `computed`).
+    let computed = match neighbour_coords {
+        NeighbourCoords::Fitting => None,
+        NeighbourCoords::MeanValue => {
+            let mut vertices: Vec<usize> = near.iter().flatten().copied().collect();
+            vertices.sort_unstable();
+            vertices.dedup();
+            let points: Vec<DVec3> = vertices.iter().map(|&v| rest_mesh[v]).collect();
+            let cage = crate::mesh::TriMesh::new(rest_cage.to_vec(), cage_triangles.to_vec())?;
+            let coords = crate::coords::mvc::compute_cage_coords(&cage, &points, None)?;
+            let mut local = vec![usize::MAX; nv];
+            for (row, &v) in vertices.iter().enumerate() {
+                local[v] = row;
+            }
+            Some((coords, local))
+        }
+    };
+    let coordinate = |v: usize, m: usize| match &computed {
+        None => cage_coords.get(v, m),
+        Some((coords, local)) => coords.get(local[v], m),
+    };
     let nj = skin_weights.num_joints();
-    let mut distances: Vec<(f64, usize)> = Vec::with_capacity(candidates.len());
     let mut slot = vec![usize::MAX; nj];
     let mut joints: Vec<NeighbourhoodJoint> = Vec::new();
     let mut centroid_coords = vec![0.0f64; nc * nc];
     let mut binding_centroids = vec![DVec3::ZERO; nc];
     let mut rotation_blend = vec![0.0f64; nc];
-    for (k, c) in rest_cage.iter().enumerate() {
-        distances.clear();
-        distances.extend(
-            candidates
-                .iter()
-                .map(|&v| (rest_mesh[v].distance_squared(*c), v)),
-        );
-        if take < distances.len() {
-            distances
-                .select_nth_unstable_by(take - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        }
+    for (k, near) in near.iter().enumerate() {
+        let share = 1.0 / near.len() as f64;
         let first = joints.len();
-        let mut near: Vec<usize> = distances[..take].iter().map(|d| d.1).collect();
-        near.sort_unstable();
         let centre = near.iter().map(|&v| rest_mesh[v]).sum::<DVec3>() * share;
         binding_centroids[k] = centre;
         let mut spread = 0.0;
-        for &v in &near {
+        for &v in near {
             let d = rest_mesh[v] - centre;
             spread += share * d.length_squared();
             let centroid = &mut centroid_coords[k * nc..(k + 1) * nc];
             for (m, x) in centroid.iter_mut().enumerate() {
-                *x += share * cage_coords.get(v, m);
+                *x += share * coordinate(v, m);
             }
             let (vertex_joints, weights) = skin_weights.row(v);
             for (&j, &w) in vertex_joints.iter().zip(weights) {
@@ -736,7 +771,7 @@ fn neighbourhoods(
                 entry.spread += outer(d, d) * (share * w);
                 entry.offset += d * (share * w);
                 for (m, x) in entry.coords.iter_mut().enumerate() {
-                    *x += share * w * cage_coords.get(v, m);
+                    *x += share * w * coordinate(v, m);
                 }
             }
         }
@@ -756,6 +791,36 @@ fn neighbourhoods(
         binding_centroids,
         rotation_blend,
     })
+}
+
+/// N_k for every rest cage vertex (`#C` lists, each sorted): its [`PRIOR_NEIGHBOURS`] nearest
+/// rest-skin vertices (`rest_mesh`, not empty) among a regular subsample of at most
+/// [`PRIOR_SEARCH_VERTICES`]; ties by index.
+fn nearest_skin_vertices(rest_cage: &[DVec3], rest_mesh: &[DVec3]) -> Vec<Vec<usize>> {
+    let nv = rest_mesh.len();
+    let stride = nv.div_ceil(PRIOR_SEARCH_VERTICES).max(1);
+    let candidates: Vec<usize> = (0..nv).step_by(stride).collect();
+    let take = PRIOR_NEIGHBOURS.min(candidates.len());
+    let mut distances: Vec<(f64, usize)> = Vec::with_capacity(candidates.len());
+    rest_cage
+        .iter()
+        .map(|c| {
+            distances.clear();
+            distances.extend(
+                candidates
+                    .iter()
+                    .map(|&v| (rest_mesh[v].distance_squared(*c), v)),
+            );
+            if take < distances.len() {
+                distances.select_nth_unstable_by(take - 1, |a, b| {
+                    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+                });
+            }
+            let mut near: Vec<usize> = distances[..take].iter().map(|d| d.1).collect();
+            near.sort_unstable();
+            near
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -801,6 +866,7 @@ mod tests {
             &points,
             &omega,
             &BindingJoints::two_joint_chain(DVec3::ZERO, DVec3::new(0.5, 0.5, 0.5)),
+            NeighbourCoords::Fitting,
         )
         .unwrap();
         (cage, phi, rows, maps)
@@ -902,6 +968,7 @@ mod tests {
             &points,
             &omega,
             &BindingJoints::two_joint_chain(root, pivot),
+            NeighbourCoords::Fitting,
         )
         .unwrap();
         // The root turns a little, the child (the x > 0.5 side) much more about the pivot.

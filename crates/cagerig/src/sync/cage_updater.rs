@@ -134,6 +134,7 @@ impl CageUpdater {
             rest_mesh,
             skin_weights,
             binding_joints,
+            crate::sync::cage_prior::NeighbourCoords::Fitting,
         )?;
         Ok(Self {
             rows: self.rows,

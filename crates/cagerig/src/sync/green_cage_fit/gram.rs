@@ -32,6 +32,19 @@ pub(super) fn gram_matrices(
 }
 
 impl GreenCageFit {
+    /// tr(J₀ᵀJ₀) at the binding cage: the rows' Gauss–Newton scale, which sets the prior's λ
+    /// ([`super::prior`]). Leaves no factorisation behind.
+    pub fn binding_rows_scale(&mut self) -> f64 {
+        let cage = std::mem::take(&mut self.binding_cage);
+        self.gauss_newton_matrix_at(&cage);
+        self.binding_cage = cage;
+        self.lu.invalidate();
+        self.factor_damping = f64::INFINITY;
+        (0..3 * self.num_cage)
+            .map(|i| self.normal_matrix[(i, i)])
+            .sum()
+    }
+
     /// JᵀJ at x into `self.normal_matrix`, from the Gram matrices: with J = φ_R ⊗ I₃ + (ψ_R ⊗ I₃)·D
     /// and D = ∂g/∂C (three 3×3 blocks B_{f,m} per face f, one per corner m),
     /// JᵀJ = φ_Rᵀφ_R ⊗ I₃ + (φ_Rᵀψ_R ⊗ I₃)·D + its transpose + Dᵀ·(ψ_Rᵀψ_R ⊗ I₃)·D. No allocation.

@@ -5,7 +5,7 @@
 //! ([`crate::sync::cage_prior`]: every rest cage vertex carried by the mean motion of its
 //! nearest rest-skin vertices, built here on the vertex coordinates φ) and
 //! W = λ(LᵀL + εI) (`#C × #C`, symmetric positive definite: L the cage's uniform graph
-//! Laplacian, λ chosen once per binding from the fitting rows), the fit minimises
+//! Laplacian, λ chosen once per binding from the fitting rows, below), the fit minimises
 //!
 //! `E(C') = ½ ‖F_R(C') − M'_R‖² + ½ Σ_axes (C' − P)ᵀ W (C' − P)`.
 //!
@@ -13,11 +13,23 @@
 //! point form, and CageRev ([`super::reverser`]) inverts it with P(C) affine in the rest cage
 //! and the rest joints for a fixed pose. At the rest pose P = C (the skinning transforms are the
 //! identity and Σ_j ω_ij = 1), so C' = C stays the exact answer.
+//!
+//! **λ** = [`GREEN_PRIOR_STRENGTH`] · tr(J₀ᵀJ₀) / (3 tr(LᵀL + εI)), with J₀ the Jacobian of the
+//! rows F_R at the binding cage (φ_R ⊗ I₃ + (ψ_R ⊗ I₃)·∂g/∂C): the mean value rigs' rule
+//! (λ₀ · tr(Φ̃ᵀΦ̃) / tr R) on the Green map's own Gauss–Newton scale, with a stronger λ₀. The
+//! neighbourhoods of P are expressed in mean value coordinates of their skin vertices
+//! ([`crate::sync::cage_prior::NeighbourCoords::MeanValue`]), since φC alone is not the skin.
 
 use faer::Mat;
 use glam::{DAffine3, DMat3, DVec3};
 
-use crate::sync::cage_prior::CagePrior;
+use super::GreenCageFit;
+use crate::cage_coords::CageCoords;
+use crate::error::RigError;
+use crate::skin_weights::SkinWeights;
+use crate::sync::cage_prior::{
+    BindingJoints, CagePrior, NeighbourCoords, laplacian_regulariser, regularised_maps,
+};
 
 /// The regulariser's data (see the module docs).
 #[derive(Debug, Clone)]
@@ -33,11 +45,25 @@ pub struct FitPrior {
     last: Vec<DVec3>,
 }
 
+/// λ₀ of the Green fit's λ (module docs): three times the mean value rigs'
+/// ([`crate::sync::cage_prior::PRIOR_STRENGTH`]). The Green map follows a folding cage
+/// triangle through its face terms, so its rows pull C' from the body harder; with 9 the
+/// worst deviation over the Fox's and CesiumMan's motions drops from 0.077 to 0.053 of the
+/// diagonal (`docs/green-coordinates.md`).
+pub const GREEN_PRIOR_STRENGTH: f64 = 9.0;
+
 impl FitPrior {
-    /// From the carried-cage prior (its λ and neighbourhoods) and R = LᵀL + εI (`#C × #C`) of
-    /// the cage; P starts at `rest_cage` (`#C`).
-    pub fn new(prior: CagePrior, regulariser: &Mat<f64>, rest_cage: &[DVec3]) -> Self {
-        let strength = prior.strength();
+    /// From the carried-cage prior (its neighbourhoods), R = LᵀL + εI (`#C × #C`) of the cage and
+    /// tr(J₀ᵀJ₀) of the rows at the binding cage (`rows_scale`, see the module docs for λ); P
+    /// starts at `rest_cage` (`#C`).
+    pub fn new(
+        prior: CagePrior,
+        regulariser: &Mat<f64>,
+        rest_cage: &[DVec3],
+        rows_scale: f64,
+    ) -> Self {
+        let trace: f64 = (0..regulariser.nrows()).map(|k| regulariser[(k, k)]).sum();
+        let strength = GREEN_PRIOR_STRENGTH * rows_scale / (3.0 * trace);
         Self {
             prior,
             weight: Mat::from_fn(regulariser.nrows(), regulariser.ncols(), |r, c| {
@@ -47,6 +73,36 @@ impl FitPrior {
             active: rest_cage.to_vec(),
             last: rest_cage.to_vec(),
         }
+    }
+
+    /// The prior of `fit` for a binding: the carried cage of the rest cage `rest_cage` (`#C`),
+    /// with neighbourhoods on the rest skin `rest_mesh` (`#V`) and Ω `skin_weights`
+    /// (`#V × #J`), the binding skeleton `binding_joints` (`#J`), and λ from the fitting rows
+    /// `rows` of the vertex coordinates φ `vertex_coords` (`#V × #C`) and of `fit` (module
+    /// docs). The one rule of every Green binding.
+    pub fn for_binding(
+        fit: &mut GreenCageFit,
+        vertex_coords: &CageCoords,
+        rows: &[usize],
+        rest_cage: &[DVec3],
+        rest_mesh: &[DVec3],
+        skin_weights: &SkinWeights,
+        binding_joints: &BindingJoints,
+    ) -> Result<Self, RigError> {
+        let triangles = fit.normals().triangles().to_vec();
+        let maps = regularised_maps(
+            vertex_coords,
+            rows,
+            rest_cage,
+            &triangles,
+            rest_mesh,
+            skin_weights,
+            binding_joints,
+            NeighbourCoords::MeanValue,
+        )?;
+        let regulariser = laplacian_regulariser(rest_cage.len(), &triangles)?;
+        let rows_scale = fit.binding_rows_scale();
+        Ok(Self::new(maps.prior, &regulariser, rest_cage, rows_scale))
     }
 
     /// W = λ(LᵀL + εI), `#C × #C`.

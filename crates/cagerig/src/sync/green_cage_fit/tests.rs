@@ -239,11 +239,12 @@ fn regularised_fit_of(points: &[DVec3]) -> (GreenCageFit, crate::mesh::TriMesh) 
     )
     .unwrap();
     let rows: Vec<usize> = (0..points.len()).collect();
-    let maps = crate::sync::cage_prior::regularised_maps(
+    let mut fit = fit;
+    let prior = FitPrior::for_binding(
+        &mut fit,
         &coords.vertex,
         &rows,
         &cage.positions,
-        &coords.triangles,
         points,
         &omega,
         &crate::sync::cage_prior::BindingJoints::two_joint_chain(
@@ -252,10 +253,6 @@ fn regularised_fit_of(points: &[DVec3]) -> (GreenCageFit, crate::mesh::TriMesh) 
         ),
     )
     .unwrap();
-    let regulariser =
-        crate::sync::cage_prior::laplacian_regulariser(cage.num_vertices(), &coords.triangles)
-            .unwrap();
-    let prior = FitPrior::new(maps.prior, &regulariser, &cage.positions);
     (fit.with_prior(prior, true), cage)
 }
 
