@@ -41,8 +41,8 @@
 //!
 //! with P_k the moved points above (no term goes through more than #K + 2 roundings; the last
 //! u covers the second-order terms). Worst cases need every rounding to go the same way:
-//! measured on the Arm the drawn M̃ is within 2–4e-7 of the diagonal of the exact M (the CPU
-//! backend's: 1–1.6e-7), inside the display path's 2e-6. The unit tests check the bound per
+//! measured on the Arm the drawn M̃ is within 1.5–2.7e-7 of the diagonal of the exact M (the
+//! CPU backend's: 1.0–1.6e-7), inside the display path's 2e-6. The unit tests check the bound per
 //! vertex on coordinates with negative entries far from the origin; `tests/gpu_rest_map.rs`
 //! checks the 2e-6 on the bound Arm.
 //!
