@@ -300,8 +300,8 @@ impl GpuRestMap {
 
     /// Copies the columns of `parts` side by side (`#V × #K`: the vertex part first, each part
     /// `#V` rows) to the GPU in f32, with the row sums of the first part as one more column (see
-    /// the module notes). Fails when the parts' row counts differ, or a buffer would exceed
-    /// [`Self::max_bytes`] or the dispatch limits.
+    /// the module notes). Fails when the parts' row counts differ, a buffer would exceed
+    /// [`Self::max_bytes`] or the dispatch limits, or there are more than 1023 columns.
     pub fn bind(&self, parts: &[&CageCoords]) -> Result<GpuRestMapProduct, GpuRestMapError> {
         let Some(first) = parts.first() else {
             return Err(GpuRestMapError::Shape("no coordinate parts".into()));
