@@ -16,7 +16,9 @@ pub struct GpuContext {
 impl GpuContext {
     /// Opens the first adapter of the backends allowed by `WGPU_BACKEND` (default: Vulkan, GL,
     /// Metal, DX12), preferring a hardware one; software adapters (lavapipe, llvmpipe) are
-    /// accepted. Fails with [`RenderError::NoAdapter`] naming what to install.
+    /// accepted. The device takes the downlevel default limits, with the adapter's texture
+    /// resolution and its storage-buffer and buffer sizes. Fails with [`RenderError::NoAdapter`]
+    /// naming what to install.
     pub fn new_headless() -> Result<Self, RenderError> {
         let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle();
         descriptor.backends = wgpu::Backends::from_env().unwrap_or(
@@ -40,9 +42,20 @@ impl GpuContext {
         })?;
         let info = adapter.get_info();
         let adapter_name = format!("{} ({:?})", info.name, info.backend);
+        // The adapter's own buffer limits (the downlevel defaults stop at 128 MiB per storage
+        // binding, less than the rest map's coefficients of a 532k-vertex skin).
+        let supported = adapter.limits();
+        let mut required_limits =
+            wgpu::Limits::downlevel_defaults().using_resolution(supported.clone());
+        required_limits.max_storage_buffer_binding_size = required_limits
+            .max_storage_buffer_binding_size
+            .max(supported.max_storage_buffer_binding_size);
+        required_limits.max_buffer_size = required_limits
+            .max_buffer_size
+            .max(supported.max_buffer_size);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("cagerig-render"),
-            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            required_limits,
             ..Default::default()
         }))
         .map_err(|e| RenderError::Device {

@@ -10,6 +10,7 @@
 //! | file | concern |
 //! |---|---|
 //! | `gpu.rs` | headless device, clear error when no adapter exists |
+//! | `gpu_rest_map.rs`, `shaders/rest_map.wgsl` | the display path's rest skin M̃ = K̃·[C; g] as a compute pass ([`GpuRestMap`], a `cagerig::session::DisplayRestMapBackend`) |
 //! | `camera.rs` | orbit camera, presets, frame-all, projection |
 //! | `palette.rs` | sequential and diverging colour maps |
 //! | `scene.rs` | what to draw (borrowed slices) and the style |
@@ -32,6 +33,7 @@ pub mod camera;
 pub mod error;
 pub mod gpu;
 mod gpu_buffer;
+pub mod gpu_rest_map;
 pub mod gpu_types;
 pub mod image;
 pub mod offscreen;
@@ -48,6 +50,7 @@ pub mod vertex_packing;
 pub use camera::{CameraPreset, OrbitCamera};
 pub use error::RenderError;
 pub use gpu::GpuContext;
+pub use gpu_rest_map::{GpuRestMap, GpuRestMapError, GpuRestMapProduct};
 pub use image::RgbaImage;
 pub use offscreen::OffscreenRenderer;
 pub use palette::ColorMap;

@@ -5,14 +5,15 @@
 //! everywhere, and the drawn rest skin is the product of the whole `#V × #K` coordinate matrix
 //! with the cage (`#K` = `#C` for mean value rigs; `#C + #F` for Green rigs, whose face terms g
 //! are extra columns). That product is the largest per-event read (79 MB at 133k vertices × 74
-//! cage vertices in f64), and the one a GPU backend would hold in its own memory. The sync
+//! cage vertices in f64), and the one a GPU backend holds in its own memory. The sync
 //! operators never read it: CageUp, CageRev and SkelUp take the exact f64 rows, so a backend can
 //! change what is drawn, never the rig's state.
 //!
 //! [`DisplayRestMap::Cpu`] is [`DisplayCageCoords`] (Φ rounded to f32 on the CPU). A backend
 //! from another crate implements [`DisplayRestMapBackend`] (upload once per binding) and
 //! [`DisplayRestMapProduct`] (apply per event into the caller's buffer), and is passed as
-//! [`DisplayRestMap::External`]; `crates/cagerig/tests/display_rest_map.rs` is a complete one.
+//! [`DisplayRestMap::External`]; `crates/cagerig/tests/display_rest_map.rs` is a complete one,
+//! and `cagerig-render`'s `GpuRestMap` a wgpu one.
 
 use std::fmt;
 use std::sync::Arc;
