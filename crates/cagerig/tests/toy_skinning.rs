@@ -270,3 +270,41 @@ fn a_method_that_cannot_bind_the_rig_fails_the_binding_with_its_words() {
         }
     );
 }
+
+#[test]
+fn a_saved_state_with_the_external_method_reopens_where_the_method_is_passed_in() {
+    let mut session = rigid_bar();
+    session
+        .rotate_joint(1, DVec3::Z, 30f64.to_radians())
+        .unwrap();
+    session
+        .move_posed_cage(&[3], &[DVec3::new(0.0, 0.1, 0.0)])
+        .unwrap();
+    let text = serde_json::to_string(&session.editable_state()).unwrap();
+    assert!(text.contains("\"skinning\":\"external\""), "{text}");
+    let state: cagerig::session::EditableState = serde_json::from_str(&text).unwrap();
+    assert_eq!(state.skinning, SkinningMethod::External);
+    // A session with the method passed in takes the state back (C to the bit; M' and C' to
+    // round-off, since the restore re-derives them from the state's C and pose).
+    let mut reopened = rigid_bar();
+    reopened.restore_editable_state(&state).unwrap();
+    assert_eq!(reopened.skinning(), SkinningMethod::External);
+    assert_eq!(reopened.rest_cage(), session.rest_cage());
+    let size = diagonal(&session);
+    for (what, a, b) in [
+        ("M'", reopened.posed_mesh(), session.posed_mesh()),
+        ("C'", reopened.posed_cage(), session.posed_cage()),
+    ] {
+        let worst = worst_distance(a, b);
+        assert!(worst <= 1e-9 * size, "{what}: {worst}");
+    }
+    // One without it refuses the state in words and stays as it was.
+    let mut plain = bar(SessionOptions::default()).unwrap();
+    let before = plain.posed_mesh().to_vec();
+    assert_eq!(
+        plain.restore_editable_state(&state),
+        Err(RigError::NoExternalSkinning)
+    );
+    assert_eq!(plain.skinning(), SkinningMethod::Lbs);
+    assert_eq!(plain.posed_mesh(), &before[..]);
+}

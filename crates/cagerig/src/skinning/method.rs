@@ -50,7 +50,8 @@ impl SkinningMethod {
     }
 
     /// The name in scripts, options and files: `"lbs"`, `"dqs"`, `"cor"` or `"blended"`
-    /// (`"external"` for the method passed in, which no parser reads back).
+    /// (`"external"` for the method passed in: saved states read it back, options and scripts
+    /// do not, since no front end chooses it by name).
     pub const fn name(self) -> &'static str {
         match self {
             Self::Lbs => "lbs",
@@ -93,7 +94,32 @@ impl SkinningMethod {
     }
 }
 
-crate::named_kind::named_kind!(SkinningMethod, UnknownSkinningMethod);
+crate::named_kind::named_kind!(
+    SkinningMethod,
+    UnknownSkinningMethod,
+    |_method: SkinningMethod| "",
+    no_serde
+);
+
+impl serde::Serialize for SkinningMethod {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for SkinningMethod {
+    /// A name of [`SkinningMethod::ALL`] through `FromStr`, or `"external"`: a saved state of a
+    /// session whose method was passed in reads back as [`SkinningMethod::External`], and a
+    /// session restoring it without such a method refuses it
+    /// ([`crate::RigError::NoExternalSkinning`]).
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let text = <String as serde::Deserialize>::deserialize(deserializer)?;
+        if crate::named_kind::same_name(Self::External.name(), &text) {
+            return Ok(Self::External);
+        }
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
 
 #[cfg(test)]
 mod tests {
@@ -132,6 +158,14 @@ mod tests {
     #[test]
     fn the_external_method_is_not_a_name_front_ends_choose() {
         assert!(!SkinningMethod::ALL.contains(&SkinningMethod::External));
+        // Saved states read the method passed in back; options and scripts do not name it.
+        let json = serde_json::to_string(&SkinningMethod::External).unwrap();
+        assert_eq!(json, "\"external\"");
+        assert_eq!(
+            serde_json::from_str::<SkinningMethod>(&json).unwrap(),
+            SkinningMethod::External
+        );
+        assert!("external".parse::<SkinningMethod>().is_err());
         assert!("external".parse::<SkinningMethod>().is_err());
         assert!(!SkinningMethod::External.is_linear());
     }
