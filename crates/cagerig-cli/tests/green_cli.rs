@@ -203,7 +203,7 @@ fn a_green_rig_with_a_generated_cage_computes_no_mean_value_coordinates() {
 }
 
 /// The Fox under Green coordinates: its unindexed mesh has 290 distinct points for a cage of
-/// 102 vertices and 200 faces, so [φ ψ] has no MaxVol rows. Binding does not fail with "cage
+/// 100 vertices and 196 faces, so [φ ψ] has no MaxVol rows. Binding does not fail with "cage
 /// coordinates Φ (rank deficient: MaxVol needs rank #C)": it fits all rows, says so, and
 /// reproduces the rest mesh and follows a rest-cage edit.
 #[test]
@@ -369,5 +369,54 @@ fn export_past_the_fold_names_the_option_and_keeps_the_animation_with_it() {
     let stderr = String::from_utf8_lossy(&kept.stderr);
     assert!(kept.status.success(), "{stderr}");
     assert!(dir.join("kept.glb").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `animate --json` says which samples left C' unfitted and counts them: the Arm's own
+/// animation past t ≈ 1.2 s under Lipman's term with the fit on the rows alone (kept), and none
+/// under the default rig.
+#[test]
+fn animate_json_counts_the_samples_whose_current_cage_is_unfitted() {
+    let dir = std::env::temp_dir().join(format!("cagerig-unfitted-json-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let report = |extra: &[&str], out: &str| -> serde_json::Value {
+        let output = cagerig()
+            .arg("animate")
+            .arg(repo().join("data/arm/arm.obj"))
+            .arg("--skeleton-anim")
+            .arg(repo().join("data/arm/arm_skelAnim.txt"))
+            .args(["--times", "0,2", "--coords", "green", "--json", "--out"])
+            .arg(dir.join(out))
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        serde_json::from_slice(&output.stdout).unwrap()
+    };
+    let kept = report(
+        &[
+            "--green-face-term",
+            "lipman",
+            "--cage-fit",
+            "paper",
+            "--unfitted-cage",
+            "keep",
+        ],
+        "kept",
+    );
+    let flags: Vec<bool> = kept["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["unfitted"].as_bool().unwrap())
+        .collect();
+    assert_eq!(flags, [false, true], "{kept}");
+    assert_eq!(kept["unfitted_samples"], 1);
+    let default = report(&[], "default");
+    assert_eq!(default["unfitted_samples"], 0, "{default}");
     let _ = std::fs::remove_dir_all(&dir);
 }

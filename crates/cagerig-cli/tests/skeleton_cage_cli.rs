@@ -95,17 +95,19 @@ fn the_default_automatic_cages_stay_on_the_body() {
 }
 
 /// The same rigs under Green coordinates: no sample refused, and the handle as near the body as
-/// `docs/characters.md` says (spread 1.82, deviation 0.085, two of the Fox's 196 triangles at
-/// worst), which is not yet within the mean value rigs' bounds.
+/// `docs/characters.md` says: within the mean value rigs' bound on flipped triangles, and on
+/// spread and deviation everywhere but CesiumMan's spread (1.63) and the Fox Run's deviation
+/// (0.061).
 #[test]
 fn the_default_automatic_cages_of_green_rigs_stay_near_the_body() {
     for (file, animation, last) in CHARACTERS {
         let (spread, deviation, flipped) =
             auto_cage_with(file, animation, last, "skeleton", &["--coords", "green"]);
         let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
-        assert!(spread <= 1.85, "{what}");
-        assert!(deviation <= 0.09, "{what}");
-        assert!(flipped <= 2.0 / 196.0 + 1e-12, "{what}");
+        let cesium_man = file.contains("CesiumMan");
+        assert!(spread <= if cesium_man { 1.65 } else { 1.5 }, "{what}");
+        assert!(deviation <= 0.062, "{what}");
+        assert!(flipped <= 1.0 / 196.0 + 1e-12, "{what}");
     }
 }
 

@@ -72,6 +72,8 @@ pub struct Args {
 struct SampleReport {
     time: f64,
     frame_ms: f64,
+    /// Whether C' is not CageUp's fit (a Green pose kept under `--unfitted-cage keep`).
+    unfitted: bool,
     #[serde(flatten)]
     cage: cagerig::cage_quality::CageQuality,
 }
@@ -82,6 +84,8 @@ struct AnimateReport {
     cage_fit: cagerig::CageFitKind,
     coords: cagerig::CoordsKind,
     samples: Vec<SampleReport>,
+    /// How many samples left C' unfitted.
+    unfitted_samples: usize,
     /// The worst of each measure over the samples.
     worst: Option<cagerig::cage_quality::CageQuality>,
 }
@@ -121,6 +125,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         cage_fit: session.cage_fit(),
         coords: session.coords_kind(),
         samples: Vec::with_capacity(times.len()),
+        unfitted_samples: 0,
         worst: None,
     };
     for &t in times {
@@ -132,9 +137,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let cage = probe.measure_session(&session);
         eprintln!("t = {t}: frame in {frame_ms:.3} ms; current cage: {cage}");
         report.worst = Some(report.worst.map_or(cage, |w| w.worst(cage)));
+        let unfitted = session.posed_cage_unfitted().is_some();
+        report.unfitted_samples += usize::from(unfitted);
         report.samples.push(SampleReport {
             time: t,
             frame_ms,
+            unfitted,
             cage,
         });
         write_state(&mut staged, &format!("t{t}"), &session)?;

@@ -47,7 +47,7 @@ pub(super) fn compute_green_coords_for_mesh(
 /// Green CageUp's fitting rows: the MaxVol rows of [φ ψ] (`#V × (#C + #F)`), or every row
 /// when the mesh has no more rows than that or [φ ψ] is rank deficient — a mesh with fewer
 /// distinct points than #C + #F (an unindexed glTF repeats each corner: the Fox has 290
-/// distinct points of 1,728 for a cage of 102 vertices and 200 faces) — with a note saying so.
+/// distinct points of 1,728 for a cage of 100 vertices and 196 faces) — with a note saying so.
 pub(super) fn green_fit_rows(
     vertex: &CageCoords,
     face: &CageCoords,
