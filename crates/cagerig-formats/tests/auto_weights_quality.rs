@@ -119,6 +119,24 @@ fn default_weights_beat_blenders_bone_heat_on_the_arm_and_the_fox() {
     );
 }
 
+/// The Fox's shipped cage (`--cage data/fox/Fox_cage.obj`) adds its interior to the volume:
+/// the dominant joints stay those computed without it on 96 % of the vertices
+/// (`docs/weights.md`).
+#[test]
+fn the_foxs_cage_keeps_the_dominant_joints() {
+    let aw = AutoWeights::new(AutoWeightsOptions::default()).unwrap();
+    let (mesh, skeleton, _, _) = fox();
+    let cage = cagerig::io::obj::read_obj(&data("fox/Fox_cage.obj")).unwrap();
+    let without = aw.compute(&mesh, &skeleton, None).unwrap();
+    let with = aw.compute(&mesh, &skeleton, Some(&cage)).unwrap();
+    let kept = agreement(&with.weights, &without.weights);
+    println!(
+        "Fox: dominant joint kept with its cage on {:.1} % of the vertices",
+        100.0 * kept
+    );
+    assert!(kept >= 0.95, "{kept}");
+}
+
 #[test]
 fn every_deforming_joint_gets_weight_and_only_those() {
     let aw = AutoWeights::new(AutoWeightsOptions::default()).unwrap();
