@@ -149,14 +149,16 @@ impl GreenState {
         )?;
         // The regulariser's prior; kept aside when the rig asks for the paper's fit (a rig
         // that cannot have one then fits on the rows alone).
+        let rows_scale = fit.binding_rows_scale();
         let prior = FitPrior::for_binding(
-            &mut fit,
             vertex_coords,
             rows,
             rest_cage,
+            fit.normals().triangles(),
             rest_mesh,
             skin_weights,
             binding_joints,
+            rows_scale,
         );
         match (prior, regularised) {
             (Ok(prior), on) => fit = fit.with_prior(prior, on),

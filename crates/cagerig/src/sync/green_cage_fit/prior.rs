@@ -23,7 +23,6 @@
 use faer::Mat;
 use glam::{DAffine3, DMat3, DVec3};
 
-use super::GreenCageFit;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
@@ -75,33 +74,37 @@ impl FitPrior {
         }
     }
 
-    /// The prior of `fit` for a binding: the carried cage of the rest cage `rest_cage` (`#C`),
-    /// with neighbourhoods on the rest skin `rest_mesh` (`#V`) and Ω `skin_weights`
-    /// (`#V × #J`), the binding skeleton `binding_joints` (`#J`), and λ from the fitting rows
-    /// `rows` of the vertex coordinates φ `vertex_coords` (`#V × #C`) and of `fit` (module
-    /// docs). The one rule of every Green binding.
+    /// The prior of a Green fit for a binding: the carried cage of the rest cage `rest_cage`
+    /// (`#C`) and its `triangles`, with neighbourhoods on the rest skin `rest_mesh` (`#V`) and Ω
+    /// `skin_weights` (`#V × #J`), the binding skeleton `binding_joints` (`#J`), and λ from the
+    /// fit's `rows_scale` ([`super::GreenCageFit::binding_rows_scale`]; the fitting rows `rows`
+    /// of the vertex coordinates φ `vertex_coords`, `#V × #C`, are read for the neighbourhoods'
+    /// rows alone). The one rule of every Green binding (module docs).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the binding's parts, each named in the docs"
+    )]
     pub fn for_binding(
-        fit: &mut GreenCageFit,
         vertex_coords: &CageCoords,
         rows: &[usize],
         rest_cage: &[DVec3],
+        triangles: &[[u32; 3]],
         rest_mesh: &[DVec3],
         skin_weights: &SkinWeights,
         binding_joints: &BindingJoints,
+        rows_scale: f64,
     ) -> Result<Self, RigError> {
-        let triangles = fit.normals().triangles().to_vec();
         let maps = regularised_maps(
             vertex_coords,
             rows,
             rest_cage,
-            &triangles,
+            triangles,
             rest_mesh,
             skin_weights,
             binding_joints,
             NeighbourCoords::MeanValue,
         )?;
-        let regulariser = laplacian_regulariser(rest_cage.len(), &triangles)?;
-        let rows_scale = fit.binding_rows_scale();
+        let regulariser = laplacian_regulariser(rest_cage.len(), triangles)?;
         Ok(Self::new(maps.prior, &regulariser, rest_cage, rows_scale))
     }
 

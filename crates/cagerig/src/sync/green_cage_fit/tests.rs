@@ -240,17 +240,19 @@ fn regularised_fit_of(points: &[DVec3]) -> (GreenCageFit, crate::mesh::TriMesh) 
     .unwrap();
     let rows: Vec<usize> = (0..points.len()).collect();
     let mut fit = fit;
+    let rows_scale = fit.binding_rows_scale();
     let prior = FitPrior::for_binding(
-        &mut fit,
         &coords.vertex,
         &rows,
         &cage.positions,
+        fit.normals().triangles(),
         points,
         &omega,
         &crate::sync::cage_prior::BindingJoints::two_joint_chain(
             DVec3::new(lo.x, 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z)),
             0.5 * (lo + hi),
         ),
+        rows_scale,
     )
     .unwrap();
     (fit.with_prior(prior, true), cage)
