@@ -224,17 +224,8 @@ mod tests {
     #[test]
     fn zero_and_one_have_the_bits_of_lbs_and_dqs() {
         // 20 000 vertices (several chunks, sign table in use), up to 3 influences.
-        let n = 20_000;
-        let rows: Vec<Vec<f64>> = (0..n)
-            .map(|v| match v % 3 {
-                0 => vec![1.0, 0.0, 0.0],
-                1 => vec![0.25, 0.0, 0.75],
-                _ => vec![0.2, 0.3, 0.5],
-            })
-            .collect();
-        let rest: Vec<DVec3> = (0..n)
-            .map(|v| DVec3::new(v as f64 * 1e-3, (v % 7) as f64, -((v % 11) as f64)))
-            .collect();
+        let (rows, rest) = crate::skinning::test_fixtures::twenty_thousand_vertices();
+        let n = rest.len();
         let t = [
             DAffine3::from_translation(DVec3::Y) * DAffine3::from_rotation_x(0.4),
             DAffine3::from_rotation_z(170f64.to_radians()),

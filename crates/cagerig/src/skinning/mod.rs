@@ -21,6 +21,8 @@ mod method;
 pub mod precision;
 pub mod rigid_rotation;
 mod stored_rest_kernel;
+#[cfg(test)]
+mod test_fixtures;
 pub use stored_rest_kernel::StoredRestKernel;
 
 pub use blended::BlendedSkinning;
