@@ -40,9 +40,21 @@ pub(crate) struct BlendedRule<'a, S: SkinReal, T: ?Sized, P, const TABLE: bool> 
     pub points: P,
 }
 
-impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bool>
-    BlendedRule<'_, S, T, P, TABLE>
+impl<'a, S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bool>
+    BlendedRule<'a, S, T, P, TABLE>
 {
+    /// The rule of the LBS columns `transforms` and the DQS part of `dqs` (filled for this
+    /// frame), with the blend weights `blend` (`#V`, by vertex) and the rest `points`.
+    fn new(dqs: &'a DqsScratch<S>, transforms: &'a T, blend: &'a [S], points: P) -> Self {
+        Self {
+            transforms,
+            joint_dual_quats: &dqs.joint_dual_quats,
+            signs: &dqs.signs,
+            blend,
+            points,
+        }
+    }
+
     /// The LBS part at the rest point `p`.
     #[inline(always)]
     fn lbs_point(&self, joints: &[u16], weights: &[S], p: S::V3) -> S::V3 {
@@ -96,24 +108,11 @@ pub(crate) fn skin_blended<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoin
     points: P,
     out: &mut [S::Out],
 ) {
-    let table = dqs.prepare(transforms, origin, sorted);
-    if table {
-        let rule = BlendedRule::<S, T, P, true> {
-            transforms: columns,
-            joint_dual_quats: &dqs.joint_dual_quats,
-            signs: &dqs.signs,
-            blend,
-            points,
-        };
+    if dqs.prepare(transforms, origin, sorted) {
+        let rule = BlendedRule::<S, T, P, true>::new(dqs, columns, blend, points);
         sorted.skin(&rule, out);
     } else {
-        let rule = BlendedRule::<S, T, P, false> {
-            transforms: columns,
-            joint_dual_quats: &dqs.joint_dual_quats,
-            signs: &dqs.signs,
-            blend,
-            points,
-        };
+        let rule = BlendedRule::<S, T, P, false>::new(dqs, columns, blend, points);
         sorted.skin(&rule, out);
     }
 }
