@@ -11,9 +11,7 @@
 use glam::{DAffine3, Vec3};
 
 use super::dqs::DqsScratch;
-use super::precision::RestPoint;
-use super::stored_rest_kernel::StoredRestKernel;
-use crate::{RigError, SkinWeights};
+use super::stored_rest_kernel::{RestOnlyMethod, StoredRestKernel};
 
 /// Caller-owned per-frame buffer: the `#J` joint dual quaternions of `T_j ∘ translate(o)`, f32.
 pub type DqsF32Scratch = DqsScratch<f32>;
@@ -25,20 +23,12 @@ pub struct DqsF32Method;
 /// Precomputed f32 DQS: compact Ω, pivots and the rest mesh M (`#V`, f32, local origin).
 pub type DqsF32 = StoredRestKernel<DqsF32Method>;
 
-impl DqsF32 {
-    /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
-    pub fn new<P: RestPoint>(
-        skin_weights: &SkinWeights,
-        rest_positions: &[P],
-    ) -> Result<Self, RigError> {
-        Self::build(
-            skin_weights,
-            rest_positions,
-            "DQS f32 rest positions vs. weight rows",
-            DqsF32Method,
-        )
-    }
+impl RestOnlyMethod for DqsF32Method {
+    const METHOD: Self = DqsF32Method;
+    const SIZE_MISMATCH: &'static str = "DQS f32 rest positions vs. weight rows";
+}
 
+impl DqsF32 {
     /// M' = DQS(T, Ω, M) in f32 (Eq. 4). `transforms`: `#J`; `scratch`:
     /// `DqsF32Scratch::new(#J)`; `out`: `#V`. Unweighted vertices stay at rest.
     ///

@@ -23,7 +23,7 @@ pub mod rigid_rotation;
 mod stored_rest_kernel;
 #[cfg(test)]
 mod test_fixtures;
-pub use stored_rest_kernel::StoredRestKernel;
+pub use stored_rest_kernel::{RestOnlyMethod, StoredRestKernel};
 
 pub use blended::BlendedSkinning;
 pub use blended_f32::{BlendedF32, BlendedF32Method, BlendedF32Scratch};
