@@ -203,26 +203,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
         times = refined.times;
     }
-    let (document, bin, report) = if bake {
-        export_animation::baked_animation_to_gltf(
-            &mut session,
-            &mut player,
-            cage_track.as_ref(),
-            &times,
-            &name,
-            &animation_name,
-        )
-    } else {
-        export_animation::animation_to_gltf(
-            &mut session,
-            &mut player,
-            cage_track.as_ref(),
-            &times,
-            &name,
-            &animation_name,
-        )
-        .map(|(document, bin)| (document, bin, BakeReport::default()))
-    }
+    let (document, bin, report) = export_animation::animation_to_gltf(
+        &mut session,
+        &mut player,
+        cage_track.as_ref(),
+        &times,
+        &name,
+        &animation_name,
+        bake,
+    )
     .map_err(|e| crate::session_args::event_error("exporting the animation", e))?;
     cagerig_formats::gltf::export::write_gltf_or_glb(&args.out, &document, &bin)?;
     println!(
