@@ -8,6 +8,9 @@ use cagerig::script::EditScript;
 use cagerig::session::{RigParts, RigSession, SessionOptions};
 use libfuzzer_sys::fuzz_target;
 
+mod finite_session;
+use finite_session::all_finite;
+
 fn bar() -> &'static RigSession {
     static SESSION: OnceLock<RigSession> = OnceLock::new();
     SESSION.get_or_init(|| {
@@ -15,15 +18,6 @@ fn bar() -> &'static RigSession {
         let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
         RigSession::new(parts, SessionOptions::default()).unwrap().0
     })
-}
-
-fn all_finite(s: &RigSession) -> bool {
-    s.rest_mesh().iter().all(|p| p.is_finite())
-        && s.posed_mesh().iter().all(|p| p.is_finite())
-        && s.rest_cage().iter().all(|p| p.is_finite())
-        && s.posed_cage().iter().all(|p| p.is_finite())
-        && s.rest_joints().all(|p| p.is_finite())
-        && s.posed_joints().all(|p| p.is_finite())
 }
 
 fuzz_target!(|data: &[u8]| {

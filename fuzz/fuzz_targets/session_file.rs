@@ -28,6 +28,9 @@ use cagerig_document::session_restore::restore_session;
 use glam::DVec3;
 use libfuzzer_sys::fuzz_target;
 
+mod finite_session;
+use finite_session::all_finite;
+
 /// The largest built-in rig the target builds (skin vertices).
 const MAX_VERTICES: u64 = 2_000;
 
@@ -55,15 +58,6 @@ fn opened(name: &str, resolution: Option<usize>) -> Option<OpenedRig> {
         morph_targets: Default::default(),
         rigged: true,
     })
-}
-
-fn all_finite(s: &RigSession) -> bool {
-    s.rest_mesh().iter().all(|p| p.is_finite())
-        && s.posed_mesh().iter().all(|p| p.is_finite())
-        && s.rest_cage().iter().all(|p| p.is_finite())
-        && s.posed_cage().iter().all(|p| p.is_finite())
-        && s.rest_joints().all(|p| p.is_finite())
-        && s.posed_joints().all(|p| p.is_finite())
 }
 
 /// What the views draw of the skeleton: every parent names a drawn joint, every position is

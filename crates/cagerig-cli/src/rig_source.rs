@@ -215,11 +215,30 @@ pub enum CageCheck {
     Session,
 }
 
-/// The rig of a command that opens a session (`edit`, `animate`, `export`, `render`): loaded
-/// with a progress bar and its cage generated under `--auto-cage`; the session computes the
-/// coordinates of the kind it binds with ([`crate::session_args::start_session`]).
-pub fn load_rig_for_session(rig: &RigArgs, auto_cage: &AutoCageArgs) -> anyhow::Result<LoadedRig> {
-    load_rig_or_generate_cage(rig, true, false, auto_cage.options(), CageCheck::Session)
+/// The rig of a command that builds one from files or a built-in and may generate its cage
+/// (`edit`, `animate`, `export`, `render`, `subdivide`): the rig's sources and `--auto-cage`.
+#[derive(Debug, Clone, Args)]
+pub struct RigInputArgs {
+    #[command(flatten)]
+    pub rig: RigArgs,
+    #[command(flatten)]
+    pub auto_cage: AutoCageArgs,
+}
+
+impl RigInputArgs {
+    /// The rig of a command that opens a session (`edit`, `animate`, `export`, `render`):
+    /// loaded with a progress bar and its cage generated under `--auto-cage`; the session
+    /// computes the coordinates of the kind it binds with
+    /// ([`crate::session_args::start_session`]).
+    pub fn load_for_session(&self) -> anyhow::Result<LoadedRig> {
+        load_rig_or_generate_cage(
+            &self.rig,
+            true,
+            false,
+            self.auto_cage.options(),
+            CageCheck::Session,
+        )
+    }
 }
 
 /// [`load_rig`]; when the rig has no cage and `auto_cage` gives options, one is generated

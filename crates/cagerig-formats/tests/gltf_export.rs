@@ -221,13 +221,14 @@ fn hybrid_animation_exports_with_cage_keys_as_morph_targets() {
         .copied()
         .collect();
     let times = sample_times(player.duration(), 30.0, &keys);
-    let (doc, bin) = animation_to_gltf(
+    let (doc, bin, _) = animation_to_gltf(
         &mut s,
         &mut player,
         Some(&cage_track),
         &times,
         "arm",
         "walk",
+        false,
     )
     .unwrap();
     let path = temp_file("fox_hybrid.glb");

@@ -107,13 +107,14 @@ impl AnimatedRig {
     fn measure_times(&mut self, times: &[f64], file_name: &str) -> (Measured, PathBuf) {
         let diag = self.diagonal();
         let mut player = self.player();
-        let (doc, bin) = animation_to_gltf(
+        let (doc, bin, _) = animation_to_gltf(
             &mut self.session,
             &mut player,
             self.cage_track.as_ref(),
             times,
             "anim",
             "anim",
+            false,
         )
         .unwrap();
         let mut bytes = Vec::new();

@@ -731,6 +731,7 @@ impl DisplayRestMapProduct for GpuRestMapProduct {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use cagerig::session::DyadicProductCheck;
 
     /// The backend on a headless device, or `None` (with the reason printed) where there is no
     /// adapter or `CAGERIG_SKIP_GPU_TESTS` is set.
@@ -748,27 +749,15 @@ mod tests {
         }
     }
 
-    /// Rows (1, 0), (0.5, 0.5), (0.25, 0.75), as in the library's CPU backend test.
-    fn small() -> CageCoords {
-        CageCoords::from_rows(&[vec![1.0, 0.0], vec![0.5, 0.5], vec![0.25, 0.75]], 2).unwrap()
-    }
-
     #[test]
     fn dyadic_coordinates_give_the_exact_product() {
         let Some(gpu) = backend() else { return };
-        let (vertex_part, extra) = (small(), small());
-        let product = gpu.upload(&[&vertex_part, &extra]).unwrap();
-        let head = [DVec3::new(1.0, 2.0, 3.0), DVec3::new(-3.0, 0.0, 1.0)];
-        let tail = [DVec3::X, DVec3::Y];
-        let mut out = [Vec3::ZERO; 3];
-        product.apply(&head, &tail, &mut out);
-        // Every coefficient, moved point and partial sum is a short dyadic number: no rounding.
-        let expected = [
-            Vec3::new(2.0, 2.0, 3.0),
-            Vec3::new(-0.5, 1.5, 2.0),
-            Vec3::new(-1.75, 1.25, 1.5),
-        ];
-        assert_eq!(out, expected);
+        let coords = DyadicProductCheck::coords();
+        let product = gpu.upload(&[&coords, &coords]).unwrap();
+        assert_eq!(
+            DyadicProductCheck::apply(&*product),
+            DyadicProductCheck::EXPECTED
+        );
         assert_eq!(gpu.name(), "wgpu");
         let counts = gpu.counts();
         assert_eq!(
@@ -862,7 +851,7 @@ mod tests {
         let Some(gpu) = backend() else { return };
         let gpu = gpu.with_max_bytes(16);
         assert_eq!(gpu.max_bytes(), 16);
-        let phi = small();
+        let phi = DyadicProductCheck::coords();
         assert!(gpu.upload(&[&phi]).is_none());
         let counts = gpu.counts();
         assert_eq!((counts.bound, counts.refused), (0, 1));
@@ -878,7 +867,7 @@ mod tests {
     fn parts_of_different_heights_or_none_are_refused() {
         let Some(gpu) = backend() else { return };
         let (phi, _) = coordinates(4, 3, 1);
-        let short = small();
+        let short = DyadicProductCheck::coords();
         assert!(matches!(
             gpu.bind(&[&phi, &short]),
             Err(GpuRestMapError::Shape(_))
@@ -903,7 +892,7 @@ mod tests {
     #[test]
     fn lengths_that_do_not_match_leave_the_output_untouched() {
         let Some(gpu) = backend() else { return };
-        let product = gpu.upload(&[&small()]).unwrap();
+        let product = gpu.upload(&[&DyadicProductCheck::coords()]).unwrap();
         let mut out = [Vec3::splat(7.0); 3];
         product.apply(&[DVec3::ONE], &[], &mut out);
         product.apply(&[DVec3::ONE, DVec3::ONE], &[DVec3::ONE], &mut out);

@@ -256,13 +256,14 @@ fn a_hybrid_export_reopens_with_its_cage_keys_and_plays_as_exported() {
         .collect();
     let times =
         cagerig_formats::gltf::export_animation::sample_times(player.duration(), 30.0, &keys);
-    let (document, bin) = cagerig_formats::gltf::export_animation::animation_to_gltf(
+    let (document, bin, _) = cagerig_formats::gltf::export_animation::animation_to_gltf(
         &mut original,
         &mut player,
         Some(&cage_track),
         &times,
         "arm",
         "arm",
+        false,
     )
     .unwrap();
     let dir = temp_dir("hybrid");

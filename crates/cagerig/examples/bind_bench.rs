@@ -3,10 +3,7 @@
 //! `cargo run --release -p cagerig --example bind_bench -- [N] [--cor] [--reps R] [--sweep]`
 //! (`RAYON_NUM_THREADS=1` for the single-thread figures; `--sweep`: MaxVol with 1–32 starts).
 
-#![expect(clippy::expect_used)] // tests, benches and examples may panic on a broken fixture
-
 use std::path::Path;
-use std::time::Instant;
 
 use cagerig::coords::maxvol::select_maxvol_rows;
 use cagerig::coords::mvc::compute_cage_coords;
@@ -14,20 +11,8 @@ use cagerig::skinning::CorCentresOptions;
 use cagerig::sync::cage_updater::{CageFitMode, CageUpdater};
 use cagerig::sync::skeleton_updater::{JointLocalisation, SkeletonUpdater};
 
-/// (median, min) wall-clock milliseconds of `reps` runs, and the last result.
-fn timed<T>(reps: usize, mut f: impl FnMut() -> T) -> ((f64, f64), T) {
-    let mut last = None;
-    let mut times: Vec<f64> = (0..reps.max(1))
-        .map(|_| {
-            let start = Instant::now();
-            last = Some(f());
-            start.elapsed().as_secs_f64() * 1e3
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    let result = last.expect("at least one run");
-    ((times[times.len() / 2], times[0]), result)
-}
+mod timing;
+use timing::timed;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

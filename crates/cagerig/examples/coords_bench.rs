@@ -5,12 +5,13 @@
 #![expect(clippy::unwrap_used)] // tests, benches and examples may panic on a broken fixture
 
 use std::path::Path;
-use std::time::Instant;
 
 use cagerig::coords::maxvol::select_maxvol_rows;
 use cagerig::coords::mvc::compute_cage_coords;
 use cagerig::io::{read_obj, read_skt, read_skw};
 use cagerig::subdivide::subdivide_midpoint;
+
+mod timing;
 
 const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/arm");
 const REPETITIONS: usize = 7;
@@ -30,22 +31,14 @@ fn cpu_ms() -> f64 {
 
 /// (median, min) wall-clock milliseconds over [`REPETITIONS`] runs; also prints the mean CPU
 /// time per run (less sensitive to other processes on the machine).
-fn timings<T>(mut f: impl FnMut() -> T) -> ((f64, f64), T) {
-    let mut last = None;
+fn timings<T>(f: impl FnMut() -> T) -> ((f64, f64), T) {
     let cpu_start = cpu_ms();
-    let mut times: Vec<f64> = (0..REPETITIONS)
-        .map(|_| {
-            let start = Instant::now();
-            last = Some(f());
-            start.elapsed().as_secs_f64() * 1e3
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
+    let timings = timing::timed(REPETITIONS, f);
     println!(
         "  CPU time per run {:.1} ms",
         (cpu_ms() - cpu_start) / REPETITIONS as f64
     );
-    ((times[REPETITIONS / 2], times[0]), last.unwrap())
+    timings
 }
 
 fn main() {

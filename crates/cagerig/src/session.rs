@@ -59,7 +59,9 @@ use checkpoint::Checkpoint;
 pub use checkpoint::MAX_STATE_MAGNITUDE;
 use display_path::DisplayPath;
 pub use display_path::DisplayPrecision;
-pub use display_rest_map::{DisplayRestMap, DisplayRestMapBackend, DisplayRestMapProduct};
+pub use display_rest_map::{
+    DisplayRestMap, DisplayRestMapBackend, DisplayRestMapProduct, DyadicProductCheck,
+};
 pub use editable_state::{EditableState, SyncLocks};
 pub use external_skinning::{BoundSkinning, SkinningBackend, SkinningBindInput};
 pub use green::GREEN_FIT_LIMIT;

@@ -9,8 +9,7 @@ use cagerig::skinning::SkinningMethod;
 use crate::animation_args::{AnimationSourceArgs, NO_ANIMATION};
 use crate::output_dir::{StagedDir, StateOutputArgs};
 use crate::rig_source::{
-    AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_for_session, report_generated_cage,
-    write_generated_cage,
+    GENERATED_CAGE_FILE, RigInputArgs, report_generated_cage, write_generated_cage,
 };
 use crate::session_args::{SessionArgs, kind_parser, start_session};
 use crate::state_files::write_state;
@@ -41,9 +40,7 @@ pub fn check_times(times: &[f64]) -> anyhow::Result<()> {
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub rig: RigArgs,
-    #[command(flatten)]
-    pub auto_cage: AutoCageArgs,
+    pub input: RigInputArgs,
     #[command(flatten)]
     pub animation: AnimationSourceArgs,
     /// Comma-separated sample times in seconds, each once (negative times allowed).
@@ -91,7 +88,7 @@ struct AnimateReport {
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (rig, auto_cage, out) = (&args.rig, &args.auto_cage, args.output.out.as_path());
+    let out = args.output.out.as_path();
     let times = args.times.as_slice();
     let (force, render, skinning, session_args) = (
         args.output.force,
@@ -105,7 +102,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     check_times(times)?;
     let mut pictures = crate::pictures::PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
-    let mut loaded = load_rig_for_session(rig, auto_cage)?;
+    let mut loaded = args.input.load_for_session()?;
     if let Some(g) = &loaded.generated_cage {
         report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
         write_generated_cage(&mut staged, &g.cage)?;

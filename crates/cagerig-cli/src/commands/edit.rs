@@ -10,8 +10,7 @@ use cagerig::skinning::SkinningMethod;
 use crate::output_dir::{StagedDir, StateOutputArgs};
 use crate::pictures::PictureMaker;
 use crate::rig_source::{
-    AutoCageArgs, GENERATED_CAGE_FILE, RigArgs, load_rig_for_session, report_generated_cage,
-    write_generated_cage,
+    GENERATED_CAGE_FILE, RigInputArgs, report_generated_cage, write_generated_cage,
 };
 use crate::session_args::{SessionArgs, kind_parser, start_session};
 use crate::state_files::write_state;
@@ -43,9 +42,7 @@ pub fn read_script(path: &Path) -> anyhow::Result<EditScript> {
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub rig: RigArgs,
-    #[command(flatten)]
-    pub auto_cage: AutoCageArgs,
+    pub input: RigInputArgs,
     /// The script: {"skinning":..., "steps":[{"op":...}, ...]} (operations: see --help).
     #[arg(long)]
     pub script: PathBuf,
@@ -59,12 +56,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (rig, auto_cage, script_path, out) = (
-        &args.rig,
-        &args.auto_cage,
-        args.script.as_path(),
-        args.output.out.as_path(),
-    );
+    let (script_path, out) = (args.script.as_path(), args.output.out.as_path());
     let (force, render, skinning, session_args) = (
         args.output.force,
         args.output.render,
@@ -74,7 +66,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let script = read_script(script_path)?;
     let mut pictures = PictureMaker::for_steps(render)?;
     let mut staged = StagedDir::create(out, force, crate::output_dir::OUT)?;
-    let loaded = load_rig_for_session(rig, auto_cage)?;
+    let loaded = args.input.load_for_session()?;
     if let Some(g) = &loaded.generated_cage {
         report_generated_cage(&loaded.name, g, &out.join(GENERATED_CAGE_FILE));
         write_generated_cage(&mut staged, &g.cage)?;

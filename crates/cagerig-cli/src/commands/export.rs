@@ -19,15 +19,13 @@ use cagerig_formats::gltf::export_animation;
 use cagerig_formats::gltf::export_bake::BakeReport;
 
 use crate::animation_args::AnimationSourceArgs;
-use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_for_session, note_generated_cage};
+use crate::rig_source::{RigInputArgs, note_generated_cage};
 use crate::session_args::{SessionArgs, kind_parser};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub rig: RigArgs,
-    #[command(flatten)]
-    pub auto_cage: AutoCageArgs,
+    pub input: RigInputArgs,
     /// Edit script replayed before exporting (as for `edit`).
     #[arg(long)]
     pub script: Option<PathBuf>,
@@ -85,7 +83,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.max_between
         );
     }
-    let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage)?;
+    let mut loaded = args.input.load_for_session()?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
     let name = loaded
@@ -205,26 +203,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
         times = refined.times;
     }
-    let (document, bin, report) = if bake {
-        export_animation::baked_animation_to_gltf(
-            &mut session,
-            &mut player,
-            cage_track.as_ref(),
-            &times,
-            &name,
-            &animation_name,
-        )
-    } else {
-        export_animation::animation_to_gltf(
-            &mut session,
-            &mut player,
-            cage_track.as_ref(),
-            &times,
-            &name,
-            &animation_name,
-        )
-        .map(|(document, bin)| (document, bin, BakeReport::default()))
-    }
+    let (document, bin, report) = export_animation::animation_to_gltf(
+        &mut session,
+        &mut player,
+        cage_track.as_ref(),
+        &times,
+        &name,
+        &animation_name,
+        bake,
+    )
     .map_err(|e| crate::session_args::event_error("exporting the animation", e))?;
     cagerig_formats::gltf::export::write_gltf_or_glb(&args.out, &document, &bin)?;
     println!(

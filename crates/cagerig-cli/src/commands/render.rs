@@ -15,15 +15,13 @@ use glam::DVec3;
 use crate::animation_args::{AnimationSourceArgs, NO_ANIMATION};
 use crate::output_dir::{OUT, StagedDir};
 use crate::pictures::{CameraChoice, PictureMaker, PictureOptions, ViewArg};
-use crate::rig_source::{AutoCageArgs, RigArgs, load_rig_for_session, note_generated_cage};
+use crate::rig_source::{RigInputArgs, note_generated_cage};
 use crate::session_args::{SessionArgs, start_session};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub rig: RigArgs,
-    #[command(flatten)]
-    pub auto_cage: AutoCageArgs,
+    pub input: RigInputArgs,
     /// Edit script (the JSON of `cagerig edit`) applied before rendering; the picture shows
     /// the state after its last step.
     #[arg(long, conflicts_with_all = ["skeleton_anim", "cage_anim", "animation"])]
@@ -278,7 +276,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .map(crate::commands::edit::read_script)
         .transpose()?;
     let mut pictures = open_pictures(args)?;
-    let mut loaded = load_rig_for_session(&args.rig, &args.auto_cage)?;
+    let mut loaded = args.input.load_for_session()?;
     note_generated_cage(&loaded);
     let tracks = args.animation.tracks(&mut loaded)?;
     tracks.warn_times_past_end(&args.times);

@@ -9,17 +9,13 @@ use anyhow::bail;
 use cagerig::session::RigParts;
 
 use crate::output_dir::StagedDir;
-use crate::rig_source::{
-    AutoCageArgs, RigArgs, compute_coords_with_progress, load_rig_or_generate_cage,
-};
+use crate::rig_source::{RigInputArgs, compute_coords_with_progress, load_rig_or_generate_cage};
 
 /// `cagerig subdivide`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    pub rig: RigArgs,
-    #[command(flatten)]
-    pub auto_cage: AutoCageArgs,
+    pub input: RigInputArgs,
     /// Rounds of midpoint subdivision (each multiplies the triangles by 4).
     #[arg(long, default_value_t = 1)]
     pub levels: usize,
@@ -36,7 +32,7 @@ pub struct Args {
 
 pub fn run(cli: &Args) -> anyhow::Result<()> {
     let (args, levels, out, name, force) = (
-        &cli.rig,
+        &cli.input.rig,
         cli.levels,
         cli.out.as_path(),
         cli.name.as_str(),
@@ -58,7 +54,7 @@ pub fn run(cli: &Args) -> anyhow::Result<()> {
         args,
         true,
         false,
-        cli.auto_cage.options(),
+        cli.input.auto_cage.options(),
         crate::rig_source::CageCheck::Loader,
     )?;
     for w in &loaded.warnings {

@@ -17,7 +17,7 @@
 //!   the union of the skeleton keys, the cage keys and a grid at `fps`. Between samples a viewer
 //!   slerps/lerps the node TRS, which differs from cagerig's interpolation by the resampling.
 //!   Under DQS/CoR the file still carries the LBS rig (glTF skins with LBS only), unless it is
-//!   baked ([`baked_animation_to_gltf`]): then each sample also gets a morph target that turns the
+//!   baked ([`animation_to_gltf`] with `bake`): then each sample also gets a morph target that turns the
 //!   viewer's LBS into cagerig's DQS/CoR M' at that sample ([`super::export_bake`]), with LINEAR
 //!   weights that are 1 at its sample and 0 at every other, so that between two samples a viewer
 //!   blends the two corrections linearly.
@@ -84,10 +84,30 @@ pub(crate) fn node_trs(
     }
 }
 
+/// Bytes the baked targets add: 12 per vertex and sample (f32 VEC3), plus the weights of every
+/// target (`cage_keys + samples`) at every sample (f32).
+pub fn baked_bytes(vertices: usize, cage_keys: usize, samples: usize) -> u64 {
+    let (v, c, s) = (vertices as u64, cage_keys as u64, samples as u64);
+    12u64
+        .saturating_mul(v)
+        .saturating_mul(s)
+        .saturating_add(4u64.saturating_mul(s).saturating_mul(c.saturating_add(s)))
+}
+
 /// Plays `player` at every time of `times` on `session` and writes the glTF document (JSON and
 /// binary chunk) of the animation. `cage_track` must be the player's cage track (its keys
 /// become the morph targets). `name` names the mesh and the skin, `animation` the animation.
 /// The session is left at the last sample.
+///
+/// With `bake`, the session's skinning result is baked: after the cage-key targets, one morph
+/// target per sample (`#V` bind-space corrections, see [`super::export_bake`]) whose weight is 1
+/// at its sample and 0 at the others (LINEAR), so that at every sample time a viewer shows the
+/// session's M' (DQS or CoR) instead of the LBS of the rig. The mesh's `extras` name the targets
+/// (`targetNames`, which Blender uses for shape keys) and mark the baked ones
+/// (`cagerig_baked_skinning`: `method`, `first_target`) so that cagerig's importer leaves them
+/// out. Under LBS nothing needs baking and no target is added. Refused when the file would pass
+/// the GLB limit of 4 GiB (12 bytes × `#V` per sample, plus `#samples × #targets` weights).
+/// Without `bake` the report is empty.
 pub fn animation_to_gltf(
     session: &mut RigSession,
     player: &mut AnimationPlayer,
@@ -95,28 +115,9 @@ pub fn animation_to_gltf(
     times: &[f64],
     name: &str,
     animation: &str,
-) -> Result<(Value, Vec<u8>), ExportAnimationError> {
-    write_animation(session, player, cage_track, times, name, animation, false)
-        .map(|(document, bin, _)| (document, bin))
-}
-
-/// [`animation_to_gltf`] with the session's skinning result baked: after the cage-key targets,
-/// one morph target per sample (`#V` bind-space corrections, see [`super::export_bake`]) whose
-/// weight is 1 at its sample and 0 at the others (LINEAR), so that at every sample time a viewer
-/// shows the session's M' (DQS or CoR) instead of the LBS of the rig. The mesh's `extras` name
-/// the targets (`targetNames`, which Blender uses for shape keys) and mark the baked ones
-/// (`cagerig_baked_skinning`: `method`, `first_target`) so that cagerig's importer leaves them
-/// out. Under LBS nothing needs baking and no target is added. Refused when the file would pass
-/// the GLB limit of 4 GiB (12 bytes × `#V` per sample, plus `#samples × #targets` weights).
-pub fn baked_animation_to_gltf(
-    session: &mut RigSession,
-    player: &mut AnimationPlayer,
-    cage_track: Option<&CageTrack>,
-    times: &[f64],
-    name: &str,
-    animation: &str,
+    bake: bool,
 ) -> Result<(Value, Vec<u8>, BakeReport), ExportAnimationError> {
-    let bake = !session.skinning().is_linear();
+    let bake = bake && !session.skinning().is_linear();
     if bake {
         let cage_keys = cage_track.map_or(0, |c| c.times().len());
         let bytes = baked_bytes(session.num_vertices(), cage_keys, times.len());
@@ -128,28 +129,6 @@ pub fn baked_animation_to_gltf(
             });
         }
     }
-    write_animation(session, player, cage_track, times, name, animation, bake)
-}
-
-/// Bytes the baked targets add: 12 per vertex and sample (f32 VEC3), plus the weights of every
-/// target (`cage_keys + samples`) at every sample (f32).
-pub fn baked_bytes(vertices: usize, cage_keys: usize, samples: usize) -> u64 {
-    let (v, c, s) = (vertices as u64, cage_keys as u64, samples as u64);
-    12u64
-        .saturating_mul(v)
-        .saturating_mul(s)
-        .saturating_add(4u64.saturating_mul(s).saturating_mul(c.saturating_add(s)))
-}
-
-fn write_animation(
-    session: &mut RigSession,
-    player: &mut AnimationPlayer,
-    cage_track: Option<&CageTrack>,
-    times: &[f64],
-    name: &str,
-    animation: &str,
-    bake: bool,
-) -> Result<(Value, Vec<u8>, BakeReport), ExportAnimationError> {
     if times.is_empty() {
         return Err(ExportAnimationError::NoSamples);
     }

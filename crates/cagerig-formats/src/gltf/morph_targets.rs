@@ -13,7 +13,7 @@ pub(super) fn default_weights(node: &gltf::Node) -> Vec<f64> {
 }
 
 /// The first baked target of `mesh` and the method baked (its `extras.cagerig_baked_skinning`,
-/// written by `cagerig export --bake`, see [`super::export_animation::baked_animation_to_gltf`]),
+/// written by `cagerig export --bake`, see [`super::export_animation::animation_to_gltf`]),
 /// or `None` when the mesh holds no baked targets.
 pub(super) fn baked_targets(mesh: &gltf::Mesh) -> Option<(usize, String)> {
     let extras: serde_json::Value = serde_json::from_str(mesh.extras().as_ref()?.get()).ok()?;

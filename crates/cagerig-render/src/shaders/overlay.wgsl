@@ -27,6 +27,16 @@ fn to_pixels(clip: vec4<f32>) -> vec2<f32> {
     return clip.xy / clip.w * 0.5 * frame.viewport.xy;
 }
 
+// The corner `c` of an overlay quad: `clip` moved by `offset_px` pixels on screen and by `bias`
+// (NDC units) towards the eye, with the sRGB `color` made linear.
+fn overlay_corner(clip: vec4<f32>, offset_px: vec2<f32>, bias: f32, color: vec4<f32>, c: vec2<f32>) -> OverlayOut {
+    var out: OverlayOut;
+    out.clip = vec4<f32>(clip.xy + offset_px * 2.0 * frame.viewport.zw * clip.w, clip.z - bias * clip.w, clip.w);
+    out.color = vec4<f32>(srgb_to_linear(color.rgb), color.a);
+    out.local = c;
+    return out;
+}
+
 @vertex
 fn vs_line(@builtin(vertex_index) index: u32, line: LineIn) -> OverlayOut {
     let c = corner(index);
@@ -38,15 +48,10 @@ fn vs_line(@builtin(vertex_index) index: u32, line: LineIn) -> OverlayOut {
         along = normalize(delta);
     }
     let across = vec2<f32>(-along.y, along.x);
-    var clip = select(clip_a, clip_b, c.x > 0.0);
+    let clip = select(clip_a, clip_b, c.x > 0.0);
     let half_width = 0.5 * line.style.x;
     let offset_px = across * c.y * half_width + along * c.x * half_width;
-    clip = vec4<f32>(clip.xy + offset_px * 2.0 * frame.viewport.zw * clip.w, clip.z - line.style.y * clip.w, clip.w);
-    var out: OverlayOut;
-    out.clip = clip;
-    out.color = vec4<f32>(srgb_to_linear(line.color.rgb), line.color.a);
-    out.local = c;
-    return out;
+    return overlay_corner(clip, offset_px, line.style.y, line.color, c);
 }
 
 @fragment
@@ -57,14 +62,8 @@ fn fs_line(in: OverlayOut) -> @location(0) vec4<f32> {
 @vertex
 fn vs_point(@builtin(vertex_index) index: u32, point: PointIn) -> OverlayOut {
     let c = corner(index);
-    var clip = frame.clip_from_world * vec4<f32>(point.centre, 1.0);
-    let offset_px = c * point.style.x;
-    clip = vec4<f32>(clip.xy + offset_px * 2.0 * frame.viewport.zw * clip.w, clip.z - point.style.y * clip.w, clip.w);
-    var out: OverlayOut;
-    out.clip = clip;
-    out.color = vec4<f32>(srgb_to_linear(point.color.rgb), point.color.a);
-    out.local = c;
-    return out;
+    let clip = frame.clip_from_world * vec4<f32>(point.centre, 1.0);
+    return overlay_corner(clip, c * point.style.x, point.style.y, point.color, c);
 }
 
 @fragment

@@ -329,17 +329,21 @@ fn least_squares_fallback(
         })
     });
     crate::vector_registers::clear_upper_halves();
-    let Some(pinv) = pseudo_inverse else {
-        return finish(
+    let report = |out: &[f64], reason: String| {
+        finish(
             points,
             target,
             out,
             MecMethod::LeastSquaresFallback,
             iterations,
             clamped_masses,
-            Some(format!(
-                "{reason}; the least-squares system could not be factorised"
-            )),
+            Some(reason),
+        )
+    };
+    let Some(pinv) = pseudo_inverse else {
+        return report(
+            out,
+            format!("{reason}; the least-squares system could not be factorised"),
         );
     };
     for _ in 0..2 {
@@ -359,15 +363,7 @@ fn least_squares_fallback(
             *b += (0..4).map(|i| a[i] * multiplier[i]).sum::<f64>();
         }
     }
-    finish(
-        points,
-        target,
-        out,
-        MecMethod::LeastSquaresFallback,
-        iterations,
-        clamped_masses,
-        Some(reason),
-    )
+    report(out, reason)
 }
 
 /// Solves the symmetric positive semi-definite 3 × 3 system `h · s = rhs` (Cholesky with a tiny

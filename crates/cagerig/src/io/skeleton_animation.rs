@@ -281,16 +281,7 @@ pub fn skeleton_animation_text(
                 let d = euler_degrees_from_rotation(g.matrix3).ok_or_else(|| {
                     format!("keyframe {k}: the global frame of joint {j} is not rigid")
                 })?;
-                let t = g.translation;
-                out += &format!(
-                    "s {k} {} {} {} {} {} {}\n",
-                    f(d.x),
-                    f(d.y),
-                    f(d.z),
-                    f(t.x),
-                    f(t.y),
-                    f(t.z)
-                );
+                out += &format!("s {k} {}\n", format.vectors(&[d, g.translation]));
             }
         }
     }

@@ -159,15 +159,8 @@ pub fn skt_text(skeleton: &Skeleton, format: FloatFormat) -> Result<String, Stri
             ));
         }
         let t = frame.translation;
-        let f = |x: f64| format.format(x);
         if frame.matrix3 == DMat3::IDENTITY {
-            out += &format!(
-                "j {j} {} {father} {} {} {}\n",
-                joint.name,
-                f(t.x),
-                f(t.y),
-                f(t.z)
-            );
+            out += &format!("j {j} {} {father} {}\n", joint.name, format.vectors(&[t]));
         } else {
             let d = euler_degrees_from_rotation(frame.matrix3).ok_or_else(|| {
                 format!(
@@ -176,14 +169,9 @@ pub fn skt_text(skeleton: &Skeleton, format: FloatFormat) -> Result<String, Stri
                 )
             })?;
             out += &format!(
-                "j {j} {} {father} {} {} {} {} {} {}\n",
+                "j {j} {} {father} {}\n",
                 joint.name,
-                f(d.x),
-                f(d.y),
-                f(d.z),
-                f(t.x),
-                f(t.y),
-                f(t.z)
+                format.vectors(&[d, t])
             );
         }
     }

@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+use glam::DVec3;
+
 use super::error::ParseError;
 
 /// `text` with every `%XX` (two hex digits) replaced by the byte XX, as UTF-8 (URI
@@ -61,6 +63,19 @@ impl FloatFormat {
         } else {
             Err(non_finite_output(&format!("the value {x}")))
         }
+    }
+
+    /// The components of `vectors` (x, y, z of each in turn), formatted and separated by single
+    /// spaces.
+    pub fn vectors(self, vectors: &[DVec3]) -> String {
+        let mut text = String::new();
+        for x in vectors.iter().flat_map(|v| v.to_array()) {
+            if !text.is_empty() {
+                text.push(' ');
+            }
+            text += &self.format(x);
+        }
+        text
     }
 }
 

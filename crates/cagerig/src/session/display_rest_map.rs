@@ -87,31 +87,54 @@ impl DisplayRestMapProduct for DisplayCageCoords {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// A product every backend must compute without rounding, for the tests of a backend (the CPU
+/// one's here, the wgpu one's in `cagerig-render`): three vertices on two cage points, rows
+/// (1, 0), (0.5, 0.5), (0.25, 0.75) ([`Self::coords`]), uploaded as both the vertex part and
+/// the extra columns and applied to [`Self::HEAD`] and [`Self::TAIL`]. Every coefficient, moved
+/// point and partial sum is a short dyadic number, so M̃ is [`Self::EXPECTED`] exactly.
+#[derive(Debug, Clone, Copy)]
+pub struct DyadicProductCheck;
 
-    /// Three vertices on two cage points: rows (1, 0), (0.5, 0.5), (0.25, 0.75).
-    fn coords() -> CageCoords {
+impl DyadicProductCheck {
+    /// The rest cage C (`#C` = 2).
+    pub const HEAD: [DVec3; 2] = [DVec3::new(1.0, 2.0, 3.0), DVec3::new(-3.0, 0.0, 1.0)];
+    /// The extra terms (2).
+    pub const TAIL: [DVec3; 2] = [DVec3::X, DVec3::Y];
+    /// M̃ of the three vertices.
+    pub const EXPECTED: [Vec3; 3] = [
+        Vec3::new(2.0, 2.0, 3.0),
+        Vec3::new(-0.5, 1.5, 2.0),
+        Vec3::new(-1.75, 1.25, 1.5),
+    ];
+
+    /// The coordinates: rows (1, 0), (0.5, 0.5), (0.25, 0.75).
+    #[expect(clippy::expect_used, reason = "three finite constant rows")]
+    pub fn coords() -> CageCoords {
         CageCoords::from_rows(&[vec![1.0, 0.0], vec![0.5, 0.5], vec![0.25, 0.75]], 2)
             .expect("finite rows")
     }
 
+    /// `product`'s M̃ at [`Self::HEAD`] and [`Self::TAIL`] (the product of two uploaded copies
+    /// of [`Self::coords`]).
+    pub fn apply(product: &dyn DisplayRestMapProduct) -> [Vec3; 3] {
+        let mut out = [Vec3::ZERO; 3];
+        product.apply(&Self::HEAD, &Self::TAIL, &mut out);
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
     #[test]
     fn the_cpu_backend_is_the_f32_product_of_the_concatenated_columns() {
-        let (vertex_part, extra) = (coords(), coords());
+        let coords = DyadicProductCheck::coords();
         let product = DisplayRestMap::Cpu
-            .upload(&[&vertex_part, &extra])
+            .upload(&[&coords, &coords])
             .expect("a few bytes");
-        let head = [DVec3::new(1.0, 2.0, 3.0), DVec3::new(-3.0, 0.0, 1.0)];
-        let tail = [DVec3::X, DVec3::Y];
-        let mut out = [Vec3::ZERO; 3];
-        product.apply(&head, &tail, &mut out);
-        let expected = [
-            Vec3::new(2.0, 2.0, 3.0),
-            Vec3::new(-0.5, 1.5, 2.0),
-            Vec3::new(-1.75, 1.25, 1.5),
-        ];
+        let out = DyadicProductCheck::apply(&*product);
+        let expected = DyadicProductCheck::EXPECTED;
         for (o, e) in out.iter().zip(expected) {
             assert!(o.abs_diff_eq(e, 1e-6), "{out:?}");
         }

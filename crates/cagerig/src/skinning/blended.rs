@@ -40,9 +40,21 @@ pub(crate) struct BlendedRule<'a, S: SkinReal, T: ?Sized, P, const TABLE: bool> 
     pub points: P,
 }
 
-impl<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bool>
-    BlendedRule<'_, S, T, P, TABLE>
+impl<'a, S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoints<S>, const TABLE: bool>
+    BlendedRule<'a, S, T, P, TABLE>
 {
+    /// The rule of the LBS columns `transforms` and the DQS part of `dqs` (filled for this
+    /// frame), with the blend weights `blend` (`#V`, by vertex) and the rest `points`.
+    fn new(dqs: &'a DqsScratch<S>, transforms: &'a T, blend: &'a [S], points: P) -> Self {
+        Self {
+            transforms,
+            joint_dual_quats: &dqs.joint_dual_quats,
+            signs: &dqs.signs,
+            blend,
+            points,
+        }
+    }
+
     /// The LBS part at the rest point `p`.
     #[inline(always)]
     fn lbs_point(&self, joints: &[u16], weights: &[S], p: S::V3) -> S::V3 {
@@ -96,24 +108,11 @@ pub(crate) fn skin_blended<S: SkinReal, T: JointColumns<S> + ?Sized, P: RestPoin
     points: P,
     out: &mut [S::Out],
 ) {
-    let table = dqs.prepare(transforms, origin, sorted);
-    if table {
-        let rule = BlendedRule::<S, T, P, true> {
-            transforms: columns,
-            joint_dual_quats: &dqs.joint_dual_quats,
-            signs: &dqs.signs,
-            blend,
-            points,
-        };
+    if dqs.prepare(transforms, origin, sorted) {
+        let rule = BlendedRule::<S, T, P, true>::new(dqs, columns, blend, points);
         sorted.skin(&rule, out);
     } else {
-        let rule = BlendedRule::<S, T, P, false> {
-            transforms: columns,
-            joint_dual_quats: &dqs.joint_dual_quats,
-            signs: &dqs.signs,
-            blend,
-            points,
-        };
+        let rule = BlendedRule::<S, T, P, false>::new(dqs, columns, blend, points);
         sorted.skin(&rule, out);
     }
 }
@@ -224,17 +223,8 @@ mod tests {
     #[test]
     fn zero_and_one_have_the_bits_of_lbs_and_dqs() {
         // 20 000 vertices (several chunks, sign table in use), up to 3 influences.
-        let n = 20_000;
-        let rows: Vec<Vec<f64>> = (0..n)
-            .map(|v| match v % 3 {
-                0 => vec![1.0, 0.0, 0.0],
-                1 => vec![0.25, 0.0, 0.75],
-                _ => vec![0.2, 0.3, 0.5],
-            })
-            .collect();
-        let rest: Vec<DVec3> = (0..n)
-            .map(|v| DVec3::new(v as f64 * 1e-3, (v % 7) as f64, -((v % 11) as f64)))
-            .collect();
+        let (rows, rest) = crate::skinning::test_fixtures::twenty_thousand_vertices();
+        let n = rest.len();
         let t = [
             DAffine3::from_translation(DVec3::Y) * DAffine3::from_rotation_x(0.4),
             DAffine3::from_rotation_z(170f64.to_radians()),

@@ -321,20 +321,30 @@ impl CorSkinning {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::skinning::cor_f32::{CorF32, CorF32Scratch};
+    use glam::Vec3;
     use std::f64::consts::FRAC_PI_2;
 
+    /// M' of both instances of the rule: the f64 kernel and the f32 display kernel.
     fn skin(
         weights: &[Vec<f64>],
         transforms: &[DAffine3],
         rest: &[DVec3],
         centres: &[DVec3],
-    ) -> Vec<DVec3> {
+    ) -> (Vec<DVec3>, Vec<Vec3>) {
         let (w, _) = SkinWeights::from_dense(weights).unwrap();
         let cor = CorSkinning::new(&w);
         let mut scratch = CorScratch::new(transforms.len());
         let mut out = vec![DVec3::ZERO; rest.len()];
         cor.apply(transforms, rest, centres, &mut scratch, &mut out);
-        out
+        let cor_f32 = CorF32::new(&w, rest, centres).unwrap();
+        let mut out_f32 = vec![Vec3::ZERO; rest.len()];
+        cor_f32.apply(
+            transforms,
+            &mut CorF32Scratch::new(transforms.len()),
+            &mut out_f32,
+        );
+        (out, out_f32)
     }
 
     #[test]
@@ -346,10 +356,14 @@ mod tests {
             * DAffine3::from_rotation_z(FRAC_PI_2)
             * DAffine3::from_translation(-e);
         let v = DVec3::new(1.0, 0.5, 0.0);
-        let out = skin(&[vec![0.5, 0.5]], &[DAffine3::IDENTITY, bend], &[v], &[e]);
+        let (out, out_f32) = skin(&[vec![0.5, 0.5]], &[DAffine3::IDENTITY, bend], &[v], &[e]);
         let expected = e + DQuat::from_rotation_z(FRAC_PI_2 / 2.0).mul_vec3(v - e);
         assert!(out[0].abs_diff_eq(expected, 1e-14), "{out:?} vs {expected}");
         assert!((out[0].distance(e) - 0.5).abs() < 1e-14);
+        assert!(
+            out_f32[0].abs_diff_eq(expected.as_vec3(), 1e-6),
+            "{out_f32:?}"
+        );
     }
 
     #[test]
@@ -362,8 +376,12 @@ mod tests {
         let lbs = (t[0].matrix3 * 0.25 + t[1].matrix3 * 0.75) * v
             + (t[0].translation * 0.25 + t[1].translation * 0.75);
         for c in [v, DVec3::NAN] {
-            let out = skin(&[vec![0.25, 0.75]], &t, &[v], &[c]);
+            let (out, out_f32) = skin(&[vec![0.25, 0.75]], &t, &[v], &[c]);
             assert!(out[0].abs_diff_eq(lbs, 1e-14), "{out:?} vs {lbs}");
+            assert!(
+                out_f32[0].abs_diff_eq(lbs.as_vec3(), 1e-6),
+                "{out_f32:?} vs {lbs}"
+            );
         }
     }
 
@@ -371,17 +389,7 @@ mod tests {
     fn sign_table_and_blocks_match_the_plain_per_vertex_rule_bitwise() {
         // 3 joints, 20 000 vertices (3 chunks, table and blocks used), 1–3 influences, centres
         // finite or not, joint 2 rotated by ±170° so that signs flip.
-        let num_vertices = 20_000;
-        let rows: Vec<Vec<f64>> = (0..num_vertices)
-            .map(|v| match v % 3 {
-                0 => vec![1.0, 0.0, 0.0],
-                1 => vec![0.25, 0.0, 0.75],
-                _ => vec![0.2, 0.3, 0.5],
-            })
-            .collect();
-        let rest: Vec<DVec3> = (0..num_vertices)
-            .map(|v| DVec3::new(v as f64 * 1e-3, (v % 7) as f64, -((v % 11) as f64)))
-            .collect();
+        let (rows, rest) = crate::skinning::test_fixtures::twenty_thousand_vertices();
         let centres: Vec<DVec3> = rest
             .iter()
             .enumerate()
@@ -400,7 +408,7 @@ mod tests {
                 * DAffine3::from_rotation_z(-170f64.to_radians()),
         ];
         let (w, _) = SkinWeights::from_dense(&rows).unwrap();
-        let out = skin(&rows, &t, &rest, &centres);
+        let (out, _) = skin(&rows, &t, &rest, &centres);
         let columns: Vec<[DVec3; 4]> = t
             .iter()
             .map(|a| {

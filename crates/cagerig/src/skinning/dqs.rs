@@ -323,15 +323,29 @@ impl DualQuaternionSkinning {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::skinning::dqs_f32::{DqsF32, DqsF32Scratch};
+    use glam::Vec3;
     use std::f64::consts::{FRAC_PI_2, PI};
 
-    fn skin(weights: &[Vec<f64>], transforms: &[DAffine3], rest: &[DVec3]) -> Vec<DVec3> {
+    /// M' of both instances of the rule: the f64 kernel and the f32 display kernel.
+    fn skin(
+        weights: &[Vec<f64>],
+        transforms: &[DAffine3],
+        rest: &[DVec3],
+    ) -> (Vec<DVec3>, Vec<Vec3>) {
         let (w, _) = SkinWeights::from_dense(weights).unwrap();
         let dqs = DualQuaternionSkinning::new(&w);
         let mut scratch = DqsScratch::new(transforms.len());
         let mut out = vec![DVec3::ZERO; rest.len()];
         dqs.apply(transforms, rest, &mut scratch, &mut out);
-        out
+        let dqs_f32 = DqsF32::new(&w, rest).unwrap();
+        let mut out_f32 = vec![Vec3::ZERO; rest.len()];
+        dqs_f32.apply(
+            transforms,
+            &mut DqsF32Scratch::new(transforms.len()),
+            &mut out_f32,
+        );
+        (out, out_f32)
     }
 
     #[test]
@@ -340,10 +354,12 @@ mod tests {
         let t = DAffine3::from_translation(pivot)
             * DAffine3::from_rotation_z(FRAC_PI_2)
             * DAffine3::from_translation(-pivot);
-        let out = skin(&[vec![1.0]], &[t], &[DVec3::new(2.0, 2.0, 5.0)]);
+        let (out, out_f32) = skin(&[vec![1.0]], &[t], &[DVec3::new(2.0, 2.0, 5.0)]);
+        let expected = DVec3::new(1.0, 3.0, 5.0);
+        assert!(out[0].abs_diff_eq(expected, 1e-14), "{out:?}");
         assert!(
-            out[0].abs_diff_eq(DVec3::new(1.0, 3.0, 5.0), 1e-14),
-            "{out:?}"
+            out_f32[0].abs_diff_eq(expected.as_vec3(), 1e-6),
+            "{out_f32:?}"
         );
     }
 
@@ -355,11 +371,12 @@ mod tests {
             DAffine3::from_rotation_x(-FRAC_PI_2),
         ];
         let p = DVec3::new(3.0, 1.0, 2.0);
-        let out = skin(&[vec![0.5, 0.5]], &t, &[p]);
+        let (out, out_f32) = skin(&[vec![0.5, 0.5]], &t, &[p]);
         assert!(out[0].abs_diff_eq(p, 1e-14), "{out:?}");
+        assert!(out_f32[0].abs_diff_eq(p.as_vec3(), 1e-6), "{out_f32:?}");
         // 30/70 blend of 0 and 90°: rotation by 63° about x, length preserved.
         let t = [DAffine3::IDENTITY, DAffine3::from_rotation_x(FRAC_PI_2)];
-        let out = skin(&[vec![0.3, 0.7]], &t, &[p]);
+        let (out, _) = skin(&[vec![0.3, 0.7]], &t, &[p]);
         assert!((out[0].length() - p.length()).abs() < 1e-14);
         assert!((out[0].x - p.x).abs() < 1e-14);
     }
@@ -372,8 +389,9 @@ mod tests {
             DAffine3::from_rotation_z(170f64.to_radians()),
             DAffine3::from_rotation_z(-170f64.to_radians()),
         ];
-        let out = skin(&[vec![0.5, 0.5]], &t, &[DVec3::X]);
+        let (out, out_f32) = skin(&[vec![0.5, 0.5]], &t, &[DVec3::X]);
         assert!(out[0].abs_diff_eq(-DVec3::X, 1e-14), "{out:?}");
+        assert!(out_f32[0].abs_diff_eq(-Vec3::X, 1e-6), "{out_f32:?}");
         // Same rotation stored with opposite quaternion signs is blended as one rotation.
         let q = DQuat::from_rotation_y(PI / 3.0);
         let dual_quats = [q, -q].map(|q| {
@@ -393,24 +411,14 @@ mod tests {
     fn sign_table_and_count_sorting_match_the_plain_per_vertex_rule_bitwise() {
         // 3 joints, 20 000 vertices (3 chunks, table used since 9 ≤ #V), 1–3 influences per
         // vertex, joint 2 rotated by ±170° so that signs flip.
-        let num_vertices = 20_000;
-        let rows: Vec<Vec<f64>> = (0..num_vertices)
-            .map(|v| match v % 3 {
-                0 => vec![1.0, 0.0, 0.0],
-                1 => vec![0.25, 0.0, 0.75],
-                _ => vec![0.2, 0.3, 0.5],
-            })
-            .collect();
-        let rest: Vec<DVec3> = (0..num_vertices)
-            .map(|v| DVec3::new(v as f64 * 1e-3, (v % 7) as f64, -((v % 11) as f64)))
-            .collect();
+        let (rows, rest) = crate::skinning::test_fixtures::twenty_thousand_vertices();
         let t = [
             DAffine3::from_translation(DVec3::Y) * DAffine3::from_rotation_x(0.4),
             DAffine3::from_rotation_z(170f64.to_radians()),
             DAffine3::from_rotation_z(-170f64.to_radians()),
         ];
         let (w, _) = SkinWeights::from_dense(&rows).unwrap();
-        let out = skin(&rows, &t, &rest);
+        let (out, _) = skin(&rows, &t, &rest);
         let dual_quats: Vec<[DQuat; 2]> = t
             .iter()
             .map(|t| {

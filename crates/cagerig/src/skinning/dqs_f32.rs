@@ -11,9 +11,7 @@
 use glam::{DAffine3, Vec3};
 
 use super::dqs::DqsScratch;
-use super::precision::RestPoint;
-use super::stored_rest_kernel::StoredRestKernel;
-use crate::{RigError, SkinWeights};
+use super::stored_rest_kernel::{RestOnlyMethod, StoredRestKernel};
 
 /// Caller-owned per-frame buffer: the `#J` joint dual quaternions of `T_j ∘ translate(o)`, f32.
 pub type DqsF32Scratch = DqsScratch<f32>;
@@ -25,20 +23,12 @@ pub struct DqsF32Method;
 /// Precomputed f32 DQS: compact Ω, pivots and the rest mesh M (`#V`, f32, local origin).
 pub type DqsF32 = StoredRestKernel<DqsF32Method>;
 
-impl DqsF32 {
-    /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
-    pub fn new<P: RestPoint>(
-        skin_weights: &SkinWeights,
-        rest_positions: &[P],
-    ) -> Result<Self, RigError> {
-        Self::build(
-            skin_weights,
-            rest_positions,
-            "DQS f32 rest positions vs. weight rows",
-            DqsF32Method,
-        )
-    }
+impl RestOnlyMethod for DqsF32Method {
+    const METHOD: Self = DqsF32Method;
+    const SIZE_MISMATCH: &'static str = "DQS f32 rest positions vs. weight rows";
+}
 
+impl DqsF32 {
     /// M' = DQS(T, Ω, M) in f32 (Eq. 4). `transforms`: `#J`; `scratch`:
     /// `DqsF32Scratch::new(#J)`; `out`: `#V`. Unweighted vertices stay at rest.
     ///
@@ -53,54 +43,5 @@ impl DqsF32 {
             self.mesh.points(),
             out,
         );
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use glam::DVec3;
-    use std::f64::consts::FRAC_PI_2;
-
-    fn skin(weights: &[Vec<f64>], transforms: &[DAffine3], rest: &[DVec3]) -> Vec<Vec3> {
-        let (w, _) = SkinWeights::from_dense(weights).unwrap();
-        let dqs = DqsF32::new(&w, rest).unwrap();
-        let mut out = vec![Vec3::ZERO; rest.len()];
-        dqs.apply(
-            transforms,
-            &mut DqsF32Scratch::new(transforms.len()),
-            &mut out,
-        );
-        out
-    }
-
-    #[test]
-    fn single_bone_rotation_about_a_point() {
-        let pivot = DVec3::new(1.0, 2.0, 0.0);
-        let t = DAffine3::from_translation(pivot)
-            * DAffine3::from_rotation_z(FRAC_PI_2)
-            * DAffine3::from_translation(-pivot);
-        let out = skin(&[vec![1.0]], &[t], &[DVec3::new(2.0, 2.0, 5.0)]);
-        assert!(
-            out[0].abs_diff_eq(Vec3::new(1.0, 3.0, 5.0), 1e-6),
-            "{out:?}"
-        );
-    }
-
-    #[test]
-    fn half_half_twist_preserves_the_point_and_opposite_rotations_blend_through_180() {
-        let t = [
-            DAffine3::from_rotation_x(FRAC_PI_2),
-            DAffine3::from_rotation_x(-FRAC_PI_2),
-        ];
-        let p = DVec3::new(3.0, 1.0, 2.0);
-        let out = skin(&[vec![0.5, 0.5]], &t, &[p]);
-        assert!(out[0].abs_diff_eq(p.as_vec3(), 1e-6), "{out:?}");
-        let t = [
-            DAffine3::from_rotation_z(170f64.to_radians()),
-            DAffine3::from_rotation_z(-170f64.to_radians()),
-        ];
-        let out = skin(&[vec![0.5, 0.5]], &t, &[DVec3::X]);
-        assert!(out[0].abs_diff_eq(-Vec3::X, 1e-6), "{out:?}");
     }
 }

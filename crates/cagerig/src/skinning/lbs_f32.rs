@@ -11,9 +11,7 @@ use glam::{DAffine3, Vec3, Vec3A};
 
 use super::compact_weights::columns_from_local;
 use super::lbs::LbsRule;
-use super::precision::RestPoint;
-use super::stored_rest_kernel::StoredRestKernel;
-use crate::{RigError, SkinWeights};
+use super::stored_rest_kernel::{RestOnlyMethod, StoredRestKernel};
 
 /// Caller-owned per-frame buffer: the `#J` transforms `T_j ∘ translate(o)` as f32 columns.
 #[derive(Debug, Clone)]
@@ -38,20 +36,12 @@ pub struct LbsF32Method;
 /// local origin, in sorted order; see [`super::compact_weights`]).
 pub type LbsF32 = StoredRestKernel<LbsF32Method>;
 
-impl LbsF32 {
-    /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
-    pub fn new<P: RestPoint>(
-        skin_weights: &SkinWeights,
-        rest_positions: &[P],
-    ) -> Result<Self, RigError> {
-        Self::build(
-            skin_weights,
-            rest_positions,
-            "LBS f32 rest positions vs. weight rows",
-            LbsF32Method,
-        )
-    }
+impl RestOnlyMethod for LbsF32Method {
+    const METHOD: Self = LbsF32Method;
+    const SIZE_MISMATCH: &'static str = "LBS f32 rest positions vs. weight rows";
+}
 
+impl LbsF32 {
     /// M' = LBS(T, Ω, M) in f32 (Eq. 2–3). `transforms`: `#J`; `scratch`:
     /// `LbsF32Scratch::new(#J)`; `out`: `#V`. Unweighted vertices stay at rest.
     ///
@@ -71,6 +61,7 @@ impl LbsF32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::SkinWeights;
     use glam::DVec3;
     use std::f64::consts::FRAC_PI_2;
 

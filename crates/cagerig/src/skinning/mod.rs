@@ -21,7 +21,9 @@ mod method;
 pub mod precision;
 pub mod rigid_rotation;
 mod stored_rest_kernel;
-pub use stored_rest_kernel::StoredRestKernel;
+#[cfg(test)]
+mod test_fixtures;
+pub use stored_rest_kernel::{RestOnlyMethod, StoredRestKernel};
 
 pub use blended::BlendedSkinning;
 pub use blended_f32::{BlendedF32, BlendedF32Method, BlendedF32Scratch};

@@ -1,6 +1,8 @@
 //! What every f32 display kernel that stores the rest mesh M shares: the count-sorted Ω with M
 //! beside it as f32 offsets from a local origin ([`SortedRestMesh`]), its sizes, and the refresh
-//! after a rest-cage edit. Each method adds its own data `M` and its `new`/`apply`
+//! after a rest-cage edit, and the constructor of the methods without data of their own
+//! ([`RestOnlyMethod`]). Each method adds its own data `M` and its `apply` (and its `new` when it
+//! has data)
 //! ([`super::LbsF32`], [`super::DqsF32`], [`super::BlendedF32`]; CoR also stores its centres and
 //! keeps its own type, [`super::CorF32`]).
 
@@ -46,5 +48,24 @@ impl<M> StoredRestKernel<M> {
         rest_positions: &[P],
     ) -> Result<(), RigError> {
         self.mesh.set_rest_positions(rest_positions)
+    }
+}
+
+/// A method with no data beyond Ω and M ([`super::LbsF32Method`], [`super::DqsF32Method`]):
+/// its kernel is built from those two alone.
+pub trait RestOnlyMethod: Sized {
+    /// The method's value.
+    const METHOD: Self;
+    /// Names the kernel when the sizes of Ω and M differ.
+    const SIZE_MISMATCH: &'static str;
+}
+
+impl<M: RestOnlyMethod> StoredRestKernel<M> {
+    /// Ω (`#V × #J`) and rest positions M (`#V`). Errors if the sizes differ.
+    pub fn new<P: RestPoint>(
+        skin_weights: &SkinWeights,
+        rest_positions: &[P],
+    ) -> Result<Self, RigError> {
+        Self::build(skin_weights, rest_positions, M::SIZE_MISMATCH, M::METHOD)
     }
 }
