@@ -188,22 +188,12 @@ pub(crate) fn bench_green_model(
         }
         Ok(stat(samples))
     };
-    let binding = time(reps(5), &mut || {
-        drop(green::compute_green_coords(
-            &cage,
-            &parts.mesh.positions,
-            None,
-        )?);
-        Ok(())
-    })?;
-    let mvc_binding = time(reps(5), &mut || {
-        drop(mvc::compute_cage_coords(
-            &cage,
-            &parts.mesh.positions,
-            None,
-        )?);
-        Ok(())
-    })?;
+    // The coordinates of each kind for the whole mesh, results dropped.
+    type Coordinates = fn(&cagerig::TriMesh, &[DVec3]) -> Result<(), cagerig::RigError>;
+    let time_coordinates =
+        |compute: Coordinates| time(reps(5), &mut || Ok(compute(&cage, &parts.mesh.positions)?));
+    let binding = time_coordinates(|c, p| green::compute_green_coords(c, p, None).map(drop))?;
+    let mvc_binding = time_coordinates(|c, p| mvc::compute_cage_coords(c, p, None).map(drop))?;
     let options = SessionOptions {
         coords: CoordsKind::Green,
         ..SessionOptions::default()

@@ -63,6 +63,15 @@ const MAX_ITERATIONS: usize = 200;
 /// |λ| (scaled units) beyond which the dual is considered divergent (a not inside the hull).
 const MAX_LAMBDA: f64 = 1e6;
 
+/// The largest distance from `target` to `points` (0 for none): the scale of both solvers'
+/// dual variables.
+pub(super) fn farthest_distance(points: &[DVec3], target: DVec3) -> f64 {
+    points
+        .iter()
+        .map(|c| c.distance(target))
+        .fold(0.0, f64::max)
+}
+
 /// Max-entropy coordinates of `target` w.r.t. `points` (`#C`) with prior masses `prior` (`#C`),
 /// written into `out` (`#C`). See the module docs for the solver, clamping and fallback.
 /// Allocates only on the fallback path.
@@ -75,10 +84,7 @@ pub fn max_entropy_coordinates(
     let n = points.len();
     debug_assert_eq!(prior.len(), n);
     debug_assert_eq!(out.len(), n);
-    let scale = points
-        .iter()
-        .map(|c| c.distance(target))
-        .fold(0.0, f64::max);
+    let scale = farthest_distance(points, target);
     if n == 0 || !target.is_finite() || !scale.is_finite() {
         out.iter_mut().for_each(|b| *b = f64::NAN);
         return MecReport {

@@ -10,7 +10,7 @@
 
 use glam::{DMat3, DVec3};
 
-use super::mec::{MecReport, max_entropy_coordinates};
+use super::mec::{MecReport, farthest_distance, max_entropy_coordinates};
 
 const MAX_ITERATIONS: usize = 100;
 const TOLERANCE: f64 = 1e-14;
@@ -23,10 +23,7 @@ pub fn max_entropy_coordinates_signed(
     out: &mut [f64],
 ) -> MecReport {
     let n = points.len();
-    let scale = points
-        .iter()
-        .map(|c| c.distance(target))
-        .fold(0.0, f64::max);
+    let scale = farthest_distance(points, target);
     if n == 0
         || scale.is_nan()
         || scale <= 0.0

@@ -957,20 +957,10 @@ mod tests {
     /// moments D_kj, s_kj and the posed binding joints give the covariance summed point by point.
     #[test]
     fn the_carried_rotation_is_the_neighbourhoods_best_fit_rotation() {
-        let (cage, points, phi, omega) = cube_rig();
-        let rows: Vec<usize> = (0..points.len()).step_by(3).collect();
-        let (root, pivot) = (DVec3::ZERO, DVec3::new(0.5, 0.5, 0.5));
-        let mut maps = regularised_maps(
-            &phi,
-            &rows,
-            &cage.positions,
-            &cage.triangles,
-            &points,
-            &omega,
-            &BindingJoints::two_joint_chain(root, pivot),
-            NeighbourCoords::Fitting,
-        )
-        .unwrap();
+        let (_, points, _, omega) = cube_rig();
+        // `cube_maps`'s joints: the root at the origin, the child at the pivot.
+        let (cage, _, _, mut maps) = cube_maps();
+        let pivot = DVec3::new(0.5, 0.5, 0.5);
         // The root turns a little, the child (the x > 0.5 side) much more about the pivot.
         let root_turn = DMat3::from_rotation_y(0.2);
         let child_turn = DMat3::from_rotation_z(1.1) * root_turn;

@@ -34,6 +34,7 @@ use crate::sync::newton::{NewtonReport, solve_by_continuation};
 
 mod budget;
 mod damping;
+mod evaluation;
 mod gram;
 mod objective;
 mod prediction;
@@ -45,6 +46,7 @@ mod tests;
 
 pub use budget::{AfterDirectSolve, FitBudget, UNFITTED_STEPS};
 use damping::{damping_scale, lower_damping, raise_damping};
+use evaluation::{Evaluation, FaceScratch};
 use gram::gram_matrices;
 pub use prior::FitPrior;
 pub(crate) use rows::{rows_jacobian_into, rows_of};
@@ -104,12 +106,11 @@ pub struct GreenCageFit {
     hessian_blocks: Vec<DMat3>,
     /// The Hessian of the fit (`3#C × 3#C`), refreshed with the factors.
     normal_matrix: Mat<f64>,
-    g: Vec<DVec3>,
-    face_sums: Vec<DVec3>,
-    residual: Vec<DVec3>,
-    trial_residual: Vec<DVec3>,
-    gradient: Vec<DVec3>,
-    trial_gradient: Vec<DVec3>,
+    /// Scratch of the objective's evaluations: the face terms, and the residual and gradient at
+    /// the current point and at a trial point.
+    faces: FaceScratch,
+    current: Evaluation,
+    trial_evaluation: Evaluation,
     trial: Vec<DVec3>,
     step: Vec<f64>,
     /// The rows the last converged solution was fitted to, and that solution (the start of a
@@ -181,12 +182,9 @@ impl GreenCageFit {
             face_gram_blocks: vec![DMat3::ZERO; num_faces * num_cage],
             hessian_blocks: vec![DMat3::ZERO; num_cage * num_cage],
             normal_matrix: Mat::zeros(3 * num_cage, 3 * num_cage),
-            g: vec![DVec3::ZERO; num_faces],
-            face_sums: vec![DVec3::ZERO; num_faces],
-            residual: vec![DVec3::ZERO; num_rows],
-            trial_residual: vec![DVec3::ZERO; num_rows],
-            gradient: vec![DVec3::ZERO; num_cage],
-            trial_gradient: vec![DVec3::ZERO; num_cage],
+            faces: FaceScratch::new(num_faces),
+            current: Evaluation::new(num_rows, num_cage),
+            trial_evaluation: Evaluation::new(num_rows, num_cage),
             trial: vec![DVec3::ZERO; num_cage],
             step: vec![0.0; 3 * num_cage],
             last_target: vec![DVec3::ZERO; num_rows],
@@ -219,10 +217,10 @@ impl GreenCageFit {
     /// the last converged solution, for its own rows F_R(cage): the next [`GreenCageFit::apply`]
     /// that stalls continues from there to its rows in pieces. No allocation.
     pub fn restart_from(&mut self, cage: &[DVec3]) {
-        let mut g = std::mem::take(&mut self.g);
+        let mut g = std::mem::take(&mut self.faces.g);
         let mut rows = std::mem::take(&mut self.last_target);
         self.rows_of(cage, &mut g, &mut rows);
-        self.g = g;
+        self.faces.g = g;
         self.last_target = rows;
         self.last_solution.copy_from_slice(cage);
         self.restart_prior_from(cage);
@@ -245,8 +243,8 @@ impl GreenCageFit {
     /// ½‖F_R(x) − target‖² plus the prior's ½ Σ_axes (x − P)ᵀW(x − P) (the fit's energy at x).
     /// No allocation.
     pub fn energy(&mut self, target: &[DVec3], x: &[DVec3]) -> f64 {
-        let mut g = std::mem::take(&mut self.g);
-        let mut rows = std::mem::take(&mut self.trial_residual);
+        let mut g = std::mem::take(&mut self.faces.g);
+        let mut rows = std::mem::take(&mut self.trial_evaluation.residual);
         self.rows_of(x, &mut g, &mut rows);
         let energy = rows
             .iter()
@@ -254,8 +252,8 @@ impl GreenCageFit {
             .map(|(r, t)| 0.5 * r.distance_squared(*t))
             .sum::<f64>()
             + self.prior_energy(x);
-        self.g = g;
-        self.trial_residual = rows;
+        self.faces.g = g;
+        self.trial_evaluation.residual = rows;
         if energy.is_finite() {
             energy
         } else {
@@ -288,7 +286,7 @@ impl GreenCageFit {
         posed_cage: &mut [DVec3],
         budget: FitBudget,
     ) -> Result<NewtonReport, RigError> {
-        debug_assert_eq!(target.len(), self.residual.len());
+        debug_assert_eq!(target.len(), self.current.residual.len());
         if posed_cage.iter().any(|p| !p.is_finite()) {
             posed_cage.copy_from_slice(&self.binding_cage);
             self.has_last_target = false;
@@ -369,46 +367,30 @@ impl GreenCageFit {
         posed_cage: &mut [DVec3],
         max_steps: usize,
     ) -> Result<NewtonReport, RigError> {
-        let mut g = std::mem::take(&mut self.g);
-        let mut face_sums = std::mem::take(&mut self.face_sums);
-        let mut residual = std::mem::take(&mut self.residual);
-        let mut trial_residual = std::mem::take(&mut self.trial_residual);
-        let mut gradient = std::mem::take(&mut self.gradient);
-        let mut trial_gradient = std::mem::take(&mut self.trial_gradient);
+        let mut faces = std::mem::take(&mut self.faces);
+        let mut current = std::mem::take(&mut self.current);
+        let mut trial_evaluation = std::mem::take(&mut self.trial_evaluation);
         let mut trial = std::mem::take(&mut self.trial);
         let mut report = NewtonReport::default();
         #[expect(clippy::redundant_closure_call)] // the loop's `?` stays inside, scratch goes back
         let outcome = (|| {
-            let (mut energy, mut norm) = self.evaluate(
-                posed_cage,
-                target,
-                &mut g,
-                &mut face_sums,
-                &mut residual,
-                &mut gradient,
-            );
+            let (mut energy, mut norm) =
+                self.evaluate(posed_cage, target, &mut faces, &mut current);
             // Chord steps first: the last solve's undamped Hessian factors (the previous event's
             // solution is close), as long as each step at least halves the gradient.
             if self.lu.is_factorised()
                 && self.factor_damping <= CHORD_DAMPING * damping_scale(&self.normal_matrix)
             {
                 while norm > self.tolerance && report.iterations < max_steps {
-                    self.newton_step(&gradient, posed_cage, &mut trial);
-                    let (trial_energy, trial_norm) = self.evaluate(
-                        &trial,
-                        target,
-                        &mut g,
-                        &mut face_sums,
-                        &mut trial_residual,
-                        &mut trial_gradient,
-                    );
+                    self.newton_step(&current.gradient, posed_cage, &mut trial);
+                    let (trial_energy, trial_norm) =
+                        self.evaluate(&trial, target, &mut faces, &mut trial_evaluation);
                     if !(trial_energy <= energy && trial_norm <= CHORD_RATE * norm) {
                         break;
                     }
                     report.iterations += 1;
                     posed_cage.copy_from_slice(&trial);
-                    std::mem::swap(&mut residual, &mut trial_residual);
-                    std::mem::swap(&mut gradient, &mut trial_gradient);
+                    std::mem::swap(&mut current, &mut trial_evaluation);
                     energy = trial_energy;
                     norm = trial_norm;
                 }
@@ -428,7 +410,7 @@ impl GreenCageFit {
                     break;
                 }
                 if !hessian_current {
-                    self.hessian_at(posed_cage, &residual);
+                    self.hessian_at(posed_cage, &current.residual);
                     hessian_current = true;
                     report.factorisations += 1;
                 }
@@ -439,8 +421,9 @@ impl GreenCageFit {
                     }
                     continue;
                 }
-                self.newton_step(&gradient, posed_cage, &mut trial);
-                let slope: f64 = gradient
+                self.newton_step(&current.gradient, posed_cage, &mut trial);
+                let slope: f64 = current
+                    .gradient
                     .iter()
                     .enumerate()
                     .map(|(k, d)| {
@@ -460,14 +443,8 @@ impl GreenCageFit {
                 }
                 let step_squared: f64 = self.step.iter().map(|v| v * v).sum();
                 let predicted = -0.5 * slope + 0.5 * damping * step_squared;
-                let (trial_energy, trial_norm) = self.evaluate(
-                    &trial,
-                    target,
-                    &mut g,
-                    &mut face_sums,
-                    &mut trial_residual,
-                    &mut trial_gradient,
-                );
+                let (trial_energy, trial_norm) =
+                    self.evaluate(&trial, target, &mut faces, &mut trial_evaluation);
                 let ratio = (energy - trial_energy) / predicted;
                 // At the round-off floor the model predicts a change of ½‖r‖² below its
                 // resolution: accept a step that still reduces the gradient, and count the steps
@@ -497,8 +474,7 @@ impl GreenCageFit {
                     damping = raise_damping(damping, &self.normal_matrix, 2.0);
                 }
                 posed_cage.copy_from_slice(&trial);
-                std::mem::swap(&mut residual, &mut trial_residual);
-                std::mem::swap(&mut gradient, &mut trial_gradient);
+                std::mem::swap(&mut current, &mut trial_evaluation);
                 energy = trial_energy;
                 norm = trial_norm;
                 hessian_current = false;
@@ -509,7 +485,7 @@ impl GreenCageFit {
                 // prediction and chord steps get undamped factors at this solution.
                 damping = accepted_damping;
                 if !hessian_current {
-                    self.hessian_at(posed_cage, &residual);
+                    self.hessian_at(posed_cage, &current.residual);
                     report.factorisations += 1;
                 }
                 if self.factorise_damped(0.0).is_err() {
@@ -520,12 +496,9 @@ impl GreenCageFit {
             report.residual = norm;
             Ok(())
         })();
-        self.g = g;
-        self.face_sums = face_sums;
-        self.residual = residual;
-        self.trial_residual = trial_residual;
-        self.gradient = gradient;
-        self.trial_gradient = trial_gradient;
+        self.faces = faces;
+        self.current = current;
+        self.trial_evaluation = trial_evaluation;
         self.trial = trial;
         outcome.map(|()| report)
     }

@@ -5,21 +5,22 @@
 
 use glam::{DAffine3, DVec3};
 
+use super::evaluation::{Evaluation, FaceScratch};
 use super::prior::FitPrior;
 use super::{GreenCageFit, rows_of};
 
 impl GreenCageFit {
-    /// ½‖r‖² and Jᵀr at x (r = F_R(x) − target into `residual`, Jᵀr into `gradient`); returns
-    /// (½‖r‖², max |Jᵀr|), infinite when not finite.
+    /// ½‖r‖² and Jᵀr at x (r = F_R(x) − target and Jᵀr into `out`, with `faces` as scratch);
+    /// returns (½‖r‖², max |Jᵀr|), infinite when not finite.
     pub(super) fn evaluate(
         &self,
         x: &[DVec3],
         target: &[DVec3],
-        g: &mut [DVec3],
-        face_sums: &mut [DVec3],
-        residual: &mut [DVec3],
-        gradient: &mut [DVec3],
+        faces: &mut FaceScratch,
+        out: &mut Evaluation,
     ) -> (f64, f64) {
+        let FaceScratch { g, face_sums } = faces;
+        let Evaluation { residual, gradient } = out;
         self.normals.apply(x, g);
         rows_of(&self.vertex_rows, &self.face_rows, x, g, residual);
         let mut energy = 0.0;

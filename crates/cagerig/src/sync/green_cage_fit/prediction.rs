@@ -24,66 +24,37 @@ impl GreenCageFit {
         if !predict && self.prior.is_none() {
             return;
         }
-        let mut g = std::mem::take(&mut self.g);
-        let mut face_sums = std::mem::take(&mut self.face_sums);
-        let mut residual = std::mem::take(&mut self.trial_residual);
-        let mut gradient = std::mem::take(&mut self.trial_gradient);
+        let mut faces = std::mem::take(&mut self.faces);
+        let mut evaluation = std::mem::take(&mut self.trial_evaluation);
         let mut trial = std::mem::take(&mut self.trial);
-        let (mut start_energy, start_norm) = self.evaluate(
-            posed_cage,
-            target,
-            &mut g,
-            &mut face_sums,
-            &mut residual,
-            &mut gradient,
-        );
+        let (mut start_energy, start_norm) =
+            self.evaluate(posed_cage, target, &mut faces, &mut evaluation);
         // A warm start that is already the answer (after a grab: CageRev made it one) stays.
         if start_norm > self.tolerance {
             // With a prior, the carried cage P is a start too.
             if let Some(p) = &self.prior {
                 trial.copy_from_slice(p.target());
-                let (carried_energy, _) = self.evaluate(
-                    &trial,
-                    target,
-                    &mut g,
-                    &mut face_sums,
-                    &mut residual,
-                    &mut gradient,
-                );
+                let (carried_energy, _) =
+                    self.evaluate(&trial, target, &mut faces, &mut evaluation);
                 if carried_energy < start_energy {
                     posed_cage.copy_from_slice(&trial);
                     start_energy = carried_energy;
                 }
             }
             if predict {
-                let _ = self.evaluate(
-                    &self.last_solution,
-                    target,
-                    &mut g,
-                    &mut face_sums,
-                    &mut residual,
-                    &mut gradient,
-                );
+                let _ = self.evaluate(&self.last_solution, target, &mut faces, &mut evaluation);
                 let from = std::mem::take(&mut self.last_solution);
-                self.newton_step(&gradient, &from, &mut trial);
+                self.newton_step(&evaluation.gradient, &from, &mut trial);
                 self.last_solution = from;
-                let (predicted_energy, _) = self.evaluate(
-                    &trial,
-                    target,
-                    &mut g,
-                    &mut face_sums,
-                    &mut residual,
-                    &mut gradient,
-                );
+                let (predicted_energy, _) =
+                    self.evaluate(&trial, target, &mut faces, &mut evaluation);
                 if predicted_energy < start_energy {
                     posed_cage.copy_from_slice(&trial);
                 }
             }
         }
-        self.g = g;
-        self.face_sums = face_sums;
-        self.trial_residual = residual;
-        self.trial_gradient = gradient;
+        self.faces = faces;
+        self.trial_evaluation = evaluation;
         self.trial = trial;
     }
 

@@ -66,12 +66,10 @@ fn newton_matrix_is_the_hessian_of_the_fit() {
     let nr = points.len();
     let nf = fit.normals().len();
     let gradient_at = |fit: &GreenCageFit, x: &[DVec3]| {
-        let mut g = vec![DVec3::ZERO; nf];
-        let mut sums = vec![DVec3::ZERO; nf];
-        let mut r = vec![DVec3::ZERO; nr];
-        let mut grad = vec![DVec3::ZERO; x.len()];
-        fit.evaluate(x, &target, &mut g, &mut sums, &mut r, &mut grad);
-        (grad, r)
+        let mut faces = FaceScratch::new(nf);
+        let mut out = Evaluation::new(nr, x.len());
+        fit.evaluate(x, &target, &mut faces, &mut out);
+        (out.gradient, out.residual)
     };
     let (_, residual) = gradient_at(&fit, &x);
     fit.hessian_at(&x, &residual);
@@ -321,12 +319,10 @@ fn a_regularised_fits_gradient_and_newton_matrix_are_its_derivatives() {
         .collect();
     let (nr, nf) = (points.len(), fit.normals().len());
     let evaluate = |fit: &GreenCageFit, x: &[DVec3]| {
-        let mut g = vec![DVec3::ZERO; nf];
-        let mut sums = vec![DVec3::ZERO; nf];
-        let mut r = vec![DVec3::ZERO; nr];
-        let mut grad = vec![DVec3::ZERO; x.len()];
-        let (energy, _) = fit.evaluate(x, &target, &mut g, &mut sums, &mut r, &mut grad);
-        (energy, grad, r)
+        let mut faces = FaceScratch::new(nf);
+        let mut out = Evaluation::new(nr, x.len());
+        let (energy, _) = fit.evaluate(x, &target, &mut faces, &mut out);
+        (energy, out.gradient, out.residual)
     };
     let (energy, gradient, residual) = evaluate(&fit, &x);
     assert!((fit.energy(&target, &x) - energy).abs() <= 1e-14 * energy);
