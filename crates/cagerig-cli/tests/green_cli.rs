@@ -377,25 +377,19 @@ fn export_past_the_fold_names_the_option_and_keeps_the_animation_with_it() {
 /// under the default rig.
 #[test]
 fn animate_json_counts_the_samples_whose_current_cage_is_unfitted() {
-    let dir = std::env::temp_dir().join(format!("cagerig-unfitted-json-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = temp_dir("unfitted-json");
     let report = |extra: &[&str], out: &str| -> serde_json::Value {
-        let output = cagerig()
-            .arg("animate")
-            .arg(repo().join("data/arm/arm.obj"))
-            .arg("--skeleton-anim")
-            .arg(repo().join("data/arm/arm_skelAnim.txt"))
-            .args(["--times", "0,2", "--coords", "green", "--json", "--out"])
-            .arg(dir.join(out))
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
+        let json = run_ok(
+            cagerig()
+                .arg("animate")
+                .arg(repo().join("data/arm/arm.obj"))
+                .arg("--skeleton-anim")
+                .arg(repo().join("data/arm/arm_skelAnim.txt"))
+                .args(["--times", "0,2", "--coords", "green", "--json", "--out"])
+                .arg(dir.join(out))
+                .args(extra),
         );
-        serde_json::from_slice(&output.stdout).unwrap()
+        serde_json::from_str(&json).unwrap()
     };
     let kept = report(
         &[

@@ -50,8 +50,9 @@ impl SkinningMethod {
     }
 
     /// The name in scripts, options and files: `"lbs"`, `"dqs"`, `"cor"` or `"blended"`
-    /// (`"external"` for the method passed in: saved states read it back, options and scripts
-    /// do not, since no front end chooses it by name).
+    /// (`"external"` for the method passed in: saved states and edit scripts, read through serde,
+    /// take it back, and a session without such a method refuses it; the options front ends
+    /// list, read through `FromStr`, do not offer it).
     pub const fn name(self) -> &'static str {
         match self {
             Self::Lbs => "lbs",
@@ -108,9 +109,9 @@ impl serde::Serialize for SkinningMethod {
 }
 
 impl<'de> serde::Deserialize<'de> for SkinningMethod {
-    /// A name of [`SkinningMethod::ALL`] through `FromStr`, or `"external"`: a saved state of a
-    /// session whose method was passed in reads back as [`SkinningMethod::External`], and a
-    /// session restoring it without such a method refuses it
+    /// A name of [`SkinningMethod::ALL`] through `FromStr`, or `"external"`: a saved state (or an
+    /// edit script) of a session whose method was passed in reads back as
+    /// [`SkinningMethod::External`], and a session without such a method refuses it
     /// ([`crate::RigError::NoExternalSkinning`]).
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         let text = <String as serde::Deserialize>::deserialize(deserializer)?;
@@ -158,7 +159,7 @@ mod tests {
     #[test]
     fn the_external_method_is_not_a_name_front_ends_choose() {
         assert!(!SkinningMethod::ALL.contains(&SkinningMethod::External));
-        // Saved states read the method passed in back; options and scripts do not name it.
+        // Saved states read the method passed in back; the options' parser does not name it.
         let json = serde_json::to_string(&SkinningMethod::External).unwrap();
         assert_eq!(json, "\"external\"");
         assert_eq!(
