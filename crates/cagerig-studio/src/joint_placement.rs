@@ -37,24 +37,11 @@ pub fn joint_in_body(
 mod tests {
     use super::*;
 
-    /// A unit cube's 12 triangles.
+    /// A unit cube's 8 vertices and 12 triangles.
     fn cube() -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let v = (0..8)
-            .map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
-            .collect();
-        let quads = [
-            [0, 1, 3, 2],
-            [4, 6, 7, 5],
-            [0, 4, 5, 1],
-            [2, 3, 7, 6],
-            [0, 2, 6, 4],
-            [1, 5, 7, 3],
-        ];
-        let t = quads
-            .iter()
-            .flat_map(|[a, b, c, d]| [[*a, *b, *c], [*a, *c, *d]])
-            .collect();
-        (v, t)
+        let cube = cagerig::mesh::TriMesh::cuboid(DVec3::ZERO, DVec3::ONE)
+            .expect("a unit cube is a valid mesh");
+        (cube.positions, cube.triangles)
     }
 
     #[test]
