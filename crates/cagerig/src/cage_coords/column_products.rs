@@ -16,7 +16,8 @@
 //!   then one addition per group as before.
 //!
 //! A CPU without FMA (x86-64 before 2013) runs the baseline body, where `mul_add` is a libm
-//! call: correct, slow.
+//! call: correct, slow. The web build (wasm32) adds the product and the sum separately instead
+//! ([`chain_step`]).
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -240,10 +241,27 @@ fn add_group<const N: usize>(s: f64, w: &[f64; N], d: &[f64; N]) -> f64 {
     let mut t = w[0] * d[0];
     let mut c = 1;
     while c < N {
-        t = w[c].mul_add(d[c], t);
+        t = chain_step(w[c], d[c], t);
         c += 1;
     }
     s + t
+}
+
+/// One step `w·d + t` of [`add_group`]'s chain: fused (one rounding) on native targets, so every
+/// tier gives the same bits. wasm32 has no fused multiply-add instruction and `f64::mul_add` is a
+/// software routine there, about 100× a multiply (it made a current-cage grab in the web studio
+/// take 7–20 ms instead of 0.2–1); the web build rounds the product and the sum separately, so
+/// its products differ from native ones by round-off, which the browser test bounds.
+#[inline(always)]
+fn chain_step(w: f64, d: f64, t: f64) -> f64 {
+    #[cfg(target_arch = "wasm32")]
+    {
+        w * d + t
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        w.mul_add(d, t)
+    }
 }
 
 /// Columns of one pass over the tile sums: eight while eight remain, then four if four remain,
