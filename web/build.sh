@@ -27,7 +27,7 @@ staging=$(mktemp -d "${TMPDIR:-/tmp}/cagerig-web.XXXXXX")
 trap 'rm -rf "$staging"' EXIT
 wasm-bindgen --target web --no-typescript --out-dir "$staging" \
     target/wasm32-unknown-unknown/web/cagerig_web.wasm
-cp web/index.html "$staging/"
+cp web/index.html web/worker.js "$staging/"
 mkdir "$staging/samples"
 target/release/cagerig export data/arm/arm.obj --out "$staging/samples/Arm.glb" >/dev/null
 cp data/fox/Fox.glb data/gltf/CesiumMan/CesiumMan.glb "$staging/samples/"

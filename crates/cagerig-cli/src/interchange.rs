@@ -138,6 +138,7 @@ pub fn load_interchange(
     let request = CageRequest {
         given: cage,
         generate: auto_cage,
+        generated: None,
     };
     let opened = match cagerig_formats::open_character(path, &options, &request) {
         Ok(opened) => opened,

@@ -2,8 +2,10 @@
 //! discovered beside the mesh, as `cagerig` does), or a skinned glTF / FBX character.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use cagerig::Warning;
+use cagerig::cage_gen::GeneratedCage;
 use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, cage_options_with_vertices};
 use cagerig::rig_files::MissingCage;
 use cagerig::session::{BindProgress, DisplayPrecision, RigParts, RigSession, SessionOptions};
@@ -41,6 +43,11 @@ pub enum RigSource {
         bytes: FileBytes,
         #[serde(default)]
         auto_cage: Option<usize>,
+        /// The cage that opening generates for a file without one, made beforehand by
+        /// [`generated_cage_of`] (the web page runs it in a worker, off the page's thread); `None`
+        /// generates it while opening. Not written to session files.
+        #[serde(skip)]
+        generated_cage: Option<Arc<GeneratedCage>>,
     },
 }
 
@@ -184,77 +191,11 @@ pub fn open_rig_with_progress(
     source: &RigSource,
     progress: BindProgress<'_>,
 ) -> Result<OpenedRig, OpenError> {
-    let mut rigged = true;
-    let (parts, mut warnings, files, (animations, morph_targets, file_skinning)) = match source {
-        RigSource::Builtin { name, resolution } => {
-            let builtin_error = |source| OpenError::Builtin {
-                name: name.clone(),
-                source,
-            };
-            // `builtin` refuses a rig too large for the machine before building it.
-            let rig = cagerig::demo::builtin(name, *resolution).map_err(builtin_error)?;
-            let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
-            (parts, Vec::new(), Vec::new(), Default::default())
-        }
-        RigSource::File {
-            path,
-            cage,
-            skin,
-            auto_cage,
-        } if cagerig_formats::CharacterFormat::of(path).is_some() => {
-            let input = CharacterInput::File(path);
-            let (imported, skinned) =
-                open_interchange(input, cage.as_deref(), skin.as_deref(), *auto_cage)?;
-            rigged = skinned;
-            imported
-        }
-        RigSource::Memory {
-            path,
-            bytes,
-            auto_cage,
-        } => {
-            let input = CharacterInput::Bytes {
-                path,
-                bytes: &bytes.0,
-            };
-            let (imported, skinned) = open_interchange(input, None, None, *auto_cage)?;
-            rigged = skinned;
-            imported
-        }
-        RigSource::File {
-            path,
-            cage,
-            auto_cage,
-            ..
-        } if crate::unrigged::is_unrigged_obj(path) => {
-            rigged = false;
-            let (parts, warnings, files) =
-                crate::unrigged::open_unrigged_obj(path, cage.as_deref(), *auto_cage)?;
-            (parts, warnings, files, Default::default())
-        }
-        RigSource::File {
-            path,
-            cage,
-            auto_cage,
-            ..
-        } => {
-            // As for a character: a rig with no cage opens with a generated one.
-            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
-            let missing = MissingCage::Generate(cage_options_with_vertices(vertices));
-            let rig =
-                cagerig::rig_files::load_rig_files_or_generate(path, cage.as_deref(), missing)?;
-            let mut warnings = rig.warnings;
-            if let Some(g) = &rig.generated_cage {
-                warnings.push(generated_note(g));
-            }
-            let files = rig
-                .files
-                .into_iter()
-                .map(|(role, p)| (role.to_string(), p))
-                .collect();
-            (rig.parts, warnings, files, Default::default())
-        }
-    };
+    let ImportedSource {
+        imported: (parts, mut warnings, files, (animations, morph_targets, file_skinning)),
+        rigged,
+        ..
+    } = import_source(source)?;
     let name = source.display_name();
     // A character opens with the skinning method its file says (FBX skin deformers).
     let options = SessionOptions {
@@ -283,6 +224,109 @@ pub fn open_rig_with_progress(
     })
 }
 
+/// The cage that opening `source` generates: `None` when the source brings its own (a cage
+/// node, a cage file beside it, a built-in rig). This is the slow part of opening a character
+/// without a cage; the web page runs it in a worker and opens the file with the answer as
+/// [`RigSource::Memory`]'s `generated_cage`, which gives the rig opening it alone gives.
+pub fn generated_cage_of(source: &RigSource) -> Result<Option<GeneratedCage>, OpenError> {
+    Ok(import_source(source)?.generated_cage.map(|g| *g))
+}
+
+/// What reading a source gives before binding.
+struct ImportedSource {
+    imported: Imported,
+    /// False for a mesh with no skeleton (see `unrigged`).
+    rigged: bool,
+    /// The cage generated for it, when it brought none.
+    generated_cage: Option<Box<GeneratedCage>>,
+}
+
+/// Reads `source` into a rig's parts, with the cage-source rule applied.
+fn import_source(source: &RigSource) -> Result<ImportedSource, OpenError> {
+    let (imported, rigged, generated_cage) = match source {
+        RigSource::Builtin { name, resolution } => {
+            let builtin_error = |source| OpenError::Builtin {
+                name: name.clone(),
+                source,
+            };
+            // `builtin` refuses a rig too large for the machine before building it.
+            let rig = cagerig::demo::builtin(name, *resolution).map_err(builtin_error)?;
+            let parts = RigParts::new(rig.mesh, rig.skeleton, rig.skin_weights, rig.cage);
+            (
+                (parts, Vec::new(), Vec::new(), Default::default()),
+                true,
+                None,
+            )
+        }
+        RigSource::File {
+            path,
+            cage,
+            skin,
+            auto_cage,
+        } if cagerig_formats::CharacterFormat::of(path).is_some() => {
+            let input = CharacterInput::File(path);
+            open_interchange(input, cage.as_deref(), skin.as_deref(), *auto_cage, None)?
+        }
+        RigSource::Memory {
+            path,
+            bytes,
+            auto_cage,
+            generated_cage,
+        } => {
+            let input = CharacterInput::Bytes {
+                path,
+                bytes: &bytes.0,
+            };
+            open_interchange(input, None, None, *auto_cage, generated_cage.as_deref())?
+        }
+        RigSource::File {
+            path,
+            cage,
+            auto_cage,
+            ..
+        } if crate::unrigged::is_unrigged_obj(path) => {
+            let (parts, warnings, files, generated) =
+                crate::unrigged::open_unrigged_obj(path, cage.as_deref(), *auto_cage)?;
+            (
+                (parts, warnings, files, Default::default()),
+                false,
+                generated,
+            )
+        }
+        RigSource::File {
+            path,
+            cage,
+            auto_cage,
+            ..
+        } => {
+            // As for a character: a rig with no cage opens with a generated one.
+            let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
+            let missing = MissingCage::Generate(cage_options_with_vertices(vertices));
+            let rig =
+                cagerig::rig_files::load_rig_files_or_generate(path, cage.as_deref(), missing)?;
+            let mut warnings = rig.warnings;
+            if let Some(g) = &rig.generated_cage {
+                warnings.push(generated_note(g));
+            }
+            let files = rig
+                .files
+                .into_iter()
+                .map(|(role, p)| (role.to_string(), p))
+                .collect();
+            (
+                (rig.parts, warnings, files, Default::default()),
+                true,
+                rig.generated_cage.map(Box::new),
+            )
+        }
+    };
+    Ok(ImportedSource {
+        imported,
+        rigged,
+        generated_cage,
+    })
+}
+
 type Imported = (
     RigParts,
     Vec<Warning>,
@@ -304,23 +348,28 @@ pub(crate) fn generated_note(g: &cagerig::cage_gen::GeneratedCage) -> Warning {
     }
 }
 
-/// A glTF / FBX character as a rig's parts, and whether it is skinned. A character with no
-/// cage opens with a generated one (`auto_cage` vertices, else the default), said so in the
-/// log, as a mesh with no skeleton does; a file with no skin opens as a mesh to rig.
+/// A glTF / FBX character as a rig's parts, whether it is skinned, and the cage generated for
+/// it. A character with no cage opens with a generated one (`auto_cage` vertices, else the
+/// default; `generated` when made beforehand), said so in the log, as a mesh with no skeleton
+/// does; a file with no skin opens as a mesh to rig.
 fn open_interchange(
     input: CharacterInput<'_>,
     cage: Option<&Path>,
     skin: Option<&str>,
     auto_cage: Option<usize>,
-) -> Result<(Imported, bool), OpenError> {
+    generated: Option<&GeneratedCage>,
+) -> Result<(Imported, bool, Option<Box<GeneratedCage>>), OpenError> {
     let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
-    match import_interchange(input, cage, skin, Some(vertices)) {
+    match import_interchange(input, cage, skin, Some(vertices), generated) {
         Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
-            let (parts, warnings, files) =
-                crate::unrigged::open_unskinned_character(input, cage, auto_cage)?;
-            Ok(((parts, warnings, files, Default::default()), false))
+            let (parts, warnings, files, made) =
+                crate::unrigged::open_unskinned_character(input, cage, auto_cage, generated)?;
+            Ok(((parts, warnings, files, Default::default()), false, made))
         }
-        other => Ok((other?, true)),
+        other => {
+            let (imported, made) = other?;
+            Ok((imported, true, made))
+        }
     }
 }
 
@@ -329,7 +378,8 @@ fn import_interchange(
     cage: Option<&Path>,
     skin: Option<&str>,
     auto_cage: Option<usize>,
-) -> Result<Imported, OpenError> {
+    generated: Option<&GeneratedCage>,
+) -> Result<(Imported, Option<Box<GeneratedCage>>), OpenError> {
     let options = ImportOptions {
         skin: skin.map(str::to_owned),
         ..ImportOptions::default()
@@ -337,6 +387,7 @@ fn import_interchange(
     let request = CageRequest {
         given: cage,
         generate: auto_cage.map(cage_options_with_vertices),
+        generated,
     };
     let opened =
         cagerig_formats::open_character_input(input, &options, &request).map_err(|e| match e {
@@ -348,14 +399,21 @@ fn import_interchange(
         files.push(("cage".into(), c.to_path_buf()));
     }
     let mut warnings = opened.warnings;
-    if let CageOrigin::Generated(g) = &opened.cage_origin {
-        warnings.push(generated_note(g));
-    }
+    let made = match opened.cage_origin {
+        CageOrigin::Generated(g) => {
+            warnings.push(generated_note(&g));
+            Some(g)
+        }
+        CageOrigin::Given(_) | CageOrigin::Found => None,
+    };
     Ok((
-        opened.parts,
-        warnings,
-        files,
-        (opened.animations, opened.morph_targets, opened.skinning),
+        (
+            opened.parts,
+            warnings,
+            files,
+            (opened.animations, opened.morph_targets, opened.skinning),
+        ),
+        made,
     ))
 }
 
@@ -397,6 +455,39 @@ mod tests {
             Ok(_) => panic!("opened a missing file"),
         };
         assert!(err.contains("/nonexistent/thing.obj"), "{err}");
+    }
+
+    /// The web page's split of opening a file without a cage: the cage generated beforehand
+    /// (in the page's worker), passed through JSON as the worker hands it over, then the file
+    /// opened with it, gives the rig that opening the file alone gives, bit for bit, with the
+    /// same note; a rig that brings its cage has none to generate.
+    #[test]
+    fn a_cage_generated_beforehand_opens_the_rig_that_opening_generates() {
+        let fox = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/fox/Fox.glb");
+        let memory = |generated_cage: Option<Arc<GeneratedCage>>| RigSource::Memory {
+            path: "Fox.glb".into(),
+            bytes: std::fs::read(fox).unwrap().into(),
+            auto_cage: None,
+            generated_cage,
+        };
+        assert!(generated_cage_of(&RigSource::default()).unwrap().is_none());
+        let made = generated_cage_of(&memory(None)).unwrap().unwrap();
+        let json = serde_json::to_string(&made).unwrap();
+        let handed: GeneratedCage = serde_json::from_str(&json).unwrap();
+        assert_eq!(handed, made);
+        let alone = open_rig(&memory(None)).unwrap();
+        let prepared = open_rig(&memory(Some(Arc::new(handed)))).unwrap();
+        assert_eq!(prepared.session.rest_cage(), alone.session.rest_cage());
+        assert_eq!(prepared.session.rest_mesh(), alone.session.rest_mesh());
+        assert_eq!(prepared.session.posed_cage(), alone.session.posed_cage());
+        let notes = |o: &OpenedRig| o.warnings.iter().map(|w| w.to_string()).collect::<Vec<_>>();
+        assert_eq!(notes(&prepared), notes(&alone));
+        assert!(notes(&alone).iter().any(|n| n.contains("generated one")));
+        // The source as session files write it is the same.
+        assert_eq!(
+            serde_json::to_string(&prepared.source).unwrap(),
+            serde_json::to_string(&alone.source).unwrap()
+        );
     }
 
     #[test]

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use cagerig::cage_gen::CageOptions;
+use cagerig::cage_gen::{CageOptions, GeneratedCage};
 use cagerig::cage_source::{CageOrigin, CageRequest, choose_cage};
 use cagerig::session::RigParts;
 use cagerig::{Joint, RigError, Skeleton, SkinWeights, TriMesh, Warning};
@@ -39,9 +39,14 @@ pub fn placeholder_parts(mesh: TriMesh, cage: TriMesh) -> Result<RigParts, RigEr
     Ok(RigParts::new(mesh, skeleton, weights, cage))
 }
 
-/// A mesh opened with no skeleton: its placeholder rig, the load warnings and the files read
-/// as (role, path).
-pub type UnriggedMesh = (RigParts, Vec<Warning>, Vec<(String, PathBuf)>);
+/// A mesh opened with no skeleton: its placeholder rig, the load warnings, the files read as
+/// (role, path) and the cage generated for it (when none was given or found).
+pub type UnriggedMesh = (
+    RigParts,
+    Vec<Warning>,
+    Vec<(String, PathBuf)>,
+    Option<Box<GeneratedCage>>,
+);
 
 /// The mesh of the OBJ `path` with its cage: `cage` if given, else the one beside it, else one
 /// generated with `auto_cage` vertices (the default generator when `None`).
@@ -57,8 +62,7 @@ pub fn open_unrigged_obj(
         path,
         mesh,
         None,
-        cage.or(found_cage.as_deref()),
-        auto_cage,
+        &mesh_cage_request(cage.or(found_cage.as_deref()), auto_cage, None),
         warnings,
         vec![("mesh".to_string(), path.to_path_buf())],
     )
@@ -70,6 +74,7 @@ pub fn open_unskinned_character(
     input: cagerig_formats::CharacterInput<'_>,
     cage: Option<&Path>,
     auto_cage: Option<usize>,
+    generated: Option<&GeneratedCage>,
 ) -> Result<UnriggedMesh, OpenError> {
     let imported = input.import_static()?;
     let path = input.path();
@@ -77,36 +82,51 @@ pub fn open_unskinned_character(
         path,
         imported.mesh,
         imported.cage,
-        cage,
-        auto_cage,
+        &mesh_cage_request(cage, auto_cage, generated),
         imported.warnings,
         vec![("character".to_string(), path.to_path_buf())],
     )
 }
 
-/// The placeholder rig of `mesh` in its chosen cage (the cage-source rule), with the notes.
-fn unrigged(
-    path: &Path,
-    mesh: TriMesh,
-    cage_in_file: Option<TriMesh>,
-    cage: Option<&Path>,
+/// A mesh's cage request: `cage` if given, else one generated with `auto_cage` vertices (the
+/// default generator when `None`), or `generated` when it was made beforehand.
+fn mesh_cage_request<'a>(
+    cage: Option<&'a Path>,
     auto_cage: Option<usize>,
-    mut warnings: Vec<Warning>,
-    mut files: Vec<(String, PathBuf)>,
-) -> Result<UnriggedMesh, OpenError> {
-    let request = CageRequest {
+    generated: Option<&'a GeneratedCage>,
+) -> CageRequest<'a> {
+    CageRequest {
         given: cage,
         generate: Some(auto_cage.map_or_else(
             CageOptions::default,
             cagerig::cage_source::cage_options_with_vertices,
         )),
-    };
-    let chosen = choose_cage(path, &mesh, None, cage_in_file, &request)?;
-    match &chosen.origin {
-        CageOrigin::Given(p) => files.push(("cage".into(), p.clone())),
-        CageOrigin::Generated(g) => warnings.push(crate::rig_open::generated_note(g)),
-        CageOrigin::Found => {}
+        generated,
     }
+}
+
+/// The placeholder rig of `mesh` in its chosen cage (the cage-source rule applied to
+/// `request`), with the notes.
+fn unrigged(
+    path: &Path,
+    mesh: TriMesh,
+    cage_in_file: Option<TriMesh>,
+    request: &CageRequest<'_>,
+    mut warnings: Vec<Warning>,
+    mut files: Vec<(String, PathBuf)>,
+) -> Result<UnriggedMesh, OpenError> {
+    let chosen = choose_cage(path, &mesh, None, cage_in_file, request)?;
+    let made = match chosen.origin {
+        CageOrigin::Given(p) => {
+            files.push(("cage".into(), p));
+            None
+        }
+        CageOrigin::Generated(g) => {
+            warnings.push(crate::rig_open::generated_note(&g));
+            Some(g)
+        }
+        CageOrigin::Found => None,
+    };
     warnings.push(Warning::Note {
         message: format!(
             "{}: no skeleton: build one in the rest view (Skeleton panel: add joints by \
@@ -118,7 +138,7 @@ fn unrigged(
         name: path.display().to_string(),
         source,
     })?;
-    Ok((parts, warnings, files))
+    Ok((parts, warnings, files, made))
 }
 
 #[cfg(test)]

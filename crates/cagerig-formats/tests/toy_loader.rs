@@ -155,6 +155,7 @@ fn a_loader_of_another_crate_opens_binds_and_bends_its_character() {
         &CageRequest {
             given: None,
             generate: Some(CageOptions::default()),
+            generated: None,
         },
     )
     .unwrap();

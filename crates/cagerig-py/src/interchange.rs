@@ -55,6 +55,7 @@ pub fn load_character(
         generate: auto_cage
             .map(|n| cage_options(n, None, cage_layout))
             .transpose()?,
+        generated: None,
     };
     let opened = py
         .detach(|| cagerig_formats::open_character(path, &options, &request))

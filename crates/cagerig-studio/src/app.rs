@@ -351,12 +351,20 @@ impl StudioApp {
     }
 
     /// Opens a character file whose bytes the page read (its file input, a dropped file or a
-    /// sample), named `name` (`.glb`, `.gltf`), asking about unsaved edits first.
-    pub fn open_character_bytes(&mut self, name: &str, bytes: Vec<u8>) {
+    /// sample), named `name` (`.glb`, `.gltf`), asking about unsaved edits first. A file without
+    /// a cage opens with `generated_cage` when the page made it beforehand
+    /// ([`crate::rig_open::generated_cage_of`], in a worker), else with one generated now.
+    pub fn open_character_bytes(
+        &mut self,
+        name: &str,
+        bytes: Vec<u8>,
+        generated_cage: Option<cagerig::cage_gen::GeneratedCage>,
+    ) {
         self.request_open(OpenRequest::Rig(RigSource::Memory {
             path: PathBuf::from(name),
             bytes: bytes.into(),
             auto_cage: None,
+            generated_cage: generated_cage.map(Arc::new),
         }));
     }
 

@@ -52,7 +52,9 @@ pub struct PendingOpen {
     request: OpenRequest,
     /// The session file of a session or recovery request, read before its rig.
     session: Option<SessionFile>,
-    started: Instant,
+    /// When the load started; for a deferred load, when it ran (the time the page's thread
+    /// spent on it).
+    started: Cell<Instant>,
     result: mpsc::Receiver<Result<OpenedRig, OpenError>>,
     /// The binding's last report: its stage, the work done and its total.
     progress: Arc<Mutex<Option<(BindStage, usize, usize)>>>,
@@ -99,7 +101,7 @@ impl PendingOpen {
             Ok(()) => Ok(Self {
                 request,
                 session,
-                started,
+                started: Cell::new(started),
                 result: receiver,
                 progress,
                 deferred: RefCell::new(deferred),
@@ -120,6 +122,7 @@ impl PendingOpen {
         if self.polls.get() >= 2
             && let Some(work) = self.deferred.borrow_mut().take()
         {
+            self.started.set(Instant::now());
             work();
         }
         match self.result.try_recv() {
@@ -147,7 +150,7 @@ impl PendingOpen {
 
     /// The request, its session file and when it started.
     pub fn into_parts(self) -> (OpenRequest, Option<SessionFile>, Instant) {
-        (self.request, self.session, self.started)
+        (self.request, self.session, self.started.get())
     }
 }
 
@@ -165,7 +168,7 @@ pub struct NoThread {
 pub fn opening_ui(ctx: &egui::Context, pending: &PendingOpen) -> bool {
     let (name, elapsed) = (
         pending.request.display_name(),
-        pending.started.elapsed().as_secs_f64(),
+        pending.started.get().elapsed().as_secs_f64(),
     );
     let mut cancel = false;
     egui::Window::new("Opening")

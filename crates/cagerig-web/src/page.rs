@@ -30,6 +30,10 @@ extern "C" {
     /// `window.cagerigPage.download(name, mime, bytes)`: offers a download.
     #[wasm_bindgen(catch, js_namespace = cagerigPage, js_name = download)]
     fn page_download(name: &str, mime: &str, bytes: &[u8]) -> Result<(), JsValue>;
+    /// `window.cagerigPage.openBytes(name, bytes)`: opens a character file the page holds,
+    /// through the page's worker (which generates its cage when it has none).
+    #[wasm_bindgen(js_namespace = cagerigPage, js_name = openBytes)]
+    fn page_open_bytes(name: &str, bytes: &[u8]);
 }
 
 /// [`PageFiles`] through `window.cagerigPage`.
@@ -55,7 +59,10 @@ impl PageFiles for Page {
             let read = file.bytes_async().await;
             // Runs between frames: the studio is free.
             let _ = match read {
-                Ok(bytes) => open_file(name, bytes),
+                Ok(bytes) => {
+                    page_open_bytes(&name, &bytes);
+                    Ok(())
+                }
                 Err(e) => with_app(|app| {
                     app.diagnostics
                         .log
@@ -134,10 +141,41 @@ pub async fn start(canvas_id: String) -> Result<(), JsValue> {
 /// dense coordinates; larger characters open in the native studio).
 const LARGEST_FILE: usize = 64 << 20;
 
-/// Opens a character file the page read (file input, drop, sample): `name` gives its format.
-/// A file over [`LARGEST_FILE`] is refused in the log.
+/// The size of the largest character file the page opens, in bytes.
 #[wasm_bindgen]
-pub fn open_file(name: String, bytes: Vec<u8>) -> Result<(), JsValue> {
+pub fn largest_file_bytes() -> usize {
+    LARGEST_FILE
+}
+
+/// The page's worker's part of opening a character file (`name` gives its format): the cage
+/// that opening it generates, as JSON (`None` when the file brings its cage), computed in the
+/// worker's own instance of this module so that the page's thread stays free. An error is the
+/// message opening the file gives (the page hands it to [`report_open_error`]).
+#[wasm_bindgen]
+pub fn generated_cage(name: String, bytes: Vec<u8>) -> Result<Option<String>, JsValue> {
+    let source = RigSource::Memory {
+        path: name.into(),
+        bytes: bytes.into(),
+        auto_cage: None,
+        generated_cage: None,
+    };
+    let generated = cagerig_studio::rig_open::generated_cage_of(&source)
+        .map_err(|e| JsValue::from_str(&e.to_string()))?;
+    generated
+        .map(|cage| serde_json::to_string(&cage))
+        .transpose()
+        .map_err(|e| JsValue::from_str(&format!("the generated cage as JSON: {e}")))
+}
+
+/// Opens a character file the page read (file input, drop, sample): `name` gives its format,
+/// `cage_json` is the worker's [`generated_cage`] for it (`None` when the file has its cage,
+/// or to generate it here). A file over [`LARGEST_FILE`] is refused in the log.
+#[wasm_bindgen]
+pub fn open_file(name: String, bytes: Vec<u8>, cage_json: Option<String>) -> Result<(), JsValue> {
+    let generated = cage_json
+        .map(|json| serde_json::from_str(&json))
+        .transpose()
+        .map_err(|e| JsValue::from_str(&format!("{name}: the worker's cage: {e}")))?;
     with_app(|app| {
         if bytes.len() > LARGEST_FILE {
             app.diagnostics.log.error(format!(
@@ -147,9 +185,16 @@ pub fn open_file(name: String, bytes: Vec<u8>) -> Result<(), JsValue> {
                 LARGEST_FILE >> 20
             ));
         } else {
-            app.open_character_bytes(&name, bytes);
+            app.open_character_bytes(&name, bytes, generated);
         }
     })
+}
+
+/// Logs why the page's worker could not open a character file, as the studio logs a file it
+/// cannot open (the open rig stays).
+#[wasm_bindgen]
+pub fn report_open_error(message: String) -> Result<(), JsValue> {
+    with_app(|app| app.diagnostics.log.error(format!("cannot open: {message}")))
 }
 
 /// Offers the rig as a `.glb` download (File ▸ Download glTF).

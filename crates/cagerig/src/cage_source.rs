@@ -25,6 +25,10 @@ pub struct CageRequest<'a> {
     pub given: Option<&'a Path>,
     /// Generate a cage with these options when none is given or found (`--auto-cage`).
     pub generate: Option<CageOptions>,
+    /// The cage that generating would give, made beforehand for this character and these
+    /// options (the web page generates it off the page's thread): used in place of generating.
+    /// Only with `generate`.
+    pub generated: Option<&'a GeneratedCage>,
 }
 
 /// Where the chosen cage came from.
@@ -114,6 +118,10 @@ pub fn choose_cage(
         });
     }
     match &request.generate {
+        Some(_) if let Some(made) = request.generated => Ok(ChosenCage {
+            cage: made.cage.clone(),
+            origin: CageOrigin::Generated(Box::new(made.clone())),
+        }),
         Some(asked) => {
             let generated =
                 generate_usable_cage(character, mesh, rig, asked, RigCheckDepth::WhenInDoubt)?;
@@ -330,6 +338,7 @@ mod tests {
         let request = CageRequest {
             given: None,
             generate: Some(cage_options_with_vertices(50)),
+            generated: None,
         };
         let chosen = choose_cage(
             Path::new("x.glb"),
@@ -366,6 +375,7 @@ mod tests {
         let request = CageRequest {
             given: Some(&path),
             generate: None,
+            generated: None,
         };
         let err = choose_cage(Path::new("x.obj"), &octahedron(1.0), None, None, &request)
             .unwrap_err()
@@ -383,6 +393,7 @@ mod tests {
         let request = CageRequest {
             given: Some(Path::new("/nonexistent/cage.obj")),
             generate: None,
+            generated: None,
         };
         let err = choose_cage(
             Path::new("x.glb"),

@@ -1,11 +1,12 @@
 //! Triangle meshes: the skin M and the cage C share this representation.
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use crate::error::RigError;
 
 /// A triangle mesh with f64 positions and u32 triangle indices (counter-clockwise = outward).
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct TriMesh {
     /// Vertex positions, `#V`.
     pub positions: Vec<DVec3>,

@@ -132,6 +132,7 @@ pub fn load_rig_files_with_weights(
             MissingCage::Fail => None,
             MissingCage::Generate(options) => Some(options),
         },
+        generated: None,
     };
     let rig = crate::cage_gen::CageRig {
         skeleton: &skeleton,

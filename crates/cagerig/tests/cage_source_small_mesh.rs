@@ -48,6 +48,7 @@ fn a_generated_cage_on_a_24_vertex_mesh_builds_a_rig() {
     let request = CageRequest {
         given: None,
         generate: Some(CageOptions::default()),
+        generated: None,
     };
     let chosen = choose_cage(Path::new("prism.obj"), &mesh, None, None, &request).unwrap();
     assert!(matches!(chosen.origin, CageOrigin::Generated(_)));

@@ -5,7 +5,7 @@
 use web_time::Instant;
 
 use glam::DVec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::bvh::{Aabb, TriangleBvh};
 use super::distance_grid::{SampleGrid, fill_from_outside};
@@ -77,7 +77,7 @@ pub struct CageRig<'a> {
 }
 
 /// Figures of one generation.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GenerationStats {
     /// Offset of the accepted surface, × diagonal.
     pub offset_fraction: f64,
@@ -114,7 +114,7 @@ pub struct GenerationStats {
 }
 
 /// Seconds per stage of [`generate_cage`] (summed over the offsets tried).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct StageSeconds {
     /// Welding, pieces and the mesh BVH.
     pub setup: f64,
@@ -128,8 +128,9 @@ pub struct StageSeconds {
     pub validate: f64,
 }
 
-/// A cage that passed [`validate_cage_geometry`], its report and how it was made.
-#[derive(Debug, Clone, PartialEq)]
+/// A cage that passed [`validate_cage_geometry`], its report and how it was made. It goes
+/// through serde whole (the web page generates a cage in a worker and hands it to the page).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GeneratedCage {
     /// The cage C.
     pub cage: TriMesh,

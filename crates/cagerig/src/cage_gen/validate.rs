@@ -16,7 +16,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 
 use super::bvh::{Aabb, TriangleBvh};
 use super::geometry::{Triangle, cage_triangles_conflict};
@@ -43,11 +43,46 @@ pub struct CageRequirements {
     pub target_faces: Option<usize>,
 }
 
+/// The name of every check a [`CageReport`] can hold: the validator's, and the rig's
+/// ([`crate::cage_source::RIG_CHECK`]).
+pub const CHECK_NAMES: [&str; 10] = [
+    "closed_manifold",
+    "no_degenerate_triangle",
+    "outward",
+    "one_piece",
+    "no_self_intersection",
+    "mesh_inside",
+    "margin",
+    "vertex_count",
+    "coordinates",
+    crate::cage_source::RIG_CHECK,
+];
+
+/// A check's name, one of [`CHECK_NAMES`] (an alias, so that serde does not borrow it from the
+/// input it reads).
+pub type CheckName = &'static str;
+
+/// A check's name read back: the [`CHECK_NAMES`] entry it spells.
+fn check_name<'de, D: Deserializer<'de>>(deserializer: D) -> Result<&'static str, D::Error> {
+    let name = String::deserialize(deserializer)?;
+    CHECK_NAMES
+        .iter()
+        .find(|known| **known == name)
+        .copied()
+        .ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "unknown cage check {name:?} (expected one of {})",
+                CHECK_NAMES.join(", ")
+            ))
+        })
+}
+
 /// One named check.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Check {
-    /// Name of the check (e.g. `closed_manifold`, see the module docs).
-    pub name: &'static str,
+    /// Name of the check (e.g. `closed_manifold`, see the module docs): one of [`CHECK_NAMES`].
+    #[serde(deserialize_with = "check_name")]
+    pub name: CheckName,
     /// Whether the cage passed it.
     pub passed: bool,
     /// What was measured or found (the first offender when it failed).
@@ -55,7 +90,7 @@ pub struct Check {
 }
 
 /// Results of [`validate_cage_geometry`] (and [`check_coordinates`] when run).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CageReport {
     /// Every check run, in order.
     pub checks: Vec<Check>,
