@@ -145,6 +145,27 @@ def wait(what, check, timeout=120.0, step=0.1):
         time.sleep(step)
 
 
+def without_skin(glb):
+    """A .glb's bytes with its skins, animations and the vertex attributes that bind a mesh to
+    a skeleton removed (the JSON chunk rewritten, the binary chunk kept)."""
+    import struct
+    length, = struct.unpack_from("<I", glb, 12)
+    doc = json.loads(glb[20:20 + length])
+    doc.pop("skins", None)
+    doc.pop("animations", None)
+    for node in doc.get("nodes", []):
+        node.pop("skin", None)
+    for mesh in doc.get("meshes", []):
+        for primitive in mesh["primitives"]:
+            for attribute in ("JOINTS_0", "WEIGHTS_0"):
+                primitive["attributes"].pop(attribute, None)
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    rest = glb[20 + length:]
+    total = 12 + 8 + len(text) + len(rest)
+    return struct.pack("<III", 0x46546C67, 2, total) + struct.pack("<II", len(text), 0x4E4F534A) + text + rest
+
+
 def obj_vertices(path):
     return [[float(x) for x in line.split()[1:4]] for line in path.read_text().splitlines()
             if line.startswith("v ")]
@@ -377,6 +398,24 @@ def main():
         info = subprocess.run([str(args.cli), "info", str(glb)], capture_output=True, text=True)
         check("the downloaded .glb opens in the native library", info.returncode == 0 and "24 joints" in info.stdout,
               f"{glb.name}: {glb.stat().st_size} bytes; {info.stderr.strip()[:200]}")
+
+        # 9b. A skinless character dropped on the page: the Fox with its skin, skeleton and
+        # animations taken out. It opens as a mesh to rig, in a cage the worker generated.
+        skinless = without_skin(fox.read_bytes())
+        driver.js_async("const done = arguments[arguments.length - 1];"
+                        "const transfer = new DataTransfer();"
+                        "transfer.items.add(new File([new Uint8Array(arguments[0])], 'skinless-fox.glb'));"
+                        "window.dispatchEvent(new DragEvent('drop', {dataTransfer: transfer, cancelable: true}));"
+                        "done();", list(skinless))
+        dropped = wait("the dropped skinless Fox to open",
+                       lambda: (s := status()) and s["name"] == "skinless-fox.glb" and not s["opening"] and s, 120)
+        notes = [l["text"] for l in dropped["log"]]
+        opened_line = [n for n in notes if n.startswith("opened skinless-fox.glb")][-1]
+        check("a skinless .glb dropped on the page opens as a mesh to rig, in a generated cage",
+              " 0 joints" in opened_line and dropped["cage_vertices"] > 0
+              and any("no skeleton: build one" in n for n in notes)
+              and any("generated one" in n for n in notes),
+              f"{opened_line}; {[n for n in notes if 'skeleton' in n][-1:]}")
 
         # 10. The Arm sample (its cage is in the file): the binding's time on the page's thread.
         driver.js("window.cagerigPage.fetchSample('Arm.glb')")
