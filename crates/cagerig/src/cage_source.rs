@@ -225,8 +225,9 @@ pub fn generated_cage_note(generated: &GeneratedCage) -> Warning {
     }
 }
 
-/// Name of the validator's check of what a rig needs of a cage ([`rig_check`]).
-pub const RIG_CHECK: &str = "rig";
+/// Name of the validator's check of what a rig needs of a cage ([`rig_check`]); defined with
+/// the validator's other names ([`crate::cage_gen::CHECK_NAMES`]).
+pub use crate::cage_gen::validate::RIG_CHECK;
 
 /// How much [`rig_check`] computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -54,7 +54,7 @@ pub use offset_search::{
 };
 pub use skeleton_guide::CageGuide;
 pub use validate::{
-    CageReport, CageRequirements, Check, check_coordinates, validate_cage_geometry,
+    CHECK_NAMES, CageReport, CageRequirements, Check, check_coordinates, validate_cage_geometry,
 };
 
 /// Default target vertex count of `cagerig cage`.

@@ -43,8 +43,12 @@ pub struct CageRequirements {
     pub target_faces: Option<usize>,
 }
 
+/// Name of the check of what a rig needs of a cage (`cage_source::rig_check`, which adds it to
+/// the validator's report).
+pub const RIG_CHECK: &str = "rig";
+
 /// The name of every check a [`CageReport`] can hold: the validator's, and the rig's
-/// ([`crate::cage_source::RIG_CHECK`]).
+/// ([`RIG_CHECK`]).
 pub const CHECK_NAMES: [&str; 10] = [
     "closed_manifold",
     "no_degenerate_triangle",
@@ -55,7 +59,7 @@ pub const CHECK_NAMES: [&str; 10] = [
     "margin",
     "vertex_count",
     "coordinates",
-    crate::cage_source::RIG_CHECK,
+    RIG_CHECK,
 ];
 
 /// A check's name, one of [`CHECK_NAMES`] (an alias, so that serde does not borrow it from the
