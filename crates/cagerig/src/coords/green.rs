@@ -62,7 +62,8 @@ pub fn outward_triangles(cage: &TriMesh) -> Vec<[u32; 3]> {
 /// blocks of points, [`LANES`](super::mvc_batch::LANES) points at a time (SIMD across points,
 /// [`super::green_batch`]; the points on or within 1e-12 (relative) of a face's plane or a cage
 /// vertex go through the per-point closed forms of [`super::green_triangle`]). `progress` (if any) is called from worker threads with the number of
-/// points finished so far.
+/// points finished so far, in whatever order the threads get there; the last call is
+/// `#points`, from the calling thread once every block is done.
 ///
 /// Errors: an empty cage, a non-finite point, or coordinates too large to store.
 pub fn compute_green_coords(
@@ -109,12 +110,17 @@ pub fn compute_green_coords(
                     first_non_finite.fetch_min(start + row, Ordering::Relaxed);
                 }
                 let finished = done.fetch_add(count, Ordering::Relaxed) + count;
-                if let Some(report) = progress {
+                if let Some(report) = progress
+                    && finished < num_points
+                {
                     report(finished);
                 }
             },
         )
     };
+    if let Some(report) = progress {
+        report(num_points);
+    }
     match first_non_finite.into_inner() {
         usize::MAX => Ok(GreenCoords {
             vertex: CageCoords::from_checked_matrix(vertex),
@@ -141,6 +147,39 @@ pub fn face_normals(positions: &[DVec3], triangles: &[[u32; 3]], out: &mut [DVec
 pub(crate) mod tests {
     use super::*;
     use crate::test_random::uniform;
+
+    /// The progress of the coordinates ends on the whole count, whatever order the worker
+    /// threads report in (the last report could be an earlier count from a slower thread, which
+    /// made a progress bar stop short, and the Blender add-on's test fail now and then).
+    #[test]
+    fn the_last_progress_report_is_every_point() {
+        let cage = test_cage();
+        let points: Vec<DVec3> = (0..8192)
+            .map(|i| {
+                let t = i as f64 / 8192.0;
+                DVec3::new(
+                    0.3 * (t * 17.0).sin(),
+                    0.3 * (t * 29.0).cos(),
+                    0.6 * t - 0.3,
+                )
+            })
+            .collect();
+        for _ in 0..20 {
+            let reports = std::sync::Mutex::new(Vec::new());
+            // An earlier count reported slowly: the report of the whole would overtake it.
+            let record = |done: usize| {
+                if done < points.len() {
+                    std::thread::sleep(std::time::Duration::from_millis(1));
+                }
+                reports.lock().unwrap().push(done);
+            };
+            compute_green_coords(&cage, &points, Some(&record)).unwrap();
+            let reports = reports.into_inner().unwrap();
+            assert_eq!(reports.last(), Some(&points.len()), "{reports:?}");
+            assert!(reports.iter().all(|&d| d <= points.len()));
+            assert_eq!(reports.iter().filter(|&&d| d == points.len()).count(), 1);
+        }
+    }
 
     /// An octahedron-like closed cage around the origin (outward), slightly irregular.
     pub(crate) fn test_cage() -> TriMesh {
