@@ -360,7 +360,12 @@ fn open_interchange(
     generated: Option<&GeneratedCage>,
 ) -> Result<(Imported, bool, Option<Box<GeneratedCage>>), OpenError> {
     let vertices = auto_cage.unwrap_or(cagerig::cage_gen::DEFAULT_VERTICES);
-    match import_interchange(input, cage, skin, Some(vertices), generated) {
+    let request = CageRequest {
+        given: cage,
+        generate: Some(cage_options_with_vertices(vertices)),
+        generated,
+    };
+    match import_interchange(input, skin, &request) {
         Err(OpenError::Import(cagerig_formats::FormatError::NoSkin { .. })) => {
             let (parts, warnings, files, made) =
                 crate::unrigged::open_unskinned_character(input, cage, auto_cage, generated)?;
@@ -373,29 +378,24 @@ fn open_interchange(
     }
 }
 
+/// A skinned glTF / FBX character with the cage `request` chooses, and the cage generated for
+/// it.
 fn import_interchange(
     input: CharacterInput<'_>,
-    cage: Option<&Path>,
     skin: Option<&str>,
-    auto_cage: Option<usize>,
-    generated: Option<&GeneratedCage>,
+    request: &CageRequest<'_>,
 ) -> Result<(Imported, Option<Box<GeneratedCage>>), OpenError> {
     let options = ImportOptions {
         skin: skin.map(str::to_owned),
         ..ImportOptions::default()
     };
-    let request = CageRequest {
-        given: cage,
-        generate: auto_cage.map(cage_options_with_vertices),
-        generated,
-    };
     let opened =
-        cagerig_formats::open_character_input(input, &options, &request).map_err(|e| match e {
+        cagerig_formats::open_character_input(input, &options, request).map_err(|e| match e {
             OpenCharacterError::Import(e) => OpenError::from(e),
             OpenCharacterError::Cage(e) => OpenError::from(e),
         })?;
     let mut files = vec![("character".to_string(), input.path().to_path_buf())];
-    if let Some(c) = cage {
+    if let Some(c) = request.given {
         files.push(("cage".into(), c.to_path_buf()));
     }
     let mut warnings = opened.warnings;

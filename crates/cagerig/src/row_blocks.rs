@@ -8,8 +8,49 @@
     reason = "matrices filled by disjoint row blocks through raw pointers, without a zero fill"
 )]
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use faer::Mat;
 use rayon::prelude::*;
+
+/// Progress of `total` rows filled by blocks on worker threads, for a caller's `report(done)`.
+/// Each block adds its rows ([`Self::block_done`]) and reports the running count while it is
+/// below the total, in whatever order the threads get there; [`Self::finish`], on the calling
+/// thread once every block is done, reports the total. So the last report is the whole, however
+/// the threads interleave.
+pub(crate) struct BlockProgress<'a> {
+    report: Option<&'a (dyn Fn(usize) + Sync)>,
+    done: AtomicUsize,
+    total: usize,
+}
+
+impl<'a> BlockProgress<'a> {
+    /// No rows done yet of `total`.
+    pub(crate) fn new(report: Option<&'a (dyn Fn(usize) + Sync)>, total: usize) -> Self {
+        Self {
+            report,
+            done: AtomicUsize::new(0),
+            total,
+        }
+    }
+
+    /// A block of `rows` rows is done (from any thread).
+    pub(crate) fn block_done(&self, rows: usize) {
+        let finished = self.done.fetch_add(rows, Ordering::Relaxed) + rows;
+        if let Some(report) = self.report
+            && finished < self.total
+        {
+            report(finished);
+        }
+    }
+
+    /// Every block is done: reports the total.
+    pub(crate) fn finish(self) {
+        if let Some(report) = self.report {
+            report(self.total);
+        }
+    }
+}
 
 /// Fills `N` column-major matrices of `num_rows` rows, matrix i with `num_cols[i]` columns, by
 /// disjoint blocks of `block_rows` rows on the worker threads, without zero-filling them first:

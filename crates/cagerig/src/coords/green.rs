@@ -26,7 +26,7 @@ use super::green_triangle::GreenTriangle;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::mesh::TriMesh;
-use crate::row_blocks::fill_by_row_blocks;
+use crate::row_blocks::{BlockProgress, fill_by_row_blocks};
 
 /// Points per parallel task.
 const POINT_BLOCK: usize = 256;
@@ -89,7 +89,7 @@ pub fn compute_green_coords(
     // φ and ψ are written straight into their column-major matrices by row blocks, without
     // zero-filling them first (every entry is written), so the page faults of first touch are
     // spread over the workers.
-    let done = AtomicUsize::new(0);
+    let blocks_done = BlockProgress::new(progress, num_points);
     let first_non_finite = AtomicUsize::new(usize::MAX);
     // SAFETY: `evaluate_green_rows` writes all rows × columns of both blocks.
     let [vertex, face] = unsafe {
@@ -109,18 +109,11 @@ pub fn compute_green_coords(
                 ) {
                     first_non_finite.fetch_min(start + row, Ordering::Relaxed);
                 }
-                let finished = done.fetch_add(count, Ordering::Relaxed) + count;
-                if let Some(report) = progress
-                    && finished < num_points
-                {
-                    report(finished);
-                }
+                blocks_done.block_done(count);
             },
         )
     };
-    if let Some(report) = progress {
-        report(num_points);
-    }
+    blocks_done.finish();
     match first_non_finite.into_inner() {
         usize::MAX => Ok(GreenCoords {
             vertex: CageCoords::from_checked_matrix(vertex),
@@ -147,39 +140,6 @@ pub fn face_normals(positions: &[DVec3], triangles: &[[u32; 3]], out: &mut [DVec
 pub(crate) mod tests {
     use super::*;
     use crate::test_random::uniform;
-
-    /// The progress of the coordinates ends on the whole count, whatever order the worker
-    /// threads report in (the last report could be an earlier count from a slower thread, which
-    /// made a progress bar stop short, and the Blender add-on's test fail now and then).
-    #[test]
-    fn the_last_progress_report_is_every_point() {
-        let cage = test_cage();
-        let points: Vec<DVec3> = (0..8192)
-            .map(|i| {
-                let t = i as f64 / 8192.0;
-                DVec3::new(
-                    0.3 * (t * 17.0).sin(),
-                    0.3 * (t * 29.0).cos(),
-                    0.6 * t - 0.3,
-                )
-            })
-            .collect();
-        for _ in 0..20 {
-            let reports = std::sync::Mutex::new(Vec::new());
-            // An earlier count reported slowly: the report of the whole would overtake it.
-            let record = |done: usize| {
-                if done < points.len() {
-                    std::thread::sleep(std::time::Duration::from_millis(1));
-                }
-                reports.lock().unwrap().push(done);
-            };
-            compute_green_coords(&cage, &points, Some(&record)).unwrap();
-            let reports = reports.into_inner().unwrap();
-            assert_eq!(reports.last(), Some(&points.len()), "{reports:?}");
-            assert!(reports.iter().all(|&d| d <= points.len()));
-            assert_eq!(reports.iter().filter(|&&d| d == points.len()).count(), 1);
-        }
-    }
 
     /// An octahedron-like closed cage around the origin (outward), slightly irregular.
     pub(crate) fn test_cage() -> TriMesh {

@@ -15,6 +15,8 @@ pub mod mvc;
 mod mvc_batch;
 mod mvc_lanes;
 mod mvc_triangle;
+#[cfg(test)]
+mod progress_tests;
 pub mod stretched_normals;
 
 /// The checks every cage-coordinates computation makes first: a cage with triangles, finite

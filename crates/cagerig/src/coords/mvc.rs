@@ -38,7 +38,7 @@ pub(crate) use super::mvc_triangle::{TriangleWeights, triangle_weights};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::mesh::TriMesh;
-use crate::row_blocks::fill_by_row_blocks;
+use crate::row_blocks::{BlockProgress, fill_by_row_blocks};
 
 /// Dimensionless tolerance for the degenerate cases (same value as Ju et al.'s reference code).
 pub(crate) const EPS: f64 = 1e-8;
@@ -255,7 +255,7 @@ pub fn compute_cage_coords(
     let (num_points, num_cage) = (points.len(), cage.num_vertices());
     // Φ is 8 · #V · #C bytes (62 MB at N = 3): not zero-filled first; the blocks below write every
     // entry, so the page faults of first touch are spread over the worker threads.
-    let done = AtomicUsize::new(0);
+    let blocks_done = BlockProgress::new(progress, num_points);
     let first_non_finite = AtomicUsize::new(usize::MAX);
     // SAFETY: `evaluate_rows` writes all rows × columns of its block.
     let [matrix] = unsafe {
@@ -271,18 +271,11 @@ pub fn compute_cage_coords(
                 {
                     first_non_finite.fetch_min(start + row, Ordering::Relaxed);
                 }
-                let finished = done.fetch_add(count, Ordering::Relaxed) + count;
-                if let Some(report) = progress
-                    && finished < num_points
-                {
-                    report(finished);
-                }
+                blocks_done.block_done(count);
             },
         )
     };
-    if let Some(report) = progress {
-        report(num_points);
-    }
+    blocks_done.finish();
     match first_non_finite.into_inner() {
         usize::MAX => Ok(CageCoords::from_checked_matrix(matrix)),
         index => Err(RigError::NonFinite {
@@ -398,39 +391,6 @@ pub(crate) mod tests {
         let mut b = vec![0.0; pos.len()];
         ev.evaluate(x, &mut s, &mut b);
         (a, b)
-    }
-
-    /// The progress of the coordinates ends on the whole count, whatever order the worker
-    /// threads report in (the last report could be an earlier count from a slower thread, which
-    /// made a progress bar stop short, and the Blender add-on's test fail now and then).
-    #[test]
-    fn the_last_progress_report_is_every_point() {
-        let cage = TriMesh::cuboid(DVec3::splat(-1.0), DVec3::ONE).unwrap();
-        let points: Vec<DVec3> = (0..8192)
-            .map(|i| {
-                let t = i as f64 / 8192.0;
-                DVec3::new(
-                    0.3 * (t * 17.0).sin(),
-                    0.3 * (t * 29.0).cos(),
-                    0.6 * t - 0.3,
-                )
-            })
-            .collect();
-        for _ in 0..20 {
-            let reports = std::sync::Mutex::new(Vec::new());
-            // An earlier count reported slowly: the report of the whole would overtake it.
-            let record = |done: usize| {
-                if done < points.len() {
-                    std::thread::sleep(std::time::Duration::from_millis(1));
-                }
-                reports.lock().unwrap().push(done);
-            };
-            compute_cage_coords(&cage, &points, Some(&record)).unwrap();
-            let reports = reports.into_inner().unwrap();
-            assert_eq!(reports.last(), Some(&points.len()), "{reports:?}");
-            assert!(reports.iter().all(|&d| d <= points.len()));
-            assert_eq!(reports.iter().filter(|&&d| d == points.len()).count(), 1);
-        }
     }
 
     #[test]
