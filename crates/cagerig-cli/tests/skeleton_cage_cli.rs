@@ -74,18 +74,22 @@ fn auto_cage_with(
     )
 }
 
-/// The characters of the figures: file, animation, last sample time.
-const CHARACTERS: [(&str, &str, f64); 4] = [
-    ("fox/Fox.glb", "Walk", 0.7),
-    ("fox/Fox.glb", "Run", 1.1),
-    ("gltf/CesiumMan/CesiumMan.glb", "0", 2.0),
-    ("gltf/RiggedFigure/RiggedFigure.gltf", "0", 1.2),
-];
+/// The characters of the figures: file, animation, last sample time. RiggedFigure's file
+/// animates one joint per animation (19 of them), so each is sampled.
+fn characters() -> Vec<(&'static str, String, f64)> {
+    let mut out = vec![
+        ("fox/Fox.glb", "Walk".to_owned(), 0.7),
+        ("fox/Fox.glb", "Run".to_owned(), 1.1),
+        ("gltf/CesiumMan/CesiumMan.glb", "0".to_owned(), 2.0),
+    ];
+    out.extend((0..19).map(|a| ("gltf/RiggedFigure/RiggedFigure.gltf", a.to_string(), 1.2)));
+    out
+}
 
 #[test]
 fn the_default_automatic_cages_stay_on_the_body() {
-    for (file, animation, last) in CHARACTERS {
-        let (spread, deviation, flipped) = auto_cage(file, animation, last, "skeleton");
+    for (file, animation, last) in characters() {
+        let (spread, deviation, flipped) = auto_cage(file, &animation, last, "skeleton");
         let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
         assert!(spread <= 1.5, "{what}");
         assert!(deviation <= 0.06, "{what}");
@@ -100,9 +104,9 @@ fn the_default_automatic_cages_stay_on_the_body() {
 /// (0.061).
 #[test]
 fn the_default_automatic_cages_of_green_rigs_stay_near_the_body() {
-    for (file, animation, last) in CHARACTERS {
+    for (file, animation, last) in characters() {
         let (spread, deviation, flipped) =
-            auto_cage_with(file, animation, last, "skeleton", &["--coords", "green"]);
+            auto_cage_with(file, &animation, last, "skeleton", &["--coords", "green"]);
         let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
         let cesium_man = file.contains("CesiumMan");
         assert!(spread <= if cesium_man { 1.65 } else { 1.5 }, "{what}");
@@ -115,7 +119,7 @@ fn the_default_automatic_cages_of_green_rigs_stay_near_the_body() {
 fn cesium_mans_webbed_offset_cage_cannot_follow_both_legs() {
     let (offset, _, _) = auto_cage("gltf/CesiumMan/CesiumMan.glb", "0", 2.0, "offset");
     let (skeleton, _, _) = auto_cage("gltf/CesiumMan/CesiumMan.glb", "0", 2.0, "skeleton");
-    assert!(offset > 3.0, "{offset}");
+    assert!(offset > 2.5, "{offset}");
     assert!(skeleton < 0.5 * offset, "{skeleton} vs {offset}");
 }
 

@@ -196,11 +196,11 @@ fn the_arms_joint_bends_keep_the_handle_on_the_body() {
 
 /// The Arm with its generated 58-vertex cage (the skeleton layout, as `cagerig cage --vertices
 /// 58`): every joint turned about x, y and z to 15°, 30°, 45°, 60° and 90°, each angle from rest
-/// and as a continuation of the previous one. Up to 45° the handle stays near the body (spread
-/// ≤ 1.5) for every joint. Beyond, the metacarpals turned to 60° and 90° carry a finger out of
-/// the palm that the coarse cage wraps in one part with its neighbours: spread 2.68 at worst
-/// (metacarpal3.R at 90° about x; every other joint stays ≤ 1.5). A grab after each joint's
-/// sweep lands exactly and leaves the other cage vertices still.
+/// and as a continuation of the previous one. The handle stays near the body (spread ≤ 1.5) for
+/// every joint and angle: beyond 45° the metacarpals carry a finger out of the palm that the
+/// coarse cage wraps in one part with its neighbours, and the reach limit keeps the cage vertex
+/// the finger's rows pull on within reach of its skin (2.68 without it). A grab after each
+/// joint's sweep lands exactly and leaves the other cage vertices still.
 #[test]
 fn the_arms_single_joint_sweep_keeps_a_generated_handle_on_the_body() {
     use cagerig::cage_gen::{CageOptions, CageRig, CageTarget, generate_rig_cage};
@@ -276,5 +276,5 @@ fn the_arms_single_joint_sweep_keeps_a_generated_handle_on_the_body() {
     let [(up_to_45, at), (beyond, beyond_at)] = worst;
     println!("worst spread up to 45°: {up_to_45:.3} ({at}); beyond: {beyond:.3} ({beyond_at})");
     assert!(up_to_45 <= 1.5, "spread {up_to_45:.3}: {at}");
-    assert!(beyond <= 2.75, "spread {beyond:.3}: {beyond_at}");
+    assert!(beyond <= 1.5, "spread {beyond:.3}: {beyond_at}");
 }

@@ -63,6 +63,7 @@ use glam::{DAffine3, DMat3, DVec3};
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
+use crate::sync::reach_limit::{PriorEntry, ReachLimit, ReachScratch};
 
 /// λ₀ in λ = λ₀ · tr(Φ̃ᵀΦ̃) / tr(R): the prior weighs three times as much as the rows in
 /// total (1 leaves the Fox's Run at spread 1.54, 3 at 1.47; `docs/method.md`).
@@ -204,6 +205,12 @@ pub struct CagePrior {
     /// Scratch: the translations of T̂_j and the joints' scales |det L_j|^⅓, `#J` each.
     posed_translations: Vec<DVec3>,
     joint_scales: Vec<f64>,
+    /// The reach limit ([`crate::sync::reach_limit`]), its scratch, and its factors s (`#C`)
+    /// for the linear parts `reach_linear` (`#J`; empty before the first pose).
+    reach_limit: ReachLimit,
+    reach_scratch: ReachScratch,
+    reach_factors: Vec<f64>,
+    reach_linear: Vec<DMat3>,
 }
 
 /// K and the prior of a regularised fit.
@@ -237,18 +244,13 @@ impl CagePrior {
         if self.moments_cage == rest_cage {
             return;
         }
-        let nc = rest_cage.len();
-        let dot = |row: &[f64]| {
-            row.iter()
-                .zip(rest_cage)
-                .fold(DVec3::ZERO, |acc, (&w, c)| acc + w * *c)
-        };
-        for (k, x) in self.rest_centroids.iter_mut().enumerate() {
-            *x = dot(&self.centroid_coords[k * nc..(k + 1) * nc]);
-        }
-        for (m, entry) in self.joint_moments.iter_mut().zip(&self.joints) {
-            *m = dot(&entry.coords);
-        }
+        cage_moments(
+            &self.centroid_coords,
+            &self.joints,
+            rest_cage,
+            &mut self.rest_centroids,
+            &mut self.joint_moments,
+        );
         self.moments_cage.copy_from_slice(rest_cage);
     }
 
@@ -317,6 +319,86 @@ impl CagePrior {
         &self.carried
     }
 
+    /// The reach limit of the fit `posed_cage` (`#C`, C'_fit = K M̃' + Q P for the pose of the
+    /// last [`Self::carry`], whose skinning transforms are `posed_from_rest`, `#J`): every
+    /// vertex becomes s_k C'_fit,k + (1 − s_k) P_k ([`crate::sync::reach_limit`]). The factors
+    /// are computed once per pose. No allocation.
+    pub fn limit_reach(&mut self, posed_from_rest: &[DAffine3], posed_cage: &mut [DVec3]) {
+        let same_pose = self.reach_linear.len() == posed_from_rest.len()
+            && self
+                .reach_linear
+                .iter()
+                .zip(posed_from_rest)
+                .all(|(a, b)| *a == b.matrix3);
+        if !same_pose {
+            let mut factors = std::mem::take(&mut self.reach_factors);
+            let mut scratch = std::mem::take(&mut self.reach_scratch);
+            self.reach_limit.factors(
+                |j| posed_from_rest[j].matrix3,
+                &self.rotations,
+                &self.posed_translations,
+                self.prior_entries(),
+                &self.cage_from_prior,
+                &mut scratch,
+                &mut factors,
+            );
+            self.reach_factors = factors;
+            self.reach_scratch = scratch;
+            self.reach_linear.clear();
+            self.reach_linear
+                .extend(posed_from_rest.iter().map(|t| t.matrix3));
+        }
+        for ((c, p), &s) in posed_cage
+            .iter_mut()
+            .zip(&self.carried)
+            .zip(&self.reach_factors)
+        {
+            if s < 1.0 {
+                *c = s * *c + (1.0 - s) * *p;
+            }
+        }
+    }
+
+    /// The reach limit's factors s (`#C`) for the joints' linear parts `joint_linear` (`#J`):
+    /// what [`Self::limit_reach`] applies in that pose (CageRev's rows of Eq. 19).
+    pub fn reach_factors(&self, joint_linear: &[DMat3]) -> Vec<f64> {
+        let nc = self.carried.len();
+        let mut rotations = vec![DMat3::ZERO; nc];
+        let mut translations = vec![DVec3::ZERO; self.binding_joints.len()];
+        let mut scales = vec![0.0; self.binding_joints.len()];
+        self.blend_rotations(
+            |j| joint_linear[j],
+            &mut translations,
+            &mut scales,
+            &mut rotations,
+        );
+        let mut factors = vec![1.0; nc];
+        self.reach_limit.factors(
+            |j| joint_linear[j],
+            &rotations,
+            &translations,
+            self.prior_entries(),
+            &self.cage_from_prior,
+            &mut self.reach_limit.scratch(),
+            &mut factors,
+        );
+        factors
+    }
+
+    /// The reach limit's ρ: the farthest a rest cage vertex is from its skin neighbourhood.
+    pub fn reach(&self) -> f64 {
+        self.reach_limit.reach()
+    }
+
+    /// The (k, j, a_kj) entries, for the reach limit's P̂.
+    fn prior_entries(&self) -> impl Iterator<Item = PriorEntry> + '_ {
+        self.joints.iter().map(|e| PriorEntry {
+            cage_vertex: e.cage_vertex,
+            joint: e.joint,
+            share: e.share,
+        })
+    }
+
     /// ∂P/∂C for the pose with joint linear parts `joint_linear` (`#J`) and the translation
     /// derivatives `translation_jacobian` (`∂t_j/∂c_m`, `#J × #C` blocks, row-major by joint;
     /// zero when the joints do not follow the cage), into `jacobian` (`#C × 9#C`, column-major
@@ -367,6 +449,29 @@ impl CagePrior {
                 }
             }
         }
+    }
+}
+
+/// x̄_k = ξ_k C (`centroids`, `#C`) and β_kj C (`joint_moments`, one per entry of `joints`)
+/// for the cage `cage` (`#C`), ξ `centroid_coords` (`#C × #C` row-major). No allocation.
+fn cage_moments(
+    centroid_coords: &[f64],
+    joints: &[NeighbourhoodJoint],
+    cage: &[DVec3],
+    centroids: &mut [DVec3],
+    joint_moments: &mut [DVec3],
+) {
+    let nc = cage.len();
+    let dot = |row: &[f64]| {
+        row.iter()
+            .zip(cage)
+            .fold(DVec3::ZERO, |acc, (&w, c)| acc + w * *c)
+    };
+    for (k, x) in centroids.iter_mut().enumerate() {
+        *x = dot(&centroid_coords[k * nc..(k + 1) * nc]);
+    }
+    for (m, entry) in joint_moments.iter_mut().zip(joints) {
+        *m = dot(&entry.coords);
     }
 }
 
@@ -570,6 +675,7 @@ pub(crate) fn regularised_maps(
     }
     let row_coords = cage_coords.select_rows(rows);
     let Neighbourhoods {
+        near,
         joints,
         centroid_coords,
         binding_centroids,
@@ -610,14 +716,33 @@ pub(crate) fn regularised_maps(
     }
     crate::vector_registers::clear_upper_halves();
     let num_entries = joints.len();
-    let mut prior = CagePrior {
+    let mut rest_centroids = vec![DVec3::ZERO; nc];
+    let mut joint_moments = vec![DVec3::ZERO; num_entries];
+    cage_moments(
+        &centroid_coords,
+        &joints,
+        rest_cage,
+        &mut rest_centroids,
+        &mut joint_moments,
+    );
+    let reach_limit = ReachLimit::new(
+        rest_cage,
+        rest_mesh,
+        skin_weights,
+        rows,
+        &cage_from_rows,
+        &near,
+        rest_centroids.clone(),
+        joint_moments.clone(),
+    );
+    let prior = CagePrior {
         joints,
         centroid_coords,
         cage_from_prior,
         strength,
-        moments_cage: vec![DVec3::NAN; nc],
-        rest_centroids: vec![DVec3::ZERO; nc],
-        joint_moments: vec![DVec3::ZERO; num_entries],
+        moments_cage: rest_cage.to_vec(),
+        rest_centroids,
+        joint_moments,
         carried: vec![DVec3::ZERO; nc],
         rotations: vec![DMat3::IDENTITY; nc],
         posed_translations: vec![DVec3::ZERO; binding_joints.len()],
@@ -625,8 +750,11 @@ pub(crate) fn regularised_maps(
         binding_joints: binding_joints.clone(),
         binding_centroids,
         rotation_blend,
+        reach_scratch: reach_limit.scratch(),
+        reach_limit,
+        reach_factors: vec![1.0; nc],
+        reach_linear: Vec::new(),
     };
-    prior.update_moments(rest_cage);
     Ok(RegularisedMaps {
         cage_from_rows,
         prior,
@@ -680,6 +808,8 @@ pub(crate) fn laplacian_regulariser(
 
 /// What [`neighbourhoods`] finds.
 struct Neighbourhoods {
+    /// N_k, `#C` lists of rest-skin vertices.
+    near: Vec<Vec<usize>>,
     joints: Vec<NeighbourhoodJoint>,
     /// ξ, `#C × #C` row-major.
     centroid_coords: Vec<f64>,
@@ -786,6 +916,7 @@ fn neighbourhoods(
         };
     }
     Ok(Neighbourhoods {
+        near,
         joints,
         centroid_coords,
         binding_centroids,

@@ -27,7 +27,8 @@
 //!
 //! **Regularised CageUp.** With C' = K M̃' + Q P(C, S') ([`crate::sync::cage_prior`]) the system
 //! is `(K G_rows + Q G_prior) ∂C = ∂C'`, with G_rows the matrix above and G_prior the Jacobian
-//! of the prior, also linear for a fixed pose; it is factorised densely.
+//! of the prior, also linear for a fixed pose; it is factorised densely. Its reach limit
+//! ([`crate::sync::reach_limit`]) blends row k with (G_prior)_k by the pose's factor s_k.
 
 use faer::Mat;
 use glam::{DMat3, DVec3};
@@ -436,6 +437,14 @@ impl CageReverser {
                     1.0,
                     faer::Par::Seq,
                 );
+                // The reach limit: row k is s_k [K Q]_k [G; ∂P/∂C] + (1 − s_k) ∂P_k/∂C.
+                for (k, s) in prior.reach_factors(joint_rotations).into_iter().enumerate() {
+                    if s < 1.0 {
+                        for c in 0..9 * nc {
+                            pg[(k, c)] = s * pg[(k, c)] + (1.0 - s) * g[(nr + k, c)];
+                        }
+                    }
+                }
                 pg
             }
         };

@@ -184,6 +184,7 @@ impl CageUpdater {
         if let Some(prior) = &mut self.prior {
             prior.carry(posed_from_rest, rest_cage);
             accumulate_product(prior.cage_from_prior(), prior.carried_cage(), posed_cage);
+            prior.limit_reach(posed_from_rest, posed_cage);
         }
     }
 

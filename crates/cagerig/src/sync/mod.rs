@@ -8,6 +8,7 @@ pub mod cage_updater;
 pub(crate) mod dense_lu;
 pub mod green_cage_fit;
 pub mod newton;
+pub mod reach_limit;
 pub mod skeleton_updater;
 
 pub use cage_fit_kind::CageFitKind;

@@ -1,0 +1,289 @@
+//! The reach limit of the regularised CageUp: each current-cage vertex stays as near its patch
+//! of skin as the rest cage is to the body.
+//!
+//! The regularised fit `C'_fit = K M̃' + Q P` ([`super::cage_prior`]) still follows rows that no
+//! cage of the rig can reproduce. A finger turned 90° out of a palm that a coarse cage wraps in
+//! one part with its neighbours is the typical case: its rows reach the cage vertex through
+//! small coordinates, and matching them pulls that vertex far off the body (2.7× the rest
+//! cage's distance on the Arm's generated 58-vertex cage). Every cage vertex k therefore blends
+//! the fit back toward the prior by a factor s_k ∈ [0, 1]:
+//!
+//! ```text
+//! C'_k = s_k C'_fit,k + (1 − s_k) P_k.
+//! ```
+//!
+//! s_k is the largest s ∈ [0, 1] with `dist(P̂_k + s (Ĉ'_k − P̂_k), N̂'_k) ≤ ρ`, or, when no s
+//! qualifies, the s nearest N̂'_k. Hats are the binding rig posed by the current joints' linear
+//! parts L_j: the binding cage C₀ and skin M₀, and the binding skeleton posed as the prior's
+//! rotation sees it (T̂_j, [`super::cage_prior`]). N̂'_k is the posed neighbourhood of the
+//! prior (its [`super::cage_prior::PRIOR_NEIGHBOURS`] rest-skin vertices) and ρ the rest reach
+//! max_k dist(C₀_k, N_k): the farthest any rest cage vertex is from its neighbourhood.
+//!
+//! **Guarantees kept.** s depends on the linear parts only, never on C, so for a fixed pose C'
+//! stays linear in C and CageRev stays exact: row k of Eq. 19 becomes
+//! `s_k (K G_rows + Q G_prior)_k + (1 − s_k) (G_prior)_k`
+//! ([`super::cage_reverser::CageReverser`]). At rest and under one rigid motion of every joint
+//! Ĉ' = P̂, every s_k is 1 and C' is the fit (C at rest, the moved cage under the motion). Where
+//! the fit stays within reach, s_k = 1 and C' is the fit bit for bit.
+
+use faer::Mat;
+use glam::{DMat3, DVec3};
+
+use crate::skin_weights::SkinWeights;
+
+/// What the reach limit keeps of the binding (see the module docs), and its scratch.
+#[derive(Debug, Clone)]
+pub struct ReachLimit {
+    /// C₀, `#C`.
+    binding_cage: Vec<DVec3>,
+    /// ξ_k C₀ (the anchors' centroids on the binding cage), `#C`.
+    binding_centroids: Vec<DVec3>,
+    /// β_kj C₀, one per (k, j) entry of the prior.
+    binding_joint_moments: Vec<DVec3>,
+    /// The fitting rows on the binding skin M₀ (`#R`) and their weights (`#R × #J`).
+    row_points: Vec<DVec3>,
+    row_weights: SkinWeights,
+    /// K (`#C × #R`).
+    cage_from_rows: Mat<f64>,
+    /// The neighbourhoods' vertices on M₀, concatenated, with their weights; cage vertex k's are
+    /// `neighbour_start[k]..neighbour_start[k + 1]`.
+    neighbour_points: Vec<DVec3>,
+    neighbour_weights: SkinWeights,
+    neighbour_start: Vec<usize>,
+    /// ρ.
+    reach: f64,
+}
+
+/// Scratch of [`ReachLimit::factors`]: P̂ and Ĉ' (`#C`), ŷ of the rows (`#R`).
+#[derive(Debug, Clone, Default)]
+pub struct ReachScratch {
+    carried: Vec<DVec3>,
+    posed_rows: Vec<DVec3>,
+    fitted: Vec<DVec3>,
+}
+
+/// The (k, j) entries of the prior that carry P̂ (the joints' shares of each cage vertex's
+/// translation), in the prior's order.
+pub(crate) struct PriorEntry {
+    pub(crate) cage_vertex: usize,
+    pub(crate) joint: usize,
+    /// a_kj.
+    pub(crate) share: f64,
+}
+
+impl ReachLimit {
+    /// The limit for the binding cage `binding_cage` (C₀, `#C`) and skin `binding_mesh` (M₀,
+    /// `#V`) with weights `skin_weights` (`#V × #J`); `rows` are the fitting rows, `cage_from_rows`
+    /// their map K (`#C × #R`); `neighbours` the prior's neighbourhood of each cage vertex;
+    /// `binding_centroids` and `binding_joint_moments` the prior's ξC₀ and β_kj C₀.
+    #[expect(clippy::too_many_arguments, reason = "the binding's parts, each named")]
+    pub(crate) fn new(
+        binding_cage: &[DVec3],
+        binding_mesh: &[DVec3],
+        skin_weights: &SkinWeights,
+        rows: &[usize],
+        cage_from_rows: &Mat<f64>,
+        neighbours: &[Vec<usize>],
+        binding_centroids: Vec<DVec3>,
+        binding_joint_moments: Vec<DVec3>,
+    ) -> Self {
+        let nc = binding_cage.len();
+        let mut neighbour_start = Vec::with_capacity(nc + 1);
+        neighbour_start.push(0);
+        let mut all: Vec<usize> = Vec::new();
+        let mut reach = 0.0f64;
+        for (k, near) in neighbours.iter().enumerate() {
+            all.extend_from_slice(near);
+            neighbour_start.push(all.len());
+            let nearest = near
+                .iter()
+                .map(|&v| binding_mesh[v].distance(binding_cage[k]))
+                .fold(f64::INFINITY, f64::min);
+            if nearest.is_finite() {
+                reach = reach.max(nearest);
+            }
+        }
+        Self {
+            binding_cage: binding_cage.to_vec(),
+            binding_centroids,
+            binding_joint_moments,
+            row_points: rows.iter().map(|&r| binding_mesh[r]).collect(),
+            row_weights: skin_weights.select_rows(rows),
+            cage_from_rows: cage_from_rows.clone(),
+            neighbour_points: all.iter().map(|&v| binding_mesh[v]).collect(),
+            neighbour_weights: skin_weights.select_rows(&all),
+            neighbour_start,
+            reach,
+        }
+    }
+
+    /// Scratch sized for this limit.
+    pub fn scratch(&self) -> ReachScratch {
+        let nc = self.binding_cage.len();
+        ReachScratch {
+            carried: vec![DVec3::ZERO; nc],
+            posed_rows: vec![DVec3::ZERO; self.row_points.len()],
+            fitted: vec![DVec3::ZERO; nc],
+        }
+    }
+
+    /// ρ: the rest reach.
+    pub fn reach(&self) -> f64 {
+        self.reach
+    }
+
+    /// s (`factors`, `#C`) for the joints' linear parts `joint_linear` (`#J`), with the
+    /// prior's carried rotations A_k (`rotations`, `#C`) and the binding skeleton's posed
+    /// translations t̂_j (`translations`, `#J`) for those linear parts, its (k, j) `entries` and
+    /// its Q `cage_from_prior` (`#C × #C`). No allocation with a [`Self::scratch`].
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the prior's parts of the pose, each named"
+    )]
+    pub(crate) fn factors(
+        &self,
+        joint_linear: impl Fn(usize) -> DMat3,
+        rotations: &[DMat3],
+        translations: &[DVec3],
+        entries: impl Iterator<Item = PriorEntry>,
+        cage_from_prior: &Mat<f64>,
+        scratch: &mut ReachScratch,
+        factors: &mut [f64],
+    ) {
+        let ReachScratch {
+            carried,
+            posed_rows,
+            fitted,
+        } = scratch;
+        let posed = |weights: &SkinWeights, i: usize, x: DVec3| {
+            let (joints, w) = weights.row(i);
+            joints.iter().zip(w).fold(DVec3::ZERO, |acc, (&j, &w)| {
+                let j = j as usize;
+                acc + w * (joint_linear(j) * x + translations[j])
+            })
+        };
+        // P̂ = Σ_j (L_j β_kj C₀ + a_kj t̂_j) + A_k (C₀_k − ξ_k C₀).
+        carried.iter_mut().for_each(|p| *p = DVec3::ZERO);
+        for (entry, moment) in entries.zip(&self.binding_joint_moments) {
+            carried[entry.cage_vertex] +=
+                joint_linear(entry.joint) * *moment + entry.share * translations[entry.joint];
+        }
+        for (k, p) in carried.iter_mut().enumerate() {
+            *p += rotations[k] * (self.binding_cage[k] - self.binding_centroids[k]);
+        }
+        // Ĉ' = K ŷ + Q P̂.
+        for (i, y) in posed_rows.iter_mut().enumerate() {
+            *y = posed(&self.row_weights, i, self.row_points[i]);
+        }
+        fitted.iter_mut().for_each(|c| *c = DVec3::ZERO);
+        accumulate(&self.cage_from_rows, posed_rows, fitted);
+        accumulate(cage_from_prior, carried, fitted);
+        for (k, s) in factors.iter_mut().enumerate() {
+            let range = self.neighbour_start[k]..self.neighbour_start[k + 1];
+            let neighbours =
+                range.map(|v| posed(&self.neighbour_weights, v, self.neighbour_points[v]));
+            *s = largest_factor_within(carried[k], fitted[k] - carried[k], neighbours, self.reach);
+        }
+    }
+}
+
+/// The largest s ∈ [0, 1] with min_y |p + s d − y| ≤ `reach` over `points`, or the s ∈ [0, 1]
+/// nearest them when none qualifies (1 when there are no points).
+fn largest_factor_within(
+    p: DVec3,
+    d: DVec3,
+    points: impl Iterator<Item = DVec3> + Clone,
+    reach: f64,
+) -> f64 {
+    let reach_squared = reach * reach;
+    if points
+        .clone()
+        .any(|y| (p + d - y).length_squared() <= reach_squared)
+    {
+        return 1.0;
+    }
+    let a = d.length_squared();
+    if a == 0.0 {
+        return 1.0;
+    }
+    let mut largest: Option<f64> = None;
+    let (mut nearest, mut nearest_at) = (f64::INFINITY, 1.0);
+    for y in points {
+        // |e + s d|² ≤ ρ² ⇔ a s² + b s + c ≤ 0.
+        let e = p - y;
+        let b = 2.0 * d.dot(e);
+        let c = e.length_squared() - reach_squared;
+        let discriminant = b * b - 4.0 * a * c;
+        if discriminant >= 0.0 {
+            let root = discriminant.sqrt();
+            let (low, high) = ((-b - root) / (2.0 * a), (-b + root) / (2.0 * a));
+            if high >= 0.0 && low <= 1.0 {
+                let s = high.min(1.0);
+                largest = Some(largest.map_or(s, |l: f64| l.max(s)));
+            }
+        }
+        let s = (-b / (2.0 * a)).clamp(0.0, 1.0);
+        let distance = (e + s * d).length_squared();
+        if distance < nearest || (distance == nearest && s > nearest_at) {
+            (nearest, nearest_at) = (distance, s);
+        }
+    }
+    largest.unwrap_or(nearest_at)
+}
+
+/// `out += map · points` (`map` is `out.len() × points.len()`).
+fn accumulate(map: &Mat<f64>, points: &[DVec3], out: &mut [DVec3]) {
+    for (r, p) in points.iter().enumerate() {
+        let column = map.col(r);
+        for (k, o) in out.iter_mut().enumerate() {
+            *o += column[k] * *p;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_fit_within_reach_is_kept_whole() {
+        let points = [DVec3::ZERO, DVec3::X];
+        let s = largest_factor_within(DVec3::Y, DVec3::new(0.5, 0.0, 0.0), points.into_iter(), 1.5);
+        assert_eq!(s, 1.0);
+    }
+
+    #[test]
+    fn a_fit_leaving_the_body_stops_at_the_reach() {
+        // p one unit above the origin, moving straight up: within reach 2 up to s = 1/3 of 3.
+        let points = [DVec3::ZERO];
+        let s = largest_factor_within(DVec3::Y, DVec3::new(0.0, 3.0, 0.0), points.into_iter(), 2.0);
+        assert!((s - 1.0 / 3.0).abs() < 1e-15, "{s}");
+    }
+
+    #[test]
+    fn out_of_reach_everywhere_takes_the_nearest_point_of_the_path() {
+        // The path from (−2, 5, 0) to (2, 5, 0) passes 5 above the point: nearest at s = ½.
+        let points = [DVec3::ZERO];
+        let s = largest_factor_within(
+            DVec3::new(-2.0, 5.0, 0.0),
+            DVec3::new(4.0, 0.0, 0.0),
+            points.into_iter(),
+            1.0,
+        );
+        assert!((s - 0.5).abs() < 1e-15, "{s}");
+    }
+
+    #[test]
+    fn the_largest_qualifying_factor_over_several_points_is_taken() {
+        // Reach 1 around x = 0 and x = 4 on a path from x = −0.5 to x = 9.5: the second
+        // interval ends at x = 5, s = 0.55.
+        let points = [DVec3::ZERO, DVec3::new(4.0, 0.0, 0.0)];
+        let s = largest_factor_within(
+            DVec3::new(-0.5, 0.0, 0.0),
+            DVec3::new(10.0, 0.0, 0.0),
+            points.into_iter(),
+            1.0,
+        );
+        assert!((s - 0.55).abs() < 1e-15, "{s}");
+    }
+}
