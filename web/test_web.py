@@ -417,6 +417,29 @@ def main():
               and any("generated one" in n for n in notes),
               f"{opened_line}; {[n for n in notes if 'skeleton' in n][-1:]}")
 
+        # 9c. A character dropped on the studio's canvas: egui reads it (eframe's drop handler,
+        # which keeps the event from the page's own handler) and hands its bytes to the page
+        # (PageFiles::open_dropped), which opens it through the worker. It opens once.
+        cesium_man = (ROOT / "data/gltf/CesiumMan/CesiumMan.glb").read_bytes()
+        driver.js_async("const done = arguments[arguments.length - 1];"
+                        "const transfer = new DataTransfer();"
+                        "transfer.items.add(new File([new Uint8Array(arguments[0])], 'canvas-dropped.glb'));"
+                        "const canvas = document.getElementById('studio');"
+                        "const rect = canvas.getBoundingClientRect();"
+                        "const at = {clientX: rect.left + rect.width / 2, clientY: rect.top + rect.height / 2};"
+                        "for (const type of ['dragenter', 'dragover', 'drop']) {"
+                        "  canvas.dispatchEvent(new DragEvent(type, {dataTransfer: transfer, bubbles: true,"
+                        "                                            cancelable: true, ...at}));"
+                        "}"
+                        "done();", list(cesium_man))
+        dropped = wait("the character dropped on the canvas to open",
+                       lambda: (s := status()) and s["name"] == "canvas-dropped.glb" and not s["opening"] and s, 120)
+        time.sleep(1.0)
+        opened = [l["text"] for l in status()["log"] if l["text"].startswith("opened canvas-dropped.glb")]
+        check("a .glb dropped on the studio's canvas opens once, read by the studio",
+              len(opened) == 1 and " 19 joints" in opened[0] and dropped["cage_vertices"] > 0,
+              f"{opened}")
+
         # 10. The Arm sample (its cage is in the file): the binding's time on the page's thread.
         driver.js("window.cagerigPage.fetchSample('Arm.glb')")
         wait("the Arm to open", lambda: (s := status()) and s["name"] == "Arm.glb" and not s["opening"], 120)
