@@ -99,9 +99,8 @@ fn the_default_automatic_cages_stay_on_the_body() {
 }
 
 /// The same rigs under Green coordinates: no sample refused, and the handle as near the body as
-/// `docs/characters.md` says: within the mean value rigs' bound on flipped triangles, and on
-/// spread and deviation everywhere but CesiumMan's spread (1.63) and the Fox Run's deviation
-/// (0.061).
+/// `docs/characters.md` says: within the mean value rigs' bounds on deviation and flipped
+/// triangles, and on spread everywhere but CesiumMan's (1.55).
 #[test]
 fn the_default_automatic_cages_of_green_rigs_stay_near_the_body() {
     for (file, animation, last) in characters() {
@@ -109,8 +108,8 @@ fn the_default_automatic_cages_of_green_rigs_stay_near_the_body() {
             auto_cage_with(file, &animation, last, "skeleton", &["--coords", "green"]);
         let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
         let cesium_man = file.contains("CesiumMan");
-        assert!(spread <= if cesium_man { 1.65 } else { 1.5 }, "{what}");
-        assert!(deviation <= 0.062, "{what}");
+        assert!(spread <= if cesium_man { 1.57 } else { 1.5 }, "{what}");
+        assert!(deviation <= 0.06, "{what}");
         assert!(flipped <= 1.0 / 196.0 + 1e-12, "{what}");
     }
 }
