@@ -166,6 +166,23 @@ def without_skin(glb):
     return struct.pack("<III", 0x46546C67, 2, total) + struct.pack("<II", len(text), 0x4E4F534A) + text + rest
 
 
+def drop_file(driver, target, name, data):
+    """Drags a file called `name` holding `data` onto `target` (a JS expression: `window`, or an
+    element, whose centre it is dropped on) as a user's drop does: dragenter, dragover, drop."""
+    driver.js_async("const done = arguments[arguments.length - 1];"
+                    "const transfer = new DataTransfer();"
+                    "transfer.items.add(new File([new Uint8Array(arguments[0])], arguments[1]));"
+                    f"const target = {target};"
+                    "const rect = target.getBoundingClientRect ? target.getBoundingClientRect()"
+                    "                                          : {left: 0, top: 0, width: 0, height: 0};"
+                    "const at = {clientX: rect.left + rect.width / 2, clientY: rect.top + rect.height / 2};"
+                    "for (const type of ['dragenter', 'dragover', 'drop']) {"
+                    "  target.dispatchEvent(new DragEvent(type, {dataTransfer: transfer, bubbles: true,"
+                    "                                            cancelable: true, ...at}));"
+                    "}"
+                    "done();", list(data), name)
+
+
 def obj_vertices(path):
     return [[float(x) for x in line.split()[1:4]] for line in path.read_text().splitlines()
             if line.startswith("v ")]
@@ -402,11 +419,7 @@ def main():
         # 9b. A skinless character dropped on the page: the Fox with its skin, skeleton and
         # animations taken out. It opens as a mesh to rig, in a cage the worker generated.
         skinless = without_skin(fox.read_bytes())
-        driver.js_async("const done = arguments[arguments.length - 1];"
-                        "const transfer = new DataTransfer();"
-                        "transfer.items.add(new File([new Uint8Array(arguments[0])], 'skinless-fox.glb'));"
-                        "window.dispatchEvent(new DragEvent('drop', {dataTransfer: transfer, cancelable: true}));"
-                        "done();", list(skinless))
+        drop_file(driver, "window", "skinless-fox.glb", skinless)
         dropped = wait("the dropped skinless Fox to open",
                        lambda: (s := status()) and s["name"] == "skinless-fox.glb" and not s["opening"] and s, 120)
         notes = [l["text"] for l in dropped["log"]]
@@ -421,17 +434,7 @@ def main():
         # which keeps the event from the page's own handler) and hands its bytes to the page
         # (PageFiles::open_dropped), which opens it through the worker. It opens once.
         cesium_man = (ROOT / "data/gltf/CesiumMan/CesiumMan.glb").read_bytes()
-        driver.js_async("const done = arguments[arguments.length - 1];"
-                        "const transfer = new DataTransfer();"
-                        "transfer.items.add(new File([new Uint8Array(arguments[0])], 'canvas-dropped.glb'));"
-                        "const canvas = document.getElementById('studio');"
-                        "const rect = canvas.getBoundingClientRect();"
-                        "const at = {clientX: rect.left + rect.width / 2, clientY: rect.top + rect.height / 2};"
-                        "for (const type of ['dragenter', 'dragover', 'drop']) {"
-                        "  canvas.dispatchEvent(new DragEvent(type, {dataTransfer: transfer, bubbles: true,"
-                        "                                            cancelable: true, ...at}));"
-                        "}"
-                        "done();", list(cesium_man))
+        drop_file(driver, "document.getElementById('studio')", "canvas-dropped.glb", cesium_man)
         dropped = wait("the character dropped on the canvas to open",
                        lambda: (s := status()) and s["name"] == "canvas-dropped.glb" and not s["opening"] and s, 120)
         time.sleep(1.0)

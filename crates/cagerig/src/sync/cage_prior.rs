@@ -321,9 +321,15 @@ impl CagePrior {
 
     /// The reach limit of the fit `posed_cage` (`#C`, C'_fit = K M̃' + Q P for the pose of the
     /// last [`Self::carry`], whose skinning transforms are `posed_from_rest`, `#J`): every
-    /// vertex becomes s_k C'_fit,k + (1 − s_k) P_k ([`crate::sync::reach_limit`]). The factors
-    /// are computed once per pose. No allocation.
-    pub fn limit_reach(&mut self, posed_from_rest: &[DAffine3], posed_cage: &mut [DVec3]) {
+    /// vertex becomes s_k C'_fit,k + (1 − s_k) P_k ([`crate::sync::reach_limit`]), with the
+    /// fit's K `cage_from_rows` (`#C × #R`). The factors are computed once per pose. No
+    /// allocation.
+    pub fn limit_reach(
+        &mut self,
+        posed_from_rest: &[DAffine3],
+        cage_from_rows: &Mat<f64>,
+        posed_cage: &mut [DVec3],
+    ) {
         let same_pose = self.reach_linear.len() == posed_from_rest.len()
             && self
                 .reach_linear
@@ -338,6 +344,7 @@ impl CagePrior {
                 &self.rotations,
                 &self.posed_translations,
                 self.prior_entries(),
+                cage_from_rows,
                 &self.cage_from_prior,
                 &mut scratch,
                 &mut factors,
@@ -360,10 +367,28 @@ impl CagePrior {
     }
 
     /// The reach limit's factors s (`#C`) for the joints' linear parts `joint_linear` (`#J`):
-    /// what [`Self::limit_reach`] applies in that pose (CageRev's rows of Eq. 19).
-    pub fn reach_factors(&self, joint_linear: &[DMat3]) -> Vec<f64> {
-        let nc = self.carried.len();
-        let mut rotations = vec![DMat3::ZERO; nc];
+    /// what [`Self::limit_reach`] applies in that pose with the fit's K `cage_from_rows`
+    /// (`#C × #R`): CageRev's rows of Eq. 19.
+    pub fn reach_factors(&self, joint_linear: &[DMat3], cage_from_rows: &Mat<f64>) -> Vec<f64> {
+        let (rotations, translations) = self.pose_rotations(joint_linear);
+        let mut factors = vec![1.0; rotations.len()];
+        self.reach_limit.factors(
+            |j| joint_linear[j],
+            &rotations,
+            &translations,
+            self.prior_entries(),
+            cage_from_rows,
+            &self.cage_from_prior,
+            &mut self.reach_limit.scratch(),
+            &mut factors,
+        );
+        factors
+    }
+
+    /// A_k (`#C`) and the translations t̂_j of the posed binding skeleton (`#J`) for the joints'
+    /// linear parts `joint_linear` (`#J`), allocated ([`Self::blend_rotations`]).
+    fn pose_rotations(&self, joint_linear: &[DMat3]) -> (Vec<DMat3>, Vec<DVec3>) {
+        let mut rotations = vec![DMat3::ZERO; self.carried.len()];
         let mut translations = vec![DVec3::ZERO; self.binding_joints.len()];
         let mut scales = vec![0.0; self.binding_joints.len()];
         self.blend_rotations(
@@ -372,17 +397,7 @@ impl CagePrior {
             &mut scales,
             &mut rotations,
         );
-        let mut factors = vec![1.0; nc];
-        self.reach_limit.factors(
-            |j| joint_linear[j],
-            &rotations,
-            &translations,
-            self.prior_entries(),
-            &self.cage_from_prior,
-            &mut self.reach_limit.scratch(),
-            &mut factors,
-        );
-        factors
+        (rotations, translations)
     }
 
     /// The reach limit's ρ: the farthest a rest cage vertex is from its skin neighbourhood.
@@ -411,15 +426,7 @@ impl CagePrior {
         mut jacobian: faer::MatMut<'_, f64>,
     ) {
         let nc = self.rest_centroids.len();
-        let mut blended = vec![DMat3::ZERO; nc];
-        let mut translations = vec![DVec3::ZERO; self.binding_joints.len()];
-        let mut scales = vec![0.0; self.binding_joints.len()];
-        self.blend_rotations(
-            |j| joint_linear[j],
-            &mut translations,
-            &mut scales,
-            &mut blended,
-        );
+        let (blended, _) = self.pose_rotations(joint_linear);
         // ∂P_k/∂c_m = A_k (δ_km − ξ_km) + Σ_j (β_kj[m] L_j + a_kj ∂t_j/∂c_m), as 3×3 blocks
         // (k, m) in row-major order.
         let mut blocks = vec![DMat3::ZERO; nc * nc];
@@ -730,7 +737,6 @@ pub(crate) fn regularised_maps(
         rest_mesh,
         skin_weights,
         rows,
-        &cage_from_rows,
         &near,
         rest_centroids.clone(),
         joint_moments.clone(),

@@ -438,7 +438,11 @@ impl CageReverser {
                     faer::Par::Seq,
                 );
                 // The reach limit: row k is s_k [K Q]_k [G; ∂P/∂C] + (1 − s_k) ∂P_k/∂C.
-                for (k, s) in prior.reach_factors(joint_rotations).into_iter().enumerate() {
+                for (k, s) in prior
+                    .reach_factors(joint_rotations, &self.cage_from_rows)
+                    .into_iter()
+                    .enumerate()
+                {
                     if s < 1.0 {
                         for c in 0..9 * nc {
                             pg[(k, c)] = s * pg[(k, c)] + (1.0 - s) * g[(nr + k, c)];

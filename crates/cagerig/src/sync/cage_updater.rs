@@ -16,6 +16,7 @@ use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
 use crate::sync::cage_fit_kind::CageFitKind;
 use crate::sync::cage_prior::{BindingJoints, CagePrior, RegularisedMaps, regularised_maps};
+use crate::sync::small_products::{accumulate_column, accumulate_product};
 
 /// Reciprocal condition estimate below which a cage-fitting system is rejected as singular.
 pub const MIN_RECIPROCAL_CONDITION: f64 = 1e-13;
@@ -184,7 +185,7 @@ impl CageUpdater {
         if let Some(prior) = &mut self.prior {
             prior.carry(posed_from_rest, rest_cage);
             accumulate_product(prior.cage_from_prior(), prior.carried_cage(), posed_cage);
-            prior.limit_reach(posed_from_rest, posed_cage);
+            prior.limit_reach(posed_from_rest, &self.cage_from_rows, posed_cage);
         }
     }
 
@@ -223,22 +224,6 @@ impl CageUpdater {
     pub fn apply_rows(&self, rows: &[DVec3], cage: &mut [DVec3]) {
         cage.iter_mut().for_each(|c| *c = DVec3::ZERO);
         accumulate_product(self.interpolant(), rows, cage);
-    }
-}
-
-/// `cage += map · points` (`map` is `#C × points.len()`), column by column.
-fn accumulate_product(map: &Mat<f64>, points: &[DVec3], cage: &mut [DVec3]) {
-    for (r, p) in points.iter().enumerate() {
-        accumulate_column(map, r, *p, cage);
-    }
-}
-
-/// `cage += map[:, r] · p`.
-#[inline]
-fn accumulate_column(map: &Mat<f64>, r: usize, p: DVec3, cage: &mut [DVec3]) {
-    let col = map.col(r);
-    for (k, c) in cage.iter_mut().enumerate() {
-        *c += col[k] * p;
     }
 }
 

@@ -10,5 +10,6 @@ pub mod green_cage_fit;
 pub mod newton;
 pub mod reach_limit;
 pub mod skeleton_updater;
+pub(crate) mod small_products;
 
 pub use cage_fit_kind::CageFitKind;

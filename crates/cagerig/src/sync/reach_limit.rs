@@ -30,21 +30,20 @@ use faer::Mat;
 use glam::{DMat3, DVec3};
 
 use crate::skin_weights::SkinWeights;
+use crate::sync::small_products::accumulate_product;
 
 /// What the reach limit keeps of the binding (see the module docs), and its scratch.
 #[derive(Debug, Clone)]
 pub struct ReachLimit {
     /// C₀, `#C`.
     binding_cage: Vec<DVec3>,
-    /// ξ_k C₀ (the anchors' centroids on the binding cage), `#C`.
+    /// ξ_k C₀ (the neighbourhoods' centroids on the binding cage), `#C`.
     binding_centroids: Vec<DVec3>,
     /// β_kj C₀, one per (k, j) entry of the prior.
     binding_joint_moments: Vec<DVec3>,
     /// The fitting rows on the binding skin M₀ (`#R`) and their weights (`#R × #J`).
     row_points: Vec<DVec3>,
     row_weights: SkinWeights,
-    /// K (`#C × #R`).
-    cage_from_rows: Mat<f64>,
     /// The neighbourhoods' vertices on M₀, concatenated, with their weights; cage vertex k's are
     /// `neighbour_start[k]..neighbour_start[k + 1]`.
     neighbour_points: Vec<DVec3>,
@@ -73,16 +72,14 @@ pub(crate) struct PriorEntry {
 
 impl ReachLimit {
     /// The limit for the binding cage `binding_cage` (C₀, `#C`) and skin `binding_mesh` (M₀,
-    /// `#V`) with weights `skin_weights` (`#V × #J`); `rows` are the fitting rows, `cage_from_rows`
-    /// their map K (`#C × #R`); `neighbours` the prior's neighbourhood of each cage vertex;
+    /// `#V`) with weights `skin_weights` (`#V × #J`); `rows` are the fitting rows; `neighbours`
+    /// the prior's neighbourhood of each cage vertex;
     /// `binding_centroids` and `binding_joint_moments` the prior's ξC₀ and β_kj C₀.
-    #[expect(clippy::too_many_arguments, reason = "the binding's parts, each named")]
     pub(crate) fn new(
         binding_cage: &[DVec3],
         binding_mesh: &[DVec3],
         skin_weights: &SkinWeights,
         rows: &[usize],
-        cage_from_rows: &Mat<f64>,
         neighbours: &[Vec<usize>],
         binding_centroids: Vec<DVec3>,
         binding_joint_moments: Vec<DVec3>,
@@ -109,7 +106,6 @@ impl ReachLimit {
             binding_joint_moments,
             row_points: rows.iter().map(|&r| binding_mesh[r]).collect(),
             row_weights: skin_weights.select_rows(rows),
-            cage_from_rows: cage_from_rows.clone(),
             neighbour_points: all.iter().map(|&v| binding_mesh[v]).collect(),
             neighbour_weights: skin_weights.select_rows(&all),
             neighbour_start,
@@ -134,8 +130,8 @@ impl ReachLimit {
 
     /// s (`factors`, `#C`) for the joints' linear parts `joint_linear` (`#J`), with the
     /// prior's carried rotations A_k (`rotations`, `#C`) and the binding skeleton's posed
-    /// translations t̂_j (`translations`, `#J`) for those linear parts, its (k, j) `entries` and
-    /// its Q `cage_from_prior` (`#C × #C`). No allocation with a [`Self::scratch`].
+    /// translations t̂_j (`translations`, `#J`) for those linear parts, its (k, j) `entries`,
+    /// and the fit's K `cage_from_rows` (`#C × #R`) and Q `cage_from_prior` (`#C × #C`). No allocation with a [`Self::scratch`].
     #[expect(
         clippy::too_many_arguments,
         reason = "the prior's parts of the pose, each named"
@@ -146,6 +142,7 @@ impl ReachLimit {
         rotations: &[DMat3],
         translations: &[DVec3],
         entries: impl Iterator<Item = PriorEntry>,
+        cage_from_rows: &Mat<f64>,
         cage_from_prior: &Mat<f64>,
         scratch: &mut ReachScratch,
         factors: &mut [f64],
@@ -176,8 +173,8 @@ impl ReachLimit {
             *y = posed(&self.row_weights, i, self.row_points[i]);
         }
         fitted.iter_mut().for_each(|c| *c = DVec3::ZERO);
-        accumulate(&self.cage_from_rows, posed_rows, fitted);
-        accumulate(cage_from_prior, carried, fitted);
+        accumulate_product(cage_from_rows, posed_rows, fitted);
+        accumulate_product(cage_from_prior, carried, fitted);
         for (k, s) in factors.iter_mut().enumerate() {
             let range = self.neighbour_start[k]..self.neighbour_start[k + 1];
             let neighbours =
@@ -229,16 +226,6 @@ fn largest_factor_within(
         }
     }
     largest.unwrap_or(nearest_at)
-}
-
-/// `out += map · points` (`map` is `out.len() × points.len()`).
-fn accumulate(map: &Mat<f64>, points: &[DVec3], out: &mut [DVec3]) {
-    for (r, p) in points.iter().enumerate() {
-        let column = map.col(r);
-        for (k, o) in out.iter_mut().enumerate() {
-            *o += column[k] * *p;
-        }
-    }
 }
 
 #[cfg(test)]
