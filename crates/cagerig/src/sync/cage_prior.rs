@@ -366,38 +366,52 @@ impl CagePrior {
         }
     }
 
-    /// The reach limit's factors s (`#C`) for the joints' linear parts `joint_linear` (`#J`):
-    /// what [`Self::limit_reach`] applies in that pose with the fit's K `cage_from_rows`
-    /// (`#C × #R`): CageRev's rows of Eq. 19.
-    pub fn reach_factors(&self, joint_linear: &[DMat3], cage_from_rows: &Mat<f64>) -> Vec<f64> {
-        let (rotations, translations) = self.pose_rotations(joint_linear);
-        let mut factors = vec![1.0; rotations.len()];
+    /// Storage for [`Self::pose`] and [`Self::jacobian`] (CageRev's per-pose work).
+    pub fn pose_scratch(&self) -> PriorPose {
+        let (nc, nj) = (self.carried.len(), self.binding_joints.len());
+        PriorPose {
+            rotations: vec![DMat3::ZERO; nc],
+            translations: vec![DVec3::ZERO; nj],
+            scales: vec![0.0; nj],
+            reach: self.reach_limit.scratch(),
+            factors: vec![1.0; nc],
+            blocks: vec![DMat3::ZERO; nc],
+        }
+    }
+
+    /// A_k and the posed binding joints' translations t̂_j for the joints' linear parts
+    /// `joint_linear` (`#J`), what [`Self::carry`] uses in that pose, into `pose`; no
+    /// allocation.
+    pub fn pose(&self, joint_linear: &[DMat3], pose: &mut PriorPose) {
+        self.blend_rotations(
+            |j| joint_linear[j],
+            &mut pose.translations,
+            &mut pose.scales,
+            &mut pose.rotations,
+        );
+    }
+
+    /// The reach limit's factors s (`#C`) in the pose of the last [`Self::pose`] (whose linear
+    /// parts are `joint_linear`, `#J`) with the fit's K `cage_from_rows` (`#C × #R`): what
+    /// [`Self::limit_reach`] applies in that pose, for CageRev's rows of Eq. 19. Into `pose`
+    /// ([`PriorPose::reach_factors`]); no allocation.
+    pub fn reach_factors(
+        &self,
+        joint_linear: &[DMat3],
+        cage_from_rows: &Mat<f64>,
+        pose: &mut PriorPose,
+    ) {
+        pose.factors.iter_mut().for_each(|s| *s = 1.0);
         self.reach_limit.factors(
             |j| joint_linear[j],
-            &rotations,
-            &translations,
+            &pose.rotations,
+            &pose.translations,
             self.prior_entries(),
             cage_from_rows,
             &self.cage_from_prior,
-            &mut self.reach_limit.scratch(),
-            &mut factors,
+            &mut pose.reach,
+            &mut pose.factors,
         );
-        factors
-    }
-
-    /// A_k (`#C`) and the translations t̂_j of the posed binding skeleton (`#J`) for the joints'
-    /// linear parts `joint_linear` (`#J`), allocated ([`Self::blend_rotations`]).
-    fn pose_rotations(&self, joint_linear: &[DMat3]) -> (Vec<DMat3>, Vec<DVec3>) {
-        let mut rotations = vec![DMat3::ZERO; self.carried.len()];
-        let mut translations = vec![DVec3::ZERO; self.binding_joints.len()];
-        let mut scales = vec![0.0; self.binding_joints.len()];
-        self.blend_rotations(
-            |j| joint_linear[j],
-            &mut translations,
-            &mut scales,
-            &mut rotations,
-        );
-        (rotations, translations)
     }
 
     /// The reach limit's ρ: the farthest a rest cage vertex is from its skin neighbourhood.
@@ -414,48 +428,70 @@ impl CagePrior {
         })
     }
 
-    /// ∂P/∂C for the pose with joint linear parts `joint_linear` (`#J`) and the translation
-    /// derivatives `translation_jacobian` (`∂t_j/∂c_m`, `#J × #C` blocks, row-major by joint;
-    /// zero when the joints do not follow the cage), into `jacobian` (`#C × 9#C`, column-major
-    /// columns): entry (k, 9m + 3a + b) is entry (a, b) of block (k, m). CageRev multiplies it by
-    /// Q ([`Self::cage_from_prior`]).
+    /// ∂P/∂C for the pose with joint linear parts `joint_linear` (`#J`) and its A_k computed
+    /// by [`Self::pose`] in `pose`, and the translation derivatives `translation_jacobian`
+    /// (`∂t_j/∂c_m`, `#J × #C` blocks, row-major by joint; zero when the joints do not follow
+    /// the cage), into `jacobian` (`#C × 9#C`, row-major): entry (k, 9m + 3a + b) is entry
+    /// (a, b) of block (k, m). CageRev multiplies it by Q ([`Self::cage_from_prior`]). No
+    /// allocation.
     pub fn jacobian(
         &self,
         joint_linear: &[DMat3],
         translation_jacobian: &[DMat3],
-        mut jacobian: faer::MatMut<'_, f64>,
+        pose: &mut PriorPose,
+        jacobian: &mut [f64],
     ) {
         let nc = self.rest_centroids.len();
-        let (blended, _) = self.pose_rotations(joint_linear);
-        // ∂P_k/∂c_m = A_k (δ_km − ξ_km) + Σ_j (β_kj[m] L_j + a_kj ∂t_j/∂c_m), as 3×3 blocks
-        // (k, m) in row-major order.
-        let mut blocks = vec![DMat3::ZERO; nc * nc];
-        for (k, a) in blended.iter().enumerate() {
-            let row = &mut blocks[k * nc..(k + 1) * nc];
+        let row = &mut pose.blocks;
+        let mut entries = self.joints.iter().peekable();
+        // ∂P_k/∂c_m = A_k (δ_km − ξ_km) + Σ_j (β_kj[m] L_j + a_kj ∂t_j/∂c_m), a row of 3×3
+        // blocks at a time.
+        for (k, (a, out)) in pose
+            .rotations
+            .iter()
+            .zip(jacobian.chunks_exact_mut(9 * nc))
+            .enumerate()
+        {
             for (m, block) in row.iter_mut().enumerate() {
                 let delta = if k == m { 1.0 } else { 0.0 };
                 *block = *a * (delta - self.centroid_coords[k * nc + m]);
             }
-        }
-        for entry in &self.joints {
-            let linear = joint_linear[entry.joint];
-            let row = &mut blocks[entry.cage_vertex * nc..(entry.cage_vertex + 1) * nc];
-            let translations = &translation_jacobian[entry.joint * nc..(entry.joint + 1) * nc];
-            for ((block, &beta), dt) in row.iter_mut().zip(&entry.coords).zip(translations) {
-                *block += linear * beta + *dt * entry.share;
-            }
-        }
-        // Column 9m + 3a + b holds entry (a, b) of the blocks (·, m): written column by column.
-        for m in 0..nc {
-            for a in 0..3 {
-                for b in 0..3 {
-                    let mut column = jacobian.as_mut().col_mut(9 * m + 3 * a + b);
-                    for k in 0..nc {
-                        column[k] = blocks[k * nc + m].col(b)[a];
-                    }
+            while let Some(entry) = entries.next_if(|e| e.cage_vertex == k) {
+                let linear = joint_linear[entry.joint];
+                let translations = &translation_jacobian[entry.joint * nc..(entry.joint + 1) * nc];
+                for ((block, &beta), dt) in row.iter_mut().zip(&entry.coords).zip(translations) {
+                    *block += linear * beta + *dt * entry.share;
                 }
             }
+            for (block, values) in row.iter().zip(out.chunks_exact_mut(9)) {
+                // glam is column-major: the transpose's columns are the block's rows.
+                values.copy_from_slice(&block.transpose().to_cols_array());
+            }
         }
+    }
+}
+
+/// A pose of the prior for CageRev ([`CagePrior::pose`]): A_k and s_k (`#C` each), the posed
+/// binding joints' translations (`#J`), and scratch.
+#[derive(Debug, Clone)]
+pub struct PriorPose {
+    /// A_k, `#C`.
+    rotations: Vec<DMat3>,
+    /// t̂_j, `#J`.
+    translations: Vec<DVec3>,
+    /// |det L_j|^⅓, `#J`.
+    scales: Vec<f64>,
+    reach: ReachScratch,
+    /// The reach limit's s_k, `#C`.
+    factors: Vec<f64>,
+    /// One row of ∂P/∂C's `#C × #C` blocks, for [`CagePrior::jacobian`].
+    blocks: Vec<DMat3>,
+}
+
+impl PriorPose {
+    /// The reach limit's factors s_k (`#C`) of the last [`CagePrior::pose`].
+    pub fn reach_factors(&self) -> &[f64] {
+        &self.factors
     }
 }
 

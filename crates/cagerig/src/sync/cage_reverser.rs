@@ -36,7 +36,9 @@ use glam::{DMat3, DVec3};
 use crate::error::RigError;
 use crate::skeleton::Skeleton;
 use crate::skin_weights::SkinWeights;
+use crate::sync::cage_prior::{CagePrior, PriorPose};
 use crate::sync::cage_updater::check_triangular_condition;
+use crate::sync::dense_lu::DenseLu;
 
 /// How [`CageReverser::refactor`] factorises Eq. 19.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -66,12 +68,19 @@ pub struct CageReverser {
     /// P (the paper's fit) or K (the regularised one), `#C × #R` (column-major faer matrix,
     /// from the CageUpdater).
     cage_from_rows: Mat<f64>,
-    /// The regularised CageUp's prior (C' = K·M̃' + Q·P) and [K Q] (`#C × (#R + #C)`); `None`
-    /// for the paper's fit.
-    prior: Option<(crate::sync::cage_prior::CagePrior, Mat<f64>)>,
+    /// The regularised CageUp's prior (C' = K·M̃' + Q·P), [K Q] (`#C × (#R + #C)`) and the
+    /// prior's pose; `None` for the paper's fit.
+    prior: Option<RegularisedParts>,
     parents: Vec<Option<usize>>,
     order: Vec<usize>,
     factor: Option<Factor>,
+    /// The dense `3#C × 3#C` system and its factors ([`Factor::Dense`]).
+    dense_lu: DenseLu,
+    /// Scratch for building the dense system: E (`#J × #C` blocks), G (`#R (+ #C) × 9#C`) and
+    /// P·G or [K Q]·[G; ∂P/∂C] (`#C × 9#C`), both row-major.
+    translation_jacobian: Vec<DMat3>,
+    rows_jacobian: Vec<f64>,
+    cage_jacobian: Vec<f64>,
     method: ReverserMethod,
     /// Scratch for the per-grab solve (3#C).
     rhs: Vec<f64>,
@@ -81,10 +90,20 @@ pub struct CageReverser {
     scratch_small: Vec<f64>,
 }
 
+/// The regularised fit's part of Eq. 19.
+#[derive(Debug, Clone)]
+struct RegularisedParts {
+    prior: CagePrior,
+    /// [K Q], `#C × (#R + #C)`.
+    stacked: Mat<f64>,
+    pose: PriorPose,
+}
+
 /// A factorisation of Eq. 19 for one pose.
 #[derive(Debug, Clone)]
 enum Factor {
-    Dense(DenseLu),
+    /// In [`CageReverser::dense_lu`].
+    Dense,
     LowRank(LowRank),
 }
 
@@ -99,58 +118,6 @@ struct LowRank {
     y: Vec<DMat3>,
     /// LU of the capacitance matrix `I + V Y` (absent when no joint is active).
     capacitance: Option<DenseLu>,
-}
-
-/// A dense LU with partial pivoting, packed.
-#[derive(Debug, Clone)]
-struct DenseLu {
-    /// Packed LU factors (unit lower L below the diagonal, U on and above), `n × n` column-major.
-    lu: Mat<f64>,
-    /// Row permutation: row `i` of P·S is row `perm[i]` of S.
-    perm: Vec<usize>,
-}
-
-impl DenseLu {
-    fn new(system: &Mat<f64>) -> Result<Self, RigError> {
-        let n = system.nrows();
-        let lu = system.partial_piv_lu();
-        check_triangular_condition(lu.U().diagonal().column_vector().iter().copied())?;
-        let l = lu.L();
-        let u = lu.U();
-        let packed = Mat::<f64>::from_fn(n, n, |r, c| if r > c { l[(r, c)] } else { u[(r, c)] });
-        let (fwd, _) = lu.P().arrays();
-        Ok(Self {
-            lu: packed,
-            perm: fwd.to_vec(),
-        })
-    }
-
-    /// Solves in place: `x` holds b on entry (length n), the solution on exit; `tmp` is n long.
-    fn solve(&self, x: &mut [f64], tmp: &mut [f64]) {
-        let n = self.perm.len();
-        for (i, t) in tmp[..n].iter_mut().enumerate() {
-            *t = x[self.perm[i]];
-        }
-        let lu = &self.lu;
-        for c in 0..n {
-            let v = tmp[c];
-            if v != 0.0 {
-                let col = lu.col(c);
-                for r in c + 1..n {
-                    tmp[r] -= col[r] * v;
-                }
-            }
-        }
-        for c in (0..n).rev() {
-            let col = lu.col(c);
-            let v = tmp[c] / col[c];
-            tmp[c] = v;
-            for r in 0..c {
-                tmp[r] -= col[r] * v;
-            }
-        }
-        x[..n].copy_from_slice(&tmp[..n]);
-    }
 }
 
 impl CageReverser {
@@ -206,11 +173,19 @@ impl CageReverser {
                         q[(c, r - nr)]
                     }
                 });
-                (prior.clone(), stacked)
+                RegularisedParts {
+                    pose: prior.pose_scratch(),
+                    prior: prior.clone(),
+                    stacked,
+                }
             }),
             parents: (0..skeleton.len()).map(|j| skeleton.parent(j)).collect(),
             order: skeleton.topological_order().to_vec(),
             factor: None,
+            dense_lu: DenseLu::new(3 * num_cage, "CageRev's system (Eq. 19)"),
+            translation_jacobian: Vec::new(),
+            rows_jacobian: Vec::new(),
+            cage_jacobian: Vec::new(),
             method: ReverserMethod::Auto,
             rhs: vec![0.0; 3 * num_cage],
             scratch_rows: vec![DVec3::ZERO; rows.len()],
@@ -274,7 +249,9 @@ impl CageReverser {
             self.factor = Some(Factor::LowRank(low_rank));
             return Ok(());
         }
-        self.factor = Some(Factor::Dense(self.dense(joint_rotations, joints_follow)?));
+        self.factor = None;
+        self.dense(joint_rotations, joints_follow)?;
+        self.factor = Some(Factor::Dense);
         Ok(())
     }
 
@@ -366,9 +343,14 @@ impl CageReverser {
                 blocks[a * na + a] += DMat3::IDENTITY;
             }
             let n = 3 * na;
-            let m =
-                Mat::<f64>::from_fn(n, n, |r, c| blocks[(r / 3) * na + c / 3].col(c % 3)[r % 3]);
-            Some(DenseLu::new(&m)?)
+            let mut lu = DenseLu::new(n, "CageRev's capacitance matrix (Eq. 19, low-rank form)");
+            for (i, v) in lu.matrix_mut().iter_mut().enumerate() {
+                let (r, c) = (i % n, i / n);
+                *v = blocks[(r / 3) * na + c / 3].col(c % 3)[r % 3];
+            }
+            lu.factorise()?;
+            check_triangular_condition(lu.pivots())?;
+            Some(lu)
         };
         Ok(Some(LowRank {
             inverse_row_rotations,
@@ -378,13 +360,15 @@ impl CageReverser {
         }))
     }
 
-    /// The dense `3#C × 3#C` system and its LU.
-    fn dense(&self, joint_rotations: &[DMat3], joints_follow: bool) -> Result<DenseLu, RigError> {
+    /// The dense `3#C × 3#C` system, factorised into [`Self::dense_lu`]. Allocates its
+    /// scratch on the first call only.
+    fn dense(&mut self, joint_rotations: &[DMat3], joints_follow: bool) -> Result<(), RigError> {
         let nc = self.num_cage;
         let nj = self.parents.len();
         let nr = self.row_weights.num_vertices();
         // E_j(k): ∂T_j = E_j(k) ∂c_k (3×3 per joint and cage vertex), root-first.
-        let mut e = vec![DMat3::ZERO; nj * nc];
+        let e = &mut self.translation_jacobian;
+        e.resize(nj * nc, DMat3::ZERO);
         for &j in &self.order {
             let rot_j = joint_rotations[j];
             for k in 0..nc {
@@ -399,66 +383,86 @@ impl CageReverser {
                 };
             }
         }
-        // G = R̃Φ̃ + Ω̃ E as #R × (9 #C): entry (i, 9k + 3a + b) = G_block(i,k)[a][b]; for the
-        // regularised fit, the prior's Jacobian ∂P/∂C below it (#C more rows).
+        // G = R̃Φ̃ + Ω̃ E as #R × (9 #C), row-major: entry (i, 9k + 3a + b) = G_block(i,k)[a][b];
+        // for the regularised fit, the prior's Jacobian ∂P/∂C below it (#C more rows).
         let prior_rows = self.prior.as_ref().map_or(0, |_| nc);
-        let mut g = Mat::<f64>::zeros(nr + prior_rows, 9 * nc);
-        for i in 0..nr {
+        let width = 9 * nc;
+        let g = &mut self.rows_jacobian;
+        g.resize((nr + prior_rows) * width, 0.0);
+        for (i, g_row) in g.chunks_exact_mut(width).take(nr).enumerate() {
             let (joints, weights) = self.row_weights.row(i);
             let mut rot_i = DMat3::ZERO;
             for (&j, &w) in joints.iter().zip(weights) {
                 rot_i += joint_rotations[j as usize] * w;
             }
-            for k in 0..nc {
+            for (k, entries) in g_row.chunks_exact_mut(9).enumerate() {
                 let mut block = rot_i * self.row_coords[i * nc + k];
                 for (&j, &w) in joints.iter().zip(weights) {
                     block += e[j as usize * nc + k] * w;
                 }
-                for a in 0..3 {
-                    for b in 0..3 {
-                        // glam is column-major: block.col(b)[a] is entry (a, b).
-                        g[(i, 9 * k + 3 * a + b)] = block.col(b)[a];
-                    }
-                }
+                // glam is column-major: the transpose's columns are the block's rows.
+                entries.copy_from_slice(&block.transpose().to_cols_array());
             }
         }
         // P G (#C × 9#C), or [K Q] [G; ∂P/∂C] for the regularised fit (on this thread: a small
         // product, where the thread pool's dispatch cost more than it saved).
-        let pg = match &self.prior {
-            None => &self.cage_from_rows * &g,
-            Some((prior, stacked)) => {
-                prior.jacobian(joint_rotations, &e, g.as_mut().subrows_mut(nr, nc));
-                let mut pg = Mat::<f64>::zeros(nc, 9 * nc);
-                faer::linalg::matmul::matmul(
-                    pg.as_mut(),
-                    faer::Accum::Replace,
-                    stacked.as_ref(),
-                    g.as_ref(),
-                    1.0,
-                    faer::Par::Seq,
-                );
-                // The reach limit: row k is s_k [K Q]_k [G; ∂P/∂C] + (1 − s_k) ∂P_k/∂C.
-                for (k, s) in prior
-                    .reach_factors(joint_rotations, &self.cage_from_rows)
-                    .into_iter()
-                    .enumerate()
-                {
-                    if s < 1.0 {
-                        for c in 0..9 * nc {
-                            pg[(k, c)] = s * pg[(k, c)] + (1.0 - s) * g[(nr + k, c)];
-                        }
-                    }
-                }
-                pg
+        let pg = &mut self.cage_jacobian;
+        pg.resize(nc * width, 0.0);
+        let left = match &mut self.prior {
+            None => self.cage_from_rows.as_ref(),
+            Some(RegularisedParts {
+                prior,
+                stacked,
+                pose,
+            }) => {
+                prior.pose(joint_rotations, pose);
+                prior.jacobian(joint_rotations, e, pose, &mut g[nr * width..]);
+                stacked.as_ref()
             }
         };
+        faer::linalg::matmul::matmul(
+            faer::MatMut::from_row_major_slice_mut(pg, nc, width),
+            faer::Accum::Replace,
+            left,
+            faer::MatRef::from_row_major_slice(g, nr + prior_rows, width),
+            1.0,
+            faer::Par::Seq,
+        );
+        if let Some(RegularisedParts { prior, pose, .. }) = &mut self.prior {
+            // The reach limit: row k is s_k [K Q]_k [G; ∂P/∂C] + (1 − s_k) ∂P_k/∂C.
+            prior.reach_factors(joint_rotations, &self.cage_from_rows, pose);
+            let prior_jacobian = g[nr * width..].chunks_exact(width);
+            for ((row, prior_row), &s) in pg
+                .chunks_exact_mut(width)
+                .zip(prior_jacobian)
+                .zip(pose.reach_factors())
+            {
+                if s < 1.0 {
+                    for (v, p) in row.iter_mut().zip(prior_row) {
+                        *v = s * *v + (1.0 - s) * p;
+                    }
+                }
+            }
+        }
+        // Entry (3k' + a, 3k + b) of the system (column-major) is entry (k', 9k + 3a + b) of
+        // P·G.
         let n = 3 * nc;
-        let system = Mat::<f64>::from_fn(n, n, |r, c| {
-            let (kp, a) = (r / 3, r % 3);
-            let (k, b) = (c / 3, c % 3);
-            pg[(kp, 9 * k + 3 * a + b)]
-        });
-        DenseLu::new(&system)
+        let system = self.dense_lu.matrix_mut();
+        for (kp, row) in pg.chunks_exact(width).enumerate() {
+            for (k, entries) in row.chunks_exact(9).enumerate() {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        system[(3 * k + b) * n + 3 * kp + a] = entries[3 * a + b];
+                    }
+                }
+            }
+        }
+        self.dense_lu.factorise()?;
+        let conditioned = check_triangular_condition(self.dense_lu.pivots());
+        if conditioned.is_err() {
+            self.dense_lu.invalidate();
+        }
+        conditioned
     }
 
     /// Solves Eq. 19 for the rest-cage offsets ∂C (`#C`, written to `rest_cage_delta`) that
@@ -470,20 +474,16 @@ impl CageReverser {
         rest_cage_delta: &mut [DVec3],
     ) -> Result<(), RigError> {
         let nc = self.num_cage;
-        match &self.factor {
+        match &mut self.factor {
             None => Err(RigError::Invalid(
                 "the reverse cage deformer was not factorised for the current pose".into(),
             )),
-            Some(Factor::Dense(lu)) => {
-                let n = 3 * nc;
+            Some(Factor::Dense) => {
                 for (k, d) in posed_cage_delta.iter().enumerate() {
                     self.rhs[3 * k..3 * k + 3].copy_from_slice(&d.to_array());
                 }
-                let (x, tmp) = (&mut self.rhs, &mut self.scratch_small);
-                if tmp.len() < n {
-                    tmp.resize(n, 0.0);
-                }
-                lu.solve(x, tmp);
+                let x = &mut self.rhs;
+                self.dense_lu.solve(x);
                 for (k, d) in rest_cage_delta.iter_mut().enumerate() {
                     *d = DVec3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
                 }
@@ -509,9 +509,9 @@ impl CageReverser {
                     }
                 }
                 let na = lr.active.len();
-                if let Some(cap) = &lr.capacitance {
+                if let Some(cap) = &mut lr.capacitance {
                     // s = (I + VY)⁻¹ V z, then x = z − Y s.
-                    let (w, tmp) = self.scratch_small.split_at_mut(3 * na);
+                    let w = &mut self.scratch_small[..3 * na];
                     for (a, &k) in lr.active.iter().enumerate() {
                         let psi = &self.joint_coords[k * nc..(k + 1) * nc];
                         let v = psi
@@ -520,7 +520,7 @@ impl CageReverser {
                             .fold(DVec3::ZERO, |acc, (&p, zc)| acc + p * *zc);
                         w[3 * a..3 * a + 3].copy_from_slice(&v.to_array());
                     }
-                    cap.solve(w, tmp);
+                    cap.solve(w);
                     for (c, out) in rest_cage_delta.iter_mut().enumerate() {
                         let mut x = z[c];
                         for a in 0..na {

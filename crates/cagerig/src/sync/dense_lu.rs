@@ -1,6 +1,7 @@
 //! A dense LU factorisation with partial pivoting into caller-owned storage, for the small
-//! `3#C × 3#C` Jacobians and Hessians of the Green-coordinates Newton iterations: factorise and
-//! solve without allocating, so that an event that refactorises stays allocation-free.
+//! `3#C × 3#C` systems of the cage fits: the Jacobians and Hessians of the Green-coordinates
+//! Newton iterations and CageRev's Eq. 19. Factorise and solve without allocating, so that an
+//! event that refactorises stays allocation-free.
 //!
 //! The factorisation is faer's blocked, recursive LU (`lu_in_place`), run sequentially into
 //! scratch allocated once: on the Arm's cage (n = 174) it takes about a fifth of the time of the
@@ -17,6 +18,8 @@ use crate::error::RigError;
 /// and above), with the row permutation of partial pivoting.
 pub struct DenseLu {
     n: usize,
+    /// What the matrix is, for errors ("the Green-coordinates Jacobian").
+    what: &'static str,
     /// The matrix on [`DenseLu::matrix_mut`], its factors after [`DenseLu::factorise`].
     values: Vec<f64>,
     /// Row `forward[k]` of the matrix is row k of L·U; `inverse` is its inverse.
@@ -31,6 +34,7 @@ impl std::fmt::Debug for DenseLu {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("DenseLu")
             .field("n", &self.n)
+            .field("what", &self.what)
             .field("factorised", &self.factorised)
             .finish_non_exhaustive()
     }
@@ -40,6 +44,7 @@ impl Clone for DenseLu {
     fn clone(&self) -> Self {
         Self {
             n: self.n,
+            what: self.what,
             values: self.values.clone(),
             forward: self.forward.clone(),
             inverse: self.inverse.clone(),
@@ -59,10 +64,12 @@ impl PartialEq for DenseLu {
 }
 
 impl DenseLu {
-    /// Storage for `n × n` matrices.
-    pub fn new(n: usize) -> Self {
+    /// Storage for `n × n` matrices; `what` names the matrix in errors ("the
+    /// Green-coordinates Jacobian").
+    pub fn new(n: usize, what: &'static str) -> Self {
         Self {
             n,
+            what,
             values: vec![0.0; n * n],
             forward: (0..n).collect(),
             inverse: (0..n).collect(),
@@ -98,12 +105,11 @@ impl DenseLu {
     /// before it (|u_jj| ≤ ε·n·max_{k≤j} |u_kk|) or the matrix is not finite (the factors are
     /// then unusable).
     pub fn factorise(&mut self) -> Result<(), RigError> {
-        let n = self.n;
+        let (n, what) = (self.n, self.what);
         self.factorised = false;
         if self.values.iter().any(|v| !v.is_finite()) {
             return Err(RigError::Invalid(format!(
-                "the Green-coordinates Jacobian ({n} × {n}) is not finite: the cage fit has no \
-                 unique solution"
+                "{what} ({n} × {n}) is not finite: the cage fit has no unique solution"
             )));
         }
         factor::lu_in_place(
@@ -121,13 +127,18 @@ impl DenseLu {
             largest = largest.max(pivot);
             if pivot.is_nan() || pivot <= f64::EPSILON * largest * n as f64 {
                 return Err(RigError::Invalid(format!(
-                    "the Green-coordinates Jacobian ({n} × {n}) is singular at column {j} \
-                     (largest pivot {pivot:.3e}): the cage fit has no unique solution"
+                    "{what} ({n} × {n}) is singular at column {j} (pivot {pivot:.3e}, largest \
+                     {largest:.3e}): the cage fit has no unique solution"
                 )));
             }
         }
         self.factorised = true;
         Ok(())
+    }
+
+    /// The diagonal of U (`n`), once factorised.
+    pub fn pivots(&self) -> impl Iterator<Item = f64> + '_ {
+        (0..self.n).map(|j| self.values[j * self.n + j])
     }
 
     /// Solves A x = b in place (`x` holds b on entry, `n` long). Requires the factors.
@@ -164,14 +175,14 @@ mod tests {
                 b[r] += matrix[c * n + r] * x_true[c];
             }
         }
-        let mut lu = DenseLu::new(n);
+        let mut lu = DenseLu::new(n, "a test matrix");
         lu.matrix_mut().copy_from_slice(&matrix);
         lu.factorise().unwrap();
         lu.solve(&mut b);
         for (x, t) in b.iter().zip(&x_true) {
             assert!((x - t).abs() < 1e-12, "{x} vs {t}");
         }
-        let mut singular = DenseLu::new(2);
+        let mut singular = DenseLu::new(2, "a test matrix");
         singular.matrix_mut().copy_from_slice(&[1.0, 2.0, 2.0, 4.0]);
         assert!(singular.factorise().is_err());
         assert!(!singular.is_factorised());

@@ -87,7 +87,7 @@ impl NewtonSolver {
     /// A solver for `n` unknown points.
     pub fn new(n: usize) -> Self {
         Self {
-            lu: DenseLu::new(3 * n),
+            lu: DenseLu::new(3 * n, "the Green-coordinates reverse Jacobian"),
             fresh: false,
             residual: vec![DVec3::ZERO; n],
             trial: vec![DVec3::ZERO; n],

@@ -170,7 +170,7 @@ impl GreenCageFit {
             face_rows,
             normals,
             binding_cage: binding_cage.to_vec(),
-            lu: DenseLu::new(3 * num_cage),
+            lu: DenseLu::new(3 * num_cage, "the Green-coordinates Hessian"),
             damping: 0.0,
             factor_damping: f64::INFINITY,
             tolerance: GRADIENT_TOLERANCE * cage_size.max(f64::MIN_POSITIVE),

@@ -207,16 +207,18 @@ pub(crate) fn prior_jacobians(
     let nc = prior.target.len();
     let nj = joint_linear.len();
     let zero_translations = vec![DMat3::ZERO; nj * nc];
-    let mut by_entry = Mat::<f64>::zeros(nc, 9 * nc);
+    let mut by_entry = vec![0.0; nc * 9 * nc];
+    let mut pose = prior.prior.pose_scratch();
+    prior.prior.pose(joint_linear, &mut pose);
     prior
         .prior
-        .jacobian(joint_linear, &zero_translations, by_entry.as_mut());
-    // Entry (k, 9m + 3a + b) is entry (a, b) of block (k, m).
+        .jacobian(joint_linear, &zero_translations, &mut pose, &mut by_entry);
+    // Entry (k, 9m + 3a + b) (row-major) is entry (a, b) of block (k, m).
     for k in 0..nc {
         for m in 0..nc {
             for a in 0..3 {
                 for b in 0..3 {
-                    cage_rows[(3 * k + a, 3 * m + b)] = by_entry[(k, 9 * m + 3 * a + b)];
+                    cage_rows[(3 * k + a, 3 * m + b)] = by_entry[k * 9 * nc + 9 * m + 3 * a + b];
                 }
             }
         }
