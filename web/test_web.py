@@ -3,7 +3,8 @@
 (the W3C WebDriver protocol, spoken with the standard library), against target/web/ served on
 127.0.0.1. It does what a user does: loads the page, waits for the first frame, rotates a joint
 and grabs a cage vertex with the pointer and the keys, undoes, opens data/fox/Fox.glb through the
-file input, downloads a session, and opens bad files. It reads the rig back through the page's
+file input, binds it again with automatic weights (computed in the page's worker), downloads a
+session, and opens bad files. It reads the rig back through the page's
 test hook (window.cagerigTest), compares it with `cagerig edit` on the same script to round-off,
 times the engine in the page, and writes screenshots and report.json to the output folder.
 
@@ -404,6 +405,54 @@ def main():
         })
         time.sleep(0.5)
         driver.screenshot(out / "fox.png")
+
+        # 8b. Bind with automatic weights (the Skeleton panel's Bind, re-weighting the Fox): the
+        # weights are computed in the worker while the page's 20 ms timer keeps firing, the rig
+        # is then bound on the page's thread, and Ω equals the native library's on the same
+        # input.
+        bound_before = sum(1 for l in status()["log"] if l["text"].startswith("bound "))
+        driver.js("cagerigTest.bindAutomatic()")
+        binding_seen = status()["binding"]
+        bound = wait("the bind with automatic weights", lambda: (s := status()) and not s["binding"] and
+                     sum(1 for l in s["log"] if l["text"].startswith(("bound ", "bind:"))) > bound_before and s, 120)
+        line = [l["text"] for l in bound["log"] if l["text"].startswith(("bound ", "bind:"))][-1]
+        weights_run = driver.js("return cagerigTest.lastWeights")
+        page_weights = driver.js("return cagerigTest.skinWeights()")
+        # The native library on what the page gave its worker: the rest mesh, the cage and the
+        # skeleton as OBJ and .skt files for `cagerig weights` (same default options).
+        given = json.loads(weights_run["input"])
+        with tempfile.TemporaryDirectory() as native:
+            def write_obj(path, mesh):
+                path.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in mesh["positions"]) +
+                                "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in mesh["triangles"]))
+            write_obj(Path(native) / "mesh.obj", given["mesh"])
+            write_obj(Path(native) / "cage.obj", given["cage"])
+            (Path(native) / "skeleton.skt").write_text("".join(
+                f"j {j} {joint['name']} {-1 if joint['parent'] is None else joint['parent']} "
+                + " ".join(repr(x) for x in joint["rest_world_from_joint"][-3:]) + "\n"
+                for j, joint in enumerate(given["joints"])))
+            subprocess.run([str(args.cli), "weights", native + "/mesh.obj", "--skeleton", native + "/skeleton.skt",
+                            "--cage", native + "/cage.obj", "--out", native + "/w.skw"],
+                           check=True, capture_output=True)
+            native_rows = [{} for _ in page_weights["rows"]]
+            for row in (Path(native) / "w.skw").read_text().splitlines():
+                fields = row.split()
+                if len(fields) == 3 and not row.startswith("#"):
+                    native_rows[int(fields[1])][int(fields[0])] = float(fields[2])
+        def row_difference(page_row, native_row):
+            page_row = {j: w for j, w in page_row}
+            return max((abs(page_row.get(j, 0.0) - native_row.get(j, 0.0))
+                        for j in set(page_row) | set(native_row)), default=0.0)
+        weights_difference = max(row_difference(p, n) for p, n in zip(page_weights["rows"], native_rows))
+        report["fox_bind"] = {"worker_ms": weights_run["ms"], "page_longest_pause_ms": weights_run["longestGapMs"],
+                              "line": line, "weights_difference": weights_difference}
+        check("Bind with automatic weights computes them in the worker while the page stays responsive",
+              line.startswith("bound 24 joints") and binding_seen and weights_run["ms"] > 0
+              and weights_run["longestGapMs"] < max(250.0, 0.25 * weights_run["ms"]),
+              f"worker {weights_run['ms']:.0f} ms, the page's longest pause meanwhile "
+              f"{weights_run['longestGapMs']:.0f} ms; {line}")
+        check("the automatic weights bound in the page equal the native library's",
+              weights_difference <= 1e-9, f"largest difference {weights_difference:.1e}")
 
         session = download_session("the Fox")
         check("the Fox's session names its file", session["source"].get("path") == "Fox.glb",

@@ -2,17 +2,21 @@
 //! stays, for a re-weighting), with automatic skinning weights Ω (geodesic voxel binding, the
 //! `cagerig weights` method) or the bound weights carried over. The heavy part — the weights
 //! and the new session — runs on a background thread with progress; the document takes the
-//! result as one undo step ([`crate::document::Document::finish_bind`]).
+//! result as one undo step ([`crate::document::Document::finish_bind`]). The automatic weights
+//! may instead be handed to a [`WeightsOffload`] (the web page's worker); the new session is
+//! then built once they are back (on the web target, which has no threads, on the page's
+//! thread after a frame of progress).
 
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::sync::{Arc, Mutex};
 use web_time::Instant;
 
-use cagerig::auto_weights::{AutoWeights, AutoWeightsOptions, Progress, Stage};
+use cagerig::auto_weights::{AutoWeightsOptions, Progress, Stage};
 use cagerig::session::{BindStage, DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::{Skeleton, SkinWeights, Warning};
 use glam::{DQuat, DVec3};
 
+use crate::offload::{WeightsInput, WeightsOffload, WeightsOutput, WeightsReply, compute_weights};
 use crate::skeleton_draft::SkeletonDraft;
 
 /// Where the new Ω comes from.
@@ -36,6 +40,8 @@ pub struct BindRequest {
     automatic: Option<AutoWeightsOptions>,
     /// For each new joint, the bound joint it stands for (`#J` new).
     pub origins: Vec<Option<usize>>,
+    /// Warnings of weights computed elsewhere, reported with the bind's.
+    warnings: Vec<Warning>,
 }
 
 /// A finished bind.
@@ -104,26 +110,44 @@ impl BindRequest {
             precision: session.display_precision(),
             automatic,
             origins,
+            warnings: Vec::new(),
         })
+    }
+
+    /// The input of the automatic weights, when Ω is to be computed.
+    fn weights_input(&self) -> Option<WeightsInput> {
+        let options = self.automatic.as_ref()?;
+        let p = &self.parts;
+        Some(WeightsInput::new(options, &p.mesh, &p.skeleton, &p.cage))
+    }
+
+    /// Takes Ω computed elsewhere: the request then only builds the session.
+    fn with_weights(mut self, output: WeightsOutput) -> Result<Self, String> {
+        let (weights, warnings) = output
+            .into_weights(self.parts.mesh.num_vertices(), self.parts.skeleton.len())
+            .map_err(|e| e.to_string())?;
+        self.parts.skin_weights = weights;
+        self.warnings.extend(warnings);
+        self.automatic = None;
+        Ok(self)
     }
 
     /// Computes Ω and builds the new session; `progress` follows the automatic weights, then
     /// the rig's binding.
     pub fn run(mut self, progress: &(dyn Fn(BindStep) + Sync)) -> Result<BoundRig, String> {
         let t = Instant::now();
-        let mut warnings = Vec::new();
+        let mut warnings = std::mem::take(&mut self.warnings);
         if let Some(options) = &self.automatic {
-            let result = AutoWeights::new(options.clone())
-                .map_err(|e| format!("automatic weights: {e}"))?
-                .compute_with_progress(
-                    &self.parts.mesh,
-                    &self.parts.skeleton,
-                    Some(&self.parts.cage),
-                    &|p| progress(BindStep::Weights(p)),
-                )
-                .map_err(|e| format!("automatic weights: {e}"))?;
-            warnings.extend(result.report.warnings);
-            self.parts.skin_weights = result.weights;
+            let (weights, more) = compute_weights(
+                options,
+                &self.parts.mesh,
+                &self.parts.skeleton,
+                &self.parts.cage,
+                &|p| progress(BindStep::Weights(p)),
+            )
+            .map_err(|e| e.to_string())?;
+            warnings.extend(more);
+            self.parts.skin_weights = weights;
         }
         let report = |stage, done, total| progress(BindStep::Rig { stage, done, total });
         let (mut session, more) = RigSession::with_progress(self.parts, self.options, &report)
@@ -229,58 +253,176 @@ pub enum BindStep {
     },
 }
 
-/// A bind running on a background thread.
+/// Where a running bind is.
+enum JobState {
+    /// Running on a background thread (never on the web target).
+    #[cfg_attr(
+        target_arch = "wasm32",
+        expect(dead_code, reason = "the web target has no threads")
+    )]
+    Running(Receiver<Result<BoundRig, String>>),
+    /// Waiting for its automatic weights from a [`WeightsOffload`].
+    Offloaded {
+        weights: Receiver<Result<WeightsOutput, String>>,
+        request: Box<BindRequest>,
+    },
+    /// To run on this thread (the web target has no threads; or none could be started) at its
+    /// second poll, so that a frame shows the progress first; whether it was polled once.
+    Deferred(Box<BindRequest>, bool),
+    /// Its result was taken, or it failed to continue.
+    Done,
+}
+
+/// A bind running in the background: on a thread, or with its automatic weights offloaded.
 pub struct BindJob {
-    receiver: Receiver<Result<BoundRig, String>>,
+    state: JobState,
     progress: Arc<Mutex<Option<BindStep>>>,
     started: Instant,
+    /// Whether the automatic weights are computed by a [`WeightsOffload`].
+    offloaded: bool,
 }
 
 impl BindJob {
-    /// Starts `request` on a new thread (on the web target, which has no threads, runs it
-    /// now: its result is then ready at the first [`Self::poll`]).
-    pub fn spawn(request: BindRequest) -> Self {
-        let (sender, receiver) = channel();
+    /// Starts `request`: on a new thread; with its automatic weights handed to `offload`
+    /// when given (the rest once they are back). On the web target, which has no threads,
+    /// what is not offloaded runs on this thread at the second [`Self::poll`] after it is due.
+    pub fn spawn(request: BindRequest, offload: Option<&dyn WeightsOffload>) -> Self {
         let progress = Arc::new(Mutex::new(None));
-        let shared = Arc::clone(&progress);
-        let work = move || {
-            let report = |p: BindStep| {
-                if let Ok(mut slot) = shared.lock() {
-                    *slot = Some(p);
-                }
+        let started = Instant::now();
+        if let Some(offload) = offload
+            && let Some(input) = request.weights_input()
+        {
+            let (sender, weights) = channel();
+            offload.start(
+                input,
+                WeightsReply {
+                    sender,
+                    progress: Arc::clone(&progress),
+                },
+            );
+            return Self {
+                state: JobState::Offloaded {
+                    weights,
+                    request: Box::new(request),
+                },
+                progress,
+                started,
+                offloaded: true,
             };
-            let result = request.run(&report);
-            // The studio may have closed the document meanwhile: nobody to tell.
-            let _ = sender.send(result);
-        };
-        #[cfg(not(target_arch = "wasm32"))]
-        std::thread::spawn(work);
-        #[cfg(target_arch = "wasm32")]
-        work();
+        }
         Self {
-            receiver,
+            state: Self::start(request, &progress),
             progress,
-            started: Instant::now(),
+            started,
+            offloaded: false,
         }
     }
 
-    /// The result once the thread is done (`None` while it runs).
-    pub fn poll(&self) -> Option<Result<BoundRig, String>> {
-        match self.receiver.try_recv() {
-            Ok(result) => Some(result),
-            Err(TryRecvError::Empty) => None,
-            Err(TryRecvError::Disconnected) => Some(Err(
-                "the bind stopped unexpectedly (its thread ended)".into(),
-            )),
+    /// Runs `request` on a new thread; on the web target, or when no thread can be started,
+    /// on this thread at the second poll.
+    fn start(request: BindRequest, progress: &Arc<Mutex<Option<BindStep>>>) -> JobState {
+        #[cfg(target_arch = "wasm32")]
+        {
+            let _ = progress;
+            JobState::Deferred(Box::new(request), false)
         }
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            let (sender, receiver) = channel();
+            let shared = Arc::clone(progress);
+            // The thread takes the request; it stays here when no thread can be started.
+            let slot = Arc::new(Mutex::new(Some(request)));
+            let job = Arc::clone(&slot);
+            let spawned = std::thread::Builder::new()
+                .name("cagerig-bind".into())
+                .spawn(move || {
+                    let Some(request) = job.lock().ok().and_then(|mut r| r.take()) else {
+                        return;
+                    };
+                    let result = request.run(&|p| report_to(&shared, p));
+                    // The studio may have closed the document meanwhile: nobody to tell.
+                    let _ = sender.send(result);
+                });
+            let left = match spawned {
+                Ok(_) => None,
+                Err(_) => slot.lock().ok().and_then(|mut r| r.take()),
+            };
+            match left {
+                Some(request) => JobState::Deferred(Box::new(request), false),
+                None => JobState::Running(receiver),
+            }
+        }
+    }
+
+    /// The result once the bind is done (`None` while it runs; a deferred bind runs here).
+    pub fn poll(&mut self) -> Option<Result<BoundRig, String>> {
+        match std::mem::replace(&mut self.state, JobState::Done) {
+            JobState::Running(receiver) => match receiver.try_recv() {
+                Ok(result) => Some(result.map(|bound| self.total_time(bound))),
+                Err(TryRecvError::Empty) => {
+                    self.state = JobState::Running(receiver);
+                    None
+                }
+                Err(TryRecvError::Disconnected) => Some(Err(
+                    "the bind stopped unexpectedly (its thread ended)".into(),
+                )),
+            },
+            JobState::Offloaded { weights, request } => match weights.try_recv() {
+                Ok(Ok(output)) => match request.with_weights(output) {
+                    Ok(request) => {
+                        self.state = Self::start(request, &self.progress);
+                        None
+                    }
+                    Err(e) => Some(Err(e)),
+                },
+                Ok(Err(message)) => Some(Err(message)),
+                Err(TryRecvError::Empty) => {
+                    self.state = JobState::Offloaded { weights, request };
+                    None
+                }
+                Err(TryRecvError::Disconnected) => Some(Err(
+                    "the automatic weights stopped unexpectedly (nothing computes them)".into(),
+                )),
+            },
+            JobState::Deferred(request, false) => {
+                self.state = JobState::Deferred(request, true);
+                None
+            }
+            JobState::Deferred(request, true) => {
+                let progress = &self.progress;
+                let result = request.run(&|p| report_to(progress, p));
+                Some(result.map(|bound| self.total_time(bound)))
+            }
+            JobState::Done => None,
+        }
+    }
+
+    /// `bound` with the time since the bind started (its weights included, wherever they ran).
+    /// (A bind that ran whole on its thread keeps its own time.)
+    fn total_time(&self, mut bound: BoundRig) -> BoundRig {
+        if self.offloaded {
+            bound.seconds = self.started.elapsed().as_secs_f64();
+        }
+        bound
     }
 
     /// Fraction done (0…1) and a line for the progress bar.
     pub fn progress(&self) -> (f32, String) {
         let seconds = self.started.elapsed().as_secs_f64();
+        if matches!(self.state, JobState::Deferred(..)) {
+            return (
+                0.75,
+                format!("binding: the rig's operators… {seconds:.1} s"),
+            );
+        }
         let p = self.progress.lock().ok().and_then(|p| *p);
         let Some(p) = p else {
-            return (0.0, format!("binding… {seconds:.1} s"));
+            let what = if self.offloaded {
+                "computing the weights in the worker"
+            } else {
+                "binding"
+            };
+            return (0.0, format!("{what}… {seconds:.1} s"));
         };
         let fraction = |done: usize, total: usize| {
             if total == 0 {
@@ -297,10 +439,21 @@ impl BindJob {
             },
             BindStep::Rig { stage, done, total } => (0.75, 0.25, stage.label(), done, total),
         };
+        let place = match p {
+            BindStep::Weights(_) if self.offloaded => " in the worker",
+            _ => "",
+        };
         (
             start + span * fraction(done, total),
-            format!("binding: {what} ({done}/{total}) {seconds:.1} s"),
+            format!("binding: {what}{place} ({done}/{total}) {seconds:.1} s"),
         )
+    }
+}
+
+/// Records `step` as the bind's progress.
+fn report_to(progress: &Mutex<Option<BindStep>>, step: BindStep) {
+    if let Ok(mut slot) = progress.lock() {
+        *slot = Some(step);
     }
 }
 

@@ -8,6 +8,7 @@ use glam::DVec3;
 use crate::binding::{BindJob, BindRequest, BindWeights, BoundRig, carry_pose};
 use crate::document::{BindingKey, DocError, Document, SkeletonEdit};
 use crate::keys::Keys;
+use crate::offload::WeightsOffload;
 use crate::saved_binding::SavedBinding;
 use crate::session_file::SessionFile;
 use crate::skeleton_draft::{Mirror, SkeletonDraft};
@@ -116,12 +117,17 @@ impl Document {
     }
 
     /// Starts a bind in the background: the draft (or the bound skeleton, re-weighted) with
-    /// `weights`. Refused while one runs.
-    pub fn start_bind(&mut self, weights: BindWeights) -> Result<(), DocError> {
+    /// `weights`, automatic weights computed by `offload` when given (the web page's worker).
+    /// Refused while one runs.
+    pub fn start_bind(
+        &mut self,
+        weights: BindWeights,
+        offload: Option<&dyn WeightsOffload>,
+    ) -> Result<(), DocError> {
         if self.bind_job.is_some() {
             return Err(DocError::Bind("a bind is already running".into()));
         }
-        self.bind_job = Some(BindJob::spawn(self.bind_request(weights)?));
+        self.bind_job = Some(BindJob::spawn(self.bind_request(weights)?, offload));
         Ok(())
     }
 
@@ -148,7 +154,7 @@ impl Document {
     /// Takes the result of the background bind when it is done: `None` while it runs or
     /// when none runs, else what happened (applied as one undo step on success).
     pub fn poll_bind(&mut self) -> Option<Result<String, DocError>> {
-        let result = self.bind_job.as_ref()?.poll()?;
+        let result = self.bind_job.as_mut()?.poll()?;
         self.bind_job = None;
         Some(match result {
             Ok(bound) => {

@@ -173,6 +173,76 @@ mod skeleton_building {
         cagerig::mesh::bounding_box(d.session.rest_mesh())
     }
 
+    /// A stand-in for the web page's worker: answers when told, through the JSON encoding.
+    #[derive(Debug, Default)]
+    struct LaterWorker {
+        waiting:
+            std::cell::RefCell<Vec<(crate::offload::WeightsInput, crate::offload::WeightsReply)>>,
+    }
+
+    impl crate::offload::WeightsOffload for LaterWorker {
+        fn start(&self, input: crate::offload::WeightsInput, reply: crate::offload::WeightsReply) {
+            self.waiting.borrow_mut().push((input, reply));
+        }
+    }
+
+    impl LaterWorker {
+        fn answer(&self) {
+            use crate::offload::{WeightsInput, WeightsOutput};
+            for (input, reply) in self.waiting.borrow_mut().drain(..) {
+                let json = input.to_json().unwrap();
+                let output = WeightsInput::from_json(&json)
+                    .unwrap()
+                    .compute(&|p| reply.report(p))
+                    .unwrap()
+                    .to_json()
+                    .unwrap();
+                reply.finish(Ok(WeightsOutput::from_json(&output).unwrap()));
+            }
+        }
+    }
+
+    #[test]
+    fn offloaded_weights_bind_as_the_bind_computes_them() {
+        let mut reference = doc();
+        reference.bind_blocking(automatic()).unwrap();
+        let mut d = doc();
+        let worker = LaterWorker::default();
+        d.start_bind(automatic(), Some(&worker)).unwrap();
+        assert!(d.poll_bind().is_none(), "waiting for the worker");
+        assert!(d.bind_job().unwrap().progress().1.contains("in the worker"));
+        worker.answer();
+        let line = loop {
+            if let Some(result) = d.poll_bind() {
+                break result.unwrap();
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        };
+        assert!(line.starts_with("bound "), "{line}");
+        let (a, b) = (d.session.skin_weights(), reference.session.skin_weights());
+        for v in 0..a.num_vertices() {
+            assert_eq!(a.row(v).0, b.row(v).0);
+            for (x, y) in a.row(v).1.iter().zip(b.row(v).1) {
+                assert!((x - y).abs() <= 1e-15);
+            }
+        }
+        // A failed computation fails the bind with its message; the rig stays.
+        let mut d = doc();
+        let worker = LaterWorker::default();
+        d.start_bind(automatic(), Some(&worker)).unwrap();
+        for (_, reply) in worker.waiting.borrow_mut().drain(..) {
+            reply.finish(Err("the worker failed".into()));
+        }
+        let failed = d.poll_bind().unwrap();
+        assert!(
+            failed
+                .unwrap_err()
+                .to_string()
+                .contains("the worker failed")
+        );
+        assert!(d.bind_job().is_none());
+    }
+
     #[test]
     fn a_new_skeleton_binds_in_one_undo_step_and_undo_brings_the_old_rig_back() {
         let mut d = doc();

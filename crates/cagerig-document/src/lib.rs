@@ -9,6 +9,7 @@
 //! | `history` | undo / redo stacks of snapshots |
 //! | `skeleton_draft` | the skeleton being built: add, move, re-parent, rename, delete, X mirror |
 //! | `binding` | Bind: automatic or carried weights and the new session, on a background thread |
+//! | `offload` | a bind's automatic weights computed elsewhere (the web page's worker), and their encoding |
 //! | `keys` | skeleton and cage keyframes, playback, the paper tool's animation files |
 //! | `rig_open` | opening a character (built-in demo, OBJ set, glTF, FBX) |
 //! | `unrigged` | opening a mesh with no skeleton: its cage and a placeholder rig |
@@ -21,6 +22,7 @@ pub mod document;
 pub mod document_skeleton;
 pub mod history;
 pub mod keys;
+pub mod offload;
 pub mod rig_open;
 pub mod saved_binding;
 pub mod session_file;

@@ -440,7 +440,15 @@ impl eframe::App for StudioApp {
         let doc = self.project.doc.as_mut();
         timeline_ui(ui, doc, &mut self.timeline, &mut self.diagnostics);
         let (doc, view, tools) = (self.project.doc.as_mut(), &mut self.view, &mut self.tools);
-        inspector_ui(ui, doc, view, tools, &mut self.diagnostics);
+        let offload = self.run.options().weights_offload.clone();
+        inspector_ui(
+            ui,
+            doc,
+            view,
+            tools,
+            &mut self.diagnostics,
+            offload.as_deref(),
+        );
         let render_state = frame.wgpu_render_state().cloned();
         let gpu = match (&render_state, &self.renderer) {
             (Some(render_state), Some(renderer)) => Some(Gpu {
@@ -539,6 +547,19 @@ impl StudioApp {
         {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
             self.dialogs.confirm = Some(AfterConfirm::Close);
+        }
+    }
+
+    /// Starts a Bind with automatic weights, as the Skeleton panel's Bind button does.
+    pub fn bind_automatic(&mut self) {
+        let offload = self.run.options().weights_offload.clone();
+        match self.project.doc.as_mut() {
+            Some(doc) => crate::skeleton_panel::bind_automatic(
+                doc,
+                &mut self.diagnostics,
+                offload.as_deref(),
+            ),
+            None => self.diagnostics.log.error("bind: no rig is open"),
         }
     }
 

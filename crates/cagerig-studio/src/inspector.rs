@@ -12,13 +12,15 @@ use crate::selection::{Selection, Tool};
 use crate::tools::{NumericEntry, Tools};
 use crate::view_state::{ColorMode, ViewState};
 
-/// The right-hand panel.
+/// The right-hand panel (`offload`: what computes a Bind's automatic weights, when not the
+/// bind's own thread).
 pub fn inspector_ui(
     ui: &mut egui::Ui,
     mut doc: Option<&mut Document>,
     view: &mut ViewState,
     tools: &mut Tools,
     diag: &mut Diagnostics,
+    offload: Option<&dyn crate::offload::WeightsOffload>,
 ) {
     egui::Panel::right("inspector")
         .resizable(true)
@@ -37,7 +39,7 @@ pub fn inspector_ui(
                     diag,
                 );
                 ui.separator();
-                crate::skeleton_panel::skeleton_ui(ui, doc, tools, diag);
+                crate::skeleton_panel::skeleton_ui(ui, doc, tools, diag, offload);
             });
         });
 }

@@ -7,7 +7,7 @@
 //! | module | concern |
 //! |---|---|
 //! | **parts of the state** | |
-//! | `document` (and `document_skeleton`, `history`, `keys`, `skeleton_draft`, `binding`, `rig_open`, `unrigged`, `session_file`, `saved_binding`, `session_restore`) | the document model, from the GUI-free crate `cagerig-document`: the rig session, keys, skeleton building, undo, opening characters, session files |
+//! | `document` (and `document_skeleton`, `history`, `keys`, `skeleton_draft`, `binding`, `offload`, `rig_open`, `unrigged`, `session_file`, `saved_binding`, `session_restore`) | the document model, from the GUI-free crate `cagerig-document`: the rig session, keys, skeleton building, undo, opening characters, session files |
 //! | `project` | the document with its files: saving, autosave, export, animation import |
 //! | `view_state` | the two views' cameras, layout, layers, colour map |
 //! | `tools` | selection, tool, mouse state, numeric entry; a transform as one gesture |
@@ -82,8 +82,8 @@ pub mod views;
 // The document model lives in `cagerig-document` (no GUI dependencies, so that the fuzz
 // targets build it); its modules keep their paths here.
 pub use cagerig_document::{
-    binding, document, document_skeleton, history, keys, rig_open, saved_binding, session_file,
-    session_restore, skeleton_draft, unrigged,
+    binding, document, document_skeleton, history, keys, offload, rig_open, saved_binding,
+    session_file, session_restore, skeleton_draft, unrigged,
 };
 
 pub use app::StudioApp;

@@ -168,6 +168,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         color_mode: args.color_map,
         coords: args.coords,
         page_files: None,
+        weights_offload: None,
     };
     let failures = std::sync::Arc::clone(&options.failures);
     let native = eframe::NativeOptions {

@@ -10,14 +10,17 @@ use crate::diagnostics::Diagnostics;
 use crate::doc_commands::run_command;
 use crate::document::{Command, Document, SkeletonEdit};
 use crate::document_skeleton::ShownSkeleton;
+use crate::offload::WeightsOffload;
 use crate::tools::Tools;
 
 /// The Skeleton section of the inspector.
+/// `offload` computes a Bind's automatic weights when given (the web page's worker).
 pub fn skeleton_ui(
     ui: &mut egui::Ui,
     doc: Option<&mut Document>,
     tools: &mut Tools,
     diag: &mut Diagnostics,
+    offload: Option<&dyn WeightsOffload>,
 ) {
     let Some(doc) = doc else { return };
     // Open while a skeleton is being built; folded on a rigged character until asked for.
@@ -25,7 +28,7 @@ pub fn skeleton_ui(
     egui::CollapsingHeader::new(egui::RichText::new("Skeleton").heading())
         .id_salt("skeleton section")
         .open(building.then_some(true))
-        .show(ui, |ui| skeleton_section_ui(ui, doc, tools, diag));
+        .show(ui, |ui| skeleton_section_ui(ui, doc, tools, diag, offload));
 }
 
 fn skeleton_section_ui(
@@ -33,6 +36,7 @@ fn skeleton_section_ui(
     doc: &mut Document,
     tools: &mut Tools,
     diag: &mut Diagnostics,
+    offload: Option<&dyn WeightsOffload>,
 ) {
     let skeleton = doc.shown_skeleton(true);
     let status = match (doc.draft.is_some(), doc.rigged()) {
@@ -47,7 +51,7 @@ fn skeleton_section_ui(
         (false, true) => format!("{} joints, bound", skeleton.positions.len()),
     };
     ui.label(status);
-    bind_ui(ui, doc, diag);
+    bind_ui(ui, doc, diag, offload);
     ui.checkbox(&mut tools.add_joints, "Add joints by clicking")
         .on_hover_text(
             "In the rest view a click on the mesh adds a joint in the middle of the body under \
@@ -203,7 +207,29 @@ fn child_position(skeleton: &ShownSkeleton, j: usize, doc: &Document) -> DVec3 {
     }
 }
 
-fn bind_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
+/// Starts a Bind of the document's skeleton (its draft, or the bound one re-weighted) with
+/// automatic weights (the Skeleton panel's Bind), computed by `offload` when given; a refusal
+/// goes to the log.
+pub fn bind_automatic(
+    doc: &mut Document,
+    diag: &mut Diagnostics,
+    offload: Option<&dyn WeightsOffload>,
+) {
+    let weights = BindWeights::Automatic(AutoWeightsOptions {
+        tips: doc.bind_tips.clone(),
+        ..AutoWeightsOptions::default()
+    });
+    if let Err(e) = doc.start_bind(weights, offload) {
+        diag.log.error(format!("bind: {e}"));
+    }
+}
+
+fn bind_ui(
+    ui: &mut egui::Ui,
+    doc: &mut Document,
+    diag: &mut Diagnostics,
+    offload: Option<&dyn WeightsOffload>,
+) {
     if let Some(job) = doc.bind_job() {
         let (fraction, text) = job.progress();
         ui.add(egui::ProgressBar::new(fraction).text(text));
@@ -219,13 +245,7 @@ fn bind_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
             )
             .clicked()
         {
-            let weights = BindWeights::Automatic(AutoWeightsOptions {
-                tips: doc.bind_tips.clone(),
-                ..AutoWeightsOptions::default()
-            });
-            if let Err(e) = doc.start_bind(weights) {
-                diag.log.error(format!("bind: {e}"));
-            }
+            bind_automatic(doc, diag, offload);
         }
         if doc.draft.is_some()
             && doc.rigged()
@@ -235,7 +255,7 @@ fn bind_ui(ui: &mut egui::Ui, doc: &mut Document, diag: &mut Diagnostics) {
                     "Bind the changed skeleton keeping the bound weights (new joints get none)",
                 )
                 .clicked()
-            && let Err(e) = doc.start_bind(BindWeights::KeepBound)
+            && let Err(e) = doc.start_bind(BindWeights::KeepBound, None)
         {
             diag.log.error(format!("bind: {e}"));
         }

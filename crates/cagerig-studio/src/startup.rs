@@ -39,6 +39,9 @@ pub struct StartupOptions {
     pub coords: Option<cagerig::CoordsKind>,
     /// The web page's files (file input, samples, downloads); `None` in the native studio.
     pub page_files: Option<crate::page_files::SharedPageFiles>,
+    /// What computes a Bind's automatic weights (the web page's worker); `None`: the bind's
+    /// own background thread, as in the native studio.
+    pub weights_offload: Option<std::sync::Arc<dyn crate::offload::WeightsOffload>>,
     /// Failures of the startup actions (open, script, save), for the binary's exit status.
     pub failures: Arc<std::sync::Mutex<Vec<String>>>,
 }

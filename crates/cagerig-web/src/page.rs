@@ -3,12 +3,17 @@
 //! `web/index.html`), and the exports the page and its test call.
 //!
 //! Every export works on the one running studio; before [`start`] has finished, or after a
-//! panic, they report that no studio runs.
+//! panic, they report that no studio runs. The exports the page's worker calls
+//! ([`generated_cage`], [`automatic_weights`]) need no studio.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use cagerig_studio::StudioApp;
+use cagerig_studio::offload::{
+    WeightsInput, WeightsOffload, WeightsOutput, WeightsReply, stage_code, stage_of_code,
+};
 use cagerig_studio::page_files::PageFiles;
 use cagerig_studio::rig_open::RigSource;
 use cagerig_studio::startup::StartupOptions;
@@ -34,6 +39,15 @@ extern "C" {
     /// through the page's worker (which generates its cage when it has none).
     #[wasm_bindgen(js_namespace = cagerigPage, js_name = openBytes)]
     fn page_open_bytes(name: &str, bytes: &[u8]);
+    /// `window.cagerigPage.computeWeights(id, input)`: hands a Bind's automatic weights
+    /// (`input`: [`WeightsInput`] as JSON) to the page's worker, which answers through
+    /// [`weights_progress`] and [`weights_finished`] with the same `id`.
+    #[wasm_bindgen(js_namespace = cagerigPage, js_name = computeWeights)]
+    fn page_compute_weights(id: u32, input: &str);
+    /// `self.cagerigWorker.weightsProgress(stage, done, total)`, in the page's worker: relays
+    /// the automatic weights' progress to the page.
+    #[wasm_bindgen(js_namespace = cagerigWorker, js_name = weightsProgress)]
+    fn worker_weights_progress(stage: u32, done: usize, total: usize);
 }
 
 /// [`PageFiles`] through `window.cagerigPage`.
@@ -77,7 +91,32 @@ impl PageFiles for Page {
     }
 }
 
+/// [`WeightsOffload`] through the page's worker: each computation gets an id, and its reply
+/// waits in [`WEIGHTS`] for the worker's answer.
+#[derive(Debug)]
+struct WorkerWeights;
+
+impl WeightsOffload for WorkerWeights {
+    fn start(&self, input: WeightsInput, reply: WeightsReply) {
+        let json = match input.to_json() {
+            Ok(json) => json,
+            Err(e) => return reply.finish(Err(e.to_string())),
+        };
+        let id = NEXT_WEIGHTS.with(|n| {
+            let id = n.get().wrapping_add(1);
+            n.set(id);
+            id
+        });
+        WEIGHTS.with(|w| w.borrow_mut().insert(id, reply));
+        page_compute_weights(id, &json);
+    }
+}
+
 thread_local! {
+    /// The automatic weights the worker computes, by id.
+    static WEIGHTS: RefCell<HashMap<u32, WeightsReply>> = RefCell::new(HashMap::new());
+    /// The last id given to one.
+    static NEXT_WEIGHTS: Cell<u32> = const { Cell::new(0) };
     /// The running studio.
     static RUNNER: RefCell<Option<eframe::WebRunner>> = const { RefCell::new(None) };
     /// Its egui context, to ask for a frame after a change from outside.
@@ -96,11 +135,7 @@ fn with_app<T>(f: impl FnOnce(&mut StudioApp) -> T) -> Result<T, JsValue> {
             .ok_or_else(|| JsValue::from_str("the studio has stopped (see the console)"))?;
         Ok::<T, JsValue>(f(&mut app))
     })?;
-    CONTEXT.with(|c| {
-        if let Some(ctx) = c.borrow().as_ref() {
-            ctx.request_repaint();
-        }
-    });
+    repaint();
     Ok(result)
 }
 
@@ -120,6 +155,7 @@ pub async fn start(canvas_id: String) -> Result<(), JsValue> {
         // No file system: nothing is read from or written to a state folder.
         state_dir: Some("/cagerig-studio".into()),
         page_files: Some(Arc::new(Page)),
+        weights_offload: Some(Arc::new(WorkerWeights)),
         ..StartupOptions::default()
     };
     runner
@@ -190,6 +226,81 @@ pub fn open_file(name: String, bytes: Vec<u8>, cage_json: Option<String>) -> Res
     })
 }
 
+/// The page's worker's part of a Bind: the automatic weights of `input` ([`WeightsInput`] as
+/// JSON, from `window.cagerigPage.computeWeights`), as [`WeightsOutput`] JSON, computed in the
+/// worker's own instance of this module with the same code as a bind on the page. Progress
+/// goes to `self.cagerigWorker.weightsProgress`. An error is a message for the page's log.
+#[wasm_bindgen]
+pub fn automatic_weights(input: String) -> Result<String, JsValue> {
+    let error = |e: cagerig_studio::offload::OffloadError| JsValue::from_str(&e.to_string());
+    WeightsInput::from_json(&input)
+        .and_then(|input| {
+            input.compute(&|p| worker_weights_progress(stage_code(p.stage), p.done, p.total))
+        })
+        .and_then(|output| output.to_json())
+        .map_err(error)
+}
+
+/// The worker's progress on the automatic weights of computation `id` (`stage` as
+/// `stage_code` numbers it); unknown ids and stages are ignored.
+#[wasm_bindgen]
+pub fn weights_progress(id: u32, stage: u32, done: usize, total: usize) {
+    let Some(stage) = stage_of_code(stage) else {
+        return;
+    };
+    WEIGHTS.with(|w| {
+        if let Some(reply) = w.borrow().get(&id) {
+            reply.report(cagerig::auto_weights::Progress { stage, done, total });
+        }
+    });
+    repaint();
+}
+
+/// The worker's answer for the automatic weights of computation `id`: `output` (the
+/// [`automatic_weights`] JSON) or `error` (a message); the Bind goes on with it at the
+/// studio's next frame, and an error goes to the log. Unknown ids are ignored.
+#[wasm_bindgen]
+pub fn weights_finished(id: u32, output: Option<String>, error: Option<String>) {
+    let Some(reply) = WEIGHTS.with(|w| w.borrow_mut().remove(&id)) else {
+        return;
+    };
+    let result = match (output, error) {
+        (_, Some(error)) => Err(format!("automatic weights in the worker: {error}")),
+        (Some(json), None) => WeightsOutput::from_json(&json).map_err(|e| e.to_string()),
+        (None, None) => Err("the worker gave no automatic weights".into()),
+    };
+    reply.finish(result);
+    repaint();
+}
+
+/// Asks the studio for a frame (it polls what came from outside).
+fn repaint() {
+    CONTEXT.with(|c| {
+        if let Some(ctx) = c.borrow().as_ref() {
+            ctx.request_repaint();
+        }
+    });
+}
+
+/// Binds the rig's skeleton with automatic weights, as the Skeleton panel's Bind does (the
+/// weights in the page's worker, the rig then on the page's thread).
+#[wasm_bindgen]
+pub fn bind_automatic() -> Result<(), JsValue> {
+    with_app(StudioApp::bind_automatic)
+}
+
+/// The rig's skinning weights Ω as JSON `{"joints": #J, "rows": [[[joint, weight], …], …]}`
+/// (one row per vertex), for the test's comparison with native runs.
+#[wasm_bindgen]
+pub fn skin_weights() -> Result<String, JsValue> {
+    with_app(|app| {
+        app.project.doc.as_ref().map_or_else(
+            || "null".to_string(),
+            |doc| crate::rig_state::weights_json(doc.session.skin_weights()),
+        )
+    })
+}
+
 /// Logs why the page's worker could not open a character file, as the studio logs a file it
 /// cannot open (the open rig stays).
 #[wasm_bindgen]
@@ -246,7 +357,7 @@ pub fn run_script(json: String) -> Result<f64, JsValue> {
     })?
 }
 
-/// The studio's status as JSON: the rig's name and sizes, whether it is opening, unsaved
+/// The studio's status as JSON: the rig's name and sizes, whether it is opening or binding, unsaved
 /// edits, the undo depth, the frames drawn and the log.
 #[wasm_bindgen]
 pub fn status() -> Result<String, JsValue> {
@@ -265,6 +376,7 @@ pub fn status() -> Result<String, JsValue> {
             "joints": doc.map(|d| d.session.skeleton().len()),
             "cage_vertices": doc.map(|d| d.session.rest_cage().len()),
             "opening": app.is_opening(),
+            "binding": doc.is_some_and(|d| d.bind_job().is_some()),
             "unsaved": app.unsaved(),
             "undo_depth": doc.map(|d| d.history().undo_len()),
             "frames": app.frames(),

@@ -13,6 +13,8 @@ pub struct RigState {
     pub rest_cage: Vec<[f64; 3]>,
     /// Current cage C', `#C`.
     pub posed_cage: Vec<[f64; 3]>,
+    /// The cage's triangles.
+    pub cage_triangles: Vec<[u32; 3]>,
     /// Rest skin M, `#V`.
     pub rest_mesh: Vec<[f64; 3]>,
     /// Current skin M', `#V`.
@@ -27,6 +29,7 @@ impl RigState {
             posed_joints: session.posed_joints().map(|p| p.to_array()).collect(),
             rest_cage: rows(session.rest_cage()),
             posed_cage: rows(session.posed_cage()),
+            cage_triangles: session.cage_triangles().to_vec(),
             rest_mesh: rows(session.rest_mesh()),
             posed_mesh: rows(session.posed_mesh()),
         }
@@ -36,6 +39,18 @@ impl RigState {
     pub fn to_json(&self) -> String {
         serde_json::to_string(self).unwrap_or_else(|e| format!("{{\"error\":\"{e}\"}}"))
     }
+}
+
+/// Ω as JSON `{"joints": #J, "rows": [[[joint, weight], …], …]}`, one row per vertex (every
+/// f64 written so that it reads back to the same bits).
+pub fn weights_json(weights: &cagerig::SkinWeights) -> String {
+    let rows: Vec<Vec<(u32, f64)>> = (0..weights.num_vertices())
+        .map(|v| {
+            let (joints, values) = weights.row(v);
+            joints.iter().copied().zip(values.iter().copied()).collect()
+        })
+        .collect();
+    serde_json::json!({"joints": weights.num_joints(), "rows": rows}).to_string()
 }
 
 #[cfg(test)]
