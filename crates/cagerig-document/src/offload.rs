@@ -11,9 +11,8 @@
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
 
-use cagerig::auto_weights::{AutoWeights, AutoWeightsOptions, Progress, Stage, TipJoints};
+use cagerig::auto_weights::{AutoWeights, AutoWeightsOptions, Progress, Stage};
 use cagerig::{Joint, RigError, Skeleton, SkinWeights, TriMesh, Warning};
-use glam::DAffine3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -53,44 +52,14 @@ pub enum OffloadError {
     Compute(String),
 }
 
-/// One joint of the skeleton, as it crosses.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct JointInput {
-    name: String,
-    parent: Option<usize>,
-    rest_world_from_joint: DAffine3,
-}
-
-/// [`TipJoints`], as it crosses.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-enum TipsInput {
-    AllButEndMarkers,
-    All,
-    None,
-    Only(Vec<usize>),
-}
-
-/// [`AutoWeightsOptions`], as they cross (checked again by [`AutoWeights::new`]).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct OptionsInput {
-    max_influences: usize,
-    resolution: usize,
-    exponent: f64,
-    tips: TipsInput,
-    tip_length: f64,
-    closing: usize,
-    max_hole_fraction: f64,
-}
-
 /// What the automatic weights of a bind are computed from: the rest mesh, the new skeleton,
 /// the rest cage (its interior is part of the volume) and the options.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct WeightsInput {
     mesh: TriMesh,
     cage: TriMesh,
-    joints: Vec<JointInput>,
-    options: OptionsInput,
+    joints: Vec<Joint>,
+    options: AutoWeightsOptions,
 }
 
 /// Computed weights Ω (`#V × #J`, compressed rows) and the computation's warnings, as they
@@ -129,33 +98,11 @@ impl WeightsInput {
         skeleton: &Skeleton,
         cage: &TriMesh,
     ) -> Self {
-        let tips = match &options.tips {
-            TipJoints::AllButEndMarkers => TipsInput::AllButEndMarkers,
-            TipJoints::All => TipsInput::All,
-            TipJoints::None => TipsInput::None,
-            TipJoints::Only(list) => TipsInput::Only(list.clone()),
-        };
         Self {
             mesh: mesh.clone(),
             cage: cage.clone(),
-            joints: skeleton
-                .joints()
-                .iter()
-                .map(|j| JointInput {
-                    name: j.name.clone(),
-                    parent: j.parent,
-                    rest_world_from_joint: j.rest_world_from_joint,
-                })
-                .collect(),
-            options: OptionsInput {
-                max_influences: options.max_influences,
-                resolution: options.resolution,
-                exponent: options.exponent,
-                tips,
-                tip_length: options.tip_length,
-                closing: options.closing,
-                max_hole_fraction: options.max_hole_fraction,
-            },
+            joints: skeleton.joints().to_vec(),
+            options: options.clone(),
         }
     }
 
@@ -186,40 +133,8 @@ impl WeightsInput {
             TriMesh::new(self.mesh.positions, self.mesh.triangles).map_err(invalid("mesh"))?;
         let cage =
             TriMesh::new(self.cage.positions, self.cage.triangles).map_err(invalid("cage"))?;
-        let joints = self
-            .joints
-            .into_iter()
-            .map(|j| {
-                if j.rest_world_from_joint.is_finite() {
-                    Ok(Joint {
-                        name: j.name,
-                        parent: j.parent,
-                        rest_world_from_joint: j.rest_world_from_joint,
-                    })
-                } else {
-                    Err(OffloadError::Compute(format!(
-                        "joint {:?} has a rest frame that is not finite",
-                        j.name
-                    )))
-                }
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let skeleton = Skeleton::new(joints).map_err(invalid("skeleton"))?;
-        let o = self.options;
-        let options = AutoWeightsOptions {
-            max_influences: o.max_influences,
-            resolution: o.resolution,
-            exponent: o.exponent,
-            tips: match o.tips {
-                TipsInput::AllButEndMarkers => TipJoints::AllButEndMarkers,
-                TipsInput::All => TipJoints::All,
-                TipsInput::None => TipJoints::None,
-                TipsInput::Only(list) => TipJoints::Only(list),
-            },
-            tip_length: o.tip_length,
-            closing: o.closing,
-            max_hole_fraction: o.max_hole_fraction,
-        };
+        let skeleton = Skeleton::new(self.joints).map_err(invalid("skeleton"))?;
+        let options = self.options;
         let (weights, warnings) = compute_weights(&options, &mesh, &skeleton, &cage, progress)?;
         let (row_start, joints, values) = weights.csr();
         Ok(WeightsOutput {

@@ -11,8 +11,8 @@ use glam::{DAffine3, DVec3};
 
 use crate::error::RigError;
 
-/// One joint of the skeleton.
-#[derive(Debug, Clone, PartialEq)]
+/// One joint of the skeleton (serialised with serde; [`Skeleton::new`] checks joints).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Joint {
     /// Unique name.
     pub name: String,

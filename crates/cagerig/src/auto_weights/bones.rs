@@ -16,7 +16,8 @@ use crate::Skeleton;
 pub const MIN_BONE_FRACTION: f64 = 1e-6;
 
 /// Which tip joints (joints with no child) deform.
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum TipJoints {
     /// Every tip except end markers: joints whose name ends with `end`, `nub`, `tip` or
     /// `null` (any case; Blender's and 3ds Max's leaf markers, e.g. `head_end`, `Bip01 R Finger0Nub`).

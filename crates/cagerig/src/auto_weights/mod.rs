@@ -45,8 +45,8 @@ pub const DEFAULT_EXPONENT: f64 = 8.0;
 /// Most voxels a grid may have (a few bytes each).
 pub const MAX_VOXELS: usize = 64 << 20;
 
-/// Options of [`AutoWeights`].
-#[derive(Debug, Clone, PartialEq)]
+/// Options of [`AutoWeights`] (serialised with serde; [`AutoWeights::new`] checks them).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AutoWeightsOptions {
     /// Most joints influencing one vertex (≥ 1).
     pub max_influences: usize,
