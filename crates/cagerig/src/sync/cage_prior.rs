@@ -489,7 +489,7 @@ pub struct PriorPose {
 }
 
 impl PriorPose {
-    /// The reach limit's factors s_k (`#C`) of the last [`CagePrior::pose`].
+    /// The reach limit's factors s_k (`#C`) of the last [`CagePrior::reach_factors`].
     pub fn reach_factors(&self) -> &[f64] {
         &self.factors
     }

@@ -348,8 +348,7 @@ impl CageReverser {
                 let (r, c) = (i % n, i / n);
                 *v = blocks[(r / 3) * na + c / 3].col(c % 3)[r % 3];
             }
-            lu.factorise()?;
-            check_triangular_condition(lu.pivots())?;
+            factorise_conditioned(&mut lu)?;
             Some(lu)
         };
         Ok(Some(LowRank {
@@ -457,12 +456,7 @@ impl CageReverser {
                 }
             }
         }
-        self.dense_lu.factorise()?;
-        let conditioned = check_triangular_condition(self.dense_lu.pivots());
-        if conditioned.is_err() {
-            self.dense_lu.invalidate();
-        }
-        conditioned
+        factorise_conditioned(&mut self.dense_lu)
     }
 
     /// Solves Eq. 19 for the rest-cage offsets ∂C (`#C`, written to `rest_cage_delta`) that
@@ -536,4 +530,15 @@ impl CageReverser {
             }
         }
     }
+}
+
+/// Factorises `lu` and rejects factors whose pivots span more than the cage fits' condition
+/// bound ([`check_triangular_condition`]); rejected factors are invalidated.
+fn factorise_conditioned(lu: &mut DenseLu) -> Result<(), RigError> {
+    lu.factorise()?;
+    let conditioned = check_triangular_condition(lu.pivots());
+    if conditioned.is_err() {
+        lu.invalidate();
+    }
+    conditioned
 }

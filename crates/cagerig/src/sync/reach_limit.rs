@@ -131,7 +131,8 @@ impl ReachLimit {
     /// s (`factors`, `#C`) for the joints' linear parts `joint_linear` (`#J`), with the
     /// prior's carried rotations A_k (`rotations`, `#C`) and the binding skeleton's posed
     /// translations t̂_j (`translations`, `#J`) for those linear parts, its (k, j) `entries`,
-    /// and the fit's K `cage_from_rows` (`#C × #R`) and Q `cage_from_prior` (`#C × #C`). No allocation with a [`Self::scratch`].
+    /// and the fit's K `cage_from_rows` (`#C × #R`) and Q `cage_from_prior` (`#C × #C`). No
+    /// allocation with a [`Self::scratch`].
     #[expect(
         clippy::too_many_arguments,
         reason = "the prior's parts of the pose, each named"
