@@ -43,6 +43,7 @@ mod events;
 mod external_skinning;
 mod green;
 mod green_binding;
+mod green_cage_up;
 mod green_sync;
 mod parts;
 mod pose_events;

@@ -113,7 +113,7 @@ impl RigSession {
                 Ok(())
             }
             CageMap::Green(green) => {
-                let mut fit = green.fit.clone();
+                let mut fit = green.cage_up.fit.clone();
                 // The rows alone: no regulariser towards a carried cage.
                 fit.set_regularised(false);
                 // Start from the better of the given cage and the linear map's cage P·rows (the

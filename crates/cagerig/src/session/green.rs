@@ -9,16 +9,16 @@
 
 use std::sync::OnceLock;
 
+use super::green_cage_up::GreenCageUp;
 use crate::cage_coords::CageCoords;
 use crate::coords::stretched_normals::{FaceTermKind, StretchedNormals};
 use crate::error::RigError;
-use crate::error::UnfittedCage;
 use crate::skin_weights::SkinWeights;
 use crate::sync::cage_updater::CageUpdater;
 use crate::sync::green_cage_fit::reverser::GreenCageReverser;
 use crate::sync::green_cage_fit::{FitPrior, GreenCageFit};
 use crate::sync::newton::NewtonReport;
-use glam::{DAffine3, DVec3};
+use glam::DVec3;
 
 /// The Green terms of a session.
 #[derive(Debug, Clone)]
@@ -28,7 +28,8 @@ pub(super) struct GreenState {
     /// The vertex part's linear fit on the rows of [φ ψ]: the fitting rows R, and P·M'_R as a
     /// start for the Newton fit.
     pub(super) linear: CageUpdater,
-    pub(super) fit: GreenCageFit,
+    /// CageUp: the fit, its target rows and warm start.
+    pub(super) cage_up: GreenCageUp,
     pub(super) reverser: GreenCageReverser,
     /// g(C) for the current rest cage C, `#F`.
     pub(super) rest_terms: Vec<DVec3>,
@@ -41,31 +42,12 @@ pub(super) struct GreenState {
     pub(super) touched_faces: Vec<usize>,
     pub(super) face_changes: Vec<DVec3>,
     pub(super) face_marked: Vec<bool>,
-    /// The skinned fitting rows M'_R CageUp fitted last, `#R`.
-    pub(super) target_rows: Vec<DVec3>,
-    /// Skinning weights of the cage vertices, P·Ω̃ (`#C × #J`, row-major): the predictor of
-    /// CageUp's warm start.
-    pub(super) cage_weights: Vec<f64>,
-    /// The skinning transforms (`#J`) and the rest cage (`#C`) of the last CageUp, for the
-    /// predictor.
-    pub(super) last_transforms: Vec<DAffine3>,
-    pub(super) last_rest_cage: Vec<DVec3>,
-    pub(super) has_last_transforms: bool,
-    /// Scratch: the rest cage skinned with the cage weights, `#C`.
-    pub(super) skinned_cage: Vec<DVec3>,
-    /// Set by a grab: the next CageUp starts from the grabbed C' (CageRev made it the answer).
-    pub(super) start_from_posed_cage: bool,
     /// Λ_ψ = S·ψ (`#V × #F`) for the CoR centres, built with them.
     pub(super) face_centre_coords: Option<CageCoords>,
     /// max_v Σ_f |ψ_vf|: bounds what a face term below a threshold can add to any vertex.
     /// Computed when the first cage keyframe is made ([`GreenState::keyframe_terms_of`]), not at
     /// binding.
     pub(super) face_coords_norm: OnceLock<f64>,
-    /// Whether the failure in `unfitted` is yet to be reported to `finish_event` (a fit
-    /// outside an event, e.g. a rollback's, is not that event's).
-    pub(super) failure_unreported: bool,
-    /// Where the last CageUp stopped when it found no current cage (`None`: C' is its fit).
-    pub(super) unfitted: Option<UnfittedCage>,
     /// The cage's bounding-box diagonal.
     pub(super) size: f64,
     /// Newton reports of the last CageUp and CageRev.
@@ -168,7 +150,7 @@ impl GreenState {
         Ok(Self {
             face_coords,
             reverser: GreenCageReverser::new(num_cage, num_faces, rows.len(), num_joints, size),
-            fit,
+            cage_up: GreenCageUp::new(fit, rows.len(), cage_weights, num_joints, rest_cage),
             rest_terms,
             all_faces: (0..num_faces).collect(),
             vertex_face_start,
@@ -176,18 +158,9 @@ impl GreenState {
             touched_faces: Vec::with_capacity(num_faces),
             face_changes: Vec::with_capacity(num_faces),
             face_marked: vec![false; num_faces],
-            target_rows: vec![DVec3::ZERO; rows.len()],
             linear,
-            cage_weights,
-            last_transforms: vec![DAffine3::IDENTITY; num_joints],
-            last_rest_cage: rest_cage.to_vec(),
-            has_last_transforms: false,
-            start_from_posed_cage: false,
-            skinned_cage: rest_cage.to_vec(),
             face_centre_coords: None,
             face_coords_norm: OnceLock::new(),
-            failure_unreported: false,
-            unfitted: None,
             size,
             last_reverse: NewtonReport::default(),
         })
@@ -228,7 +201,7 @@ impl GreenState {
     /// g of `cage` into a new vector (`#F`).
     pub(super) fn terms_of(&self, cage: &[DVec3]) -> Vec<DVec3> {
         let mut g = vec![DVec3::ZERO; self.all_faces.len()];
-        self.fit.normals().apply(cage, &mut g);
+        self.cage_up.fit.normals().apply(cage, &mut g);
         g
     }
 }
@@ -248,7 +221,7 @@ impl GreenState {
         rest_cage: &[DVec3],
         rest_mesh: &mut [DVec3],
     ) {
-        let normals = self.fit.normals();
+        let normals = self.cage_up.fit.normals();
         normals.apply(rest_cage, &mut self.rest_terms);
         let tolerance =
             KEYFRAME_TERM_TOLERANCE * self.size / self.face_coords_norm().max(f64::MIN_POSITIVE);
@@ -290,7 +263,7 @@ impl GreenState {
                 }
             }
         }
-        let normals = self.fit.normals();
+        let normals = self.cage_up.fit.normals();
         for &f in &self.touched_faces {
             let new = normals.face(rest_cage, f);
             self.face_changes.push(new - self.rest_terms[f]);

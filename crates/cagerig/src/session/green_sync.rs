@@ -3,117 +3,30 @@
 
 use super::RigSession;
 use super::green::GREEN_FIT_LIMIT;
+use super::green_cage_up::CageUpInputs;
 use super::rest_map::CageMap;
-use super::unfitted_cage::UnfittedCagePolicy;
 use crate::cage_coords::CageCoords;
-use crate::error::{RigError, UnfittedCage};
-use crate::sync::green_cage_fit::FitBudget;
+use crate::error::RigError;
 use crate::sync::green_cage_fit::reverser::GrabState;
 use crate::sync::newton::NewtonReport;
 use faer::Mat;
 use glam::{DMat3, DVec3};
 
 impl RigSession {
-    /// CageUp under Green coordinates: C' fitted to the rows M'_R (in `green.target_rows`) by
-    /// Gauss–Newton, warm-started from the current C'. Records a failure to converge for
-    /// `finish_event`.
+    /// CageUp under Green coordinates: C' fitted to the rows M'_R (in the CageUp's
+    /// `target_rows`) by Gauss–Newton ([`GreenCageUp::fit_cage`]).
     pub(super) fn fit_green_cage(&mut self) {
         let CageMap::Green(green) = self.rest_map.cage_map_mut() else {
             return;
         };
-        let limit = GREEN_FIT_LIMIT * green.size;
-        green
-            .fit
-            .carry_prior(&self.posed_from_rest, &self.rest_cage);
-        let predict = !green.start_from_posed_cage;
-        green.start_from_posed_cage = false;
-        if predict {
-            // Two warm starts, the one the fit likes better: the previous C' moved by the change
-            // of the skinning transforms and the skinned change of the rest cage, and the rest
-            // cage skinned outright — both blended with the cage vertices' weights P·Ω̃ (the
-            // normals turn with the bones; at the rest pose the second is C, the exact answer).
-            let nj = green.last_transforms.len();
-            let continuing =
-                green.has_last_transforms && self.posed_cage.iter().all(|p| p.is_finite());
-            for (k, (p, s)) in self
-                .posed_cage
-                .iter_mut()
-                .zip(green.skinned_cage.iter_mut())
-                .enumerate()
-            {
-                let weights = &green.cage_weights[k * nj..(k + 1) * nj];
-                let rest_change = self.rest_cage[k] - green.last_rest_cage[k];
-                let (mut moved, mut skinned) = (DVec3::ZERO, DVec3::ZERO);
-                for (j, &w) in weights.iter().enumerate() {
-                    if w != 0.0 {
-                        let transform = &self.posed_from_rest[j];
-                        skinned += w * transform.transform_point3(self.rest_cage[k]);
-                        if continuing {
-                            let back = green.last_transforms[j].inverse().transform_point3(*p);
-                            moved += w
-                                * (transform.transform_point3(back)
-                                    + transform.transform_vector3(rest_change));
-                        }
-                    }
-                }
-                *s = skinned;
-                if continuing {
-                    *p = moved;
-                }
-            }
-            let skinned_energy = green.fit.energy(&green.target_rows, &green.skinned_cage);
-            if !continuing
-                || skinned_energy < green.fit.energy(&green.target_rows, &self.posed_cage)
-            {
-                self.posed_cage.copy_from_slice(&green.skinned_cage);
-            }
-        }
-        green.last_transforms.copy_from_slice(&self.posed_from_rest);
-        green.last_rest_cage.copy_from_slice(&self.rest_cage);
-        green.has_last_transforms = true;
-        // A run of kept events past the fold tries a few steps each (`FitBudget`).
-        let budget = match (self.options.unfitted_cage, green.unfitted) {
-            (UnfittedCagePolicy::KeepEvent, Some(_)) => FitBudget::UNFITTED_STREAK,
-            (UnfittedCagePolicy::KeepEvent | UnfittedCagePolicy::Refuse, _) => FitBudget::FULL,
+        let inputs = CageUpInputs {
+            posed_from_rest: &self.posed_from_rest,
+            rest_cage: &self.rest_cage,
+            original_rest_cage: &self.original_rest_cage,
+            unfitted_policy: self.options.unfitted_cage,
+            limit: GREEN_FIT_LIMIT * green.size,
         };
-        let result = green
-            .fit
-            .apply_within(&green.target_rows, &mut self.posed_cage, budget);
-        let residual = match result {
-            Ok(report) if report.residual <= limit => {
-                green.failure_unreported = false;
-                green.unfitted = None;
-                return;
-            }
-            Ok(report) => report.residual,
-            Err(_) => f64::INFINITY,
-        };
-        let (face, area_ratio) = green
-            .fit
-            .normals()
-            .triangles()
-            .iter()
-            .enumerate()
-            .map(|(f, t)| {
-                // Signed: negative when the triangle turned over against its binding normal.
-                let [a, b, c] = t.map(|v| self.posed_cage[v as usize]);
-                let [a0, b0, c0] = t.map(|v| self.original_rest_cage[v as usize]);
-                let rest = (b0 - a0).cross(c0 - a0);
-                let now = (b - a).cross(c - a);
-                let signed = now.length() * now.dot(rest).signum();
-                (f, signed / rest.length().max(f64::MIN_POSITIVE))
-            })
-            .fold(
-                (0, f64::INFINITY),
-                |best, x| if x.1 < best.1 { x } else { best },
-            );
-        green.unfitted = Some(UnfittedCage {
-            residual,
-            limit,
-            face,
-            area_ratio,
-        });
-        green.failure_unreported = true;
+        green.cage_up.fit_cage(inputs, &mut self.posed_cage);
     }
 
     /// Builds R̃ and K_A = Ω̃ ∂T/∂A of the Green CageRev for the current pose and SkelUp lock,
@@ -181,7 +94,7 @@ impl RigSession {
             let joint_linear: Vec<DMat3> = self.posed_from_rest.iter().map(|t| t.matrix3).collect();
             green
                 .reverser
-                .prepare_prior(&green.fit, &joint_linear, &translation_jacobian);
+                .prepare_prior(&green.cage_up.fit, &joint_linear, &translation_jacobian);
         }
         Ok(())
     }
@@ -205,12 +118,12 @@ impl RigSession {
         let at = GrabState {
             rest_cage: &self.rest_cage,
             rest_rows: &self.scratch_rows_rest,
-            posed_rows: &green.target_rows,
+            posed_rows: &green.cage_up.target_rows,
             posed_cage: &self.posed_cage,
         };
         let report = green
             .reverser
-            .solve(&green.fit, at, posed_delta, rest_delta)?;
+            .solve(&green.cage_up.fit, at, posed_delta, rest_delta)?;
         green.last_reverse = report;
         if report.residual > GREEN_FIT_LIMIT * green.size {
             return Err(RigError::GreenGrabFailed {
@@ -235,7 +148,7 @@ impl RigSession {
     pub fn green_triangles(&self) -> Option<&[[u32; 3]]> {
         match self.rest_map.cage_map() {
             CageMap::Mvc(_) => None,
-            CageMap::Green(green) => Some(green.fit.normals().triangles()),
+            CageMap::Green(green) => Some(green.cage_up.fit.normals().triangles()),
         }
     }
 
@@ -243,7 +156,7 @@ impl RigSession {
     pub fn green_newton_reports(&self) -> Option<(NewtonReport, NewtonReport)> {
         match self.rest_map.cage_map() {
             CageMap::Mvc(_) => None,
-            CageMap::Green(green) => Some((green.fit.last_report(), green.last_reverse)),
+            CageMap::Green(green) => Some((green.cage_up.fit.last_report(), green.last_reverse)),
         }
     }
 }

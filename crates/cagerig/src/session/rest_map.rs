@@ -572,7 +572,9 @@ impl RestMap {
     pub(super) fn fit_kind(&self) -> CageFitKind {
         match &self.kind {
             CageMap::Mvc(mvc) => mvc.fit.fit_kind(),
-            CageMap::Green(green) if green.fit.prior().is_some() => CageFitKind::Regularised,
+            CageMap::Green(green) if green.cage_up.fit.prior().is_some() => {
+                CageFitKind::Regularised
+            }
             CageMap::Green(_) => CageFitKind::Paper,
         }
     }
@@ -598,7 +600,10 @@ impl RestMap {
                 skeleton,
             ),
             CageMap::Green(green) => {
-                green.fit.set_regularised(kind == CageFitKind::Regularised);
+                green
+                    .cage_up
+                    .fit
+                    .set_regularised(kind == CageFitKind::Regularised);
                 green.reverser.invalidate();
                 Ok(())
             }
@@ -689,7 +694,11 @@ impl RestMap {
     pub(super) fn update_terms(&mut self, rest_cage: &[DVec3]) {
         match &mut self.kind {
             CageMap::Mvc(_) => {}
-            CageMap::Green(green) => green.fit.normals().apply(rest_cage, &mut green.rest_terms),
+            CageMap::Green(green) => green
+                .cage_up
+                .fit
+                .normals()
+                .apply(rest_cage, &mut green.rest_terms),
         }
     }
 
@@ -806,7 +815,7 @@ impl RestMap {
     pub(super) fn start_next_fit_from_posed_cage(&mut self) {
         match &mut self.kind {
             CageMap::Mvc(_) => {}
-            CageMap::Green(green) => green.start_from_posed_cage = true,
+            CageMap::Green(green) => green.cage_up.start_from_posed_cage = true,
         }
     }
 
@@ -814,7 +823,7 @@ impl RestMap {
     pub(super) fn unfitted(&self) -> Option<crate::error::UnfittedCage> {
         match &self.kind {
             CageMap::Mvc(_) => None,
-            CageMap::Green(green) => green.unfitted,
+            CageMap::Green(green) => green.cage_up.unfitted,
         }
     }
 
@@ -823,8 +832,9 @@ impl RestMap {
         match &mut self.kind {
             CageMap::Mvc(_) => None,
             CageMap::Green(green) => {
-                let unreported = std::mem::take(&mut green.failure_unreported);
+                let unreported = std::mem::take(&mut green.cage_up.failure_unreported);
                 green
+                    .cage_up
                     .unfitted
                     .filter(|_| unreported)
                     .map(RigError::GreenFitFailed)
