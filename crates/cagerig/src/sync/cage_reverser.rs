@@ -419,14 +419,7 @@ impl CageReverser {
                 stacked.as_ref()
             }
         };
-        faer::linalg::matmul::matmul(
-            faer::MatMut::from_row_major_slice_mut(pg, nc, width),
-            faer::Accum::Replace,
-            left,
-            faer::MatRef::from_row_major_slice(g, nr + prior_rows, width),
-            1.0,
-            faer::Par::Seq,
-        );
+        crate::sync::small_products::product_into(left, g, width, pg);
         if let Some(RegularisedParts { prior, pose, .. }) = &mut self.prior {
             // The reach limit: row k is s_k [K Q]_k [G; ∂P/∂C] + (1 − s_k) ∂P_k/∂C.
             prior.reach_factors(joint_rotations, &self.cage_from_rows, pose);

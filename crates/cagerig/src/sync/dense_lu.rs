@@ -4,9 +4,13 @@
 //! event that refactorises stays allocation-free.
 //!
 //! The factorisation is faer's blocked, recursive LU (`lu_in_place`), run sequentially into
-//! scratch allocated once: on the Arm's cage (n = 174) it takes about a fifth of the time of the
-//! column-by-column elimination this file held before, which was the largest part of a Green
-//! animation frame (`cagerig bench --coords green`).
+//! scratch allocated once: on the Arm's cage (n = 174) it takes about a fifth of the time of a
+//! column-by-column elimination, which was the largest part of a Green animation frame
+//! (`cagerig bench --coords green`). On the web target faer has no SIMD kernels and runs its
+//! portable ones; there the column-by-column elimination [`eliminate_by_columns`] is the faster
+//! (LLVM vectorises its updates with `simd128`): a 300 × 300 LU, the regularised CageRev's of
+//! the Fox, takes 2.5 ms against faer's 3.2–4.3 ms in V8 (`docs/web.md`). Both kernels give
+//! the same factors up to round-off (tested natively).
 
 use faer::MatMut;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -112,6 +116,7 @@ impl DenseLu {
                 "{what} ({n} × {n}) is not finite: the cage fit has no unique solution"
             )));
         }
+        #[cfg(not(target_arch = "wasm32"))]
         factor::lu_in_place(
             MatMut::from_column_major_slice_mut(&mut self.values, n, n),
             &mut self.forward,
@@ -120,6 +125,8 @@ impl DenseLu {
             MemStack::new(&mut self.scratch),
             Default::default(),
         );
+        #[cfg(target_arch = "wasm32")]
+        eliminate_by_columns(&mut self.values, n, &mut self.forward, &mut self.inverse);
         crate::vector_registers::clear_upper_halves();
         let mut largest: f64 = 0.0;
         for j in 0..n {
@@ -158,10 +165,84 @@ impl DenseLu {
     }
 }
 
+/// LU with partial pivoting of the `n × n` column-major `values` in place, column by column
+/// (right-looking: each column's multipliers, then the rank-1 update of the columns to its
+/// right, one contiguous column at a time), in the packing and permutation of faer's
+/// `lu_in_place`: unit L below the diagonal, U on and above, row `forward[k]` of the matrix
+/// is row k of L·U and `inverse` is its inverse. A zero pivot leaves its column unscaled (the
+/// caller's pivot check refuses it). The web target's kernel (see the module docs).
+#[cfg_attr(not(any(target_arch = "wasm32", test)), expect(dead_code))]
+fn eliminate_by_columns(
+    values: &mut [f64],
+    n: usize,
+    forward: &mut [usize],
+    inverse: &mut [usize],
+) {
+    for (k, f) in forward.iter_mut().enumerate() {
+        *f = k;
+    }
+    for k in 0..n {
+        let column = &values[k * n..(k + 1) * n];
+        let (mut pivot_row, mut largest) = (k, column[k].abs());
+        for (i, v) in column.iter().enumerate().skip(k + 1) {
+            if v.abs() > largest {
+                (pivot_row, largest) = (i, v.abs());
+            }
+        }
+        if pivot_row != k {
+            forward.swap(pivot_row, k);
+            for j in 0..n {
+                values.swap(j * n + k, j * n + pivot_row);
+            }
+        }
+        let pivot = values[k * n + k];
+        if pivot != 0.0 {
+            let inverse_pivot = 1.0 / pivot;
+            for v in &mut values[k * n + k + 1..(k + 1) * n] {
+                *v *= inverse_pivot;
+            }
+        }
+        let (done, rest) = values.split_at_mut((k + 1) * n);
+        let multipliers = &done[k * n + k + 1..];
+        for column in rest.chunks_exact_mut(n) {
+            let u = column[k];
+            if u != 0.0 {
+                for (v, l) in column[k + 1..].iter_mut().zip(multipliers) {
+                    *v -= u * *l;
+                }
+            }
+        }
+    }
+    for (k, &f) in forward.iter().enumerate() {
+        inverse[f] = k;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::test_random::uniform;
+
+    /// The web target's kernel gives faer's factors up to round-off, with the same pivots.
+    #[test]
+    fn column_elimination_matches_faer() {
+        let n = 37;
+        let mut rng = uniform(5);
+        let matrix: Vec<f64> = (0..n * n).map(|_| rng() - 0.5).collect();
+        let mut faer_lu = DenseLu::new(n, "a test matrix");
+        faer_lu.matrix_mut().copy_from_slice(&matrix);
+        faer_lu.factorise().unwrap();
+        let mut values = matrix.clone();
+        let (mut forward, mut inverse) = (vec![0; n], vec![0; n]);
+        eliminate_by_columns(&mut values, n, &mut forward, &mut inverse);
+        assert_eq!(forward, faer_lu.forward);
+        assert_eq!(inverse, faer_lu.inverse);
+        let worst = values
+            .iter()
+            .zip(&faer_lu.values)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst < 1e-12, "largest difference {worst:e}");
+    }
 
     #[test]
     fn solves_a_random_system_and_refuses_a_singular_one() {
