@@ -71,7 +71,7 @@ pub struct WeightsOutput {
     row_start: Vec<u32>,
     joints: Vec<u32>,
     weights: Vec<f64>,
-    warnings: Vec<String>,
+    warnings: Vec<Warning>,
 }
 
 /// The automatic weights of `mesh` for `skeleton` inside `cage`, with `options`: the one
@@ -142,7 +142,7 @@ impl WeightsInput {
             row_start: row_start.to_vec(),
             joints: joints.to_vec(),
             weights: values.to_vec(),
-            warnings: warnings.iter().map(ToString::to_string).collect(),
+            warnings,
         })
     }
 }
@@ -201,12 +201,7 @@ impl WeightsOutput {
                     source,
                 }
             })?;
-        let warnings = self
-            .warnings
-            .into_iter()
-            .map(|message| Warning::Note { message })
-            .collect();
-        Ok((weights, warnings))
+        Ok((weights, self.warnings))
     }
 }
 
@@ -262,6 +257,32 @@ pub trait WeightsOffload: std::fmt::Debug {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The computation's warnings cross to the page as they are: kind and fields, not as text.
+    #[test]
+    fn warnings_cross_with_their_kind() {
+        let warnings = vec![
+            Warning::MecFallback {
+                joint: 3,
+                name: "elbow".into(),
+                reason: "no interior point".into(),
+            },
+            Warning::Note {
+                message: "two bones overlap".into(),
+            },
+        ];
+        let output = WeightsOutput {
+            num_joints: 2,
+            row_start: vec![0, 1, 2],
+            joints: vec![0, 1],
+            weights: vec![1.0, 1.0],
+            warnings: warnings.clone(),
+        };
+        let json = serde_json::to_string(&output).unwrap();
+        let crossed: WeightsOutput = serde_json::from_str(&json).unwrap();
+        let (_, received) = crossed.into_weights(2, 2).unwrap();
+        assert_eq!(received, warnings);
+    }
 
     #[test]
     fn weights_computed_from_the_encoded_input_are_the_binds() {

@@ -376,7 +376,8 @@ impl RigError {
 }
 
 /// Something that was accepted but changed or is suspicious; shown to the user by `info`.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+/// Serialised by kind (to cross to and from the web page's worker as it is).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Warning {
     /// Rows of Ω that did not sum to 1 and were rescaled.

@@ -3,18 +3,21 @@
 
 use glam::DVec3;
 
-/// Scratch of the face terms for [`super::GreenCageFit::evaluate`]: g(x) and ψ_Rᵀr (`#F` each).
+/// Scratch of [`super::GreenCageFit::evaluate`]: the face terms g(x) and ψ_Rᵀr (`#F` each),
+/// and the prior's pulls W(x − P) (`#C`).
 #[derive(Debug, Clone, Default)]
 pub(super) struct FaceScratch {
     pub(super) g: Vec<DVec3>,
     pub(super) face_sums: Vec<DVec3>,
+    pub(super) pulls: Vec<DVec3>,
 }
 
 impl FaceScratch {
-    pub(super) fn new(num_faces: usize) -> Self {
+    pub(super) fn new(num_cage: usize, num_faces: usize) -> Self {
         Self {
             g: vec![DVec3::ZERO; num_faces],
             face_sums: vec![DVec3::ZERO; num_faces],
+            pulls: vec![DVec3::ZERO; num_cage],
         }
     }
 }

@@ -104,6 +104,8 @@ pub struct GreenCageFit {
     face_blocks: Vec<[DMat3; 3]>,
     face_gram_blocks: Vec<DMat3>,
     hessian_blocks: Vec<DMat3>,
+    /// Scratch: ψ_Rᵀr, the weights of the faces' second-order terms in the Hessian (`#F`).
+    hessian_face_weights: Vec<DVec3>,
     /// The Hessian of the fit (`3#C × 3#C`), refreshed with the factors.
     normal_matrix: Mat<f64>,
     /// Scratch of the objective's evaluations: the face terms, and the residual and gradient at
@@ -181,8 +183,9 @@ impl GreenCageFit {
             face_blocks: vec![[DMat3::ZERO; 3]; num_faces],
             face_gram_blocks: vec![DMat3::ZERO; num_faces * num_cage],
             hessian_blocks: vec![DMat3::ZERO; num_cage * num_cage],
+            hessian_face_weights: vec![DVec3::ZERO; num_faces],
             normal_matrix: Mat::zeros(3 * num_cage, 3 * num_cage),
-            faces: FaceScratch::new(num_faces),
+            faces: FaceScratch::new(num_cage, num_faces),
             current: Evaluation::new(num_rows, num_cage),
             trial_evaluation: Evaluation::new(num_rows, num_cage),
             trial: vec![DVec3::ZERO; num_cage],
@@ -244,6 +247,7 @@ impl GreenCageFit {
     /// No allocation.
     pub fn energy(&mut self, target: &[DVec3], x: &[DVec3]) -> f64 {
         let mut g = std::mem::take(&mut self.faces.g);
+        let mut pulls = std::mem::take(&mut self.faces.pulls);
         let mut rows = std::mem::take(&mut self.trial_evaluation.residual);
         self.rows_of(x, &mut g, &mut rows);
         let energy = rows
@@ -251,8 +255,9 @@ impl GreenCageFit {
             .zip(target)
             .map(|(r, t)| 0.5 * r.distance_squared(*t))
             .sum::<f64>()
-            + self.prior_energy(x);
+            + self.prior_energy(x, &mut pulls);
         self.faces.g = g;
+        self.faces.pulls = pulls;
         self.trial_evaluation.residual = rows;
         if energy.is_finite() {
             energy

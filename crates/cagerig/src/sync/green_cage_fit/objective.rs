@@ -7,6 +7,7 @@ use glam::{DAffine3, DVec3};
 
 use super::evaluation::{Evaluation, FaceScratch};
 use super::prior::FitPrior;
+use super::rows::column_dots;
 use super::{GreenCageFit, rows_of};
 
 impl GreenCageFit {
@@ -19,7 +20,11 @@ impl GreenCageFit {
         faces: &mut FaceScratch,
         out: &mut Evaluation,
     ) -> (f64, f64) {
-        let FaceScratch { g, face_sums } = faces;
+        let FaceScratch {
+            g,
+            face_sums,
+            pulls,
+        } = faces;
         let Evaluation { residual, gradient } = out;
         self.normals.apply(x, g);
         rows_of(&self.vertex_rows, &self.face_rows, x, g, residual);
@@ -29,27 +34,15 @@ impl GreenCageFit {
             energy += 0.5 * r.length_squared();
         }
         // Jᵀr = φ_Rᵀ r + Σ_f (∂g_f/∂x)ᵀ (ψ_Rᵀ r)_f.
-        for (k, out) in gradient.iter_mut().enumerate() {
-            let column = self.vertex_rows.col(k);
-            *out = residual
-                .iter()
-                .enumerate()
-                .fold(DVec3::ZERO, |acc, (i, r)| acc + column[i] * *r);
-        }
-        for (f, sum) in face_sums.iter_mut().enumerate() {
-            let column = self.face_rows.col(f);
-            *sum = residual
-                .iter()
-                .enumerate()
-                .fold(DVec3::ZERO, |acc, (i, r)| acc + column[i] * *r);
-        }
+        column_dots(&self.vertex_rows, residual, gradient);
+        column_dots(&self.face_rows, residual, face_sums);
         for (f, triangle) in self.normals.triangles().iter().enumerate() {
             let blocks = self.normals.face_jacobian(x, f);
             for (corner, block) in triangle.iter().zip(blocks) {
                 gradient[*corner as usize] += block.transpose() * face_sums[f];
             }
         }
-        energy += self.add_prior_gradient(x, gradient);
+        energy += self.add_prior_gradient(x, gradient, pulls);
         let largest = gradient
             .iter()
             .fold(0.0f64, |m, v| m.max(v.abs().max_element()));
@@ -65,12 +58,9 @@ impl GreenCageFit {
     /// (`residual`, `#R`).
     pub(super) fn hessian_at(&mut self, x: &[DVec3], residual: &[DVec3]) {
         self.gauss_newton_matrix_at(x);
-        for (f, triangle) in self.normals.triangles().iter().enumerate() {
-            let column = self.face_rows.col(f);
-            let weight = residual
-                .iter()
-                .enumerate()
-                .fold(DVec3::ZERO, |acc, (i, r)| acc + column[i] * *r);
+        let mut weights = std::mem::take(&mut self.hessian_face_weights);
+        column_dots(&self.face_rows, residual, &mut weights);
+        for (f, (triangle, &weight)) in self.normals.triangles().iter().zip(&weights).enumerate() {
             let corners = triangle.map(|v| x[v as usize]);
             let scale = (corners[1] - corners[0])
                 .length()
@@ -85,6 +75,7 @@ impl GreenCageFit {
                 }
             }
         }
+        self.hessian_face_weights = weights;
         self.add_prior_hessian();
     }
 }
@@ -137,15 +128,20 @@ impl GreenCageFit {
 
     /// The prior's energy at x added to the returned value and its gradient to `gradient` (0
     /// without a prior).
-    pub(super) fn add_prior_gradient(&self, x: &[DVec3], gradient: &mut [DVec3]) -> f64 {
+    pub(super) fn add_prior_gradient(
+        &self,
+        x: &[DVec3],
+        gradient: &mut [DVec3],
+        pulls: &mut [DVec3],
+    ) -> f64 {
         self.prior
             .as_ref()
-            .map_or(0.0, |p| p.add_to_gradient(x, gradient))
+            .map_or(0.0, |p| p.add_to_gradient(x, gradient, pulls))
     }
 
     /// The prior's energy ½ Σ_axes (x − P)ᵀW(x − P) at x (0 without a prior). No allocation.
-    pub(super) fn prior_energy(&self, x: &[DVec3]) -> f64 {
-        self.prior.as_ref().map_or(0.0, |p| p.energy(x))
+    pub(super) fn prior_energy(&self, x: &[DVec3], pulls: &mut [DVec3]) -> f64 {
+        self.prior.as_ref().map_or(0.0, |p| p.energy(x, pulls))
     }
 
     /// normal_matrix += W ⊗ I₃ (nothing without a prior).

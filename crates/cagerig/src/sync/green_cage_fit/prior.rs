@@ -23,6 +23,7 @@
 use faer::Mat;
 use glam::{DAffine3, DMat3, DVec3};
 
+use super::rows::row_dots;
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
 use crate::skin_weights::SkinWeights;
@@ -131,20 +132,18 @@ impl FitPrior {
         self.active.copy_from_slice(&self.target);
     }
 
-    /// (Wd)_k for d = x − P of the current solve (`x`: `#C`).
-    fn pull(&self, x: &[DVec3], k: usize) -> DVec3 {
-        let row = self.weight.row(k);
-        x.iter()
-            .zip(&self.active)
-            .enumerate()
-            .fold(DVec3::ZERO, |acc, (m, (xm, pm))| acc + row[m] * (*xm - *pm))
+    /// Wd for d = x − P of the current solve (`x`: `#C`) into `pulls` (`#C`).
+    fn pulls(&self, x: &[DVec3], pulls: &mut [DVec3]) {
+        row_dots(&self.weight, x, &self.active, pulls);
     }
 
-    /// ½ Σ_axes dᵀWd for d = x − P of the current solve (`x`: `#C`). No allocation.
-    pub(super) fn energy(&self, x: &[DVec3]) -> f64 {
+    /// ½ Σ_axes dᵀWd for d = x − P of the current solve (`x`: `#C`), with `pulls` (`#C`) as
+    /// scratch. No allocation.
+    pub(super) fn energy(&self, x: &[DVec3], pulls: &mut [DVec3]) -> f64 {
+        self.pulls(x, pulls);
         let mut energy = 0.0;
-        for k in 0..x.len() {
-            energy += 0.5 * self.pull(x, k).dot(x[k] - self.active[k]);
+        for ((pull, xk), pk) in pulls.iter().zip(x).zip(&self.active) {
+            energy += 0.5 * pull.dot(*xk - *pk);
         }
         energy
     }
@@ -181,12 +180,17 @@ impl FitPrior {
     }
 
     /// ½ Σ_axes dᵀWd and gradient += Wd for d = x − P of the current solve (`x`, `gradient`:
-    /// `#C`). No allocation.
-    pub(super) fn add_to_gradient(&self, x: &[DVec3], gradient: &mut [DVec3]) -> f64 {
+    /// `#C`), with `pulls` (`#C`) as scratch. No allocation.
+    pub(super) fn add_to_gradient(
+        &self,
+        x: &[DVec3],
+        gradient: &mut [DVec3],
+        pulls: &mut [DVec3],
+    ) -> f64 {
+        self.pulls(x, pulls);
         let mut energy = 0.0;
-        for (k, out) in gradient.iter_mut().enumerate() {
-            let pull = self.pull(x, k);
-            *out += pull;
+        for (k, (out, pull)) in gradient.iter_mut().zip(pulls.iter()).enumerate() {
+            *out += *pull;
             energy += 0.5 * pull.dot(x[k] - self.active[k]);
         }
         energy

@@ -66,7 +66,7 @@ fn newton_matrix_is_the_hessian_of_the_fit() {
     let nr = points.len();
     let nf = fit.normals().len();
     let gradient_at = |fit: &GreenCageFit, x: &[DVec3]| {
-        let mut faces = FaceScratch::new(nf);
+        let mut faces = FaceScratch::new(x.len(), nf);
         let mut out = Evaluation::new(nr, x.len());
         fit.evaluate(x, &target, &mut faces, &mut out);
         (out.gradient, out.residual)
@@ -319,7 +319,7 @@ fn a_regularised_fits_gradient_and_newton_matrix_are_its_derivatives() {
         .collect();
     let (nr, nf) = (points.len(), fit.normals().len());
     let evaluate = |fit: &GreenCageFit, x: &[DVec3]| {
-        let mut faces = FaceScratch::new(nf);
+        let mut faces = FaceScratch::new(x.len(), nf);
         let mut out = Evaluation::new(nr, x.len());
         let (energy, _) = fit.evaluate(x, &target, &mut faces, &mut out);
         (energy, out.gradient, out.residual)
