@@ -101,7 +101,7 @@ pub(crate) fn column_dots(matrix: &Mat<f64>, points: &[DVec3], out: &mut [DVec3]
         let mut sums = [DVec3::ZERO; SIDE_BY_SIDE];
         for (i, p) in points.iter().enumerate() {
             for (sum, column) in sums.iter_mut().zip(&columns) {
-                *sum = *sum + column[i] * *p;
+                *sum += column[i] * *p;
             }
         }
         block.copy_from_slice(&sums);
@@ -130,7 +130,7 @@ pub(crate) fn row_dots(matrix: &Mat<f64>, x: &[DVec3], y: &[DVec3], out: &mut [D
             let column = matrix.col(m);
             let d = *xm - *ym;
             for (q, sum) in sums.iter_mut().enumerate() {
-                *sum = *sum + column[start + q] * d;
+                *sum += column[start + q] * d;
             }
         }
         block.copy_from_slice(&sums);
