@@ -11,11 +11,12 @@ use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::sync::{Arc, Mutex};
 use web_time::Instant;
 
-use cagerig::auto_weights::{AutoWeightsOptions, Progress, Stage};
-use cagerig::session::{BindStage, DisplayPrecision, RigParts, RigSession, SessionOptions};
+use cagerig::auto_weights::{AutoWeightsOptions, Stage};
+use cagerig::session::{DisplayPrecision, RigParts, RigSession, SessionOptions};
 use cagerig::{Skeleton, SkinWeights, Warning};
 use glam::{DQuat, DVec3};
 
+pub use crate::bind_progress::BindStep;
 use crate::offload::{WeightsInput, WeightsOffload, WeightsOutput, WeightsReply, compute_weights};
 use crate::skeleton_draft::SkeletonDraft;
 
@@ -237,20 +238,6 @@ pub fn carry_pose(
             })
             .collect(),
     )
-}
-
-/// How far a bind is: the automatic weights' stages (when it computes them), then the rig's
-/// binding ([`RigSession::with_progress`]).
-#[derive(Debug, Clone, Copy)]
-pub enum BindStep {
-    /// The automatic weights.
-    Weights(Progress),
-    /// The rig's binding: its `stage`, `done` of `total`.
-    Rig {
-        stage: BindStage,
-        done: usize,
-        total: usize,
-    },
 }
 
 /// Where a running bind is.

@@ -17,6 +17,7 @@
 //! | `saved_binding` | a skeleton and weights bound in the studio, as a session file keeps them |
 //! | `session_restore` | a parsed session file restored onto its opened rig, every part checked |
 
+mod bind_progress;
 pub mod binding;
 pub mod document;
 pub mod document_skeleton;

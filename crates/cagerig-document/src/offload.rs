@@ -16,7 +16,7 @@ use cagerig::{Joint, RigError, Skeleton, SkinWeights, TriMesh, Warning};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::binding::BindStep;
+use crate::bind_progress::BindStep;
 
 /// Why an offloaded computation's input or output was refused, or why it failed.
 #[derive(Debug, Error)]
