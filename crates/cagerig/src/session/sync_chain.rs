@@ -254,23 +254,15 @@ impl RigSession {
             return false;
         }
         self.refresh_stale_centres();
+        // Under LBS the ghost rows are the exact skinned rows.
+        self.posed_fit_rows(true);
         let CageMap::Green(green) = self.rest_map.cage_map_mut() else {
             return false;
         };
-        for ((rest, posed), &row) in self
-            .scratch_rows_rest
-            .iter_mut()
-            .zip(green.cage_up.target_rows.iter_mut())
-            .zip(green.linear.rows())
-        {
-            *rest = self.rest_mesh[row];
-            *posed = DVec3::ZERO;
-        }
-        self.ghost_lbs.apply(
-            &self.posed_from_rest,
-            &self.scratch_rows_rest,
-            &mut green.cage_up.target_rows,
-        );
+        green
+            .cage_up
+            .target_rows
+            .copy_from_slice(&self.scratch_rows_posed);
         let inputs = CageUpInputs {
             posed_from_rest: &self.posed_from_rest,
             rest_cage: &self.rest_cage,
