@@ -6,7 +6,8 @@
 //!   body as at rest; distances to the nearest skin vertex).
 //! - **deviation**: max_k |C'_k − P_k| / the rest skin's bounding-box diagonal, with P_k the rest
 //!   vertex C_k carried rigidly by the best-fit rotation and translation (Kabsch) of its
-//!   [`QUALITY_NEIGHBOURS`] nearest rest-skin vertices from M to M'.
+//!   [`QUALITY_NEIGHBOURS`] nearest rest-skin vertices from M to M' (and any as near as the
+//!   last: [`crate::nearest_vertices`], so the measure does not depend on round-off).
 //! - **flipped**: the share of C' triangles whose normal opposes that of the same triangle on P.
 //!
 //! [`CageQualityProbe::new`] picks the neighbours once (on the rest state given);
@@ -16,6 +17,7 @@ use faer::Mat;
 use glam::{DMat3, DVec3};
 
 use crate::error::RigError;
+use crate::nearest_vertices::nearest_with_ties;
 
 /// Rest-skin vertices whose rigid motion carries a cage vertex (the deviation's P_k).
 pub const QUALITY_NEIGHBOURS: usize = 32;
@@ -57,7 +59,7 @@ impl std::fmt::Display for CageQuality {
 /// What [`CageQualityProbe::measure`] needs of the rest state.
 #[derive(Debug, Clone)]
 pub struct CageQualityProbe {
-    /// Per cage vertex, its nearest rest-skin vertices (`#C × QUALITY_NEIGHBOURS` at most).
+    /// Per cage vertex, its nearest rest-skin vertices (`QUALITY_NEIGHBOURS` and their ties).
     neighbours: Vec<Vec<usize>>,
     cage_triangles: Vec<[u32; 3]>,
     /// max_k dist(C_k, M).
@@ -104,17 +106,9 @@ impl CageQualityProbe {
                     .enumerate()
                     .map(|(v, m)| (m.distance_squared(*c), v)),
             );
-            if take < distances.len() {
-                distances.select_nth_unstable_by(take - 1, |a, b| {
-                    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
-                });
-            }
-            let nearest = distances[..take]
-                .iter()
-                .map(|d| d.0)
-                .fold(f64::INFINITY, f64::min);
+            let nearest = distances.iter().map(|d| d.0).fold(f64::INFINITY, f64::min);
             rest_reach = rest_reach.max(nearest.sqrt());
-            neighbours.push(distances[..take].iter().map(|d| d.1).collect());
+            neighbours.push(nearest_with_ties(&mut distances, take));
         }
         let (lo, hi) = crate::mesh::bounding_box(rest_mesh);
         Ok(Self {

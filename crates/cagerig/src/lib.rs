@@ -27,6 +27,7 @@ pub mod io;
 pub mod memory_estimate;
 pub mod mesh;
 pub mod named_kind;
+pub mod nearest_vertices;
 pub mod playback;
 pub mod pose;
 pub mod rig_files;

@@ -278,3 +278,66 @@ fn the_arms_single_joint_sweep_keeps_a_generated_handle_on_the_body() {
     assert!(up_to_45 <= 1.5, "spread {up_to_45:.3}: {at}");
     assert!(beyond <= 1.5, "spread {beyond:.3}: {beyond_at}");
 }
+
+/// The bar (2 segments: a mirror-symmetric skin and cage) bent about z, bound once with its own
+/// Φ and once with every entry of Φ moved by a few units of round-off (what another SIMD tier's
+/// M = ΦC gives): the two agree to round-off, before and after a grab, and the prior P is
+/// mirror-symmetric in z. Before, a neighbourhood of the prior cut through a tie of equal
+/// distances and a cage vertex exactly at the rest reach was kept or dropped by the last bits:
+/// C' moved by 0.1 (the bar is 2.6 wide) from one CPU to another. (C' itself is not symmetric:
+/// the MaxVol rows it fits are not.)
+#[test]
+fn a_symmetric_rigs_prior_is_symmetric_and_its_handle_does_not_hang_on_the_last_bits() {
+    let rig = cagerig::demo::builtin("bar", Some(2)).unwrap();
+    let bind = |relative: f64| {
+        let mut parts = RigParts::new(
+            rig.mesh.clone(),
+            rig.skeleton.clone(),
+            rig.skin_weights.clone(),
+            rig.cage.clone(),
+        );
+        let phi =
+            cagerig::coords::mvc::compute_cage_coords(&parts.cage, &parts.mesh.positions, None)
+                .unwrap();
+        let mut matrix = phi.matrix().clone();
+        let mut state = 0x5eed_u64;
+        for j in 0..matrix.ncols() {
+            for i in 0..matrix.nrows() {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let unit = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+                matrix[(i, j)] *= 1.0 + relative * unit;
+            }
+        }
+        parts.cage_coords = Some(cagerig::cage_coords::CageCoords::from_matrix(matrix).unwrap());
+        let mut s = RigSession::new(parts, SessionOptions::default()).unwrap().0;
+        s.rotate_joint(1, DVec3::Z, 0.5).unwrap();
+        let bent = s.posed_cage().to_vec();
+        let carried = s.cage_updater().prior().unwrap().carried_cage().to_vec();
+        s.move_posed_cage(&[3], &[DVec3::new(0.0, 0.2, 0.0)])
+            .unwrap();
+        (bent, carried, s.rest_cage().to_vec())
+    };
+    let (bent, carried, grabbed) = bind(0.0);
+    let (bent_other, _, grabbed_other) = bind(4e-16);
+    let tol = 1e-9 * diagonal(&builtin("bar", CageFitKind::default()));
+    assert!(
+        max_distance(&bent, &bent_other) < tol,
+        "{}",
+        max_distance(&bent, &bent_other)
+    );
+    assert!(max_distance(&grabbed, &grabbed_other) < tol);
+    let cage = &rig.cage.positions;
+    for (k, c) in cage.iter().enumerate() {
+        let mirror = cage
+            .iter()
+            .position(|m| (*m - DVec3::new(c.x, c.y, -c.z)).length() < 1e-12)
+            .unwrap();
+        let image = carried[mirror] * DVec3::new(1.0, 1.0, -1.0);
+        assert!(
+            (carried[k] - image).length() < tol,
+            "the prior at cage vertex {k} and at its mirror {mirror}"
+        );
+    }
+}

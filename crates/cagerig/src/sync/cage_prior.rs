@@ -12,8 +12,8 @@
 //!
 //! - Φ̃ (`#R × #C`) the fitting rows of Φ and M̃' their posed positions (or their ghost LBS);
 //! - P (`#C`) the *prior*: every rest cage vertex carried by the mean motion of the skin around
-//!   it. With N_k the [`PRIOR_NEIGHBOURS`] rest-skin vertices nearest to C_k, x̄_k their rest
-//!   centroid, ȳ_k the centroid of their LBS-posed positions and A_k the rotation of their mean
+//!   it. With N_k the [`PRIOR_NEIGHBOURS`] rest-skin vertices nearest to C_k (and any as near
+//!   as the last, so that ties never depend on round-off), x̄_k their rest centroid, ȳ_k the centroid of their LBS-posed positions and A_k the rotation of their mean
 //!   skinning transform (see below), `P_k = ȳ_k + A_k (C_k − x̄_k)`. The centroid follows the
 //!   body exactly; only the offset of the cage from it turns, so a cage vertex between two
 //!   limbs stays between them;
@@ -62,6 +62,7 @@ use glam::{DAffine3, DMat3, DVec3};
 
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
+use crate::nearest_vertices::nearest_with_ties;
 use crate::skin_weights::SkinWeights;
 use crate::sync::reach_limit::{PriorEntry, ReachLimit, ReachScratch};
 
@@ -968,7 +969,9 @@ fn neighbourhoods(
 
 /// N_k for every rest cage vertex (`#C` lists, each sorted): its [`PRIOR_NEIGHBOURS`] nearest
 /// rest-skin vertices (`rest_mesh`, not empty) among a regular subsample of at most
-/// [`PRIOR_SEARCH_VERTICES`]; ties by index.
+/// [`PRIOR_SEARCH_VERTICES`], and every further one as near as the last of them
+/// ([`nearest_with_ties`]: a mirror-symmetric skin gets mirror-symmetric neighbourhoods,
+/// whatever the round-off of its positions).
 fn nearest_skin_vertices(rest_cage: &[DVec3], rest_mesh: &[DVec3]) -> Vec<Vec<usize>> {
     let nv = rest_mesh.len();
     let stride = nv.div_ceil(PRIOR_SEARCH_VERTICES).max(1);
@@ -984,12 +987,7 @@ fn nearest_skin_vertices(rest_cage: &[DVec3], rest_mesh: &[DVec3]) -> Vec<Vec<us
                     .iter()
                     .map(|&v| (rest_mesh[v].distance_squared(*c), v)),
             );
-            if take < distances.len() {
-                distances.select_nth_unstable_by(take - 1, |a, b| {
-                    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
-                });
-            }
-            let mut near: Vec<usize> = distances[..take].iter().map(|d| d.1).collect();
+            let mut near = nearest_with_ties(&mut distances, take);
             near.sort_unstable();
             near
         })
@@ -1125,6 +1123,30 @@ mod tests {
         assert!(close(horn_rotation(h), rotation_of(h)));
     }
 
+    /// A tie at the cut is kept whole: 40 skin points on a circle around the cage vertex (all
+    /// at one distance, each with its own round-off) are all its neighbours, and of points at
+    /// 1, 2, …, the pair at the cut's distance joins as a pair.
+    #[test]
+    fn a_neighbourhood_keeps_every_vertex_tied_at_its_cut() {
+        let circle: Vec<DVec3> = (0..40)
+            .map(|i| {
+                let angle = std::f64::consts::TAU * i as f64 / 40.0;
+                DVec3::new(angle.cos(), angle.sin(), 0.0) * 0.7 + DVec3::splat(0.1)
+            })
+            .collect();
+        let near = nearest_skin_vertices(&[DVec3::splat(0.1)], &circle);
+        assert_eq!(near[0], (0..40).collect::<Vec<_>>());
+        // Two points at each distance 1, 2, … (±x): the cut falls inside the 16th pair.
+        let pairs: Vec<DVec3> = (1..=40)
+            .flat_map(|d| [DVec3::X * d as f64, -DVec3::X * (d as f64 * (1.0 + 1e-15))])
+            .collect();
+        let near = nearest_skin_vertices(&[DVec3::ZERO], &pairs);
+        assert_eq!(near[0], (0..PRIOR_NEIGHBOURS).collect::<Vec<_>>());
+        let shifted = &pairs[1..];
+        let near = nearest_skin_vertices(&[DVec3::ZERO], shifted);
+        assert_eq!(near[0], (0..=PRIOR_NEIGHBOURS).collect::<Vec<_>>());
+    }
+
     /// The carried rotation is the best-fit rotation of the neighbourhood posed with the binding
     /// skeleton (a hinge closing turns the neighbourhood by less than the child joint): the
     /// moments D_kj, s_kj and the posed binding joints give the covariance summed point by point.
@@ -1165,7 +1187,15 @@ mod tests {
                     .total_cmp(&points[b].distance_squared(*c))
                     .then(a.cmp(&b))
             });
-            let near = &order[..PRIOR_NEIGHBOURS];
+            // The nearest PRIOR_NEIGHBOURS and whoever ties with the last of them.
+            let distance = |i: usize| points[i].distance_squared(*c);
+            let cut = distance(order[PRIOR_NEIGHBOURS - 1]);
+            let near: Vec<usize> = order
+                .iter()
+                .copied()
+                .filter(|&i| distance(i) <= cut * (1.0 + 1e-9))
+                .collect();
+            let near = &near[..];
             let n = near.len() as f64;
             let x_bar = near.iter().map(|&i| points[i]).sum::<DVec3>() / n;
             let y_bar = near.iter().map(|&i| posed[i]).sum::<DVec3>() / n;

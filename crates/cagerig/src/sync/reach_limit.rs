@@ -17,7 +17,10 @@
 //! parts L_j: the binding cage C₀ and skin M₀, and the binding skeleton posed as the prior's
 //! rotation sees it (T̂_j, [`super::cage_prior`]). N̂'_k is the posed neighbourhood of the
 //! prior (its [`super::cage_prior::PRIOR_NEIGHBOURS`] rest-skin vertices) and ρ the rest reach
-//! max_k dist(C₀_k, N_k): the farthest any rest cage vertex is from its neighbourhood.
+//! max_k dist(C₀_k, N_k): the farthest any rest cage vertex is from its neighbourhood. Distances
+//! are compared with ρ to [`crate::nearest_vertices::TIE_TOLERANCE`]: a vertex at exactly the rest
+//! reach in a part that moved rigidly (on a symmetric cage, every vertex of the ring that
+//! attains ρ) stays whole whatever the round-off of its pose.
 //!
 //! **Guarantees kept.** s depends on the linear parts only, never on C, so for a fixed pose C'
 //! stays linear in C and CageRev stays exact: row k of Eq. 19 becomes
@@ -29,6 +32,7 @@
 use faer::Mat;
 use glam::{DMat3, DVec3};
 
+use crate::nearest_vertices::TIE_TOLERANCE;
 use crate::skin_weights::SkinWeights;
 use crate::sync::small_products::accumulate_product;
 
@@ -185,15 +189,16 @@ impl ReachLimit {
     }
 }
 
-/// The largest s ∈ [0, 1] with min_y |p + s d − y| ≤ `reach` over `points`, or the s ∈ [0, 1]
-/// nearest them when none qualifies (1 when there are no points).
+/// The largest s ∈ [0, 1] with min_y |p + s d − y| ≤ `reach` over `points` (to
+/// [`TIE_TOLERANCE`] of ρ²), or the s ∈ [0, 1] nearest them when none qualifies (1 when there
+/// are no points).
 fn largest_factor_within(
     p: DVec3,
     d: DVec3,
     points: impl Iterator<Item = DVec3> + Clone,
     reach: f64,
 ) -> f64 {
-    let reach_squared = reach * reach;
+    let reach_squared = reach * reach * (1.0 + TIE_TOLERANCE);
     if points
         .clone()
         .any(|y| (p + d - y).length_squared() <= reach_squared)
@@ -245,7 +250,18 @@ mod tests {
         // p one unit above the origin, moving straight up: within reach 2 up to s = 1/3 of 3.
         let points = [DVec3::ZERO];
         let s = largest_factor_within(DVec3::Y, DVec3::new(0.0, 3.0, 0.0), points.into_iter(), 2.0);
-        assert!((s - 1.0 / 3.0).abs() < 1e-15, "{s}");
+        assert!((s - 1.0 / 3.0).abs() < 1e-9, "{s}");
+    }
+
+    /// A fit at exactly the rest reach, computed with round-off on either side of it (a cage
+    /// vertex of a rigidly moved part whose rest distance is ρ), is kept whole.
+    #[test]
+    fn a_fit_at_the_reach_to_round_off_is_kept_whole() {
+        let points = [DVec3::ZERO];
+        for reach in [2.0 * (1.0 - 4e-16), 2.0, 2.0 * (1.0 + 4e-16)] {
+            let s = largest_factor_within(DVec3::Y, DVec3::Y, points.into_iter(), reach);
+            assert_eq!(s, 1.0, "reach {reach}");
+        }
     }
 
     #[test]
@@ -272,6 +288,6 @@ mod tests {
             points.into_iter(),
             1.0,
         );
-        assert!((s - 0.55).abs() < 1e-15, "{s}");
+        assert!((s - 0.55).abs() < 1e-9, "{s}");
     }
 }
