@@ -2,7 +2,6 @@
 //! own fit and reverser, and M(C) of a cage that is not the session's.
 
 use super::RigSession;
-use super::green::GREEN_FIT_LIMIT;
 use super::parts::CageFitSource;
 use super::rest_map::CageMap;
 use super::skinning::CorState;
@@ -126,14 +125,14 @@ impl RigSession {
                 // A stalled solve continues from the start to `rows` in pieces.
                 fit.restart_from(out);
                 let report = fit.apply(rows, out)?;
-                if report.residual <= GREEN_FIT_LIMIT * green.size() {
+                if report.residual <= green.fit_limit() {
                     Ok(())
                 } else {
                     Err(RigError::Invalid(format!(
                         "no rest cage reproduces the given skin rows through Green coordinates: \
                          the fit stopped with a gradient of {:.3e}, expected at most {:.3e}",
                         report.residual,
-                        GREEN_FIT_LIMIT * green.size()
+                        green.fit_limit()
                     )))
                 }
             }

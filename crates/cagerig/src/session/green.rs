@@ -166,9 +166,10 @@ impl GreenState {
         })
     }
 
-    /// The cage's bounding-box diagonal.
-    pub(super) fn size(&self) -> f64 {
-        self.size
+    /// The largest gradient a Green CageUp, CageRev or rest-cage fit may end with: its
+    /// acceptance ([`GREEN_FIT_LIMIT`]) times the cage size.
+    pub(super) fn fit_limit(&self) -> f64 {
+        GREEN_FIT_LIMIT * self.size
     }
 
     /// out += Λ_ψ·g (the CoR centres' face part), when built.

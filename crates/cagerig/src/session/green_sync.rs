@@ -2,7 +2,6 @@
 //! CageRev's system for the pose, and the Green accessors (the state is [`super::green`]'s).
 
 use super::RigSession;
-use super::green::GREEN_FIT_LIMIT;
 use super::green_cage_up::CageUpInputs;
 use super::rest_map::CageMap;
 use crate::cage_coords::CageCoords;
@@ -24,7 +23,7 @@ impl RigSession {
             rest_cage: &self.rest_cage,
             original_rest_cage: &self.original_rest_cage,
             unfitted_policy: self.options.unfitted_cage,
-            limit: GREEN_FIT_LIMIT * green.size,
+            limit: green.fit_limit(),
         };
         green.cage_up.fit_cage(inputs, &mut self.posed_cage);
     }
@@ -125,10 +124,10 @@ impl RigSession {
             .reverser
             .solve(&green.cage_up.fit, at, posed_delta, rest_delta)?;
         green.last_reverse = report;
-        if report.residual > GREEN_FIT_LIMIT * green.size {
+        if report.residual > green.fit_limit() {
             return Err(RigError::GreenGrabFailed {
                 residual: report.residual,
-                limit: GREEN_FIT_LIMIT * green.size,
+                limit: green.fit_limit(),
                 iterations: report.iterations,
             });
         }

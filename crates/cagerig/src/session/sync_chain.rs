@@ -2,7 +2,6 @@
 //! forward kinematics, skinning and CageUp, and the lazily built CoR state.
 
 use super::RigSession;
-use super::green::GREEN_FIT_LIMIT;
 use super::green_cage_up::CageUpInputs;
 use super::parts::compute_centre_coords;
 use super::rest_map::{CageMap, RestMeshState};
@@ -268,7 +267,7 @@ impl RigSession {
             rest_cage: &self.rest_cage,
             original_rest_cage: &self.original_rest_cage,
             unfitted_policy: self.options.unfitted_cage,
-            limit: GREEN_FIT_LIMIT * green.size,
+            limit: green.fit_limit(),
         };
         let (lbs, transforms) = (self.skinning.lbs(), &self.posed_from_rest);
         let (rest_mesh, posed_mesh) = (&self.rest_mesh, &mut self.posed_mesh);
