@@ -105,17 +105,15 @@ fn the_default_automatic_cages_stay_on_the_body() {
     }
 }
 
-/// The same rigs under Green coordinates: no sample refused, and the handle as near the body as
-/// `docs/characters.md` says: within the mean value rigs' bounds on deviation and flipped
-/// triangles, and on spread everywhere but CesiumMan's (1.55).
+/// The same rigs under Green coordinates: no sample refused, and the handle within the mean
+/// value rigs' bounds (CesiumMan's spread was 1.55 before the Green fit had reach terms).
 #[test]
 fn the_default_automatic_cages_of_green_rigs_stay_near_the_body() {
     for (file, animation, last) in characters() {
         let (spread, deviation, flipped) =
             auto_cage_with(file, &animation, last, "skeleton", &["--coords", "green"]);
         let what = format!("{file} {animation}: {spread} / {deviation} / {flipped}");
-        let cesium_man = file.contains("CesiumMan");
-        assert!(spread <= if cesium_man { 1.57 } else { 1.5 }, "{what}");
+        assert!(spread <= 1.5, "{what}");
         assert!(deviation <= 0.06, "{what}");
         let most = if file.contains("Fox") && animation == "Run" {
             2.0

@@ -464,7 +464,8 @@ fn thousand_interleaved_events_keep_every_invariant_on_the_builtin_rigs() {
                             let expect = if k == v[0] { *b + offset } else { *b };
                             assert!(
                                 after.distance(expect) < tol,
-                                "{name} event {event}: vertex {k}"
+                                "{name} event {event}: vertex {k} off {:e} tol {tol:e}",
+                                after.distance(expect)
                             );
                         }
                     }

@@ -151,6 +151,21 @@ impl RigSession {
         }
     }
 
+    /// Green rigs with a regularised CageUp: the reach weights β_k (`#C`, 0 where the fit stays
+    /// within reach of the body) and which cage vertices are anchored on the cage vertex
+    /// skinned with its nearest skin vertex's weights (`#C`), in the current pose
+    /// ([`crate::sync::green_cage_fit::prior`]); `None` for MVC rigs and the paper's fit.
+    pub fn green_reach(&self) -> Option<(&[f64], &[bool])> {
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(_) => None,
+            CageMap::Green(green) => green
+                .cage_up
+                .fit
+                .prior()
+                .map(|p| (p.reach_weights(), p.anchored())),
+        }
+    }
+
     /// Green rigs: the Newton reports of the last CageUp and the last CageRev.
     pub fn green_newton_reports(&self) -> Option<(NewtonReport, NewtonReport)> {
         match self.rest_map.cage_map() {

@@ -211,6 +211,8 @@ pub struct CagePrior {
     reach_limit: ReachLimit,
     reach_scratch: ReachScratch,
     reach_factors: Vec<f64>,
+    /// Which vertices the reach limit anchors on their skinned Q_k in that pose (`#C`).
+    reach_anchored: Vec<bool>,
     reach_linear: Vec<DMat3>,
 }
 
@@ -331,31 +333,7 @@ impl CagePrior {
         cage_from_rows: &Mat<f64>,
         posed_cage: &mut [DVec3],
     ) {
-        let same_pose = self.reach_linear.len() == posed_from_rest.len()
-            && self
-                .reach_linear
-                .iter()
-                .zip(posed_from_rest)
-                .all(|(a, b)| *a == b.matrix3);
-        if !same_pose {
-            let mut factors = std::mem::take(&mut self.reach_factors);
-            let mut scratch = std::mem::take(&mut self.reach_scratch);
-            self.reach_limit.factors(
-                |j| posed_from_rest[j].matrix3,
-                &self.rotations,
-                &self.posed_translations,
-                self.prior_entries(),
-                cage_from_rows,
-                &self.cage_from_prior,
-                &mut scratch,
-                &mut factors,
-            );
-            self.reach_factors = factors;
-            self.reach_scratch = scratch;
-            self.reach_linear.clear();
-            self.reach_linear
-                .extend(posed_from_rest.iter().map(|t| t.matrix3));
-        }
+        self.carried_reach_factors(posed_from_rest, cage_from_rows);
         for ((c, p), &s) in posed_cage
             .iter_mut()
             .zip(&self.carried)
@@ -367,6 +345,68 @@ impl CagePrior {
         }
     }
 
+    /// The reach limit's factors s (`#C`) in the pose of the last [`Self::carry`] (whose
+    /// skinning transforms are `posed_from_rest`, `#J`), for the fit's K `cage_from_rows`
+    /// (`#C × #R`), and which vertices it anchors on their skinned Q_k (`#C`); computed once
+    /// per pose ([`crate::sync::reach_limit`]). No allocation.
+    pub fn carried_reach_factors(
+        &mut self,
+        posed_from_rest: &[DAffine3],
+        cage_from_rows: &Mat<f64>,
+    ) -> (&[f64], &[bool]) {
+        let same_pose = self.reach_linear.len() == posed_from_rest.len()
+            && self
+                .reach_linear
+                .iter()
+                .zip(posed_from_rest)
+                .all(|(a, b)| *a == b.matrix3);
+        if !same_pose {
+            let mut factors = std::mem::take(&mut self.reach_factors);
+            let mut anchored = std::mem::take(&mut self.reach_anchored);
+            let mut scratch = std::mem::take(&mut self.reach_scratch);
+            self.reach_limit.factors(
+                |j| posed_from_rest[j].matrix3,
+                &self.rotations,
+                &self.posed_translations,
+                self.prior_entries(),
+                cage_from_rows,
+                &self.cage_from_prior,
+                &mut scratch,
+                &mut factors,
+                &mut anchored,
+            );
+            self.reach_factors = factors;
+            self.reach_anchored = anchored;
+            self.reach_scratch = scratch;
+            self.reach_linear.clear();
+            self.reach_linear
+                .extend(posed_from_rest.iter().map(|t| t.matrix3));
+        }
+        (&self.reach_factors, &self.reach_anchored)
+    }
+
+    /// The reach limit's hat fit reads the fitting rows as `row_points` (`#R`, the rows of the
+    /// binding rig that K maps back to its binding cage) instead of the binding skin's rows: a
+    /// Green rig's vertex part φ_R C₀ ([`crate::sync::green_cage_fit::prior`]). Forgets the
+    /// factors computed so far.
+    pub(crate) fn set_reach_rows(&mut self, row_points: Vec<DVec3>) {
+        self.reach_limit.set_row_points(row_points);
+        self.reach_linear.clear();
+    }
+
+    /// The reach limit anchors vertices whose carried P̂_k is itself out of reach on their
+    /// skinned Q_k ([`crate::sync::reach_limit`]). Forgets the factors computed so far.
+    pub(crate) fn use_skinned_anchors(&mut self) {
+        self.reach_limit.use_skinned_anchors();
+        self.reach_linear.clear();
+    }
+
+    /// The weights of each cage vertex's nearest rest-skin vertex, `#C × #J` (Q_k =
+    /// Σ_j ω_kj T_j C_k).
+    pub fn anchor_weights(&self) -> &SkinWeights {
+        self.reach_limit.anchor_weights()
+    }
+
     /// Storage for [`Self::pose`] and [`Self::jacobian`] (CageRev's per-pose work).
     pub fn pose_scratch(&self) -> PriorPose {
         let (nc, nj) = (self.carried.len(), self.binding_joints.len());
@@ -376,6 +416,7 @@ impl CagePrior {
             scales: vec![0.0; nj],
             reach: self.reach_limit.scratch(),
             factors: vec![1.0; nc],
+            anchored: vec![false; nc],
             blocks: vec![DMat3::ZERO; nc],
         }
     }
@@ -412,6 +453,7 @@ impl CagePrior {
             &self.cage_from_prior,
             &mut pose.reach,
             &mut pose.factors,
+            &mut pose.anchored,
         );
     }
 
@@ -485,6 +527,8 @@ pub struct PriorPose {
     reach: ReachScratch,
     /// The reach limit's s_k, `#C`.
     factors: Vec<f64>,
+    /// Whether the reach limit anchors vertex k on its skinned Q_k, `#C`.
+    anchored: Vec<bool>,
     /// One row of ∂P/∂C's `#C × #C` blocks, for [`CagePrior::jacobian`].
     blocks: Vec<DMat3>,
 }
@@ -493,6 +537,12 @@ impl PriorPose {
     /// The reach limit's factors s_k (`#C`) of the last [`CagePrior::reach_factors`].
     pub fn reach_factors(&self) -> &[f64] {
         &self.factors
+    }
+
+    /// Which vertices the last [`CagePrior::reach_factors`] anchors on their skinned Q_k
+    /// (`#C`; none unless the limit uses skinned anchors).
+    pub fn reach_anchored(&self) -> &[bool] {
+        &self.anchored
     }
 }
 
@@ -796,6 +846,7 @@ pub(crate) fn regularised_maps(
         reach_scratch: reach_limit.scratch(),
         reach_limit,
         reach_factors: vec![1.0; nc],
+        reach_anchored: vec![false; nc],
         reach_linear: Vec::new(),
     };
     Ok(RegularisedMaps {

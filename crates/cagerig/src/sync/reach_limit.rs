@@ -22,6 +22,14 @@
 //! reach in a part that moved rigidly (on a symmetric cage, every vertex of the ring that
 //! attains ρ) stays whole whatever the round-off of its pose.
 //!
+//! **Skinned anchors** (Green rigs, [`crate::sync::green_cage_fit::prior`]). A neighbourhood
+//! that spans two parts moving apart (the legs in a walk) carries its cage vertex between them:
+//! P̂_k itself is then out of reach, and no blend toward it brings the vertex back. With
+//! skinned anchors such a vertex is measured, and pulled, toward
+//! Q̂_k = Σ_j ω_kj (L_j C₀_k + t̂_j) instead, the cage vertex skinned with the weights ω_k of its
+//! nearest binding-skin vertex, which stays about as near that vertex as at rest. Mean value
+//! rigs keep P̂_k (their CageRev rows are those of the blend toward P).
+//!
 //! **Guarantees kept.** s depends on the linear parts only, never on C, so for a fixed pose C'
 //! stays linear in C and CageRev stays exact: row k of Eq. 19 becomes
 //! `s_k (K G_rows + Q G_prior)_k + (1 − s_k) (G_prior)_k`
@@ -55,6 +63,11 @@ pub struct ReachLimit {
     neighbour_start: Vec<usize>,
     /// ρ.
     reach: f64,
+    /// The weights of each cage vertex's nearest binding-skin vertex (`#C × #J`): the skinned
+    /// anchor Q_k = Σ_j ω_kj T_j C_k, and whether vertices whose carried P̂_k is itself out of
+    /// reach are anchored on it (module docs).
+    anchor_weights: SkinWeights,
+    skinned_anchors: bool,
 }
 
 /// Scratch of [`ReachLimit::factors`]: P̂ and Ĉ' (`#C`), ŷ of the rows (`#R`).
@@ -93,13 +106,15 @@ impl ReachLimit {
         neighbour_start.push(0);
         let mut all: Vec<usize> = Vec::new();
         let mut reach = 0.0f64;
+        let mut nearest_vertices = Vec::with_capacity(nc);
         for (k, near) in neighbours.iter().enumerate() {
             all.extend_from_slice(near);
             neighbour_start.push(all.len());
-            let nearest = near
+            let (nearest, vertex) = near
                 .iter()
-                .map(|&v| binding_mesh[v].distance(binding_cage[k]))
-                .fold(f64::INFINITY, f64::min);
+                .map(|&v| (binding_mesh[v].distance(binding_cage[k]), v))
+                .fold((f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a });
+            nearest_vertices.push(vertex);
             if nearest.is_finite() {
                 reach = reach.max(nearest);
             }
@@ -114,7 +129,27 @@ impl ReachLimit {
             neighbour_weights: skin_weights.select_rows(&all),
             neighbour_start,
             reach,
+            anchor_weights: skin_weights.select_rows(&nearest_vertices),
+            skinned_anchors: false,
         }
+    }
+
+    /// Vertices whose carried P̂_k is itself out of reach are anchored on the skinned Q̂_k
+    /// instead (module docs).
+    pub(crate) fn use_skinned_anchors(&mut self) {
+        self.skinned_anchors = true;
+    }
+
+    /// The weights of each cage vertex's nearest binding-skin vertex, `#C × #J`: Q_k =
+    /// Σ_j ω_kj T_j C_k.
+    pub(crate) fn anchor_weights(&self) -> &SkinWeights {
+        &self.anchor_weights
+    }
+
+    /// The hat fit's rows on the binding rig become `row_points` (`#R`, in the rows' order).
+    pub(crate) fn set_row_points(&mut self, row_points: Vec<DVec3>) {
+        debug_assert_eq!(row_points.len(), self.row_points.len());
+        self.row_points = row_points;
     }
 
     /// Scratch sized for this limit.
@@ -151,6 +186,7 @@ impl ReachLimit {
         cage_from_prior: &Mat<f64>,
         scratch: &mut ReachScratch,
         factors: &mut [f64],
+        anchored: &mut [bool],
     ) {
         let ReachScratch {
             carried,
@@ -180,13 +216,55 @@ impl ReachLimit {
         fitted.iter_mut().for_each(|c| *c = DVec3::ZERO);
         accumulate_product(cage_from_rows, posed_rows, fitted);
         accumulate_product(cage_from_prior, carried, fitted);
+        for (k, is_anchored) in anchored.iter_mut().enumerate() {
+            *is_anchored = self.skinned_anchors
+                && !within_reach(carried[k], self.posed_neighbours(k, &posed), self.reach);
+            if *is_anchored {
+                carried[k] = posed(&self.anchor_weights, k, self.binding_cage[k]);
+            }
+        }
+        self.factors_of(&joint_linear, translations, carried, fitted, factors);
+    }
+
+    /// Cage vertex k's neighbourhood, posed by `posed` (weights, vertex, point).
+    fn posed_neighbours<'a>(
+        &'a self,
+        k: usize,
+        posed: &'a impl Fn(&SkinWeights, usize, DVec3) -> DVec3,
+    ) -> impl Iterator<Item = DVec3> + Clone + 'a {
+        (self.neighbour_start[k]..self.neighbour_start[k + 1])
+            .map(move |v| posed(&self.neighbour_weights, v, self.neighbour_points[v]))
+    }
+
+    /// s (`factors`, `#C`) of the fitted cage `fitted` (`#C`) against the carried cage
+    /// `carried` (`#C`), with the neighbourhoods posed by the linear parts `joint_linear` and
+    /// the translations `translations` (`#J`).
+    pub(crate) fn factors_of(
+        &self,
+        joint_linear: &impl Fn(usize) -> DMat3,
+        translations: &[DVec3],
+        carried: &[DVec3],
+        fitted: &[DVec3],
+        factors: &mut [f64],
+    ) {
+        let posed = |weights: &SkinWeights, i: usize, x: DVec3| {
+            let (joints, w) = weights.row(i);
+            joints.iter().zip(w).fold(DVec3::ZERO, |acc, (&j, &w)| {
+                let j = j as usize;
+                acc + w * (joint_linear(j) * x + translations[j])
+            })
+        };
         for (k, s) in factors.iter_mut().enumerate() {
-            let range = self.neighbour_start[k]..self.neighbour_start[k + 1];
-            let neighbours =
-                range.map(|v| posed(&self.neighbour_weights, v, self.neighbour_points[v]));
+            let neighbours = self.posed_neighbours(k, &posed);
             *s = largest_factor_within(carried[k], fitted[k] - carried[k], neighbours, self.reach);
         }
     }
+}
+
+/// Whether `p` is within `reach` of one of `points` (to [`TIE_TOLERANCE`] of ρ²).
+fn within_reach(p: DVec3, mut points: impl Iterator<Item = DVec3>, reach: f64) -> bool {
+    let reach_squared = reach * reach * (1.0 + TIE_TOLERANCE);
+    points.any(|y| (p - y).length_squared() <= reach_squared)
 }
 
 /// The largest s ∈ [0, 1] with min_y |p + s d − y| ≤ `reach` over `points` (to
@@ -198,13 +276,10 @@ fn largest_factor_within(
     points: impl Iterator<Item = DVec3> + Clone,
     reach: f64,
 ) -> f64 {
-    let reach_squared = reach * reach * (1.0 + TIE_TOLERANCE);
-    if points
-        .clone()
-        .any(|y| (p + d - y).length_squared() <= reach_squared)
-    {
+    if within_reach(p + d, points.clone(), reach) {
         return 1.0;
     }
+    let reach_squared = reach * reach * (1.0 + TIE_TOLERANCE);
     let a = d.length_squared();
     if a == 0.0 {
         return 1.0;

@@ -1,5 +1,5 @@
 //! The regulariser of the Green CageUp: C' stays close to the rest cage carried by the
-//! skeleton while it fits the rows.
+//! skeleton while it fits the rows, and within reach of the body.
 //!
 //! With P (`#C`) the carried cage of the mean value rigs' regularised fit
 //! ([`crate::sync::cage_prior`]: every rest cage vertex carried by the mean motion of its
@@ -7,18 +7,40 @@
 //! W = λ(LᵀL + εI) (`#C × #C`, symmetric positive definite: L the cage's uniform graph
 //! Laplacian, λ chosen once per binding from the fitting rows, below), the fit minimises
 //!
-//! `E(C') = ½ ‖F_R(C') − M'_R‖² + ½ Σ_axes (C' − P)ᵀ W (C' − P)`.
+//! `E(C') = ½ ‖F_R(C') − M'_R‖² + ½ Σ_axes (C' − P)ᵀ W (C' − P) + ½ Σ_k β_k |C'_k − a_k|²`.
 //!
-//! Its gradient adds W(C' − P) and its Hessian W ⊗ I₃ (constant): the fit keeps its stationary
-//! point form, and CageRev ([`super::reverser`]) inverts it with P(C) affine in the rest cage
-//! and the rest joints for a fixed pose. At the rest pose P = C (the skinning transforms are the
-//! identity and Σ_j ω_ij = 1), so C' = C stays the exact answer.
+//! Its gradient adds W(C' − P) + B(C' − a) and its Hessian (W + B) ⊗ I₃ (constant for a pose,
+//! B = diag β): the fit keeps its stationary point form, and CageRev ([`super::reverser`])
+//! inverts it with P(C) and a(C) affine in the rest cage and the rest joints for a fixed pose.
+//! At the rest pose P = C (the skinning transforms are the identity and Σ_j ω_ij = 1) and
+//! every β_k is 0, so C' = C stays the exact answer.
 //!
 //! **λ** = [`GREEN_PRIOR_STRENGTH`] · tr(J₀ᵀJ₀) / (3 tr(LᵀL + εI)), with J₀ the Jacobian of the
 //! rows F_R at the binding cage (φ_R ⊗ I₃ + (ψ_R ⊗ I₃)·∂g/∂C): the mean value rigs' rule
 //! (λ₀ · tr(Φ̃ᵀΦ̃) / tr R) on the Green map's own Gauss–Newton scale, with a stronger λ₀. The
 //! neighbourhoods of P are expressed in mean value coordinates of their skin vertices
 //! ([`crate::sync::cage_prior::NeighbourCoords::MeanValue`]), since φC alone is not the skin.
+//!
+//! **The reach terms** β_k, a_k are the Green form of the mean value rigs' reach limit
+//! ([`crate::sync::reach_limit`]), which blends C'_k back toward P_k after a linear fit. A
+//! blend after a Gauss–Newton fit is not a stationary point, so here the limit is a weight in
+//! the energy, decided by the pose alone:
+//! - the reach factor s_k is the reach limit's, for the hat fit `K ŷ + Q P̂` of the *vertex
+//!   part* of the rows: the binding rig's φ_R C₀ posed by the joints' linear parts, mapped back
+//!   by the mean value rigs' K and Q built on φ_R (at rest it returns C₀);
+//! - β_k = [`REACH_GAIN`] · h · (1/max(s_k, 0.1) − 1), with h the mean diagonal entry of
+//!   J₀ᵀJ₀ + W ⊗ I₃: 0 where the hat fit stays within reach (s_k = 1), and in a quadratic model
+//!   with stiffness h the weight that blends the fit by s_k toward a_k. The floor keeps β_k
+//!   within 9h, so that CageRev's Newton still reaches the fit's round-off floor;
+//! - a_k = P_k, except where the carried P̂_k is itself out of reach of its posed
+//!   neighbourhood (a neighbourhood that spans two parts moving apart, such as the legs of a
+//!   walk, carries its cage vertex between them): there a_k = Q_k = Σ_j ω_kj T_j C_k, the rest
+//!   cage vertex skinned with the weights of its nearest rest-skin vertex, which stays as near
+//!   that vertex as it was at rest.
+//!
+//! Where every s_k is 1 (no vertex would leave the body), B = 0 and the fit is bit for bit the
+//! fit without reach terms. On CesiumMan's walk with its default automatic cage they take the
+//! worst spread from 1.55 to 1.38 (`docs/green-coordinates.md`).
 
 use faer::Mat;
 use glam::{DAffine3, DMat3, DVec3};
@@ -37,8 +59,20 @@ pub struct FitPrior {
     prior: CagePrior,
     /// W = λ(LᵀL + εI), `#C × #C`.
     weight: Mat<f64>,
+    /// K of the vertex part's hat fit (`#C × #R`), which decides the reach factors s_k.
+    hat_from_rows: Mat<f64>,
+    /// h: the mean diagonal entry of J₀ᵀJ₀ + W ⊗ I₃, the scale of the reach weights.
+    stiffness: f64,
+    /// β_k of the current event (`#C`): the reach weights, 0 where the hat fit stays within
+    /// reach.
+    reach_weights: Vec<f64>,
+    /// Whether vertex k is anchored on its skinned Q_k in the current event, and its anchor
+    /// a_k (Q_k, or P_k when not anchored), `#C` each.
+    anchored: Vec<bool>,
+    anchors: Vec<DVec3>,
     /// P of the current event (`#C`).
     target: Vec<DVec3>,
+
     /// P of the current solve (a continuation's piece blends `last` and `target`), `#C`.
     active: Vec<DVec3>,
     /// P of the last converged solution, `#C`.
@@ -53,20 +87,45 @@ pub struct FitPrior {
 /// deviation within 0.056 of the diagonal (0.061 at 9); `docs/green-coordinates.md`.
 pub const GREEN_PRIOR_STRENGTH: f64 = 13.0;
 
+/// g of the reach weights β_k = g·h·(1/s_k − 1) (module docs). Over the characters of
+/// `docs/green-coordinates.md`, 1 holds CesiumMan's walk to spread 1.38 with deviation 0.052 of
+/// the diagonal; 3 and 10 give spread 1.37 and 1.48 but deviation 0.069 and 0.089 (the anchored
+/// vertices leave the rigidly carried reference the deviation measures against).
+pub const REACH_GAIN: f64 = 1.0;
+
+/// The reach factor below which s_k counts as this value, so that β_k stays finite.
+const SMALLEST_REACH_FACTOR: f64 = 0.1;
+
+/// β_k for the reach factor `factor` (s_k) and the fit's `stiffness` (h): 0 at s_k = 1.
+fn reach_weight(stiffness: f64, factor: f64) -> f64 {
+    if factor >= 1.0 {
+        0.0
+    } else {
+        REACH_GAIN * stiffness * (1.0 / factor.max(SMALLEST_REACH_FACTOR) - 1.0)
+    }
+}
+
 impl FitPrior {
     /// From the carried-cage prior (its neighbourhoods), R = LᵀL + εI (`#C × #C`) of the cage and
     /// tr(J₀ᵀJ₀) of the rows at the binding cage (`rows_scale`, see the module docs for λ); P
     /// starts at `rest_cage` (`#C`).
     pub fn new(
         prior: CagePrior,
+        hat_from_rows: Mat<f64>,
         regulariser: &Mat<f64>,
         rest_cage: &[DVec3],
         rows_scale: f64,
     ) -> Self {
-        let trace: f64 = (0..regulariser.nrows()).map(|k| regulariser[(k, k)]).sum();
+        let nc = regulariser.nrows();
+        let trace: f64 = (0..nc).map(|k| regulariser[(k, k)]).sum();
         let strength = GREEN_PRIOR_STRENGTH * rows_scale / (3.0 * trace);
         Self {
             prior,
+            hat_from_rows,
+            stiffness: (rows_scale + 3.0 * strength * trace) / (3.0 * nc as f64),
+            reach_weights: vec![0.0; nc],
+            anchored: vec![false; nc],
+            anchors: rest_cage.to_vec(),
             weight: Mat::from_fn(regulariser.nrows(), regulariser.ncols(), |r, c| {
                 strength * regulariser[(r, c)]
             }),
@@ -107,7 +166,24 @@ impl FitPrior {
             NeighbourCoords::MeanValue,
         )?;
         let regulariser = laplacian_regulariser(rest_cage.len(), triangles)?;
-        Ok(Self::new(maps.prior, &regulariser, rest_cage, rows_scale))
+        let mut prior = maps.prior;
+        // The hat fit K ŷ + Q P̂ maps the posed vertex part φ_R C₀ back to C₀ at rest.
+        let vertex_rows = vertex_coords.select_rows(rows);
+        let mut vertex_part = vec![DVec3::ZERO; rows.len()];
+        for (k, c) in rest_cage.iter().enumerate() {
+            for (out, &w) in vertex_part.iter_mut().zip(vertex_rows.col(k).iter()) {
+                *out += w * *c;
+            }
+        }
+        prior.set_reach_rows(vertex_part);
+        prior.use_skinned_anchors();
+        Ok(Self::new(
+            prior,
+            maps.cage_from_rows,
+            &regulariser,
+            rest_cage,
+            rows_scale,
+        ))
     }
 
     /// W = λ(LᵀL + εI), `#C × #C`.
@@ -130,25 +206,93 @@ impl FitPrior {
         self.prior.carry(posed_from_rest, rest_cage);
         self.target.copy_from_slice(self.prior.carried_cage());
         self.active.copy_from_slice(&self.target);
+        let (factors, anchored) = self
+            .prior
+            .carried_reach_factors(posed_from_rest, &self.hat_from_rows);
+        for (weight, &s) in self.reach_weights.iter_mut().zip(factors) {
+            *weight = reach_weight(self.stiffness, s);
+        }
+        self.anchored.copy_from_slice(anchored);
+        let anchor_weights = self.prior.anchor_weights();
+        for (k, anchor) in self.anchors.iter_mut().enumerate() {
+            *anchor = if self.anchored[k] {
+                skinned_anchor(anchor_weights, k, posed_from_rest, rest_cage[k])
+            } else {
+                self.target[k]
+            };
+        }
     }
 
-    /// Wd for d = x − P of the current solve (`x`: `#C`) into `pulls` (`#C`).
-    fn pulls(&self, x: &[DVec3], pulls: &mut [DVec3]) {
+    /// β_k of the current event (`#C`, module docs).
+    pub fn reach_weights(&self) -> &[f64] {
+        &self.reach_weights
+    }
+
+    /// β_k (`weights`, `#C`) in the pose with the joints' linear parts `joint_linear` (`#J`):
+    /// what [`Self::carry`] sets in that pose, for CageRev. Allocates its scratch (once per
+    /// pose).
+    pub(crate) fn reach_weights_in(
+        &self,
+        joint_linear: &[DMat3],
+        weights: &mut [f64],
+        anchored: &mut [bool],
+    ) {
+        let mut pose = self.prior.pose_scratch();
+        self.prior.pose(joint_linear, &mut pose);
+        self.prior
+            .reach_factors(joint_linear, &self.hat_from_rows, &mut pose);
+        for (weight, &s) in weights.iter_mut().zip(pose.reach_factors()) {
+            *weight = reach_weight(self.stiffness, s);
+        }
+        anchored.copy_from_slice(pose.reach_anchored());
+    }
+
+    /// Whether vertex k is anchored on its skinned Q_k in the current event (`#C`).
+    pub fn anchored(&self) -> &[bool] {
+        &self.anchored
+    }
+
+    /// a_k of the current event (`#C`): Q_k where the vertex is anchored, P_k elsewhere.
+    pub fn anchors(&self) -> &[DVec3] {
+        &self.anchors
+    }
+
+    /// The weights of each cage vertex's nearest rest-skin vertex (`#C × #J`), Q_k's.
+    pub(crate) fn anchor_weights(&self) -> &SkinWeights {
+        self.prior.anchor_weights()
+    }
+
+    /// The gradient (W(x − P) + B(x − a), into `pulls`, `#C`) and the energy
+    /// ½ Σ_axes (x − P)ᵀW(x − P) + ½ Σ_k β_k |x_k − a_k|² of the prior at `x` (`#C`), with P
+    /// that of the current solve. No allocation.
+    fn pulls(&self, x: &[DVec3], pulls: &mut [DVec3]) -> f64 {
         row_dots(&self.weight, x, &self.active, pulls);
-    }
-
-    /// ½ Σ_axes dᵀWd for d = x − P of the current solve (`x`: `#C`), with `pulls` (`#C`) as
-    /// scratch. No allocation.
-    pub(super) fn energy(&self, x: &[DVec3], pulls: &mut [DVec3]) -> f64 {
-        self.pulls(x, pulls);
         let mut energy = 0.0;
         for ((pull, xk), pk) in pulls.iter().zip(x).zip(&self.active) {
             energy += 0.5 * pull.dot(*xk - *pk);
         }
+        for (((pull, &beta), xk), ak) in pulls
+            .iter_mut()
+            .zip(&self.reach_weights)
+            .zip(x)
+            .zip(&self.anchors)
+        {
+            if beta != 0.0 {
+                let d = *xk - *ak;
+                *pull += beta * d;
+                energy += 0.5 * beta * d.length_squared();
+            }
+        }
         energy
     }
 
-    /// `normal_matrix` (`3#C × 3#C`) += W ⊗ I₃.
+    /// The prior's energy at `x` (`#C`, see [`Self::pulls`]), with `pulls` (`#C`) as scratch.
+    /// No allocation.
+    pub(super) fn energy(&self, x: &[DVec3], pulls: &mut [DVec3]) -> f64 {
+        self.pulls(x, pulls)
+    }
+
+    /// `normal_matrix` (`3#C × 3#C`) += (W + B) ⊗ I₃.
     pub(super) fn add_to_hessian(&self, normal_matrix: &mut Mat<f64>) {
         let n = self.weight.nrows();
         for k in 0..n {
@@ -156,6 +300,12 @@ impl FitPrior {
                 let w = self.weight[(k, m)];
                 for a in 0..3 {
                     normal_matrix[(3 * k + a, 3 * m + a)] += w;
+                }
+            }
+            let beta = self.reach_weights[k];
+            if beta != 0.0 {
+                for a in 0..3 {
+                    normal_matrix[(3 * k + a, 3 * k + a)] += beta;
                 }
             }
         }
@@ -179,22 +329,38 @@ impl FitPrior {
         self.last.copy_from_slice(cage);
     }
 
-    /// ½ Σ_axes dᵀWd and gradient += Wd for d = x − P of the current solve (`x`, `gradient`:
-    /// `#C`), with `pulls` (`#C`) as scratch. No allocation.
+    /// The prior's energy at `x` (`#C`, see [`Self::pulls`]) and its gradient added to
+    /// `gradient` (`#C`), with `pulls` (`#C`) as scratch. No allocation.
     pub(super) fn add_to_gradient(
         &self,
         x: &[DVec3],
         gradient: &mut [DVec3],
         pulls: &mut [DVec3],
     ) -> f64 {
-        self.pulls(x, pulls);
-        let mut energy = 0.0;
-        for (k, (out, pull)) in gradient.iter_mut().zip(pulls.iter()).enumerate() {
+        let energy = self.pulls(x, pulls);
+        for (out, pull) in gradient.iter_mut().zip(pulls.iter()) {
             *out += *pull;
-            energy += 0.5 * pull.dot(x[k] - self.active[k]);
         }
         energy
     }
+}
+
+/// Q_k = Σ_j ω_kj T_j C_k: the rest cage vertex `rest_vertex` (C_k) skinned by the skinning
+/// transforms `posed_from_rest` (`#J`) with the weights of its nearest rest-skin vertex (row k
+/// of `anchor_weights`).
+fn skinned_anchor(
+    anchor_weights: &SkinWeights,
+    k: usize,
+    posed_from_rest: &[DAffine3],
+    rest_vertex: DVec3,
+) -> DVec3 {
+    let (joints, weights) = anchor_weights.row(k);
+    joints
+        .iter()
+        .zip(weights)
+        .fold(DVec3::ZERO, |acc, (&j, &w)| {
+            acc + w * posed_from_rest[j as usize].transform_point3(rest_vertex)
+        })
 }
 
 /// ∂P/∂C for a fixed pose and fixed joint translations (`3#C × 3#C`, row 3k + a, column 3m + b)

@@ -31,6 +31,11 @@
 //! in A): `P(C₀ + δ) = P(C₀) + (∂P/∂C) δ + (∂P/∂t)(∂t/∂A)(A(C₀ + δ) − A(C₀))` exactly, both
 //! matrices built once per pose ([`GreenCageReverser::prepare_prior`]). Its Jacobian adds
 //! `W (∂P/∂C + (∂P/∂t)(∂t/∂A) J_A)`.
+//!
+//! The prior's reach terms ½ Σ_k β_k |C'_k − a_k|² (β_k and the choice of a_k depend on the pose
+//! alone) add `B (a(C₀ + δ) − C'_t)` to G: a_k = P_k, or the skinned anchor
+//! `Q_k = Σ_j ω_kj (L_j C_k + t_j)`, whose change is `L̄_k δ_k + Σ_j ω_kj (∂t_j/∂A) ΔA` exactly
+//! (L̄_k = Σ_j ω_kj L_j), and their derivatives to its Jacobian.
 
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use glam::{DMat3, DVec3};
@@ -97,6 +102,17 @@ pub struct GreenCageReverser {
 struct ReverserPrior {
     /// W ⊗ I₃, `3#C × 3#C`.
     weight: Mat<f64>,
+    /// β_k of the pose and whether vertex k is anchored on its skinned Q_k, `#C` each
+    /// ([`super::prior`]).
+    reach_weights: Vec<f64>,
+    anchored: Vec<bool>,
+    /// ∂Q_k/∂C_k = Σ_j ω_kj L_j of the anchored vertices (`#C`, identity elsewhere) and
+    /// (∂Q/∂t)(∂t/∂A) (`3#C × 3#J`, zero rows for vertices not anchored and while SkelUp is
+    /// locked).
+    anchor_blocks: Vec<DMat3>,
+    anchor_joint_rows: Mat<f64>,
+    /// a(C₀) − C'_t of the current piece (`3#C`).
+    anchor_start: Vec<f64>,
     /// ∂P/∂C (`3#C × 3#C`) and (∂P/∂t)(∂t/∂A) (`3#C × 3#J`, zero while SkelUp is locked).
     cage_rows: Mat<f64>,
     joint_rows: Mat<f64>,
@@ -184,6 +200,11 @@ impl GreenCageReverser {
         let nj = joint_linear.len();
         let terms = self.prior.get_or_insert_with(|| ReverserPrior {
             weight: Mat::zeros(n, n),
+            reach_weights: vec![0.0; n / 3],
+            anchored: vec![false; n / 3],
+            anchor_blocks: vec![DMat3::IDENTITY; n / 3],
+            anchor_joint_rows: Mat::zeros(n, 3 * nj),
+            anchor_start: vec![0.0; n],
             cage_rows: Mat::zeros(n, n),
             joint_rows: Mat::zeros(n, 3 * nj),
             start: vec![0.0; n],
@@ -196,6 +217,37 @@ impl GreenCageReverser {
             for m in 0..self.num_cage {
                 for a in 0..3 {
                     terms.weight[(3 * k + a, 3 * m + a)] = weight[(k, m)];
+                }
+            }
+        }
+        prior.reach_weights_in(joint_linear, &mut terms.reach_weights, &mut terms.anchored);
+        // The skinned anchors' derivatives: Q_k = Σ_j ω_kj (L_j C_k + t_j).
+        let anchor_weights = prior.anchor_weights();
+        terms.anchor_joint_rows.fill(0.0);
+        for (k, block) in terms.anchor_blocks.iter_mut().enumerate() {
+            *block = DMat3::IDENTITY;
+            if !terms.anchored[k] {
+                continue;
+            }
+            let (joints, weights) = anchor_weights.row(k);
+            *block = joints
+                .iter()
+                .zip(weights)
+                .fold(DMat3::ZERO, |acc, (&j, &w)| {
+                    acc + joint_linear[j as usize] * w
+                });
+            if self.skel_up_locked {
+                continue;
+            }
+            for (&j, &w) in joints.iter().zip(weights) {
+                for l in 0..nj {
+                    let derivative = translation_jacobian[j as usize * nj + l] * w;
+                    for b in 0..3 {
+                        let column = derivative.col(b);
+                        for a in 0..3 {
+                            terms.anchor_joint_rows[(3 * k + a, 3 * l + b)] += column[a];
+                        }
+                    }
                 }
             }
         }
@@ -326,14 +378,16 @@ impl GreenCageReverser {
             *t = *p + a * *d;
         }
         fit.rows_of(&self.posed_target, &mut self.g, &mut self.rows_target);
-        if let (Some(terms), Some(carried)) = (&mut self.prior, fit.prior_target()) {
-            for ((start, p), t) in terms
+        if let (Some(terms), Some(fit_prior)) = (&mut self.prior, fit.prior()) {
+            for (((start, anchor_start), (p, a)), t) in terms
                 .start
                 .chunks_exact_mut(3)
-                .zip(carried)
+                .zip(terms.anchor_start.chunks_exact_mut(3))
+                .zip(fit_prior.target().iter().zip(fit_prior.anchors()))
                 .zip(&self.posed_target)
             {
                 start.copy_from_slice(&(*p - *t).to_array());
+                anchor_start.copy_from_slice(&(*a - *t).to_array());
             }
         }
         for (f, blocks) in self.target_blocks.iter_mut().enumerate() {
@@ -480,6 +534,33 @@ impl GreenCageReverser {
                         }
                         *o += DVec3::from_array(pull);
                     }
+                    // + B (a(C₀ + δ) − C'_t): a_k = P_k, or the skinned
+                    // Q_k(C₀ + δ) = Q_k(C₀) + L̄_k δ_k + (∂Q_k/∂A) ΔA.
+                    for (k, o) in out.iter_mut().enumerate() {
+                        let beta = terms.reach_weights[k];
+                        if beta == 0.0 {
+                            continue;
+                        }
+                        let change = if terms.anchored[k] {
+                            let mut change = DVec3::from_slice(&terms.anchor_start[3 * k..])
+                                + terms.anchor_blocks[k] * delta[k];
+                            for (a, c) in change.as_mut().iter_mut().enumerate() {
+                                let row = terms.anchor_joint_rows.row(3 * k + a);
+                                *c += row
+                                    .iter()
+                                    .zip(joint_change.iter())
+                                    .fold(0.0, |acc, (w, d)| acc + w * d);
+                            }
+                            change
+                        } else {
+                            DVec3::new(
+                                terms.change[3 * k],
+                                terms.change[3 * k + 1],
+                                terms.change[3 * k + 2],
+                            )
+                        };
+                        *o += beta * change;
+                    }
                 }
                 let largest = out.iter().fold(0.0f64, |m, o| m.max(o.abs().max_element()));
                 if largest.is_finite() {
@@ -549,6 +630,34 @@ impl GreenCageReverser {
                         1.0,
                         Par::Seq,
                     );
+                    // + B ∂a/∂δ: ∂P_k/∂δ, or L̄_k on the diagonal + (∂Q_k/∂A) J_A.
+                    for k in 0..terms.reach_weights.len() {
+                        let beta = terms.reach_weights[k];
+                        if beta == 0.0 {
+                            continue;
+                        }
+                        for a in 0..3 {
+                            let r = 3 * k + a;
+                            if terms.anchored[k] {
+                                for b in 0..3 {
+                                    system[(r, 3 * k + b)] +=
+                                        beta * terms.anchor_blocks[k].col(b)[a];
+                                }
+                                for col in 0..n {
+                                    let derivative =
+                                        (0..joint_jacobian.nrows()).fold(0.0, |acc, l| {
+                                            acc + terms.anchor_joint_rows[(r, l)]
+                                                * joint_jacobian[(l, col)]
+                                        });
+                                    system[(r, col)] += beta * derivative;
+                                }
+                            } else {
+                                for col in 0..n {
+                                    system[(r, col)] += beta * terms.system[(r, col)];
+                                }
+                            }
+                        }
+                    }
                 }
                 for c in 0..n {
                     let column = system.col(c);
