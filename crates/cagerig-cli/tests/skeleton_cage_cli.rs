@@ -106,7 +106,7 @@ fn the_default_automatic_cages_stay_on_the_body() {
 }
 
 /// The same rigs under Green coordinates: no sample refused, and the handle within the mean
-/// value rigs' bounds (CesiumMan's spread was 1.55 before the Green fit had reach terms).
+/// value rigs' bounds (CesiumMan's spread needs the fit's reach terms: 1.55 without them).
 #[test]
 fn the_default_automatic_cages_of_green_rigs_stay_near_the_body() {
     for (file, animation, last) in characters() {

@@ -82,9 +82,10 @@ pub struct FitPrior {
 /// λ₀ of the Green fit's λ (module docs), about four times the mean value rigs'
 /// ([`crate::sync::cage_prior::PRIOR_STRENGTH`]). The Green map follows a folding cage
 /// triangle through its face terms, so its rows pull C' from the body harder. Over the default
-/// automatic cages of the Fox (Walk, Run) and CesiumMan, λ₀ = 13 gives the least worst spread
-/// of those tried (9 to 22; CesiumMan 1.55, against 1.63 at 9 and 1.67 at 22) and keeps the
-/// deviation within 0.056 of the diagonal (0.061 at 9); `docs/green-coordinates.md`.
+/// automatic cages of the Fox (Walk, Run) and CesiumMan, fitted without the reach terms, λ₀ = 13
+/// gives the least worst spread of those tried (9 to 22; CesiumMan 1.55, against 1.63 at 9 and
+/// 1.67 at 22) and keeps the deviation within 0.056 of the diagonal (0.061 at 9);
+/// `docs/green-coordinates.md`.
 pub const GREEN_PRIOR_STRENGTH: f64 = 13.0;
 
 /// g of the reach weights β_k = g·h·(1/s_k − 1) (module docs). Over the characters of
