@@ -194,11 +194,7 @@ impl ReachLimit {
             fitted,
         } = scratch;
         let posed = |weights: &SkinWeights, i: usize, x: DVec3| {
-            let (joints, w) = weights.row(i);
-            joints.iter().zip(w).fold(DVec3::ZERO, |acc, (&j, &w)| {
-                let j = j as usize;
-                acc + w * (joint_linear(j) * x + translations[j])
-            })
+            skinned_by_linear_parts(weights, i, x, &joint_linear, translations)
         };
         // P̂ = Σ_j (L_j β_kj C₀ + a_kj t̂_j) + A_k (C₀_k − ξ_k C₀).
         carried.iter_mut().for_each(|p| *p = DVec3::ZERO);
@@ -248,17 +244,29 @@ impl ReachLimit {
         factors: &mut [f64],
     ) {
         let posed = |weights: &SkinWeights, i: usize, x: DVec3| {
-            let (joints, w) = weights.row(i);
-            joints.iter().zip(w).fold(DVec3::ZERO, |acc, (&j, &w)| {
-                let j = j as usize;
-                acc + w * (joint_linear(j) * x + translations[j])
-            })
+            skinned_by_linear_parts(weights, i, x, &joint_linear, translations)
         };
         for (k, s) in factors.iter_mut().enumerate() {
             let neighbours = self.posed_neighbours(k, &posed);
             *s = largest_factor_within(carried[k], fitted[k] - carried[k], neighbours, self.reach);
         }
     }
+}
+
+/// `x` skinned with row `i` of `weights` by the joints' linear parts `joint_linear` and the
+/// translations `translations` (`#J`): Σ_j ω_ij (L_j x + t_j).
+fn skinned_by_linear_parts(
+    weights: &SkinWeights,
+    i: usize,
+    x: DVec3,
+    joint_linear: &impl Fn(usize) -> DMat3,
+    translations: &[DVec3],
+) -> DVec3 {
+    let (joints, w) = weights.row(i);
+    joints.iter().zip(w).fold(DVec3::ZERO, |acc, (&j, &w)| {
+        let j = j as usize;
+        acc + w * (joint_linear(j) * x + translations[j])
+    })
 }
 
 /// Whether `p` is within `reach` of one of `points` (to [`TIE_TOLERANCE`] of ρ²).
