@@ -52,6 +52,7 @@ use crate::skin_weights::SkinWeights;
 use crate::sync::cage_prior::{
     BindingJoints, CagePrior, NeighbourCoords, laplacian_regulariser, regularised_maps,
 };
+use crate::sync::small_products::accumulate_product;
 
 /// The regulariser's data (see the module docs).
 #[derive(Debug, Clone)]
@@ -72,7 +73,6 @@ pub struct FitPrior {
     anchors: Vec<DVec3>,
     /// P of the current event (`#C`).
     target: Vec<DVec3>,
-
     /// P of the current solve (a continuation's piece blends `last` and `target`), `#C`.
     active: Vec<DVec3>,
     /// P of the last converged solution, `#C`.
@@ -169,13 +169,12 @@ impl FitPrior {
         let regulariser = laplacian_regulariser(rest_cage.len(), triangles)?;
         let mut prior = maps.prior;
         // The hat fit K ŷ + Q P̂ maps the posed vertex part φ_R C₀ back to C₀ at rest.
-        let vertex_rows = vertex_coords.select_rows(rows);
         let mut vertex_part = vec![DVec3::ZERO; rows.len()];
-        for (k, c) in rest_cage.iter().enumerate() {
-            for (out, &w) in vertex_part.iter_mut().zip(vertex_rows.col(k).iter()) {
-                *out += w * *c;
-            }
-        }
+        accumulate_product(
+            &vertex_coords.select_rows(rows),
+            rest_cage,
+            &mut vertex_part,
+        );
         prior.set_reach_rows(vertex_part);
         prior.use_skinned_anchors();
         Ok(Self::new(
@@ -256,11 +255,6 @@ impl FitPrior {
     /// a_k of the current event (`#C`): Q_k where the vertex is anchored, P_k elsewhere.
     pub fn anchors(&self) -> &[DVec3] {
         &self.anchors
-    }
-
-    /// The weights of each cage vertex's nearest rest-skin vertex (`#C × #J`), Q_k's.
-    pub(crate) fn anchor_weights(&self) -> &SkinWeights {
-        self.prior.anchor_weights()
     }
 
     /// The gradient (W(x − P) + B(x − a), into `pulls`, `#C`) and the energy
@@ -399,13 +393,63 @@ pub(crate) fn prior_jacobians(
         return;
     }
     for (k, j, share) in prior.prior.joint_shares() {
-        for l in 0..nj {
-            let block = translation_jacobian[j * nj + l] * share;
-            for b in 0..3 {
-                let column = block.col(b);
-                for a in 0..3 {
-                    joint_rows[(3 * k + a, 3 * l + b)] += column[a];
-                }
+        add_translation_rows(translation_jacobian, k, j, share, joint_rows);
+    }
+}
+
+/// The skinned anchors' derivatives for CageRev in the pose with the joints' linear parts
+/// `joint_linear` (`#J`): Q_k = Σ_j ω_kj (L_j C_k + t_j), so ∂Q_k/∂C_k = L̄_k = Σ_j ω_kj L_j
+/// (`blocks`, `#C`; identity where `anchored` is false) and ∂Q_k/∂A = Σ_j ω_kj ∂t_j/∂A
+/// (`joint_rows`, `3#C × 3#J`, zero rows where not anchored and while SkelUp is locked), with
+/// ∂t_j/∂A_l = `translation_jacobian[j·#J + l]`.
+pub(crate) fn anchor_jacobians(
+    prior: &FitPrior,
+    joint_linear: &[DMat3],
+    translation_jacobian: &[DMat3],
+    skel_up_locked: bool,
+    anchored: &[bool],
+    blocks: &mut [DMat3],
+    joint_rows: &mut Mat<f64>,
+) {
+    let anchor_weights = prior.prior.anchor_weights();
+    joint_rows.fill(0.0);
+    for (k, block) in blocks.iter_mut().enumerate() {
+        *block = DMat3::IDENTITY;
+        if !anchored[k] {
+            continue;
+        }
+        let (joints, weights) = anchor_weights.row(k);
+        *block = joints
+            .iter()
+            .zip(weights)
+            .fold(DMat3::ZERO, |acc, (&j, &w)| {
+                acc + joint_linear[j as usize] * w
+            });
+        if skel_up_locked {
+            continue;
+        }
+        for (&j, &w) in joints.iter().zip(weights) {
+            add_translation_rows(translation_jacobian, k, j as usize, w, joint_rows);
+        }
+    }
+}
+
+/// `joint_rows` (`3#C × 3#J`) rows of cage vertex k += `share` · ∂t_j/∂A: the block row of
+/// `translation_jacobian` (`#J × #J` blocks, ∂t_j/∂A_l at `j·#J + l`) for joint j.
+fn add_translation_rows(
+    translation_jacobian: &[DMat3],
+    k: usize,
+    j: usize,
+    share: f64,
+    joint_rows: &mut Mat<f64>,
+) {
+    let nj = joint_rows.ncols() / 3;
+    for l in 0..nj {
+        let block = translation_jacobian[j * nj + l] * share;
+        for b in 0..3 {
+            let column = block.col(b);
+            for a in 0..3 {
+                joint_rows[(3 * k + a, 3 * l + b)] += column[a];
             }
         }
     }

@@ -40,7 +40,7 @@
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use glam::{DMat3, DVec3};
 
-use super::prior::prior_jacobians;
+use super::prior::{anchor_jacobians, prior_jacobians};
 use super::{GRADIENT_TOLERANCE, GreenCageFit, rows_jacobian_into, rows_of};
 use crate::error::RigError;
 use crate::sync::newton::{NewtonReport, NewtonSolver, solve_by_continuation};
@@ -221,36 +221,15 @@ impl GreenCageReverser {
             }
         }
         prior.reach_weights_in(joint_linear, &mut terms.reach_weights, &mut terms.anchored);
-        // The skinned anchors' derivatives: Q_k = Σ_j ω_kj (L_j C_k + t_j).
-        let anchor_weights = prior.anchor_weights();
-        terms.anchor_joint_rows.fill(0.0);
-        for (k, block) in terms.anchor_blocks.iter_mut().enumerate() {
-            *block = DMat3::IDENTITY;
-            if !terms.anchored[k] {
-                continue;
-            }
-            let (joints, weights) = anchor_weights.row(k);
-            *block = joints
-                .iter()
-                .zip(weights)
-                .fold(DMat3::ZERO, |acc, (&j, &w)| {
-                    acc + joint_linear[j as usize] * w
-                });
-            if self.skel_up_locked {
-                continue;
-            }
-            for (&j, &w) in joints.iter().zip(weights) {
-                for l in 0..nj {
-                    let derivative = translation_jacobian[j as usize * nj + l] * w;
-                    for b in 0..3 {
-                        let column = derivative.col(b);
-                        for a in 0..3 {
-                            terms.anchor_joint_rows[(3 * k + a, 3 * l + b)] += column[a];
-                        }
-                    }
-                }
-            }
-        }
+        anchor_jacobians(
+            prior,
+            joint_linear,
+            translation_jacobian,
+            self.skel_up_locked,
+            &terms.anchored,
+            &mut terms.anchor_blocks,
+            &mut terms.anchor_joint_rows,
+        );
         prior_jacobians(
             prior,
             joint_linear,
