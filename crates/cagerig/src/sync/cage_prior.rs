@@ -76,8 +76,12 @@ pub const PRIOR_NEIGHBOURS: usize = 32;
 /// Skin vertices searched for neighbours at most (a regular subsample of larger skins).
 const PRIOR_SEARCH_VERTICES: usize = 16_384;
 /// μ_k / tr(Σ_j D_kj) in the carried rotation's H_k: how much of the blend of the joints'
-/// linear parts H_k holds beside the neighbourhood's own motion (see the module docs).
-pub const ROTATION_BLEND: f64 = 0.05;
+/// linear parts H_k holds beside the neighbourhood's own motion (see the module docs). Only
+/// enough to keep H_k definite against round-off where N_k is flat: a larger blend turns P away
+/// from the neighbourhood's best-fit rotation, and on a thin triangle of a cage that turn alone
+/// flips it (0.05 flipped one or two of the Fox's 196 cage triangles in its Walk and Run
+/// against the deviation's reference, `docs/method.md`).
+pub const ROTATION_BLEND: f64 = 1e-6;
 
 /// The skeleton of the binding, whose pose under the current linear parts turns the carried
 /// cage (T̂_j in the module docs): every joint's parent, an order with parents first, and each
@@ -385,19 +389,12 @@ impl CagePrior {
         (&self.reach_factors, &self.reach_anchored)
     }
 
-    /// The reach limit's hat fit reads the fitting rows as `row_points` (`#R`, the rows of the
+    /// The reach limit's hat fit reads the fitting rows as `vertex_part` (`#R`, the rows of the
     /// binding rig that K maps back to its binding cage) instead of the binding skin's rows: a
-    /// Green rig's vertex part φ_R C₀ ([`crate::sync::green_cage_fit::prior`]). Forgets the
-    /// factors computed so far.
-    pub(crate) fn set_reach_rows(&mut self, row_points: Vec<DVec3>) {
-        self.reach_limit.set_row_points(row_points);
-        self.reach_linear.clear();
-    }
-
-    /// The reach limit anchors vertices whose carried P̂_k is itself out of reach on their
-    /// skinned Q_k ([`crate::sync::reach_limit`]). Forgets the factors computed so far.
-    pub(crate) fn use_skinned_anchors(&mut self) {
-        self.reach_limit.use_skinned_anchors();
+    /// Green rig's vertex part φ_R C₀ ([`crate::sync::green_cage_fit::prior`],
+    /// [`crate::sync::reach_limit::HatFit::VertexPart`]). Forgets the factors computed so far.
+    pub(crate) fn use_vertex_part_hat(&mut self, vertex_part: Vec<DVec3>) {
+        self.reach_limit.use_vertex_part_hat(vertex_part);
         self.reach_linear.clear();
     }
 
@@ -821,6 +818,7 @@ pub(crate) fn regularised_maps(
     );
     let reach_limit = ReachLimit::new(
         rest_cage,
+        cage_triangles,
         rest_mesh,
         skin_weights,
         rows,

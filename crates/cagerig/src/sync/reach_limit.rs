@@ -22,6 +22,11 @@
 //! reach in a part that moved rigidly (on a symmetric cage, every vertex of the ring that
 //! attains ρ) stays whole whatever the round-off of its pose.
 //!
+//! **The fold guard** (mean value rigs, [`HatFit::Exact`]). The fit can turn a thin cage
+//! triangle over while its corners stay within reach. Their hat is the fit itself, so every
+//! triangle that the blend turns against P̂ gets its corners' factors scaled down until its
+//! normal faces P̂'s again ([`ReachLimit::unfold`]).
+//!
 //! **Skinned anchors** (Green rigs, [`crate::sync::green_cage_fit::prior`]). A neighbourhood
 //! that spans two parts moving apart (the legs in a walk) carries its cage vertex between them:
 //! P̂_k itself is then out of reach, and no blend toward it brings the vertex back. With
@@ -64,10 +69,27 @@ pub struct ReachLimit {
     /// ρ.
     reach: f64,
     /// The weights of each cage vertex's nearest binding-skin vertex (`#C × #J`): the skinned
-    /// anchor Q_k = Σ_j ω_kj T_j C_k, and whether vertices whose carried P̂_k is itself out of
-    /// reach are anchored on it (module docs).
+    /// anchor Q_k = Σ_j ω_kj T_j C_k ([`HatFit::VertexPart`]).
     anchor_weights: SkinWeights,
-    skinned_anchors: bool,
+    /// What the hat fit is to the rig's own fit: it decides the fold guard and the anchors.
+    hat: HatFit,
+    /// The cage's triangles, for the fold guard.
+    triangles: Vec<[u32; 3]>,
+}
+
+/// What the reach limit's hat fit Ĉ' is to the rig's own CageUp, and so what the limit may
+/// conclude from it (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum HatFit {
+    /// The fit itself on the binding rig (mean value rigs: C'_fit = K M̃' + Q P is linear, so
+    /// the hat is the fit up to the translations). A triangle the hat turns against P̂ is one the
+    /// fit turns, and the fold guard lowers its factors; vertices blend toward P̂.
+    Exact,
+    /// The fit of the vertex part φ_R C₀ only (Green rigs, whose fit also follows the
+    /// normals' part): a proxy that says where the fit leaves the body, not which triangles it
+    /// folds. No fold guard; vertices whose P̂_k is itself out of reach are anchored on their
+    /// skinned Q̂_k.
+    VertexPart,
 }
 
 /// Scratch of [`ReachLimit::factors`]: P̂ and Ĉ' (`#C`), ŷ of the rows (`#R`).
@@ -91,9 +113,15 @@ impl ReachLimit {
     /// The limit for the binding cage `binding_cage` (C₀, `#C`) and skin `binding_mesh` (M₀,
     /// `#V`) with weights `skin_weights` (`#V × #J`); `rows` are the fitting rows; `neighbours`
     /// the prior's neighbourhood of each cage vertex;
-    /// `binding_centroids` and `binding_joint_moments` the prior's ξC₀ and β_kj C₀.
+    /// `binding_centroids` and `binding_joint_moments` the prior's ξC₀ and β_kj C₀;
+    /// `triangles` the cage's faces.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the binding's parts, each named in the docs"
+    )]
     pub(crate) fn new(
         binding_cage: &[DVec3],
+        triangles: &[[u32; 3]],
         binding_mesh: &[DVec3],
         skin_weights: &SkinWeights,
         rows: &[usize],
@@ -130,14 +158,9 @@ impl ReachLimit {
             neighbour_start,
             reach,
             anchor_weights: skin_weights.select_rows(&nearest_vertices),
-            skinned_anchors: false,
+            hat: HatFit::Exact,
+            triangles: triangles.to_vec(),
         }
-    }
-
-    /// Vertices whose carried P̂_k is itself out of reach are anchored on the skinned Q̂_k
-    /// instead (module docs).
-    pub(crate) fn use_skinned_anchors(&mut self) {
-        self.skinned_anchors = true;
     }
 
     /// The weights of each cage vertex's nearest binding-skin vertex, `#C × #J`: Q_k =
@@ -146,10 +169,12 @@ impl ReachLimit {
         &self.anchor_weights
     }
 
-    /// The hat fit's rows on the binding rig become `row_points` (`#R`, in the rows' order).
-    pub(crate) fn set_row_points(&mut self, row_points: Vec<DVec3>) {
-        debug_assert_eq!(row_points.len(), self.row_points.len());
-        self.row_points = row_points;
+    /// The hat fit reads the rows as `vertex_part` (`#R`, φ_R C₀ in the rows' order): a Green
+    /// rig's [`HatFit::VertexPart`].
+    pub(crate) fn use_vertex_part_hat(&mut self, vertex_part: Vec<DVec3>) {
+        debug_assert_eq!(vertex_part.len(), self.row_points.len());
+        self.row_points = vertex_part;
+        self.hat = HatFit::VertexPart;
     }
 
     /// Scratch sized for this limit.
@@ -212,14 +237,81 @@ impl ReachLimit {
         fitted.iter_mut().for_each(|c| *c = DVec3::ZERO);
         accumulate_product(cage_from_rows, posed_rows, fitted);
         accumulate_product(cage_from_prior, carried, fitted);
-        for (k, is_anchored) in anchored.iter_mut().enumerate() {
-            *is_anchored = self.skinned_anchors
-                && !within_reach(carried[k], self.posed_neighbours(k, &posed), self.reach);
-            if *is_anchored {
-                carried[k] = posed(&self.anchor_weights, k, self.binding_cage[k]);
+        match self.hat {
+            HatFit::Exact => {
+                anchored.iter_mut().for_each(|a| *a = false);
+                self.factors_of(&joint_linear, translations, carried, fitted, factors);
+                self.unfold(carried, fitted, factors);
+            }
+            HatFit::VertexPart => {
+                for (k, is_anchored) in anchored.iter_mut().enumerate() {
+                    *is_anchored =
+                        !within_reach(carried[k], self.posed_neighbours(k, &posed), self.reach);
+                    if *is_anchored {
+                        carried[k] = posed(&self.anchor_weights, k, self.binding_cage[k]);
+                    }
+                }
+                self.factors_of(&joint_linear, translations, carried, fitted, factors);
             }
         }
-        self.factors_of(&joint_linear, translations, carried, fitted, factors);
+    }
+
+    /// Lowers the factors (`#C`) of the vertices of every cage triangle that the blend
+    /// P̂_k + s_k (Ĉ'_k − P̂_k) of `carried` and `fitted` (`#C`) turns against P̂ (module docs):
+    /// its three factors are scaled by the largest t ∈ [0, 1] that keeps its normal facing P̂'s
+    /// by at least [`UNFOLD_MARGIN`] of P̂'s squared area. A pass over the triangles repeats
+    /// while one changed, at most [`UNFOLD_PASSES`] times; triangles still turned after that get
+    /// factors 0, the carried triangle itself.
+    fn unfold(&self, carried: &[DVec3], fitted: &[DVec3], factors: &mut [f64]) {
+        let corner = |k: usize, s: f64| carried[k] + s * (fitted[k] - carried[k]);
+        let facing = |tri: &[u32; 3], factors: &[f64], t: f64| {
+            let [a, b, c] = tri.map(|v| v as usize);
+            let reference = normal(carried[a], carried[b], carried[c]);
+            let blended = normal(
+                corner(a, t * factors[a]),
+                corner(b, t * factors[b]),
+                corner(c, t * factors[c]),
+            );
+            (
+                blended.dot(reference),
+                UNFOLD_MARGIN * reference.length_squared(),
+            )
+        };
+        for _ in 0..UNFOLD_PASSES {
+            let mut changed = false;
+            for tri in &self.triangles {
+                let (dot, bound) = facing(tri, factors, 1.0);
+                if dot >= bound || bound == 0.0 {
+                    continue;
+                }
+                let t = first_crossing(|t| {
+                    let (dot, bound) = facing(tri, factors, t);
+                    dot - bound
+                });
+                for &v in tri {
+                    factors[v as usize] *= t;
+                }
+                changed = true;
+            }
+            if !changed {
+                return;
+            }
+        }
+        loop {
+            let mut changed = false;
+            for tri in &self.triangles {
+                let (dot, bound) = facing(tri, factors, 1.0);
+                if dot < bound && bound > 0.0 {
+                    for &v in tri {
+                        changed |= factors[v as usize] != 0.0;
+                        factors[v as usize] = 0.0;
+                    }
+                }
+            }
+            if !changed {
+                return;
+            }
+        }
     }
 
     /// Cage vertex k's neighbourhood, posed by `posed` (weights, vertex, point).
@@ -251,6 +343,45 @@ impl ReachLimit {
             *s = largest_factor_within(carried[k], fitted[k] - carried[k], neighbours, self.reach);
         }
     }
+}
+
+/// The share of P̂'s squared area (times four) by which a blended cage triangle's normal must
+/// face P̂'s: below it the fold guard lowers the triangle's factors ([`ReachLimit::unfold`]).
+const UNFOLD_MARGIN: f64 = 0.25;
+/// Passes of the fold guard before the triangles still turned fall back to P̂.
+const UNFOLD_PASSES: usize = 8;
+
+/// (b − a) × (c − a).
+fn normal(a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    (b - a).cross(c - a)
+}
+
+/// The first t ∈ (0, 1] where `f` (positive at 0, negative at 1) turns negative: the first sign
+/// change of 16 even samples, then bisected to round-off; a t where `f` ≥ 0.
+fn first_crossing(f: impl Fn(f64) -> f64) -> f64 {
+    const SAMPLES: usize = 16;
+    let mut low = 0.0;
+    let mut high = 1.0;
+    for i in 1..=SAMPLES {
+        let t = i as f64 / SAMPLES as f64;
+        if f(t) < 0.0 {
+            high = t;
+            break;
+        }
+        low = t;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (low + high);
+        if mid <= low || mid >= high {
+            break;
+        }
+        if f(mid) < 0.0 {
+            high = mid;
+        } else {
+            low = mid;
+        }
+    }
+    low
 }
 
 /// `x` skinned with row `i` of `weights` by the joints' linear parts `joint_linear` and the
@@ -320,6 +451,40 @@ fn largest_factor_within(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One triangle in the z = 0 plane whose fit swaps two corners' sides of the third: the
+    /// guard scales the three factors to the turn where the normal keeps a quarter of the
+    /// carried one's, and leaves an unturned fit alone.
+    #[test]
+    fn the_fold_guard_stops_a_turning_triangle_before_it_folds() {
+        let limit = |triangles: &[[u32; 3]]| ReachLimit {
+            binding_cage: Vec::new(),
+            binding_centroids: Vec::new(),
+            binding_joint_moments: Vec::new(),
+            row_points: Vec::new(),
+            row_weights: SkinWeights::from_csr_unchecked(0, vec![0], Vec::new(), Vec::new()),
+            neighbour_points: Vec::new(),
+            neighbour_weights: SkinWeights::from_csr_unchecked(0, vec![0], Vec::new(), Vec::new()),
+            neighbour_start: Vec::new(),
+            reach: 1.0,
+            anchor_weights: SkinWeights::from_csr_unchecked(0, vec![0], Vec::new(), Vec::new()),
+            hat: HatFit::Exact,
+            triangles: triangles.to_vec(),
+        };
+        let guard = limit(&[[0, 1, 2]]);
+        let carried = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        // Corner 1 moves from x = 1 to x = −1: the normal's z is 1 − 2s, ¼ at s = 3/8.
+        let fitted = [DVec3::ZERO, -DVec3::X, DVec3::Y];
+        let mut factors = [1.0; 3];
+        guard.unfold(&carried, &fitted, &mut factors);
+        for s in factors {
+            assert!((s - 0.375).abs() < 1e-12, "{factors:?}");
+        }
+        let unturned = [DVec3::ZERO, 2.0 * DVec3::X, DVec3::Y];
+        let mut factors = [1.0, 0.5, 1.0];
+        guard.unfold(&carried, &unturned, &mut factors);
+        assert_eq!(factors, [1.0, 0.5, 1.0]);
+    }
 
     #[test]
     fn a_fit_within_reach_is_kept_whole() {

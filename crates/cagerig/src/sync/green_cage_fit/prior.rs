@@ -175,8 +175,7 @@ impl FitPrior {
             rest_cage,
             &mut vertex_part,
         );
-        prior.set_reach_rows(vertex_part);
-        prior.use_skinned_anchors();
+        prior.use_vertex_part_hat(vertex_part);
         Ok(Self::new(
             prior,
             maps.cage_from_rows,
