@@ -92,12 +92,14 @@ pub(crate) enum HatFit {
     VertexPart,
 }
 
-/// Scratch of [`ReachLimit::factors`]: P̂ and Ĉ' (`#C`), ŷ of the rows (`#R`).
+/// Scratch of [`ReachLimit::factors`]: P̂ and Ĉ' (`#C`), ŷ of the rows (`#R`), and the fold
+/// guard's floors (`#C`).
 #[derive(Debug, Clone, Default)]
 pub struct ReachScratch {
     carried: Vec<DVec3>,
     posed_rows: Vec<DVec3>,
     fitted: Vec<DVec3>,
+    floors: Vec<f64>,
 }
 
 /// The (k, j) entries of the prior that carry P̂ (the joints' shares of each cage vertex's
@@ -184,6 +186,7 @@ impl ReachLimit {
             carried: vec![DVec3::ZERO; nc],
             posed_rows: vec![DVec3::ZERO; self.row_points.len()],
             fitted: vec![DVec3::ZERO; nc],
+            floors: vec![0.0; nc],
         }
     }
 
@@ -217,6 +220,7 @@ impl ReachLimit {
             carried,
             posed_rows,
             fitted,
+            floors,
         } = scratch;
         let posed = |weights: &SkinWeights, i: usize, x: DVec3| {
             skinned_by_linear_parts(weights, i, x, &joint_linear, translations)
@@ -241,7 +245,16 @@ impl ReachLimit {
             HatFit::Exact => {
                 anchored.iter_mut().for_each(|a| *a = false);
                 self.factors_of(&joint_linear, translations, carried, fitted, factors);
-                self.unfold(carried, fitted, factors);
+                for (k, floor) in floors.iter_mut().enumerate() {
+                    *floor = reach_floor(
+                        carried[k],
+                        fitted[k] - carried[k],
+                        self.posed_neighbours(k, &posed),
+                        self.reach,
+                        factors[k],
+                    );
+                }
+                self.unfold(carried, fitted, floors, factors);
             }
             HatFit::VertexPart => {
                 for (k, is_anchored) in anchored.iter_mut().enumerate() {
@@ -256,40 +269,45 @@ impl ReachLimit {
         }
     }
 
-    /// Lowers the factors (`#C`) of the vertices of every cage triangle that the blend
-    /// P̂_k + s_k (Ĉ'_k − P̂_k) of `carried` and `fitted` (`#C`) turns against P̂ (module docs):
-    /// its three factors are scaled by the largest t ∈ [0, 1] that keeps its normal facing P̂'s
-    /// by at least [`UNFOLD_MARGIN`] of P̂'s squared area. A pass over the triangles repeats
-    /// while one changed, at most [`UNFOLD_PASSES`] times; triangles still turned after that get
-    /// factors 0, the carried triangle itself.
-    fn unfold(&self, carried: &[DVec3], fitted: &[DVec3], factors: &mut [f64]) {
+    /// Lowers the factors (`#C`) of the corners of every cage triangle that the blend
+    /// P̂_k + s_k (Ĉ'_k − P̂_k) of `carried` and `fitted` (`#C`) turns against P̂ (module docs).
+    /// Each corner is lowered at most to its floor (`floors`, `#C`): the lowest factor down to
+    /// which its blend stays within reach, so that the guard never trades a fold for a handle
+    /// off the body. The corners' factors move toward their floors by the same share 1 − t, t the
+    /// largest in [0, 1] that keeps the triangle's normal facing P̂'s by at least
+    /// [`UNFOLD_MARGIN`] of P̂'s squared area; a triangle still turned with every corner at its
+    /// floor is left alone. A pass over the triangles repeats while one changed, at most
+    /// [`UNFOLD_PASSES`] times; the corners of triangles still turned after that go to their
+    /// floors.
+    fn unfold(&self, carried: &[DVec3], fitted: &[DVec3], floors: &[f64], factors: &mut [f64]) {
         let corner = |k: usize, s: f64| carried[k] + s * (fitted[k] - carried[k]);
+        // The triangle's facing less its bound, with its corners' factors at a share t of the
+        // way from their floors.
         let facing = |tri: &[u32; 3], factors: &[f64], t: f64| {
             let [a, b, c] = tri.map(|v| v as usize);
             let reference = normal(carried[a], carried[b], carried[c]);
+            let scaled = |k: usize| floors[k] + t * (factors[k] - floors[k]);
             let blended = normal(
-                corner(a, t * factors[a]),
-                corner(b, t * factors[b]),
-                corner(c, t * factors[c]),
+                corner(a, scaled(a)),
+                corner(b, scaled(b)),
+                corner(c, scaled(c)),
             );
-            (
-                blended.dot(reference),
-                UNFOLD_MARGIN * reference.length_squared(),
-            )
+            blended.dot(reference) - UNFOLD_MARGIN * reference.length_squared()
+        };
+        // Whether the guard lowers `tri`: turned now, and not at its corners' floors.
+        let turned = |tri: &[u32; 3], factors: &[f64]| {
+            facing(tri, factors, 1.0) < 0.0 && facing(tri, factors, 0.0) >= 0.0
         };
         for _ in 0..UNFOLD_PASSES {
             let mut changed = false;
             for tri in &self.triangles {
-                let (dot, bound) = facing(tri, factors, 1.0);
-                if dot >= bound || bound == 0.0 {
+                if !turned(tri, factors) {
                     continue;
                 }
-                let t = first_crossing(|t| {
-                    let (dot, bound) = facing(tri, factors, t);
-                    dot - bound
-                });
+                let t = first_crossing(|t| facing(tri, factors, t));
                 for &v in tri {
-                    factors[v as usize] *= t;
+                    let v = v as usize;
+                    factors[v] = floors[v] + t * (factors[v] - floors[v]);
                 }
                 changed = true;
             }
@@ -300,11 +318,11 @@ impl ReachLimit {
         loop {
             let mut changed = false;
             for tri in &self.triangles {
-                let (dot, bound) = facing(tri, factors, 1.0);
-                if dot < bound && bound > 0.0 {
+                if turned(tri, factors) {
                     for &v in tri {
-                        changed |= factors[v as usize] != 0.0;
-                        factors[v as usize] = 0.0;
+                        let v = v as usize;
+                        changed |= factors[v] != floors[v];
+                        factors[v] = floors[v];
                     }
                 }
             }
@@ -448,6 +466,51 @@ fn largest_factor_within(
     largest.unwrap_or(nearest_at)
 }
 
+/// The lowest s' ≤ `s` such that every point p + σ d with σ ∈ [s', s] is within `reach` of one
+/// of `points` (to [`TIE_TOLERANCE`] of ρ²): the fold guard's floor. `s` itself when p + s d is
+/// out of reach.
+fn reach_floor(
+    p: DVec3,
+    d: DVec3,
+    points: impl Iterator<Item = DVec3> + Clone,
+    reach: f64,
+    s: f64,
+) -> f64 {
+    let reach_squared = reach * reach * (1.0 + TIE_TOLERANCE);
+    let a = d.length_squared();
+    if a == 0.0 {
+        return if within_reach(p, points, reach) {
+            0.0
+        } else {
+            s
+        };
+    }
+    // Each point's interval [low, high] of σ within reach; the floor walks down through the
+    // intervals that overlap, from s.
+    let mut floor = s;
+    loop {
+        let mut lowered = floor;
+        for y in points.clone() {
+            let e = p - y;
+            let b = 2.0 * d.dot(e);
+            let c = e.length_squared() - reach_squared;
+            let discriminant = b * b - 4.0 * a * c;
+            if discriminant < 0.0 {
+                continue;
+            }
+            let root = discriminant.sqrt();
+            let (low, high) = ((-b - root) / (2.0 * a), (-b + root) / (2.0 * a));
+            if low <= floor && floor <= high {
+                lowered = lowered.min(low.max(0.0));
+            }
+        }
+        if lowered >= floor {
+            return floor;
+        }
+        floor = lowered;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -476,14 +539,49 @@ mod tests {
         // Corner 1 moves from x = 1 to x = −1: the normal's z is 1 − 2s, ¼ at s = 3/8.
         let fitted = [DVec3::ZERO, -DVec3::X, DVec3::Y];
         let mut factors = [1.0; 3];
-        guard.unfold(&carried, &fitted, &mut factors);
+        guard.unfold(&carried, &fitted, &[0.0; 3], &mut factors);
         for s in factors {
             assert!((s - 0.375).abs() < 1e-12, "{factors:?}");
         }
         let unturned = [DVec3::ZERO, 2.0 * DVec3::X, DVec3::Y];
         let mut factors = [1.0, 0.5, 1.0];
-        guard.unfold(&carried, &unturned, &mut factors);
+        guard.unfold(&carried, &unturned, &[0.0; 3], &mut factors);
         assert_eq!(factors, [1.0, 0.5, 1.0]);
+        // Corner 1 may not go below 0.8 (the reach): the others alone do not unturn the
+        // triangle, so it is left alone.
+        let mut factors = [1.0; 3];
+        guard.unfold(&carried, &fitted, &[0.0, 0.8, 0.0], &mut factors);
+        assert_eq!(factors, [1.0; 3]);
+        // Floor 0.25 on corner 1: the normal's z, 1 − 2(0.25 + 0.75t), reaches ¼ at t = 1/6.
+        let mut factors = [1.0; 3];
+        guard.unfold(&carried, &fitted, &[0.0, 0.25, 0.0], &mut factors);
+        let t = 1.0 / 6.0;
+        for (s, floor) in factors.into_iter().zip([0.0, 0.25, 0.0]) {
+            assert!(
+                (s - (floor + t * (1.0 - floor))).abs() < 1e-12,
+                "{factors:?}"
+            );
+        }
+    }
+
+    /// The floor walks down through overlapping intervals within reach, and stops at a gap.
+    #[test]
+    fn the_reach_floor_follows_the_path_back_while_within_reach() {
+        // Path along x from 0 to 10; points at x = 2 and x = 4 with reach 1.5: within reach on
+        // [0.5, 5.5] (overlapping), then a gap; a point at 9: [7.5, 10.5].
+        let points = [2.0, 4.0, 9.0].map(|x| DVec3::new(x, 0.0, 0.0));
+        let floor = |s: f64| {
+            reach_floor(
+                DVec3::ZERO,
+                DVec3::new(10.0, 0.0, 0.0),
+                points.into_iter(),
+                1.5,
+                s,
+            )
+        };
+        assert!((floor(0.5) - 0.05).abs() < 1e-9, "{}", floor(0.5));
+        assert!((floor(1.0) - 0.75).abs() < 1e-9, "{}", floor(1.0));
+        assert_eq!(floor(0.6), 0.6, "out of reach at s = 0.6 (x = 6)");
     }
 
     #[test]
