@@ -174,3 +174,25 @@ fn an_unknown_layout_lists_the_accepted_ones() {
         "{stderr}"
     );
 }
+
+/// The fold guard holds a turning triangle's corners no lower than the reach allows: at
+/// CesiumMan's t = 0.85 s a corner of such a triangle is carried between the legs, and holding it
+/// toward that carried vertex regardless took the spread to 1.52.
+#[test]
+fn the_fold_guard_keeps_cesium_mans_handle_within_reach_between_samples() {
+    let path = data("gltf/CesiumMan/CesiumMan.glb");
+    let (spread, deviation, flipped) = worst(
+        "cesium-fold-guard",
+        &[
+            path.to_str().unwrap(),
+            "--auto-cage",
+            "--animation",
+            "0",
+            "--times",
+            "0.75,0.85",
+        ],
+    );
+    let what = format!("{spread} / {deviation} / {flipped}");
+    assert!(spread <= 1.5, "{what}");
+    assert!(deviation <= 0.06, "{what}");
+}
