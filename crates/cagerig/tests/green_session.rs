@@ -593,6 +593,32 @@ fn the_arms_single_joint_sweep_is_refusal_free() {
     );
 }
 
+/// The elbow bent in steps of 15° to 135° on the Arm, and the bar and the snake bent at their
+/// middle joint, under Green coordinates: every step fits, and the handle stays near the body
+/// (spread ≤ 1.5, deviation ≤ 0.06 of the diagonal, no triangle turned over).
+#[test]
+fn green_handles_follow_large_bends() {
+    for name in ["arm", "bar", "snake"] {
+        let mut s = match name {
+            "arm" => arm(green()).0,
+            _ => builtin(name, green()),
+        };
+        let probe = cagerig::cage_quality::CageQualityProbe::of_session(&s).unwrap();
+        let joint = match name {
+            "arm" => s.skeleton().find("lowerarm01.R").unwrap(),
+            _ => s.skeleton().len() / 2,
+        };
+        for step in 1..=9 {
+            s.rotate_joint(joint, DVec3::X, 15f64.to_radians())
+                .unwrap_or_else(|e| panic!("{name} at {}°: {e}", 15 * step));
+            let quality = probe.measure_session(&s);
+            let at = format!("{name} at {}°: {quality}", 15 * step);
+            assert!(quality.spread <= 1.5 && quality.deviation <= 0.06, "{at}");
+            assert_eq!(quality.flipped, 0.0, "{at}");
+        }
+    }
+}
+
 /// Regression: the elbow at 30° about x from rest was refused (the fit of Lipman's map landed
 /// on a branch folding cage triangle 87 to −5.6× its area, and stopped at 25° above its
 /// tolerance). The default rig fits both, with no triangle of C' turned over against the

@@ -135,7 +135,7 @@ fn switching_the_fit_refits_the_handle_and_an_undo_restores_it() {
 
 /// The elbow bent in steps of 15° to 135° on the Arm, and the bar and the snake bent at their
 /// middle joint: the regularised handle stays near the body (spread ≤ 1.5, deviation ≤ 0.06 of
-/// the diagonal) and never strays further than the paper's.
+/// the diagonal, no triangle turned over) and never strays further than the paper's.
 #[test]
 fn the_handle_follows_large_bends() {
     for name in ["arm", "bar", "snake"] {
@@ -158,6 +158,7 @@ fn the_handle_follows_large_bends() {
             let (r, p) = (quality[0], quality[1]);
             let at = format!("{name} at {}°: {r} (paper: {p})", 15 * step);
             assert!(r.spread <= 1.5 && r.deviation <= 0.06, "{at}");
+            assert_eq!(r.flipped, 0.0, "{at}");
             assert!(
                 r.spread <= p.spread.max(1.05) && r.deviation <= p.deviation + 1e-9,
                 "{at}"
