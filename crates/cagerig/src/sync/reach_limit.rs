@@ -24,8 +24,9 @@
 //!
 //! **The fold guard** (mean value rigs, [`HatFit::Exact`]). The fit can turn a thin cage
 //! triangle over while its corners stay within reach. Their hat is the fit itself, so every
-//! triangle that the blend turns against P̂ gets its corners' factors scaled down until its
-//! normal faces P̂'s again ([`ReachLimit::unfold`]).
+//! triangle that the blend turns against P̂ gets its corners' factors lowered, each no further
+//! than its blend stays within reach, until its normal faces P̂'s again
+//! ([`ReachLimit::unfold`]).
 //!
 //! **Skinned anchors** (Green rigs, [`crate::sync::green_cage_fit::prior`]). A neighbourhood
 //! that spans two parts moving apart (the legs in a walk) carries its cage vertex between them:
@@ -45,6 +46,7 @@
 use faer::Mat;
 use glam::{DMat3, DVec3};
 
+use crate::cage_gen::geometry::area_normal;
 use crate::nearest_vertices::TIE_TOLERANCE;
 use crate::skin_weights::SkinWeights;
 use crate::sync::small_products::accumulate_product;
@@ -285,13 +287,13 @@ impl ReachLimit {
         // way from their floors.
         let facing = |tri: &[u32; 3], factors: &[f64], t: f64| {
             let [a, b, c] = tri.map(|v| v as usize);
-            let reference = normal(carried[a], carried[b], carried[c]);
+            let reference = area_normal([carried[a], carried[b], carried[c]]);
             let scaled = |k: usize| floors[k] + t * (factors[k] - floors[k]);
-            let blended = normal(
+            let blended = area_normal([
                 corner(a, scaled(a)),
                 corner(b, scaled(b)),
                 corner(c, scaled(c)),
-            );
+            ]);
             blended.dot(reference) - UNFOLD_MARGIN * reference.length_squared()
         };
         // Whether the guard lowers `tri`: turned now, and not at its corners' floors.
@@ -366,13 +368,8 @@ impl ReachLimit {
 /// The share of P̂'s squared area (times four) by which a blended cage triangle's normal must
 /// face P̂'s: below it the fold guard lowers the triangle's factors ([`ReachLimit::unfold`]).
 const UNFOLD_MARGIN: f64 = 0.25;
-/// Passes of the fold guard before the triangles still turned fall back to P̂.
+/// Passes of the fold guard before the corners of triangles still turned go to their floors.
 const UNFOLD_PASSES: usize = 8;
-
-/// (b − a) × (c − a).
-fn normal(a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
-    (b - a).cross(c - a)
-}
 
 /// The first t ∈ (0, 1] where `f` (positive at 0, negative at 1) turns negative: the first sign
 /// change of 16 even samples, then bisected to round-off; a t where `f` ≥ 0.
@@ -444,19 +441,16 @@ fn largest_factor_within(
     let mut largest: Option<f64> = None;
     let (mut nearest, mut nearest_at) = (f64::INFINITY, 1.0);
     for y in points {
-        // |e + s d|² ≤ ρ² ⇔ a s² + b s + c ≤ 0.
         let e = p - y;
-        let b = 2.0 * d.dot(e);
-        let c = e.length_squared() - reach_squared;
-        let discriminant = b * b - 4.0 * a * c;
-        if discriminant >= 0.0 {
-            let root = discriminant.sqrt();
-            let (low, high) = ((-b - root) / (2.0 * a), (-b + root) / (2.0 * a));
-            if high >= 0.0 && low <= 1.0 {
-                let s = high.min(1.0);
-                largest = Some(largest.map_or(s, |l: f64| l.max(s)));
-            }
+        if let Some((low, high)) = reach_interval(e, d, a, reach_squared)
+            && high >= 0.0
+            && low <= 1.0
+        {
+            let s = high.min(1.0);
+            largest = Some(largest.map_or(s, |l: f64| l.max(s)));
         }
+        // The point of the path nearest y.
+        let b = 2.0 * d.dot(e);
         let s = (-b / (2.0 * a)).clamp(0.0, 1.0);
         let distance = (e + s * d).length_squared();
         if distance < nearest || (distance == nearest && s > nearest_at) {
@@ -464,6 +458,18 @@ fn largest_factor_within(
         }
     }
     largest.unwrap_or(nearest_at)
+}
+
+/// The interval [low, high] of σ where |e + σ d|² ≤ `reach_squared` (e = p − y, a = |d|² > 0):
+/// the roots of a σ² + b σ + c, or None where the path never comes within reach of y.
+fn reach_interval(e: DVec3, d: DVec3, a: f64, reach_squared: f64) -> Option<(f64, f64)> {
+    let b = 2.0 * d.dot(e);
+    let c = e.length_squared() - reach_squared;
+    let discriminant = b * b - 4.0 * a * c;
+    (discriminant >= 0.0).then(|| {
+        let root = discriminant.sqrt();
+        ((-b - root) / (2.0 * a), (-b + root) / (2.0 * a))
+    })
 }
 
 /// The lowest s' ≤ `s` such that every point p + σ d with σ ∈ [s', s] is within `reach` of one
@@ -491,16 +497,10 @@ fn reach_floor(
     loop {
         let mut lowered = floor;
         for y in points.clone() {
-            let e = p - y;
-            let b = 2.0 * d.dot(e);
-            let c = e.length_squared() - reach_squared;
-            let discriminant = b * b - 4.0 * a * c;
-            if discriminant < 0.0 {
-                continue;
-            }
-            let root = discriminant.sqrt();
-            let (low, high) = ((-b - root) / (2.0 * a), (-b + root) / (2.0 * a));
-            if low <= floor && floor <= high {
+            if let Some((low, high)) = reach_interval(p - y, d, a, reach_squared)
+                && low <= floor
+                && floor <= high
+            {
                 lowered = lowered.min(low.max(0.0));
             }
         }
