@@ -21,7 +21,8 @@ use crate::error::RigError;
 #[cfg(test)]
 use column_products::{LANE_BLOCK, ROW_BLOCK};
 use column_products::{
-    OffsetTerms, accumulate_columns, accumulate_columns_then, call_on_tiles, rows_of_columns,
+    OffsetTerms, ScatteredTerms, accumulate_columns, accumulate_columns_then, call_on_tiles,
+    rows_of_columns,
 };
 
 /// How the per-frame products M = ΦC and M += Φ[:, k]·ΔC_k read Φ.
@@ -266,11 +267,66 @@ impl CageCoords {
             )
         );
         let parts = [OffsetTerms::new(0, cage), OffsetTerms::new(nc, extra_terms)];
+        self.accumulate_with_extra_then(extra, &parts, false, out, second, then);
+    }
+
+    /// out (`#V`) += Φ[:, cage_vertices]·deltas + Ψ[:, extra_columns]·extra_deltas, Ψ =
+    /// `extra` (`#V × #F`), in one pass over the rows: the bits of [`Self::apply_delta`]
+    /// followed by `extra.apply_delta`, reading and writing `out` once instead of twice (a
+    /// Green rest-cage drag: the moved vertices' columns of φ, then their faces' of ψ); nothing
+    /// when there is no column. Parallel over row blocks, no allocation.
+    pub fn apply_delta_with_extra(
+        &self,
+        cage_vertices: &[usize],
+        deltas: &[DVec3],
+        extra: &CageCoords,
+        extra_columns: &[usize],
+        extra_deltas: &[DVec3],
+        out: &mut [DVec3],
+    ) {
+        debug_assert_eq!(cage_vertices.len(), deltas.len());
+        debug_assert_eq!(extra_columns.len(), extra_deltas.len());
+        debug_assert_eq!(extra.num_vertices(), self.num_vertices());
+        if cage_vertices.is_empty() && extra_columns.is_empty() {
+            return;
+        }
+        let parts = [
+            ScatteredTerms::new(0, cage_vertices, deltas),
+            ScatteredTerms::new(self.num_cage_vertices(), extra_columns, extra_deltas),
+        ];
+        let mut no_second = vec![(); out.len()];
+        self.accumulate_with_extra_then(
+            Some(extra),
+            &parts,
+            true,
+            out,
+            &mut no_second,
+            |_, _, _| {},
+        );
+    }
+
+    /// `out = [out +] Σ` over the terms of `parts`, whose columns k < #C are Φ's and
+    /// #C + f are column f of `extra` (Ψ, `#V × #F`), in one pass over the rows (two where Φ
+    /// and Ψ are stored in different precisions), calling `then` on each finished tile as
+    /// [`Self::apply_then`].
+    fn accumulate_with_extra_then<I, Q: Send>(
+        &self,
+        extra: Option<&CageCoords>,
+        parts: &[I; 2],
+        add_to_out: bool,
+        out: &mut [DVec3],
+        second: &mut [Q],
+        then: impl Fn(usize, &[DVec3], &mut [Q]) + Send + Sync,
+    ) where
+        I: Iterator<Item = (usize, DVec3)> + Clone + Send + Sync,
+    {
+        let (nc, nv) = (self.num_cage_vertices(), self.num_vertices());
         if extra.is_some_and(|e| e.compact.is_some() != self.compact.is_some()) {
             // Φ and Ψ stored in different precisions: the two products one after the other.
-            self.accumulate(&parts[..1], false, out);
+            self.accumulate(&parts[..1], add_to_out, out);
             if let Some(extra) = extra {
-                extra.accumulate(&[OffsetTerms::new(0, extra_terms)], true, out);
+                let own_columns = parts[1].clone().map(move |(k, d)| (k - nc, d));
+                extra.accumulate(&[own_columns], true, out);
             }
             call_on_tiles(out, second, then);
             return;
@@ -281,7 +337,7 @@ impl CageCoords {
                     (Some(f), Some(extra)) => extra.column(f),
                     (None, _) | (Some(_), None) => self.column(k),
                 };
-                accumulate_columns_then(column, &parts, false, out, second, then);
+                accumulate_columns_then(column, parts, add_to_out, out, second, then);
             }
             Some(compact) => {
                 let extra_compact = extra.and_then(|e| e.compact.as_deref()).unwrap_or(&[]);
@@ -289,14 +345,18 @@ impl CageCoords {
                     Some(f) => &extra_compact[f * nv..(f + 1) * nv],
                     None => &compact[k * nv..(k + 1) * nv],
                 };
-                accumulate_columns_then(column, &parts, false, out, second, then);
+                accumulate_columns_then(column, parts, add_to_out, out, second, then);
             }
         }
     }
 
-    /// M += Φ[:, k]·ΔC_k for the edited cage vertices only: O(#V · k). No allocation.
+    /// M += Φ[:, k]·ΔC_k for the edited cage vertices only: O(#V · k), and nothing at all
+    /// (not a pass over M) when there is none. No allocation.
     pub fn apply_delta(&self, cage_vertices: &[usize], deltas: &[DVec3], out: &mut [DVec3]) {
         debug_assert_eq!(cage_vertices.len(), deltas.len());
+        if cage_vertices.is_empty() {
+            return;
+        }
         self.accumulate(
             &[cage_vertices.iter().copied().zip(deltas.iter().copied())],
             true,

@@ -164,6 +164,32 @@ impl Iterator for OffsetTerms<'_> {
     }
 }
 
+/// The terms (`offset + columns[j]`, `values[j]`) of one part of [`accumulate_columns`]: a few
+/// chosen columns of a concatenation, with their `d` (a sparse edit).
+#[derive(Clone)]
+pub(super) struct ScatteredTerms<'a> {
+    offset: usize,
+    terms: std::iter::Zip<std::slice::Iter<'a, usize>, std::slice::Iter<'a, DVec3>>,
+}
+
+impl<'a> ScatteredTerms<'a> {
+    pub(super) fn new(offset: usize, columns: &'a [usize], values: &'a [DVec3]) -> Self {
+        Self {
+            offset,
+            terms: columns.iter().zip(values),
+        }
+    }
+}
+
+impl Iterator for ScatteredTerms<'_> {
+    type Item = (usize, DVec3);
+
+    #[inline]
+    fn next(&mut self) -> Option<(usize, DVec3)> {
+        self.terms.next().map(|(k, d)| (self.offset + *k, *d))
+    }
+}
+
 simd_dispatch! {
     /// Rows `rows` of `[out +] Σ column(k)·d_k` over `terms` into `out` (`rows.len()`, holding
     /// those rows of the `out` of [`accumulate_columns`] when `add_to_out`): the same groups and

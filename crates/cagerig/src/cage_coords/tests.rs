@@ -195,7 +195,8 @@ fn varied(nv: usize, nc: usize, seed: usize) -> CageCoords {
 fn the_one_pass_product_with_extra_columns_gives_the_bits_of_two_passes() {
     // Φ with a partial group at its end (58 = 7 × 8 + 2) and Ψ of 112 and 5 columns, over
     // a row count that ends in a partial tile and a partial row block; each of Φ and Ψ in
-    // f64 or rounded to f32 (the mixed cases take the two passes).
+    // f64 or rounded to f32 (the mixed cases take the two passes). A sparse edit of both in
+    // one pass gives the bits of the two edits in turn too.
     let nv = 2 * ROW_BLOCK + LANE_BLOCK + 37;
     for (nc, nf) in [(58, 112), (9, 5)] {
         for (round_phi, round_psi) in [(false, false), (true, true), (true, false), (false, true)] {
@@ -237,6 +238,17 @@ fn the_one_pass_product_with_extra_columns_gives_the_bits_of_two_passes() {
             );
             assert_eq!(again, two_passes, "{case}");
             assert_eq!(seen, two_passes, "{case}");
+            // A sparse edit of a few columns of each: the bits of the two deltas in turn.
+            let (vertices, faces) = ([nc - 1, 0, nc / 2], [nf / 3, nf - 1]);
+            let deltas = [cage[1], -cage[2], cage[0]];
+            let changes = [terms[0], -terms[nf - 1]];
+            let mut two_deltas = two_passes.clone();
+            phi.apply_delta(&vertices, &deltas, &mut two_deltas);
+            psi.apply_delta(&faces, &changes, &mut two_deltas);
+            let mut one_delta = two_passes.clone();
+            phi.apply_delta_with_extra(&vertices, &deltas, &psi, &faces, &changes, &mut one_delta);
+            assert_eq!(one_delta, two_deltas, "{case}: sparse edit");
+            assert_ne!(one_delta, two_passes, "{case}: the edit moved nothing");
         }
     }
     // Without extra columns: the bits of apply.

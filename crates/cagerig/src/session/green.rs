@@ -245,12 +245,15 @@ impl GreenState {
             .apply_delta(&self.touched_faces, &self.face_changes, rest_mesh);
     }
 
-    /// After the rest-cage vertices `vertices` moved (`rest_cage` already updated, `rest_mesh`
-    /// += φ ΔC applied): the faces around them get their new g, and `rest_mesh` += ψ_f·Δg_f for
-    /// those faces only. No allocation.
+    /// After the rest-cage vertices `vertices` moved by `deltas` (`rest_cage` already
+    /// updated): the faces around them get their new g, and `rest_mesh` += φ_k·ΔC_k +
+    /// ψ_f·Δg_f over those vertices and faces only, in one pass over the rows
+    /// ([`CageCoords::apply_delta_with_extra`], `vertex_coords` being φ). No allocation.
     pub(super) fn apply_rest_delta(
         &mut self,
+        vertex_coords: &CageCoords,
         vertices: &[usize],
+        deltas: &[DVec3],
         rest_cage: &[DVec3],
         rest_mesh: &mut [DVec3],
     ) {
@@ -271,7 +274,13 @@ impl GreenState {
             self.rest_terms[f] = new;
             self.face_marked[f] = false;
         }
-        self.face_coords
-            .apply_delta(&self.touched_faces, &self.face_changes, rest_mesh);
+        vertex_coords.apply_delta_with_extra(
+            vertices,
+            deltas,
+            &self.face_coords,
+            &self.touched_faces,
+            &self.face_changes,
+            rest_mesh,
+        );
     }
 }

@@ -721,8 +721,8 @@ impl RestMap {
     }
 
     /// After the rest-cage vertices `vertices` moved by `deltas` (`rest_cage` already
-    /// updated): `rest_mesh` += Φ[:, k]·ΔC_k, and the kind's terms of the change. No
-    /// allocation.
+    /// updated): `rest_mesh` += Φ[:, k]·ΔC_k, and the kind's terms of the change (Green: in
+    /// the same pass over the rows). No allocation.
     pub(super) fn apply_rest_delta(
         &mut self,
         vertices: &[usize],
@@ -730,10 +730,11 @@ impl RestMap {
         rest_cage: &[DVec3],
         rest_mesh: &mut [DVec3],
     ) {
-        self.coords.apply_delta(vertices, deltas, rest_mesh);
         match &mut self.kind {
-            CageMap::Mvc(_) => {}
-            CageMap::Green(green) => green.apply_rest_delta(vertices, rest_cage, rest_mesh),
+            CageMap::Mvc(_) => self.coords.apply_delta(vertices, deltas, rest_mesh),
+            CageMap::Green(green) => {
+                green.apply_rest_delta(&self.coords, vertices, deltas, rest_cage, rest_mesh)
+            }
         }
     }
 

@@ -82,6 +82,10 @@ pub struct GreenCageFit {
     vertex_rows: Mat<f64>,
     /// ψ_R, `#R × #F`.
     face_rows: Mat<f64>,
+    /// φ_Rᵀ (`#C × #R`) and ψ_Rᵀ (`#F × #R`): the gradient's φ_Rᵀr and ψ_Rᵀr read their
+    /// contiguous columns ([`rows::transposed_times_points`]).
+    vertex_rows_transposed: Mat<f64>,
+    face_rows_transposed: Mat<f64>,
     normals: StretchedNormals,
     /// The binding cage (the start when a warm start is not finite).
     binding_cage: Vec<DVec3>,
@@ -168,6 +172,8 @@ impl GreenCageFit {
         let (vertex_gram, vertex_face_gram, face_gram) = gram_matrices(&vertex_rows, &face_rows);
         Ok(Self {
             num_cage,
+            vertex_rows_transposed: vertex_rows.transpose().to_owned(),
+            face_rows_transposed: face_rows.transpose().to_owned(),
             vertex_rows,
             face_rows,
             normals,

@@ -7,7 +7,7 @@ use glam::{DAffine3, DVec3};
 
 use super::evaluation::{Evaluation, FaceScratch};
 use super::prior::FitPrior;
-use super::rows::column_dots;
+use super::rows::transposed_times_points;
 use super::{GreenCageFit, rows_of};
 
 impl GreenCageFit {
@@ -34,8 +34,8 @@ impl GreenCageFit {
             energy += 0.5 * r.length_squared();
         }
         // Jᵀr = φ_Rᵀ r + Σ_f (∂g_f/∂x)ᵀ (ψ_Rᵀ r)_f.
-        column_dots(&self.vertex_rows, residual, gradient);
-        column_dots(&self.face_rows, residual, face_sums);
+        transposed_times_points(&self.vertex_rows_transposed, residual, gradient);
+        transposed_times_points(&self.face_rows_transposed, residual, face_sums);
         for (f, triangle) in self.normals.triangles().iter().enumerate() {
             let blocks = self.normals.face_jacobian(x, f);
             for (corner, block) in triangle.iter().zip(blocks) {
@@ -59,7 +59,7 @@ impl GreenCageFit {
     pub(super) fn hessian_at(&mut self, x: &[DVec3], residual: &[DVec3]) {
         self.gauss_newton_matrix_at(x);
         let mut weights = std::mem::take(&mut self.hessian_face_weights);
-        column_dots(&self.face_rows, residual, &mut weights);
+        transposed_times_points(&self.face_rows_transposed, residual, &mut weights);
         for (f, (triangle, &weight)) in self.normals.triangles().iter().zip(&weights).enumerate() {
             let corners = triangle.map(|v| x[v as usize]);
             let scale = (corners[1] - corners[0])
