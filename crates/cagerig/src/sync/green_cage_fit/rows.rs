@@ -63,10 +63,11 @@ pub(crate) fn rows_of(
 
 simd_dispatch! {
     /// `out[i] += Σ_k matrix[i, k] · points[k]`, added in the order of k (`matrix`: `#out ×
-    /// #points`): up to [`ROW_LANES`] rows side by side, each down the contiguous columns, so that
+    /// #points`): up to [`ROW_LANES`] rows side by side (then [`TAIL_LANES`], then one at a
+    /// time for the last rows), each down the contiguous columns, so that
     /// their sums are the lanes of one vector instruction per column and coordinate (the same
     /// product and sum per term as one row at a time, so the same bits on every tier).
-    pub(crate) fn add_columns_times_points(
+    fn add_columns_times_points(
         matrix: &Mat<f64>,
         points: &[DVec3],
         out: &mut [DVec3]
@@ -79,6 +80,8 @@ simd_dispatch! {
 /// coordinate, so that twelve chains of additions overlap instead of each waiting on its last
 /// addition.
 const ROW_LANES: usize = 32;
+/// Rows side by side in the rows left after the blocks of [`ROW_LANES`]: one AVX-512 register.
+const TAIL_LANES: usize = 8;
 
 #[inline(always)]
 fn add_columns_times_points_generic(matrix: &Mat<f64>, points: &[DVec3], out: &mut [DVec3]) {
@@ -90,9 +93,14 @@ fn add_columns_times_points_generic(matrix: &Mat<f64>, points: &[DVec3], out: &m
         add_columns_to_rows::<ROW_LANES>(matrix, points, start, &mut out[start..start + ROW_LANES]);
         start += ROW_LANES;
     }
-    while rows - start >= 8 {
-        add_columns_to_rows::<8>(matrix, points, start, &mut out[start..start + 8]);
-        start += 8;
+    while rows - start >= TAIL_LANES {
+        add_columns_to_rows::<TAIL_LANES>(
+            matrix,
+            points,
+            start,
+            &mut out[start..start + TAIL_LANES],
+        );
+        start += TAIL_LANES;
     }
     while start < rows {
         add_columns_to_rows::<1>(matrix, points, start, &mut out[start..start + 1]);
@@ -172,12 +180,12 @@ mod tests {
     use super::*;
     use crate::test_random::uniform;
 
-    /// Rows side by side, F_R(x) keeps the bits of one row and one column at a time, on full
-    /// blocks of rows and the short last one.
+    /// Rows side by side, F_R(x) keeps the bits of one row and one column at a time: in blocks
+    /// of 32 rows, of 8, and one at a time.
     #[test]
     fn rows_of_adds_the_columns_in_order() {
         let mut rng = uniform(9);
-        for (rows, cage, faces) in [(7, 6, 9), (19, 6, 9), (16, 3, 1)] {
+        for (rows, cage, faces) in [(7, 6, 9), (19, 6, 9), (16, 3, 1), (77, 5, 7), (32, 2, 3)] {
             let phi = Mat::from_fn(rows, cage, |_, _| rng() - 0.5);
             let psi = Mat::from_fn(rows, faces, |_, _| rng() - 0.5);
             let x: Vec<DVec3> = (0..cage).map(|_| DVec3::new(rng(), rng(), rng())).collect();
@@ -206,7 +214,8 @@ mod tests {
     )]
     fn every_tier_adds_the_columns_with_the_same_bits() {
         let mut rng = uniform(5);
-        let (rows, columns) = (29, 13);
+        // Two blocks of 32 rows, one of 8 and 5 rows one at a time.
+        let (rows, columns) = (77, 13);
         let matrix = Mat::from_fn(rows, columns, |_, _| rng() - 0.5);
         let points: Vec<DVec3> = (0..columns)
             .map(|_| DVec3::new(rng(), -rng(), 1e3 * rng()))
@@ -239,7 +248,7 @@ mod tests {
     #[test]
     fn dots_side_by_side_are_the_folds_bit_for_bit() {
         let mut rng = uniform(7);
-        for (rows, columns) in [(9, 11), (5, 4), (3, 2), (6, 1), (12, 21)] {
+        for (rows, columns) in [(9, 11), (5, 4), (3, 2), (6, 1), (12, 21), (10, 45)] {
             let matrix = Mat::from_fn(rows, columns, |_, _| rng() - 0.5);
             let points: Vec<DVec3> = (0..rows)
                 .map(|_| DVec3::new(rng(), rng() - 0.5, 3.0 * rng()))
