@@ -619,6 +619,37 @@ fn green_handles_follow_large_bends() {
     }
 }
 
+/// Regression: a thin cage triangle turned over in the Green fit while its corners stayed within
+/// reach (the Fox Run, one of 196). Where the prior's hat turns a triangle, its edges are
+/// stiffened toward the carried cage's: the Arm's elbow bent in steps of 15° keeps every
+/// triangle facing the carried cage, and a grab of the corners of the triangle the hat turns
+/// most, in that pose, lands exactly with the fold terms in CageRev.
+#[test]
+fn a_grab_where_the_fold_terms_act_lands_exactly() {
+    let (mut s, _) = arm(green());
+    let probe = cagerig::cage_quality::CageQualityProbe::of_session(&s).unwrap();
+    let joint = s.skeleton().find("lowerarm01.R").unwrap();
+    let mut turned = None;
+    for step in 1..=9 {
+        s.rotate_joint(joint, DVec3::X, 15f64.to_radians()).unwrap();
+        let quality = probe.measure_session(&s);
+        assert_eq!(quality.flipped, 0.0, "{}°: {quality}", 15 * step);
+        let turns = s.green_fold_turns().unwrap();
+        if let Some(t) = (0..turns.len()).max_by(|&a, &b| turns[a].total_cmp(&turns[b]))
+            && turns[t] > 0.0
+        {
+            turned = Some(t);
+            break;
+        }
+    }
+    let t = turned.unwrap_or_else(|| panic!("no bend of the elbow to 135° turns a triangle"));
+    let corners = s.green_triangles().unwrap()[t].map(|v| v as usize);
+    let tol = 1e-9 * diagonal(s.posed_cage());
+    grab_lands_exactly(&mut s, &corners, DVec3::new(0.02, -0.03, 0.01), tol);
+    assert!(s.green_fold_turns().unwrap()[t] > 0.0);
+    check_rest_mesh(&s, 1e-9 * diagonal(s.rest_mesh()));
+}
+
 /// Regression: the elbow at 30° about x from rest was refused (the fit of Lipman's map landed
 /// on a branch folding cage triangle 87 to −5.6× its area, and stopped at 25° above its
 /// tolerance). The default rig fits both, with no triangle of C' turned over against the

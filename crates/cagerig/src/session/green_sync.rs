@@ -166,6 +166,16 @@ impl RigSession {
         }
     }
 
+    /// Green rigs with a regularised CageUp: how far the prior's hat fit turns each cage
+    /// triangle in the current pose, in [0, 1] (`#F`; the weights of the fit's fold terms,
+    /// [`crate::sync::green_cage_fit::prior`]); `None` for MVC rigs and the paper's fit.
+    pub fn green_fold_turns(&self) -> Option<&[f64]> {
+        match self.rest_map.cage_map() {
+            CageMap::Mvc(_) => None,
+            CageMap::Green(green) => green.cage_up.fit.prior().map(|p| p.turns()),
+        }
+    }
+
     /// Green rigs: the Newton reports of the last CageUp and the last CageRev.
     pub fn green_newton_reports(&self) -> Option<(NewtonReport, NewtonReport)> {
         match self.rest_map.cage_map() {

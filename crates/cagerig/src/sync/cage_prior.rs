@@ -389,6 +389,12 @@ impl CagePrior {
         (&self.reach_factors, &self.reach_anchored)
     }
 
+    /// How far the hat fit of the last [`Self::carried_reach_factors`] turns each cage
+    /// triangle, in [0, 1] (`#F`).
+    pub(crate) fn carried_turns(&self) -> &[f64] {
+        self.reach_scratch.turns()
+    }
+
     /// The reach limit's hat fit reads the fitting rows as `vertex_part` (`#R`, the rows of the
     /// binding rig that K maps back to its binding cage) instead of the binding skin's rows: a
     /// Green rig's vertex part φ_R C₀ ([`crate::sync::green_cage_fit::prior`],
@@ -540,6 +546,12 @@ impl PriorPose {
     /// (`#C`; none unless the limit uses skinned anchors).
     pub fn reach_anchored(&self) -> &[bool] {
         &self.anchored
+    }
+
+    /// How far the hat fit of the last [`CagePrior::reach_factors`] turns each cage triangle,
+    /// in [0, 1] (`#F`).
+    pub(crate) fn reach_turns(&self) -> &[f64] {
+        self.reach.turns()
     }
 }
 

@@ -36,6 +36,12 @@
 //! nearest binding-skin vertex, which stays about as near that vertex as at rest. Mean value
 //! rigs keep P̂_k (their CageRev rows are those of the blend toward P).
 //!
+//! **Turned triangles** (Green rigs). The Green fit is not a blend, so the hat's triangles are
+//! not measured for a guard here: the limit reports how far the hat turns each triangle against
+//! P̂ ([`ReachScratch::turns`], 0 while it faces P̂'s by at least [`UNFOLD_MARGIN`], 1 once
+//! turned over), and the Green prior stiffens those triangles' edges
+//! ([`crate::sync::green_cage_fit::prior`]).
+//!
 //! **Guarantees kept.** s depends on the linear parts only, never on C, so for a fixed pose C'
 //! stays linear in C and CageRev stays exact: row k of Eq. 19 becomes
 //! `s_k (K G_rows + Q G_prior)_k + (1 − s_k) (G_prior)_k`
@@ -88,20 +94,32 @@ pub(crate) enum HatFit {
     /// fit turns, and the fold guard lowers its factors; vertices blend toward P̂.
     Exact,
     /// The fit of the vertex part φ_R C₀ only (Green rigs, whose fit also follows the
-    /// normals' part): a proxy that says where the fit leaves the body, not which triangles it
-    /// folds. No fold guard; vertices whose P̂_k is itself out of reach are anchored on their
-    /// skinned Q̂_k.
+    /// normals' part): a proxy that says where the fit leaves the body and which triangles it
+    /// tends to turn, not the fit's own triangles. No fold guard: the hat's turns are reported
+    /// for the Green prior's edge terms instead; vertices whose P̂_k is itself out of reach are
+    /// anchored on their skinned Q̂_k.
     VertexPart,
 }
 
-/// Scratch of [`ReachLimit::factors`]: P̂ and Ĉ' (`#C`), ŷ of the rows (`#R`), and the fold
-/// guard's floors (`#C`).
+/// Scratch of [`ReachLimit::factors`]: P̂ and Ĉ' (`#C`), ŷ of the rows (`#R`), the fold
+/// guard's floors (`#C`) and the hat's turns (`#F`).
 #[derive(Debug, Clone, Default)]
 pub struct ReachScratch {
     carried: Vec<DVec3>,
     posed_rows: Vec<DVec3>,
     fitted: Vec<DVec3>,
     floors: Vec<f64>,
+    /// How far the hat fit turns each cage triangle against P̂ (`#F`, [`hat_turn`]; computed
+    /// for [`HatFit::VertexPart`] only, 0 otherwise).
+    turns: Vec<f64>,
+}
+
+impl ReachScratch {
+    /// How far the last hat fit turned each cage triangle against P̂, in [0, 1] (`#F`,
+    /// [`hat_turn`]; 0 unless the hat is [`HatFit::VertexPart`]).
+    pub(crate) fn turns(&self) -> &[f64] {
+        &self.turns
+    }
 }
 
 /// The (k, j) entries of the prior that carry P̂ (the joints' shares of each cage vertex's
@@ -189,6 +207,7 @@ impl ReachLimit {
             posed_rows: vec![DVec3::ZERO; self.row_points.len()],
             fitted: vec![DVec3::ZERO; nc],
             floors: vec![0.0; nc],
+            turns: vec![0.0; self.triangles.len()],
         }
     }
 
@@ -223,6 +242,7 @@ impl ReachLimit {
             posed_rows,
             fitted,
             floors,
+            turns,
         } = scratch;
         let posed = |weights: &SkinWeights, i: usize, x: DVec3| {
             skinned_by_linear_parts(weights, i, x, &joint_linear, translations)
@@ -259,6 +279,13 @@ impl ReachLimit {
                 self.unfold(carried, fitted, floors, factors);
             }
             HatFit::VertexPart => {
+                for (turn, tri) in turns.iter_mut().zip(&self.triangles) {
+                    let [a, b, c] = tri.map(|v| v as usize);
+                    *turn = hat_turn(
+                        [carried[a], carried[b], carried[c]],
+                        [fitted[a], fitted[b], fitted[c]],
+                    );
+                }
                 for (k, is_anchored) in anchored.iter_mut().enumerate() {
                     *is_anchored =
                         !within_reach(carried[k], self.posed_neighbours(k, &posed), self.reach);
@@ -363,6 +390,20 @@ impl ReachLimit {
             *s = largest_factor_within(carried[k], fitted[k] - carried[k], neighbours, self.reach);
         }
     }
+}
+
+/// How far the hat fit turns a cage triangle against the carried one, in [0, 1]: with
+/// f = n(Ĉ'_t)·n(P̂_t) / |n(P̂_t)|² (`hat` against `carried`, n the area normal), 0 while
+/// f ≥ [`UNFOLD_MARGIN`], rising linearly to 1 at f = 0 and staying 1 beyond (turned over).
+/// Continuous in the pose; 0 for a degenerate carried triangle.
+fn hat_turn(carried: [DVec3; 3], hat: [DVec3; 3]) -> f64 {
+    let reference = area_normal(carried);
+    let scale = reference.length_squared();
+    if scale == 0.0 {
+        return 0.0;
+    }
+    let facing = area_normal(hat).dot(reference) / scale;
+    ((UNFOLD_MARGIN - facing) / UNFOLD_MARGIN).clamp(0.0, 1.0)
 }
 
 /// The share of P̂'s squared area (times four) by which a blended cage triangle's normal must
@@ -514,6 +555,26 @@ fn reach_floor(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The hat's turn of one triangle in the z = 0 plane: 0 while it faces the carried one by
+    /// at least the margin, linear to 1 at a right angle (zero facing), 1 when turned over, 0
+    /// for a degenerate carried triangle.
+    #[test]
+    fn the_hats_turn_rises_linearly_from_the_margin_to_a_fold() {
+        let carried = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        assert_eq!(hat_turn(carried, carried), 0.0);
+        // The third corner moved along y scales the facing by its height.
+        let lifted = |h: f64| [DVec3::ZERO, DVec3::X, DVec3::new(0.3, h, 0.0)];
+        assert_eq!(hat_turn(carried, lifted(UNFOLD_MARGIN)), 0.0);
+        assert!((hat_turn(carried, lifted(0.5 * UNFOLD_MARGIN)) - 0.5).abs() < 1e-15);
+        assert_eq!(hat_turn(carried, lifted(0.0)), 1.0);
+        assert_eq!(hat_turn(carried, lifted(-2.0)), 1.0);
+        // Tilted out of the plane by 90°: no facing left.
+        let tilted = [DVec3::ZERO, DVec3::X, DVec3::Z];
+        assert_eq!(hat_turn(carried, tilted), 1.0);
+        let degenerate = [DVec3::ZERO, DVec3::X, 2.0 * DVec3::X];
+        assert_eq!(hat_turn(degenerate, carried), 0.0);
+    }
 
     /// One triangle in the z = 0 plane whose fit swaps two corners' sides of the third: the
     /// guard scales the three factors to the turn where the normal keeps a quarter of the

@@ -13,7 +13,8 @@
 //! B = diag β): the fit keeps its stationary point form, and CageRev ([`super::reverser`])
 //! inverts it with P(C) and a(C) affine in the rest cage and the rest joints for a fixed pose.
 //! At the rest pose P = C (the skinning transforms are the identity and Σ_j ω_ij = 1) and
-//! every β_k is 0, so C' = C stays the exact answer.
+//! every β_k is 0, so C' = C stays the exact answer. W is λ(LᵀL + εI) plus the fold terms
+//! below, which depend on the pose alone.
 //!
 //! **λ** = [`GREEN_PRIOR_STRENGTH`] · tr(J₀ᵀJ₀) / (3 tr(LᵀL + εI)), with J₀ the Jacobian of the
 //! rows F_R at the binding cage (φ_R ⊗ I₃ + (ψ_R ⊗ I₃)·∂g/∂C): the mean value rigs' rule
@@ -38,9 +39,24 @@
 //!   cage vertex skinned with the weights of its nearest rest-skin vertex, which stays as near
 //!   that vertex as it was at rest.
 //!
+//! **The fold terms.** A thin cage triangle can turn over in the fit while its corners stay
+//! within reach (one of the Fox Run's 196 at three samples, facing the carried cage's at cos
+//! −0.8 to −0.003). The hat fit above turns the same triangles: the reach limit reports how
+//! far, turn_t ∈ [0, 1] (0 while the hat's normal faces P̂'s by a quarter of its squared area,
+//! 1 once turned over; [`crate::sync::reach_limit`]). Each such triangle adds
+//! ½ γ_t Σ_(i,j) |(C'_j − C'_i) − (P_j − P_i)|² over its three edges, γ_t = [`FOLD_GAIN`]·h·turn_t:
+//! the triangle keeps the carried triangle's shape while the fit may still move it whole. The
+//! term is (C' − P)ᵀ(γ_t L_t)(C' − P) with L_t the graph Laplacian of the triangle's edges, so
+//! it joins W: still symmetric positive definite, quadratic in C' − P, and 0 at rest whatever
+//! the rest cage (C' = P = C there). CageRev takes the same W for the grab's pose. A barrier
+//! on the facing itself was tried and is not used (`docs/green-coordinates.md`): measured
+//! against P̂ it does not vanish at rest once the rest cage is edited, and measured against P
+//! it is not convex.
+//!
 //! Where every s_k is 1 (no vertex would leave the body), B = 0 and the fit is bit for bit the
-//! fit without reach terms. On CesiumMan's walk with its default automatic cage they take the
-//! worst spread from 1.55 to 1.38 (`docs/green-coordinates.md`).
+//! fit without reach terms, and where no triangle turns W is λ(LᵀL + εI). On CesiumMan's walk
+//! with its default automatic cage the reach terms take the worst spread from 1.55 to 1.38
+//! (`docs/green-coordinates.md`).
 
 use faer::Mat;
 use glam::{DAffine3, DMat3, DVec3};
@@ -58,7 +74,13 @@ use crate::sync::small_products::accumulate_product;
 #[derive(Debug, Clone)]
 pub struct FitPrior {
     prior: CagePrior,
-    /// W = λ(LᵀL + εI), `#C × #C`.
+    /// λ(LᵀL + εI), `#C × #C`: W without the fold terms.
+    base_weight: Mat<f64>,
+    /// The cage's triangles (`#F`), for the fold terms.
+    triangles: Vec<[u32; 3]>,
+    /// Whether `weight` holds fold terms (else it equals `base_weight`).
+    folded: bool,
+    /// W of the current pose, `#C × #C`: λ(LᵀL + εI) plus the fold terms.
     weight: Mat<f64>,
     /// K of the vertex part's hat fit (`#C × #R`), which decides the reach factors s_k.
     hat_from_rows: Mat<f64>,
@@ -94,6 +116,12 @@ pub const GREEN_PRIOR_STRENGTH: f64 = 13.0;
 /// vertices leave the rigidly carried reference the deviation measures against).
 pub const REACH_GAIN: f64 = 1.0;
 
+/// g of the fold terms γ_t = g·h·turn_t (module docs). On the Fox's Run with its default
+/// automatic cage, 1 holds every triangle of C' facing the carried cage's (one of 196 turned at
+/// three samples without the terms); 3 to 30 change the worst deviation by under 1 %
+/// (`docs/green-coordinates.md`).
+pub const FOLD_GAIN: f64 = 1.0;
+
 /// The reach factor below which s_k counts as this value, so that β_k stays finite.
 const SMALLEST_REACH_FACTOR: f64 = 0.1;
 
@@ -115,21 +143,26 @@ impl FitPrior {
         hat_from_rows: Mat<f64>,
         regulariser: &Mat<f64>,
         rest_cage: &[DVec3],
+        triangles: &[[u32; 3]],
         rows_scale: f64,
     ) -> Self {
         let nc = regulariser.nrows();
         let trace: f64 = (0..nc).map(|k| regulariser[(k, k)]).sum();
         let strength = GREEN_PRIOR_STRENGTH * rows_scale / (3.0 * trace);
+        let weight = Mat::from_fn(regulariser.nrows(), regulariser.ncols(), |r, c| {
+            strength * regulariser[(r, c)]
+        });
         Self {
             prior,
+            base_weight: weight.clone(),
+            triangles: triangles.to_vec(),
+            folded: false,
             hat_from_rows,
             stiffness: (rows_scale + 3.0 * strength * trace) / (3.0 * nc as f64),
             reach_weights: vec![0.0; nc],
             anchored: vec![false; nc],
             anchors: rest_cage.to_vec(),
-            weight: Mat::from_fn(regulariser.nrows(), regulariser.ncols(), |r, c| {
-                strength * regulariser[(r, c)]
-            }),
+            weight,
             target: rest_cage.to_vec(),
             active: rest_cage.to_vec(),
             last: rest_cage.to_vec(),
@@ -181,13 +214,21 @@ impl FitPrior {
             maps.cage_from_rows,
             &regulariser,
             rest_cage,
+            triangles,
             rows_scale,
         ))
     }
 
-    /// W = λ(LᵀL + εI), `#C × #C`.
+    /// W of the current event, `#C × #C`: λ(LᵀL + εI) plus the fold terms of the triangles
+    /// the hat fit turns in its pose (module docs).
     pub fn weight(&self) -> &Mat<f64> {
         &self.weight
+    }
+
+    /// How far the hat fit turns each cage triangle in the current event, in [0, 1] (`#F`):
+    /// the fold terms' turn_t (module docs).
+    pub fn turns(&self) -> &[f64] {
+        self.prior.carried_turns()
     }
 
     /// P of the current event, `#C`.
@@ -212,6 +253,16 @@ impl FitPrior {
             *weight = reach_weight(self.stiffness, s);
         }
         self.anchored.copy_from_slice(anchored);
+        let turns = self.prior.carried_turns();
+        if self.folded || turns.iter().any(|&t| t != 0.0) {
+            self.folded = fold_weight(
+                &self.base_weight,
+                &self.triangles,
+                turns,
+                self.stiffness,
+                &mut self.weight,
+            );
+        }
         let anchor_weights = self.prior.anchor_weights();
         for (k, anchor) in self.anchors.iter_mut().enumerate() {
             *anchor = if self.anchored[k] {
@@ -227,14 +278,15 @@ impl FitPrior {
         &self.reach_weights
     }
 
-    /// β_k (`weights`, `#C`) in the pose with the joints' linear parts `joint_linear` (`#J`):
-    /// what [`Self::carry`] sets in that pose, for CageRev. Allocates its scratch (once per
-    /// pose).
+    /// β_k (`weights`, `#C`), the anchored vertices (`anchored`, `#C`) and W (`weight`,
+    /// `#C × #C`) in the pose with the joints' linear parts `joint_linear` (`#J`): what
+    /// [`Self::carry`] sets in that pose, for CageRev. Allocates its scratch (once per pose).
     pub(crate) fn reach_weights_in(
         &self,
         joint_linear: &[DMat3],
         weights: &mut [f64],
         anchored: &mut [bool],
+        weight: &mut Mat<f64>,
     ) {
         let mut pose = self.prior.pose_scratch();
         self.prior.pose(joint_linear, &mut pose);
@@ -244,6 +296,13 @@ impl FitPrior {
             *weight = reach_weight(self.stiffness, s);
         }
         anchored.copy_from_slice(pose.reach_anchored());
+        fold_weight(
+            &self.base_weight,
+            &self.triangles,
+            pose.reach_turns(),
+            self.stiffness,
+            weight,
+        );
     }
 
     /// Whether vertex k is anchored on its skinned Q_k in the current event (`#C`).
@@ -342,6 +401,37 @@ impl FitPrior {
 /// Q_k = Σ_j ω_kj T_j C_k: the rest cage vertex `rest_vertex` (C_k) skinned by the skinning
 /// transforms `posed_from_rest` (`#J`) with the weights of its nearest rest-skin vertex (row k
 /// of `anchor_weights`).
+/// W of a pose (`out`, `#C × #C`): `base` (λ(LᵀL + εI)) plus, on every cage triangle t the hat
+/// fit turns (`turns`, `#F`, from `triangles`), [`FOLD_GAIN`]·h·turn_t times the graph
+/// Laplacian of its three edges: the quadratic form of
+/// ½ γ_t Σ_(i,j) |(x_j − x_i) − (P_j − P_i)|² (module docs). Returns whether a triangle is
+/// turned. No allocation.
+fn fold_weight(
+    base: &Mat<f64>,
+    triangles: &[[u32; 3]],
+    turns: &[f64],
+    stiffness: f64,
+    out: &mut Mat<f64>,
+) -> bool {
+    out.copy_from(base);
+    let mut turned = false;
+    for (tri, &turn) in triangles.iter().zip(turns) {
+        if turn == 0.0 {
+            continue;
+        }
+        turned = true;
+        let gamma = FOLD_GAIN * stiffness * turn;
+        for e in 0..3 {
+            let (i, j) = (tri[e] as usize, tri[(e + 1) % 3] as usize);
+            out[(i, i)] += gamma;
+            out[(j, j)] += gamma;
+            out[(i, j)] -= gamma;
+            out[(j, i)] -= gamma;
+        }
+    }
+    turned
+}
+
 fn skinned_anchor(
     anchor_weights: &SkinWeights,
     k: usize,
@@ -449,6 +539,60 @@ fn add_translation_rows(
             let column = block.col(b);
             for a in 0..3 {
                 joint_rows[(3 * k + a, 3 * l + b)] += column[a];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles sharing the edge (1, 2) over four vertices: a turned triangle adds
+    /// g·h·turn times its edges' graph Laplacian to W, so that (x − P)ᵀ W (x − P) gains
+    /// γ Σ_edges |Δx_j − Δx_i|², a move of the whole triangle costs nothing more, and an
+    /// unturned pose leaves W as it was.
+    #[test]
+    fn the_fold_terms_are_the_turned_triangles_edge_laplacians() {
+        let base = Mat::from_fn(4, 4, |r, c| if r == c { 2.0 } else { 0.0 });
+        let triangles = [[0, 1, 2], [1, 3, 2]];
+        let stiffness = 3.0;
+        let mut weight = Mat::zeros(4, 4);
+        assert!(!fold_weight(
+            &base,
+            &triangles,
+            &[0.0, 0.0],
+            stiffness,
+            &mut weight
+        ));
+        assert_eq!(weight, base);
+        assert!(fold_weight(
+            &base,
+            &triangles,
+            &[0.5, 0.0],
+            stiffness,
+            &mut weight
+        ));
+        let gamma = FOLD_GAIN * stiffness * 0.5;
+        let quadratic = |d: [f64; 4]| {
+            let mut q = 0.0;
+            for r in 0..4 {
+                for c in 0..4 {
+                    q += d[r] * weight[(r, c)] * d[c];
+                }
+            }
+            q
+        };
+        let d = [0.3, -1.0, 0.5, 7.0];
+        let base_part: f64 = d.iter().map(|x| 2.0 * x * x).sum();
+        let edges = (d[1] - d[0]).powi(2) + (d[2] - d[1]).powi(2) + (d[0] - d[2]).powi(2);
+        assert!((quadratic(d) - base_part - gamma * edges).abs() < 1e-12);
+        // Moving the turned triangle whole (vertex 3 apart) costs only the base part.
+        let whole = [1.5, 1.5, 1.5, 0.0];
+        assert!((quadratic(whole) - 3.0 * 2.0 * 1.5 * 1.5).abs() < 1e-12);
+        for r in 0..4 {
+            for c in 0..4 {
+                assert_eq!(weight[(r, c)], weight[(c, r)]);
             }
         }
     }

@@ -32,6 +32,9 @@
 //! matrices built once per pose ([`GreenCageReverser::prepare_prior`]). Its Jacobian adds
 //! `W (∂P/∂C + (∂P/∂t)(∂t/∂A) J_A)`.
 //!
+//! W includes the fold terms of the triangles the prior's hat turns: they depend on the pose
+//! alone, so W is that of the grab's pose, fixed for the grab.
+//!
 //! The prior's reach terms ½ Σ_k β_k |C'_k − a_k|² (β_k and the choice of a_k depend on the pose
 //! alone) add `B (a(C₀ + δ) − C'_t)` to G: a_k = P_k, or the skinned anchor
 //! `Q_k = Σ_j ω_kj (L_j C_k + t_j)`, whose change is `L̄_k δ_k + Σ_j ω_kj (∂t_j/∂A) ΔA` exactly
@@ -100,8 +103,10 @@ pub struct GreenCageReverser {
 /// CageRev's terms of a regularised fit, for one pose (see the module docs).
 #[derive(Debug, Clone)]
 struct ReverserPrior {
-    /// W ⊗ I₃, `3#C × 3#C`.
+    /// W ⊗ I₃, `3#C × 3#C`, with W (`cage_weight`, `#C × #C`) that of the pose, fold terms
+    /// included ([`super::prior`]).
     weight: Mat<f64>,
+    cage_weight: Mat<f64>,
     /// β_k of the pose and whether vertex k is anchored on its skinned Q_k, `#C` each
     /// ([`super::prior`]).
     reach_weights: Vec<f64>,
@@ -200,6 +205,7 @@ impl GreenCageReverser {
         let nj = joint_linear.len();
         let terms = self.prior.get_or_insert_with(|| ReverserPrior {
             weight: Mat::zeros(n, n),
+            cage_weight: Mat::zeros(n / 3, n / 3),
             reach_weights: vec![0.0; n / 3],
             anchored: vec![false; n / 3],
             anchor_blocks: vec![DMat3::IDENTITY; n / 3],
@@ -212,15 +218,19 @@ impl GreenCageReverser {
             delta: vec![0.0; n],
             system: Mat::zeros(n, n),
         });
-        let weight = prior.weight();
+        prior.reach_weights_in(
+            joint_linear,
+            &mut terms.reach_weights,
+            &mut terms.anchored,
+            &mut terms.cage_weight,
+        );
         for k in 0..self.num_cage {
             for m in 0..self.num_cage {
                 for a in 0..3 {
-                    terms.weight[(3 * k + a, 3 * m + a)] = weight[(k, m)];
+                    terms.weight[(3 * k + a, 3 * m + a)] = terms.cage_weight[(k, m)];
                 }
             }
         }
-        prior.reach_weights_in(joint_linear, &mut terms.reach_weights, &mut terms.anchored);
         anchor_jacobians(
             prior,
             joint_linear,
