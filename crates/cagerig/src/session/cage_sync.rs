@@ -3,7 +3,7 @@
 
 use super::RigSession;
 use super::parts::CageFitSource;
-use super::rest_map::CageMap;
+use super::rest_map::{CageMap, MvcMap};
 use super::skinning::CorState;
 use crate::coords_kind::CoordsKind;
 use crate::error::RigError;
@@ -68,7 +68,11 @@ impl RigSession {
         }
         let skel_up = !self.locks.skel_up;
         match self.rest_map.cage_map_mut() {
-            CageMap::Mvc(mvc) => mvc.reverser.refactor(&self.scratch_rotations, skel_up),
+            CageMap::Mvc(mvc) => {
+                let MvcMap { fit, reverser } = &mut **mvc;
+                let rotations = &self.scratch_rotations;
+                reverser.refactor(rotations, skel_up, fit.reach_factors_in_pose(rotations))
+            }
             CageMap::Green(_) => self.prepare_green_reverser(),
         }
     }
@@ -143,5 +147,49 @@ impl RigSession {
     pub(super) fn centres_of_cage(&self, cor: &CorState, cage: &[DVec3], out: &mut [DVec3]) {
         cor.centre_coords.apply(cage, out);
         self.rest_map.add_centre_terms_of(cage, out);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::rest_map::{CageMap, MvcMap};
+    use super::super::{RigSession, SessionOptions};
+    use crate::rig_files::load_rig_files;
+    use glam::{DMat3, DVec3};
+    use std::path::Path;
+
+    /// CageRev's rows take the reach factors CageUp applied in the pose: the Arm with its first
+    /// metacarpal turned 90°, where the limit holds six cage vertices (s_k < 1), factorises to the same
+    /// bits with them as when it computes its own, and a stale pose gives none.
+    #[test]
+    fn cage_rev_takes_cage_ups_reach_factors_to_the_bit() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
+        let files = load_rig_files(&dir.join("arm.obj"), None).unwrap();
+        let mut s = RigSession::new(files.parts, SessionOptions::default())
+            .unwrap()
+            .0;
+        let metacarpal = s.skeleton().find("metacarpal1.R").unwrap();
+        s.rotate_joint(metacarpal, DVec3::X, 90f64.to_radians())
+            .unwrap();
+        let rotations: Vec<DMat3> = s.posed_from_rest.iter().map(|t| t.matrix3).collect();
+        let skel_up = !s.locks.skel_up;
+        let CageMap::Mvc(mvc) = s.rest_map.cage_map_mut() else {
+            panic!("a mean value rig");
+        };
+        let MvcMap { fit, reverser } = &mut **mvc;
+        let shared = fit.reach_factors_in_pose(&rotations).unwrap().to_vec();
+        assert!(shared.iter().any(|&f| f < 1.0), "{shared:?}");
+        let offset = vec![DVec3::new(0.01, -0.02, 0.03); shared.len()];
+        let solve = |reverser: &mut crate::sync::cage_reverser::CageReverser,
+                     factors: Option<&[f64]>| {
+            reverser.refactor(&rotations, skel_up, factors).unwrap();
+            let mut delta = vec![DVec3::ZERO; offset.len()];
+            reverser.solve(&offset, &mut delta).unwrap();
+            delta
+        };
+        assert_eq!(solve(reverser, Some(&shared)), solve(reverser, None));
+        let mut other = rotations.clone();
+        other[metacarpal] = DMat3::IDENTITY;
+        assert!(fit.reach_factors_in_pose(&other).is_none());
     }
 }

@@ -395,6 +395,13 @@ impl CagePrior {
         self.reach_scratch.turns()
     }
 
+    /// The reach factors s (`#C`) of the last [`Self::carried_reach_factors`] when its pose had
+    /// the linear parts `joint_linear` (`#J`); `None` otherwise.
+    pub fn reach_factors_in_pose(&self, joint_linear: &[DMat3]) -> Option<&[f64]> {
+        (!self.reach_linear.is_empty() && self.reach_linear == joint_linear)
+            .then_some(self.reach_factors.as_slice())
+    }
+
     /// The reach limit's hat fit reads the fitting rows as `vertex_part` (`#R`, the rows of the
     /// binding rig that K maps back to its binding cage) instead of the binding skin's rows: a
     /// Green rig's vertex part φ_R C₀ ([`crate::sync::green_cage_fit::prior`],

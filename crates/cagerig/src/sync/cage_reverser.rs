@@ -224,12 +224,16 @@ impl CageReverser {
     /// (`joint_rotations`, `#J`, the linear parts of posed_from_rest). `joints_follow`: whether
     /// SkelUp moves the joints with the rest cage; when it is locked the skeleton term
     /// Ω̃ B_topo⁻¹ A_R Ψ is zero (a grab moves no joint) and the system is `P R̃ Φ̃`.
+    /// `fitted_reach_factors`: the reach factors s (`#C`) CageUp applied in this pose, when it
+    /// has them ([`crate::sync::cage_updater::CageUpdater::reach_factors_in_pose`]); the
+    /// regularised fit's rows take those instead of computing them again (the same bits).
     pub fn refactor(
         &mut self,
         joint_rotations: &[DMat3],
         joints_follow: bool,
+        fitted_reach_factors: Option<&[f64]>,
     ) -> Result<(), RigError> {
-        let factored = self.factorise(joint_rotations, joints_follow);
+        let factored = self.factorise(joint_rotations, joints_follow, fitted_reach_factors);
         // The factorisations run faer on this thread.
         crate::vector_registers::clear_upper_halves();
         factored
@@ -240,6 +244,7 @@ impl CageReverser {
         &mut self,
         joint_rotations: &[DMat3],
         joints_follow: bool,
+        fitted_reach_factors: Option<&[f64]>,
     ) -> Result<(), RigError> {
         let square = self.row_weights.num_vertices() == self.num_cage && self.prior.is_none();
         if self.method == ReverserMethod::Auto
@@ -250,7 +255,7 @@ impl CageReverser {
             return Ok(());
         }
         self.factor = None;
-        self.dense(joint_rotations, joints_follow)?;
+        self.dense(joint_rotations, joints_follow, fitted_reach_factors)?;
         self.factor = Some(Factor::Dense);
         Ok(())
     }
@@ -361,7 +366,12 @@ impl CageReverser {
 
     /// The dense `3#C × 3#C` system, factorised into [`Self::dense_lu`]. Allocates its
     /// scratch on the first call only.
-    fn dense(&mut self, joint_rotations: &[DMat3], joints_follow: bool) -> Result<(), RigError> {
+    fn dense(
+        &mut self,
+        joint_rotations: &[DMat3],
+        joints_follow: bool,
+        fitted_reach_factors: Option<&[f64]>,
+    ) -> Result<(), RigError> {
         let nc = self.num_cage;
         let nj = self.parents.len();
         let nr = self.row_weights.num_vertices();
@@ -421,13 +431,18 @@ impl CageReverser {
         };
         crate::sync::small_products::product_into(left, g, width, pg);
         if let Some(RegularisedParts { prior, pose, .. }) = &mut self.prior {
-            // The reach limit: row k is s_k [K Q]_k [G; ∂P/∂C] + (1 − s_k) ∂P_k/∂C.
-            prior.reach_factors(joint_rotations, &self.cage_from_rows, pose);
+            // The reach limit: row k is s_k [K Q]_k [G; ∂P/∂C] + (1 − s_k) ∂P_k/∂C, with
+            // CageUp's s of this pose when it is given.
+            let factors = match fitted_reach_factors {
+                Some(factors) => factors,
+                None => {
+                    prior.reach_factors(joint_rotations, &self.cage_from_rows, pose);
+                    pose.reach_factors()
+                }
+            };
             let prior_jacobian = g[nr * width..].chunks_exact(width);
-            for ((row, prior_row), &s) in pg
-                .chunks_exact_mut(width)
-                .zip(prior_jacobian)
-                .zip(pose.reach_factors())
+            for ((row, prior_row), &s) in
+                pg.chunks_exact_mut(width).zip(prior_jacobian).zip(factors)
             {
                 if s < 1.0 {
                     for (v, p) in row.iter_mut().zip(prior_row) {

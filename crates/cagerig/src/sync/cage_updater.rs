@@ -9,7 +9,7 @@
 //! ([`super::cage_prior`]): C' = K·M̃' + Q·P(C, S'), still linear in both targets.
 
 use faer::Mat;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
@@ -187,6 +187,14 @@ impl CageUpdater {
             accumulate_product(prior.cage_from_prior(), prior.carried_cage(), posed_cage);
             prior.limit_reach(posed_from_rest, &self.cage_from_rows, posed_cage);
         }
+    }
+
+    /// The reach factors s (`#C`) the regularised fit applied in the pose whose skinning
+    /// transforms have the linear parts `joint_linear` (`#J`), when its last fit was in that
+    /// pose; `None` otherwise and for the paper's fit. CageRev's rows take them
+    /// ([`crate::sync::cage_reverser::CageReverser::refactor`]).
+    pub fn reach_factors_in_pose(&self, joint_linear: &[DMat3]) -> Option<&[f64]> {
+        self.prior.as_ref()?.reach_factors_in_pose(joint_linear)
     }
 
     /// The mesh rows the fit uses (`#R`).
