@@ -60,8 +60,8 @@ pub(crate) struct GreenModelRow {
     pub frame_over_mvc: f64,
     pub drag_over_mvc: f64,
     /// The grab after a skeleton edit against its memory-bandwidth bound: the bytes the event
-    /// must read (the whole coordinate matrix, [φ ψ] for Green and Φ for MVC, in f64) over the
-    /// read bandwidth measured in this run.
+    /// must read (the whole coordinate matrix, [φ ψ] for Green and Φ for MVC, in f64, and the
+    /// skin weights that skin M into M') over the read bandwidth measured in this run.
     pub grab_bound: GrabBound,
 }
 
@@ -223,7 +223,13 @@ pub(crate) fn bench_green_model(
     let matrix_bytes = |columns: usize| 8.0 * nv as f64 * columns as f64;
     let bound_ms = |bytes: f64| bytes / (read_bandwidth_gbs * 1e9) * 1e3;
     let ratio = |a: &Stat, b: &Stat| a.median_ms / b.median_ms.max(f64::MIN_POSITIVE);
-    let (green_bytes, mvc_bytes) = (matrix_bytes(nc + cage_faces), matrix_bytes(nc));
+    // The skinning of M into M' reads the weights too: per vertex its row start (u32), per
+    // entry its joint (u16) and weight (f64), as `LinearBlendSkinning` stores them.
+    let skin_bytes = 4.0 * nv as f64 + 10.0 * parts.skin_weights.num_entries() as f64;
+    let (green_bytes, mvc_bytes) = (
+        matrix_bytes(nc + cage_faces) + skin_bytes,
+        matrix_bytes(nc) + skin_bytes,
+    );
     let grab_bound = GrabBound {
         read_bandwidth_gbs,
         green_bytes,
