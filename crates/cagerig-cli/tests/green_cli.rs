@@ -178,6 +178,22 @@ fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
         let bend = rows["bend_degrees"].as_f64().unwrap();
         assert!((10.0..=60.0).contains(&bend), "bend {bend}°");
     }
+    // The grab's read bound: the coordinate matrix in f64 and the skin weights, the same
+    // weights for both kinds (a row start per vertex and at least one entry per vertex).
+    let count = |key: &str| model[key].as_f64().unwrap();
+    let (nv, nc, nf) = (
+        count("vertices"),
+        count("cage_vertices"),
+        count("cage_faces"),
+    );
+    let bound = &model["grab_bound"];
+    let skin_mvc = bound["mvc_bytes"].as_f64().unwrap() - 8.0 * nv * nc;
+    let skin_green = bound["green_bytes"].as_f64().unwrap() - 8.0 * nv * (nc + nf);
+    assert_eq!(skin_mvc, skin_green);
+    assert!(
+        skin_mvc >= 14.0 * nv,
+        "{skin_mvc} bytes of skin weights for {nv} vertices"
+    );
 }
 
 /// A Green rig does not compute mean value coordinates it would discard: `animate --auto-cage

@@ -158,9 +158,10 @@ mod tests {
     use glam::{DMat3, DVec3};
     use std::path::Path;
 
-    /// CageRev's rows take the reach factors CageUp applied in the pose: the Arm with its first
-    /// metacarpal turned 90°, where the limit holds six cage vertices (s_k < 1), factorises to the same
-    /// bits with them as when it computes its own, and a stale pose gives none.
+    /// CageRev's rows take the reach factors CageUp applied in the pose: the Arm with its
+    /// first metacarpal turned 90°, where the limit holds six cage vertices (s_k < 1),
+    /// factorises to the same bits with them as when it computes its own, and a stale pose
+    /// gives none.
     #[test]
     fn cage_rev_takes_cage_ups_reach_factors_to_the_bit() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
@@ -191,5 +192,42 @@ mod tests {
         let mut other = rotations.clone();
         other[metacarpal] = DMat3::IDENTITY;
         assert!(fit.reach_factors_in_pose(&other).is_none());
+    }
+
+    /// The Green twin: what CageRev takes of the fit's last carry in its pose is what it would
+    /// compute. The Arm's elbow bent 135° under Green coordinates, where the hat turns
+    /// triangles, gives the same β, anchors and W (fold terms included) both ways.
+    #[test]
+    fn green_cage_rev_takes_the_fits_reach_weights_to_the_bit() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
+        let files = load_rig_files(&dir.join("arm.obj"), None).unwrap();
+        let options = SessionOptions {
+            coords: crate::CoordsKind::Green,
+            ..SessionOptions::default()
+        };
+        let mut s = RigSession::new(files.parts, options).unwrap().0;
+        let elbow = s.skeleton().find("lowerarm01.R").unwrap();
+        for _ in 0..9 {
+            s.rotate_joint(elbow, DVec3::X, 15f64.to_radians()).unwrap();
+        }
+        assert!(s.green_fold_turns().unwrap().iter().any(|&t| t > 0.0));
+        let linear: Vec<DMat3> = s.posed_from_rest.iter().map(|t| t.matrix3).collect();
+        let CageMap::Green(green) = s.rest_map.cage_map() else {
+            panic!("a Green rig");
+        };
+        let prior = green.cage_up.fit.prior().unwrap();
+        assert!(prior.carried().reach_factors_in_pose(&linear).is_some());
+        let nc = prior.reach_weights().len();
+        let run = |shared: bool| {
+            let (mut weights, mut anchored) = (vec![0.0; nc], vec![false; nc]);
+            let mut weight = faer::Mat::zeros(nc, nc);
+            if shared {
+                prior.reach_weights_in(&linear, &mut weights, &mut anchored, &mut weight);
+            } else {
+                prior.compute_reach_weights_in(&linear, &mut weights, &mut anchored, &mut weight);
+            }
+            (weights, anchored, weight)
+        };
+        assert_eq!(run(true), run(false));
     }
 }

@@ -280,8 +280,27 @@ impl FitPrior {
 
     /// β_k (`weights`, `#C`), the anchored vertices (`anchored`, `#C`) and W (`weight`,
     /// `#C × #C`) in the pose with the joints' linear parts `joint_linear` (`#J`): what
-    /// [`Self::carry`] sets in that pose, for CageRev. Allocates its scratch (once per pose).
+    /// [`Self::carry`] sets in that pose, for CageRev. Copied from the last carry when it was
+    /// in that pose (they depend on the linear parts alone); computed otherwise, allocating
+    /// its scratch (once per pose).
     pub(crate) fn reach_weights_in(
+        &self,
+        joint_linear: &[DMat3],
+        weights: &mut [f64],
+        anchored: &mut [bool],
+        weight: &mut Mat<f64>,
+    ) {
+        if self.prior.reach_factors_in_pose(joint_linear).is_some() {
+            weights.copy_from_slice(&self.reach_weights);
+            anchored.copy_from_slice(&self.anchored);
+            weight.copy_from(&self.weight);
+        } else {
+            self.compute_reach_weights_in(joint_linear, weights, anchored, weight);
+        }
+    }
+
+    /// [`Self::reach_weights_in`] computed for the pose, whatever the last carry.
+    pub(crate) fn compute_reach_weights_in(
         &self,
         joint_linear: &[DMat3],
         weights: &mut [f64],
