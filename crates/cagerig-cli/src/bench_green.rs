@@ -59,22 +59,69 @@ pub(crate) struct GreenModelRow {
     /// Green / MVC medians of the animation frame and the rest-cage drag (exact path).
     pub frame_over_mvc: f64,
     pub drag_over_mvc: f64,
+    /// Green / MVC of the bytes the rest-cage drag must move: per vertex, the columns it reads
+    /// (the moved cage vertices' of φ or Φ, and for Green ψ's of every face touching them, in
+    /// f64), the skin weights, M read and written by the edit and read by the skinning, and M'
+    /// written. The two drags run at the
+    /// same share of the bandwidth when [`Self::drag_over_mvc`] equals it.
+    pub drag_bytes_over_mvc: f64,
     /// The grab after a skeleton edit against its memory-bandwidth bound: the bytes the event
     /// must read (the whole coordinate matrix, [φ ψ] for Green and Φ for MVC, in f64, and the
     /// skin weights that skin M into M') over the read bandwidth measured in this run.
     pub grab_bound: GrabBound,
 }
 
-/// A grab's time against the bound set by the bytes it must read.
+/// A grab's time against the bound set by the bytes it must read, for both kinds.
 #[derive(Debug, Serialize)]
 pub(crate) struct GrabBound {
     pub read_bandwidth_gbs: f64,
-    pub green_bytes: f64,
-    pub green_bound_ms: f64,
-    pub green_over_bound: f64,
-    pub mvc_bytes: f64,
-    pub mvc_bound_ms: f64,
-    pub mvc_over_bound: f64,
+    pub green: KindGrabBound,
+    pub mvc: KindGrabBound,
+}
+
+/// One kind's grab against its read bound, and the rest-skin product M(C) alone against the
+/// bound of its own bytes (the coordinates): the part of the grab no refactorisation, solve or
+/// skinning adds to, so the floor the grab's ratio can reach on this host in this run.
+#[derive(Debug, Serialize)]
+pub(crate) struct KindGrabBound {
+    /// The grab's bytes: the coordinates in f64 and the skin weights.
+    pub bytes: f64,
+    pub bound_ms: f64,
+    /// Median grab over the bound.
+    pub over_bound: f64,
+    /// Fastest grab over the bound.
+    pub best_over_bound: f64,
+    /// The coordinates' bytes (what M(C) reads).
+    pub product_bytes: f64,
+    /// Median M(C) over the bound of its bytes.
+    pub product_over_bound: f64,
+    /// Fastest M(C) over the bound of its bytes.
+    pub product_best_over_bound: f64,
+}
+
+impl KindGrabBound {
+    /// `grab` and `product` (M(C) alone) against `product_bytes` + `skin_bytes` and
+    /// `product_bytes` at `read_bandwidth_gbs`.
+    fn new(
+        grab: &Stat,
+        product: &Stat,
+        product_bytes: f64,
+        skin_bytes: f64,
+        read_bandwidth_gbs: f64,
+    ) -> Self {
+        let bound_ms =
+            |bytes: f64| (bytes / (read_bandwidth_gbs * 1e9) * 1e3).max(f64::MIN_POSITIVE);
+        let bytes = product_bytes + skin_bytes;
+        Self {
+            bytes,
+            bound_ms: bound_ms(bytes),
+            over_bound: grab.median_ms / bound_ms(bytes),
+            best_over_bound: grab.min_ms / bound_ms(bytes),
+            product_bytes,
+            product_over_bound: product.median_ms / bound_ms(product_bytes),
+            product_best_over_bound: product.min_ms / bound_ms(product_bytes),
+        }
+    }
 }
 
 /// The per-event rows of one display precision, with their Newton steps.
@@ -84,8 +131,14 @@ pub(crate) struct GreenEventRows {
     pub animation_frame_iterations: IterationStat,
     pub rest_cage_drag: Stat,
     pub rest_cage_drag_iterations: IterationStat,
+    /// The coordinate columns the drag reads: its moved cage vertices, and for a Green rig the
+    /// faces touching them.
+    pub rest_cage_drag_columns: usize,
     pub grab_after_skeleton_edit: Stat,
     pub grab_after_skeleton_edit_iterations: IterationStat,
+    /// The rest skin M(C) = ΦC (+ ψ·g(C)) alone at the grab's rest cage, the product every
+    /// grab makes.
+    pub rest_skin_product: Stat,
     /// Events of these rows refused (Green CageUp fold), not timed.
     pub refused: usize,
     /// How far the joint of the drag and grab rows was bent about +X, in degrees: the MVC
@@ -221,25 +274,26 @@ pub(crate) fn bench_green_model(
     drop(mvc_session);
     let read_bandwidth_gbs = crate::bench_bandwidth::read_bandwidth_gbs();
     let matrix_bytes = |columns: usize| 8.0 * nv as f64 * columns as f64;
-    let bound_ms = |bytes: f64| bytes / (read_bandwidth_gbs * 1e9) * 1e3;
     let ratio = |a: &Stat, b: &Stat| a.median_ms / b.median_ms.max(f64::MIN_POSITIVE);
     // The skinning of M into M' reads the weights too: per vertex its row start (u32), per
     // entry its joint (u16) and weight (f64), as `LinearBlendSkinning` stores them.
     let skin_bytes = 4.0 * nv as f64 + 10.0 * parts.skin_weights.num_entries() as f64;
-    let (green_bytes, mvc_bytes) = (
-        matrix_bytes(nc + cage_faces) + skin_bytes,
-        matrix_bytes(nc) + skin_bytes,
-    );
     let grab_bound = GrabBound {
         read_bandwidth_gbs,
-        green_bytes,
-        green_bound_ms: bound_ms(green_bytes),
-        green_over_bound: exact.grab_after_skeleton_edit.median_ms
-            / bound_ms(green_bytes).max(f64::MIN_POSITIVE),
-        mvc_bytes,
-        mvc_bound_ms: bound_ms(mvc_bytes),
-        mvc_over_bound: mvc_exact.grab_after_skeleton_edit.median_ms
-            / bound_ms(mvc_bytes).max(f64::MIN_POSITIVE),
+        green: KindGrabBound::new(
+            &exact.grab_after_skeleton_edit,
+            &exact.rest_skin_product,
+            matrix_bytes(nc + cage_faces),
+            skin_bytes,
+            read_bandwidth_gbs,
+        ),
+        mvc: KindGrabBound::new(
+            &mvc_exact.grab_after_skeleton_edit,
+            &mvc_exact.rest_skin_product,
+            matrix_bytes(nc),
+            skin_bytes,
+            read_bandwidth_gbs,
+        ),
     };
     Ok(GreenModelRow {
         model,
@@ -256,6 +310,11 @@ pub(crate) fn bench_green_model(
         refused_events: exact.refused + display_f32.refused,
         frame_over_mvc: ratio(&exact.animation_frame, &mvc_exact.animation_frame),
         drag_over_mvc: ratio(&exact.rest_cage_drag, &mvc_exact.rest_cage_drag),
+        drag_bytes_over_mvc: {
+            // M read and written by the delta, read again by the skin, and M' written.
+            let drag_bytes = |columns: usize| matrix_bytes(columns) + skin_bytes + 96.0 * nv as f64;
+            drag_bytes(exact.rest_cage_drag_columns) / drag_bytes(mvc_exact.rest_cage_drag_columns)
+        },
         grab_bound,
         exact,
         display_f32,
@@ -317,6 +376,11 @@ fn event_rows(
         let (lo, hi) = cagerig::mesh::bounding_box(session.rest_cage());
         (hi - lo).length()
     };
+    let touched_faces = session.green_triangles().map_or(0, |triangles| {
+        let touches = |t: &[u32; 3]| t.iter().any(|&v| drag.contains(&(v as usize)));
+        triangles.iter().filter(|t| touches(t)).count()
+    });
+    let rest_cage_drag_columns = drag.len() + touched_faces;
     let (rest_cage_drag, rest_cage_drag_iterations) =
         timed_events(session, reps(100), 3, refused, |s, i| {
             let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
@@ -346,13 +410,25 @@ fn event_rows(
             }
         }
     }
+    // The rest skin M(C) alone, the product each grab makes, into a buffer of the bench's.
+    let mut rest_skin = vec![DVec3::ZERO; session.rest_mesh().len()];
+    let mut products = Vec::new();
+    for i in 0..reps(51) + 3 {
+        let start = Instant::now();
+        session.rest_mesh_for_cage(session.rest_cage(), &mut rest_skin)?;
+        if i >= 3 {
+            products.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
     Ok(GreenEventRows {
         animation_frame,
         animation_frame_iterations,
         rest_cage_drag,
         rest_cage_drag_iterations,
+        rest_cage_drag_columns,
         grab_after_skeleton_edit: stat(times),
         grab_after_skeleton_edit_iterations: iterations(up, rev),
+        rest_skin_product: stat(products),
         refused: *refused,
         bend_degrees,
     })
@@ -426,17 +502,31 @@ pub(crate) fn print_green_table(rows: &[GreenModelRow]) {
             "{:<26} {:>10.2}×",
             "rest-cage drag Green/MVC", row.drag_over_mvc
         );
+        println!(
+            "{:<26} {:>10.2}×   (bytes the drags must move: columns read, skin weights, M, M')",
+            "rest-cage drag bytes", row.drag_bytes_over_mvc
+        );
         let b = &row.grab_bound;
         println!(
-            "grab against its read bound at {:.1} GB/s: Green {:.0} MB, bound {:.2} ms, {:.2}× it; \
-             MVC {:.0} MB, bound {:.2} ms, {:.2}× it",
+            "grab against its read bound at {:.1} GB/s, median (fastest): Green {:.0} MB, bound \
+             {:.2} ms, {:.2}× it ({:.2}×); MVC {:.0} MB, bound {:.2} ms, {:.2}× it ({:.2}×)",
             b.read_bandwidth_gbs,
-            b.green_bytes / 1e6,
-            b.green_bound_ms,
-            b.green_over_bound,
-            b.mvc_bytes / 1e6,
-            b.mvc_bound_ms,
-            b.mvc_over_bound
+            b.green.bytes / 1e6,
+            b.green.bound_ms,
+            b.green.over_bound,
+            b.green.best_over_bound,
+            b.mvc.bytes / 1e6,
+            b.mvc.bound_ms,
+            b.mvc.over_bound,
+            b.mvc.best_over_bound,
+        );
+        println!(
+            "M(C) alone against the bound of the coordinates, median (fastest): Green {:.2}× \
+             ({:.2}×), MVC {:.2}× ({:.2}×)",
+            b.green.product_over_bound,
+            b.green.product_best_over_bound,
+            b.mvc.product_over_bound,
+            b.mvc.product_best_over_bound,
         );
         for (precision, events) in [("exact", &row.exact), ("f32 display", &row.display_f32)] {
             if events.bend_degrees < 60.0 {

@@ -159,6 +159,7 @@ fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
             "animation_frame",
             "rest_cage_drag",
             "grab_after_skeleton_edit",
+            "rest_skin_product",
         ] {
             let ms = rows[key]["median_ms"].as_f64().unwrap();
             assert!(ms.is_finite() && ms > 0.0, "{key}: {ms}");
@@ -187,9 +188,28 @@ fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
         count("cage_faces"),
     );
     let bound = &model["grab_bound"];
-    let skin_mvc = bound["mvc_bytes"].as_f64().unwrap() - 8.0 * nv * nc;
-    let skin_green = bound["green_bytes"].as_f64().unwrap() - 8.0 * nv * (nc + nf);
+    let bytes = |kind: &str, key: &str| bound[kind][key].as_f64().unwrap();
+    assert_eq!(bytes("mvc", "product_bytes"), 8.0 * nv * nc);
+    assert_eq!(bytes("green", "product_bytes"), 8.0 * nv * (nc + nf));
+    let skin_mvc = bytes("mvc", "bytes") - 8.0 * nv * nc;
+    let skin_green = bytes("green", "bytes") - 8.0 * nv * (nc + nf);
     assert_eq!(skin_mvc, skin_green);
+    // A Green drag reads the moved vertices' columns and those of the faces touching them.
+    let columns = |rows: &serde_json::Value| rows["rest_cage_drag_columns"].as_u64().unwrap();
+    let mvc_columns = columns(&model["mvc_exact"]);
+    assert!((1..=5).contains(&mvc_columns), "{mvc_columns}");
+    assert!(columns(model) > mvc_columns);
+    assert!(model["drag_bytes_over_mvc"].as_f64().unwrap() > 1.0);
+    // Each ratio is a time over a positive bound; the fastest is at most the median.
+    for kind in ["green", "mvc"] {
+        for (best, median) in [
+            ("best_over_bound", "over_bound"),
+            ("product_best_over_bound", "product_over_bound"),
+        ] {
+            let (best, median) = (bytes(kind, best), bytes(kind, median));
+            assert!(0.0 < best && best <= median, "{kind}: {best} > {median}");
+        }
+    }
     assert!(
         skin_mvc >= 14.0 * nv,
         "{skin_mvc} bytes of skin weights for {nv} vertices"
