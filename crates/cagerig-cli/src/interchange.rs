@@ -417,21 +417,34 @@ pub fn skeleton_track(
 }
 
 #[derive(Serialize)]
-struct InterchangeInfo<'a> {
+struct InterchangeInfo<'a, R: Serialize> {
     file: String,
     #[serde(flatten)]
     summary: &'a cagerig_formats::ImportSummary,
     warnings: Vec<String>,
+    /// The rig built from the file with a given or generated cage, when `info` binds one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rig: Option<&'a R>,
 }
 
-/// `cagerig info FILE.glb|.gltf|.fbx [--json]`: counts, skins, animations, influences.
-pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
+/// `cagerig info FILE.glb|.gltf|.fbx [--json]`: counts, skins, animations, influences. With
+/// `rig`, the report of the rig built from the file and the cage it names (a `--cage` file, or a
+/// generated one), which the JSON carries as `rig` and the text leaves to the caller to print
+/// after this.
+pub fn info<R: Serialize>(
+    path: &Path,
+    skin: Option<&str>,
+    json: bool,
+    rig: Option<(&R, String)>,
+) -> anyhow::Result<()> {
     let c = import(path, skin)?;
     let s = &c.summary;
+    let (rig, cage_used) = rig.map_or((None, None), |(r, cage)| (Some(r), Some(cage)));
     let report = InterchangeInfo {
         file: path.display().to_string(),
         summary: s,
         warnings: c.warnings.iter().map(|w| w.to_string()).collect(),
+        rig,
     };
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -492,14 +505,13 @@ pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
     if s.animations.is_empty() {
         println!("animation      none");
     }
-    println!(
-        "cage in file   {}",
-        if s.cage_in_file {
-            "yes"
-        } else {
-            "no (give --cage)"
+    match (s.cage_in_file, &cage_used) {
+        (true, _) => println!("cage in file   yes"),
+        (false, None) => {
+            println!("cage in file   no (give --cage, or --auto-cage to generate one)")
         }
-    );
+        (false, Some(cage)) => println!("cage in file   no; the rig below takes {cage}"),
+    }
     if report.warnings.is_empty() {
         println!("warnings       none");
     }

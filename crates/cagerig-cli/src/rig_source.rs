@@ -81,8 +81,8 @@ impl RigArgs {
 pub struct AutoCageArgs {
     /// When the rig has no cage (no `<stem>_cage.obj`, no --cage, no cage node in a glTF/FBX
     /// file), generate one as `cagerig cage` does with its default options (validated), say
-    /// so, and write it into --out as generated_cage.obj. Without this flag a rig with no cage
-    /// is an error.
+    /// so, and write it into --out as generated_cage.obj where the command writes an --out
+    /// folder. Without this flag a rig with no cage is an error.
     #[arg(long)]
     pub auto_cage: bool,
     /// Target vertex count of the generated cage.

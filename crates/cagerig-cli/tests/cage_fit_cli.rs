@@ -89,7 +89,7 @@ fn info_bends_every_joint_and_reports_the_handle() {
     let worst = &bends["worst"];
     assert!(worst["deviation"].as_f64().unwrap() <= 0.06, "{worst}");
     assert!(worst["spread"].as_f64().unwrap() <= 1.5, "{worst}");
-    // A glTF character is measured along its animations instead: said, not ignored.
+    // A glTF character with no cage: the error says how to give or generate one.
     let output = cagerig()
         .arg("info")
         .arg(data("fox/Fox.glb"))
@@ -97,9 +97,56 @@ fn info_bends_every_joint_and_reports_the_handle() {
         .output()
         .unwrap();
     assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
-        String::from_utf8_lossy(&output.stderr).contains("animate"),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+        stderr.contains("--cage") && stderr.contains("--auto-cage"),
+        "{stderr}"
     );
+}
+
+#[test]
+fn info_binds_a_gltf_character_with_a_given_or_generated_cage() {
+    // A generated cage: the file's facts, and the rig with that cage, each joint bent.
+    let json = run_ok(cagerig().arg("info").arg(data("fox/Fox.glb")).args([
+        "--auto-cage",
+        "--bend-joints",
+        "45",
+        "--json",
+    ]));
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(report["cage_in_file"], false);
+    assert_eq!(report["animations"].as_array().unwrap().len(), 3);
+    let rig = &report["rig"];
+    assert_eq!(rig["cage_generated"], true);
+    assert!(rig["cage_vertices"].as_u64().unwrap() > 0);
+    assert!(rig["cage_checks"].is_object(), "{rig}");
+    let bends = &rig["joint_bends"];
+    let joints = bends["joints"].as_array().unwrap();
+    assert_eq!(joints.len(), 24);
+    assert!(joints.iter().all(|j| j["refused"] == 0), "{bends}");
+    let worst = &bends["worst"];
+    assert!(worst["deviation"].as_f64().unwrap() <= 0.06, "{worst}");
+    assert!(worst["spread"].as_f64().unwrap() <= 1.5, "{worst}");
+    assert_eq!(worst["flipped"].as_f64().unwrap(), 0.0, "{worst}");
+    // A given cage: named where the file has none, then checked, as for a rig of OBJ files.
+    let text = run_ok(
+        cagerig()
+            .arg("info")
+            .arg(data("fox/Fox.glb"))
+            .arg("--cage")
+            .arg(data("fox/Fox_cage.obj")),
+    );
+    assert!(
+        text.contains("cage in file   no; the rig below takes"),
+        "{text}"
+    );
+    assert!(text.contains("Fox_cage.obj"), "{text}");
+    assert!(
+        text.contains("check          mesh_inside            ok"),
+        "{text}"
+    );
+    // Without a cage or a binding asked for, the file's facts alone, as before.
+    let text = run_ok(cagerig().arg("info").arg(data("fox/Fox.glb")));
+    assert!(text.contains("cage in file   no (give --cage"), "{text}");
+    assert!(!text.contains("check "), "{text}");
 }
