@@ -156,12 +156,16 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(m) = rig.mesh.as_deref()
         && crate::interchange::is_interchange(m)?
     {
-        // The file's own facts; then, when a cage is given or generated or a binding is asked
-        // for, the rig built from the file and that cage, as for a rig of OBJ files.
+        // The file's own facts; then, when a cage is given or generated, or anything of the rig
+        // built from the file is asked for, that rig, as for a rig of OBJ files (a rig with no
+        // cage is then an error that says how to give one).
         let binds = rig.cage.is_some()
             || args.auto_cage.auto_cage
             || args.bend_joints.is_some()
-            || args.coords != cagerig::CoordsKind::Mvc;
+            || args.coords != cagerig::CoordsKind::Mvc
+            || rig.weights.is_some()
+            || rig.auto_weights
+            || rig.allow_outside_cage;
         if !binds {
             return crate::interchange::info(
                 m,
