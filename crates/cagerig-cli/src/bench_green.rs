@@ -33,6 +33,8 @@ pub(crate) struct IterationStat {
 pub(crate) struct GreenModelRow {
     pub model: String,
     pub coords: &'static str,
+    /// CageUp's fit in both sessions (`--cage-fit`).
+    pub cage_fit: cagerig::CageFitKind,
     pub vertices: usize,
     pub joints: usize,
     pub cage_vertices: usize,
@@ -223,6 +225,7 @@ fn timed_events(
 pub(crate) fn bench_green_model(
     model: String,
     parts: RigParts,
+    cage_fit: cagerig::CageFitKind,
     reps: impl Fn(usize) -> usize,
 ) -> anyhow::Result<GreenModelRow> {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
@@ -249,6 +252,7 @@ pub(crate) fn bench_green_model(
     let mvc_binding = time_coordinates(|c, p| mvc::compute_cage_coords(c, p, None).map(drop))?;
     let options = SessionOptions {
         coords: CoordsKind::Green,
+        cage_fit,
         ..SessionOptions::default()
     };
     let mut built = None;
@@ -269,7 +273,11 @@ pub(crate) fn bench_green_model(
     let display_f32 = event_rows(&mut session, bend_joint, &tracks, &reps)?;
     drop(session);
     // The same events on a mean value rig of the same model, in the same run.
-    let mut mvc_session = RigSession::new(parts.clone(), SessionOptions::default())?.0;
+    let mvc_options = SessionOptions {
+        cage_fit,
+        ..SessionOptions::default()
+    };
+    let mut mvc_session = RigSession::new(parts.clone(), mvc_options)?.0;
     let mvc_exact = event_rows(&mut mvc_session, bend_joint, &tracks, &reps)?;
     drop(mvc_session);
     let read_bandwidth_gbs = crate::bench_bandwidth::read_bandwidth_gbs();
@@ -298,6 +306,7 @@ pub(crate) fn bench_green_model(
     Ok(GreenModelRow {
         model,
         coords: CoordsKind::Green.name(),
+        cage_fit,
         vertices: nv,
         joints: nj,
         cage_vertices: nc,
@@ -438,8 +447,9 @@ fn event_rows(
 pub(crate) fn print_green_table(rows: &[GreenModelRow]) {
     for row in rows {
         println!(
-            "\n{} (Green coordinates): {} vertices, {} joints, cage {} vertices / {} faces, peak {:.0} MB",
+            "\n{} (Green coordinates, {} cage fit): {} vertices, {} joints, cage {} vertices / {} faces, peak {:.0} MB",
             row.model,
+            row.cage_fit,
             row.vertices,
             row.joints,
             row.cage_vertices,

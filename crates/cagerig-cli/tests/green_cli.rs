@@ -153,6 +153,7 @@ fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let model = &v[0];
     assert_eq!(model["coords"], "green");
+    assert_eq!(model["cage_fit"], "regularised");
     assert!(model["binding_over_mvc"].as_f64().unwrap() > 0.0);
     for rows in [model, &model["display_f32"]] {
         for key in [
@@ -214,6 +215,29 @@ fn bench_with_green_coordinates_reports_every_row_on_the_default_rig() {
         skin_mvc >= 14.0 * nv,
         "{skin_mvc} bytes of skin weights for {nv} vertices"
     );
+}
+
+/// `bench --coords green --cage-fit paper` times both of its sessions with the paper's fit, and
+/// says which fit it timed.
+#[test]
+fn bench_with_green_coordinates_takes_the_cage_fit() {
+    let out = cagerig()
+        .args([
+            "bench",
+            "--coords",
+            "green",
+            "--cage-fit",
+            "paper",
+            "--json",
+        ])
+        .args(["--skip-one-thread", "--repeat-scale", "0.1"])
+        .args(["--builtin", "bar"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v[0]["cage_fit"], "paper");
 }
 
 /// A Green rig does not compute mean value coordinates it would discard: `animate --auto-cage

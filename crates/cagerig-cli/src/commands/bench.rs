@@ -45,7 +45,8 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Skip the second pass on one thread (`RAYON_NUM_THREADS=1` like for like with the
-    /// single-threaded paper tool); by default every row is measured both ways.
+    /// single-threaded paper tool); by default every row is measured both ways (`--coords
+    /// green` times its rows on every thread only).
     #[arg(long)]
     pub skip_one_thread: bool,
     /// Multiplies the number of repetitions.
@@ -55,7 +56,8 @@ pub struct Args {
     /// per-event rows and their Newton iterations for a Green rig (docs/green-coordinates.md).
     #[arg(long, value_parser = crate::session_args::kind_parser::<cagerig::CoordsKind>(), default_value = "mvc")]
     pub coords: cagerig::CoordsKind,
-    /// CageUp's fit in the timed sessions (mean value rigs).
+    /// CageUp's fit in the timed sessions (with `--coords green`, in both its Green and its
+    /// mean value sessions).
     #[arg(long, value_parser = crate::session_args::kind_parser::<cagerig::CageFitKind>(), default_value = cagerig::CageFitKind::default().name())]
     pub cage_fit: cagerig::CageFitKind,
 }
@@ -177,6 +179,7 @@ fn run_green(args: &Args, name: &str, base: &RigParts) -> anyhow::Result<()> {
         rows.push(crate::bench_green::bench_green_model(
             model,
             parts,
+            args.cage_fit,
             |base| reps(base, scale, nv),
         )?);
     }
