@@ -64,8 +64,8 @@ pub(crate) struct GreenModelRow {
     /// Green / MVC of the bytes the rest-cage drag must move: per vertex, the columns it reads
     /// (the moved cage vertices' of φ or Φ, and for Green ψ's of every face touching them, in
     /// f64), the skin weights, M read and written by the edit and read by the skinning, and M'
-    /// written. The two drags run at the
-    /// same share of the bandwidth when [`Self::drag_over_mvc`] equals it.
+    /// written. The two drags run at the same share of the bandwidth when
+    /// [`Self::drag_over_mvc`] equals it.
     pub drag_bytes_over_mvc: f64,
     /// The grab after a skeleton edit against its memory-bandwidth bound: the bytes the event
     /// must read (the whole coordinate matrix, [φ ψ] for Green and Φ for MVC, in f64, and the

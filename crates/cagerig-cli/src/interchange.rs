@@ -189,6 +189,7 @@ pub fn load_interchange(
         allow_outside_cage: false,
         generated_cage,
         file_skinning: opened.skinning,
+        import_summary: Some(opened.summary),
     })
 }
 
@@ -421,29 +422,54 @@ struct InterchangeInfo<'a, R: Serialize> {
     file: String,
     #[serde(flatten)]
     summary: &'a cagerig_formats::ImportSummary,
-    warnings: Vec<String>,
+    /// The importer's warnings; absent when a rig is reported, whose own warnings hold them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    warnings: Option<Vec<String>>,
     /// The rig built from the file with a given or generated cage, when `info` binds one.
     #[serde(skip_serializing_if = "Option::is_none")]
     rig: Option<&'a R>,
 }
 
-/// `cagerig info FILE.glb|.gltf|.fbx [--json]`: counts, skins, animations, influences. With
-/// `rig`, the report of the rig built from the file and the cage it names (a `--cage` file, or a
-/// generated one), which the JSON carries as `rig` and the text leaves to the caller to print
-/// after this.
-pub fn info<R: Serialize>(
-    path: &Path,
-    skin: Option<&str>,
-    json: bool,
-    rig: Option<(&R, String)>,
-) -> anyhow::Result<()> {
+/// The rig `info` builds from a glTF/FBX file: its report and the cage it takes, worded.
+pub struct BoundRig<'a, R: Serialize> {
+    pub report: &'a R,
+    pub cage: String,
+}
+
+/// `cagerig info FILE.glb|.gltf|.fbx [--json]`: counts, skins, animations, influences and the
+/// importer's warnings.
+pub fn info(path: &Path, skin: Option<&str>, json: bool) -> anyhow::Result<()> {
     let c = import(path, skin)?;
-    let s = &c.summary;
-    let (rig, cage_used) = rig.map_or((None, None), |(r, cage)| (Some(r), Some(cage)));
+    let warnings = c.warnings.iter().map(|w| w.to_string()).collect();
+    print_info::<()>(path, &c.summary, Some(warnings), None, json)
+}
+
+/// [`info`] of a file already imported (`summary`), with the rig built from it and the cage it
+/// names (a `--cage` file, or a generated one): the JSON carries the rig's report as `rig`,
+/// whose warnings include the importer's; the text leaves the rig's report to the caller to
+/// print after this.
+pub fn info_with_rig<R: Serialize>(
+    path: &Path,
+    summary: &cagerig_formats::ImportSummary,
+    rig: BoundRig<'_, R>,
+    json: bool,
+) -> anyhow::Result<()> {
+    print_info(path, summary, None, Some(rig), json)
+}
+
+/// The file's facts of [`info`] and [`info_with_rig`].
+fn print_info<R: Serialize>(
+    path: &Path,
+    s: &cagerig_formats::ImportSummary,
+    warnings: Option<Vec<String>>,
+    rig: Option<BoundRig<'_, R>>,
+    json: bool,
+) -> anyhow::Result<()> {
+    let (rig, cage_used) = rig.map_or((None, None), |r| (Some(r.report), Some(r.cage)));
     let report = InterchangeInfo {
         file: path.display().to_string(),
         summary: s,
-        warnings: c.warnings.iter().map(|w| w.to_string()).collect(),
+        warnings,
         rig,
     };
     if json {
@@ -512,11 +538,13 @@ pub fn info<R: Serialize>(
         }
         (false, Some(cage)) => println!("cage in file   no; the rig below takes {cage}"),
     }
-    if report.warnings.is_empty() {
-        println!("warnings       none");
-    }
-    for w in &report.warnings {
-        println!("warning        {w}");
+    if let Some(warnings) = &report.warnings {
+        if warnings.is_empty() {
+            println!("warnings       none");
+        }
+        for w in warnings {
+            println!("warning        {w}");
+        }
     }
     Ok(())
 }

@@ -186,6 +186,8 @@ pub struct LoadedRig {
     pub generated_cage: Option<GeneratedCage>,
     /// The skinning method the file says its authoring tool uses (FBX), if any.
     pub file_skinning: Option<cagerig::skinning::SkinningMethod>,
+    /// What the importer read from a glTF/FBX file (`None` for OBJ and built-in rigs).
+    pub import_summary: Option<cagerig_formats::ImportSummary>,
 }
 
 impl LoadedRig {
@@ -288,6 +290,7 @@ pub fn load_rig_or_generate_cage(
                 allow_outside_cage: args.allow_outside_cage,
                 generated_cage: None,
                 file_skinning: None,
+                import_summary: None,
             }
         }
         (None, Some(mesh)) if interchange => LoadedRig {
@@ -441,6 +444,7 @@ fn load_files(
         allow_outside_cage,
         generated_cage: rig.generated_cage,
         file_skinning: None,
+        import_summary: None,
     })
 }
 

@@ -145,6 +145,16 @@ fn info_binds_a_gltf_character_with_a_given_or_generated_cage() {
         text.contains("check          mesh_inside            ok"),
         "{text}"
     );
+    // The importer's warnings are the rig's: said once, in the rig's section (and its JSON).
+    let text = run_ok(
+        cagerig()
+            .arg("info")
+            .arg(data("gltf/RiggedFigure/RiggedFigure.gltf"))
+            .arg("--auto-cage"),
+    );
+    assert_eq!(text.matches("did not sum to 1").count(), 1, "{text}");
+    assert!(report.get("warnings").is_none(), "{report}");
+    assert!(rig["warnings"].is_array(), "{rig}");
     // Without a cage or a binding asked for, the file's facts alone, as before.
     let text = run_ok(cagerig().arg("info").arg(data("fox/Fox.glb")));
     assert!(text.contains("cage in file   no (give --cage"), "{text}");

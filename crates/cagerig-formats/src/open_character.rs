@@ -10,7 +10,7 @@ use cagerig::cage_source::{CageOrigin, CageRequest, CageSourceError, choose_cage
 use cagerig::session::RigParts;
 use cagerig::skinning::SkinningMethod;
 
-use crate::character::{ImportedAnimation, ImportedCharacter, MorphTargets};
+use crate::character::{ImportSummary, ImportedAnimation, ImportedCharacter, MorphTargets};
 use crate::error::FormatError;
 use crate::{CharacterInput, ImportOptions};
 
@@ -29,6 +29,8 @@ pub struct OpenedCharacter {
     pub morph_targets: MorphTargets,
     /// The skinning method the file's skin says its authoring tool uses, if it says one.
     pub skinning: Option<SkinningMethod>,
+    /// What the importer read from the file (counts, skins, animations, space).
+    pub summary: ImportSummary,
 }
 
 /// Why a character could not be opened.
@@ -81,6 +83,7 @@ pub fn open_imported_character(
         warnings,
         skinning,
         dq_blend_weights,
+        summary,
         ..
     } = imported;
     let rig = cagerig::cage_gen::CageRig {
@@ -96,5 +99,6 @@ pub fn open_imported_character(
         animations,
         morph_targets,
         skinning,
+        summary,
     })
 }
