@@ -3,7 +3,8 @@
 //! (what the editor runs) next to its product M̃ = Φ̃C:
 //! `cargo run --release -p cagerig --example grab_bench -- [N] [display|exact] [green]` (`display`:
 //! only the display path, `exact`: only the f64 path, each 400 grabs, e.g. under a profiler;
-//! `green`: a Green-coordinates rig, bent in 10° steps).
+//! `green`: a Green-coordinates rig, bent in 10° steps; `paper`: the paper's cage fit instead of
+//! the default regularised one).
 
 // tests, benches and examples may panic on a broken fixture
 
@@ -56,6 +57,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         cagerig::CoordsKind::Mvc
     };
+    let cage_fit = if std::env::args().any(|a| a == "paper") {
+        cagerig::sync::CageFitKind::Paper
+    } else {
+        cagerig::sync::CageFitKind::Regularised
+    };
     let arm_obj = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/arm/arm.obj");
     let arm = cagerig::rig_files::load_rig_files(&arm_obj, None)?.parts;
     let (mesh, skeleton, weights, cage) = (arm.mesh, arm.skeleton, arm.skin_weights, arm.cage);
@@ -79,6 +85,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let options = SessionOptions {
             cage_coords_precision: precision,
             coords,
+            cage_fit,
             ..SessionOptions::default()
         };
         let (mut session, _) = RigSession::new(parts, options)?;
@@ -109,6 +116,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let parts = RigParts::new(sub.mesh, skeleton, sub.skin_weights, cage);
     let options = SessionOptions {
         coords,
+        cage_fit,
         ..SessionOptions::default()
     };
     let (mut session, _) = RigSession::new(parts, options)?;
