@@ -6,8 +6,10 @@
 //!   body as at rest; distances to the nearest skin vertex).
 //! - **deviation**: max_k |C'_k − P_k| / the rest skin's bounding-box diagonal, with P_k the rest
 //!   vertex C_k carried rigidly by the best-fit rotation and translation (Kabsch) of its
-//!   [`QUALITY_NEIGHBOURS`] nearest rest-skin vertices from M to M' (and any as near as the
-//!   last: [`crate::nearest_vertices`], so the measure does not depend on round-off).
+//!   [`SKIN_NEIGHBOURS`](crate::nearest_vertices::SKIN_NEIGHBOURS) nearest rest-skin vertices
+//!   from M to M' (and any as near as the last, so the measure does not depend on round-off):
+//!   the neighbourhoods of the regularised CageUp's prior, by the same rule
+//!   ([`crate::nearest_vertices::skin_neighbourhoods`]).
 //! - **flipped**: the share of C' triangles whose normal opposes that of the same triangle on P.
 //!
 //! [`CageQualityProbe::new`] picks the neighbours once (on the rest state given);
@@ -17,10 +19,7 @@ use faer::Mat;
 use glam::{DMat3, DVec3};
 
 use crate::error::RigError;
-use crate::nearest_vertices::nearest_with_ties;
-
-/// Rest-skin vertices whose rigid motion carries a cage vertex (the deviation's P_k).
-pub const QUALITY_NEIGHBOURS: usize = 32;
+use crate::nearest_vertices::skin_neighbourhoods;
 
 /// The three measures of one state (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -59,7 +58,8 @@ impl std::fmt::Display for CageQuality {
 /// What [`CageQualityProbe::measure`] needs of the rest state.
 #[derive(Debug, Clone)]
 pub struct CageQualityProbe {
-    /// Per cage vertex, its nearest rest-skin vertices (`QUALITY_NEIGHBOURS` and their ties).
+    /// Per cage vertex, its nearest rest-skin vertices
+    /// ([`crate::nearest_vertices::skin_neighbourhoods`]).
     neighbours: Vec<Vec<usize>>,
     cage_triangles: Vec<[u32; 3]>,
     /// max_k dist(C_k, M).
@@ -94,22 +94,18 @@ impl CageQualityProbe {
                 len: rest_cage.len(),
             });
         }
-        let take = QUALITY_NEIGHBOURS.min(rest_mesh.len());
-        let mut distances: Vec<(f64, usize)> = Vec::with_capacity(rest_mesh.len());
-        let mut neighbours = Vec::with_capacity(rest_cage.len());
-        let mut rest_reach = 0.0f64;
-        for c in rest_cage {
-            distances.clear();
-            distances.extend(
-                rest_mesh
-                    .iter()
-                    .enumerate()
-                    .map(|(v, m)| (m.distance_squared(*c), v)),
-            );
-            let nearest = distances.iter().map(|d| d.0).fold(f64::INFINITY, f64::min);
-            rest_reach = rest_reach.max(nearest.sqrt());
-            neighbours.push(nearest_with_ties(&mut distances, take));
-        }
+        let neighbours = skin_neighbourhoods(rest_cage, rest_mesh);
+        // The nearest skin vertex of each cage vertex is in its neighbourhood.
+        let rest_reach = neighbours
+            .iter()
+            .zip(rest_cage)
+            .map(|(near, c)| {
+                near.iter()
+                    .map(|&v| rest_mesh[v].distance_squared(*c))
+                    .fold(f64::INFINITY, f64::min)
+                    .sqrt()
+            })
+            .fold(0.0f64, f64::max);
         let (lo, hi) = crate::mesh::bounding_box(rest_mesh);
         Ok(Self {
             neighbours,

@@ -12,9 +12,11 @@
 //!
 //! - Φ̃ (`#R × #C`) the fitting rows of Φ and M̃' their posed positions (or their ghost LBS);
 //! - P (`#C`) the *prior*: every rest cage vertex carried by the mean motion of the skin around
-//!   it. With N_k the [`PRIOR_NEIGHBOURS`] rest-skin vertices nearest to C_k (and any as near
-//!   as the last, so that ties never depend on round-off), x̄_k their rest centroid, ȳ_k the centroid of their LBS-posed positions and A_k the rotation of their mean
-//!   skinning transform (see below), `P_k = ȳ_k + A_k (C_k − x̄_k)`. The centroid follows the
+//!   it. With N_k the 32 rest-skin vertices nearest to C_k (and any as near as the last, so
+//!   that ties never depend on round-off; the whole skin searched, by the rule the cage quality
+//!   measures use too, [`skin_neighbourhoods`]), x̄_k their rest centroid, ȳ_k
+//!   the centroid of their LBS-posed positions and A_k the rotation of their mean skinning
+//!   transform (see below), `P_k = ȳ_k + A_k (C_k − x̄_k)`. The centroid follows the
 //!   body exactly; only the offset of the cage from it turns, so a cage vertex between two
 //!   limbs stays between them;
 //! - L the cage's uniform graph Laplacian (`#C × #C`, row k: c_k − mean of its neighbours), so
@@ -62,7 +64,7 @@ use glam::{DAffine3, DMat3, DVec3};
 
 use crate::cage_coords::CageCoords;
 use crate::error::RigError;
-use crate::nearest_vertices::nearest_with_ties;
+use crate::nearest_vertices::skin_neighbourhoods;
 use crate::skin_weights::SkinWeights;
 use crate::sync::reach_limit::{PriorEntry, ReachLimit, ReachScratch};
 
@@ -71,10 +73,6 @@ use crate::sync::reach_limit::{PriorEntry, ReachLimit, ReachScratch};
 pub const PRIOR_STRENGTH: f64 = 3.0;
 /// ε in R = LᵀL + εI, relative to the Laplacian's scale (tr(LᵀL) / #C).
 pub const PRIOR_EPSILON: f64 = 0.05;
-/// Rest-skin vertices around a cage vertex whose mean motion carries it ([`neighbourhoods`]).
-pub const PRIOR_NEIGHBOURS: usize = 32;
-/// Skin vertices searched for neighbours at most (a regular subsample of larger skins).
-const PRIOR_SEARCH_VERTICES: usize = 16_384;
 /// μ_k / tr(Σ_j D_kj) in the carried rotation's H_k: how much of the blend of the joints'
 /// linear parts H_k holds beside the neighbourhood's own motion (see the module docs). Only
 /// enough to keep H_k definite against round-off where N_k is flat: a larger blend turns P away
@@ -744,9 +742,9 @@ fn rotation_of(m: DMat3) -> DMat3 {
 pub(crate) enum NeighbourCoords {
     /// The fitting coordinates themselves: mean value rigs, whose Φ reproduces the skin (M = ΦC).
     Fitting,
-    /// Mean value coordinates of the neighbourhoods' skin vertices (at most
-    /// [`PRIOR_NEIGHBOURS`] · #C of them), computed at binding: Green rigs, whose vertex part φ
-    /// alone does not reproduce the skin (M = φC + ψ·g(C)), while P must stay linear in C.
+    /// Mean value coordinates of the neighbourhoods' skin vertices (about 32·#C of them, the
+    /// ties included: [`skin_neighbourhoods`]), computed at binding: Green rigs, whose vertex
+    /// part φ alone does not reproduce the skin (M = φC + ψ·g(C)), while P must stay linear in C.
     MeanValue,
 }
 
@@ -930,8 +928,8 @@ struct Neighbourhoods {
     rotation_blend: Vec<f64>,
 }
 
-/// The neighbourhood N_k of every rest cage vertex (its [`PRIOR_NEIGHBOURS`] nearest rest-skin
-/// vertices, among a regular subsample of at most 16,384 for larger skins) as its joints' a_kj,
+/// The neighbourhood N_k of every rest cage vertex (its 32 nearest rest-skin vertices,
+/// [`skin_neighbourhoods`]) as its joints' a_kj,
 /// β_kj, D_kj and s_kj, ξ (`#C × #C` row-major, row k the mean over N_k of the vertices'
 /// coordinates in `neighbour_coords`), x̄_k and μ_k.
 fn neighbourhoods(
@@ -951,7 +949,7 @@ fn neighbourhoods(
             actual: skin_weights.num_vertices(),
         });
     }
-    let near = nearest_skin_vertices(rest_cage, rest_mesh);
+    let near = skin_neighbourhoods(rest_cage, rest_mesh);
     // The coordinate row of each neighbour: Φ's own, or mean value coordinates of the
     // neighbours alone (row `local[v]` of `computed`).
     let computed = match neighbour_coords {
@@ -1035,37 +1033,11 @@ fn neighbourhoods(
     })
 }
 
-/// N_k for every rest cage vertex (`#C` lists, each sorted): its [`PRIOR_NEIGHBOURS`] nearest
-/// rest-skin vertices (`rest_mesh`, not empty) among a regular subsample of at most
-/// [`PRIOR_SEARCH_VERTICES`], and every further one as near as the last of them
-/// ([`nearest_with_ties`]: a mirror-symmetric skin gets mirror-symmetric neighbourhoods,
-/// whatever the round-off of its positions).
-fn nearest_skin_vertices(rest_cage: &[DVec3], rest_mesh: &[DVec3]) -> Vec<Vec<usize>> {
-    let nv = rest_mesh.len();
-    let stride = nv.div_ceil(PRIOR_SEARCH_VERTICES).max(1);
-    let candidates: Vec<usize> = (0..nv).step_by(stride).collect();
-    let take = PRIOR_NEIGHBOURS.min(candidates.len());
-    let mut distances: Vec<(f64, usize)> = Vec::with_capacity(candidates.len());
-    rest_cage
-        .iter()
-        .map(|c| {
-            distances.clear();
-            distances.extend(
-                candidates
-                    .iter()
-                    .map(|&v| (rest_mesh[v].distance_squared(*c), v)),
-            );
-            let mut near = nearest_with_ties(&mut distances, take);
-            near.sort_unstable();
-            near
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::mesh::TriMesh;
+    use crate::nearest_vertices::SKIN_NEIGHBOURS;
 
     /// A unit cube cage, 60 skin points inside it split between two joints by x, and Φ.
     fn cube_rig() -> (TriMesh, Vec<DVec3>, CageCoords, SkinWeights) {
@@ -1191,30 +1163,6 @@ mod tests {
         assert!(close(horn_rotation(h), rotation_of(h)));
     }
 
-    /// A tie at the cut is kept whole: 40 skin points on a circle around the cage vertex (all
-    /// at one distance, each with its own round-off) are all its neighbours, and of points at
-    /// 1, 2, …, the pair at the cut's distance joins as a pair.
-    #[test]
-    fn a_neighbourhood_keeps_every_vertex_tied_at_its_cut() {
-        let circle: Vec<DVec3> = (0..40)
-            .map(|i| {
-                let angle = std::f64::consts::TAU * i as f64 / 40.0;
-                DVec3::new(angle.cos(), angle.sin(), 0.0) * 0.7 + DVec3::splat(0.1)
-            })
-            .collect();
-        let near = nearest_skin_vertices(&[DVec3::splat(0.1)], &circle);
-        assert_eq!(near[0], (0..40).collect::<Vec<_>>());
-        // Two points at each distance 1, 2, … (±x): the cut falls inside the 16th pair.
-        let pairs: Vec<DVec3> = (1..=40)
-            .flat_map(|d| [DVec3::X * d as f64, -DVec3::X * (d as f64 * (1.0 + 1e-15))])
-            .collect();
-        let near = nearest_skin_vertices(&[DVec3::ZERO], &pairs);
-        assert_eq!(near[0], (0..PRIOR_NEIGHBOURS).collect::<Vec<_>>());
-        let shifted = &pairs[1..];
-        let near = nearest_skin_vertices(&[DVec3::ZERO], shifted);
-        assert_eq!(near[0], (0..=PRIOR_NEIGHBOURS).collect::<Vec<_>>());
-    }
-
     /// The carried rotation is the best-fit rotation of the neighbourhood posed with the binding
     /// skeleton (a hinge closing turns the neighbourhood by less than the child joint): the
     /// moments D_kj, s_kj and the posed binding joints give the covariance summed point by point.
@@ -1255,9 +1203,9 @@ mod tests {
                     .total_cmp(&points[b].distance_squared(*c))
                     .then(a.cmp(&b))
             });
-            // The nearest PRIOR_NEIGHBOURS and whoever ties with the last of them.
+            // The nearest SKIN_NEIGHBOURS and whoever ties with the last of them.
             let distance = |i: usize| points[i].distance_squared(*c);
-            let cut = distance(order[PRIOR_NEIGHBOURS - 1]);
+            let cut = distance(order[SKIN_NEIGHBOURS - 1]);
             let near: Vec<usize> = order
                 .iter()
                 .copied()

@@ -16,7 +16,7 @@
 //! qualifies, the s nearest N̂'_k. Hats are the binding rig posed by the current joints' linear
 //! parts L_j: the binding cage C₀ and skin M₀, and the binding skeleton posed as the prior's
 //! rotation sees it (T̂_j, [`super::cage_prior`]). N̂'_k is the posed neighbourhood of the
-//! prior (its [`super::cage_prior::PRIOR_NEIGHBOURS`] rest-skin vertices) and ρ the rest reach
+//! prior (its [`crate::nearest_vertices::SKIN_NEIGHBOURS`] rest-skin vertices) and ρ the rest reach
 //! max_k dist(C₀_k, N_k): the farthest any rest cage vertex is from its neighbourhood. Distances
 //! are compared with ρ to [`crate::nearest_vertices::TIE_TOLERANCE`]: a vertex at exactly the rest
 //! reach in a part that moved rigidly (on a symmetric cage, every vertex of the ring that
