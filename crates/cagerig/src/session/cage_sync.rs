@@ -60,8 +60,9 @@ impl RigSession {
         }
     }
 
-    /// Factorises the reverse cage deformer (Eq. 19) for the current pose now. An editor calls
-    /// this when a cage grab starts; [`RigSession::move_posed_cage`] does it lazily otherwise.
+    /// Factorises the reverse cage deformer (Eq. 19) for the current pose now (again, if it
+    /// already was). A caller can run it before a grab, so that the grab's first event does not
+    /// pay for it; [`RigSession::move_posed_cage`] does it lazily otherwise, once per pose.
     pub fn refactor_reverser(&mut self) -> Result<(), RigError> {
         for (r, t) in self.scratch_rotations.iter_mut().zip(&self.posed_from_rest) {
             *r = t.matrix3;
