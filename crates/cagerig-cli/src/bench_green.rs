@@ -421,13 +421,14 @@ fn event_rows(
     }
     // The rest skin M(C) alone, the product each grab makes, into a buffer of the bench's.
     let mut rest_skin = vec![DVec3::ZERO; session.rest_mesh().len()];
-    let mut products = Vec::new();
-    for i in 0..reps(51) + 3 {
-        let start = Instant::now();
-        session.rest_mesh_for_cage(session.rest_cage(), &mut rest_skin)?;
-        if i >= 3 {
-            products.push(start.elapsed().as_secs_f64() * 1e3);
+    let mut product_error = None;
+    let rest_skin_product = crate::bench_report::time(reps(51), 3, || {
+        if let Err(e) = session.rest_mesh_for_cage(session.rest_cage(), &mut rest_skin) {
+            product_error.get_or_insert(e);
         }
+    });
+    if let Some(e) = product_error {
+        return Err(e.into());
     }
     Ok(GreenEventRows {
         animation_frame,
@@ -437,7 +438,7 @@ fn event_rows(
         rest_cage_drag_columns,
         grab_after_skeleton_edit: stat(times),
         grab_after_skeleton_edit_iterations: iterations(up, rev),
-        rest_skin_product: stat(products),
+        rest_skin_product,
         refused: *refused,
         bend_degrees,
     })

@@ -15,14 +15,18 @@ use cagerig::session::{RigParts, RigSession, SessionOptions};
 use cagerig::skinning::SkinningMethod;
 use glam::DVec3;
 
-fn arm(cage_fit: CageFitKind) -> RigSession {
+/// The paper's Arm as its files give it.
+fn arm_parts() -> RigParts {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
-    let files = load_rig_files(&dir.join("arm.obj"), None).unwrap();
+    load_rig_files(&dir.join("arm.obj"), None).unwrap().parts
+}
+
+fn arm(cage_fit: CageFitKind) -> RigSession {
     let options = SessionOptions {
         cage_fit,
         ..SessionOptions::default()
     };
-    RigSession::new(files.parts, options).unwrap().0
+    RigSession::new(arm_parts(), options).unwrap().0
 }
 
 fn builtin(name: &str, cage_fit: CageFitKind) -> RigSession {
@@ -205,8 +209,7 @@ fn the_arms_joint_bends_keep_the_handle_on_the_body() {
 #[test]
 fn the_arms_single_joint_sweep_keeps_a_generated_handle_on_the_body() {
     use cagerig::cage_gen::{CageOptions, CageRig, CageTarget, generate_rig_cage};
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
-    let mut parts = load_rig_files(&dir.join("arm.obj"), None).unwrap().parts;
+    let mut parts = arm_parts();
     let options = CageOptions {
         target: CageTarget::Vertices(58),
         ..CageOptions::default()
@@ -350,9 +353,7 @@ fn a_symmetric_rigs_prior_is_symmetric_and_its_handle_does_not_hang_on_the_last_
 /// wider patches, and 0.9–1.8 % of them turned over at these frames (deviation up to 0.054).
 #[test]
 fn a_large_skins_handle_keeps_its_triangles_against_the_measures_reference() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/arm");
-    let files = load_rig_files(&dir.join("arm.obj"), None).unwrap();
-    let arm = files.parts;
+    let arm = arm_parts();
     let sub = cagerig::subdivide::subdivide_midpoint(&arm.mesh, &arm.skin_weights, 2).unwrap();
     assert!(sub.mesh.num_vertices() > 16_384);
     let parts = RigParts::new(sub.mesh, arm.skeleton, sub.skin_weights, arm.cage);
